@@ -1,0 +1,40 @@
+# ssw: the two commands of the README are `make study` and `make test`.
+# Both set up the environment first (scripts/setup.sh: idempotent, seconds when done).
+VENV    := .venv
+PY      := $(VENV)/bin/python
+SMK     := $(VENV)/bin/snakemake
+CORES   ?= 2
+CONFIG  ?= config/config.yaml
+PYTEST_ARGS ?=
+
+.PHONY: setup study test test-all lint bench report clean
+
+setup:
+	@bash scripts/setup.sh
+
+## The default study (the thesis study in config/config.yaml), results under results/.
+study: setup
+	$(SMK) --profile workflow/profiles/default --cores $(CORES) --configfile $(CONFIG)
+
+## The test suite (default: everything but the `slow` marker), lint and workflow checks.
+test: setup
+	@if [ -f scripts/slurm-local.sh ]; then bash scripts/slurm-local.sh start || echo "[test] local Slurm not started: its tests will say why they skip"; fi
+	$(VENV)/bin/ruff check ssw tests
+	PATH="$(CURDIR)/$(VENV)/bin:$$PATH" $(PY) -m pytest -m "not slow" $(PYTEST_ARGS)
+
+## Everything, slow tests included.
+test-all: setup
+	PATH="$(CURDIR)/$(VENV)/bin:$$PATH" $(PY) -m pytest $(PYTEST_ARGS)
+
+lint: setup
+	$(VENV)/bin/ruff check ssw tests
+	$(SMK) --lint --configfile $(CONFIG)
+
+## Benchmarks (figures go into the README).
+bench: setup
+	$(VENV)/bin/ssw bench contact
+	$(VENV)/bin/ssw bench chain
+	$(VENV)/bin/ssw bench study
+
+clean:
+	rm -rf results .snakemake

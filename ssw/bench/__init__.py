@@ -1,0 +1,1 @@
+"""Benchmarks behind ``ssw bench``; one module per kind, each with ``register``."""

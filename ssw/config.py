@@ -1,0 +1,198 @@
+"""Study configuration: load, validate against the JSON schema, fill defaults, expand grids.
+
+The schema (``ssw/data/config.schema.yaml``, linked as ``workflow/schemas/config.schema.yaml``)
+is enforced here for every ``ssw`` command and by ``snakemake.utils.validate`` in the
+workflow. :func:`check_config` adds the checks a schema cannot express (material keys that
+exist in the library, Poisson's ratios a model supports, non-empty grids) and raises
+:class:`ssw.errors.ConfigError` naming the field, the value and what is allowed.
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from ssw.errors import ConfigError
+from ssw.materials import Material, material_set
+
+SCHEMA_PATH = Path(__file__).resolve().parent / "data" / "config.schema.yaml"
+REPO_ROOT = Path(__file__).resolve().parent.parent
+DEFAULT_CONFIG = REPO_ROOT / "config" / "config.yaml"
+
+
+def load_schema() -> dict[str, Any]:
+    """The config JSON schema as a dict."""
+    return yaml.safe_load(SCHEMA_PATH.read_text())
+
+
+def _validator(schema: dict[str, Any]) -> Any:
+    """A draft-07 validator that also fills in ``default`` values (as Snakemake's does)."""
+    import jsonschema
+
+    base = jsonschema.Draft7Validator
+    validate_props = base.VALIDATORS["properties"]
+
+    def set_defaults(validator: Any, properties: Any, instance: Any, schema: Any) -> Any:
+        if isinstance(instance, dict):
+            for prop, sub in properties.items():
+                if "default" in sub and prop not in instance:
+                    instance[prop] = copy.deepcopy(sub["default"])
+        yield from validate_props(validator, properties, instance, schema)
+
+    return jsonschema.validators.extend(base, {"properties": set_defaults})(schema)
+
+
+def _path_of(error: Any) -> str:
+    parts = [str(p) for p in error.absolute_path]
+    return ".".join(parts) if parts else "(top level)"
+
+
+def validate_config(cfg: dict[str, Any]) -> dict[str, Any]:
+    """Validate ``cfg`` in place against the schema, fill defaults, and run semantic checks.
+
+    Returns ``cfg``. Raises :class:`ConfigError` on the first problem (the deepest error of
+    the schema, so that the message names the offending field).
+    """
+    import jsonschema
+
+    validator = _validator(load_schema())
+    errors = sorted(validator.iter_errors(cfg), key=lambda e: -len(e.absolute_path))
+    if errors:
+        err = errors[0]
+        best = jsonschema.exceptions.best_match([err]) or err
+        raise ConfigError(_path_of(best), best.instance, best.message)
+    check_config(cfg)
+    return cfg
+
+
+def load_config(path: str | Path | None = None, overrides: dict[str, Any] | None = None) -> dict:
+    """Read a YAML study config, apply ``overrides`` (top-level keys), validate it."""
+    p = Path(path) if path is not None else DEFAULT_CONFIG
+    if not p.is_file():
+        raise ConfigError("--config", str(p), "an existing YAML file")
+    cfg = yaml.safe_load(p.read_text()) or {}
+    if not isinstance(cfg, dict):
+        raise ConfigError("--config", str(p), "a YAML mapping at the top level")
+    cfg.update(overrides or {})
+    return validate_config(cfg)
+
+
+def expand_grid(spec: dict[str, Any], field: str) -> np.ndarray:
+    """Values of a grid axis: ``{values: [...]}`` or ``{start, stop, step}`` (stop included)."""
+    if "values" in spec:
+        return np.asarray(spec["values"], dtype=float)
+    start, stop, step = (float(spec[k]) for k in ("start", "stop", "step"))
+    n = (stop - start) / step
+    if n < 0 or abs(n - round(n)) > 1e-9 * max(1.0, abs(n)):
+        raise ConfigError(
+            field, spec, "stop - start must be a non-negative whole multiple of step"
+        )
+    return start + step * np.arange(round(n) + 1)
+
+
+def library(cfg: dict[str, Any]) -> dict[str, Material]:
+    """The materials of the config's library and set."""
+    return material_set(cfg.get("material_set", "realistic"), _materials_path(cfg))
+
+
+def _materials_path(cfg: dict[str, Any]) -> Path:
+    p = Path(cfg.get("materials_file", "config/materials.yaml"))
+    return p if p.is_absolute() or p.exists() else REPO_ROOT / p
+
+
+def check_config(cfg: dict[str, Any]) -> None:
+    """Checks the schema cannot express. Raises :class:`ConfigError` naming the field."""
+    mats = library(cfg)
+    known = ", ".join(sorted(mats))
+
+    def need_material(field: str, key: str) -> None:
+        if key not in mats:
+            raise ConfigError(field, key, f"a material of the library: {known}")
+
+    for name, s in cfg["sets"].items():
+        for i, m in enumerate(s["plate_material"]):
+            need_material(f"sets.{name}.plate_material[{i}]", m)
+        t = expand_grid(s["plate_thickness"], f"sets.{name}.plate_thickness")
+        if np.any(t < 0) or not np.all(np.isfinite(t)):
+            raise ConfigError(f"sets.{name}.plate_thickness", t.tolist(), "thicknesses >= 0 m")
+        E = expand_grid(s["soil_E"], f"sets.{name}.soil_E")
+        if np.any(E <= 0) or not np.all(np.isfinite(E)):
+            raise ConfigError(f"sets.{name}.soil_E", E.tolist(), "moduli > 0 Pa")
+        nu = expand_grid(s["soil_nu"], f"sets.{name}.soil_nu")
+        if np.any(nu <= -1) or np.any(nu > 0.5):
+            raise ConfigError(
+                f"sets.{name}.soil_nu", nu.tolist(),
+                "Poisson's ratios in (-1, 0.5] (0.5 is solved with the mixed u-p element)",
+            )
+    ch = cfg.get("chain", {})
+    for key in ("bead_material", "plate_material"):
+        if key in ch:
+            need_material(f"chain.{key}", ch[key])
+    if "beads" in ch and "sensor_index" in ch and not ch["sensor_index"] < ch["beads"] - 1:
+        raise ConfigError(
+            "chain.sensor_index", ch["sensor_index"],
+            f"an index between 1 and beads - 2 = {ch['beads'] - 2}",
+        )
+    sw = ch.get("sweep", {})
+    if "soil_E" in sw:
+        E = expand_grid(sw["soil_E"], "chain.sweep.soil_E")
+        if np.any(E <= 0):
+            raise ConfigError("chain.sweep.soil_E", E.tolist(), "moduli > 0 Pa")
+    if "soil_nu" in sw:
+        nu = expand_grid(sw["soil_nu"], "chain.sweep.soil_nu")
+        if np.any(nu <= -1) or np.any(nu > 0.5):
+            raise ConfigError("chain.sweep.soil_nu", nu.tolist(), "Poisson's ratios in (-1, 0.5]")
+    fit = cfg.get("fit", {})
+    if fit.get("set") is not None and fit["set"] not in cfg["sets"]:
+        raise ConfigError("fit.set", fit["set"], f"one of the sets: {', '.join(cfg['sets'])}")
+    for i, smp in enumerate(cfg.get("validation", {}).get("samples", [])):
+        need_material(f"validation.samples[{i}].material", smp["material"])
+
+
+@dataclass(frozen=True)
+class Scene:
+    """One contact scene: a plate (or none) on a soil, indented by the rigid sphere. SI."""
+
+    plate_material: str  # material key; "none" when plate_thickness == 0
+    plate_thickness: float  # m
+    soil_E: float  # Pa
+    soil_nu: float  # -
+
+    @property
+    def scene_id(self) -> str:
+        """Stable, file-name-safe identifier, e.g. ``pla-t400um-E10MPa-nu0.300``."""
+        plate = (
+            "noplate"
+            if self.plate_thickness == 0
+            else f"{self.plate_material}-t{self.plate_thickness * 1e6:g}um"
+        )
+        return f"{plate}-E{self.soil_E / 1e6:g}MPa-nu{self.soil_nu:.3f}"
+
+
+def scenes(cfg: dict[str, Any], set_name: str) -> list[Scene]:
+    """Scenes of set ``set_name``: the product of its axes, no-plate scenes deduplicated."""
+    if set_name not in cfg["sets"]:
+        raise ConfigError("set", set_name, f"one of the sets: {', '.join(cfg['sets'])}")
+    s = cfg["sets"][set_name]
+    out: dict[str, Scene] = {}
+    for m in s["plate_material"]:
+        for t in expand_grid(s["plate_thickness"], f"sets.{set_name}.plate_thickness"):
+            for E in expand_grid(s["soil_E"], f"sets.{set_name}.soil_E"):
+                for nu in expand_grid(s["soil_nu"], f"sets.{set_name}.soil_nu"):
+                    sc = Scene("none" if t == 0 else m, float(t), float(E), float(nu))
+                    out.setdefault(sc.scene_id, sc)
+    return list(out.values())
+
+
+def all_scenes(cfg: dict[str, Any]) -> dict[str, Scene]:
+    """Every scene of every set, by scene id (a scene shared by two sets appears once)."""
+    out: dict[str, Scene] = {}
+    for name in cfg["sets"]:
+        for sc in scenes(cfg, name):
+            out.setdefault(sc.scene_id, sc)
+    return out

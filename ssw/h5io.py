@@ -1,0 +1,119 @@
+"""HDF5 conventions of ssw: one file per job, SI units in attributes, atomic writes.
+
+Every file written through :func:`atomic_h5` carries the root attributes
+
+* ``ssw_kind``: what the file holds (``"contact_curve"``, ``"chain_run"``, ...);
+* ``ssw_version``: the package version that wrote it;
+* ``created_utc``: ISO-8601 time stamp;
+* ``inputs_json``: every input that produced it, as JSON (SI units).
+
+Every dataset written through :func:`write_dataset` has a ``units`` attribute (``"1"`` for
+dimensionless) and, optionally, a ``description``. A file is written under a temporary name
+in the destination folder and renamed into place only when complete, so an interrupted run
+never leaves a file that looks finished.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import json
+import os
+import tempfile
+from collections.abc import Iterator, Mapping
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ssw import __version__
+from ssw.errors import SswError
+
+
+def _json_default(obj: Any) -> Any:
+    if isinstance(obj, np.ndarray):
+        return obj.tolist()
+    if isinstance(obj, np.generic):
+        return obj.item()
+    if isinstance(obj, Path):
+        return str(obj)
+    raise TypeError(f"not JSON serializable: {type(obj).__name__}")
+
+
+def to_json(obj: Any, **kw: Any) -> str:
+    """JSON text of ``obj``; numpy arrays and scalars and paths are converted."""
+    return json.dumps(obj, default=_json_default, **kw)
+
+
+@contextlib.contextmanager
+def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
+    """Yield a temporary path beside ``path``; rename it to ``path`` on success.
+
+    On an exception the temporary file is removed and ``path`` is left untouched.
+    """
+    dest = Path(path)
+    dest.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".part", dir=dest.parent)
+    os.close(fd)
+    tmp_path = Path(tmp)
+    try:
+        yield tmp_path
+        os.replace(tmp_path, dest)
+    finally:
+        if tmp_path.exists():
+            tmp_path.unlink()
+
+
+def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
+    """Write ``text`` to ``path`` atomically."""
+    with atomic_path(path) as tmp:
+        tmp.write_text(text)
+
+
+@contextlib.contextmanager
+def atomic_h5(
+    path: str | os.PathLike[str], *, kind: str, inputs: Mapping[str, Any]
+) -> Iterator[Any]:
+    """Open a new HDF5 file for writing that appears at ``path`` only when complete.
+
+    Parameters
+    ----------
+    path : destination file.
+    kind : value of the ``ssw_kind`` root attribute.
+    inputs : every input that produced the file (SI units); stored as ``inputs_json``.
+    """
+    import h5py
+
+    with atomic_path(path) as tmp:
+        with h5py.File(tmp, "w") as f:
+            f.attrs["ssw_kind"] = kind
+            f.attrs["ssw_version"] = __version__
+            f.attrs["created_utc"] = datetime.now(UTC).isoformat(timespec="seconds")
+            f.attrs["inputs_json"] = to_json(dict(inputs), sort_keys=True)
+            yield f
+
+
+def write_dataset(
+    group: Any, name: str, data: Any, units: str, description: str = "", **kw: Any
+) -> Any:
+    """Create dataset ``name`` in ``group`` with a ``units`` attribute (SI; ``"1"``: none)."""
+    ds = group.create_dataset(name, data=np.asarray(data), **kw)
+    ds.attrs["units"] = units
+    if description:
+        ds.attrs["description"] = description
+    return ds
+
+
+def read_inputs(f: Any) -> dict[str, Any]:
+    """The ``inputs_json`` root attribute of an open ssw HDF5 file, as a dict."""
+    raw = f.attrs.get("inputs_json")
+    if raw is None:
+        raise SswError(f"{getattr(f, 'filename', f)} is not an ssw file (no inputs_json)")
+    return json.loads(raw)
+
+
+def check_kind(f: Any, kind: str) -> None:
+    """Raise :class:`SswError` unless the open file's ``ssw_kind`` is ``kind``."""
+    got = f.attrs.get("ssw_kind")
+    if got != kind:
+        raise SswError(f"{getattr(f, 'filename', f)}: ssw_kind is {got!r}, expected {kind!r}")

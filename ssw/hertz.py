@@ -1,0 +1,129 @@
+"""Hertz contact laws: sphere on half-space, sphere on sphere, and the exact sphere.
+
+Equations (Johnson 1985, *Contact Mechanics*, ch. 4; Popov 2010, ch. 5; Sneddon 1965):
+
+* effective modulus ``1/E* = (1 - nu1^2)/E1 + (1 - nu2^2)/E2`` (a rigid body: ``E = inf``);
+* effective radius ``1/R* = 1/R1 + 1/R2`` (a flat: ``R = inf``);
+* force ``F = 4/3 E* sqrt(R*) delta^(3/2)``; contact radius ``a = sqrt(R* delta)``;
+* peak pressure ``p0 = 3 F / (2 pi a^2) = 2 E* a / (pi R*)``;
+* impact duration of two bodies of reduced mass ``m`` meeting at speed ``v`` under
+  ``F = A delta^(3/2)``: ``t_c = 2.9432 (5 m / (4 A))^(2/5) v^(-1/5)`` (Johnson 1985, eq. 11.24);
+* exact (non-paraboloidal) rigid sphere on an elastic half-space (Sneddon 1965):
+  ``delta = (a/2) ln((R+a)/(R-a))``, ``F = (E*/2) [(a^2 + R^2) ln((R+a)/(R-a)) - 2 a R]``.
+
+All functions take and return SI units and broadcast over numpy arrays.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ssw.errors import ConfigError
+
+def _check_positive(name: str, value: ArrayLike) -> NDArray[np.float64]:
+    arr = np.asarray(value, dtype=float)
+    if not np.all(arr > 0):
+        raise ConfigError(name, value, "must be > 0")
+    return arr
+
+
+def _check_nu(name: str, nu: ArrayLike) -> NDArray[np.float64]:
+    arr = np.asarray(nu, dtype=float)
+    if not np.all((arr > -1.0) & (arr <= 0.5)):
+        raise ConfigError(name, nu, "Poisson's ratio must lie in (-1, 0.5]")
+    return arr
+
+
+def effective_modulus(
+    E1: ArrayLike, nu1: ArrayLike, E2: ArrayLike = np.inf, nu2: ArrayLike = 0.0
+) -> NDArray[np.float64]:
+    """Contact modulus E* (Pa): ``1/E* = (1-nu1^2)/E1 + (1-nu2^2)/E2``; ``E2=inf`` is rigid."""
+    E1a, E2a = _check_positive("E1", E1), _check_positive("E2", E2)
+    n1, n2 = _check_nu("nu1", nu1), _check_nu("nu2", nu2)
+    return 1.0 / ((1.0 - n1**2) / E1a + (1.0 - n2**2) / E2a)
+
+
+def effective_radius(R1: ArrayLike, R2: ArrayLike = np.inf) -> NDArray[np.float64]:
+    """Effective radius R* (m): ``1/R* = 1/R1 + 1/R2``; ``R2=inf`` is a flat."""
+    return 1.0 / (1.0 / _check_positive("R1", R1) + 1.0 / _check_positive("R2", R2))
+
+
+def hertz_coefficient(E_star: ArrayLike, R_star: ArrayLike) -> NDArray[np.float64]:
+    """``A`` of ``F = A delta^(3/2)``: ``A = 4/3 E* sqrt(R*)`` (N m^-3/2)."""
+    return 4.0 / 3.0 * np.asarray(E_star, float) * np.sqrt(np.asarray(R_star, float))
+
+
+def sphere_sphere_coefficient(E: ArrayLike, nu: ArrayLike, R: ArrayLike) -> NDArray[np.float64]:
+    """``A`` for two identical spheres of radius R: ``A = E sqrt(2R) / (3 (1 - nu^2))``."""
+    return hertz_coefficient(effective_modulus(E, nu, E, nu), effective_radius(R, R))
+
+
+def force(delta: ArrayLike, E_star: ArrayLike, R_star: ArrayLike) -> NDArray[np.float64]:
+    """Hertz force (N) at approach ``delta`` (m); zero for ``delta <= 0`` (no tension)."""
+    d = np.clip(np.asarray(delta, float), 0.0, None)
+    return hertz_coefficient(E_star, R_star) * d**1.5
+
+
+def indentation(F: ArrayLike, E_star: ArrayLike, R_star: ArrayLike) -> NDArray[np.float64]:
+    """Approach ``delta`` (m) under force ``F`` (N), the inverse of :func:`force`."""
+    f = np.clip(np.asarray(F, float), 0.0, None)
+    return (f / hertz_coefficient(E_star, R_star)) ** (2.0 / 3.0)
+
+
+def contact_radius(delta: ArrayLike, R_star: ArrayLike) -> NDArray[np.float64]:
+    """Contact radius ``a = sqrt(R* delta)`` (m)."""
+    return np.sqrt(np.clip(np.asarray(delta, float), 0.0, None) * np.asarray(R_star, float))
+
+
+def peak_pressure(delta: ArrayLike, E_star: ArrayLike, R_star: ArrayLike) -> NDArray[np.float64]:
+    """Peak contact pressure ``p0 = 2 E* a / (pi R*)`` (Pa)."""
+    return 2.0 * np.asarray(E_star, float) * contact_radius(delta, R_star) / (
+        np.pi * np.asarray(R_star, float)
+    )
+
+
+def pressure_profile(
+    r: ArrayLike, delta: ArrayLike, E_star: ArrayLike, R_star: ArrayLike
+) -> NDArray[np.float64]:
+    """Hertz pressure ``p(r) = p0 sqrt(1 - r^2/a^2)`` for ``r < a``, else 0 (Pa)."""
+    a = contact_radius(delta, R_star)
+    p0 = peak_pressure(delta, E_star, R_star)
+    s = 1.0 - (np.asarray(r, float) / np.where(a > 0, a, np.inf)) ** 2
+    return p0 * np.sqrt(np.clip(s, 0.0, None))
+
+
+def contact_time(m_eff: ArrayLike, A: ArrayLike, v: ArrayLike) -> NDArray[np.float64]:
+    """Hertz impact duration ``t_c = 2.9432 (5 m / (4 A))^(2/5) v^(-1/5)`` (s).
+
+    ``m_eff`` is the reduced mass (kg), ``A`` the coefficient of ``F = A delta^(3/2)`` and
+    ``v`` the approach speed (m/s). Johnson (1985), eq. (11.24).
+    """
+    m, a, vv = (np.asarray(x, float) for x in (m_eff, A, v))
+    return HERTZ_TC * (5.0 * m / (4.0 * a)) ** 0.4 * vv ** (-0.2)
+
+
+def sneddon_sphere(
+    a: ArrayLike, E_star: ArrayLike, R: ArrayLike
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Exact rigid sphere on a half-space (Sneddon 1965): ``(delta, F)`` at contact radius a.
+
+    ``delta = (a/2) ln((R+a)/(R-a))``; ``F = (E*/2) [(a^2+R^2) ln((R+a)/(R-a)) - 2 a R]``.
+    """
+    aa, RR, Es = (np.asarray(x, float) for x in (a, R, E_star))
+    if np.any(aa >= RR):
+        raise ConfigError("a", a, "contact radius must be smaller than the sphere radius")
+    lg = np.log((RR + aa) / (RR - aa))
+    return 0.5 * aa * lg, 0.5 * Es * ((aa**2 + RR**2) * lg - 2.0 * aa * RR)
+
+
+def _impact_time_coefficient() -> float:
+    """2 * integral_0^1 dx / sqrt(1 - x^(5/2)) (Johnson 1985, eq. 11.24): 2.9432."""
+    from scipy.special import beta
+
+    # integral_0^1 (1 - x^(5/2))^(-1/2) dx = (2/5) B(2/5, 1/2)
+    return float(2.0 * 0.4 * beta(0.4, 0.5))
+
+
+#: Johnson (1985) eq. 11.24 constant, computed: 2 * (2/5) B(2/5, 1/2) = 2.9432.
+HERTZ_TC: float = _impact_time_coefficient()

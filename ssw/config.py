@@ -52,6 +52,14 @@ def _path_of(error: Any) -> str:
     return ".".join(parts) if parts else "(top level)"
 
 
+def _looks_numeric(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
+
+
 def validate_config(cfg: dict[str, Any]) -> dict[str, Any]:
     """Validate ``cfg`` in place against the schema, fill defaults, and run semantic checks.
 
@@ -65,7 +73,10 @@ def validate_config(cfg: dict[str, Any]) -> dict[str, Any]:
     if errors:
         err = errors[0]
         best = jsonschema.exceptions.best_match([err]) or err
-        raise ConfigError(_path_of(best), best.instance, best.message)
+        hint = ""
+        if isinstance(best.instance, str) and _looks_numeric(best.instance):
+            hint = " (YAML reads a number like 1.0e6 as text: write 1.0e+6)"
+        raise ConfigError(_path_of(best), best.instance, best.message + hint)
     check_config(cfg)
     return cfg
 
@@ -80,6 +91,23 @@ def load_config(path: str | Path | None = None, overrides: dict[str, Any] | None
         raise ConfigError("--config", str(p), "a YAML mapping at the top level")
     cfg.update(overrides or {})
     return validate_config(cfg)
+
+
+def dump_config(cfg: dict[str, Any]) -> str:
+    """YAML text of a validated config, keys in their order; re-loadable by load_config."""
+    header = "# Resolved ssw study config (validated, defaults filled). SI units.\n"
+    return header + yaml.safe_dump(_plain(cfg), sort_keys=False, default_flow_style=None)
+
+
+def _plain(obj: Any) -> Any:
+    """Plain Python containers (Snakemake's config may hold its own mapping types)."""
+    if isinstance(obj, dict):
+        return {str(k): _plain(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_plain(v) for v in obj]
+    if isinstance(obj, np.generic):
+        return obj.item()
+    return obj
 
 
 def expand_grid(spec: dict[str, Any], field: str) -> np.ndarray:

@@ -110,11 +110,17 @@ def sneddon_sphere(
 
     ``delta = (a/2) ln((R+a)/(R-a))``; ``F = (E*/2) [(a^2+R^2) ln((R+a)/(R-a)) - 2 a R]``.
     """
-    aa, RR, Es = (np.asarray(x, float) for x in (a, R, E_star))
+    aa, RR, Es = np.broadcast_arrays(*(np.asarray(v, float) for v in (a, R, E_star)))
     if np.any(aa >= RR):
         raise ConfigError("a", a, "contact radius must be smaller than the sphere radius")
-    lg = np.log((RR + aa) / (RR - aa))
-    return 0.5 * aa * lg, 0.5 * Es * ((aa**2 + RR**2) * lg - 2.0 * aa * RR)
+    x = aa / RR
+    # ln((R+a)/(R-a)) = 2 atanh(x); F = E* R^2 [(atanh(x) - x) + x^2 atanh(x)], where
+    # atanh(x) - x = sum_k x^(2k+1)/(2k+1), k >= 1, is summed as a series for small x to
+    # avoid cancellation (12 terms: truncation < x^27 < 1e-26 for x < 0.1).
+    k = np.arange(1, 13)
+    series = np.sum(x[..., None] ** (2 * k + 1) / (2 * k + 1), axis=-1)
+    at_minus_x = np.where(x < 0.1, series, np.arctanh(x) - x)
+    return aa * np.arctanh(x), Es * RR**2 * (at_minus_x + x**2 * np.arctanh(x))
 
 
 def _impact_time_coefficient() -> float:

@@ -1,6 +1,7 @@
 # Config validation and the input functions shared by the stages. The only place that
 # validates the config: the JSON schema (snakemake.utils.validate fills its defaults), then
 # the checks a schema cannot express (ssw.config.check_config).
+import copy
 import sys
 from pathlib import Path
 
@@ -8,15 +9,32 @@ from snakemake.utils import validate
 
 sys.path.insert(0, str(Path(workflow.basedir)))
 import ssw.config as sswcfg  # noqa: E402
+from ssw.h5io import atomic_write_text  # noqa: E402
 
+# A study config is complete by itself: `--configfile other.yaml` replaces
+# config/config.yaml instead of being merged into it (`--config key=value` still applies).
+if workflow.overwrite_configfiles:
+    config.clear()
+    config.update(copy.deepcopy(workflow.config_settings.overwrite_config))
 
 validate(config, schema="../schemas/config.schema.yaml")
 sswcfg.check_config(config)
 
 RESULTS = "results"
 LOGS = "results/logs"
-# The config file(s) Snakemake was given, passed to `ssw` commands with --config.
-CONFIG_FILE = workflow.overwrite_configfiles[-1] if workflow.overwrite_configfiles else "config/config.yaml"
+
+
+def _resolved_config_file():
+    """Write the validated config (defaults filled) for the `ssw` commands; only on change."""
+    path = Path(RESULTS) / "study_config.yaml"
+    text = sswcfg.dump_config(config)
+    if not path.exists() or path.read_text() != text:
+        atomic_write_text(path, text)
+    return str(path)
+
+
+# The resolved study config, passed to `ssw ... --config {CONFIG_FILE}` by the rules.
+CONFIG_FILE = _resolved_config_file()
 SCENES = sswcfg.all_scenes(config)
 
 

@@ -1,0 +1,200 @@
+"""Axisymmetric (r, z) mesh of a plate on a soil sample, built with the gmsh Python API.
+
+The soil sample occupies ``0 <= r <= soil_radius``, ``-soil_depth <= z <= 0``; the plate (if
+``plate_thickness > 0``) occupies ``0 <= r <= plate_radius``, ``0 <= z <= plate_thickness``.
+The sphere touches the top surface at ``(0, top)``. Element sizes grow linearly with the
+distance ``d`` from that point, ``h(d) = clip(growth * d, size_contact, size_max)`` (a gmsh
+Distance + Threshold field), so that every contact radius between ``size_contact / growth``
+and the largest is resolved by about ``1 / growth`` elements. The plate is a structured
+(transfinite) band with ``plate_layers`` elements through its thickness and the same
+geometric progression along r. Elements are 6-node (quadratic) triangles.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ssw.errors import MeshError
+
+#: gmsh element type of the 6-node triangle.
+GMSH_TRIANGLE6 = 9
+#: Relative tolerance for recognising boundary nodes by coordinates.
+GEOM_TOL = 1e-9
+
+
+@dataclass(frozen=True)
+class MeshSettings:
+    """Domain and mesh density. Lengths in m."""
+
+    soil_radius: float  # m, radius of the soil sample (rollers on r = soil_radius)
+    soil_depth: float  # m, depth of the soil sample (fixed bottom)
+    size_contact: float  # m, element size at the contact point
+    growth: float  # element size / distance from the contact point, -
+    size_max: float  # m, largest element size
+    plate_layers: int  # elements through the plate thickness
+
+
+@dataclass(frozen=True)
+class Mesh:
+    """A quadratic triangle mesh of the (r, z) half-plane section.
+
+    ``nodes`` (n, 2) m; ``tri`` (ne, 6) node indices (3 vertices then the midsides of edges
+    01, 12, 20); ``body`` (ne,) 0 = soil, 1 = plate; ``top`` is the z of the loaded surface.
+    """
+
+    nodes: np.ndarray
+    tri: np.ndarray
+    body: np.ndarray
+    top: float
+    plate_radius: float
+    soil_radius: float
+    soil_depth: float
+
+    @property
+    def vertices(self) -> np.ndarray:
+        """Indices of the nodes that are element vertices (carry a pressure dof)."""
+        return np.unique(self.tri[:, :3])
+
+
+def _progression_nodes(length: float, first: float, ratio: float) -> int:
+    """Nodes of a geometric progression of first size ``first`` and ``ratio`` over ``length``."""
+    if ratio <= 1.0 + 1e-12:
+        return int(np.ceil(length / first)) + 1
+    n_seg = np.log1p(length * (ratio - 1.0) / first) / np.log(ratio)
+    return int(np.ceil(n_seg)) + 1
+
+
+def build_mesh(plate_thickness: float, plate_radius: float, s: MeshSettings) -> Mesh:
+    """Mesh the soil sample and (if ``plate_thickness > 0``) the plate on top of it.
+
+    Parameters
+    ----------
+    plate_thickness : m, 0 for no plate.
+    plate_radius : m, half the plate diameter.
+    s : domain and density settings.
+
+    Returns
+    -------
+    Mesh
+        With conforming nodes on the plate-soil interface (the solver duplicates them for
+        the frictionless and unilateral interfaces).
+    """
+    import gmsh
+
+    if plate_thickness > 0 and plate_radius >= s.soil_radius:
+        raise MeshError(
+            f"plate radius {plate_radius} m must be smaller than soil_radius {s.soil_radius} m"
+        )
+    initialized_here = not gmsh.isInitialized()
+    if initialized_here:
+        gmsh.initialize(interruptible=False)
+    try:
+        gmsh.option.setNumber("General.Terminal", 0)
+        gmsh.option.setNumber("General.NumThreads", 1)
+        gmsh.model.add("ssw_contact")
+        return _build(gmsh, plate_thickness, plate_radius, s)
+    except MeshError:
+        raise
+    except Exception as exc:  # gmsh raises plain Exceptions
+        raise MeshError(f"gmsh failed to mesh the scene: {exc}") from exc
+    finally:
+        gmsh.model.remove()
+        if initialized_here:
+            gmsh.finalize()
+
+
+def _build(gmsh, t: float, rp: float, s: MeshSettings) -> Mesh:
+    occ = gmsh.model.occ
+    soil = occ.addRectangle(0.0, -s.soil_depth, 0.0, s.soil_radius, s.soil_depth)
+    plate = None
+    if t > 0:
+        plate = occ.addRectangle(0.0, 0.0, 0.0, rp, t)
+        occ.fragment([(2, soil)], [(2, plate)])
+    occ.synchronize()
+    top = float(t)
+    eps = GEOM_TOL * s.soil_radius
+
+    # graded sizes from the contact point
+    pt = occ.addPoint(0.0, top, 0.0)
+    occ.synchronize()
+    field = gmsh.model.mesh.field
+    dist = field.add("Distance")
+    field.setNumbers(dist, "PointsList", [pt])
+    thr = field.add("Threshold")
+    field.setNumber(thr, "InField", dist)
+    field.setNumber(thr, "SizeMin", s.size_contact)
+    field.setNumber(thr, "SizeMax", s.size_max)
+    field.setNumber(thr, "DistMin", s.size_contact / s.growth)
+    field.setNumber(thr, "DistMax", s.size_max / s.growth)
+    field.setAsBackgroundMesh(thr)
+    for opt in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints", "MeshSizeFromCurvature"):
+        gmsh.option.setNumber(f"Mesh.{opt}", 0)
+    gmsh.option.setNumber("Mesh.Algorithm", 6)  # Frontal-Delaunay
+
+    if t > 0:
+        _transfinite_plate(gmsh, t, rp, s, eps)
+    gmsh.model.mesh.generate(2)
+    gmsh.model.mesh.setOrder(2)
+
+    tags, coords, _ = gmsh.model.mesh.getNodes()
+    xyz = coords.reshape(-1, 3)[:, :2]
+    index = np.full(int(tags.max()) + 1, -1, dtype=np.int64)
+    index[tags.astype(np.int64)] = np.arange(len(tags))
+    tris, bodies = [], []
+    for dim, tag in gmsh.model.getEntities(2):
+        etypes, _, enodes = gmsh.model.mesh.getElements(dim, tag)
+        for et, en in zip(etypes, enodes, strict=True):
+            if et != GMSH_TRIANGLE6:
+                raise MeshError(f"unexpected gmsh element type {et} (want 6-node triangles)")
+            conn = index[np.asarray(en, dtype=np.int64).reshape(-1, 6)]
+            xmin, ymin, _, xmax, ymax, _ = gmsh.model.getBoundingBox(dim, tag)
+            is_plate = t > 0 and ymin > -0.5 * t
+            tris.append(conn)
+            bodies.append(np.full(len(conn), 1 if is_plate else 0, dtype=np.int8))
+    tri = np.concatenate(tris)
+    used = np.unique(tri)
+    renum = np.full(len(xyz), -1, dtype=np.int64)
+    renum[used] = np.arange(len(used))
+    nodes = xyz[used].copy()
+    tri = renum[tri]
+    _check_orientation(nodes, tri)
+    return Mesh(nodes, tri, np.concatenate(bodies), top, rp if t > 0 else 0.0,
+                s.soil_radius, s.soil_depth)
+
+
+def _transfinite_plate(gmsh, t: float, rp: float, s: MeshSettings, eps: float) -> None:
+    """Structured plate: ``plate_layers`` through t, geometric progression along r."""
+    ratio = 1.0 + s.growth
+    n_r = _progression_nodes(rp, s.size_contact, ratio)
+    plate_surf = [
+        tag for _, tag in gmsh.model.getEntities(2)
+        if gmsh.model.getBoundingBox(2, tag)[1] > -0.5 * t
+    ]
+    if len(plate_surf) != 1:
+        raise MeshError(f"expected one plate surface, found {len(plate_surf)}")
+    for _, c in gmsh.model.getBoundary([(2, plate_surf[0])], oriented=False):
+        xmin, ymin, _, xmax, ymax, _ = gmsh.model.getBoundingBox(1, c)
+        if abs(xmax - xmin) < 0.5 * t:  # vertical edge: through the thickness
+            gmsh.model.mesh.setTransfiniteCurve(c, s.plate_layers + 1)
+        else:  # horizontal edge: progression away from the axis
+            p0, _ = gmsh.model.getAdjacencies(1, c)[1]
+            x0 = gmsh.model.getValue(0, p0, [])[0]
+            coef = ratio if x0 < eps else -ratio
+            gmsh.model.mesh.setTransfiniteCurve(c, n_r, "Progression", coef)
+    gmsh.model.mesh.setTransfiniteSurface(plate_surf[0])
+
+
+def _check_orientation(nodes: np.ndarray, tri: np.ndarray) -> None:
+    """Raise MeshError on degenerate elements; flip clockwise ones in place."""
+    p = nodes[tri[:, :3]]
+    det = (p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (
+        p[:, 2, 0] - p[:, 0, 0]
+    ) * (p[:, 1, 1] - p[:, 0, 1])
+    scale = np.max(np.abs(p[:, 1:] - p[:, :1]), axis=(1, 2)) ** 2
+    if np.any(np.abs(det) < 1e-12 * scale):
+        raise MeshError("the mesh has degenerate (zero-area) triangles")
+    cw = det < 0
+    if np.any(cw):
+        tri[cw] = tri[cw][:, [0, 2, 1, 5, 4, 3]]

@@ -1,0 +1,120 @@
+"""Acquisition backends behind one interface, and the session loop that records hits.
+
+A backend yields one finite, reference-triggered record per hit (:class:`Hit`). Two are
+registered: ``nidaqmx`` (real hardware, :mod:`ssw.daq.nidaq`) and ``simulated``
+(:mod:`ssw.daq.simulated`). :func:`run_session` drives any backend and appends every hit
+to a :class:`ssw.daq.recording.RecordingWriter`, which flushes after each one, so an
+interruption (exception, Ctrl-C, power loss after the flush) keeps every completed hit.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Iterator
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any, Protocol
+
+import numpy as np
+
+from ssw.daq.settings import DaqSettings
+from ssw.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class Hit:
+    """One finite record around one hit.
+
+    Attributes
+    ----------
+    force : (record_samples,) sensor force, N, as the module delivers it (scaled).
+    trigger_index : index of the first sample at or after the reference trigger
+        (equals the pretrigger sample count).
+    timestamp_utc : ISO-8601 time the record was read.
+    overloaded : the hardware reported an overload/overrange on the channel during the hit.
+    extra : backend-specific metadata (e.g. the simulated wave's true TOF), SI units.
+    """
+
+    force: np.ndarray
+    trigger_index: int
+    timestamp_utc: str = field(default_factory=lambda: datetime.now(UTC).isoformat())
+    overloaded: bool = False
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+class Backend(Protocol):
+    """What an acquisition backend provides."""
+
+    name: str
+
+    def describe(self) -> dict[str, Any]:
+        """Metadata about the hardware (or simulation) that records go with."""
+
+    def hits(self, settings: DaqSettings, n_hits: int) -> Iterator[Hit]:
+        """Yield ``n_hits`` records, one per hit, in order."""
+
+
+BACKENDS: dict[str, Callable[..., Backend]] = {}
+
+
+def register_backend(name: str, factory: Callable[..., Backend]) -> None:
+    """Make ``factory(**options)`` available as backend ``name``."""
+    BACKENDS[name] = factory
+
+
+def get_backend(name: str, **options: Any) -> Backend:
+    """An instance of backend ``name`` (``nidaqmx`` or ``simulated``)."""
+    _load_builtin()
+    if name not in BACKENDS:
+        raise ConfigError("backend", name, f"one of {sorted(BACKENDS)}")
+    return BACKENDS[name](**options)
+
+
+def _load_builtin() -> None:
+    # Importing the modules registers them; neither imports nidaqmx at import time.
+    import ssw.daq.nidaq  # noqa: F401
+    import ssw.daq.simulated  # noqa: F401
+
+
+def run_session(
+    backend: Backend,
+    settings: DaqSettings,
+    path: str | Path,
+    *,
+    sample_id: str,
+    plate: str = "",
+    operator: str = "",
+    n_hits: int | None = None,
+    synthetic: bool = False,
+    notes: str = "",
+    overwrite: bool = False,
+    on_hit: Callable[[int, Hit], None] | None = None,
+) -> Path:
+    """Record ``n_hits`` hits (default ``settings.hits``) of one sample into ``path``.
+
+    The file is created first, every hit is appended and flushed as it arrives, and the
+    session is marked complete at the end. If the backend or ``on_hit`` raises, the
+    file keeps every hit completed so far (``complete = False``) and the error propagates.
+    Returns ``path``.
+    """
+    from ssw.daq.recording import RecordingWriter
+
+    n = settings.hits if n_hits is None else int(n_hits)
+    if n < 1:
+        raise ConfigError("hits", n, "at least 1")
+    meta = {
+        "sample_id": sample_id,
+        "plate": plate,
+        "operator": operator,
+        "synthetic": bool(synthetic),
+        "notes": notes,
+        "backend": backend.name,
+        **{f"hw_{k}": v for k, v in backend.describe().items()},
+    }
+    with RecordingWriter(path, settings, meta, overwrite=overwrite) as writer:
+        for i, hit in enumerate(backend.hits(settings, n)):
+            writer.append(hit)
+            if on_hit is not None:
+                on_hit(i, hit)
+        writer.mark_complete()
+    return Path(path)

@@ -1,0 +1,255 @@
+"""HDF5 recordings: one file per sample session, one dataset per hit, flushed per hit.
+
+Layout (``ssw_kind = "daq_recording"``)::
+
+    /                     attrs: ssw_kind, ssw_version, created_utc, inputs_json (the
+                          DaqSettings), units = "N", sample_rate (S/s), device, channel,
+                          physical_channel, sensor_model, sensitivity (V/N),
+                          excitation_current (A), coupling, trigger_* , pretrigger_samples,
+                          record_samples, sample_id, plate, operator, synthetic, backend,
+                          hw_* (hardware description), n_hits, complete, finished_utc
+    /hits/hit_0000 ...    float64 (record_samples,) force, N; attrs: units, trigger_index,
+                          t0 (s, time of sample 0 relative to the trigger), timestamp_utc,
+                          overloaded, clipped, extra_json
+
+The file is written in place (not through :func:`ssw.h5io.atomic_h5`): a session must
+survive an interruption with every completed hit, so each hit is flushed as it arrives
+and ``complete`` turns true only at the end. Readers raise
+:class:`ssw.errors.RecordingError` for files that are empty, truncated, clipped or in the
+wrong units.
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ssw import __version__
+from ssw.daq.backend import Hit
+from ssw.daq.settings import DaqSettings
+from ssw.errors import ConfigError, RecordingError
+from ssw.h5io import to_json
+
+KIND = "daq_recording"
+FORCE_UNITS = "N"
+CLIP_FRACTION = 0.999  # |F| at or above this fraction of the +-5 V full scale counts as clipped
+CLIP_POLICIES = ("raise", "drop", "keep")
+
+
+def is_clipped(force: np.ndarray, full_scale: float) -> bool:
+    """True if any sample reaches ``CLIP_FRACTION`` of the full-scale force ``full_scale``."""
+    return bool(np.any(np.abs(force) >= CLIP_FRACTION * full_scale))
+
+
+class RecordingWriter:
+    """Write a session file hit by hit (use as a context manager).
+
+    Parameters
+    ----------
+    path : the session's HDF5 file; must not exist unless ``overwrite``.
+    settings : the acquisition settings (stored as metadata).
+    meta : sample id, plate, operator, synthetic flag, backend, hardware description.
+    """
+
+    def __init__(
+        self, path: str | Path, settings: DaqSettings, meta: dict[str, Any], *, overwrite: bool
+    ) -> None:
+        import h5py
+
+        self.path = Path(path)
+        if self.path.exists() and not overwrite:
+            raise ConfigError("recording", str(self.path), "a path that does not exist yet "
+                              "(pass overwrite to replace a session)")
+        self.path.parent.mkdir(parents=True, exist_ok=True)
+        self.settings = settings
+        self.n = 0
+        self._f = h5py.File(self.path, "w")
+        a = self._f.attrs
+        a["ssw_kind"] = KIND
+        a["ssw_version"] = __version__
+        a["created_utc"] = datetime.now(UTC).isoformat(timespec="seconds")
+        a["inputs_json"] = to_json(settings.to_dict(), sort_keys=True)
+        a["units"] = FORCE_UNITS
+        for key in ("device", "channel", "physical_channel", "sensor_model", "sensitivity",
+                    "excitation_current", "coupling", "sample_rate", "max_force",
+                    "trigger_level", "trigger_slope", "pretrigger_samples", "record_samples",
+                    "full_scale_force"):
+            a[key] = getattr(settings, key)
+        a["sensitivity_units"] = "V/N"
+        a["trigger_type"] = "analog edge, reference trigger on the force channel"
+        for key, val in meta.items():
+            a[key] = val if isinstance(val, bool | int | float | str) else to_json(val)
+        a["n_hits"] = 0
+        a["complete"] = False
+        self._hits = self._f.create_group("hits")
+        self._f.flush()
+
+    def append(self, hit: Hit) -> None:
+        """Store one hit as ``hits/hit_NNNN`` and flush the file to disk."""
+        force = np.asarray(hit.force, dtype=np.float64)
+        ds = self._hits.create_dataset(f"hit_{self.n:04d}", data=force)
+        ds.attrs["units"] = FORCE_UNITS
+        ds.attrs["trigger_index"] = int(hit.trigger_index)
+        ds.attrs["t0"] = -hit.trigger_index / self.settings.sample_rate
+        ds.attrs["timestamp_utc"] = hit.timestamp_utc
+        ds.attrs["overloaded"] = bool(hit.overloaded)
+        ds.attrs["clipped"] = bool(hit.overloaded) or is_clipped(
+            force, self.settings.full_scale_force
+        )
+        ds.attrs["extra_json"] = to_json(hit.extra, sort_keys=True)
+        self.n += 1
+        self._f.attrs["n_hits"] = self.n
+        self._f.flush()
+
+    def mark_complete(self) -> None:
+        """Mark the session finished (all requested hits recorded)."""
+        self._f.attrs["complete"] = True
+        self._f.attrs["finished_utc"] = datetime.now(UTC).isoformat(timespec="seconds")
+        self._f.flush()
+
+    def close(self) -> None:
+        if self._f.id.valid:
+            self._f.close()
+
+    def __enter__(self) -> RecordingWriter:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+
+@dataclass(frozen=True)
+class RecordedHit:
+    """One hit read back: force (N), its trigger index, flags and metadata."""
+
+    index: int
+    force: np.ndarray
+    trigger_index: int
+    clipped: bool = False
+    timestamp_utc: str = ""
+    extra: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass(frozen=True)
+class Recording:
+    """A session: metadata (SI units), sample rate (S/s) and its hits."""
+
+    path: str
+    meta: dict[str, Any]
+    sample_rate: float
+    hits: tuple[RecordedHit, ...]
+    dropped: tuple[str, ...] = ()
+
+    @property
+    def sample_id(self) -> str:
+        return str(self.meta.get("sample_id", ""))
+
+
+def _attr(x: Any) -> Any:
+    if isinstance(x, bytes):
+        return x.decode()
+    if isinstance(x, np.generic):
+        return x.item()
+    return x
+
+
+def check_hits(
+    path: str, hits: list[RecordedHit], *, record_samples: int | None, full_scale: float | None,
+    clipped: str,
+) -> tuple[list[RecordedHit], list[str]]:
+    """Apply the readers' checks; return the kept hits and the reasons hits were dropped."""
+    if clipped not in CLIP_POLICIES:
+        raise ConfigError("clipped", clipped, f"one of {CLIP_POLICIES}")
+    if not hits:
+        raise RecordingError(f"{path}: empty recording: no hits stored")
+    kept: list[RecordedHit] = []
+    dropped: list[str] = []
+    for h in hits:
+        n = h.force.size
+        if record_samples is not None and n != record_samples:
+            raise RecordingError(
+                f"{path}: hit {h.index} is truncated: {n} samples, record_samples = "
+                f"{record_samples}"
+            )
+        if n < 8:
+            raise RecordingError(f"{path}: hit {h.index} has {n} samples; at least 8 needed")
+        if not np.all(np.isfinite(h.force)):
+            raise RecordingError(f"{path}: hit {h.index} holds non-finite samples")
+        clip = h.clipped or (full_scale is not None and is_clipped(h.force, full_scale))
+        if clip:
+            msg = (f"hit {h.index} is clipped (overrange at the NI 9234's +-5 V, "
+                   f"|F| >= {CLIP_FRACTION} x {full_scale} N)")
+            if clipped == "raise":
+                raise RecordingError(f"{path}: {msg}; re-record it or read with clipped='drop'")
+            if clipped == "drop":
+                dropped.append(msg)
+                continue
+        kept.append(h)
+    if not kept:
+        raise RecordingError(f"{path}: every hit was dropped: {'; '.join(dropped)}")
+    return kept, dropped
+
+
+def read_recording(path: str | Path, *, clipped: str = "raise") -> Recording:
+    """Read a session file written by :class:`RecordingWriter`.
+
+    Parameters
+    ----------
+    path : the HDF5 file.
+    clipped : what to do with clipped hits: ``raise`` (:class:`RecordingError`), ``drop``
+        (skip them, listed in ``Recording.dropped``) or ``keep``.
+
+    Raises
+    ------
+    RecordingError
+        The file is unreadable (truncated HDF5), not a recording, in other units than N,
+        holds no hits, a hit is shorter than ``record_samples``, or a hit is clipped.
+    """
+    import h5py
+
+    p = str(path)
+    if not Path(p).is_file():
+        raise RecordingError(f"{p}: no such recording file")
+    try:
+        f = h5py.File(p, "r")
+    except OSError as exc:
+        raise RecordingError(f"{p}: not a readable HDF5 file (truncated or corrupt): {exc}") from exc
+    with f:
+        meta = {k: _attr(v) for k, v in f.attrs.items()}
+        if meta.get("ssw_kind") != KIND:
+            raise RecordingError(f"{p}: ssw_kind = {meta.get('ssw_kind')!r}, expected {KIND!r}")
+        units = meta.get("units")
+        if units != FORCE_UNITS:
+            raise RecordingError(
+                f"{p}: units = {units!r}; recordings must hold force in {FORCE_UNITS!r} "
+                "(convert volts with the sensor sensitivity before storing)"
+            )
+        rate = meta.get("sample_rate")
+        if not isinstance(rate, int | float) or rate <= 0:
+            raise RecordingError(f"{p}: sample_rate = {rate!r}; a positive rate in S/s needed")
+        group = f.get("hits")
+        names = sorted(group.keys()) if group is not None else []
+        hits = []
+        for i, name in enumerate(names):
+            ds = group[name]
+            u = _attr(ds.attrs.get("units"))
+            if u != FORCE_UNITS:
+                raise RecordingError(f"{p}: {name} has units {u!r}, expected {FORCE_UNITS!r}")
+            hits.append(RecordedHit(
+                index=i,
+                force=np.asarray(ds[()], dtype=np.float64),
+                trigger_index=int(ds.attrs.get("trigger_index", 0)),
+                clipped=bool(ds.attrs.get("clipped", False)),
+                timestamp_utc=str(_attr(ds.attrs.get("timestamp_utc", ""))),
+                extra=json.loads(_attr(ds.attrs.get("extra_json", "{}"))),
+            ))
+    kept, dropped = check_hits(
+        p, hits, record_samples=meta.get("record_samples"),
+        full_scale=meta.get("full_scale_force"), clipped=clipped,
+    )
+    return Recording(p, meta, float(rate), tuple(kept), tuple(dropped))

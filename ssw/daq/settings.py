@@ -1,0 +1,184 @@
+"""Acquisition settings: the ``daq:`` section of the config as a frozen, checked dataclass.
+
+The checks encode the NI 9234 (C Series sound and vibration module) and the PCB 208C02
+IEPE force sensor the thesis used (Torres Constante 2024, Stage III; REFERENCE.md):
+
+* sample rate ``f_s = (13.1072 MHz / 256) / n = 51200 / n`` S/s, ``n = 1..31``
+  (internal master timebase; NI 9234 specifications, "Data rates");
+* input range +-5 V; the sensor range times its sensitivity must fit in it, otherwise
+  every full-scale hit clips;
+* IEPE excitation 2 mA (or 0 = off), and only with AC coupling (the module switches the
+  excitation off in DC coupling).
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+from ssw.errors import ConfigError
+
+NI9234_BASE_RATE = 13.1072e6 / 256  # S/s, 51200: master timebase / 256 (NI 9234 specs)
+NI9234_MAX_DIVISOR = 31  # rate divisor n = 1..31 (NI 9234 specs)
+NI9234_RANGE_V = 5.0  # V, input range +-5 V (NI 9234 specs)
+NI9234_BITS = 24  # delta-sigma ADC resolution (NI 9234 specs)
+NI9234_IEPE_A = 0.002  # A, the only IEPE excitation current the module supplies
+RATE_RTOL = 1e-9  # relative tolerance when matching a rate to 51200/n
+
+
+def allowed_rates() -> list[float]:
+    """The NI 9234's sample rates with the internal timebase, S/s, fastest first."""
+    return [NI9234_BASE_RATE / n for n in range(1, NI9234_MAX_DIVISOR + 1)]
+
+
+def rate_divisor(rate: float) -> int:
+    """The divisor ``n`` with ``rate = 51200 / n``; :class:`ConfigError` if none matches."""
+    n = round(NI9234_BASE_RATE / rate) if rate > 0 else 0
+    if 1 <= n <= NI9234_MAX_DIVISOR and abs(NI9234_BASE_RATE / n - rate) <= RATE_RTOL * rate:
+        return n
+    raise ConfigError(
+        "daq.sample_rate",
+        rate,
+        "an NI 9234 rate 51200/n S/s with n = 1..31 (51200, 25600, 17066.67, 12800, ... "
+        f"{NI9234_BASE_RATE / NI9234_MAX_DIVISOR:.2f})",
+    )
+
+
+@dataclass(frozen=True)
+class SimulationSettings:
+    """Imperfections the simulated backend adds (``daq.simulation``), SI units.
+
+    Attributes
+    ----------
+    noise_rms : additive white noise at the sensor, N (rms).
+    trigger_jitter : standard deviation of the random delay between the wave and the
+        sample clock beyond the uniform sample phase, s.
+    source : waveform source: ``chain`` (``ssw.chain.api.sensor_signal``) or ``analytic``
+        (two sech^2 pulses with a known TOF, for tests without the chain).
+    """
+
+    noise_rms: float = 0.05
+    trigger_jitter: float = 2.0e-6
+    source: str = "chain"
+
+
+@dataclass(frozen=True)
+class DaqSettings:
+    """One force channel of an NI 9234 in a cDAQ chassis, from config ``daq:`` (SI units).
+
+    ``sensitivity`` is in V/N (NI-DAQmx takes mV/N: :attr:`sensitivity_mv_per_n`);
+    ``trigger_level`` and ``max_force`` are in N.
+    """
+
+    device: str = "cDAQ1Mod1"
+    channel: str = "ai0"
+    sensor_model: str = "PCB 208C02"
+    sensitivity: float = 11.24e-3
+    excitation_current: float = NI9234_IEPE_A
+    coupling: str = "AC"
+    sample_rate: float = NI9234_BASE_RATE
+    max_force: float = 445.0
+    trigger_level: float = 5.0
+    trigger_slope: str = "rising"
+    pretrigger_samples: int = 256
+    record_samples: int = 2048
+    hits: int = 10
+    timeout: float = 60.0
+    simulation: SimulationSettings = field(default_factory=SimulationSettings)
+
+    def __post_init__(self) -> None:
+        check_settings(self)
+
+    @property
+    def physical_channel(self) -> str:
+        """NI-DAQmx physical channel name, e.g. ``cDAQ1Mod1/ai0``."""
+        return f"{self.device}/{self.channel}"
+
+    @property
+    def sensitivity_mv_per_n(self) -> float:
+        """Sensitivity in mV/N, the unit NI-DAQmx's force IEPE channel takes."""
+        return self.sensitivity * 1e3
+
+    @property
+    def full_scale_force(self) -> float:
+        """Force at the module's +-5 V limit, N: ``5 V / sensitivity``."""
+        return NI9234_RANGE_V / self.sensitivity
+
+    @property
+    def dt(self) -> float:
+        """Sample period, s."""
+        return 1.0 / self.sample_rate
+
+    def to_dict(self) -> dict[str, Any]:
+        """Plain dict (for metadata and ``--json``)."""
+        return asdict(self)
+
+
+def check_settings(s: DaqSettings) -> None:
+    """Raise :class:`ConfigError` unless ``s`` is a configuration the NI 9234 accepts."""
+    rate_divisor(s.sample_rate)
+    if s.coupling not in ("AC", "DC"):
+        raise ConfigError("daq.coupling", s.coupling, "AC or DC")
+    if s.excitation_current not in (0.0, NI9234_IEPE_A):
+        raise ConfigError(
+            "daq.excitation_current", s.excitation_current,
+            "0 (off) or 0.002 A: the NI 9234 supplies 2 mA IEPE excitation only",
+        )
+    if s.excitation_current > 0 and s.coupling != "AC":
+        raise ConfigError(
+            "daq.coupling", s.coupling,
+            "AC when IEPE excitation is on: the NI 9234 supplies IEPE current only in AC coupling",
+        )
+    if s.sensitivity <= 0:
+        raise ConfigError("daq.sensitivity", s.sensitivity, "a positive value in V/N")
+    if s.max_force <= 0:
+        raise ConfigError("daq.max_force", s.max_force, "a positive force in N")
+    volts = s.max_force * s.sensitivity
+    if volts > NI9234_RANGE_V * (1 + 1e-3):
+        raise ConfigError(
+            "daq.max_force", s.max_force,
+            f"at most {s.full_scale_force:.4g} N: max_force x sensitivity = {volts:.4g} V "
+            f"exceeds the NI 9234's +-{NI9234_RANGE_V} V range",
+        )
+    if s.trigger_slope not in ("rising", "falling"):
+        raise ConfigError("daq.trigger_slope", s.trigger_slope, "rising or falling")
+    if not 0 < abs(s.trigger_level) < s.max_force:
+        raise ConfigError(
+            "daq.trigger_level", s.trigger_level, f"a nonzero force below max_force {s.max_force} N"
+        )
+    if not 2 <= s.pretrigger_samples <= s.record_samples - 2:
+        raise ConfigError(
+            "daq.pretrigger_samples", s.pretrigger_samples,
+            f"between 2 and record_samples - 2 = {s.record_samples - 2}",
+        )
+    if s.hits < 1:
+        raise ConfigError("daq.hits", s.hits, "at least 1")
+    if s.timeout <= 0:
+        raise ConfigError("daq.timeout", s.timeout, "a positive time in s")
+    sim = s.simulation
+    if sim.noise_rms < 0:
+        raise ConfigError("daq.simulation.noise_rms", sim.noise_rms, "a nonnegative force in N")
+    if sim.trigger_jitter < 0:
+        raise ConfigError("daq.simulation.trigger_jitter", sim.trigger_jitter, "a nonnegative time")
+    if sim.source not in ("chain", "analytic"):
+        raise ConfigError("daq.simulation.source", sim.source, "chain or analytic")
+
+
+def settings_from_config(cfg: dict[str, Any], **overrides: Any) -> DaqSettings:
+    """Build :class:`DaqSettings` from a loaded config's ``daq:`` section plus overrides."""
+    raw = dict(cfg.get("daq", {}) or {})
+    raw.update({k: v for k, v in overrides.items() if v is not None})
+    sim_raw = raw.pop("simulation", {}) or {}
+    known = set(DaqSettings.__dataclass_fields__)
+    unknown = sorted(set(raw) - known)
+    if unknown:
+        raise ConfigError(f"daq.{unknown[0]}", raw[unknown[0]], f"one of {sorted(known)}")
+    sim_known = set(SimulationSettings.__dataclass_fields__)
+    bad = sorted(set(sim_raw) - sim_known)
+    if bad:
+        raise ConfigError(f"daq.simulation.{bad[0]}", sim_raw[bad[0]], f"one of {sorted(sim_known)}")
+    for key in ("sensitivity", "excitation_current", "sample_rate", "max_force", "trigger_level",
+                "timeout"):
+        if key in raw:
+            raw[key] = float(raw[key])
+    return DaqSettings(**raw, simulation=SimulationSettings(**sim_raw))

@@ -1,0 +1,173 @@
+"""The indentation range a fit covers: by default, what the chain reaches at its last contact.
+
+Fitting a law on the whole FEM curve (0..0.1 mm in the thesis) weights indentations the
+device never reaches (stiff soils) or misses those it does (soft soils). The default
+range, mode ``chain``, is ``[0, factor * delta_peak(E, nu)]`` with ``delta_peak`` the peak
+wall indentation of the chain on that soil, with the Hertz wall:
+
+* from ``ssw.chain.api.peak_wall_indentation(soil_E, soil_nu, params)`` when the chain
+  package provides it (the dynamics, Stage II);
+* otherwise (documented fallback, ``source = "energy_bound"``) from energy conservation:
+  the wall cannot store more than the striker's kinetic energy plus the work of the
+  chain's weight over the wall's indentation,
+
+      ``(2/5) A_w delta^(5/2) = 1/2 m_s v^2 + M g delta``,
+
+  with ``A_w = 4/3 E* sqrt(R_b)``, ``1/E* = (1-nu_b^2)/E_b + (1-nu_s^2)/E_s``, ``m_s`` the
+  striker (one bead) mass, ``M`` the chain's mass (gravity on) and ``v`` the striker speed.
+  It bounds the Hertz-wall peak from above (bead-bead springs and kinetic energy left
+  in the chain only lower it); a plate makes the wall stiffer and the peak smaller still.
+
+Other modes: ``fixed`` (``[delta_min, delta_max]`` from the config) and ``curve`` (the whole
+curve). The upper end is clipped to the curve's last indentation; the result says so.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ssw import hertz
+from ssw.errors import ConfigError
+
+G = 9.80665  # m/s^2, standard gravity
+RANGE_MODES = ("chain", "fixed", "curve")
+#: Bisection steps in log(delta): 200 halvings of a 1e-12..1 m bracket reach ~1e-16 relative.
+_BISECT_STEPS = 200
+
+
+@dataclass(frozen=True)
+class ChainEstimate:
+    """The chain quantities the energy bound needs. SI units."""
+
+    beads: int  # including the striker
+    bead_radius: float  # m
+    bead_density: float  # kg/m^3
+    bead_E: float  # Pa
+    bead_nu: float  # -
+    striker_velocity: float  # m/s
+    gravity: bool
+
+    @property
+    def bead_mass(self) -> float:
+        """kg: ``4/3 pi R^3 rho``."""
+        return 4.0 / 3.0 * np.pi * self.bead_radius**3 * self.bead_density
+
+    @classmethod
+    def from_config(cls, cfg: dict[str, Any]) -> ChainEstimate:
+        """From a validated study config (``chain`` section and the materials library)."""
+        from ssw.config import library
+
+        ch = cfg["chain"]
+        mat = library(cfg)[ch["bead_material"]]
+        return cls(
+            beads=int(ch["beads"]),
+            bead_radius=float(ch["bead_radius"]),
+            bead_density=mat.density,
+            bead_E=mat.E,
+            bead_nu=mat.nu,
+            striker_velocity=float(ch["striker_velocity"]),
+            gravity=bool(ch["gravity"]),
+        )
+
+
+def energy_bound_indentation(
+    soil_E: ArrayLike, soil_nu: ArrayLike, chain: ChainEstimate
+) -> NDArray[np.float64]:
+    """Upper bound (m) of the Hertz-wall peak indentation from energy conservation.
+
+    Solves ``(2/5) A_w d^(5/2) - M g d = 1/2 m_s v^2`` for its positive root (the left side
+    is negative, then increasing, beyond its minimum) by bisection in ``log d``; vectorized
+    over ``soil_E`` and ``soil_nu``.
+    """
+    E_star = hertz.effective_modulus(chain.bead_E, chain.bead_nu, soil_E, soil_nu)
+    A = hertz.hertz_coefficient(E_star, chain.bead_radius)
+    m = chain.bead_mass
+    W0 = 0.5 * m * chain.striker_velocity**2
+    Mg = chain.beads * m * G if chain.gravity else 0.0
+    lo = np.full(np.shape(A), np.log(1e-12))
+    hi = np.full(np.shape(A), np.log(1.0))
+    for _ in range(_BISECT_STEPS):
+        mid = 0.5 * (lo + hi)
+        d = np.exp(mid)
+        above = 0.4 * A * d**2.5 - Mg * d - W0 > 0
+        hi = np.where(above, mid, hi)
+        lo = np.where(above, lo, mid)
+    return np.exp(0.5 * (lo + hi))
+
+
+def _chain_api() -> Any | None:
+    try:
+        api = importlib.import_module("ssw.chain.api")
+    except ImportError:
+        return None
+    return api if hasattr(api, "peak_wall_indentation") else None
+
+
+def peak_wall_indentation(
+    soil_E: ArrayLike, soil_nu: ArrayLike, cfg: dict[str, Any]
+) -> tuple[NDArray[np.float64], str]:
+    """Peak wall indentation (m) of the config's chain on a Hertz wall, and its source.
+
+    ``source`` is ``"chain"`` (``ssw.chain.api``) or ``"energy_bound"`` (the fallback).
+    """
+    api = _chain_api()
+    if api is not None:
+        params = api.params_from_config(cfg) if hasattr(api, "params_from_config") else cfg
+        return np.asarray(api.peak_wall_indentation(soil_E, soil_nu, params), float), "chain"
+    return energy_bound_indentation(soil_E, soil_nu, ChainEstimate.from_config(cfg)), (
+        "energy_bound"
+    )
+
+
+@dataclass(frozen=True)
+class FitRange:
+    """A fit range (m) and how it was chosen."""
+
+    lo: float
+    hi: float
+    mode: str
+    source: str  # chain | energy_bound | config | curve
+    needed: float  # m, the upper end before clipping to the curve
+    clipped: bool  # the curve stops short of ``needed``
+
+
+def fit_range(
+    soil_E: float, soil_nu: float, curve_delta_max: float, cfg: dict[str, Any]
+) -> FitRange:
+    """The fit range of one scene under the config's ``fit.range`` settings.
+
+    Parameters
+    ----------
+    soil_E, soil_nu : the scene's soil (Pa, -).
+    curve_delta_max : the curve's last indentation, m.
+    cfg : validated study config (``fit.range.{mode, factor, delta_min, delta_max}``).
+    """
+    rc = cfg.get("fit", {}).get("range", {})
+    mode = rc.get("mode", "chain")
+    lo = float(rc.get("delta_min", 0.0))
+    if mode == "chain":
+        d, source = peak_wall_indentation(soil_E, soil_nu, cfg)
+        needed = float(rc.get("factor", 1.0)) * float(np.asarray(d).ravel()[0])
+    elif mode == "fixed":
+        needed, source = float(rc.get("delta_max", 1.0e-4)), "config"
+    elif mode == "curve":
+        needed, source = curve_delta_max, "curve"
+    else:
+        raise ConfigError("fit.range.mode", mode, f"one of {', '.join(RANGE_MODES)}")
+    hi = min(needed, curve_delta_max)
+    if not hi > lo:
+        raise ConfigError(
+            "fit.range.delta_min", lo, f"below the range's upper end {hi:.6g} m"
+        )
+    return FitRange(lo, hi, mode, source, needed, needed > curve_delta_max * (1 + 1e-12))
+
+
+def scene_delta_max(soil_E: float, soil_nu: float, cfg: dict[str, Any]) -> float:
+    """Indentation (m) a scene's curve must reach for its default fit (the contact stage
+    may use it to compute only what the fit needs)."""
+    return fit_range(soil_E, soil_nu, np.inf, cfg).needed

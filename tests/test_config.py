@@ -1,0 +1,102 @@
+"""Config schema and semantic checks: bad values are refused naming the field."""
+
+import copy
+
+import numpy as np
+import pytest
+import yaml
+
+from ssw.config import DEFAULT_CONFIG, expand_grid, load_config, scenes, validate_config
+from ssw.errors import ConfigError
+from ssw.materials import get_material, material_set
+
+
+@pytest.fixture(scope="module")
+def thesis_raw():
+    return yaml.safe_load(DEFAULT_CONFIG.read_text())
+
+
+def test_thesis_config_mirrors_the_thesis(thesis_raw):
+    cfg = validate_config(copy.deepcopy(thesis_raw))
+    # Set 3: E 10..1000 MPa step 10 (100 values) x nu 0.1/0.3/0.5, PLA 0.4 mm (thesis Table 1)
+    s3 = scenes(cfg, "set3_soil")
+    assert len(s3) == 300
+    assert {s.soil_nu for s in s3} == {0.1, 0.3, 0.5}
+    assert min(s.soil_E for s in s3) == 10e6 and max(s.soil_E for s in s3) == 1000e6
+    assert {s.plate_thickness for s in s3} == {0.4e-3}
+    # Set 2: PLA 0.1, 0.2, 0.4, 1.0 mm (and the no-plate reference)
+    t2 = sorted({s.plate_thickness for s in scenes(cfg, "set2_thickness")})
+    assert t2 == [0.0, 0.1e-3, 0.2e-3, 0.4e-3, 1.0e-3]
+    # Set 1: three plate materials at 0.4 mm
+    assert {s.plate_material for s in scenes(cfg, "set1_materials")} == {"pla", "al6061", "a36"}
+    assert cfg["indenter"]["radius"] == 9.53e-3
+    assert cfg["contact"]["steps"] * 1e-7 == pytest.approx(cfg["contact"]["delta_max"])
+
+
+def test_defaults_are_filled():
+    cfg = validate_config({"sets": {"s": {"plate_material": ["pla"],
+                                          "plate_thickness": {"values": [4e-4]},
+                                          "soil_E": {"values": [5e7]},
+                                          "soil_nu": {"values": [0.3]}}}})
+    assert cfg["contact"]["interface"] == "frictionless"
+    assert cfg["chain"]["sweep"]["soil_nu"] == {"values": [0.1, 0.3, 0.5]}
+
+
+@pytest.mark.parametrize(
+    ("path", "value", "field"),
+    [
+        (("sets", "set2_thickness", "plate_thickness"), {"values": [-0.4e-3]},
+         "sets.set2_thickness.plate_thickness"),
+        (("sets", "set3_soil", "soil_nu"), {"values": [0.6]}, "sets.set3_soil.soil_nu"),
+        (("sets", "set3_soil", "soil_E"), {"values": [0.0]}, "sets.set3_soil.soil_E"),
+        (("sets", "set1_materials", "plate_material"), ["unobtainium"],
+         "sets.set1_materials.plate_material[0]"),
+        (("indenter", "radius"), -1.0, "indenter.radius"),
+        (("contact", "interface"), "glued", "contact.interface"),
+        (("chain", "bead_material"), "cheese", "chain.bead_material"),
+    ],
+)
+def test_bad_values_are_refused_naming_the_field(thesis_raw, path, value, field):
+    cfg = copy.deepcopy(thesis_raw)
+    node = cfg
+    for key in path[:-1]:
+        node = node[key]
+    node[path[-1]] = value
+    with pytest.raises(ConfigError) as exc:
+        validate_config(cfg)
+    assert exc.value.field == field
+    assert str(exc.value).startswith(field)
+    # the message shows the offending value
+    shown = value["values"] if isinstance(value, dict) else value
+    assert str(shown).strip("[]'") in str(exc.value)
+
+
+def test_unknown_key_is_refused(thesis_raw):
+    cfg = copy.deepcopy(thesis_raw)
+    cfg["contact"]["mesh_sise"] = 3
+    with pytest.raises(ConfigError, match="mesh_sise"):
+        validate_config(cfg)
+
+
+def test_grid_expansion_includes_stop_and_refuses_misfit():
+    assert np.allclose(expand_grid({"start": 10e6, "stop": 1000e6, "step": 10e6}, "f"),
+                       np.arange(1, 101) * 10e6)
+    with pytest.raises(ConfigError, match="f"):
+        expand_grid({"start": 0.0, "stop": 1.0, "step": 0.3}, "f")
+
+
+def test_missing_config_file(tmp_path):
+    with pytest.raises(ConfigError, match="--config"):
+        load_config(tmp_path / "nope.yaml")
+
+
+def test_materials_sets():
+    real, printed = material_set("realistic"), material_set("as_printed")
+    # the thesis's Table 1 as printed: Al 10 MPa, PLA 100 MPa, A36 210 MPa
+    assert printed["al6061"].E == 10e6 and printed["pla"].E == 100e6 and printed["a36"].E == 210e6
+    assert real["al6061"].E == 68.9e9 and real["pla"].E == 3.5e9 and real["a36"].E == 200e9
+    # the as-printed set inherits everything else from realistic
+    assert printed["pla"].nu == real["pla"].nu and printed["pcf15"] == real["pcf15"]
+    assert all(m.source for m in real.values())
+    with pytest.raises(ConfigError, match="material"):
+        get_material("cheese")

@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from ssw.errors import ConfigError
 
+
 def _check_positive(name: str, value: ArrayLike) -> NDArray[np.float64]:
     arr = np.asarray(value, dtype=float)
     if not np.all(arr > 0):

@@ -1,10 +1,13 @@
 """The SLURM profile on a real (single-node, localhost) Slurm cluster.
 
 The cluster is started by ``scripts/slurm-local.sh`` (the Makefile's ``test`` target does it
-before pytest; the fixture here does it too, idempotently). Each test runs a workflow twice,
-once with the local executor and once through ``snakemake --executor slurm`` with
-``workflow/profiles/slurm``, and checks both runs produced the same files: the result of a
-study must not depend on where its jobs ran.
+before pytest; the fixture here does it too, idempotently). The equality tests run a
+workflow twice, once with the local executor and once through ``snakemake --executor slurm``
+with ``workflow/profiles/slurm``, and check both runs produced the same results: a study's
+result must not depend on where its jobs ran. The tiny study of ``config/ci.yaml`` runs by
+default; a self-contained workflow with MPI jobs (2 ranks: the chain sweep over mpi4py, the
+contact FEM over PETSc) is ``slow``. A Ctrl-C test checks that an interrupted run leaves no
+job in the queue and no lock.
 
 Skipped, with the reason, only when this process is not root (the script needs root) or the
 cluster cannot start on this machine.
@@ -14,12 +17,17 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
+import signal
 import subprocess
 import sys
 import textwrap
+import time
 from pathlib import Path
 
+import h5py
+import numpy as np
 import pytest
 
 pytestmark = pytest.mark.slurm
@@ -32,10 +40,11 @@ PROFILE = ROOT / "workflow" / "profiles" / "slurm"
 LOCAL_CLUSTER_ARGS = [
     "--slurm-no-account",
     "--slurm-status-command", "squeue",
-    # Poll after 2 s instead of the plugin's 40 s: jobs here take seconds.
-    "--slurm-init-seconds-before-status-checks", "2",
+    # Poll 1 s after a submission instead of the plugin's 40 s: jobs here take seconds.
+    "--slurm-init-seconds-before-status-checks", "1",
 ]
 RUN_TIMEOUT_S = 300
+JOB_PREFIX = "sswtest"
 
 
 def _env() -> dict[str, str]:
@@ -65,6 +74,21 @@ def slurm_cluster() -> str:
     return sinfo.stdout.strip()
 
 
+def cancel_test_jobs() -> None:
+    """scancel the jobs this module submitted (job names start with the test prefix)."""
+    q = subprocess.run(["squeue", "-h", "-o", "%i %j"], capture_output=True, text=True)
+    ids = [line.split()[0] for line in q.stdout.splitlines()
+           if len(line.split()) == 2 and line.split()[1].startswith(JOB_PREFIX)]
+    if ids:
+        subprocess.run(["scancel", *ids], check=False)
+
+
+def failure_summary(log: str) -> str:
+    """The first failed rule's report in a Snakemake log (else its tail)."""
+    i = log.find("Error in rule")
+    return log[i:i + 2000] if i >= 0 else log[-3000:]
+
+
 def run_snakemake(workdir: Path, args: list[str], timeout: float = RUN_TIMEOUT_S):
     """Run snakemake in ``workdir``; fail the test with its log tail on error."""
     cmd = [str(SNAKEMAKE), "--directory", str(workdir), *args]
@@ -72,10 +96,10 @@ def run_snakemake(workdir: Path, args: list[str], timeout: float = RUN_TIMEOUT_S
         proc = subprocess.run(cmd, cwd=workdir, env=_env(), capture_output=True, text=True,
                               timeout=timeout)
     except subprocess.TimeoutExpired as exc:
-        subprocess.run(["scancel", "--name", "ssw-test", "--full"], check=False)
+        cancel_test_jobs()
         pytest.fail(f"snakemake did not finish in {timeout} s: {' '.join(cmd)}\n"
                     f"{(exc.stderr or b'')[-3000:]!r}")
-    assert proc.returncode == 0, f"{' '.join(cmd)}\n{proc.stderr[-4000:]}"
+    assert proc.returncode == 0, f"{' '.join(cmd)}\n{failure_summary(proc.stderr)}"
     return proc
 
 
@@ -89,8 +113,11 @@ TINY_SNAKEFILE = textwrap.dedent('''
     # A self-contained workflow shaped like the study: many cheap points (grouped into few
     # cluster jobs by the profile), an MPI job, and a summary. Every file is written through
     # ssw.h5io (atomic) by ssw's own Hertz law.
-    N_POINTS = int(config.get("n_points", 12))
+    N_POINTS = int(config.get("n_points", 8))
     SOIL_E = [1.0e6 * 10 ** (4 * i / (N_POINTS - 1)) for i in range(N_POINTS)]  # Pa, 1 MPa..10 GPa
+
+
+    localrules: all, summary
 
 
     rule all:
@@ -127,48 +154,232 @@ TINY_SNAKEFILE = textwrap.dedent('''
             runtime=5,
             mem_mb=500,
         shell:
-            "{resources.mpi} -n {resources.tasks} sh -c 'echo rank=${{PMI_RANK}} size=${{PMI_SIZE}}'"
-            " | sort > {output}"
+            "{resources.mpi} -n {resources.tasks}"
+            " sh -c 'echo rank=${{PMI_RANK}} size=${{PMI_SIZE}}' | sort > {output}"
+
+
+    SWEEP = (f"ssw tof-sweep --config {config['study_config']} --law hertz"
+             " --soil-E-min 1e7 --soil-E-max 1e8 --soil-E-step 3e7 --soil-nu 0.3 0.5")
+
+
+    rule sweep_serial:
+        output:
+            "out/sweep_serial.h5",
+        shell:
+            "{SWEEP} --output {output} > /dev/null"
+
+
+    rule sweep_mpi:
+        output:
+            "out/sweep_mpi.h5",
+        resources:
+            mpi="mpiexec",
+            tasks=2,
+        shell:
+            "{resources.mpi} -n {resources.tasks} {SWEEP} --mpi --output {output} > /dev/null"
+
+
+    CONTACT = (f"ssw contact --config {config['study_config']} --soil-E 5e7 --soil-nu 0.3"
+               " --plate-thickness 0 --steps 20")
+
+
+    rule contact_serial:
+        output:
+            "out/contact_serial.h5",
+        shell:
+            "{CONTACT} --output {output} > /dev/null"
+
+
+    rule contact_mpi:
+        output:
+            "out/contact_mpi.h5",
+        resources:
+            mpi="mpiexec",
+            tasks=2,
+        shell:
+            "{resources.mpi} -n {resources.tasks} {CONTACT} --output {output} > /dev/null"
 
 
     rule summary:
         input:
             points=expand("out/points/{i}.json", i=range(N_POINTS)),
             ranks="out/mpi_ranks.txt",
+            sweeps=["out/sweep_serial.h5", "out/sweep_mpi.h5"],
+            contacts=["out/contact_serial.h5", "out/contact_mpi.h5"],
         output:
             "out/summary.json",
         run:
+            import h5py
             import ssw.h5io as io
             pts = [json.load(open(p)) for p in input.points]
+            tofs = [h5py.File(p, "r")["tof"][()].tolist() for p in input.sweeps]
+            forces = [h5py.File(p, "r")["force"][()].tolist() for p in input.contacts]
             io.atomic_write_text(output[0], json.dumps(
-                dict(points=pts, ranks=open(input.ranks).read().split("\\n"))))
+                dict(points=pts, ranks=open(input.ranks).read().split("\\n"), tofs=tofs,
+                     forces=forces)))
 ''')
 
 
+@pytest.mark.slow
 def test_tiny_workflow_slurm_equals_local(tmp_path: Path, slurm_cluster: str) -> None:
-    """12 grouped points + a 2-rank MPI job + a summary: slurm run == local run, byte for byte.
+    """8 grouped points, 2-rank MPI jobs (a rank echo; the chain sweep over mpi4py ranks;
+    the contact FEM over PETSc ranks) and a local summary: the SLURM run's files equal the
+    local run's, and the MPI results equal the serial ones.
 
-    Also checks the profile's grouping (12 points are submitted as 3 jobs of 4) and that
-    jobs found the venv's ``ssw`` first on PATH.
+    Also checks grouping (8 points are submitted as 2 jobs of 4, each on 1 core, so they run
+    side by side on the 2-CPU node), that the MPI job got 2 ranks, and that jobs found the
+    venv's ``ssw`` first on PATH.
     """
     local, slurm = tmp_path / "local", tmp_path / "slurm"
     for d in (local, slurm):
         d.mkdir()
         (d / "Snakefile").write_text("import json\n" + TINY_SNAKEFILE)
-    run_snakemake(local, ["--cores", "2"])
+    study = ["--config", f"study_config={ROOT / 'config' / 'ci.yaml'}"]
+    run_snakemake(local, ["--cores", "2", *study])
     proc = run_snakemake(slurm, [
         "--profile", str(PROFILE), *LOCAL_CLUSTER_ARGS,
-        "--groups", "point=points", "--group-components", "points=4",
-        "--slurm-jobname-prefix", "ssw-test",
+        "--groups", "point=points", "--group-components", "points=4", "--cores", "1",
+        "--slurm-jobname-prefix", JOB_PREFIX, *study,
     ])
-    got, want = tree(slurm, "out/**/*"), tree(local, "out/**/*")
-    assert sorted(got) == sorted(want)
-    assert got == want
+    assert assert_same_results(slurm / "out", local / "out") == 4
+    got, want = tree(slurm, "out/**/*.json"), tree(local, "out/**/*.json")
+    assert got == want and len(got) == 9
     summary = json.loads((slurm / "out" / "summary.json").read_text())
     assert {p["ssw"] for p in summary["points"]} == {shutil.which("ssw", path=str(VENV_BIN))}
     assert [r for r in summary["ranks"] if r] == ["rank=0 size=2", "rank=1 size=2"]
-    # 12 points in groups of 4 -> 3 group jobs, + mpi_ranks + summary: 5 submissions.
-    submitted = proc.stderr.count("submitted to SLURM") or proc.stderr.count("Job ") and None
-    log = proc.stderr
-    assert log.count("group job") >= 3 or "points" in log, log[-2000:]
-    assert submitted is None or submitted >= 1
+    # The chain sweep split over 2 MPI ranks inside a SLURM job equals the serial sweep.
+    serial, mpi = summary["tofs"]
+    assert len(serial) == 8 and np.isfinite(serial).all() and serial == mpi
+    # The contact FEM on 2 PETSc ranks inside a SLURM job: the serial curve (the stage's own
+    # MPI test uses the same 1e-9 tolerance: one LU factorization, gathered on every rank).
+    f_serial, f_mpi = (np.asarray(f) for f in summary["forces"])
+    assert f_serial.shape == (20,) and np.all(f_serial > 0)
+    np.testing.assert_allclose(f_mpi, f_serial, rtol=1e-9, atol=0)
+    # 8 points in groups of 4 -> 2 group jobs, + mpi_ranks + 2 sweeps + 2 contacts: 7 sbatch
+    # calls (summary is a local rule).
+    assert proc.stderr.count("has been submitted with SLURM jobid") == 7, proc.stderr[-3000:]
+
+
+def _h5_datasets(path: Path) -> dict[str, np.ndarray]:
+    """Every dataset of an HDF5 file (name -> value); attributes hold run metadata."""
+    out: dict[str, np.ndarray] = {}
+    with h5py.File(path, "r") as f:
+        f.visititems(lambda n, o: out.__setitem__(n, o[()])
+                     if isinstance(o, h5py.Dataset) else None)
+    return out
+
+
+def assert_same_results(got: Path, want: Path) -> int:
+    """Same result files; HDF5 datasets and CSV tables identical. Returns files compared.
+
+    Logs, figures, JSON summaries and the HTML report carry run times, dates and paths, so
+    they are compared by presence only; the numbers they show come from the HDF5/CSV files.
+    """
+    names = sorted(str(p.relative_to(want)) for p in want.rglob("*") if p.is_file())
+    assert names == sorted(str(p.relative_to(got)) for p in got.rglob("*") if p.is_file())
+    compared = 0
+    for name in names:
+        a, b = got / name, want / name
+        if name.endswith(".h5"):
+            da, db = _h5_datasets(a), _h5_datasets(b)
+            assert sorted(da) == sorted(db), name
+            for key in da:
+                x, y = np.asarray(da[key]), np.asarray(db[key])
+                assert x.shape == y.shape, f"{name}:{key}"
+                same = np.array_equal(x, y, equal_nan=x.dtype.kind == "f")
+                assert same, f"{name}:{key} differs between the SLURM and the local run"
+            compared += 1
+        elif name.endswith(".csv"):
+            assert a.read_text() == b.read_text(), name
+            compared += 1
+    return compared
+
+
+def test_ci_study_slurm_equals_local(tmp_path: Path, slurm_cluster: str) -> None:
+    """The tiny study (config/ci.yaml) through `--executor slurm` == the same study run locally.
+
+    Both runs start together (the SLURM run spends most of its time waiting for the queue
+    and status polls) from the same code. Every HDF5 dataset and CSV table must be equal;
+    the profile's grouping must batch the 5 contact scenes into one SLURM job.
+    """
+    config = ROOT / "config" / "ci.yaml"
+    local, slurm = tmp_path / "local", tmp_path / "slurm"
+    local.mkdir()
+    slurm.mkdir()
+    smk = [str(SNAKEMAKE), "--snakefile", str(ROOT / "Snakefile"), "--configfile", str(config)]
+    local_cmd = [*smk, "--directory", str(local), "--cores", "2"]
+    slurm_cmd = [*smk, "--directory", str(slurm), "--profile", str(PROFILE),
+                 *LOCAL_CLUSTER_ARGS, "--cores", "2", "--slurm-jobname-prefix", JOB_PREFIX]
+    procs = [subprocess.Popen(cmd, cwd=ROOT, env=_env(), stdout=subprocess.PIPE,
+                              stderr=subprocess.STDOUT, text=True, start_new_session=True)
+             for cmd in (local_cmd, slurm_cmd)]
+    try:
+        logs = [p.communicate(timeout=RUN_TIMEOUT_S)[0] for p in procs]
+    except subprocess.TimeoutExpired:
+        for p in procs:
+            os.killpg(p.pid, signal.SIGINT)
+        cancel_test_jobs()
+        pytest.fail(f"the study did not finish within {RUN_TIMEOUT_S} s")
+    for p, log in zip(procs, logs, strict=True):
+        assert p.returncode == 0, f"{' '.join(p.args)}\n{failure_summary(log)}"
+    slurm_log = logs[1]
+    # Grouping: the 5 contact scenes go as one SLURM job, the small fit/figure rules as
+    # another, so there are at least 4 + 3 fewer submissions than jobs.
+    submitted = slurm_log.count("has been submitted with SLURM jobid")
+    steps = re.search(r"(\d+) of \1 steps \(100%\) done", slurm_log)
+    assert steps and 1 <= submitted <= int(steps.group(1)) - 1 - 7, (submitted, slurm_log[-2000:])
+    assert "Group job contact" in slurm_log
+    n = assert_same_results(slurm / "results", local / "results")
+    assert n >= 10, f"only {n} result files compared"
+
+
+SLOW_SNAKEFILE = textwrap.dedent('''
+    rule all:
+        input:
+            expand("out/{i}.txt", i=range(3)),
+
+
+    rule slow:
+        output:
+            "out/{i}.txt",
+        shell:
+            "sleep 120; touch {output}"
+''')
+
+
+def _test_jobs() -> list[str]:
+    q = subprocess.run(["squeue", "-h", "-o", "%j %T"], capture_output=True, text=True)
+    return [line for line in q.stdout.splitlines() if line.startswith(JOB_PREFIX)]
+
+
+def test_ctrl_c_cancels_the_slurm_jobs(tmp_path: Path, slurm_cluster: str) -> None:
+    """Ctrl-C (SIGINT) on a Snakemake run with the SLURM profile, while one job runs and
+    others wait in the queue: every submitted job leaves the queue, no output appears, and
+    the lock is released so the same command can run again (docs/cluster.md section 4)."""
+    (tmp_path / "Snakefile").write_text(SLOW_SNAKEFILE)
+    cmd = [str(SNAKEMAKE), "--directory", str(tmp_path), "--profile", str(PROFILE),
+           *LOCAL_CLUSTER_ARGS, "--cores", "1", "--slurm-jobname-prefix", JOB_PREFIX]
+    proc = subprocess.Popen(cmd, cwd=tmp_path, env=_env(), start_new_session=True,
+                            stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
+    try:
+        deadline = time.monotonic() + 90
+        while time.monotonic() < deadline:
+            jobs = _test_jobs()
+            if len(jobs) == 3 and any("RUNNING" in j for j in jobs):
+                break
+            assert proc.poll() is None, proc.communicate()[0][-3000:]
+            time.sleep(0.5)
+        else:
+            pytest.fail(f"the 3 jobs were not submitted and started within 90 s: {jobs}")
+        os.killpg(proc.pid, signal.SIGINT)
+        log = proc.communicate(timeout=120)[0]
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+        cancel_test_jobs()
+    assert proc.returncode != 0
+    assert _test_jobs() == [], log[-2000:]
+    assert "Terminating processes on user request" in log, log[-2000:]
+    assert not list((tmp_path / "out").glob("*.txt")) if (tmp_path / "out").exists() else True
+    locks = tmp_path / ".snakemake" / "locks"
+    assert not locks.exists() or not any(locks.iterdir()), "the lock was not released"

@@ -64,14 +64,14 @@ class ChainParams:
     sensor_mass: float | None = None
     striker_mass: float | None = None
     uniform: bool = False
-    striker_velocity: float = 0.5
+    striker_velocity: float = 0.5247
     gravity: bool = True
     g: float = STANDARD_GRAVITY
     damping: float = 0.0
     plate_material: str = "pla"
     plate_thickness: float = 0.4e-3
     fit_law: str = "k_hertz"
-    steps_per_contact: int = 60
+    steps_per_contact: int = 80
     t_max: float = 0.02
 
     def __post_init__(self) -> None:

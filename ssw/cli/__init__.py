@@ -37,9 +37,8 @@ def command_modules() -> list[str]:
     """Names of the modules of ``ssw.cli`` that define subcommands, sorted."""
     import ssw.cli as pkg
 
-    return sorted(
-        f"ssw.cli.{m.name}" for m in pkgutil.iter_modules(pkg.__path__) if not m.name.startswith("_")
-    )
+    names = (m.name for m in pkgutil.iter_modules(pkg.__path__))
+    return sorted(f"ssw.cli.{n}" for n in names if not n.startswith("_"))
 
 
 def build_parser() -> argparse.ArgumentParser:

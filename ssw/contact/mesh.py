@@ -6,8 +6,10 @@ The sphere touches the top surface at ``(0, top)``. Element sizes grow linearly 
 distance ``d`` from that point, ``h(d) = clip(growth * d, size_contact, size_max)`` (a gmsh
 Distance + Threshold field), so that every contact radius between ``size_contact / growth``
 and the largest is resolved by about ``1 / growth`` elements. The plate is a structured
-(transfinite) band with ``plate_layers`` elements through its thickness and the same
-geometric progression along r. Elements are 6-node (quadratic) triangles.
+(transfinite) band graded the same way: along r a geometric progression of ratio
+``1 + growth`` from ``size_contact`` at the axis, through the thickness a progression of
+the same ratio from ``size_contact`` at the loaded top face, with at least ``plate_layers``
+layers. Elements are 6-node (quadratic) triangles.
 """
 
 from __future__ import annotations
@@ -20,8 +22,6 @@ from ssw.errors import MeshError
 
 #: gmsh element type of the 6-node triangle.
 GMSH_TRIANGLE6 = 9
-#: Relative tolerance for recognising boundary nodes by coordinates.
-GEOM_TOL = 1e-9
 
 
 @dataclass(frozen=True)
@@ -60,10 +60,29 @@ class Mesh:
 
 def _progression_nodes(length: float, first: float, ratio: float) -> int:
     """Nodes of a geometric progression of first size ``first`` and ``ratio`` over ``length``."""
-    if ratio <= 1.0 + 1e-12:
-        return int(np.ceil(length / first)) + 1
     n_seg = np.log1p(length * (ratio - 1.0) / first) / np.log(ratio)
     return int(np.ceil(n_seg)) + 1
+
+
+def _transfinite_plate(gmsh, t: float, rp: float, s: MeshSettings) -> None:
+    """Structured plate graded from the contact point (see the module docstring)."""
+    ratio = 1.0 + s.growth
+    n_r = _progression_nodes(rp, s.size_contact, ratio)
+    n_z = max(_progression_nodes(t, s.size_contact, ratio), s.plate_layers + 1)
+    plate = [tag for _, tag in gmsh.model.getEntities(2)
+             if gmsh.model.getBoundingBox(2, tag)[1] > -0.5 * t]
+    if len(plate) != 1:
+        raise MeshError(f"expected one plate surface, found {len(plate)}")
+    for _, c in gmsh.model.getBoundary([(2, plate[0])], oriented=False):
+        xmin, _, _, xmax, _, _ = gmsh.model.getBoundingBox(1, c)
+        start = gmsh.model.getValue(0, gmsh.model.getAdjacencies(1, c)[1][0], [])
+        if abs(xmax - xmin) < 0.5 * t:  # through the thickness: fine at the top
+            coef = ratio if start[1] > 0.5 * t else -ratio
+            gmsh.model.mesh.setTransfiniteCurve(c, n_z, "Progression", coef)
+        else:  # along r: fine at the axis
+            coef = ratio if start[0] < 0.5 * t else -ratio
+            gmsh.model.mesh.setTransfiniteCurve(c, n_r, "Progression", coef)
+    gmsh.model.mesh.setTransfiniteSurface(plate[0])
 
 
 def build_mesh(plate_thickness: float, plate_radius: float, s: MeshSettings) -> Mesh:
@@ -114,7 +133,6 @@ def _build(gmsh, t: float, rp: float, s: MeshSettings) -> Mesh:
         occ.fragment([(2, soil)], [(2, plate)])
     occ.synchronize()
     top = float(t)
-    eps = GEOM_TOL * s.soil_radius
 
     # graded sizes from the contact point
     pt = occ.addPoint(0.0, top, 0.0)
@@ -128,13 +146,14 @@ def _build(gmsh, t: float, rp: float, s: MeshSettings) -> Mesh:
     field.setNumber(thr, "SizeMax", s.size_max)
     field.setNumber(thr, "DistMin", s.size_contact / s.growth)
     field.setNumber(thr, "DistMax", s.size_max / s.growth)
-    field.setAsBackgroundMesh(thr)
+    background = thr
+    field.setAsBackgroundMesh(background)
     for opt in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints", "MeshSizeFromCurvature"):
         gmsh.option.setNumber(f"Mesh.{opt}", 0)
     gmsh.option.setNumber("Mesh.Algorithm", 6)  # Frontal-Delaunay
 
     if t > 0:
-        _transfinite_plate(gmsh, t, rp, s, eps)
+        _transfinite_plate(gmsh, t, rp, s)
     gmsh.model.mesh.generate(2)
     gmsh.model.mesh.setOrder(2)
 
@@ -149,7 +168,7 @@ def _build(gmsh, t: float, rp: float, s: MeshSettings) -> Mesh:
             if et != GMSH_TRIANGLE6:
                 raise MeshError(f"unexpected gmsh element type {et} (want 6-node triangles)")
             conn = index[np.asarray(en, dtype=np.int64).reshape(-1, 6)]
-            xmin, ymin, _, xmax, ymax, _ = gmsh.model.getBoundingBox(dim, tag)
+            ymin = gmsh.model.getBoundingBox(dim, tag)[1]
             is_plate = t > 0 and ymin > -0.5 * t
             tris.append(conn)
             bodies.append(np.full(len(conn), 1 if is_plate else 0, dtype=np.int8))
@@ -162,28 +181,6 @@ def _build(gmsh, t: float, rp: float, s: MeshSettings) -> Mesh:
     _check_orientation(nodes, tri)
     return Mesh(nodes, tri, np.concatenate(bodies), top, rp if t > 0 else 0.0,
                 s.soil_radius, s.soil_depth)
-
-
-def _transfinite_plate(gmsh, t: float, rp: float, s: MeshSettings, eps: float) -> None:
-    """Structured plate: ``plate_layers`` through t, geometric progression along r."""
-    ratio = 1.0 + s.growth
-    n_r = _progression_nodes(rp, s.size_contact, ratio)
-    plate_surf = [
-        tag for _, tag in gmsh.model.getEntities(2)
-        if gmsh.model.getBoundingBox(2, tag)[1] > -0.5 * t
-    ]
-    if len(plate_surf) != 1:
-        raise MeshError(f"expected one plate surface, found {len(plate_surf)}")
-    for _, c in gmsh.model.getBoundary([(2, plate_surf[0])], oriented=False):
-        xmin, ymin, _, xmax, ymax, _ = gmsh.model.getBoundingBox(1, c)
-        if abs(xmax - xmin) < 0.5 * t:  # vertical edge: through the thickness
-            gmsh.model.mesh.setTransfiniteCurve(c, s.plate_layers + 1)
-        else:  # horizontal edge: progression away from the axis
-            p0, _ = gmsh.model.getAdjacencies(1, c)[1]
-            x0 = gmsh.model.getValue(0, p0, [])[0]
-            coef = ratio if x0 < eps else -ratio
-            gmsh.model.mesh.setTransfiniteCurve(c, n_r, "Progression", coef)
-    gmsh.model.mesh.setTransfiniteSurface(plate_surf[0])
 
 
 def _check_orientation(nodes: np.ndarray, tri: np.ndarray) -> None:

@@ -72,7 +72,7 @@ def get_backend(name: str, **options: Any) -> Backend:
 
 def _load_builtin() -> None:
     # Importing the modules registers them; neither imports nidaqmx at import time.
-    import ssw.daq.nidaq  # noqa: F401
+    import ssw.daq.nidaq
     import ssw.daq.simulated  # noqa: F401
 
 
@@ -94,8 +94,8 @@ def run_session(
 
     The file is created first, every hit is appended and flushed as it arrives, and the
     session is marked complete at the end. If the backend or ``on_hit`` raises, the
-    file keeps every hit completed so far (``complete = False``) and the error propagates.
-    Returns ``path``.
+    file keeps every hit completed so far (``complete = False``) and the error propagates;
+    a session that fails before its first hit leaves no file. Returns ``path``.
     """
     from ssw.daq.recording import RecordingWriter
 
@@ -109,12 +109,20 @@ def run_session(
         "synthetic": bool(synthetic),
         "notes": notes,
         "backend": backend.name,
-        **{f"hw_{k}": v for k, v in backend.describe().items()},
     }
-    with RecordingWriter(path, settings, meta, overwrite=overwrite) as writer:
+    writer = RecordingWriter(path, settings, meta, overwrite=overwrite)
+    try:
         for i, hit in enumerate(backend.hits(settings, n)):
             writer.append(hit)
+            if i == 0:  # a real backend knows its hardware once the task is open
+                writer.set_meta({f"hw_{k}": v for k, v in backend.describe().items()})
             if on_hit is not None:
                 on_hit(i, hit)
         writer.mark_complete()
+    except BaseException:
+        writer.close()
+        if writer.n == 0:  # nothing recorded (no driver, no device, no trigger): no file
+            Path(path).unlink(missing_ok=True)
+        raise
+    writer.close()
     return Path(path)

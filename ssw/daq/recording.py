@@ -82,11 +82,17 @@ class RecordingWriter:
             a[key] = getattr(settings, key)
         a["sensitivity_units"] = "V/N"
         a["trigger_type"] = "analog edge, reference trigger on the force channel"
-        for key, val in meta.items():
-            a[key] = val if isinstance(val, bool | int | float | str) else to_json(val)
+        self.set_meta(meta)
         a["n_hits"] = 0
         a["complete"] = False
         self._hits = self._f.create_group("hits")
+        self._f.flush()
+
+    def set_meta(self, meta: dict[str, Any]) -> None:
+        """Store ``meta`` as root attributes (non-scalars as JSON) and flush."""
+        for key, val in meta.items():
+            ok = isinstance(val, bool | int | float | str)
+            self._f.attrs[key] = val if ok else to_json(val)
         self._f.flush()
 
     def append(self, hit: Hit) -> None:
@@ -218,7 +224,9 @@ def read_recording(path: str | Path, *, clipped: str = "raise") -> Recording:
     try:
         f = h5py.File(p, "r")
     except OSError as exc:
-        raise RecordingError(f"{p}: not a readable HDF5 file (truncated or corrupt): {exc}") from exc
+        raise RecordingError(
+            f"{p}: not a readable HDF5 file (truncated or corrupt): {exc}"
+        ) from exc
     with f:
         meta = {k: _attr(v) for k, v in f.attrs.items()}
         if meta.get("ssw_kind") != KIND:

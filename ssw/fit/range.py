@@ -117,7 +117,9 @@ def peak_wall_indentation(
     """
     api = _chain_api()
     if api is not None:
-        params = api.params_from_config(cfg) if hasattr(api, "params_from_config") else cfg
+        from ssw.chain.params import ChainParams
+
+        params = ChainParams.from_config(cfg)
         return np.asarray(api.peak_wall_indentation(soil_E, soil_nu, params), float), "chain"
     return energy_bound_indentation(soil_E, soil_nu, ChainEstimate.from_config(cfg)), (
         "energy_bound"
@@ -136,38 +138,53 @@ class FitRange:
     clipped: bool  # the curve stops short of ``needed``
 
 
-def fit_range(
-    soil_E: float, soil_nu: float, curve_delta_max: float, cfg: dict[str, Any]
-) -> FitRange:
-    """The fit range of one scene under the config's ``fit.range`` settings.
+def fit_ranges(
+    soil_E: ArrayLike, soil_nu: ArrayLike, curve_delta_max: ArrayLike, cfg: dict[str, Any]
+) -> list[FitRange]:
+    """Fit ranges of many scenes (1-D arrays of one length) under the config's ``fit.range``.
 
     Parameters
     ----------
-    soil_E, soil_nu : the scene's soil (Pa, -).
-    curve_delta_max : the curve's last indentation, m.
-    cfg : validated study config (``fit.range.{mode, factor, delta_min, delta_max}``).
+    soil_E, soil_nu : the scenes' soils (Pa, -).
+    curve_delta_max : each curve's last indentation, m.
+    cfg : validated study config (``fit.range.{mode, factor, delta_min, delta_max}``); in
+        mode ``chain`` the chain runs once for all scenes (batched).
     """
+    E, nu, dmax = (np.atleast_1d(np.asarray(x, float)) for x in (soil_E, soil_nu, curve_delta_max))
     rc = cfg.get("fit", {}).get("range", {})
     mode = rc.get("mode", "chain")
     lo = float(rc.get("delta_min", 0.0))
     if mode == "chain":
-        d, source = peak_wall_indentation(soil_E, soil_nu, cfg)
-        needed = float(rc.get("factor", 1.0)) * float(np.asarray(d).ravel()[0])
+        d, source = peak_wall_indentation(E, nu, cfg)
+        needed = float(rc.get("factor", 1.0)) * np.asarray(d, float).ravel()
     elif mode == "fixed":
-        needed, source = float(rc.get("delta_max", 1.0e-4)), "config"
+        needed, source = np.full(E.size, float(rc.get("delta_max", 1.0e-4))), "config"
     elif mode == "curve":
-        needed, source = curve_delta_max, "curve"
+        needed, source = dmax.copy(), "curve"
     else:
         raise ConfigError("fit.range.mode", mode, f"one of {', '.join(RANGE_MODES)}")
-    hi = min(needed, curve_delta_max)
-    if not hi > lo:
+    hi = np.minimum(needed, dmax)
+    if np.any(~(hi > lo)):
         raise ConfigError(
-            "fit.range.delta_min", lo, f"below the range's upper end {hi:.6g} m"
+            "fit.range.delta_min", lo, f"below every range's upper end ({hi.min():.6g} m)"
         )
-    return FitRange(lo, hi, mode, source, needed, needed > curve_delta_max * (1 + 1e-12))
+    clipped = needed > dmax * (1 + 1e-12)
+    return [
+        FitRange(lo, float(h), mode, source, float(n), bool(c))
+        for h, n, c in zip(hi, needed, clipped, strict=True)
+    ]
+
+
+def fit_range(
+    soil_E: float, soil_nu: float, curve_delta_max: float, cfg: dict[str, Any]
+) -> FitRange:
+    """The fit range of one scene: :func:`fit_ranges` for one scene."""
+    return fit_ranges(soil_E, soil_nu, curve_delta_max, cfg)[0]
 
 
 def scene_delta_max(soil_E: float, soil_nu: float, cfg: dict[str, Any]) -> float:
     """Indentation (m) a scene's curve must reach for its default fit (the contact stage
     may use it to compute only what the fit needs)."""
+    if cfg.get("fit", {}).get("range", {}).get("mode", "chain") == "curve":
+        return float(cfg["contact"]["delta_max"])
     return fit_range(soil_E, soil_nu, np.inf, cfg).needed

@@ -1,0 +1,157 @@
+"""TOF(E, nu) sweeps (thesis Fig 8): chunks for Snakemake jobs, MPI ranks, HDF5/CSV, plot.
+
+A sweep is the product ``soil_E x soil_nu`` flattened nu-major (all E for the first nu,
+then the next). Chunk ``c`` of ``C`` takes points ``c, c + C, c + 2C, ...`` (interleaved, so
+that soft and stiff soils, whose runs differ in length, spread evenly); inside a job the
+points are split the same way over MPI ranks when a communicator is given, and gathered on
+every rank. Every point of a chunk advances in one batched run (:mod:`ssw.chain.integrate`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ssw.chain.api import peaks
+from ssw.chain.params import ChainParams
+from ssw.errors import ConfigError, SswError
+from ssw.h5io import atomic_h5, atomic_path, check_kind, read_inputs, write_dataset
+
+KIND = "tof_sweep"
+FIELDS = ("soil_E", "soil_nu", "tof", "t_incident", "f_incident", "f_reflected")
+UNITS = {"soil_E": "Pa", "soil_nu": "1", "tof": "s", "t_incident": "s", "f_incident": "N",
+         "f_reflected": "N"}
+
+
+@dataclass(frozen=True)
+class Sweep:
+    """Sweep points, flat arrays of one length. SI units."""
+
+    soil_E: np.ndarray  # Pa
+    soil_nu: np.ndarray  # -
+    tof: np.ndarray  # s
+    t_incident: np.ndarray  # s, incident peak time at the sensor
+    f_incident: np.ndarray  # N, incident peak above the static force
+    f_reflected: np.ndarray  # N, reflected peak above the static force
+
+    def sorted(self) -> Sweep:
+        """Points ordered by (nu, E)."""
+        order = np.lexsort((self.soil_E, self.soil_nu))
+        return Sweep(*(getattr(self, k)[order] for k in FIELDS))
+
+    def curve(self, soil_nu: float) -> tuple[np.ndarray, np.ndarray]:
+        """``(E, TOF)`` at one Poisson's ratio, E increasing."""
+        sel = np.isclose(self.soil_nu, soil_nu, rtol=0, atol=1e-9)
+        if not np.any(sel):
+            raise ConfigError("soil_nu", soil_nu, f"one of the sweep's {np.unique(self.soil_nu)}")
+        order = np.argsort(self.soil_E[sel])
+        return self.soil_E[sel][order], self.tof[sel][order]
+
+
+def grid_points(soil_E: Any, soil_nu: Any) -> tuple[np.ndarray, np.ndarray]:
+    """The flat (nu-major) product of the axes."""
+    nu, E = np.meshgrid(np.asarray(soil_nu, float), np.asarray(soil_E, float), indexing="ij")
+    return E.ravel(), nu.ravel()
+
+
+def chunk_slice(n_points: int, chunk: int, chunks: int) -> np.ndarray:
+    """Indices of chunk ``chunk`` (0-based) of ``chunks``: interleaved."""
+    if not (chunks >= 1 and 0 <= chunk < chunks):
+        raise ConfigError("chunk", f"{chunk} of {chunks}", "0 <= chunk < chunks, chunks >= 1")
+    return np.arange(chunk, n_points, chunks)
+
+
+def run_sweep(
+    params: ChainParams,
+    soil_E: np.ndarray,
+    soil_nu: np.ndarray,
+    wall: str = "hertz",
+    *,
+    comm: Any = None,
+    **wall_options: Any,
+) -> Sweep:
+    """TOF at the flat points ``(soil_E[i], soil_nu[i])``, split over ``comm``'s ranks.
+
+    ``wall_options`` with a per-point sequence (``curve=[...]``, ``K=[...]``) are split
+    along with the points.
+    """
+    E, nu = (np.asarray(x, float).ravel() for x in (soil_E, soil_nu))
+    size, rank = (1, 0) if comm is None else (comm.Get_size(), comm.Get_rank())
+    mine = np.arange(rank, E.size, size)
+    opts = {k: _part(v, mine, E.size) for k, v in wall_options.items()}
+    cols = np.full((len(FIELDS) - 2, E.size), np.nan)
+    if mine.size:
+        pk, _ = peaks(E[mine], nu[mine], params, wall, **opts)
+        cols[:, mine] = [pk.tof, pk.t_incident, pk.f_incident, pk.f_reflected]
+    if comm is not None and size > 1:
+        parts = comm.allgather((mine, cols[:, mine]))
+        for idx, vals in parts:
+            cols[:, idx] = vals
+    return Sweep(E, nu, *cols)
+
+
+def _part(value: Any, idx: np.ndarray, n: int) -> Any:
+    if isinstance(value, list | tuple | np.ndarray) and len(value) == n and n > 1:
+        return [value[i] for i in idx] if isinstance(value, list | tuple) else value[idx]
+    return value
+
+
+def write_sweep(path: str | Path, sweep: Sweep, inputs: dict[str, Any]) -> None:
+    """HDF5 (kind ``tof_sweep``) with one dataset per field."""
+    with atomic_h5(path, kind=KIND, inputs=inputs) as f:
+        for k in FIELDS:
+            write_dataset(f, k, getattr(sweep, k), UNITS[k])
+
+
+def read_sweep(path: str | Path) -> tuple[Sweep, dict[str, Any]]:
+    """A sweep written by :func:`write_sweep` and its inputs."""
+    import h5py
+
+    p = Path(path)
+    if not p.is_file():
+        raise SswError(f"no TOF sweep at {p}")
+    with h5py.File(p, "r") as f:
+        check_kind(f, KIND)
+        return Sweep(*(f[k][()] for k in FIELDS)), read_inputs(f)
+
+
+def merge_sweeps(sweeps: list[Sweep]) -> Sweep:
+    """One sweep of all points, ordered by (nu, E); duplicates are an error."""
+    cat = Sweep(*(np.concatenate([getattr(s, k) for s in sweeps]) for k in FIELDS)).sorted()
+    key = np.stack([cat.soil_nu, cat.soil_E])
+    if cat.soil_E.size > 1 and np.any(np.all(np.diff(key, axis=1) == 0, axis=0)):
+        raise SswError("merged sweep chunks overlap: a point appears twice")
+    return cat
+
+
+def write_csv(path: str | Path, sweep: Sweep) -> None:
+    """CSV with a header naming the units."""
+    head = "soil_E_Pa,soil_nu,tof_s,t_incident_s,f_incident_N,f_reflected_N"
+    data = np.column_stack([getattr(sweep, k) for k in FIELDS])
+    with atomic_path(path) as tmp:
+        np.savetxt(tmp, data, delimiter=",", header=head, comments="", fmt="%.10g")
+
+
+def plot_fig8(path: str | Path, sweep: Sweep, title: str = "") -> None:
+    """TOF (ms) vs soil E (MPa), one line per nu (thesis Fig 8 style), PNG."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(6, 4.2))
+    for nu in np.unique(sweep.soil_nu):
+        E, T = sweep.curve(float(nu))
+        ax.plot(E / 1e6, T * 1e3, label=f"nu = {nu:g}")
+    ax.set_xlabel("soil Young's modulus E (MPa)")
+    ax.set_ylabel("TOF (ms)")
+    ax.set_title(title or "TOF vs soil modulus (cf. thesis Fig 8)")
+    ax.grid(alpha=0.3)
+    ax.legend()
+    fig.tight_layout()
+    with atomic_path(path) as tmp:
+        fig.savefig(tmp, dpi=150, format="png")
+    plt.close(fig)

@@ -1,0 +1,294 @@
+"""Last-contact laws: the force between the last bead and the tested medium.
+
+A wall law gives the force ``F(d)`` (N) at the last bead's indentation ``d = u_{N-1}`` (m,
+``[d]_+``: no tension), batched over scenes (one law per scene). The registry :data:`WALLS`
+maps a name to a builder ``builder(params, soil_E, soil_nu, **options) -> Wall``:
+
+* ``rigid``: the bead on a rigid flat, ``F = 4/3 sqrt(R) E_b/(1-nu_b^2) d^1.5`` (only the
+  bead deforms). It is the mirror image of a bead-bead contact (``2^1.5 A``), which the
+  tests use as an exact check;
+* ``hertz``: the bead on the elastic half-space, ``F = A_w d^1.5``,
+  ``A_w = 4/3 sqrt(R) / ((1-nu_b^2)/E_b + (1-nu_w^2)/E_w)`` (REFERENCE.md, Johnson 1985);
+* ``fit``: the thesis's modified Hertz law ``F = K(E, nu) A_w d^1.5`` (``fit_law=k_hertz``)
+  or the power law ``F = C (d/s)^n`` (``fit_law=power``) per scene, from
+  ``ssw.fit.table.KTable`` (``k_table=``) or explicit ``K=`` / ``power=(C, n)`` values;
+* ``table``: the FEM force-indentation curve itself (``curve=``: one
+  :class:`ssw.curve.ForceCurve` or a path, or one per scene), interpolated (no fit error).
+
+Bead compliance. The thesis's K and the FEM curves come from a *rigid* sphere, law
+``F_R(d)``. The chain's bead is steel, so we add its compliance the way Hertz does
+(``1/E* = c_w + c_b``, ``c = (1-nu^2)/E``): ``F(d) = F_R(d / s)`` with
+``s = (1 + c_b/c_w)^(2/3)``. This is exact for a Hertz-shaped ``F_R`` and turns the
+rigid-sphere law ``K 4/3 E_w/(1-nu_w^2) sqrt(R) d^1.5`` into exactly the thesis's
+``K A_w d^1.5``; for the plate's non-Hertzian curves it is an approximation of relative
+size ``c_b/c_w`` (2e-4 at 38 MPa, 5e-3 at 1000 MPa).
+
+Table extension. Beyond the curve's last point ``(d_L, F_L)`` the force continues as the
+power law ``F = F_L (d/d_L)^n_L`` whose exponent is the curve's log-log slope over its last
+10 % of indentation (clipped to [1, 2]): C^0 and slope-continuous in the mean. The chain's
+peak wall indentation (:func:`ssw.chain.api.peak_wall_indentation`) tells how far a
+sweep reaches beyond the FEM range.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Sequence
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ssw.chain.params import ChainParams
+from ssw.errors import ConfigError, SswError
+
+#: Cells of the uniform indentation grid a FEM curve is resampled on.
+TABLE_CELLS = 400
+#: Share of the curve's indentation range used for the extension's exponent.
+TABLE_TAIL = 0.1
+#: Bisection iterations for the static indentation of a tabulated wall (2^-60 of range).
+BISECTION_ITERATIONS = 60
+
+
+@dataclass(frozen=True)
+class PowerWall:
+    """``F = coef [d]_+^n`` per scene; shapes (n_scenes,)."""
+
+    coef: np.ndarray  # N / m^n
+    exponent: np.ndarray  # -
+    hertzian: bool = field(init=False)  # every exponent is 1.5 (a faster path)
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "hertzian", bool(np.all(self.exponent == 1.5)))
+
+    @property
+    def n(self) -> int:
+        return self.coef.shape[0]
+
+    def force(self, d: np.ndarray) -> np.ndarray:
+        """Wall force (N) at indentation ``d`` (m), shape (n_scenes,)."""
+        dp = np.maximum(d, 0.0)
+        if self.hertzian:
+            return self.coef * dp * np.sqrt(dp)
+        return self.coef * dp**self.exponent
+
+    def potential(self, d: np.ndarray) -> np.ndarray:
+        """Stored energy ``coef d^(n+1) / (n+1)`` (J)."""
+        dp = np.maximum(d, 0.0)
+        return self.coef * dp ** (self.exponent + 1.0) / (self.exponent + 1.0)
+
+    def indentation(self, F: np.ndarray) -> np.ndarray:
+        """Indentation (m) carrying force ``F`` (N), the inverse of :meth:`force`."""
+        return (np.maximum(F, 0.0) / self.coef) ** (1.0 / self.exponent)
+
+    def take(self, idx: np.ndarray) -> PowerWall:
+        return PowerWall(self.coef[idx], self.exponent[idx])
+
+    def hertz_equivalent(self, d_ref: float) -> np.ndarray:
+        """``F(d_ref) / d_ref^1.5`` (N/m^1.5): a Hertz coefficient for time-step choice."""
+        return self.force(np.full(self.n, d_ref)) / d_ref**1.5
+
+
+@dataclass(frozen=True)
+class TableWall:
+    """Tabulated ``F(d)`` per scene on a uniform grid, with a power-law extension.
+
+    ``g[k] = F(k h) / (k h)^1.5`` is interpolated linearly (exact for Hertz at any grid);
+    beyond ``d_last = TABLE_CELLS h`` the force is ``F_last (d/d_last)^n_ext``.
+    """
+
+    h: np.ndarray  # m, grid step per scene, (n,)
+    g: np.ndarray  # N/m^1.5, (n, TABLE_CELLS + 1)
+    f_last: np.ndarray  # N
+    n_ext: np.ndarray  # -
+
+    @property
+    def n(self) -> int:
+        return self.h.shape[0]
+
+    def force(self, d: np.ndarray) -> np.ndarray:
+        dp = np.maximum(d, 0.0)
+        cells = self.g.shape[1] - 1
+        x = dp / self.h
+        k = np.minimum(x.astype(np.int64), cells - 1)
+        frac = np.minimum(x - k, 1.0)
+        rows = np.arange(self.n) * (cells + 1)
+        flat = self.g.ravel()
+        gk = flat[rows + k]
+        gval = gk + frac * (flat[rows + k + 1] - gk)
+        inside = gval * dp * np.sqrt(dp)
+        d_last = cells * self.h
+        outside = self.f_last * (np.maximum(dp, d_last) / d_last) ** self.n_ext
+        return np.where(x <= cells, inside, outside)
+
+    def indentation(self, F: np.ndarray) -> np.ndarray:
+        """Indentation carrying ``F`` (N): vectorized bisection of the monotone law."""
+        target = np.maximum(np.asarray(F, float), 0.0)
+        lo = np.zeros(self.n)
+        hi = self.h * (self.g.shape[1] - 1)
+        while np.any(self.force(hi) < target):
+            hi = np.where(self.force(hi) < target, 2.0 * hi, hi)
+        for _ in range(BISECTION_ITERATIONS):
+            mid = 0.5 * (lo + hi)
+            low = self.force(mid) < target
+            lo, hi = np.where(low, mid, lo), np.where(low, hi, mid)
+        return 0.5 * (lo + hi)
+
+    def take(self, idx: np.ndarray) -> TableWall:
+        return TableWall(self.h[idx], self.g[idx], self.f_last[idx], self.n_ext[idx])
+
+    def hertz_equivalent(self, d_ref: float) -> np.ndarray:
+        """``F(d_ref) / d_ref^1.5`` (N/m^1.5)."""
+        return self.force(np.full(self.n, d_ref)) / d_ref**1.5
+
+
+Wall = PowerWall | TableWall
+
+
+def compliance_scale(params: ChainParams, soil_E: np.ndarray, soil_nu: np.ndarray) -> np.ndarray:
+    """``s = (1 + c_b/c_w)^(2/3)``: rigid-sphere law ``F_R(d)`` -> steel bead ``F_R(d/s)``."""
+    c_w = (1.0 - np.asarray(soil_nu, float) ** 2) / np.asarray(soil_E, float)
+    return (1.0 + params.bead_compliance / c_w) ** (2.0 / 3.0)
+
+
+def _scenes(soil_E: Any, soil_nu: Any) -> tuple[np.ndarray, np.ndarray]:
+    E, nu = np.broadcast_arrays(np.asarray(soil_E, float), np.asarray(soil_nu, float))
+    E, nu = E.ravel(), nu.ravel()
+    if np.any(~(E > 0)):
+        raise ConfigError("soil_E", E[~(E > 0)].tolist(), "moduli > 0 Pa")
+    if np.any((nu <= -1) | (nu > 0.5)):
+        raise ConfigError("soil_nu", nu.tolist(), "Poisson's ratios in (-1, 0.5]")
+    return E, nu
+
+
+def rigid_wall(params: ChainParams, soil_E: Any, soil_nu: Any) -> PowerWall:
+    """Rigid flat: ``F = 4/3 sqrt(R) E_b/(1-nu_b^2) d^1.5`` (soil values only set the count)."""
+    E, _ = _scenes(soil_E, soil_nu)
+    coef = 4.0 / 3.0 * np.sqrt(params.bead_radius) / params.bead_compliance
+    return PowerWall(np.full(E.size, coef), np.full(E.size, 1.5))
+
+
+def hertz_wall(params: ChainParams, soil_E: Any, soil_nu: Any) -> PowerWall:
+    """Elastic half-space: ``F = A_w d^1.5``."""
+    E, nu = _scenes(soil_E, soil_nu)
+    return PowerWall(params.wall_coefficient(E, nu), np.full(E.size, 1.5))
+
+
+def fit_wall(
+    params: ChainParams,
+    soil_E: Any,
+    soil_nu: Any,
+    *,
+    K: Any = None,
+    power: tuple[Any, Any] | None = None,
+    k_table: Any = None,
+) -> PowerWall:
+    """Modified Hertz: ``F = K A_w d^1.5`` (k_hertz) or ``F = C (d/s)^n`` (power).
+
+    Exactly one of ``K`` (broadcast to the scenes), ``power=(C, n)`` (rigid-sphere law,
+    N/m^n and -) or ``k_table`` (a path or an object with ``.K(E, nu)`` and
+    ``.power(E, nu)``, e.g. ``ssw.fit.table.KTable``; ``params.fit_law`` picks the law).
+    """
+    E, nu = _scenes(soil_E, soil_nu)
+    given = [x is not None for x in (K, power, k_table)]
+    if sum(given) != 1:
+        raise ConfigError(
+            "fit wall", {"K": K, "power": power, "k_table": k_table},
+            "exactly one of K, power=(C, n) or k_table",
+        )
+    if k_table is not None:
+        table = _load_k_table(k_table, params)
+        if params.fit_law == "k_hertz":
+            K = table.K(E, nu)
+        else:
+            power = table.power(E, nu)
+    if K is not None:
+        Kv = np.broadcast_to(np.asarray(K, float), E.shape).copy()
+        if np.any(~(Kv > 0)):
+            raise ConfigError("K", Kv.tolist(), "K > 0")
+        return PowerWall(Kv * params.wall_coefficient(E, nu), np.full(E.size, 1.5))
+    C, n = (np.broadcast_to(np.asarray(x, float), E.shape).copy() for x in power)  # type: ignore[union-attr]
+    if np.any(~(C > 0)) or np.any(~((n >= 1.0) & (n <= 3.0))):
+        raise ConfigError("power", (C.tolist(), n.tolist()), "C > 0 and 1 <= n <= 3")
+    s = compliance_scale(params, E, nu)
+    return PowerWall(C / s**n, n)
+
+
+def _load_k_table(k_table: Any, params: ChainParams) -> Any:
+    if hasattr(k_table, "K"):
+        return k_table
+    p = Path(k_table)
+    if not p.is_file():
+        raise ConfigError("--k-table", str(p), "an existing K table (results/fit/k_table.h5)")
+    try:
+        from ssw.fit.table import KTable
+    except ImportError as exc:  # the fit stage is not installed
+        raise SswError(f"ssw.fit.table.KTable is not available to read {p}: {exc}") from exc
+    return KTable.load(p, params.plate_material, params.plate_thickness)
+
+
+def table_wall(
+    params: ChainParams, soil_E: Any, soil_nu: Any, *, curve: Any = None
+) -> TableWall:
+    """The FEM curve(s) themselves: ``curve`` is one curve/path for every scene or a
+    sequence with one per scene (:class:`ssw.curve.ForceCurve` or HDF5 path)."""
+    E, nu = _scenes(soil_E, soil_nu)
+    if curve is None:
+        raise ConfigError("curve", None, "a contact curve (ForceCurve or results/contact/*.h5)")
+    curves = list(curve) if isinstance(curve, Sequence) and not isinstance(curve, str) else [
+        curve
+    ] * E.size
+    if len(curves) != E.size:
+        raise ConfigError("curve", f"{len(curves)} curves", f"one per scene ({E.size})")
+    s = compliance_scale(params, E, nu)
+    rows = [_resample(_as_curve(c), si) for c, si in zip(curves, s, strict=True)]
+    h, g, fl, ne = (np.array(x) for x in zip(*rows, strict=True))
+    return TableWall(h, g, fl, ne)
+
+
+def _as_curve(c: Any) -> Any:
+    if hasattr(c, "delta") and hasattr(c, "force"):
+        return c
+    from ssw.curve import read_curve
+
+    return read_curve(c)
+
+
+def _resample(curve: Any, scale: float) -> tuple[float, np.ndarray, float, float]:
+    """Grid step, ``g = F/d^1.5`` on the grid, last force and extension exponent."""
+    d = np.asarray(curve.delta, float) * scale
+    F = np.asarray(curve.force, float)
+    if d[0] > 0:  # the curve starts at contact: F(0) = 0
+        d, F = np.concatenate([[0.0], d]), np.concatenate([[0.0], F])
+    if np.any(np.diff(F) < 0) or not F[-1] > 0:
+        raise SswError("a contact curve for the table wall must be non-decreasing and end > 0 N")
+    d_last = d[-1]
+    h = d_last / TABLE_CELLS
+    grid = h * np.arange(TABLE_CELLS + 1)
+    pos = d > 0
+    g = np.interp(grid, d[pos], F[pos] / d[pos] ** 1.5)  # F/d^1.5 is what is interpolated
+    tail = d >= (1.0 - TABLE_TAIL) * d_last
+    sel = tail & (d > 0) & (F > 0)
+    if np.count_nonzero(sel) >= 2:
+        n_ext = float(np.polyfit(np.log(d[sel]), np.log(F[sel]), 1)[0])
+    else:
+        n_ext = 1.5
+    return h, g, float(F[-1]), float(np.clip(n_ext, 1.0, 2.0))
+
+
+#: Registry: wall name -> builder(params, soil_E, soil_nu, **options).
+WALLS: dict[str, Callable[..., Wall]] = {
+    "rigid": rigid_wall,
+    "hertz": hertz_wall,
+    "fit": fit_wall,
+    "table": table_wall,
+}
+
+
+def build_wall(name: str, params: ChainParams, soil_E: Any, soil_nu: Any, **options: Any) -> Wall:
+    """The wall ``name`` of :data:`WALLS` for the scenes ``broadcast(soil_E, soil_nu)``."""
+    if name not in WALLS:
+        raise ConfigError("wall", name, f"one of {', '.join(WALLS)}")
+    if name in ("rigid", "hertz") and options:
+        raise ConfigError("wall options", sorted(options), f"none for the {name} wall")
+    return WALLS[name](params, soil_E, soil_nu, **options)

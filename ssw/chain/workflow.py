@@ -1,0 +1,60 @@
+"""Input helpers of the chain stage's Snakemake rules (``workflow/rules/chain.smk``).
+
+Pure functions of the validated config, so the ``.smk`` file holds only rules (and the
+helpers get tested like any code).
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+from ssw.config import Scene, all_scenes, expand_grid
+
+
+def wall_law(config: dict[str, Any]) -> str:
+    """The sweep's last-contact law (``chain.wall_law``)."""
+    return str(config["chain"].get("wall_law", "fit"))
+
+
+def sweep_scene_ids(config: dict[str, Any]) -> list[str]:
+    """Contact scene ids of the sweep points (the table wall reads their curves).
+
+    Raises ``ValueError`` when a sweep point is in no contact set.
+    """
+    ch = config["chain"]
+    E = expand_grid(ch["sweep"]["soil_E"], "chain.sweep.soil_E")
+    nu = expand_grid(ch["sweep"]["soil_nu"], "chain.sweep.soil_nu")
+    ids = [
+        Scene(ch["plate_material"], float(ch["plate_thickness"]), float(e), float(n)).scene_id
+        for n in nu
+        for e in E
+    ]
+    known = all_scenes(config)
+    missing = [i for i in ids if i not in known]
+    if missing:
+        raise ValueError(
+            f"chain.wall_law = table needs a contact scene for every sweep point; "
+            f"{len(missing)} are in no set (e.g. {missing[0]}): add them to a set"
+        )
+    return ids
+
+
+def wall_inputs(config: dict[str, Any], results: str) -> dict[str, Any]:
+    """The K table (fit wall) or the sweep points' contact curves (table wall)."""
+    law = wall_law(config)
+    if law == "fit":
+        return {"k_table": f"{results}/fit/k_table.h5"}
+    if law == "table":
+        return {"curves": [f"{results}/contact/{i}.h5" for i in sweep_scene_ids(config)]}
+    return {}
+
+
+def wall_flags(config: dict[str, Any], inputs: Any, results: str) -> str:
+    """``ssw`` flags naming the wall law and its inputs."""
+    flags = f"--law {wall_law(config)}"
+    keys = set(inputs.keys())
+    if "k_table" in keys:
+        flags += f" --k-table {inputs.k_table}"
+    if "curves" in keys:
+        flags += f" --contact-dir {results}/contact"
+    return flags

@@ -1,0 +1,355 @@
+"""``ssw chain``, ``ssw tof``, ``ssw tof-sweep``, ``ssw tof-merge``, ``ssw invert``.
+
+The chain's parameters come from the study config's ``chain:`` section (``--config``) and
+are overridden by the options given. Bead indices count from the striker (bead 0), 0-based;
+``--beads`` counts every bead, the striker included. SI units.
+"""
+
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ssw.cli import add_json_flag
+from ssw.errors import ConfigError
+
+DEFAULT_K_TABLE = "results/fit/k_table.h5"
+DEFAULT_CONTACT_DIR = "results/contact"
+
+
+def _chain_options(p: argparse.ArgumentParser, wall_flag: str = "--law") -> None:
+    p.add_argument("--config", default="config/config.yaml", help="study config (YAML)")
+    p.add_argument("--beads", type=int, help="beads including the striker (bead 0)")
+    p.add_argument("--sensor-index", type=int, help="0-based index of the sensor particle")
+    p.add_argument("--sensor-mass", type=float, help="sensor particle mass, kg")
+    p.add_argument("--uniform", action="store_true", default=None,
+                   help="the sensor is a plain bead; signal = mean of its two contact forces")
+    p.add_argument("--striker-velocity", type=float, help="striker speed at contact, m/s")
+    p.add_argument("--drop-height", type=float,
+                   help="striker dropped from this height, m (speed sqrt(2 g h))")
+    p.add_argument("--no-gravity", action="store_true", help="no gravity, no precompression")
+    p.add_argument("--bead-radius", type=float, help="bead radius, m")
+    p.add_argument("--bead-density", type=float, help="bead density, kg/m^3")
+    p.add_argument("--bead-E", type=float, help="bead Young's modulus, Pa")
+    p.add_argument("--bead-nu", type=float, help="bead Poisson's ratio")
+    p.add_argument("--damping", type=float, help="contact dashpot, N s/m (default 0)")
+    p.add_argument("--steps-per-contact", type=int, help="time steps per Hertz contact time")
+    p.add_argument(wall_flag, dest="wall", choices=["rigid", "hertz", "fit", "table"],
+                   help="last-contact law (default: the config's chain.wall_law)")
+    p.add_argument("--K", type=float, help="fit wall: a constant K instead of --k-table")
+    p.add_argument("--fit-law", choices=["k_hertz", "power"],
+                   help="fit wall: the law read from the K table (default: config fit.law)")
+    p.add_argument("--k-table", help=f"fit wall: K table HDF5 (default {DEFAULT_K_TABLE})")
+    p.add_argument("--curve", help="table wall: one FEM contact curve HDF5 for every scene")
+    p.add_argument("--contact-dir", default=DEFAULT_CONTACT_DIR,
+                   help="table wall without --curve: the {scene_id}.h5 curves' folder")
+
+
+def _params(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
+    from ssw.chain.params import STANDARD_GRAVITY, ChainParams
+    from ssw.config import load_config
+
+    cfg = load_config(args.config)
+    over = {
+        "n_beads": args.beads, "sensor_index": args.sensor_index,
+        "sensor_mass": args.sensor_mass, "uniform": args.uniform,
+        "striker_velocity": args.striker_velocity, "bead_radius": args.bead_radius,
+        "bead_density": args.bead_density, "bead_E": args.bead_E, "bead_nu": args.bead_nu,
+        "damping": args.damping, "steps_per_contact": args.steps_per_contact,
+        "fit_law": args.fit_law,
+    }
+    over = {k: v for k, v in over.items() if v is not None}
+    if args.drop_height is not None:
+        if args.striker_velocity is not None or not args.drop_height > 0:
+            raise ConfigError("--drop-height", args.drop_height,
+                              "a height > 0 m, without --striker-velocity")
+        over["striker_velocity"] = float(np.sqrt(2.0 * STANDARD_GRAVITY * args.drop_height))
+    if args.no_gravity:
+        over["gravity"] = False
+    if "n_beads" in over and "sensor_index" not in over:
+        over["sensor_index"] = over["n_beads"] // 2
+    return ChainParams.from_config(cfg, **over), cfg
+
+
+def _wall(args: argparse.Namespace, cfg: dict[str, Any], params: Any, E: Any, nu: Any
+          ) -> tuple[str, dict[str, Any]]:
+    wall = args.wall or cfg["chain"].get("wall_law", "hertz")
+    if wall == "fit":
+        if args.K is not None:
+            return wall, {"K": args.K}
+        return wall, {"k_table": args.k_table or DEFAULT_K_TABLE}
+    if wall == "table":
+        if args.curve:
+            return wall, {"curve": args.curve}
+        from ssw.config import Scene
+
+        Eb, nub = np.broadcast_arrays(np.asarray(E, float), np.asarray(nu, float))
+        paths = [
+            str(Path(args.contact_dir) / f"{Scene(params.plate_material, params.plate_thickness, float(e), float(n)).scene_id}.h5")  # noqa: E501
+            for e, n in zip(Eb.ravel(), nub.ravel(), strict=True)
+        ]
+        return wall, {"curve": paths}
+    return wall, {}
+
+
+def _params_dict(params: Any) -> dict[str, Any]:
+    from dataclasses import asdict
+
+    return {f"chain_{k}": v for k, v in asdict(params).items()}
+
+
+# ---------------------------------------------------------------------------- ssw chain
+def run_chain(args: argparse.Namespace) -> dict[str, Any]:
+    from ssw.chain.api import run_chain as simulate_one
+    from ssw.h5io import atomic_h5, write_dataset
+
+    params, cfg = _params(args)
+    wall, opts = _wall(args, cfg, params, args.soil_E, args.soil_nu)
+    if not args.t_end > 0:
+        raise ConfigError("--t-end", args.t_end, "a duration > 0 s")
+    run = simulate_one(params, args.soil_E, args.soil_nu, wall, t_end=args.t_end, **opts)
+    every = max(1, int(args.record_every))
+    t = run.t[::every]
+    forces = run.forces[::every, 0, :]
+    energy = run.energy[::every, 0]
+    inputs = {**vars(args), **_params_dict(params), "wall": wall}
+    inputs = {k: v for k, v in inputs.items() if k not in ("func", "human")}
+    with atomic_h5(args.output, kind="chain_run", inputs=inputs) as f:
+        write_dataset(f, "time", t, "s", "time from the striker's first contact")
+        write_dataset(f, "contact_force", forces, "N",
+                      "n_time x n_contacts: contact j between beads j and j+1 from the "
+                      "striker end; last column the wall")
+        write_dataset(f, "energy", energy, "J", "kinetic + elastic - gravity potential")
+        write_dataset(f, "sensor_force", run.sensor[::every, 0], "N",
+                      "mean of the sensor particle's two contact forces")
+    e0 = float(energy[0])
+    return {
+        "output": args.output, "n_time": int(t.size), "n_contacts": int(forces.shape[1]),
+        "dt": run.dt, "wall": wall,
+        "peak_wall_force": float(np.max(forces[:, -1])),
+        "peak_wall_indentation": float(run.peak_wall_indentation[0]),
+        "energy_drift_relative": float(np.max(np.abs(energy - e0)) / abs(e0)) if e0 else 0.0,
+    }
+
+
+# ---------------------------------------------------------------------------- ssw tof
+def run_tof(args: argparse.Namespace) -> dict[str, Any]:
+    from ssw.chain.api import peaks
+
+    params, cfg = _params(args)
+    wall, opts = _wall(args, cfg, params, args.soil_E, args.soil_nu)
+    pk, run = peaks(args.soil_E, args.soil_nu, params, wall, **opts)
+    return {
+        "tof": float(pk.tof[0]), "t_incident": float(pk.t_incident[0]),
+        "t_reflected": float(pk.t_reflected[0]), "f_incident": float(pk.f_incident[0]),
+        "f_reflected": float(pk.f_reflected[0]), "wall": wall, "dt": run.dt,
+        "peak_wall_indentation": float(run.peak_wall_indentation[0]),
+        "striker_velocity": params.striker_velocity,
+    }
+
+
+# ---------------------------------------------------------------------------- sweeps
+def _sweep_points(args: argparse.Namespace, cfg: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
+    from ssw.chain.sweep import grid_points
+    from ssw.config import expand_grid
+
+    sw = cfg["chain"]["sweep"]
+    if args.soil_E_min is not None:
+        if args.soil_E_max is None or args.soil_E_step is None:
+            raise ConfigError("--soil-E-max/--soil-E-step", None, "given with --soil-E-min")
+        E = expand_grid({"start": args.soil_E_min, "stop": args.soil_E_max,
+                         "step": args.soil_E_step}, "--soil-E-*")
+    else:
+        E = expand_grid(sw["soil_E"], "chain.sweep.soil_E")
+    nu = (np.asarray(args.soil_nu, float) if args.soil_nu
+          else expand_grid(sw["soil_nu"], "chain.sweep.soil_nu"))
+    return grid_points(E, nu)
+
+
+def run_tof_sweep(args: argparse.Namespace) -> dict[str, Any] | None:
+    import time
+
+    from ssw.chain.sweep import chunk_slice, run_sweep, write_csv, write_sweep
+
+    params, cfg = _params(args)
+    E, nu = _sweep_points(args, cfg)
+    chunks = args.chunks or 1
+    idx = chunk_slice(E.size, args.chunk, chunks)
+    E, nu = E[idx], nu[idx]
+    wall, opts = _wall(args, cfg, params, E, nu)
+    comm = None
+    if args.mpi:
+        from mpi4py import MPI
+
+        comm = MPI.COMM_WORLD
+    t0 = time.perf_counter()
+    sw = run_sweep(params, E, nu, wall, comm=comm, **opts)
+    wall_time = time.perf_counter() - t0
+    if comm is not None and comm.Get_rank() != 0:
+        return None  # rank 0 writes and reports
+    if args.output:
+        inputs = {k: v for k, v in vars(args).items() if k not in ("func", "human")}
+        write_sweep(args.output, sw, {**inputs, **_params_dict(params), "wall": wall})
+        if args.csv:
+            write_csv(args.csv, sw)
+    return {
+        "soil_E": sw.soil_E, "soil_nu": sw.soil_nu, "tof": sw.tof, "wall": wall,
+        "points": int(sw.tof.size), "wall_time": wall_time,
+        "ranks": 1 if comm is None else comm.Get_size(),
+    }
+
+
+def run_tof_merge(args: argparse.Namespace) -> dict[str, Any]:
+    from ssw.chain.sweep import merge_sweeps, plot_fig8, read_sweep, write_csv, write_sweep
+
+    parts = [read_sweep(p) for p in args.inputs]
+    sw = merge_sweeps([p[0] for p in parts])
+    write_sweep(args.output, sw, {"parts": [str(p) for p in args.inputs],
+                                  "part_inputs": [p[1] for p in parts]})
+    if args.csv:
+        write_csv(args.csv, sw)
+    if args.plot:
+        walls = sorted({str(p[1].get("wall", "?")) for p in parts})
+        plot_fig8(args.plot, sw, f"TOF vs soil modulus, {'/'.join(walls)} wall (cf. thesis Fig 8)")
+    return {"output": args.output, "points": int(sw.tof.size),
+            "tof_min": float(np.min(sw.tof)), "tof_max": float(np.max(sw.tof))}
+
+
+def run_tof_compare(args: argparse.Namespace) -> dict[str, Any]:
+    from ssw.chain.compare import compare_laws, write_comparison_csv
+    from ssw.config import scenes
+
+    params, cfg = _params(args)
+    set_name = args.set or cfg["fit"]["set"]
+    scs = [sc for sc in scenes(cfg, set_name)
+           if sc.plate_material == params.plate_material
+           and abs(sc.plate_thickness - params.plate_thickness) <= 1e-12]
+    if not scs:
+        raise ConfigError("--set", set_name, f"a set with {params.plate_material} plates of "
+                          f"{params.plate_thickness} m (the chain's plate)")
+    E = np.array([sc.soil_E for sc in scs])
+    nu = np.array([sc.soil_nu for sc in scs])
+    curves = [str(Path(args.contact_dir) / f"{sc.scene_id}.h5") for sc in scs]
+    cmp = compare_laws(params, E, nu, curves, args.k_table or DEFAULT_K_TABLE)
+    if args.output:
+        write_comparison_csv(args.output, cmp)
+    rel = cmp.relative_to_table()
+    return {
+        "set": set_name, "scenes": len(scs), "output": args.output,
+        **{f"max_abs_rel_{k}_vs_table": float(np.nanmax(np.abs(v))) for k, v in rel.items()},
+    }
+
+
+def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
+    from ssw.chain.calibration import calibrate_striker_velocity
+
+    params, cfg = _params(args)
+    wall, opts = _wall(args, cfg, params, 1e8, 0.3)
+    if wall == "table":
+        raise ConfigError("--law", "table", "rigid | hertz | fit for the calibration")
+    cal = calibrate_striker_velocity(params, args.foam, wall, **opts)
+    return {
+        "striker_velocity": cal.striker_velocity, "drop_height": cal.drop_height,
+        "foam": cal.foam, "wall": wall, "tof": cal.tof, "tof_thesis": cal.tof_thesis,
+        "relative_difference": {k: cal.tof[k] / cal.tof_thesis[k] - 1 for k in cal.tof},
+    }
+
+
+# ---------------------------------------------------------------------------- ssw invert
+def run_invert(args: argparse.Namespace) -> dict[str, Any]:
+    from ssw.chain.inverse import invert
+    from ssw.chain.sweep import read_sweep
+
+    params, cfg = _params(args)
+    sweep = read_sweep(args.table)[0] if args.table else None
+    E_range = (args.soil_E_min, args.soil_E_max)
+    wall, opts = _wall(args, cfg, params, np.geomspace(*E_range, 48), args.soil_nu)
+    if wall == "table":
+        raise ConfigError("--law", "table", "rigid | hertz | fit for the inverse "
+                          "(the table wall needs one FEM curve per E)")
+    res = invert(args.tof, args.soil_nu, params, wall, tof_std=args.tof_std,
+                 E_range=E_range, sweep=sweep, **opts)
+    return {
+        "E": float(res.E), "E_low": float(res.E_low), "E_high": float(res.E_high),
+        "interval_clipped": bool(res.clipped), "tof_range": list(res.tof_range),
+        "E_range": list(res.E_range), "wall": wall,
+    }
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser("chain", help="simulate the bead chain; write every contact force",
+                       description="One chain run to --t-end; HDF5 datasets time (s) and "
+                       "contact_force (N, n_time x n_contacts, last column the wall).")
+    _chain_options(p, "--wall")
+    p.add_argument("--soil-E", type=float, default=100.0e6, help="soil modulus, Pa")
+    p.add_argument("--soil-nu", type=float, default=0.3, help="soil Poisson's ratio")
+    p.add_argument("--t-end", type=float, required=True, help="simulated time, s")
+    p.add_argument("--record-every", type=int, default=1, help="keep every n-th step")
+    p.add_argument("--output", required=True, help="output HDF5")
+    add_json_flag(p)
+    p.set_defaults(func=run_chain)
+
+    p = sub.add_parser("tof", help="TOF at the sensor for one soil",
+                       description="TOF (s) between the incident and reflected peaks.")
+    _chain_options(p)
+    p.add_argument("--soil-E", type=float, required=True, help="soil modulus, Pa")
+    p.add_argument("--soil-nu", type=float, required=True, help="soil Poisson's ratio")
+    add_json_flag(p)
+    p.set_defaults(func=run_tof)
+
+    p = sub.add_parser("tof-sweep", help="TOF over a grid of soil E and nu (batched)",
+                       description="TOF(E, nu); without --soil-E-min the config's "
+                       "chain.sweep grid. --chunk/--chunks select an interleaved part.")
+    _chain_options(p)
+    p.add_argument("--soil-E-min", type=float, help="Pa")
+    p.add_argument("--soil-E-max", type=float, help="Pa (included)")
+    p.add_argument("--soil-E-step", type=float, help="Pa")
+    p.add_argument("--soil-nu", type=float, nargs="+", help="Poisson's ratio(s)")
+    p.add_argument("--chunk", type=int, default=0, help="0-based chunk index")
+    p.add_argument("--chunks", type=int, default=1, help="number of chunks")
+    p.add_argument("--mpi", action="store_true", help="split the points over MPI ranks")
+    p.add_argument("--output", help="output HDF5 (kind tof_sweep)")
+    p.add_argument("--csv", help="also write this CSV")
+    add_json_flag(p)
+    p.set_defaults(func=run_tof_sweep)
+
+    p = sub.add_parser("tof-merge", help="merge sweep chunks; CSV and Fig 8 plot")
+    p.add_argument("inputs", nargs="+", help="chunk HDF5 files")
+    p.add_argument("--output", required=True, help="merged HDF5")
+    p.add_argument("--csv", help="merged CSV")
+    p.add_argument("--plot", help="Fig 8 style PNG")
+    add_json_flag(p)
+    p.set_defaults(func=run_tof_merge)
+
+    p = sub.add_parser("tof-compare", help="TOF of the FEM curve vs the fitted laws",
+                       description="For the scenes of a contact set: TOF with the table "
+                       "wall (the FEM curve), the K law, the power law and bare Hertz.")
+    _chain_options(p)
+    p.add_argument("--set", help="contact set (default: the config's fit.set)")
+    p.add_argument("--output", help="CSV of the comparison")
+    add_json_flag(p)
+    p.set_defaults(func=run_tof_compare)
+
+    p = sub.add_parser("tof-calibrate", help="striker speed matching one Table 2 foam",
+                       description="Calibrate the striker speed on ONE foam of the thesis's "
+                       "Table 2; the other foams are predictions.")
+    _chain_options(p)
+    p.add_argument("--foam", default="PCF30", choices=["PCF08", "PCF15", "PCF30"],
+                   help="the foam calibrated on")
+    add_json_flag(p)
+    p.set_defaults(func=run_calibrate)
+
+    p = sub.add_parser("invert", help="soil E from a TOF and an assumed nu",
+                       description="E (Pa) with the interval E(TOF +- std).")
+    _chain_options(p)
+    p.add_argument("--tof", type=float, required=True, help="measured TOF, s")
+    p.add_argument("--tof-std", type=float, default=0.0, help="its standard deviation, s")
+    p.add_argument("--soil-nu", type=float, required=True, help="assumed Poisson's ratio")
+    p.add_argument("--soil-E-min", type=float, default=10.0e6, help="range searched, Pa")
+    p.add_argument("--soil-E-max", type=float, default=1000.0e6, help="range searched, Pa")
+    p.add_argument("--table", help="use a stored sweep (tof_sweep HDF5) instead of the model")
+    add_json_flag(p)
+    p.set_defaults(func=run_invert)

@@ -1,0 +1,299 @@
+"""``ssw fit``, ``ssw fit-table``, ``ssw fit-deviation``, ``ssw fit-plot``: modified-Hertz fits.
+
+* ``ssw fit CURVE.h5 [--law L] [--range-mode M] [--delta-min D] [--delta-max D]
+  [--weighting W] [--config C] [--json]``: one curve, one law; prints the parameters
+  (``K`` or ``C, n`` or ``k1, k2``), ``rms_rel_residual``, ``max_rel_residual``, the range
+  and every input.
+* ``ssw fit-table CURVES... --output T.h5 [--csv T.csv] [--config C] [--json]``: fit every
+  curve with the config's laws on its default range; write the K(E, nu) tables.
+* ``ssw fit-deviation CURVES... --set-kind materials|thickness [--output F.csv]``:
+  deviation from Hertz at ``fit.delta_ref`` next to the thesis's statements.
+* ``ssw fit-plot {deviation,curves,k} INPUTS... --output F.png``: the Figs 5-7 analogues.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+from dataclasses import asdict
+from typing import Any
+
+from ssw.cli import add_json_flag
+from ssw.config import load_config
+from ssw.fit.laws import LAWS, WEIGHTINGS
+from ssw.fit.range import RANGE_MODES
+
+
+def _config_arg(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--config", default="config/config.yaml", help="study config (YAML)")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "fit",
+        help="fit a modified-Hertz law to one contact curve",
+        description="Fit one law to a contact curve (HDF5 from `ssw contact`). K is defined "
+        "against F_H = 4/3 E/(1-nu^2) sqrt(R) delta^1.5 (rigid indenter, soil E and nu).",
+    )
+    p.add_argument("curve", help="contact curve file (HDF5, ssw_kind contact_curve)")
+    p.add_argument("--law", choices=list(LAWS), help="law (default: fit.law of the config)")
+    p.add_argument("--range-mode", choices=RANGE_MODES, help="fit range mode (fit.range.mode)")
+    p.add_argument("--delta-min", type=float, help="lower end of the fit range, m")
+    p.add_argument("--delta-max", type=float, help="upper end, m (implies --range-mode fixed)")
+    p.add_argument("--weighting", choices=WEIGHTINGS, help="least-squares weighting")
+    _config_arg(p)
+    add_json_flag(p)
+    p.set_defaults(func=run_fit, human=_human_fit)
+
+    t = sub.add_parser(
+        "fit-table",
+        help="fit contact curves and aggregate K(E, nu) tables (HDF5 + CSV)",
+        description="Fit every curve with the config's laws (fit.law + fit.compare_laws) on "
+        "its default range and write per-plate tables over the soil grid.",
+    )
+    t.add_argument("curves", nargs="+", help="contact curve files")
+    t.add_argument("--output", required=True, help="table HDF5 file (ssw_kind k_table)")
+    t.add_argument("--csv", help="table CSV file, one row per scene")
+    _config_arg(t)
+    add_json_flag(t)
+    t.set_defaults(func=run_table)
+
+    d = sub.add_parser(
+        "fit-deviation",
+        help="deviation from Hertz at the reference indentation, next to the thesis's values",
+    )
+    d.add_argument("curves", nargs="+", help="contact curve files")
+    d.add_argument("--set-kind", choices=["materials", "thickness"], required=True)
+    d.add_argument("--output", help="CSV file of the rows")
+    _config_arg(d)
+    add_json_flag(d)
+    d.set_defaults(func=run_deviation)
+
+    i = sub.add_parser(
+        "fit-tof-impact",
+        help="TOF with the FEM curve itself vs the K and power fits (what fit error costs)",
+        description="For each curve, TOF with the table law (the curve), fit K, fit (C, n) "
+        "and bare Hertz, their errors against the table, and the implied modulus errors.",
+    )
+    i.add_argument("curves", nargs="+", help="contact curve files")
+    i.add_argument("--output", help="CSV file of the rows")
+    _config_arg(i)
+    add_json_flag(i)
+    i.set_defaults(func=run_tof_impact)
+
+    c = sub.add_parser(
+        "fit-calibrate-soil",
+        help="soil E at which a plate's deviation from Hertz equals a target (FEM solves)",
+        description="Find, by Brent's method on log E with one FEM solve per step, the soil "
+        "modulus at which the plate's deviation F/F_H - 1 at fit.delta_ref equals --target.",
+    )
+    c.add_argument("--target", type=float, required=True, help="deviation F/F_H - 1")
+    c.add_argument("--plate-material", required=True, help="material key of the plate")
+    c.add_argument("--plate-thickness", type=float, required=True, help="plate thickness, m")
+    c.add_argument("--soil-nu", type=float, default=0.3, help="soil Poisson's ratio")
+    c.add_argument("--material-set", help="realistic | as_printed (default: the config's)")
+    c.add_argument("--E-min", type=float, default=1.0e6, help="search from, Pa")
+    c.add_argument("--E-max", type=float, default=1.0e10, help="search to, Pa")
+    _config_arg(c)
+    add_json_flag(c)
+    c.set_defaults(func=run_calibrate)
+
+    st = sub.add_parser(
+        "fit-thesis-statements",
+        help="the thesis's Set 1/2 deviations from Hertz, ours (both material sets) and theirs",
+        description="Solve the config's set1_materials and set2_thickness scenes with the "
+        "realistic and as_printed materials and print the deviation from Hertz at "
+        "fit.delta_ref next to the thesis's statements.",
+    )
+    st.add_argument("--output", help="CSV file of the rows")
+    _config_arg(st)
+    add_json_flag(st)
+    st.set_defaults(func=run_statements)
+
+    g = sub.add_parser(
+        "fit-range",
+        help="the indentation range a scene's default fit needs (m)",
+        description="Upper end of the default fit range of a soil under fit.range: in mode "
+        "chain, the chain's peak wall indentation (Hertz wall) times fit.range.factor. The "
+        "contact stage may compute each curve only that far.",
+    )
+    g.add_argument("--soil-E", type=float, required=True, help="soil Young's modulus, Pa")
+    g.add_argument("--soil-nu", type=float, required=True, help="soil Poisson's ratio")
+    _config_arg(g)
+    add_json_flag(g)
+    g.set_defaults(func=run_range)
+
+    f = sub.add_parser("fit-plot", help="figures of the fits (thesis Figs 5-7 analogues)")
+    f.add_argument("kind", choices=["deviation", "curves", "k"])
+    f.add_argument("inputs", nargs="+", help="curve files (deviation, curves) or a table (k)")
+    f.add_argument("--output", required=True, help="PNG file")
+    f.add_argument("--title", default="", help="figure title")
+    _config_arg(f)
+    add_json_flag(f)
+    f.set_defaults(func=run_plot)
+
+
+def _cfg_with(args: argparse.Namespace) -> dict[str, Any]:
+    cfg = copy.deepcopy(load_config(args.config))
+    rc = cfg["fit"]["range"]
+    if getattr(args, "range_mode", None):
+        rc["mode"] = args.range_mode
+    if getattr(args, "delta_min", None) is not None:
+        rc["delta_min"] = args.delta_min
+    if getattr(args, "delta_max", None) is not None:
+        rc["delta_max"], rc["mode"] = args.delta_max, "fixed"
+    if getattr(args, "weighting", None):
+        cfg["fit"]["weighting"] = args.weighting
+    return cfg
+
+
+def _human_fit(r: dict[str, Any]) -> str:
+    law = LAWS[r["law"]]
+    params = ", ".join(
+        f"{p} = {r[p]:.6g}" + ("" if u == "1" else f" {u}")
+        for p, u in zip(law.params, law.units, strict=True)
+    )
+    rng = r["range"]
+    return (
+        f"{law.formula}: {params}\n"
+        f"relative residual: rms {r['rms_rel_residual']:.3g}, max {r['max_rel_residual']:.3g} "
+        f"({r['n_points']} points)\n"
+        f"range: {r['delta_lo'] * 1e3:.4g} .. {r['delta_hi'] * 1e3:.4g} mm (mode {rng['mode']}, "
+        f"source {rng['source']}, needed {rng['needed'] * 1e3:.4g} mm"
+        f"{', clipped to the curve' if rng['clipped'] else ''})\n"
+        f"E* = {r['E_star']:.6g} Pa (soil, rigid indenter), R = {r['radius']:.6g} m"
+    )
+
+
+def run_fit(args: argparse.Namespace) -> dict[str, Any]:
+    from ssw.curve import read_curve
+    from ssw.fit.pipeline import fit_with_config
+
+    cfg = _cfg_with(args)
+    res, rng = fit_with_config(read_curve(args.curve), cfg, args.law)
+    out = res.as_dict()
+    out["range"] = asdict(rng)
+    out["formula"] = LAWS[res.law].formula
+    return out
+
+
+def run_table(args: argparse.Namespace) -> dict[str, Any]:
+    from ssw.fit.pipeline import config_laws, table_from_files
+    from ssw.fit.table import write_tables
+
+    cfg = load_config(args.config)
+    tables, records = table_from_files(args.curves, cfg)
+    inputs = {
+        "curves": list(args.curves),
+        "fit": cfg["fit"],
+        "laws": config_laws(cfg),
+        "ranges": [r["range"] for r in records],
+    }
+    write_tables(tables, args.output, args.csv, inputs)
+    return {
+        "output": args.output,
+        "csv": args.csv,
+        "tables": [
+            {
+                "name": tb.name,
+                "n_E": int(tb.soil_E.size),
+                "n_nu": int(tb.soil_nu.size),
+                "interp_error": tb.interp_error(),
+                "max_rel_residual": {
+                    law: float(r["max_rel_residual"].max()) for law, r in tb.residuals.items()
+                },
+            }
+            for tb in tables
+        ],
+    }
+
+
+def run_deviation(args: argparse.Namespace) -> dict[str, Any]:
+    from ssw.curve import read_curve
+    from ssw.fit.deviation import deviation_rows
+
+    cfg = load_config(args.config)
+    rows = deviation_rows(
+        [read_curve(p) for p in args.curves], args.set_kind, cfg["fit"]["delta_ref"]
+    )
+    for r in rows:
+        r["material_set"] = cfg["material_set"]
+    if args.output:
+        from ssw.fit.figures import write_rows_csv
+
+        write_rows_csv(rows, args.output)
+    return {"rows": rows}
+
+
+def run_plot(args: argparse.Namespace) -> dict[str, Any]:
+    from ssw.fit import figures
+
+    cfg = load_config(args.config)
+    figures.PLOTS[args.kind](args.inputs, args.output, cfg, args.title)
+    return {"output": args.output}
+
+
+def run_tof_impact(args: argparse.Namespace) -> dict[str, Any]:
+    from ssw.curve import read_curve
+    from ssw.fit.tof_impact import tof_impact
+
+    rows = tof_impact([read_curve(p) for p in args.curves], load_config(args.config))
+    if args.output:
+        from ssw.fit.figures import write_rows_csv
+
+        write_rows_csv(rows, args.output)
+    worst = {
+        k: max(abs(r[k]) for r in rows)
+        for k in ("tof_err_fit_k", "tof_err_fit_power", "E_err_fit_k", "E_err_fit_power")
+    }
+    return {"max_abs": worst, "rows": rows}
+
+
+def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
+    from ssw.config import Scene, library
+    from ssw.contact import solve_scene
+    from ssw.fit.deviation import calibrate_soil_E, deviation
+
+    cfg = copy.deepcopy(load_config(args.config))
+    if args.material_set:
+        cfg["material_set"] = args.material_set
+    mats = library(cfg)
+    calls: list[dict[str, float]] = []
+
+    def dev(E: float) -> float:
+        sc = Scene(args.plate_material, args.plate_thickness, E, args.soil_nu)
+        c = solve_scene(sc, cfg["contact"], cfg["indenter"]["radius"], mats)
+        d = deviation(c, cfg["fit"]["delta_ref"])["deviation"]
+        calls.append({"soil_E": E, "deviation": d})
+        return d
+
+    E = calibrate_soil_E(args.target, dev, args.E_min, args.E_max)
+    return {"soil_E": E, "material_set": cfg["material_set"], "solves": calls}
+
+
+def run_statements(args: argparse.Namespace) -> dict[str, Any]:
+    from ssw.config import library
+    from ssw.contact import solve_scene
+    from ssw.fit.deviation import thesis_statements
+
+    def solve(scene: Any, cfg: dict[str, Any]) -> Any:
+        return solve_scene(scene, cfg["contact"], cfg["indenter"]["radius"], library(cfg))
+
+    rows = thesis_statements(load_config(args.config), solve)
+    if args.output:
+        from ssw.fit.figures import write_rows_csv
+
+        write_rows_csv(rows, args.output)
+    return {"rows": rows}
+
+
+def run_range(args: argparse.Namespace) -> dict[str, Any]:
+    from ssw.fit.range import scene_delta_max
+
+    cfg = load_config(args.config)
+    rc = cfg["fit"]["range"]
+    return {
+        "delta_lo": rc["delta_min"],
+        "delta_hi": scene_delta_max(args.soil_E, args.soil_nu, cfg),
+        "mode": rc["mode"],
+    }

@@ -1,0 +1,155 @@
+"""PETSc sparse direct solver (petsc4py): one LU factorization, many right-hand sides.
+
+The matrix is assembled from COO triplets (``MatSetPreallocationCOO``) as AIJ, distributed
+by rows over the ranks of ``PETSC_COMM_WORLD``. It is factored once with PCLU in the
+natural order of the given numbering (which :mod:`ssw.contact.assembly` makes a nested
+dissection of the node graph with each node's displacements before its pressure, so that
+the saddle-point matrix has no zero pivot). With more than one rank the factorization is
+``PCREDUNDANT`` (every rank factors the gathered matrix with the same sequential LU), so
+that ``mpiexec -n N`` reproduces the serial answer to round-off. Every solve checks the
+KSP converged reason and raises :class:`ssw.errors.SolverError` on failure.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ssw.errors import SolverError
+
+#: Options prefix of the contact solver's KSP (users may add PETSc options under it).
+PREFIX = "ssw_contact_"
+
+
+def _petsc():
+    import petsc4py
+
+    petsc4py.init()
+    from petsc4py import PETSc
+
+    return PETSc
+
+
+def comm_size() -> int:
+    """Number of MPI ranks of PETSC_COMM_WORLD."""
+    return _petsc().COMM_WORLD.getSize()
+
+
+def comm_rank() -> int:
+    """Rank of this process in PETSC_COMM_WORLD."""
+    return _petsc().COMM_WORLD.getRank()
+
+
+def nd_order(rows: np.ndarray, cols: np.ndarray, n: int) -> np.ndarray:
+    """Nested-dissection permutation (new position -> node) of a graph given as COO."""
+    PETSc = _petsc()
+    g = PETSc.Mat().createAIJ((n, n), comm=PETSc.COMM_SELF)
+    g.setPreallocationCOO(rows.astype(PETSc.IntType), cols.astype(PETSc.IntType))
+    g.setValuesCOO(np.ones(len(rows)), addv=PETSc.InsertMode.INSERT_VALUES)
+    g.assemble()
+    rperm, _ = g.getOrdering("nd")
+    perm = rperm.getIndices().copy()
+    g.destroy()
+    return perm
+
+
+class LUSolver:
+    """LU factors of a sparse matrix given as COO triplets (duplicates are summed).
+
+    Parameters
+    ----------
+    rows, cols, vals : COO triplets (global indices, every rank passes all of them).
+    n : matrix size.
+    """
+
+    def __init__(self, rows: np.ndarray, cols: np.ndarray, vals: np.ndarray, n: int) -> None:
+        PETSc = _petsc()
+        self.PETSc = PETSc
+        comm = PETSc.COMM_WORLD
+        self.size, rank = comm.getSize(), comm.getRank()
+        self.n = n
+        # each rank inserts a slice of the triplets; PETSc sums and routes them
+        lo, hi = (len(rows) * rank) // self.size, (len(rows) * (rank + 1)) // self.size
+        a = PETSc.Mat().createAIJ((n, n), comm=comm)
+        a.setPreallocationCOO(rows[lo:hi].astype(PETSc.IntType), cols[lo:hi].astype(PETSc.IntType))
+        a.setValuesCOO(vals[lo:hi], addv=PETSc.InsertMode.ADD_VALUES)
+        a.assemble()
+        self.mat = a
+        ksp = PETSc.KSP().create(comm=comm)
+        ksp.setOptionsPrefix(PREFIX)
+        ksp.setOperators(a)
+        ksp.setType(PETSc.KSP.Type.PREONLY)
+        pc = ksp.getPC()
+        opts = PETSc.Options()
+        if self.size == 1:
+            pc.setType(PETSc.PC.Type.LU)
+            pc.setFactorOrdering(ord_type="natural")
+        else:
+            pc.setType(PETSc.PC.Type.REDUNDANT)
+            opts[f"{PREFIX}redundant_pc_type"] = "lu"
+            opts[f"{PREFIX}redundant_pc_factor_mat_ordering_type"] = "natural"
+        ksp.setFromOptions()
+        try:
+            ksp.setUp()
+        except PETSc.Error as exc:
+            raise SolverError(f"PETSc LU factorization failed: {exc}") from exc
+        self.ksp = ksp
+        self.x, self.b = a.createVecs()
+        self.lo, self.hi = a.getOwnershipRange()
+        self._gather, self._xall = PETSc.Scatter.toAll(self.x)
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """Solve ``A X = rhs`` for a dense (n, k) right-hand side; every rank gets all of X."""
+        rhs = np.asarray(rhs, dtype=float).reshape(self.n, -1)
+        if self.size == 1:
+            return self._solve_dense(rhs)
+        out = np.empty_like(rhs)
+        for j in range(rhs.shape[1]):
+            self.b.setArray(rhs[self.lo:self.hi, j])
+            self._solve_vec()
+            self._gather.scatter(self.x, self._xall)
+            out[:, j] = self._xall.getArray()
+        return out
+
+    def _solve_vec(self) -> None:
+        PETSc = self.PETSc
+        try:
+            self.ksp.solve(self.b, self.x)
+        except PETSc.Error as exc:
+            raise SolverError(f"PETSc solve failed: {exc}") from exc
+        self._check()
+
+    def _solve_dense(self, rhs: np.ndarray) -> np.ndarray:
+        PETSc = self.PETSc
+        k = rhs.shape[1]
+        b = PETSc.Mat().createDense((self.n, k), array=np.asfortranarray(rhs), comm=PETSc.COMM_SELF)
+        x = PETSc.Mat().createDense((self.n, k), comm=PETSc.COMM_SELF)
+        x.setUp()
+        try:
+            self.ksp.matSolve(b, x)
+        except PETSc.Error as exc:
+            raise SolverError(f"PETSc solve failed: {exc}") from exc
+        self._check()
+        out = x.getDenseArray().copy()
+        b.destroy()
+        x.destroy()
+        return out
+
+    def _check(self) -> None:
+        reason = self.ksp.getConvergedReason()
+        if reason < 0:
+            raise SolverError(
+                f"PETSc KSP diverged (KSPConvergedReason {reason}); the LU factorization "
+                "of the u-p matrix failed (zero pivot?)"
+            )
+
+    def matvec(self, x: np.ndarray) -> np.ndarray:
+        """``A x`` for a global vector ``x`` (n,); every rank gets the whole result."""
+        self.x.setArray(np.asarray(x, float)[self.lo:self.hi])
+        self.mat.mult(self.x, self.b)
+        self._gather.scatter(self.b, self._xall)
+        return self._xall.getArray().copy()
+
+    def destroy(self) -> None:
+        """Free the PETSc objects."""
+        for obj in (self.ksp, self.mat, self.x, self.b, self._gather, self._xall):
+            obj.destroy()

@@ -1,0 +1,71 @@
+"""Fits as the study config asks: each curve on its default range, then the tables.
+
+:func:`fit_with_config` fits one curve with one law on the range the config's
+``fit.range`` gives for that scene (:mod:`ssw.fit.range`); :func:`fit_files` does it for
+many curve files and laws and returns the fits, with the range's provenance attached;
+:func:`table_from_files` groups them into :class:`~ssw.fit.table.KTable` s.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import asdict
+from pathlib import Path
+from typing import Any
+
+from ssw.curve import ForceCurve, read_curve
+from ssw.fit.fitting import FitResult, fit_curve, scene_inputs
+from ssw.fit.range import FitRange, fit_range, fit_ranges
+from ssw.fit.table import KTable, build_tables
+
+
+def config_laws(cfg: dict[str, Any]) -> list[str]:
+    """The laws the config fits: ``fit.compare_laws`` plus ``fit.law``, without repeats."""
+    fc = cfg["fit"]
+    return list(dict.fromkeys([fc["law"], *fc["compare_laws"]]))
+
+
+def fit_with_config(
+    curve: ForceCurve, cfg: dict[str, Any], law: str | None = None
+) -> tuple[FitResult, FitRange]:
+    """Fit ``law`` (default ``fit.law``) on the config's range for this curve's scene."""
+    sc = scene_inputs(curve)
+    rng = fit_range(float(sc["soil_E"]), float(sc["soil_nu"]), float(curve.delta[-1]), cfg)
+    res = fit_curve(
+        curve, law or cfg["fit"]["law"], (rng.lo, rng.hi), weighting=cfg["fit"]["weighting"]
+    )
+    return res, rng
+
+
+def fit_files(
+    paths: Iterable[str | Path], cfg: dict[str, Any], laws: list[str] | None = None
+) -> list[dict[str, Any]]:
+    """For every curve file: ``{"path", "range": FitRange dict, "fits": {law: FitResult}}``.
+
+    The ranges of all files are computed in one batch (one chain run in mode ``chain``).
+    """
+    paths = [str(p) for p in paths]
+    curves = [read_curve(p) for p in paths]
+    scs = [scene_inputs(c) for c in curves]
+    ranges = fit_ranges(
+        [float(s["soil_E"]) for s in scs],
+        [float(s["soil_nu"]) for s in scs],
+        [float(c.delta[-1]) for c in curves],
+        cfg,
+    )
+    out = []
+    for p, c, rng in zip(paths, curves, ranges, strict=True):
+        fits = {
+            law: fit_curve(c, law, (rng.lo, rng.hi), weighting=cfg["fit"]["weighting"])
+            for law in laws or config_laws(cfg)
+        }
+        out.append({"path": p, "range": asdict(rng), "fits": fits})
+    return out
+
+
+def table_from_files(
+    paths: Iterable[str | Path], cfg: dict[str, Any], laws: list[str] | None = None
+) -> tuple[list[KTable], list[dict[str, Any]]]:
+    """Fit every file and build the tables; also return the per-file records."""
+    records = fit_files(paths, cfg, laws)
+    return build_tables(fr for r in records for fr in r["fits"].values()), records

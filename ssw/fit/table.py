@@ -1,0 +1,280 @@
+"""K(E, nu) tables: per (plate material, thickness), the fits over the soil grid.
+
+A :class:`KTable` holds, for one plate (material, thickness), every law's parameters on the
+grid ``soil_nu x soil_E`` with the residuals of each fit, and interpolates them
+(:mod:`ssw.fit.interp`: PCHIP in log E, linear in nu):
+
+* ``K(E, nu)``: the ``k_hertz`` factor against the rigid-sphere Hertz law of the FEM,
+  ``F_H = 4/3 E/(1 - nu^2) sqrt(R) delta^1.5`` (see :mod:`ssw.fit.fitting` for E*);
+* ``power(E, nu) -> (C, n)``: ``F = C delta^n`` (N, m) for the FEM's rigid sphere of
+  radius ``radius``.
+
+Stated interpolation errors (``interp_error``; leave-one-out, :mod:`ssw.fit.interp`):
+``K`` relative; ``power`` as the relative error of the force ``C delta^n`` at the fit
+ranges' ends. Files: HDF5 (``ssw_kind = "k_table"``; one group per plate) and CSV (one row
+per scene).
+"""
+
+from __future__ import annotations
+
+import csv
+import io
+from collections.abc import Iterable
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from ssw.errors import ConfigError, OutOfRangeError, SswError
+from ssw.fit.fitting import FitResult
+from ssw.fit.interp import GridInterpolant
+from ssw.fit.laws import LAWS
+from ssw.h5io import atomic_h5, atomic_write_text, check_kind, read_inputs, write_dataset
+
+KIND = "k_table"
+RESIDUALS = ("rms_rel_residual", "max_rel_residual")
+
+
+def group_name(plate_material: str, plate_thickness: float) -> str:
+    """HDF5 group of a plate, e.g. ``pla-t400um`` (``noplate`` for thickness 0)."""
+    return "noplate" if plate_thickness == 0 else f"{plate_material}-t{plate_thickness * 1e6:g}um"
+
+
+@dataclass
+class KTable:
+    """Fits of one plate over a soil grid; arrays have shape (n_nu, n_E). SI units."""
+
+    plate_material: str
+    plate_thickness: float  # m
+    radius: float  # m, indenter radius of the fits
+    soil_E: NDArray[np.float64]  # Pa, increasing
+    soil_nu: NDArray[np.float64]  # -, increasing
+    params: dict[str, dict[str, NDArray[np.float64]]]  # law -> parameter -> (n_nu, n_E)
+    residuals: dict[str, dict[str, NDArray[np.float64]]]  # law -> rms/max -> (n_nu, n_E)
+    delta_lo: NDArray[np.float64]  # m, fit range per scene
+    delta_hi: NDArray[np.float64]  # m
+    weighting: str = "absolute"
+    _interp: dict[str, GridInterpolant] = field(default_factory=dict, repr=False)
+
+    def __post_init__(self) -> None:
+        self.soil_E = np.asarray(self.soil_E, float)
+        self.soil_nu = np.asarray(self.soil_nu, float)
+        if "k_hertz" in self.params:
+            self._interp["K"] = GridInterpolant(
+                self.soil_E, self.soil_nu, self.params["k_hertz"]["K"], log_values=True
+            )
+        if "power" in self.params:
+            p = self.params["power"]
+            self._interp["C"] = GridInterpolant(self.soil_E, self.soil_nu, p["C"], log_values=True)
+            self._interp["n"] = GridInterpolant(self.soil_E, self.soil_nu, p["n"], log_values=False)
+
+    @classmethod
+    def load(
+        cls,
+        path: str | Path,
+        plate_material: str | None = None,
+        plate_thickness: float | None = None,
+    ) -> KTable:
+        """The table of one plate (m) from an HDF5 file (the only one when it holds one)."""
+        tables, _ = load_tables(path)
+        pick = [
+            tb
+            for tb in tables
+            if (plate_material is None or tb.plate_material == plate_material)
+            and (plate_thickness is None or abs(tb.plate_thickness - plate_thickness) <= 1e-12)
+        ]
+        if len(pick) != 1:
+            have = ", ".join(tb.name for tb in tables)
+            raise OutOfRangeError(
+                f"{path}: plate {plate_material!r}, thickness {plate_thickness!r} m selects "
+                f"{len(pick)} of the tables ({have}); name one plate"
+            )
+        return pick[0]
+
+    @property
+    def name(self) -> str:
+        return group_name(self.plate_material, self.plate_thickness)
+
+    def _need(self, key: str, law: str) -> GridInterpolant:
+        if key not in self._interp:
+            raise ConfigError("fit.compare_laws", sorted(self.params), f"must include {law}")
+        return self._interp[key]
+
+    def K(self, soil_E: ArrayLike, soil_nu: ArrayLike) -> NDArray[np.float64]:
+        """Interpolated K (-) at soil modulus ``soil_E`` (Pa) and Poisson's ratio ``soil_nu``."""
+        return self._need("K", "k_hertz")(soil_E, soil_nu)
+
+    def power(
+        self, soil_E: ArrayLike, soil_nu: ArrayLike
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Interpolated ``(C, n)`` of ``F = C delta^n`` (C in N m^-n)."""
+        return self._need("C", "power")(soil_E, soil_nu), self._need("n", "power")(soil_E, soil_nu)
+
+    def interp_error(self) -> dict[str, float]:
+        """Stated maximum interpolation errors (relative), leave-one-out estimates."""
+        out: dict[str, float] = {}
+        if "K" in self._interp:
+            e = self._interp["K"].loo_error()
+            out.update(K_E=e["E"], K_nu=e["nu"], K=e["bound"])
+        if "C" in self._interp:
+            (cE, cnu), (nE, nnu) = (self._interp[k].loo_predictions() for k in ("C", "n"))
+            p = self.params["power"]
+            errs = []
+            for d in (self.delta_lo, self.delta_hi):
+                dd = np.maximum(d, 1e-12)
+                F = p["C"] * dd ** p["n"]
+                errs.append([np.abs(c * dd**n / F - 1.0) for c, n in ((cE, nE), (cnu, nnu))])
+            e_E = _nanmax([e[0] for e in errs])
+            e_nu = _nanmax([e[1] for e in errs])
+            out.update(power_E=e_E, power_nu=e_nu, power=e_E + e_nu)
+        return out
+
+    def rows(self) -> list[dict[str, Any]]:
+        """One dict per scene: plate, soil, every law's parameters and residuals."""
+        out = []
+        for j, nu in enumerate(self.soil_nu):
+            for i, E in enumerate(self.soil_E):
+                row: dict[str, Any] = {
+                    "plate_material": self.plate_material,
+                    "plate_thickness": self.plate_thickness,
+                    "soil_E": float(E),
+                    "soil_nu": float(nu),
+                    "delta_lo": float(self.delta_lo[j, i]),
+                    "delta_hi": float(self.delta_hi[j, i]),
+                }
+                for law, ps in self.params.items():
+                    for k, v in ps.items():
+                        row[k] = float(v[j, i])
+                    for k, v in self.residuals[law].items():
+                        row[f"{law}_{k}"] = float(v[j, i])
+                out.append(row)
+        return out
+
+
+def _nanmax(arrays: Iterable[np.ndarray]) -> float:
+    vals = np.concatenate([np.ravel(a) for a in arrays])
+    return float(np.nanmax(vals)) if np.any(np.isfinite(vals)) else 0.0
+
+
+def build_tables(fits: Iterable[FitResult]) -> list[KTable]:
+    """Group fits by plate and arrange them on each plate's (nu, E) grid.
+
+    Every (E, nu) of a plate's grid must have a fit of every law that appears for that
+    plate; all fits of one plate must share the indenter radius and the weighting.
+    """
+    groups: dict[tuple[str, float], dict[tuple[float, float, str], FitResult]] = {}
+    for fr in fits:
+        sc = fr.scene
+        t = float(sc.get("plate_thickness") or 0.0)
+        key = ("none" if t == 0 else str(sc.get("plate_material")), t)
+        cell = (float(sc["soil_E"]), float(sc["soil_nu"]), fr.law)
+        if cell in groups.setdefault(key, {}):
+            raise SswError(f"two {fr.law} fits for plate {key} at E, nu = {cell[:2]}")
+        groups[key][cell] = fr
+    return [_table(mat, t, cells) for (mat, t), cells in sorted(groups.items())]
+
+
+def _table(mat: str, t: float, cells: dict[tuple[float, float, str], FitResult]) -> KTable:
+    """One plate's table from its fits keyed by (E, nu, law)."""
+    Es = np.unique([c[0] for c in cells])
+    nus = np.unique([c[1] for c in cells])
+    laws = [law for law in LAWS if any(c[2] == law for c in cells)]
+    missing = [(E, nu, law) for law in laws for nu in nus for E in Es if (E, nu, law) not in cells]
+    if missing:
+        raise SswError(
+            f"plate {group_name(mat, t)}: {len(missing)} fits missing on the (E, nu) grid, "
+            f"e.g. E = {missing[0][0]:g} Pa, nu = {missing[0][1]:g}, law {missing[0][2]}"
+        )
+    first = next(iter(cells.values()))
+    if any(fr.radius != first.radius or fr.weighting != first.weighting for fr in cells.values()):
+        raise SswError(f"plate {group_name(mat, t)}: fits differ in radius or weighting")
+
+    def grid(fn: Any, law: str) -> NDArray[np.float64]:
+        return np.array([[fn(cells[(E, nu, law)]) for E in Es] for nu in nus], dtype=float)
+
+    return KTable(
+        plate_material=mat,
+        plate_thickness=t,
+        radius=first.radius,
+        soil_E=Es,
+        soil_nu=nus,
+        params={
+            law: {p: grid(lambda fr, p=p: fr.params[p], law) for p in LAWS[law].params}
+            for law in laws
+        },
+        residuals={
+            law: {r: grid(lambda fr, r=r: getattr(fr, r), law) for r in RESIDUALS} for law in laws
+        },
+        delta_lo=grid(lambda fr: fr.delta_lo, laws[0]),
+        delta_hi=grid(lambda fr: fr.delta_hi, laws[0]),
+        weighting=first.weighting,
+    )
+
+
+def write_tables(
+    tables: list[KTable], h5_path: str | Path, csv_path: str | Path | None, inputs: dict
+) -> None:
+    """Write the tables to HDF5 (one group per plate) and, if given, CSV (one row per scene)."""
+    with atomic_h5(h5_path, kind=KIND, inputs=inputs) as f:
+        for tb in tables:
+            g = f.create_group(tb.name)
+            g.attrs.update(
+                plate_material=tb.plate_material,
+                plate_thickness=tb.plate_thickness,
+                radius=tb.radius,
+                weighting=tb.weighting,
+            )
+            for k, v in tb.interp_error().items():
+                g.attrs[f"interp_error_{k}"] = v
+            write_dataset(g, "soil_E", tb.soil_E, "Pa", "soil Young's modulus axis")
+            write_dataset(g, "soil_nu", tb.soil_nu, "1", "soil Poisson's ratio axis")
+            write_dataset(g, "delta_lo", tb.delta_lo, "m", "fit range start, (n_nu, n_E)")
+            write_dataset(g, "delta_hi", tb.delta_hi, "m", "fit range end, (n_nu, n_E)")
+            for law, ps in tb.params.items():
+                lg = g.create_group(law)
+                lg.attrs["formula"] = LAWS[law].formula
+                for (p, v), unit in zip(ps.items(), LAWS[law].units, strict=True):
+                    write_dataset(lg, p, v, unit, f"{p} of {LAWS[law].formula}, (n_nu, n_E)")
+                for r, v in tb.residuals[law].items():
+                    write_dataset(lg, r, v, "1", "relative force residual of the fit")
+    if csv_path is not None:
+        rows = [r for tb in tables for r in tb.rows()]
+        buf = io.StringIO()
+        cols = list(dict.fromkeys(k for r in rows for k in r))
+        w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
+        w.writeheader()
+        w.writerows(rows)
+        atomic_write_text(csv_path, buf.getvalue())
+
+
+def load_tables(path: str | Path) -> tuple[list[KTable], dict[str, Any]]:
+    """All tables of an HDF5 file written by :func:`write_tables`, and its inputs."""
+    import h5py
+
+    p = Path(path)
+    if not p.is_file():
+        raise SswError(f"no K table at {p}")
+    tables = []
+    with h5py.File(p, "r") as f:
+        check_kind(f, KIND)
+        inputs = read_inputs(f)
+        for name in f:
+            g = f[name]
+            laws = [k for k in g if isinstance(g[k], h5py.Group)]
+            tables.append(
+                KTable(
+                    plate_material=str(g.attrs["plate_material"]),
+                    plate_thickness=float(g.attrs["plate_thickness"]),
+                    radius=float(g.attrs["radius"]),
+                    soil_E=g["soil_E"][()],
+                    soil_nu=g["soil_nu"][()],
+                    params={law: {q: g[law][q][()] for q in LAWS[law].params} for law in laws},
+                    residuals={law: {r: g[law][r][()] for r in RESIDUALS} for law in laws},
+                    delta_lo=g["delta_lo"][()],
+                    delta_hi=g["delta_hi"][()],
+                    weighting=str(g.attrs["weighting"]),
+                )
+            )
+    return tables, inputs

@@ -1,0 +1,89 @@
+"""How much each law's fit error matters for the time of flight (TOF).
+
+For each contact curve, the chain (``ssw.chain.api.tof``) runs with four last-contact laws:
+
+* ``table``: the FEM curve itself (no fit error; the reference);
+* ``fit_k``: ``F = K A_w delta^1.5`` with this curve's fitted K;
+* ``fit_power``: ``F = C delta^n`` with this curve's fitted (C, n);
+* ``hertz``: the bare soil (no plate), for scale.
+
+The TOF error of a law is ``tof_law / tof_table - 1``; the inverse problem turns it into a
+modulus error through the local slope ``d ln TOF / d ln E`` (about -0.2 for a Hertz wall,
+``TOF ~ E^(-1/5)`` at fixed striker speed), so a TOF error ``e`` costs about ``e / 0.2 = 5 e``
+in E. ssw reports the slope from the Hertz-wall TOF at ``E (1 +- 1 %)``.
+
+The fits use each scene's default range (:mod:`ssw.fit.range`). The chain extends a curve
+beyond its last point with a power law fitted to its tail (``ssw.chain.walls``); the result
+flags scenes whose chain indentation exceeds the curve.
+"""
+
+from __future__ import annotations
+
+from typing import Any
+
+import numpy as np
+
+from ssw.curve import ForceCurve
+from ssw.fit.fitting import fit_curve, scene_inputs
+from ssw.fit.range import fit_ranges
+
+#: Relative step of the modulus for the slope d ln TOF / d ln E.
+SLOPE_STEP = 0.01
+
+
+def tof_impact(curves: list[ForceCurve], cfg: dict[str, Any]) -> list[dict[str, Any]]:
+    """Per curve: TOF (s) with each law, their errors against the table law, K and (C, n)."""
+    from ssw.chain import api
+    from ssw.chain.params import ChainParams
+
+    params = ChainParams.from_config(cfg)
+    scs = [scene_inputs(c) for c in curves]
+    E = np.array([float(s["soil_E"]) for s in scs])
+    nu = np.array([float(s["soil_nu"]) for s in scs])
+    ranges = fit_ranges(E, nu, [float(c.delta[-1]) for c in curves], cfg)
+    w = cfg["fit"]["weighting"]
+    fk = [
+        fit_curve(c, "k_hertz", (r.lo, r.hi), weighting=w)
+        for c, r in zip(curves, ranges, strict=True)
+    ]
+    fp = [
+        fit_curve(c, "power", (r.lo, r.hi), weighting=w)
+        for c, r in zip(curves, ranges, strict=True)
+    ]
+    K = np.array([f.params["K"] for f in fk])
+    C = np.array([f.params["C"] for f in fp])
+    n = np.array([f.params["n"] for f in fp])
+    tof = {
+        "table": api.tof(E, nu, params, "table", curve=list(curves)),
+        "fit_k": api.tof(E, nu, params, "fit", K=K),
+        "fit_power": api.tof(E, nu, params, "fit", power=(C, n)),
+        "hertz": api.tof(E, nu, params, "hertz"),
+    }
+    up = api.tof(E * (1 + SLOPE_STEP), nu, params, "hertz")
+    dn = api.tof(E * (1 - SLOPE_STEP), nu, params, "hertz")
+    slope = np.log(up / dn) / np.log((1 + SLOPE_STEP) / (1 - SLOPE_STEP))
+    rows = []
+    for i, sc in enumerate(scs):
+        row: dict[str, Any] = {
+            "plate_material": sc.get("plate_material"),
+            "plate_thickness": sc.get("plate_thickness"),
+            "soil_E": E[i],
+            "soil_nu": nu[i],
+            "fit_delta_hi": ranges[i].hi,
+            "chain_delta_needed": ranges[i].needed,
+            "curve_too_short": ranges[i].clipped,
+            "K": K[i],
+            "k_rms_rel_residual": fk[i].rms_rel_residual,
+            "C": C[i],
+            "n": n[i],
+            "power_rms_rel_residual": fp[i].rms_rel_residual,
+            "dlnTOF_dlnE": slope[i],
+        }
+        for law, t in tof.items():
+            row[f"tof_{law}"] = float(t[i])
+        for law in ("fit_k", "fit_power", "hertz"):
+            e = float(tof[law][i] / tof["table"][i] - 1.0)
+            row[f"tof_err_{law}"] = e
+            row[f"E_err_{law}"] = e / float(slope[i])
+        rows.append(row)
+    return rows

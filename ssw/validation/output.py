@@ -1,0 +1,92 @@
+"""Validation tables on disk: CSV (thesis Tables 2 and 3 columns) and HDF5 (every field)."""
+
+from __future__ import annotations
+
+import csv
+import io
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ssw.h5io import atomic_h5, atomic_write_text, to_json, write_dataset
+from ssw.validation.table import SampleResult
+
+KIND = "validation"
+#: CSV columns and their units.
+COLUMNS = {
+    "sample": "", "material": "", "E_manufacturer": "Pa", "nu": "1", "tof_sim": "s",
+    "tof_measured": "s", "tof_measured_std": "s", "tof_source": "", "tof_diff_pct": "%",
+    "tof_diff_signed_pct": "%", "E_measured": "Pa", "E_cov_pct": "%", "E_diff_pct": "%",
+    "n_hits": "1", "n_accepted": "1", "tof_published": "s", "tof_sim_published": "s",
+    "E_published": "Pa", "E_cov_published": "%", "synthetic": "",
+}
+
+
+def to_csv_text(rows: list[SampleResult]) -> str:
+    """CSV text; the header names each column with its unit, ``name [unit]``."""
+    buf = io.StringIO()
+    w = csv.writer(buf, lineterminator="\n")
+    w.writerow([f"{k} [{u}]" if u else k for k, u in COLUMNS.items()])
+    for r in rows:
+        d = r.to_dict()
+        w.writerow(["" if d[k] is None else d[k] for k in COLUMNS])
+    return buf.getvalue()
+
+
+def write_table(csv_path: str | Path, h5_path: str | Path, rows: list[SampleResult],
+                inputs: dict[str, Any]) -> None:
+    """Write the CSV and the HDF5 (one group per sample, per-hit arrays included)."""
+    atomic_write_text(csv_path, to_csv_text(rows))
+    with atomic_h5(h5_path, kind=KIND, inputs=inputs) as f:
+        for r in rows:
+            g = f.create_group(r.sample)
+            d = r.to_dict()
+            for k, u in COLUMNS.items():
+                if d[k] is not None and u and k != "synthetic":
+                    write_dataset(g, k, d[k], u)
+            g.attrs["row_json"] = to_json(d)
+            write_dataset(g, "tof_per_hit", np.asarray(r.tof_per_hit, float), "s")
+            write_dataset(g, "E_per_hit", np.asarray(r.E_per_hit, float), "Pa")
+
+
+def _r(x: float | None, scale: float = 1.0, nd: int = 4) -> str:
+    return "" if x is None else f"{x * scale:.{nd}g}"
+
+
+def thesis_tables_text(rows: list[SampleResult]) -> tuple[str, str]:
+    """Thesis Tables 2 and 3 side by side with ssw's values, in the thesis's units.
+
+    Table 2: E (MPa), nu, TOF simulated (ssw / thesis, s), TOF measured (s), difference
+    (ssw / thesis, %). Table 3: E (MPa), measured E (ssw / thesis, MPa), its COV
+    (ssw / thesis, %), difference (ssw / thesis, %). Thesis differences are recomputed
+    from its printed values with the same formulas.
+    """
+    t2 = io.StringIO()
+    w = csv.writer(t2, lineterminator="\n")
+    w.writerow(["sample", "E [MPa]", "nu [1]", "TOF sim ssw [s]", "TOF sim thesis [s]",
+                "TOF measured [s]", "TOF source", "diff ssw [%]", "diff thesis [%]"])
+    for r in rows:
+        thesis = (abs(r.tof_published - r.tof_sim_published) / r.tof_sim_published * 100
+                  if r.tof_published and r.tof_sim_published else None)
+        w.writerow([r.sample, _r(r.E_manufacturer, 1e-6), r.nu, _r(r.tof_sim),
+                    _r(r.tof_sim_published), _r(r.tof_measured), r.tof_source,
+                    _r(r.tof_diff_pct, nd=3), _r(thesis, nd=3)])
+    t3 = io.StringIO()
+    w = csv.writer(t3, lineterminator="\n")
+    w.writerow(["sample", "E [MPa]", "E measured ssw [MPa]", "E measured thesis [MPa]",
+                "COV ssw [%]", "COV thesis [%]", "diff ssw [%]", "diff thesis [%]"])
+    for r in rows:
+        thesis = (abs(r.E_published - r.E_manufacturer) / r.E_manufacturer * 100
+                  if r.E_published else None)
+        w.writerow([r.sample, _r(r.E_manufacturer, 1e-6), _r(r.E_measured, 1e-6),
+                    _r(r.E_published, 1e-6), _r(r.E_cov_pct, nd=3), _r(r.E_cov_published, nd=3),
+                    _r(r.E_diff_pct, nd=3), _r(thesis, nd=3)])
+    return t2.getvalue(), t3.getvalue()
+
+
+def write_thesis_tables(table2: str | Path, table3: str | Path, rows: list[SampleResult]) -> None:
+    """Write :func:`thesis_tables_text` to two CSV files."""
+    a, b = thesis_tables_text(rows)
+    atomic_write_text(table2, a)
+    atomic_write_text(table3, b)

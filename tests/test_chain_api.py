@@ -1,0 +1,182 @@
+"""The chain's public API, the inverse, sweeps (chunks, MPI) and the CLI contract."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import h5py
+import numpy as np
+import pytest
+
+from ssw.chain import api
+from ssw.chain.inverse import invert
+from ssw.chain.params import ChainParams
+from ssw.chain.sweep import chunk_slice, grid_points, merge_sweeps, read_sweep, run_sweep
+from ssw.cli import main
+from ssw.config import load_config
+from ssw.errors import ConfigError, OutOfRangeError
+
+P = ChainParams(striker_velocity=0.5246)
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_inverse_of_forward_is_identity():
+    E = np.array([12e6, 38e6, 123e6, 445e6, 987e6])
+    res = invert(api.tof(E, 0.3, P), 0.3, P)
+    np.testing.assert_allclose(res.E, E, rtol=1e-6)
+
+
+def test_inverse_interval_brackets_and_out_of_range_names_the_range():
+    T = float(api.tof(123e6, 0.33, P))
+    res = invert(T, 0.33, P, tof_std=1.53e-5)
+    assert res.E_low < res.E < res.E_high  # longer TOF = softer soil
+    lo, hi = res.tof_range
+    with pytest.raises(OutOfRangeError, match=r"valid range \["):
+        invert(hi * 1.05, 0.33, P)
+    with pytest.raises(OutOfRangeError, match="MPa"):
+        invert(lo * 0.95, 0.33, P)
+
+
+def test_tof_is_vectorized_and_decreases_with_E():
+    E = np.array([[20e6], [200e6]])
+    nu = np.array([0.1, 0.3, 0.5])
+    T = api.tof(E, nu, P)
+    assert T.shape == (2, 3)
+    assert np.all(T[0] > T[1])
+
+
+def test_peak_wall_indentation_is_below_the_energy_bound():
+    """Without gravity, the wall cannot store more than the striker's kinetic energy:
+    2/5 A_w d^2.5 <= m v^2 / 2, so d <= (5 m v^2 / (4 A_w))^(2/5)."""
+    p = P.with_(gravity=False)
+    E = np.array([10e6, 100e6, 1000e6])
+    d = api.peak_wall_indentation(E, 0.3, p)
+    bound = (5 * p.bead_mass * p.striker_velocity**2 / (4 * p.wall_coefficient(E, 0.3))) ** 0.4
+    assert np.all(d > 0.3 * bound)
+    assert np.all(d <= bound)
+
+
+def test_sensor_signal_shapes_and_baseline():
+    t, F = api.sensor_signal(50e6, 0.3, P)
+    assert t.ndim == 1 and F.shape == t.shape
+    s = P.sensor_index
+    expected = 0.5 * P.g * P.bead_mass * (s - 1 + s)  # static mean of the two contacts
+    assert F[0] == pytest.approx(expected, rel=1e-9)
+    t2, F2 = api.sensor_signal([50e6, 60e6], 0.3, P, t_end=1e-3)
+    assert F2.shape == (t2.size, 2) and t2[-1] == pytest.approx(1e-3, abs=2 * t2[1])
+
+
+def test_uniform_sensor_ignores_sensor_mass():
+    heavy = P.with_(sensor_mass=0.08)
+    assert api.tof(80e6, 0.3, heavy.with_(uniform=True)) == pytest.approx(
+        float(api.tof(80e6, 0.3, P)), rel=1e-12
+    )
+    assert abs(float(api.tof(80e6, 0.3, heavy)) / float(api.tof(80e6, 0.3, P)) - 1) > 1e-3
+
+
+def test_sweep_chunks_merge_to_the_whole_and_do_not_depend_on_the_batch():
+    E, nu = grid_points(np.arange(10e6, 200e6, 30e6), [0.1, 0.5])
+    whole = run_sweep(P, E, nu)
+    parts = [run_sweep(P, E[chunk_slice(E.size, c, 3)], nu[chunk_slice(E.size, c, 3)])
+             for c in range(3)]
+    merged = merge_sweeps(parts)
+    np.testing.assert_allclose(merged.sorted().tof, whole.sorted().tof, rtol=1e-12)
+
+
+def test_params_from_config_reads_the_library():
+    cfg = load_config(ROOT / "config" / "config.yaml")
+    p = ChainParams.from_config(cfg)
+    assert p.bead_E == 200e9 and p.bead_density == 7810.0
+    assert ChainParams.from_config(cfg, n_beads=12, sensor_index=6).n_beads == 12
+    with pytest.raises(ConfigError, match="sensor_index"):
+        ChainParams(n_beads=10, sensor_index=9)
+
+
+def _cli(args, capsys):
+    assert main(args) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_cli_chain_writes_time_and_contact_forces(tmp_path, capsys):
+    out = tmp_path / "run.h5"
+    res = _cli(["chain", "--beads", "12", "--striker-velocity", "0.5", "--no-gravity",
+                "--wall", "hertz", "--soil-E", "1e8", "--soil-nu", "0.3", "--t-end", "1e-3",
+                "--output", str(out), "--json"], capsys)
+    with h5py.File(out) as f:
+        t, F = f["time"][()], f["contact_force"][()]
+        assert f["contact_force"].attrs["units"] == "N"
+    assert F.shape == (t.size, 12) and res["n_contacts"] == 12
+    assert t[-1] == pytest.approx(1e-3, abs=2 * t[1])
+    # the striker's first contact (column 0) loads first; the wall (last) is last
+    first = np.argmax(F > 1.0, axis=0)
+    assert first[0] < first[5] < first[-1]
+
+
+def test_cli_tof_sweep_and_invert_agree(tmp_path, capsys):
+    base = ["--law", "hertz", "--striker-velocity", "0.5246", "--json"]
+    one = _cli(["tof", "--soil-E", "1.2e8", "--soil-nu", "0.3", *base], capsys)
+    sw = _cli(["tof-sweep", "--soil-E-min", "6e7", "--soil-E-max", "1.8e8",
+               "--soil-E-step", "6e7", "--soil-nu", "0.3", *base,
+               "--output", str(tmp_path / "s.h5"), "--csv", str(tmp_path / "s.csv")], capsys)
+    assert sw["tof"][1] == pytest.approx(one["tof"], rel=1e-12)
+    inv = _cli(["invert", "--tof", str(one["tof"]), "--tof-std", "1e-5", "--soil-nu", "0.3",
+                *base], capsys)
+    assert inv["E"] == pytest.approx(1.2e8, rel=1e-6)
+    assert read_sweep(tmp_path / "s.h5")[0].tof.size == 3
+    assert (tmp_path / "s.csv").read_text().startswith("soil_E_Pa,")
+
+
+def test_cli_reports_out_of_range_tof(capsys):
+    assert main(["invert", "--tof", "0.05", "--soil-nu", "0.3", "--law", "hertz"]) == 2
+    assert "valid range" in capsys.readouterr().err
+
+
+@pytest.mark.mpi
+@pytest.mark.skipif(shutil.which("mpiexec") is None, reason="no mpiexec")
+def test_mpi_sweep_gives_the_serial_answer(tmp_path):
+    pytest.importorskip("mpi4py")
+    ssw = str(Path(sys.executable).parent / "ssw")
+    args = ["tof-sweep", "--law", "hertz", "--soil-E-min", "1e7", "--soil-E-max", "1e8",
+            "--soil-E-step", "1e7", "--soil-nu", "0.1", "0.5", "--json"]
+    par = subprocess.run(["mpiexec", "-n", "2", ssw, *args, "--mpi"], capture_output=True,
+                         text=True, check=True, cwd=ROOT, timeout=120)
+    ser = subprocess.run([ssw, *args], capture_output=True, text=True, check=True, cwd=ROOT,
+                         timeout=120)
+    a, b = json.loads(par.stdout), json.loads(ser.stdout)
+    assert a["ranks"] == 2 and b["ranks"] == 1
+    np.testing.assert_allclose(a["tof"], b["tof"], rtol=1e-12)  # batch: last-bit rounding
+
+
+@pytest.mark.parametrize("change", [{}, {"gravity": False}, {"n_beads": 30, "sensor_index": 25},
+                                    {"striker_velocity": 3.0}])
+def test_early_stop_does_not_change_the_tof(change):
+    """Stopping a scene early (integrate's rule) picks the same peaks as running every
+    scene 2.5 times longer, from very soft to stiffer-than-rock walls."""
+    from ssw.chain.integrate import simulate
+    from ssw.chain.tof import pick_peaks
+    from ssw.chain.walls import build_wall
+
+    p = P.with_(**change)
+    w = build_wall("hertz", p, np.geomspace(5e6, 2e9, 12), 0.3)
+    short = simulate(p, w)
+    long = simulate(p, w, t_end=2.5 * np.nanmax(short.stop_time), stop_early=False)
+    assert not np.any(np.isnan(short.stop_time))
+    np.testing.assert_array_equal(pick_peaks(short.t, short.sensor).tof,
+                                  pick_peaks(long.t, long.sensor).tof)
+
+
+def test_workflow_helpers_name_the_wall_inputs():
+    from ssw.chain import workflow as wf
+
+    cfg = load_config(ROOT / "config" / "config.yaml")
+    assert wf.wall_inputs(cfg, "R") == {"k_table": "R/fit/k_table.h5"}
+    cfg["chain"]["wall_law"] = "table"
+    ids = wf.sweep_scene_ids(cfg)  # the thesis sweep is Set 3's grid: every point has a curve
+    assert len(ids) == 300 and len(wf.wall_inputs(cfg, "R")["curves"]) == 300
+    cfg["chain"]["sweep"]["soil_E"] = {"values": [15e6]}
+    with pytest.raises(ValueError, match="no set"):
+        wf.sweep_scene_ids(cfg)

@@ -1,0 +1,51 @@
+"""The thesis's Table 2: calibrate the striker speed on PCF 30 only, predict PCF 08 and 15.
+
+Thesis simulated TOF (Torres Constante 2024, Table 2): 1.80 ms (38 MPa, nu 0.34),
+1.46 ms (123 MPa, 0.33), 1.15 ms (445 MPa, 0.30). Our device: 20 beads of 3/4 in chrome
+steel, sensor bead 10, gravity, Hertz wall (the plate's K table is a product of the
+workflow, not an input of the tests). Stated tolerance of the predictions: 12 %. The
+Hertz wall lacks the plate, which stiffens the contact most on soft soils (K > 1), so the
+predictions are expected to run long for the soft foams; at calibration time (this
+code, REFERENCE.md device) they came out +9.7 % (PCF 08) and +2.8 % (PCF 15).
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from ssw.chain.calibration import TABLE2, calibrate_striker_velocity
+from ssw.chain.params import ChainParams
+from ssw.config import load_config
+
+ROOT = Path(__file__).resolve().parent.parent
+TOLERANCE = 0.12
+
+
+@pytest.fixture(scope="module")
+def calibration():
+    cfg = load_config(ROOT / "config" / "config.yaml")
+    return calibrate_striker_velocity(ChainParams.from_config(cfg), "PCF30", "hertz"), cfg
+
+
+def test_calibrated_foam_is_matched(calibration):
+    cal, _ = calibration
+    assert cal.tof["PCF30"] == pytest.approx(1.15e-3, rel=1e-5)
+
+
+@pytest.mark.parametrize("foam", ["PCF08", "PCF15"])
+def test_other_foams_are_predicted_within_tolerance(calibration, foam):
+    cal, _ = calibration
+    assert cal.tof[foam] == pytest.approx(cal.tof_thesis[foam], rel=TOLERANCE)
+
+
+def test_predictions_keep_the_thesis_order(calibration):
+    cal, _ = calibration
+    tofs = [cal.tof[row[0]] for row in TABLE2]
+    assert tofs[0] > tofs[1] > tofs[2]
+
+
+def test_config_holds_the_calibrated_striker_speed(calibration):
+    cal, cfg = calibration
+    assert cfg["chain"]["striker_velocity"] == pytest.approx(cal.striker_velocity, rel=2e-3)

@@ -1,0 +1,120 @@
+"""Wall laws: equivalences that hold exactly, the table's interpolation and extension."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ssw.chain import api
+from ssw.chain.params import ChainParams
+from ssw.chain.walls import TABLE_CELLS, build_wall, compliance_scale
+from ssw.curve import ForceCurve, write_curve
+from ssw.errors import ConfigError
+from ssw.hertz import effective_modulus, hertz_coefficient
+
+P = ChainParams(striker_velocity=0.5246)
+E = np.array([38e6, 445e6])
+NU = np.array([0.34, 0.30])
+
+
+def _rigid_sphere_hertz_curve(E_s: float, nu_s: float, d_max: float, n: int = 101
+                              ) -> ForceCurve:
+    """What the FEM gives without a plate: F = 4/3 E/(1-nu^2) sqrt(R) d^1.5 (rigid sphere)."""
+    d = np.linspace(0.0, d_max, n)
+    F = 4 / 3 * E_s / (1 - nu_s**2) * np.sqrt(P.bead_radius) * d**1.5
+    return ForceCurve(delta=d, force=F, contact_radius=np.sqrt(P.bead_radius * d))
+
+
+def test_fit_wall_with_K_1_is_the_hertz_wall():
+    np.testing.assert_allclose(api.tof(E, NU, P, "fit", K=1.0), api.tof(E, NU, P, "hertz"),
+                               rtol=1e-12)
+
+
+def test_power_law_wall_of_the_rigid_sphere_hertz_law_is_the_hertz_wall():
+    """C = 4/3 E_s/(1-nu_s^2) sqrt(R), n = 1.5 with the bead's compliance added through
+    s = (1 + c_b/c_s)^(2/3) gives exactly A_w = 4/3 sqrt(R) / (c_s + c_b)."""
+    C = 4 / 3 * E / (1 - NU**2) * np.sqrt(P.bead_radius)
+    w = build_wall("fit", P, E, NU, power=(C, 1.5))
+    A_w = hertz_coefficient(effective_modulus(P.bead_E, P.bead_nu, E, NU), P.bead_radius)
+    np.testing.assert_allclose(w.coef, A_w, rtol=1e-12)
+
+
+@pytest.mark.parametrize("d_max", [1.0e-4, 1.0e-3])
+def test_table_wall_of_a_hertz_curve_is_the_hertz_wall(tmp_path, d_max):
+    """A tabulated Hertz curve reproduces the Hertz wall: inside the table (g = F/d^1.5 is
+    constant, so interpolation is exact) and beyond it (the extension's exponent is the
+    curve's log-log slope, 1.5). With d_max = 0.1 mm (the thesis's FEM range) the chain's
+    peak indentation (0.1-0.3 mm) lies beyond the table."""
+    paths = []
+    for k, (e, n) in enumerate(zip(E, NU, strict=True)):
+        paths.append(tmp_path / f"c{k}.h5")
+        write_curve(paths[-1], _rigid_sphere_hertz_curve(e, n, d_max))
+    t_tab = api.tof(E, NU, P, "table", curve=[str(p) for p in paths])
+    np.testing.assert_allclose(t_tab, api.tof(E, NU, P, "hertz"), rtol=1e-9)
+
+
+def test_table_interpolates_a_non_hertz_curve_linearly_in_F_over_d15():
+    """For F = c d^2 (not Hertz), g = F/d^1.5 = c d^0.5 is interpolated on a grid of
+    TABLE_CELLS cells; the force error stays below the interpolation bound of sqrt."""
+    d = np.linspace(0, 2e-4, 201)
+    curve = ForceCurve(delta=d, force=1e9 * d**2, contact_radius=np.sqrt(P.bead_radius * d))
+    w = build_wall("table", P, 1.0, 0.3, curve=curve)  # 1 Pa: bead compliance negligible
+    x = np.linspace(1e-6, 2e-4, 37)
+    F = np.array([w.force(np.array([xi]))[0] for xi in x])
+    exact = 1e9 * x**2
+    h = 2e-4 / TABLE_CELLS
+    assert np.max(np.abs(F / exact - 1)) < 0.5 * h / x.min() + 1e-6
+    # extension: the slope of the last 10 % is 2, so F continues as d^2
+    far = w.force(np.array([4e-4]))[0]
+    assert far == pytest.approx(1e9 * (4e-4) ** 2, rel=1e-3)
+    # statics inverse of the tabulated law
+    np.testing.assert_allclose(w.force(w.indentation(np.array([3.0]))), 3.0, rtol=1e-9)
+
+
+def test_compliance_scale_is_the_hertz_combination():
+    s = compliance_scale(P, 38e6, 0.34)
+    c_s, c_b = (1 - 0.34**2) / 38e6, P.bead_compliance
+    assert s == pytest.approx((1 + c_b / c_s) ** (2 / 3), rel=1e-14)
+
+
+def test_stiffer_contact_shortens_tof():
+    """K > 1 (a plate spreading the load) makes the last contact stiffer: shorter TOF."""
+    t1, t2 = api.tof(38e6, 0.34, P, "fit", K=[1.0, 2.0][0]), api.tof(38e6, 0.34, P, "fit", K=2.0)
+    assert t2 < t1
+
+
+def test_wall_errors_name_the_field():
+    with pytest.raises(ConfigError, match="wall"):
+        build_wall("soft", P, 1e7, 0.3)
+    with pytest.raises(ConfigError, match="exactly one"):
+        build_wall("fit", P, 1e7, 0.3)
+    with pytest.raises(ConfigError, match="soil_nu"):
+        build_wall("hertz", P, 1e7, 0.7)
+    with pytest.raises(ConfigError, match="k-table"):
+        build_wall("fit", P, 1e7, 0.3, k_table="/nonexistent/k_table.h5")
+
+
+class _HertzKTable:
+    """A K table of the bare soil (no plate): K = 1, power law C = 4/3 E/(1-nu^2) sqrt(R)."""
+
+    def K(self, E, nu):
+        return np.ones_like(np.asarray(E, float))
+
+    def power(self, E, nu):
+        E, nu = np.asarray(E, float), np.asarray(nu, float)
+        return 4 / 3 * E / (1 - nu**2) * np.sqrt(P.bead_radius), np.full(E.shape, 1.5)
+
+
+def test_law_comparison_of_a_hertz_scene_shows_no_difference(tmp_path):
+    """Without a plate every law is Hertz: the table, K and power walls agree with it."""
+    from ssw.chain.compare import compare_laws, write_comparison_csv
+
+    paths = []
+    for k, (e, n) in enumerate(zip(E, NU, strict=True)):
+        paths.append(str(tmp_path / f"c{k}.h5"))
+        write_curve(paths[-1], _rigid_sphere_hertz_curve(e, n, 1e-4))
+    cmp = compare_laws(P, E, NU, paths, _HertzKTable())
+    for rel in cmp.relative_to_table().values():
+        assert np.max(np.abs(rel)) < 1e-8
+    write_comparison_csv(tmp_path / "cmp.csv", cmp)
+    assert (tmp_path / "cmp.csv").read_text().startswith("soil_E_Pa,soil_nu,tof_table_s")

@@ -1,0 +1,94 @@
+"""The ``ssw contact`` CLI contract, the curve file and the MPI run (2 ranks = serial)."""
+
+from __future__ import annotations
+
+import json
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from ssw import hertz
+from ssw.cli import main
+from ssw.config import Scene, library, load_config
+from ssw.contact import solve_scene
+from ssw.curve import read_curve
+
+REPO = Path(__file__).resolve().parent.parent
+CI = str(REPO / "config" / "ci.yaml")
+REQUIRED = ("soil_E", "soil_nu", "plate_material", "plate_E", "plate_nu", "plate_thickness",
+            "interface", "indenter_radius", "delta_max", "steps", "material_set")
+
+
+def test_cli_writes_curve(tmp_path, capsys):
+    out = tmp_path / "c.h5"
+    rc = main(["contact", "--soil-E", "30e6", "--soil-nu", "0.5", "--plate-material", "pla",
+               "--plate-thickness", "0.4e-3", "--steps", "20", "--config", CI,
+               "--output", str(out), "--json"])
+    assert rc == 0
+    printed = json.loads(capsys.readouterr().out)
+    curve = read_curve(out)
+    assert all(k in curve.inputs for k in REQUIRED)
+    assert curve.inputs["plate_material"] == "pla" and curve.inputs["material_set"] == "realistic"
+    assert np.allclose(printed["force"], curve.force)
+    assert len(curve.delta) == 20 and curve.delta[-1] == pytest.approx(1e-4)
+    assert curve.pressure["p"].shape[1] == len(curve.pressure["r"])
+    # the contact pressure integrates to the force (2 pi r p dr over the profile)
+    r, p = curve.pressure["r"], curve.pressure["p"][-1]
+    assert np.trapezoid(2 * np.pi * r * p, r) == pytest.approx(curve.force[-1], rel=0.03)
+
+
+def test_cli_rejects_missing_plate(capsys):
+    rc = main(["contact", "--soil-E", "30e6", "--soil-nu", "0.3", "--plate-thickness", "4e-4",
+               "--config", CI])
+    assert rc == 2
+    assert "--plate-material" in capsys.readouterr().err
+
+
+def test_solve_scene_api_no_plate():
+    cfg = load_config(CI)
+    curve = solve_scene(Scene("none", 0.0, 80e6, 0.3), cfg["contact"],
+                        cfg["indenter"]["radius"], library(cfg))
+    fh = hertz.force(curve.delta, hertz.effective_modulus(80e6, 0.3), cfg["indenter"]["radius"])
+    assert np.max(np.abs(curve.force / fh - 1)[curve.delta >= 1e-6]) < 5e-3
+    assert curve.inputs["plate_material"] == "none" and curve.inputs["plate_E"] is None
+
+
+@pytest.mark.mpi
+@pytest.mark.skipif(shutil.which("mpiexec") is None, reason="no mpiexec")
+def test_two_ranks_give_the_serial_answer(tmp_path):
+    args = [str(Path(sys.executable).parent / "ssw"), "contact", "--soil-E", "50e6",
+            "--soil-nu", "0.5", "--plate-material", "al6061", "--plate-thickness", "0.2e-3",
+            "--steps", "10", "--config", CI, "--json"]
+    par = subprocess.run(["mpiexec", "-n", "2", *args], capture_output=True, text=True,
+                         timeout=300, check=True)
+    ser = subprocess.run(args, capture_output=True, text=True, timeout=300, check=True)
+    lines = par.stdout.strip().splitlines()
+    assert len(lines) == 1  # rank 0 alone reports
+    fp, fs = np.array(json.loads(lines[0])["force"]), np.array(json.loads(ser.stdout)["force"])
+    assert json.loads(lines[0])["stats"]["ranks"] == 2
+    assert np.allclose(fp, fs, rtol=1e-9, atol=0)
+
+
+def test_schema_defaults_are_the_solver_defaults():
+    """One source of truth: the schema's contact defaults equal ssw.contact.DEFAULTS."""
+    from ssw.config import load_schema
+    from ssw.contact import DEFAULTS
+
+    props = load_schema()["properties"]["contact"]["properties"]
+    assert {k: props[k]["default"] for k in DEFAULTS} == DEFAULTS
+    for k, v in props.items():
+        assert v.get("description"), k
+
+
+def test_bad_inputs_name_the_field():
+    from ssw.contact import solve_curve
+    from ssw.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="soil_nu"):
+        solve_curve((1e7, 0.6), None, 0.0, 9.53e-3, {})
+    with pytest.raises(ConfigError, match=r"contact\.interface"):
+        solve_curve((1e7, 0.3), None, 0.0, 9.53e-3, {"interface": "glued"})

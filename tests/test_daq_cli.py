@@ -1,0 +1,45 @@
+"""``ssw acquire`` and ``ssw tof-recording`` end to end."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from ssw.cli import main
+
+
+def run_json(capsys, argv):
+    assert main([*argv, "--json"]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_simulated_acquire_then_tof_recording(capsys, tmp_path):
+    out = tmp_path / "s.h5"
+    a = run_json(capsys, ["acquire", "--simulate", "--tof", "1.3e-3", "--hits", "3",
+                          "--sample", "T1", "--output", str(out)])
+    assert a["backend"] == "simulated" and a["n_accepted"] == 3
+    assert abs(a["tof_mean"] - 1.3e-3) < 0.5 / 51200
+    b = run_json(capsys, ["tof-recording", str(out)])
+    assert b["tof_per_hit"] == a["tof_per_hit"] and b["synthetic"] is True
+
+
+def test_simulated_acquire_from_the_chain(capsys, tmp_path):
+    a = run_json(capsys, ["acquire", "--simulate", "--material", "pcf15", "--wall", "hertz",
+                          "--hits", "2", "--sample", "PCF15", "--output",
+                          str(tmp_path / "c.h5")])
+    assert abs(a["tof_mean"] - a["true_tof"]) < 0.5 / 51200
+
+
+def test_real_acquire_without_driver_fails_cleanly(capsys, tmp_path):
+    assert main(["acquire", "--sample", "X", "--output", str(tmp_path / "r.h5")]) == 2
+    assert "NI-DAQmx driver is not installed" in capsys.readouterr().err
+    assert not (tmp_path / "r.h5").exists()  # no hit recorded: no file left behind
+
+
+@pytest.mark.parametrize("content", [b"", b"not hdf5 at all"])
+def test_tof_recording_of_a_broken_file_fails_cleanly(capsys, tmp_path, content):
+    p = tmp_path / "bad.h5"
+    p.write_bytes(content)
+    assert main(["tof-recording", str(p)]) == 2
+    assert "not a readable HDF5" in capsys.readouterr().err

@@ -31,10 +31,13 @@ def load_schema() -> dict[str, Any]:
 
 
 def _validator(schema: dict[str, Any]) -> Any:
-    """A draft-07 validator that also fills in ``default`` values (as Snakemake's does)."""
+    """A JSON Schema 2020-12 validator (Snakemake 9's draft) that fills in ``default`` values.
+
+    Snakemake's ``validate`` fills defaults the same way, so both see the same config.
+    """
     import jsonschema
 
-    base = jsonschema.Draft7Validator
+    base = jsonschema.Draft202012Validator
     validate_props = base.VALIDATORS["properties"]
 
     def set_defaults(validator: Any, properties: Any, instance: Any, schema: Any) -> Any:

@@ -13,6 +13,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from ssw.chain.calibration import TABLE2, calibrate_striker_velocity
@@ -49,3 +50,24 @@ def test_predictions_keep_the_thesis_order(calibration):
 def test_config_holds_the_calibrated_striker_speed(calibration):
     cal, cfg = calibration
     assert cfg["chain"]["striker_velocity"] == pytest.approx(cal.striker_velocity, rel=2e-3)
+
+
+def test_foams_outside_the_k_table_are_skipped_with_the_reason():
+    """A K table holding nu = 0.3 only (the CI study's) calibrates on PCF 30 and names why
+    PCF 08 and PCF 15 (nu 0.34, 0.33) have no prediction, instead of failing the rule."""
+    from ssw.errors import OutOfRangeError
+
+    class OneNuTable:
+        def K(self, E, nu):
+            nu = np.asarray(nu, dtype=float)
+            if np.any(nu != 0.3):
+                raise OutOfRangeError("soil_nu must equal 0.3 -: the table has one value")
+            return np.ones(np.broadcast_shapes(np.shape(E), nu.shape))
+
+    cfg = load_config(ROOT / "config" / "config.yaml")
+    cal = calibrate_striker_velocity(ChainParams.from_config(cfg), "PCF30", "fit",
+                                     k_table=OneNuTable())
+    assert cal.tof["PCF30"] == pytest.approx(1.15e-3, rel=1e-5)
+    assert cal.tof["PCF08"] is None and cal.tof["PCF15"] is None
+    assert set(cal.skipped) == {"PCF08", "PCF15"}
+    assert "one value" in cal.skipped["PCF08"]

@@ -19,7 +19,8 @@ from typing import Any
 
 from ssw.chain import api
 from ssw.chain.params import ChainParams
-from ssw.errors import SolverError
+from ssw.chain.walls import build_wall
+from ssw.errors import OutOfRangeError, SolverError
 
 #: Thesis Table 2: (id, E Pa, nu, simulated TOF s).
 TABLE2 = (
@@ -39,8 +40,10 @@ class Calibration:
 
     striker_velocity: float
     foam: str
-    tof: dict[str, float]
+    tof: dict[str, float | None]
     tof_thesis: dict[str, float]
+    #: Why a foam has no model TOF (its E or nu lies outside the wall law's table).
+    skipped: dict[str, str]
 
     @property
     def drop_height(self) -> float:
@@ -48,12 +51,29 @@ class Calibration:
         return self.striker_velocity**2 / (2.0 * 9.80665)
 
 
-def table2_tof(params: ChainParams, wall: str = "hertz", **wall_options: Any) -> dict[str, float]:
-    """Model TOF (s) of the three Table 2 foams."""
-    E = [row[1] for row in TABLE2]
-    nu = [row[2] for row in TABLE2]
-    T = api.tof(E, nu, params, wall, **wall_options)
-    return {row[0]: float(t) for row, t in zip(TABLE2, T, strict=True)}
+def table2_tof(
+    params: ChainParams, wall: str = "hertz", **wall_options: Any
+) -> tuple[dict[str, float | None], dict[str, str]]:
+    """Model TOF (s) of the three Table 2 foams, and why any foam has none.
+
+    A foam whose (E, nu) lies outside the wall law's validity (a ``fit`` K table that
+    does not cover it) gets ``None`` and the range error's message; the others are one
+    batched run.
+    """
+    inside: list[tuple[str, float, float]] = []
+    skipped: dict[str, str] = {}
+    for foam, E, nu, _ in TABLE2:
+        try:
+            build_wall(wall, params, E, nu, **wall_options)
+        except OutOfRangeError as exc:
+            skipped[foam] = str(exc)
+        else:
+            inside.append((foam, E, nu))
+    tof: dict[str, float | None] = {row[0]: None for row in TABLE2}
+    if inside:
+        T = api.tof([r[1] for r in inside], [r[2] for r in inside], params, wall, **wall_options)
+        tof.update({r[0]: float(t) for r, t in zip(inside, T, strict=True)})
+    return tof, skipped
 
 
 def calibrate_striker_velocity(
@@ -76,5 +96,5 @@ def calibrate_striker_velocity(
         )
     v = float(brentq(gap, lo, hi, xtol=xtol))
     p = params.with_(striker_velocity=v)
-    return Calibration(v, foam, table2_tof(p, wall, **wall_options),
-                       {r[0]: r[3] for r in TABLE2})
+    tof, skipped = table2_tof(p, wall, **wall_options)
+    return Calibration(v, foam, tof, {r[0]: r[3] for r in TABLE2}, skipped)

@@ -254,7 +254,10 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
     return {
         "striker_velocity": cal.striker_velocity, "drop_height": cal.drop_height,
         "foam": cal.foam, "wall": wall, "tof": cal.tof, "tof_thesis": cal.tof_thesis,
-        "relative_difference": {k: cal.tof[k] / cal.tof_thesis[k] - 1 for k in cal.tof},
+        "relative_difference": {
+            k: None if t is None else t / cal.tof_thesis[k] - 1 for k, t in cal.tof.items()
+        },
+        "skipped": cal.skipped,
     }
 
 

@@ -39,8 +39,10 @@ rule tof_sweep_chunk:
         mpi="--mpi" if CHAIN_RANKS > 1 else "",
     wildcard_constraints:
         chunk=r"\d+",
+    conda:
+        SSW_ENV
     shell:
-        "{params.launch}ssw tof-sweep --config {params.config} {params.wall} {params.mpi} "
+        "{params.launch}python -m ssw tof-sweep --config {params.config} {params.wall} {params.mpi} "
         "--chunk {wildcards.chunk} --chunks {params.chunks} --output {output.h5} "
         "--json > {output.json} 2> {log}"
 
@@ -55,8 +57,10 @@ rule tof_sweep:
         fig8=f"{CHAIN_DIR}/figures/fig8_tof_vs_E.png",
     log:
         f"{LOGS}/chain/tof_sweep.log",
+    conda:
+        SSW_ENV
     shell:
-        "ssw tof-merge {input} --output {output.h5} --csv {output.csv} --plot {output.fig8} "
+        "python -m ssw tof-merge {input} --output {output.h5} --csv {output.csv} --plot {output.fig8} "
         "> {log} 2>&1"
 
 
@@ -76,8 +80,10 @@ rule tof_law_compare:
         config=CONFIG_FILE,
         set=config["fit"]["set"],
         contact_dir=f"{RESULTS}/contact",
+    conda:
+        SSW_ENV
     shell:
-        "ssw tof-compare --config {params.config} --set {params.set} "
+        "python -m ssw tof-compare --config {params.config} --set {params.set} "
         "--k-table {input.k_table} --contact-dir {params.contact_dir} --output {output.csv} "
         "--json > {output.json} 2> {log}"
 
@@ -93,8 +99,10 @@ rule tof_calibration:
     params:
         config=CONFIG_FILE,
         wall=lambda wc, input: chainwf.wall_flags(config, input, RESULTS),
+    conda:
+        SSW_ENV
     shell:
-        "ssw tof-calibrate --config {params.config} {params.wall} --foam PCF30 --json "
+        "python -m ssw tof-calibrate --config {params.config} {params.wall} --foam PCF30 --json "
         "> {output.json} 2> {log}"
 
 

@@ -2,6 +2,8 @@
 # validates the config: the JSON schema (snakemake.utils.validate fills its defaults), then
 # the checks a schema cannot express (ssw.config.check_config).
 import copy
+import os
+import shlex
 import sys
 from pathlib import Path
 
@@ -10,6 +12,16 @@ from snakemake.utils import validate
 sys.path.insert(0, str(Path(workflow.basedir)))
 import ssw.config as sswcfg  # noqa: E402
 from ssw.h5io import atomic_write_text  # noqa: E402
+
+# The rules run `python -m ssw ...` with the repository on PYTHONPATH. `python` is the one
+# of the environment that runs Snakemake (the project's .venv for `make study`, activated or
+# not: its bin goes first on PATH) or, with `--sdm conda`, the rules' conda environment
+# (workflow/envs/ssw.yaml: ssw's dependencies, not ssw itself). Snakemake formats the prefix
+# once, here.
+os.environ.update(PATH=os.pathsep.join([os.path.dirname(sys.executable), os.getenv("PATH", "")]))
+SSW_ROOT = shlex.quote(str(Path(workflow.basedir).resolve()))
+shell.prefix("set -euo pipefail; export PYTHONPATH={SSW_ROOT}${{PYTHONPATH:+:$PYTHONPATH}}; ")
+SSW_ENV = "../envs/ssw.yaml"
 
 # A study config is complete by itself: `--configfile other.yaml` replaces
 # config/config.yaml instead of being merged into it (`--config key=value` still applies).
@@ -46,3 +58,45 @@ def scene_ids(set_name):
 def scene_of(wildcards):
     """The Scene of a {scene} wildcard."""
     return SCENES[wildcards.scene]
+
+
+# ---- fit stage (workflow/rules/fit.smk)
+def contact_curves(set_name):
+    """The contact curve files of one set."""
+    return expand(f"{RESULTS}/contact/{{scene}}.h5", scene=scene_ids(set_name))
+
+
+def _n_soils(set_name):
+    s = config["sets"][set_name]
+    return len(sswcfg.expand_grid(s["soil_E"], f"sets.{set_name}.soil_E"))
+
+
+def deviation_kind(set_name):
+    """`materials` for a set varying the plate material, else `thickness`."""
+    return "materials" if len(config["sets"][set_name]["plate_material"]) > 1 else "thickness"
+
+
+# ---- validation stage (workflow/rules/validation.smk)
+# Relative recording paths in the config start from the repository (the Snakefile's folder),
+# so that runs with --directory elsewhere find them; `ssw validate --root` gets the same.
+RECORDINGS_ROOT = workflow.basedir
+
+
+def validation_inputs(wildcards):
+    """The chain's TOF sweep (drawn in Fig 10), the K table when the chain uses the fit
+    law, and every sample's recording."""
+    inputs = {"sweep": rules.tof_sweep.output.h5}
+    if config["chain"].get("wall_law", "fit") == "fit":
+        inputs["k_table"] = f"{RESULTS}/fit/k_table.h5"
+    recs = [
+        os.path.join(RECORDINGS_ROOT, s["recordings"])
+        for s in config["validation"]["samples"]
+        if s.get("recordings")
+    ]
+    if recs:
+        inputs["recordings"] = recs
+    return inputs
+
+
+def k_table_flag(wildcards, input):
+    return f"--k-table {input.k_table}" if "k_table" in input.keys() else ""

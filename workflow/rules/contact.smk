@@ -49,9 +49,11 @@ rule contact_scene:
     threads: 1
     resources:
         mem_mb=1500,
+    conda:
+        SSW_ENV
     shell:
         # one core per job: the LU is sequential; keep BLAS (the small LCP) from spawning more
-        "OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 ssw contact --scene {wildcards.scene} "
+        "OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 python -m ssw contact --scene {wildcards.scene} "
         "--config {params.config} --output {output.curve} > {log} 2>&1"
 
 
@@ -66,6 +68,8 @@ rule contact_figure:
     params:
         label_by=lambda wc: CONTACT_FIGURE_JOBS[wc.figure][1],
         title=lambda wc: CONTACT_FIGURE_JOBS[wc.figure][2],
+    conda:
+        SSW_ENV
     shell:
-        "ssw contact-plot {input} --output {output.png} --label-by {params.label_by} "
+        "python -m ssw contact-plot {input} --output {output.png} --label-by {params.label_by} "
         "--title '{params.title}' > {log} 2>&1"

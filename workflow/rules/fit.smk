@@ -12,21 +12,6 @@
 #   tof_impact_{set}.csv          TOF with the curve itself vs the K and power fits (grid sets)
 
 
-def contact_curves(set_name):
-    """The contact curve files of one set."""
-    return expand(f"{RESULTS}/contact/{{scene}}.h5", scene=scene_ids(set_name))
-
-
-def _n_soils(set_name):
-    s = config["sets"][set_name]
-    return len(sswcfg.expand_grid(s["soil_E"], f"sets.{set_name}.soil_E"))
-
-
-def deviation_kind(set_name):
-    """`materials` for a set varying the plate material, else `thickness`."""
-    return "materials" if len(config["sets"][set_name]["plate_material"]) > 1 else "thickness"
-
-
 ONE_SOIL_SETS = [s for s in config["sets"] if _n_soils(s) == 1]
 GRID_SETS = [s for s in config["sets"] if _n_soils(s) > 1]
 
@@ -43,8 +28,10 @@ rule k_table:
         f"{LOGS}/fit/k_table.log",
     params:
         config=CONFIG_FILE,
+    conda:
+        SSW_ENV
     shell:
-        "ssw fit-table {input.curves} --output {output.h5} --csv {output.csv} "
+        "python -m ssw fit-table {input.curves} --output {output.h5} --csv {output.csv} "
         "--config {params.config} --json > {output.json} 2> {log}"
 
 
@@ -60,8 +47,10 @@ rule fit_set_table:
         f"{LOGS}/fit/sets/{{set}}.log",
     params:
         config=CONFIG_FILE,
+    conda:
+        SSW_ENV
     shell:
-        "ssw fit-table {input.curves} --output {output.h5} --csv {output.csv} "
+        "python -m ssw fit-table {input.curves} --output {output.h5} --csv {output.csv} "
         "--config {params.config} --json > {output.json} 2> {log}"
 
 
@@ -77,8 +66,10 @@ rule fit_deviation:
     params:
         config=CONFIG_FILE,
         kind=lambda wc: deviation_kind(wc.set),
+    conda:
+        SSW_ENV
     shell:
-        "ssw fit-deviation {input.curves} --set-kind {params.kind} --output {output.csv} "
+        "python -m ssw fit-deviation {input.curves} --set-kind {params.kind} --output {output.csv} "
         "--config {params.config} --json > {output.json} 2> {log}"
 
 
@@ -92,8 +83,10 @@ rule fit_figure_curves:
         f"{LOGS}/fit/figures/{{set}}_curves.log",
     params:
         config=CONFIG_FILE,
+    conda:
+        SSW_ENV
     shell:
-        "ssw fit-plot curves {input.curves} --output {output} --title {wildcards.set} "
+        "python -m ssw fit-plot curves {input.curves} --output {output} --title {wildcards.set} "
         "--config {params.config} > {log} 2>&1"
 
 
@@ -107,8 +100,10 @@ rule fit_figure_deviation:
         f"{LOGS}/fit/figures/{{set}}_deviation.log",
     params:
         config=CONFIG_FILE,
+    conda:
+        SSW_ENV
     shell:
-        "ssw fit-plot deviation {input.curves} --output {output} --title {wildcards.set} "
+        "python -m ssw fit-plot deviation {input.curves} --output {output} --title {wildcards.set} "
         "--config {params.config} > {log} 2>&1"
 
 
@@ -122,8 +117,10 @@ rule fit_figure_k:
         f"{LOGS}/fit/figures/{{set}}_k_vs_E.log",
     params:
         config=CONFIG_FILE,
+    conda:
+        SSW_ENV
     shell:
-        "ssw fit-plot k {input} --output {output} --config {params.config} > {log} 2>&1"
+        "python -m ssw fit-plot k {input} --output {output} --config {params.config} > {log} 2>&1"
 
 
 rule fit_tof_impact:
@@ -137,8 +134,10 @@ rule fit_tof_impact:
         f"{LOGS}/fit/tof_impact_{{set}}.log",
     params:
         config=CONFIG_FILE,
+    conda:
+        SSW_ENV
     shell:
-        "ssw fit-tof-impact {input.curves} --output {output.csv} --config {params.config} "
+        "python -m ssw fit-tof-impact {input.curves} --output {output.csv} --config {params.config} "
         "--json > {output.json} 2> {log}"
 
 

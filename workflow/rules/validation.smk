@@ -1,5 +1,3 @@
-import os
-
 # Stage III: validation on the control foams (thesis Tables 2 and 3, Figs 9 and 10) and the
 # study report. Science lives in ssw.validation / ssw.signal / ssw.report; these rules call
 # `ssw validate` and `ssw report`.
@@ -10,31 +8,6 @@ import os
 #   results/validation/fig10_tof_validation.png      Fig 10: measured vs simulated TOF
 #   results/validation/fig9_tof_scatter.png          Fig 9 style: TOF scatter of repeated hits
 #   results/report/report.html                       every figure and table of the study
-
-
-# Relative recording paths in the config start from the repository (the Snakefile's folder),
-# so that runs with --directory elsewhere find them; `ssw validate --root` gets the same.
-RECORDINGS_ROOT = workflow.basedir
-
-
-def validation_inputs(wildcards):
-    """The chain's TOF sweep (drawn in Fig 10), the K table when the chain uses the fit
-    law, and every sample's recording."""
-    inputs = {"sweep": rules.tof_sweep.output.h5}
-    if config["chain"].get("wall_law", "fit") == "fit":
-        inputs["k_table"] = f"{RESULTS}/fit/k_table.h5"
-    recs = [
-        os.path.join(RECORDINGS_ROOT, s["recordings"])
-        for s in config["validation"]["samples"]
-        if s.get("recordings")
-    ]
-    if recs:
-        inputs["recordings"] = recs
-    return inputs
-
-
-def k_table_flag(wildcards, input):
-    return f"--k-table {input.k_table}" if "k_table" in input.keys() else ""
 
 
 VALIDATION_DIR = f"{RESULTS}/validation"
@@ -58,8 +31,10 @@ rule validation:
         config=CONFIG_FILE,
         k_table=k_table_flag,
         root=RECORDINGS_ROOT,
+    conda:
+        SSW_ENV
     shell:
-        "ssw validate --config {params.config} {params.k_table} --root {params.root} "
+        "python -m ssw validate --config {params.config} {params.k_table} --root {params.root} "
         "--sweep {input.sweep} "
         "--outdir $(dirname {output.csv}) --json > {output.json} 2> {log}"
 
@@ -85,8 +60,10 @@ rule report:
         f"{LOGS}/report/report.log",
     params:
         config=CONFIG_FILE,
+    conda:
+        SSW_ENV
     shell:
-        "ssw report --config {params.config} --results $(dirname $(dirname {output.html})) "
+        "python -m ssw report --config {params.config} --results $(dirname $(dirname {output.html})) "
         "--captions {input.captions} --output {output.html} > {log} 2>&1"
 
 

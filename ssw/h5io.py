@@ -45,6 +45,13 @@ def to_json(obj: Any, **kw: Any) -> str:
     return json.dumps(obj, default=_json_default, **kw)
 
 
+def _umask() -> int:
+    """The process's file mode creation mask (read by setting and restoring it)."""
+    mask = os.umask(0o022)
+    os.umask(mask)
+    return mask
+
+
 @contextlib.contextmanager
 def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     """Yield a temporary path beside ``path``; rename it to ``path`` on success.
@@ -56,6 +63,7 @@ def atomic_path(path: str | os.PathLike[str]) -> Iterator[Path]:
     fd, tmp = tempfile.mkstemp(prefix=f".{dest.name}.", suffix=".part", dir=dest.parent)
     os.close(fd)
     tmp_path = Path(tmp)
+    tmp_path.chmod(0o666 & ~_umask())  # mkstemp makes 0600; results are files like any other
     try:
         yield tmp_path
         os.replace(tmp_path, dest)

@@ -53,3 +53,15 @@ def test_bad_curves_are_refused(tmp_path):
         with atomic_h5(tmp_path / "o.h5", kind="other", inputs={}):
             pass
         read_curve(tmp_path / "o.h5")
+
+
+def test_finished_files_get_the_umask_mode_not_mkstemps_0600(tmp_path):
+    """mkstemp creates 0600 files; a result must be readable like any file the user writes."""
+    import os
+
+    old = os.umask(0o022)
+    try:
+        atomic_write_text(tmp_path / "a.txt", "x")
+    finally:
+        os.umask(old)
+    assert (tmp_path / "a.txt").stat().st_mode & 0o777 == 0o644

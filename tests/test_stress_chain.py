@@ -16,8 +16,6 @@ Each case either meets its tolerance against independent truth or stops with a c
 
 from __future__ import annotations
 
-import signal
-
 import numpy as np
 import pytest
 
@@ -38,17 +36,7 @@ ENERGY_TOL = 1e-3  # of the striker's kinetic energy
 CASE_TIMEOUT_S = 120
 
 
-@pytest.fixture(autouse=True)
-def no_hang():
-    """Fail a case that runs longer than CASE_TIMEOUT_S (SIGALRM; no pytest-timeout here)."""
-    def expire(signum, frame):
-        raise TimeoutError(f"stress case exceeded {CASE_TIMEOUT_S} s: a hang")
-
-    old = signal.signal(signal.SIGALRM, expire)
-    signal.alarm(CASE_TIMEOUT_S)
-    yield
-    signal.alarm(0)
-    signal.signal(signal.SIGALRM, old)
+pytestmark = pytest.mark.usefixtures("no_hang")  # tests/conftest.py
 
 
 def _grid() -> tuple[np.ndarray, np.ndarray]:

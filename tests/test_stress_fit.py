@@ -9,8 +9,6 @@ residual instead of returning a plausible-looking number.
 
 from __future__ import annotations
 
-import signal
-
 import numpy as np
 import pytest
 
@@ -28,17 +26,7 @@ RTOL = 1e-10
 CASE_TIMEOUT_S = 60
 
 
-@pytest.fixture(autouse=True)
-def no_hang():
-    """Fail a case that runs longer than CASE_TIMEOUT_S (SIGALRM; no pytest-timeout here)."""
-    def expire(signum, frame):
-        raise TimeoutError(f"stress case exceeded {CASE_TIMEOUT_S} s: a hang")
-
-    old = signal.signal(signal.SIGALRM, expire)
-    signal.alarm(CASE_TIMEOUT_S)
-    yield
-    signal.alarm(0)
-    signal.signal(signal.SIGALRM, old)
+pytestmark = pytest.mark.usefixtures("no_hang")  # tests/conftest.py
 
 
 def _curve(force: np.ndarray, soil_E: float = 50.0e6, soil_nu: float = 0.3) -> ForceCurve:

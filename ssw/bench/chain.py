@@ -24,7 +24,8 @@ from typing import Any
 
 import numpy as np
 
-from ssw.h5io import atomic_path, atomic_write_text, to_json
+from ssw.h5io import atomic_write_text, to_json
+from ssw.plotting import pyplot, save_png
 
 SPCS = (10, 20, 40, 60, 80, 160, 320)
 RTOLS = (1e-3, 1e-4, 1e-5, 1e-6, 1e-7, 1e-8, 1e-9)
@@ -129,10 +130,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _write(out: Any, rows: list[dict[str, Any]]) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     head = "method,setting,tof_rel_error,time_per_point_s,points,dt_s"
     lines = [head] + [
@@ -152,9 +150,7 @@ def _write(out: Any, rows: list[dict[str, Any]]) -> None:
     ax.grid(alpha=0.3, which="both")
     ax.legend()
     fig.tight_layout()
-    with atomic_path(out / "chain_work_precision.png") as tmp:
-        fig.savefig(tmp, dpi=150, format="png")
-    plt.close(fig)
+    save_png(fig, out / "chain_work_precision.png", dpi=150)
 
 
 def human(result: dict[str, Any]) -> str:

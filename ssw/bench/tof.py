@@ -17,7 +17,8 @@ from typing import Any
 
 import numpy as np
 
-from ssw.h5io import atomic_path, atomic_write_text
+from ssw.h5io import atomic_write_text
+from ssw.plotting import pyplot, save_png
 
 DIVISORS = (1, 2, 3, 4, 6, 8)
 FOAMS = (("PCF08", 38e6, 0.34), ("PCF15", 123e6, 0.33), ("PCF30", 445e6, 0.30))
@@ -75,10 +76,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _plot(path: Path, rows: list[dict[str, Any]]) -> None:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, ax = plt.subplots(figsize=(6, 4))
     for name, *_ in FOAMS:
@@ -91,6 +89,4 @@ def _plot(path: Path, rows: list[dict[str, Any]]) -> None:
     ax.set_title("TOF from simulated NI 9234 recordings vs the chain's TOF")
     ax.legend(fontsize=8)
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=120)
-    plt.close(fig)
+    save_png(fig, path, dpi=120)

@@ -19,6 +19,7 @@ from ssw.chain.api import peaks
 from ssw.chain.params import ChainParams
 from ssw.errors import ConfigError, SswError
 from ssw.h5io import atomic_h5, atomic_path, check_kind, read_inputs, write_dataset
+from ssw.plotting import pyplot, save_png
 
 KIND = "tof_sweep"
 FIELDS = ("soil_E", "soil_nu", "tof", "t_incident", "f_incident", "f_reflected")
@@ -137,10 +138,7 @@ def write_csv(path: str | Path, sweep: Sweep) -> None:
 
 def plot_fig8(path: str | Path, sweep: Sweep, title: str = "") -> None:
     """TOF (ms) vs soil E (MPa), one line per nu (thesis Fig 8 style), PNG."""
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
+    plt = pyplot()
 
     fig, ax = plt.subplots(figsize=(6, 4.2))
     for nu in np.unique(sweep.soil_nu):
@@ -152,6 +150,4 @@ def plot_fig8(path: str | Path, sweep: Sweep, title: str = "") -> None:
     ax.grid(alpha=0.3)
     ax.legend()
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=150, format="png")
-    plt.close(fig)
+    save_png(fig, path, dpi=150)

@@ -14,8 +14,11 @@ from __future__ import annotations
 
 import argparse
 import importlib
+import os
 import pkgutil
+import signal
 import sys
+import threading
 from collections.abc import Sequence
 from typing import Any
 
@@ -70,9 +73,22 @@ def _human(result: dict[str, Any]) -> str:
     return "\n".join(lines)
 
 
+def _terminate(signum: int, frame: object) -> None:
+    """SIGTERM (Snakemake cancelling a job, Slurm's scancel) unwinds like Ctrl-C, so every
+    temporary ``.part`` file is removed by its ``finally`` (ssw.h5io.atomic_path)."""
+    raise KeyboardInterrupt
+
+
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
     args = parser.parse_args(argv)
+    if threading.current_thread() is threading.main_thread():
+        signal.signal(signal.SIGTERM, _terminate)
+        # PETSc would otherwise install its own SIGTERM handler when first initialized
+        # (after this one) and abort without unwinding, leaving a `.part` file behind.
+        opts = os.environ.get("PETSC_OPTIONS", "")
+        if "-no_signal_handler" not in opts.split():
+            os.environ["PETSC_OPTIONS"] = f"{opts} -no_signal_handler".strip()
     try:
         result = args.func(args)
     except SswError as exc:
@@ -81,6 +97,9 @@ def main(argv: Sequence[str] | None = None) -> int:
     except KeyboardInterrupt:
         print(f"ssw {args.command}: interrupted", file=sys.stderr)
         return 130
+    finally:
+        if threading.current_thread() is threading.main_thread():
+            signal.signal(signal.SIGTERM, signal.SIG_DFL)
     if result is None:
         return 0
     if getattr(args, "json", False):

@@ -218,31 +218,6 @@ def run_tof_merge(args: argparse.Namespace) -> dict[str, Any]:
             "tof_min": float(np.min(sw.tof)), "tof_max": float(np.max(sw.tof))}
 
 
-def run_tof_compare(args: argparse.Namespace) -> dict[str, Any]:
-    from ssw.chain.compare import compare_laws, write_comparison_csv
-    from ssw.config import scenes
-
-    params, cfg = _params(args)
-    set_name = args.set or cfg["fit"]["set"]
-    scs = [sc for sc in scenes(cfg, set_name)
-           if sc.plate_material == params.plate_material
-           and abs(sc.plate_thickness - params.plate_thickness) <= 1e-12]
-    if not scs:
-        raise ConfigError("--set", set_name, f"a set with {params.plate_material} plates of "
-                          f"{params.plate_thickness} m (the chain's plate)")
-    E = np.array([sc.soil_E for sc in scs])
-    nu = np.array([sc.soil_nu for sc in scs])
-    curves = [str(Path(args.contact_dir) / f"{sc.scene_id}.h5") for sc in scs]
-    cmp = compare_laws(params, E, nu, curves, args.k_table or DEFAULT_K_TABLE)
-    if args.output:
-        write_comparison_csv(args.output, cmp)
-    rel = cmp.relative_to_table()
-    return {
-        "set": set_name, "scenes": len(scs), "output": args.output,
-        **{f"max_abs_rel_{k}_vs_table": float(np.nanmax(np.abs(v))) for k, v in rel.items()},
-    }
-
-
 def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.chain.calibration import calibrate_striker_velocity
 
@@ -326,15 +301,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--plot", help="Fig 8 style PNG")
     add_json_flag(p)
     p.set_defaults(func=run_tof_merge)
-
-    p = sub.add_parser("tof-compare", help="TOF of the FEM curve vs the fitted laws",
-                       description="For the scenes of a contact set: TOF with the table "
-                       "wall (the FEM curve), the K law, the power law and bare Hertz.")
-    _chain_options(p)
-    p.add_argument("--set", help="contact set (default: the config's fit.set)")
-    p.add_argument("--output", help="CSV of the comparison")
-    add_json_flag(p)
-    p.set_defaults(func=run_tof_compare)
 
     p = sub.add_parser("tof-calibrate", help="striker speed matching one Table 2 foam",
                        description="Calibrate the striker speed on ONE foam of the thesis's "

@@ -22,7 +22,8 @@ from ssw import hertz
 from ssw.curve import read_curve
 from ssw.fit.deviation import deviation_rows
 from ssw.fit.fitting import scene_inputs
-from ssw.h5io import atomic_path, atomic_write_text
+from ssw.h5io import atomic_write_text
+from ssw.plotting import pyplot, save_png
 
 
 def write_rows_csv(rows: list[dict[str, Any]], path: str | Path) -> None:
@@ -42,20 +43,11 @@ def _label(sc: dict[str, Any]) -> str:
 
 
 def _save(fig: Any, path: str | Path) -> None:
-    import matplotlib.pyplot as plt
-
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=130, bbox_inches="tight")
-    plt.close(fig)
+    save_png(fig, path, dpi=130, bbox_inches="tight")
 
 
 def _figure(nrows: int = 1) -> tuple[Any, Any]:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt.subplots(nrows, 1, figsize=(6.4, 3.2 * nrows + 0.6), squeeze=False)
+    return pyplot().subplots(nrows, 1, figsize=(6.4, 3.2 * nrows + 0.6), squeeze=False)
 
 
 def plot_curves(paths: list[str], output: str, cfg: dict[str, Any], title: str = "") -> None:

@@ -4,26 +4,16 @@
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 
-from ssw.h5io import atomic_path
+from ssw.plotting import pyplot, save_png
 from ssw.validation.table import SampleResult
 
 #: Thesis Fig 9: TOF standard deviation of three hits on a soil sample (2.03 g/cm3, 14.31 %
 #: moisture), unmodified device and with the 0.4 mm PLA plate, s.
 FIG9_STD_NO_PLATE = 6.56e-5
 FIG9_STD_PLATE = 1.53e-5
-
-
-def _plt() -> Any:
-    import matplotlib
-
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
-    return plt
 
 
 def plot_fig10(path: str | Path, rows: list[SampleResult],
@@ -34,7 +24,7 @@ def plot_fig10(path: str | Path, rows: list[SampleResult],
     ``curves`` maps nu to ``(E, TOF)`` (Pa, s) from the chain model; ``sweep_curves`` the
     same from the workflow's stored sweep (thesis Fig 8), drawn dashed.
     """
-    plt = _plt()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
     for nu, (E, T) in sorted((sweep_curves or {}).items()):
         ax.plot(E / 1e6, T * 1e3, "--", lw=0.8, color="0.5")
@@ -64,15 +54,13 @@ def plot_fig10(path: str | Path, rows: list[SampleResult],
     ax.legend(fontsize=8)
     ax.grid(True, which="both", alpha=0.3)
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=120)
-    plt.close(fig)
+    save_png(fig, path, dpi=120)
 
 
 def plot_fig9(path: str | Path, rows: list[SampleResult]) -> None:
     """Per-hit TOF minus the session mean (us) for every sample with a recording, with the
     thesis's soil-sample standard deviations (no plate / PLA plate) as reference bands."""
-    plt = _plt()
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     for std, label, style in ((FIG9_STD_NO_PLATE, "thesis soil, no plate: std", ":"),
                               (FIG9_STD_PLATE, "thesis soil, PLA plate: std", "--")):
@@ -94,6 +82,4 @@ def plot_fig9(path: str | Path, rows: list[SampleResult]) -> None:
     ax.set_title("TOF scatter of repeated hits (thesis Fig 9)")
     ax.legend(fontsize=7)
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=120)
-    plt.close(fig)
+    save_png(fig, path, dpi=120)

@@ -1,17 +1,17 @@
 # Stage II: chain dynamics. TOF(E, nu) sweep (thesis Fig 8) split into chain.sweep.chunks
-# jobs, merged; the fitted laws' TOF against the FEM curve's own (table wall).
-# Science lives in ssw.chain; these rules call `ssw tof-sweep`, `ssw tof-merge`,
-# `ssw tof-compare` and `ssw tof-calibrate`; input helpers are ssw.chain.workflow.
+# jobs, merged; the striker speed calibration on PCF 30. (What a fitted law's error costs in
+# TOF, against the FEM curve itself, is the fit stage's rule fit_tof_impact.)
+# Science lives in ssw.chain; these rules call `ssw tof-sweep`, `ssw tof-merge` and
+# `ssw tof-calibrate`; input helpers are ssw.chain.workflow.
 #
 # Outputs (results/chain/):
 #   chunks/tof_{chunk}.h5          one interleaved share of the sweep points per job
 #   tof_sweep.h5 / .csv            every sweep point: soil_E (Pa), soil_nu, tof (s), peaks
 #   figures/fig8_tof_vs_E.png      Fig 8 style: TOF vs E, one line per nu
-#   law_compare.csv / .json        TOF with the FEM curve (table wall) vs the K law, the
-#                                  power law and bare Hertz, on the scenes of fit.set
 #   calibration.json               striker speed calibrated on PCF 30 with the config's wall
 #                                  law, and the PCF 08/15 predictions (thesis Table 2); the
-#                                  config's chain.striker_velocity is the Hertz-wall value
+#                                  config's chain.striker_velocity is the Hertz-wall value (a
+#                                  fit-wall value would be circular: the fit range depends on it)
 
 
 import ssw.chain.workflow as chainwf  # noqa: E402
@@ -64,30 +64,6 @@ rule tof_sweep:
         "> {log} 2>&1"
 
 
-rule tof_law_compare:
-    """TOF with the FEM curve itself vs the fitted laws, on the scenes of fit.set."""
-    input:
-        k_table=rules.k_table.output.h5,
-        curves=lambda wc: expand(
-            f"{RESULTS}/contact/{{scene}}.h5", scene=scene_ids(config["fit"]["set"])
-        ),
-    output:
-        csv=f"{CHAIN_DIR}/law_compare.csv",
-        json=f"{CHAIN_DIR}/law_compare.json",
-    log:
-        f"{LOGS}/chain/law_compare.log",
-    params:
-        config=CONFIG_FILE,
-        set=config["fit"]["set"],
-        contact_dir=f"{RESULTS}/contact",
-    conda:
-        SSW_ENV
-    shell:
-        "python -m ssw tof-compare --config {params.config} --set {params.set} "
-        "--k-table {input.k_table} --contact-dir {params.contact_dir} --output {output.csv} "
-        "--json > {output.json} 2> {log}"
-
-
 rule tof_calibration:
     """Striker speed calibrated on PCF 30 with the config's wall law; PCF 08/15 predicted."""
     input:
@@ -110,6 +86,5 @@ CHAIN_TARGETS = [
     rules.tof_sweep.output.h5,
     rules.tof_sweep.output.csv,
     rules.tof_sweep.output.fig8,
-    rules.tof_law_compare.output.csv,
     rules.tof_calibration.output.json,
 ]

@@ -1,0 +1,24 @@
+"""Shared fixtures of the test suite."""
+
+from __future__ import annotations
+
+import signal
+
+import pytest
+
+
+@pytest.fixture
+def no_hang(request):
+    """Fail a case that runs longer than its module's ``CASE_TIMEOUT_S`` seconds (default 120)
+    with TimeoutError: a hang must fail, not stall the suite (SIGALRM; no pytest-timeout here).
+    Stress modules use it with ``pytestmark = pytest.mark.usefixtures("no_hang")``."""
+    limit = int(getattr(request.module, "CASE_TIMEOUT_S", 120))
+
+    def expire(signum, frame):
+        raise TimeoutError(f"case exceeded {limit} s: a hang")
+
+    old = signal.signal(signal.SIGALRM, expire)
+    signal.alarm(limit)
+    yield
+    signal.alarm(0)
+    signal.signal(signal.SIGALRM, old)

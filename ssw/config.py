@@ -169,6 +169,12 @@ def check_config(cfg: dict[str, Any]) -> None:
             "chain.sensor_index", ch["sensor_index"],
             f"an index between 1 and beads - 2 = {ch['beads'] - 2}",
         )
+    if ch.get("use_calibration", False) and ch.get("wall_law") == "table":
+        raise ConfigError(
+            "chain.use_calibration", True,
+            "false with chain.wall_law table (the calibration needs a law defined at any E: "
+            "hertz or fit)",
+        )
     sw = ch.get("sweep", {})
     if "soil_E" in sw:
         E = expand_grid(sw["soil_E"], "chain.sweep.soil_E")

@@ -14,13 +14,15 @@ the root is bracketed and found by Brent's method.
 
 from __future__ import annotations
 
+import json
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any
 
 from ssw.chain import api
 from ssw.chain.params import ChainParams
 from ssw.chain.walls import build_wall
-from ssw.errors import OutOfRangeError, SolverError
+from ssw.errors import ConfigError, OutOfRangeError, SolverError
 
 #: Thesis Table 2: (id, E Pa, nu, simulated TOF s).
 TABLE2 = (
@@ -49,6 +51,20 @@ class Calibration:
     def drop_height(self) -> float:
         """Free-fall height (m) giving that speed, ``V^2 / (2 g)``."""
         return self.striker_velocity**2 / (2.0 * 9.80665)
+
+
+def read_calibrated_velocity(path: str | Path) -> float:
+    """The striker speed (m/s) of a ``ssw tof-calibrate --json`` result file."""
+    p = Path(path)
+    try:
+        data = json.loads(p.read_text())
+    except (OSError, ValueError) as exc:
+        raise ConfigError("--calibration", str(p), f"a readable JSON file ({exc})") from exc
+    v = data.get("striker_velocity") if isinstance(data, dict) else None
+    if data.get("command") != "tof-calibrate" or not isinstance(v, float) or not v > 0:
+        raise ConfigError("--calibration", str(p),
+                          "the JSON output of `ssw tof-calibrate --json` (striker_velocity > 0)")
+    return v
 
 
 def table2_tof(

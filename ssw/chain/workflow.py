@@ -39,6 +39,27 @@ def sweep_scene_ids(config: dict[str, Any]) -> list[str]:
     return ids
 
 
+CALIBRATION = "chain/calibration.json"
+
+
+def uses_calibration(config: dict[str, Any]) -> bool:
+    """Whether the sweep and the validation take the striker speed calibrated on PCF 30."""
+    return bool(config["chain"].get("use_calibration", True))
+
+
+def calibrated_inputs(config: dict[str, Any], results: str) -> dict[str, Any]:
+    """The wall law's inputs plus, with chain.use_calibration, the calibration result."""
+    inputs = wall_inputs(config, results)
+    if uses_calibration(config):
+        inputs["calibration"] = f"{results}/{CALIBRATION}"
+    return inputs
+
+
+def calibration_flag(inputs: Any) -> str:
+    """``--calibration FILE`` when the job's inputs hold the calibration result."""
+    return f"--calibration {inputs.calibration}" if "calibration" in inputs.keys() else ""
+
+
 def wall_inputs(config: dict[str, Any], results: str) -> dict[str, Any]:
     """The K table (fit wall) or the sweep points' contact curves (table wall)."""
     law = wall_law(config)

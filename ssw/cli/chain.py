@@ -30,6 +30,9 @@ def _chain_options(p: argparse.ArgumentParser, wall_flag: str = "--law") -> None
     p.add_argument("--striker-velocity", type=float, help="striker speed at contact, m/s")
     p.add_argument("--drop-height", type=float,
                    help="striker dropped from this height, m (speed sqrt(2 g h))")
+    p.add_argument("--calibration", metavar="FILE",
+                   help="striker speed from a `ssw tof-calibrate --json` result "
+                   "(results/chain/calibration.json)")
     p.add_argument("--no-gravity", action="store_true", help="no gravity, no precompression")
     p.add_argument("--bead-radius", type=float, help="bead radius, m")
     p.add_argument("--bead-density", type=float, help="bead density, kg/m^3")
@@ -67,6 +70,14 @@ def _params(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
             raise ConfigError("--drop-height", args.drop_height,
                               "a height > 0 m, without --striker-velocity")
         over["striker_velocity"] = float(np.sqrt(2.0 * STANDARD_GRAVITY * args.drop_height))
+    calibration = getattr(args, "calibration", None)
+    if calibration is not None:
+        if "striker_velocity" in over:
+            raise ConfigError("--calibration", calibration,
+                              "a calibration file without --striker-velocity/--drop-height")
+        from ssw.chain.calibration import read_calibrated_velocity
+
+        over["striker_velocity"] = read_calibrated_velocity(calibration)
     if args.no_gravity:
         over["gravity"] = False
     if "n_beads" in over and "sensor_index" not in over:

@@ -22,7 +22,12 @@ def run_validate(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.validation.table import inverse_range, validate_samples
 
     cfg = load_config(args.config)
-    params = ChainParams.from_config(cfg)
+    over: dict[str, float] = {}
+    if args.calibration:
+        from ssw.chain.calibration import read_calibrated_velocity
+
+        over["striker_velocity"] = read_calibrated_velocity(args.calibration)
+    params = ChainParams.from_config(cfg, **over)
     wall, opts = wall_of(args, cfg)
     E_range = inverse_range(wall, opts, params)  # loads a K table once, into opts
     val = cfg.get("validation", {})
@@ -35,8 +40,9 @@ def run_validate(args: argparse.Namespace) -> dict[str, Any]:
         from ssw.validation.output import write_table, write_thesis_tables
 
         d = Path(args.outdir)
-        inputs = {"config": args.config, "wall": wall, "K": args.K, "k_table": args.k_table,
-                  "chain_params": params.__dict__, "E_range": E_range}
+        inputs = {"config": args.config, "calibration": args.calibration, "wall": wall,
+                  "K": args.K, "k_table": args.k_table, "chain_params": params.__dict__,
+                  "E_range": E_range}
         write_table(d / "validation.csv", d / "validation.h5", rows, inputs)
         write_thesis_tables(d / "table2_tof.csv", d / "table3_modulus.csv", rows)
         E = np.geomspace(*E_range, CURVE_POINTS)
@@ -82,6 +88,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--outdir", help="write validation.csv/.h5 and Figs 9, 10 here")
     p.add_argument("--root", default=".", help="folder relative recording paths start from")
     p.add_argument("--sweep", help="the chain's TOF(E, nu) sweep HDF5, drawn in Fig 10")
+    p.add_argument("--calibration", metavar="FILE",
+                   help="striker speed from a `ssw tof-calibrate --json` result (replaces "
+                   "chain.striker_velocity; the workflow passes it when chain.use_calibration)")
     add_wall_options(p)
     add_json_flag(p)
     p.set_defaults(func=run_validate, human=_human)

@@ -24,7 +24,7 @@ CHAIN_RANKS = int(config["chain"]["sweep"].get("mpi_ranks", 1))
 rule tof_sweep_chunk:
     """One interleaved chunk of the TOF sweep, batched (MPI ranks if chain.sweep.mpi_ranks > 1)."""
     input:
-        unpack(lambda wc: chainwf.wall_inputs(config, RESULTS)),
+        unpack(lambda wc: chainwf.calibrated_inputs(config, RESULTS)),
     output:
         h5=f"{CHAIN_DIR}/chunks/tof_{{chunk}}.h5",
         json=f"{CHAIN_DIR}/chunks/tof_{{chunk}}.json",
@@ -35,6 +35,7 @@ rule tof_sweep_chunk:
         config=CONFIG_FILE,
         chunks=CHAIN_CHUNKS,
         wall=lambda wc, input: chainwf.wall_flags(config, input, RESULTS),
+        calibration=lambda wc, input: chainwf.calibration_flag(input),
         launch=f"mpiexec -n {CHAIN_RANKS} " if CHAIN_RANKS > 1 else "",
         mpi="--mpi" if CHAIN_RANKS > 1 else "",
     wildcard_constraints:
@@ -43,6 +44,7 @@ rule tof_sweep_chunk:
         SSW_ENV
     shell:
         "{params.launch}python -m ssw tof-sweep --config {params.config} {params.wall} {params.mpi} "
+        "{params.calibration} "
         "--chunk {wildcards.chunk} --chunks {params.chunks} --output {output.h5} "
         "--json > {output.json} 2> {log}"
 
@@ -69,7 +71,7 @@ rule tof_calibration:
     input:
         unpack(lambda wc: chainwf.wall_inputs(config, RESULTS)),
     output:
-        json=f"{CHAIN_DIR}/calibration.json",
+        json=f"{RESULTS}/{chainwf.CALIBRATION}",
     log:
         f"{LOGS}/chain/calibration.log",
     params:

@@ -95,8 +95,14 @@ def validation_inputs(wildcards):
     ]
     if recs:
         inputs["recordings"] = recs
+    if config["chain"].get("use_calibration", True):
+        inputs["calibration"] = f"{RESULTS}/chain/calibration.json"
     return inputs
 
 
-def k_table_flag(wildcards, input):
-    return f"--k-table {input.k_table}" if "k_table" in input.keys() else ""
+def validation_flags(wildcards, input):
+    """--k-table and --calibration for the inputs the validation job has."""
+    keys = input.keys()
+    flags = [f"--k-table {input.k_table}" if "k_table" in keys else "",
+             f"--calibration {input.calibration}" if "calibration" in keys else ""]
+    return " ".join(f for f in flags if f)

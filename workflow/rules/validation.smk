@@ -29,12 +29,12 @@ rule validation:
         f"{LOGS}/validation/validation.log",
     params:
         config=CONFIG_FILE,
-        k_table=k_table_flag,
+        flags=validation_flags,
         root=RECORDINGS_ROOT,
     conda:
         SSW_ENV
     shell:
-        "python -m ssw validate --config {params.config} {params.k_table} --root {params.root} "
+        "python -m ssw validate --config {params.config} {params.flags} --root {params.root} "
         "--sweep {input.sweep} "
         "--outdir $(dirname {output.csv}) --json > {output.json} 2> {log}"
 

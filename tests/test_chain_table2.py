@@ -71,3 +71,29 @@ def test_foams_outside_the_k_table_are_skipped_with_the_reason():
     assert cal.tof["PCF08"] is None and cal.tof["PCF15"] is None
     assert set(cal.skipped) == {"PCF08", "PCF15"}
     assert "one value" in cal.skipped["PCF08"]
+
+
+def test_a_calibration_file_sets_the_striker_speed(tmp_path, capsys):
+    """`--calibration FILE` (what the workflow passes) gives the TOF of that striker speed,
+    and a file that is not a tof-calibrate result is refused, naming the option."""
+    import json
+
+    from ssw.chain.calibration import read_calibrated_velocity
+    from ssw.cli import main
+    from ssw.errors import ConfigError
+
+    cal = tmp_path / "calibration.json"
+    cal.write_text(json.dumps({"command": "tof-calibrate", "striker_velocity": 0.8}))
+    assert read_calibrated_velocity(cal) == 0.8
+    cfg = str(ROOT / "config" / "config.yaml")
+    tof = []
+    for extra in (["--calibration", str(cal)], ["--striker-velocity", "0.8"], []):
+        assert main(["tof", "--config", cfg, "--law", "hertz", "--soil-E", "1e8",
+                     "--soil-nu", "0.3", "--json", *extra]) == 0
+        tof.append(json.loads(capsys.readouterr().out)["tof"])
+    assert tof[0] == tof[1]
+    assert tof[2] > tof[0]  # the config's 0.52 m/s is slower: a longer TOF
+    bad = tmp_path / "bad.json"
+    bad.write_text(json.dumps({"command": "tof", "tof": 1e-3}))
+    with pytest.raises(ConfigError, match="--calibration"):
+        read_calibrated_velocity(bad)

@@ -68,3 +68,21 @@ def test_modes_and_clipping(cfg):
     c["fit"]["range"].update(mode="fixed", delta_min=2e-4)
     with pytest.raises(ConfigError, match="delta_min"):
         fit_range(50e6, 0.3, 1e-4, c)
+
+
+def test_a_softer_plate_sets_the_indentation_a_stiffer_one_does_not(cfg):
+    """The chain's need is bounded by a Hertz wall of the softer material: a 100 MPa plate
+    on a 445 MPa foam needs the 100 MPa half-space's indentation; a 3.5 GPa plate keeps the
+    soil's; no plate (None) keeps the soil's."""
+    from ssw.fit.range import scene_delta_max, softer_half_space
+
+    E, nu = softer_half_space([445e6, 445e6, 445e6], [0.3, 0.3, 0.3],
+                              [100e6, 3.5e9, None], [0.36, 0.36, None])
+    assert E.tolist() == [100e6, 445e6, 445e6]
+    assert nu.tolist() == [0.36, 0.3, 0.3]
+    soil = scene_delta_max(445e6, 0.3, cfg)
+    assert scene_delta_max(445e6, 0.3, cfg, (3.5e9, 0.36)) == soil
+    soft = scene_delta_max(445e6, 0.3, cfg, (100e6, 0.36))
+    assert soft == pytest.approx(scene_delta_max(100e6, 0.36, cfg))
+    # Hertz-wall peak ~ E*^(-2/5) at fixed energy: a 4.45x softer wall indents ~1.8x deeper
+    assert 1.5 < soft / soil < 2.1

@@ -36,6 +36,8 @@ INPUT_KEYS: dict[str, tuple[str, ...]] = {
     "radius": ("indenter_radius", "radius", "R"),
     "plate_material": ("plate_material",),
     "plate_thickness": ("plate_thickness",),
+    "plate_E": ("plate_E",),
+    "plate_nu": ("plate_nu",),
 }
 
 

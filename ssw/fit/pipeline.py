@@ -30,7 +30,8 @@ def fit_with_config(
 ) -> tuple[FitResult, FitRange]:
     """Fit ``law`` (default ``fit.law``) on the config's range for this curve's scene."""
     sc = scene_inputs(curve)
-    rng = fit_range(float(sc["soil_E"]), float(sc["soil_nu"]), float(curve.delta[-1]), cfg)
+    rng = fit_range(float(sc["soil_E"]), float(sc["soil_nu"]), float(curve.delta[-1]), cfg,
+                    sc.get("plate_E"), sc.get("plate_nu"))
     res = fit_curve(
         curve, law or cfg["fit"]["law"], (rng.lo, rng.hi), weighting=cfg["fit"]["weighting"]
     )
@@ -52,6 +53,8 @@ def fit_files(
         [float(s["soil_nu"]) for s in scs],
         [float(c.delta[-1]) for c in curves],
         cfg,
+        [s.get("plate_E") for s in scs],
+        [s.get("plate_nu") for s in scs],
     )
     out = []
     for p, c, rng in zip(paths, curves, ranges, strict=True):

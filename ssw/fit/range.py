@@ -138,8 +138,26 @@ class FitRange:
     clipped: bool  # the curve stops short of ``needed``
 
 
+def softer_half_space(
+    soil_E: ArrayLike, soil_nu: ArrayLike, plate_E: Any = None, plate_nu: Any = None
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """(E, nu) of the softer of soil and plate, per scene (1-D); a plate E of None or NaN
+    (no plate) keeps the soil. The chain's peak indentation into a Hertz wall of that
+    material bounds the real one from above when the plate is softer than the soil."""
+    E = np.atleast_1d(np.asarray(soil_E, float)).copy()
+    nu = np.atleast_1d(np.asarray(soil_nu, float)).copy()
+    if plate_E is None:
+        return E, nu
+    pE = np.broadcast_to(np.array(plate_E, dtype=float), E.shape)  # None -> NaN
+    pnu = np.broadcast_to(np.array(plate_nu, dtype=float), E.shape)
+    softer = np.isfinite(pE) & (pE < E)
+    E[softer], nu[softer] = pE[softer], pnu[softer]
+    return E, nu
+
+
 def fit_ranges(
-    soil_E: ArrayLike, soil_nu: ArrayLike, curve_delta_max: ArrayLike, cfg: dict[str, Any]
+    soil_E: ArrayLike, soil_nu: ArrayLike, curve_delta_max: ArrayLike, cfg: dict[str, Any],
+    plate_E: Any = None, plate_nu: Any = None,
 ) -> list[FitRange]:
     """Fit ranges of many scenes (1-D arrays of one length) under the config's ``fit.range``.
 
@@ -149,8 +167,11 @@ def fit_ranges(
     curve_delta_max : each curve's last indentation, m.
     cfg : validated study config (``fit.range.{mode, factor, delta_min, delta_max}``); in
         mode ``chain`` the chain runs once for all scenes (batched).
+    plate_E, plate_nu : the plates (Pa, -; None entries: no plate). In mode ``chain`` a
+        plate softer than its soil replaces the soil in the Hertz wall (``softer_half_space``).
     """
-    E, nu, dmax = (np.atleast_1d(np.asarray(x, float)) for x in (soil_E, soil_nu, curve_delta_max))
+    E, nu = softer_half_space(soil_E, soil_nu, plate_E, plate_nu)
+    dmax = np.atleast_1d(np.asarray(curve_delta_max, float))
     rc = cfg.get("fit", {}).get("range", {})
     mode = rc.get("mode", "chain")
     lo = float(rc.get("delta_min", 0.0))
@@ -176,15 +197,27 @@ def fit_ranges(
 
 
 def fit_range(
-    soil_E: float, soil_nu: float, curve_delta_max: float, cfg: dict[str, Any]
+    soil_E: float, soil_nu: float, curve_delta_max: float, cfg: dict[str, Any],
+    plate_E: float | None = None, plate_nu: float | None = None,
 ) -> FitRange:
     """The fit range of one scene: :func:`fit_ranges` for one scene."""
-    return fit_ranges(soil_E, soil_nu, curve_delta_max, cfg)[0]
+    return fit_ranges(soil_E, soil_nu, curve_delta_max, cfg, plate_E, plate_nu)[0]
 
 
-def scene_delta_max(soil_E: float, soil_nu: float, cfg: dict[str, Any]) -> float:
-    """Indentation (m) a scene's curve must reach for its default fit (the contact stage
-    may use it to compute only what the fit needs)."""
+def scene_delta_max(
+    soil_E: float, soil_nu: float, cfg: dict[str, Any],
+    plate: tuple[float, float] | None = None,
+) -> float:
+    """Indentation (m) a scene's curve must reach for the chain and the default fit.
+
+    ``fit.range.factor`` times the chain's peak indentation into a Hertz wall of the softer
+    of the soil and the plate (``plate = (E, nu)``, Pa and -; None without a plate): a
+    plate stiffer than the soil makes the contact stiffer than that wall and the real peak
+    smaller; a plate softer than the soil (the thesis's printed 100 MPa PLA on a 445 MPa
+    foam) makes it larger than the soil's Hertz wall, but not larger than a half-space of
+    the plate's material. In fit range mode ``curve`` it is ``contact.delta_max``.
+    """
     if cfg.get("fit", {}).get("range", {}).get("mode", "chain") == "curve":
         return float(cfg["contact"]["delta_max"])
-    return fit_range(soil_E, soil_nu, np.inf, cfg).needed
+    pE, pnu = plate if plate is not None else (None, None)
+    return fit_range(soil_E, soil_nu, np.inf, cfg, pE, pnu).needed

@@ -40,7 +40,8 @@ def tof_impact(curves: list[ForceCurve], cfg: dict[str, Any]) -> list[dict[str, 
     scs = [scene_inputs(c) for c in curves]
     E = np.array([float(s["soil_E"]) for s in scs])
     nu = np.array([float(s["soil_nu"]) for s in scs])
-    ranges = fit_ranges(E, nu, [float(c.delta[-1]) for c in curves], cfg)
+    ranges = fit_ranges(E, nu, [float(c.delta[-1]) for c in curves], cfg,
+                        [s.get("plate_E") for s in scs], [s.get("plate_nu") for s in scs])
     w = cfg["fit"]["weighting"]
     fk = [
         fit_curve(c, "k_hertz", (r.lo, r.hi), weighting=w)

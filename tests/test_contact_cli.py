@@ -92,3 +92,91 @@ def test_bad_inputs_name_the_field():
         solve_curve((1e7, 0.6), None, 0.0, 9.53e-3, {})
     with pytest.raises(ConfigError, match=r"contact\.interface"):
         solve_curve((1e7, 0.3), None, 0.0, 9.53e-3, {"interface": "glued"})
+
+
+# ---- batches: several scenes in one process (the workflow's contact jobs)
+
+
+def _datasets(path):
+    import h5py
+
+    out = {}
+    with h5py.File(path, "r") as f:
+        f.visititems(lambda n, o: out.__setitem__(n, o[()]) if isinstance(o, h5py.Dataset)
+                     else None)
+    return out
+
+
+def test_batch_writes_every_scene_as_the_single_scene_command_does(tmp_path, capsys):
+    """`--scene A --scene B --output-dir D` writes D/A.h5 and D/B.h5 with the same datasets
+    and inputs as two `--scene X --output F` runs (the batch only saves start-up)."""
+    from ssw.contact.batch import batches
+
+    ids = [i for b in batches(load_config(CI)).values() for i in b][:2]
+    rc = main(["contact", *[a for i in ids for a in ("--scene", i)], "--scene", ids[0],
+               "--config", CI, "--output-dir", str(tmp_path / "batch"), "--json"])
+    assert rc == 0
+    printed = json.loads(capsys.readouterr().out)
+    assert printed["scenes"] == ids  # a repeated id is solved once
+    assert printed["outputs"] == [str(tmp_path / "batch" / f"{i}.h5") for i in ids]
+    assert sorted(p.name for p in (tmp_path / "batch").iterdir()) == sorted(f"{i}.h5" for i in ids)
+    for i in ids:
+        single = tmp_path / f"single-{i}.h5"
+        assert main(["contact", "--scene", i, "--config", CI, "--output", str(single)]) == 0
+        a, b = _datasets(tmp_path / "batch" / f"{i}.h5"), _datasets(single)
+        assert sorted(a) == sorted(b)
+        for key in a:
+            assert np.array_equal(a[key], b[key]), key
+        ca, cb = read_curve(tmp_path / "batch" / f"{i}.h5"), read_curve(single)
+        assert ca.inputs == cb.inputs and ca.inputs["scene_id"] == i
+
+
+@pytest.mark.parametrize(("argv", "field"), [
+    (["--scene", "nope", "--scene", "pla-t400um-E50MPa-nu0.300"], "--scene"),
+    (["--scene", "pla-t400um-E50MPa-nu0.300", "--scene", "al6061-t400um-E50MPa-nu0.300",
+      "--output", "x.h5"], "--output"),
+    (["--scene", "pla-t400um-E50MPa-nu0.300", "--scene", "al6061-t400um-E50MPa-nu0.300"],
+     "--output-dir"),
+    (["--soil-E", "5e7", "--soil-nu", "0.3", "--plate-thickness", "0"], "--scene"),
+    (["--scene", "pla-t400um-E50MPa-nu0.300", "--soil-E", "5e7"], "--soil-E"),
+])
+def test_batch_refusals_write_nothing(tmp_path, capsys, argv, field):
+    """A bad batch stops before the first solve (unknown id, --output for several scenes,
+    no folder, scene flags) and names the option."""
+    out_dir = tmp_path / "out"
+    extra = [] if "--output" in argv or field == "--output-dir" else ["--output-dir", str(out_dir)]
+    rc = main(["contact", *argv, "--config", CI, *extra])
+    assert rc == 2
+    assert field in capsys.readouterr().err
+    assert not out_dir.exists() or not any(out_dir.iterdir())
+
+
+def test_batches_cut_every_set_into_equal_chunks():
+    """Every scene in exactly one batch of at most jobs_per_group, per set, sizes +-1."""
+    from ssw.config import all_scenes, scenes
+    from ssw.contact.batch import batches, chunks
+
+    assert [len(c) for c in chunks(list("abcdefghij"), 4)] == [3, 3, 4]
+    assert chunks(list("abc"), 5) == [["a", "b", "c"]] and chunks([], 3) == []
+    cfg = load_config(REPO / "config" / "config.yaml")
+    size = cfg["contact"]["jobs_per_group"]
+    got = batches(cfg)
+    ids = [i for b in got.values() for i in b]
+    assert sorted(ids) == sorted(all_scenes(cfg)) and len(ids) == len(set(ids))
+    for name, members in got.items():
+        assert 1 <= len(members) <= size and name.isidentifier()
+    set3 = [b for n, b in got.items() if n.startswith("set3_soil_")]
+    assert [i for b in set3 for i in b] == [s.scene_id for s in scenes(cfg, "set3_soil")]
+    assert max(map(len, set3)) - min(map(len, set3)) <= 1
+    assert len(batches(cfg, 1)) == len(ids)
+    # a scene shared by two sets belongs to the first set's batch only
+    cfg2 = {**cfg, "sets": {"a": cfg["sets"]["set2_thickness"], "b": cfg["sets"]["set2_thickness"]}}
+    assert list(batches(cfg2)) == ["a_0"]
+
+
+def test_jobs_per_group_is_checked():
+    from ssw.contact.batch import chunks
+    from ssw.errors import ConfigError
+
+    with pytest.raises(ConfigError, match="jobs_per_group"):
+        chunks(["a"], 0)

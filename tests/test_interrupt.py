@@ -287,3 +287,44 @@ def test_killed_ci_study_reruns_to_the_same_results(tmp_path: Path, share: float
         for key in a:
             assert np.array_equal(a[key], b[key], equal_nan=np.asarray(a[key]).dtype.kind == "f"), \
                 f"{name}:{key}"
+
+
+def _batch_cmd(out_dir: Path, ids: list[str]) -> list[str]:
+    scenes = [a for i in ids for a in ("--scene", i)]
+    return [str(VENV_BIN / "ssw"), "contact", *scenes, "--config", str(ROOT / "config" / "ci.yaml"),
+            "--steps", str(CONTACT_STEPS), "--output-dir", str(out_dir)]
+
+
+@pytest.mark.parametrize("sig", [signal.SIGKILL, signal.SIGTERM])
+def test_killed_contact_batch_leaves_only_complete_curves(tmp_path: Path, sig: int) -> None:
+    """A batch (`ssw contact --scene A --scene B --scene C --output-dir D`, what a workflow
+    contact job runs) killed right after its first curve appeared: every file under a final
+    name is a complete curve, the rest are hidden `.part` files (none after SIGTERM, which
+    unwinds); the re-run writes all three, the first equal to the one written before."""
+    from ssw.config import load_config
+    from ssw.contact.batch import batches
+    from ssw.curve import read_curve
+
+    ids = [i for b in batches(load_config(ROOT / "config" / "ci.yaml")).values() for i in b][:3]
+    out = tmp_path / "contact"
+    proc = subprocess.Popen(_batch_cmd(out, ids), env=_env(), stdout=subprocess.DEVNULL,
+                            stderr=subprocess.DEVNULL)
+    first = out / f"{ids[0]}.h5"
+    t0 = time.monotonic()
+    while not first.exists() and proc.poll() is None and time.monotonic() - t0 < 120:
+        time.sleep(0.005)
+    proc.send_signal(sig)
+    proc.wait(timeout=60)
+    assert first.exists()
+    done = {p.name: read_curve(p).force for p in out.iterdir() if p.suffix == ".h5"}
+    assert 1 <= len(done) < len(ids), sorted(done)  # killed mid-batch
+    assert all(f.shape == (CONTACT_STEPS,) for f in done.values())
+    rest = [p.name for p in out.iterdir() if p.suffix != ".h5"]
+    assert all(n.startswith(".") and n.endswith(".part") for n in rest), rest
+    if sig == signal.SIGTERM:
+        assert rest == []
+    subprocess.run(_batch_cmd(out, ids), env=_env(), check=True, capture_output=True,
+                   timeout=300)
+    assert sorted(p.name for p in out.glob("*.h5")) == sorted(f"{i}.h5" for i in ids)
+    for name, force in done.items():
+        np.testing.assert_array_equal(read_curve(out / name).force, force)

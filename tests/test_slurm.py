@@ -300,7 +300,8 @@ def test_ci_study_slurm_equals_local(tmp_path: Path, slurm_cluster: str) -> None
 
     Both runs start together (the SLURM run spends most of its time waiting for the queue
     and status polls) from the same code. Every HDF5 dataset and CSV table must be equal;
-    the profile's grouping must batch the 5 contact scenes into one SLURM job.
+    the contact scenes go as batches (one SLURM job each: 2 for the 5 scenes of the two
+    sets, contact.jobs_per_group = 4) and the profile's grouping batches the figure jobs.
     """
     config = ROOT / "config" / "ci.yaml"
     local, slurm = tmp_path / "local", tmp_path / "slurm"
@@ -323,12 +324,15 @@ def test_ci_study_slurm_equals_local(tmp_path: Path, slurm_cluster: str) -> None
     for p, log in zip(procs, logs, strict=True):
         assert p.returncode == 0, f"{' '.join(p.args)}\n{failure_summary(log)}"
     slurm_log = logs[1]
-    # Grouping: the 5 contact scenes go as one SLURM job, the small fit/figure rules as
-    # another, so there are at least 4 + 3 fewer submissions than jobs.
+    # Batching: the 5 contact scenes are 2 batch jobs (workflow/rules/contact.smk), each its
+    # own SLURM job; the small fit/figure rules go as group jobs, so there are at least 3
+    # fewer submissions than jobs.
     submitted = slurm_log.count("has been submitted with SLURM jobid")
     steps = re.search(r"(\d+) of \1 steps \(100%\) done", slurm_log)
-    assert steps and 1 <= submitted <= int(steps.group(1)) - 1 - 7, (submitted, slurm_log[-2000:])
-    assert "Group job contact" in slurm_log
+    assert steps and 1 <= submitted <= int(steps.group(1)) - 1 - 3, (submitted, slurm_log[-2000:])
+    for batch in ("contact_batch_set1_materials_0", "contact_batch_set3_soil_0"):
+        assert f"rule_{batch}/" in slurm_log, batch  # its SLURM log: submitted as a job
+    assert "Group job figures" in slurm_log
     n = assert_same_results(slurm / "results", local / "results")
     assert n >= 10, f"only {n} result files compared"
 

@@ -113,3 +113,38 @@ def test_a_failed_study_still_reports_the_finished_jobs(toy_study: Path, tmp_pat
     assert saved["status"] == "failed"
     assert saved["stages"]["alpha"]["jobs"] == 4 and "beta" not in saved["stages"]
     assert "FAILED" in (out / "study.md").read_text()
+
+
+GAMMA = textwrap.dedent('''
+    for _b, _ids in {"x": [0, 1], "y": [2]}.items():
+
+        rule:
+            name:
+                f"gamma_batch_{_b}"
+            output:
+                expand("results/gamma/{i}.txt", i=_ids),
+            shell:
+                "sleep 0.3; touch {output}"
+''')
+
+
+def test_rules_named_in_a_loop_count_in_their_stage(toy_study: Path, tmp_path: Path) -> None:
+    """Rules defined in a loop with the `name:` directive (the contact batches) belong to
+    the stage of their file: one job per batch, whatever its number of outputs."""
+    (toy_study / "workflow" / "rules" / "gamma.smk").write_text(GAMMA)
+    snakefile = toy_study / "Snakefile"
+    snakefile.write_text(snakefile.read_text().replace(
+        'include: "workflow/rules/beta.smk"',
+        'include: "workflow/rules/beta.smk"\ninclude: "workflow/rules/gamma.smk"').replace(
+        '"results/beta/sum.txt",', '"results/beta/sum.txt",\n        "results/gamma/2.txt",'
+        ' "results/gamma/0.txt",'))
+    assert study.stage_of("gamma_batch_x", study.rule_stages(snakefile)) == "gamma"
+    args = argparse.Namespace(
+        config=str(toy_study / "config.yaml"), cores=2, snakefile=str(snakefile),
+        profile=str(study.REPO / "workflow" / "profiles" / "default"), workdir=None,
+        keep=False, timeout=300.0, output_dir=str(tmp_path / "bench"), keep_going=False)
+    res = study.run(args)
+    assert "other" not in res["stages"]
+    gamma = res["stages"]["gamma"]
+    assert gamma["jobs"] == 2 and gamma["busy_s"] >= 2 * 0.3
+    assert set(gamma["busy_s_per_rule"]) == {"gamma_batch_x", "gamma_batch_y"}

@@ -44,6 +44,9 @@ from ssw.h5io import atomic_write_text, to_json
 
 REPO = Path(__file__).resolve().parents[2]
 RULE_RE = re.compile(r"^(?:rule|checkpoint)\s+(\w+)\s*:", re.MULTILINE)
+# Rules named by the `name:` directive (e.g. defined in a loop: `name: f"contact_batch_{b}"`):
+# the name's literal start, a prefix of every rule it defines.
+NAME_RE = re.compile(r"^\s+name:\s*(?:\n\s*)?f?[\"']([A-Za-z_]\w*)", re.MULTILINE)
 # Parts of the repository a study run reads through relative paths (materials library,
 # default config): linked into the temporary working directory.
 LINKED = ("config",)
@@ -72,11 +75,26 @@ def register(kinds: argparse._SubParsersAction) -> None:
 
 
 def rule_stages(snakefile: Path) -> dict[str, str]:
-    """Rule name -> stage (the stem of the ``.smk`` file defining it, else ``Snakefile``)."""
-    stages = {name: "Snakefile" for name in RULE_RE.findall(snakefile.read_text())}
+    """Rule name -> stage (the stem of the ``.smk`` file defining it, else ``Snakefile``).
+
+    Rules named with the ``name:`` directive appear as ``<literal start of the name>*``
+    (a prefix: a loop defines many such rules); :func:`stage_of` resolves them.
+    """
+    def found(text: str) -> list[str]:
+        return RULE_RE.findall(text) + [f"{p}*" for p in NAME_RE.findall(text)]
+
+    stages = {name: "Snakefile" for name in found(snakefile.read_text())}
     for smk in sorted((snakefile.parent / "workflow" / "rules").glob("*.smk")):
-        stages.update({name: smk.stem for name in RULE_RE.findall(smk.read_text())})
+        stages.update({name: smk.stem for name in found(smk.read_text())})
     return stages
+
+
+def stage_of(rule: str, stages: dict[str, str]) -> str:
+    """The stage of ``rule``: its exact entry, else the longest matching ``prefix*``."""
+    if rule in stages:
+        return stages[rule]
+    prefixes = [k for k in stages if k.endswith("*") and rule.startswith(k[:-1])]
+    return stages[max(prefixes, key=len)] if prefixes else "other"
 
 
 def job_records(workdir: Path) -> list[dict[str, Any]]:
@@ -114,7 +132,7 @@ def stage_times(records: list[dict[str, Any]], stages: dict[str, str],
     """Per-stage wall time, busy time and job count; times relative to ``t0`` (Unix s)."""
     by_stage: dict[str, list[dict[str, Any]]] = defaultdict(list)
     for r in records:
-        by_stage[stages.get(r["rule"], "other")].append(r)
+        by_stage[stage_of(r["rule"], stages)].append(r)
     out = {}
     for stage, recs in by_stage.items():
         start, end = min(r["start"] for r in recs), max(r["end"] for r in recs)

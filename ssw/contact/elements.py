@@ -73,8 +73,9 @@ def element_matrices(
     xy : (ne, 6, 2) node coordinates (r, z), m; straight-sided elements.
     G : (ne,) shear modulus, Pa.
     inv_K : (ne,) bulk compliance 1/K, 1/Pa (0 for incompressible).
-    p_scale : (ne,) Pa; the pressure unknown is ``p / p_scale`` (balances the blocks for
-        LU; use the element's own G, since a plate may be 1e4 times stiffer than the soil).
+    p_scale : (ne,) or (ne, 3), Pa/m^k; the pressure unknown of a vertex is ``p / p_scale``
+        (balances the blocks for LU: see :func:`ssw.contact.assembly.pressure_scale`). A
+        (ne,) value applies to the element's three vertices.
     """
     n2, g2 = p2_shape(QUAD_POINTS)
     n1 = p1_shape(QUAD_POINTS)
@@ -103,9 +104,10 @@ def element_matrices(
     db = np.matmul(dev, bm) * (2.0 * G[:, None] * wdv)[:, :, None, None]
     a = np.matmul(bm.reshape(ne, nq * 4, 12).transpose(0, 2, 1), db.reshape(ne, nq * 4, 12))
     div = bm[:, :, 0] + bm[:, :, 1] + bm[:, :, 2]  # (ne, nq, 12)
-    ps = np.asarray(p_scale, float).reshape(-1, 1, 1)
-    b = np.matmul((n1[None] * wdv[:, :, None]).transpose(0, 2, 1), div) * ps
-    c = np.matmul(n1.T, n1[None] * (wdv * inv_K[:, None])[:, :, None]) * ps**2
+    ps = np.broadcast_to(np.asarray(p_scale, float).reshape(ne, -1), (ne, 3))
+    b = np.matmul((n1[None] * wdv[:, :, None]).transpose(0, 2, 1), div) * ps[:, :, None]
+    c = np.matmul(n1.T, n1[None] * (wdv * inv_K[:, None])[:, :, None])
+    c = c * (ps[:, :, None] * ps[:, None, :])
     m = np.zeros((ne, 15, 15))
     m[:, :12, :12] = a
     m[:, 12:, :12] = b

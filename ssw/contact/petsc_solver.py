@@ -4,10 +4,11 @@ The matrix is assembled from COO triplets (``MatSetPreallocationCOO``) as AIJ, d
 by rows over the ranks of ``PETSC_COMM_WORLD``. It is factored once with PCLU in the
 natural order of the given numbering (which :mod:`ssw.contact.assembly` makes a nested
 dissection of the node graph with each node's displacements before its pressure, so that
-the saddle-point matrix has no zero pivot). With more than one rank the factorization is
-``PCREDUNDANT`` (every rank factors the gathered matrix with the same sequential LU), so
-that ``mpiexec -n N`` reproduces the serial answer to round-off. Every solve checks the
-KSP converged reason and raises :class:`ssw.errors.SolverError` on failure.
+the saddle-point matrix has no zero pivot; it is also scaled there so that PETSc's absolute
+zero-pivot threshold means "zero relative to the problem"). With more than one rank the
+factorization is ``PCREDUNDANT`` (every rank factors the gathered matrix with the same
+sequential LU), so that ``mpiexec -n N`` reproduces the serial answer to round-off. Every
+solve checks the KSP converged reason and raises :class:`ssw.errors.SolverError` on failure.
 """
 
 from __future__ import annotations
@@ -53,20 +54,28 @@ def nd_order(rows: np.ndarray, cols: np.ndarray, n: int) -> np.ndarray:
 
 
 class LUSolver:
-    """LU factors of a sparse matrix given as COO triplets (duplicates are summed).
+    """LU factors of ``scale * A``, ``A`` a sparse matrix given as COO triplets (duplicates
+    are summed).
+
+    PETSc factors ``A`` (whose zero-pivot test is absolute: give a nondimensional ``A``
+    with pivots of order one, :mod:`ssw.contact.assembly`); :meth:`solve` and
+    :meth:`matvec` work with ``scale * A``.
 
     Parameters
     ----------
-    rows, cols, vals : COO triplets (global indices, every rank passes all of them).
+    rows, cols, vals : COO triplets of ``A`` (global indices, every rank passes all of them).
     n : matrix size.
+    scale : the matrix's unit (a power of two keeps the solves exact to the bit).
     """
 
-    def __init__(self, rows: np.ndarray, cols: np.ndarray, vals: np.ndarray, n: int) -> None:
+    def __init__(self, rows: np.ndarray, cols: np.ndarray, vals: np.ndarray, n: int,
+                 scale: float = 1.0) -> None:
         PETSc = _petsc()
         self.PETSc = PETSc
         comm = PETSc.COMM_WORLD
         self.size, rank = comm.getSize(), comm.getRank()
         self.n = n
+        self.scale = float(scale)
         # each rank inserts a slice of the triplets; PETSc sums and routes them
         lo, hi = (len(rows) * rank) // self.size, (len(rows) * (rank + 1)) // self.size
         a = PETSc.Mat().createAIJ((n, n), comm=comm)
@@ -98,8 +107,9 @@ class LUSolver:
         self._gather, self._xall = PETSc.Scatter.toAll(self.x)
 
     def solve(self, rhs: np.ndarray) -> np.ndarray:
-        """Solve ``A X = rhs`` for a dense (n, k) right-hand side; every rank gets all of X."""
-        rhs = np.asarray(rhs, dtype=float).reshape(self.n, -1)
+        """Solve ``scale A X = rhs`` for a dense (n, k) right-hand side; every rank gets all
+        of X."""
+        rhs = np.asarray(rhs, dtype=float).reshape(self.n, -1) / self.scale
         if self.size == 1:
             return self._solve_dense(rhs)
         out = np.empty_like(rhs)
@@ -143,11 +153,11 @@ class LUSolver:
             )
 
     def matvec(self, x: np.ndarray) -> np.ndarray:
-        """``A x`` for a global vector ``x`` (n,); every rank gets the whole result."""
+        """``scale A x`` for a global vector ``x`` (n,); every rank gets the whole result."""
         self.x.setArray(np.asarray(x, float)[self.lo:self.hi])
         self.mat.mult(self.x, self.b)
         self._gather.scatter(self.b, self._xall)
-        return self._xall.getArray().copy()
+        return self.scale * self._xall.getArray()
 
     def destroy(self) -> None:
         """Free the PETSc objects."""

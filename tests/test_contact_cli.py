@@ -180,3 +180,36 @@ def test_jobs_per_group_is_checked():
 
     with pytest.raises(ConfigError, match="jobs_per_group"):
         chunks(["a"], 0)
+
+
+def test_delta_mode_chain_extends_the_curve_to_what_the_chain_reaches(tmp_path):
+    """contact.delta_mode chain: a soft soil's curve goes on past delta_max to the chain's
+    indentation (Hertz wall of the softer material, fit.range.factor); its first `steps`
+    increments are the fixed-mode curve (the extra, wider candidate zone changes nothing
+    the LCP solves exactly); a stiff soil goes just past it."""
+    from ssw.fit.range import scene_delta_max
+
+    ROOT = Path(__file__).resolve().parent.parent
+    cfg = load_config(ROOT / "config" / "ci.yaml")
+    assert cfg["contact"]["delta_mode"] == "chain"
+    soft, stiff = "pla-t400um-E30MPa-nu0.300", "pla-t400um-E660MPa-nu0.300"
+    steps = int(cfg["contact"]["steps"])
+    assert main(["contact", "--config", str(ROOT / "config" / "ci.yaml"), "--scene", soft,
+                 "--scene", stiff, "--output-dir", str(tmp_path / "chain")]) == 0
+    c = read_curve(tmp_path / "chain" / f"{soft}.h5")
+    pla = library(cfg)["pla"]
+    need = scene_delta_max(30e6, 0.3, cfg, (pla.E, pla.nu))
+    assert need > 2 * cfg["contact"]["delta_max"]  # 30 MPa: the chain presses > 0.2 mm
+    assert c.delta.size == 2 * steps and c.delta[-1] == pytest.approx(need, rel=1e-12)
+    assert np.all(np.diff(c.force) > 0)
+    assert main(["contact", "--config", str(ROOT / "config" / "ci.yaml"), "--scene", soft,
+                 "--delta-max", str(cfg["contact"]["delta_max"]),
+                 "--output", str(tmp_path / "fixed.h5")]) == 0
+    f = read_curve(tmp_path / "fixed.h5")
+    assert f.delta.size == steps
+    np.testing.assert_allclose(c.delta[:steps], f.delta, rtol=1e-15)
+    np.testing.assert_allclose(c.force[:steps], f.force, rtol=1e-8)
+    s = read_curve(tmp_path / "chain" / f"{stiff}.h5")
+    need_stiff = scene_delta_max(660e6, 0.3, cfg, (pla.E, pla.nu))
+    assert cfg["contact"]["delta_max"] < need_stiff < 1.5 * cfg["contact"]["delta_max"]
+    assert s.delta[-1] == pytest.approx(need_stiff, rel=1e-12)

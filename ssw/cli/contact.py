@@ -117,10 +117,13 @@ def run(args: argparse.Namespace) -> dict[str, Any] | None:
     for key in ("interface", "delta_max", "steps"):
         if getattr(args, key) is not None:
             contact[key] = getattr(args, key)
+    if args.delta_max is not None or not args.scene:
+        contact["delta_mode"] = "fixed"  # --delta-max, and scenes given by flags, reach it
     mats = library(cfg)
     if args.output_dir is not None:
         return _run_batch(args, cfg, contact, mats)
     scene, mats = _scene(args, cfg, mats)
+    contact["delta_reach"] = scene_reach([scene], cfg, contact, mats)[0]
     curve = solve_scene(scene, contact, float(cfg["indenter"]["radius"]), mats)
     inputs = {**curve.inputs, "material_set": cfg.get("material_set", "realistic")}
     if scene.plate_material == "custom":
@@ -137,6 +140,29 @@ def run(args: argparse.Namespace) -> dict[str, Any] | None:
         "contact_radius": curve.contact_radius.tolist(), "output": args.output,
         "stats": curve.stats,
     }
+
+
+def scene_reach(scenes: list[Any], cfg: dict[str, Any], contact: dict[str, Any],
+                mats: dict) -> list[float]:
+    """Final indentation (m) of each scene's curve (``contact.delta_reach`` of the solver).
+
+    ``contact.delta_mode`` ``fixed``: ``delta_max`` for all (the thesis's 0.1 mm).
+    ``chain``: ``max(delta_max, needed)`` (``steps`` more increments past delta_max), with
+    ``needed`` what the chain reaches at its last contact on that scene
+    (:func:`ssw.fit.range.scenes_delta_max`, one batched chain run): the thesis's 0.1 mm
+    stops short of the 0.2-0.6 mm a 20-bead chain presses into soils
+    below ~700 MPa, and the chain's TOF then rests on an extrapolated curve.
+    """
+    d0 = float(contact.get("delta_max", 1.0e-4))
+    if contact.get("delta_mode", "fixed") != "chain" or not scenes:
+        return [d0] * len(scenes)
+    from ssw.fit.range import scenes_delta_max
+
+    plates = [mats[s.plate_material] if s.plate_thickness > 0 else None for s in scenes]
+    need = scenes_delta_max([s.soil_E for s in scenes], [s.soil_nu for s in scenes],
+                            [p.E if p else None for p in plates],
+                            [p.nu if p else None for p in plates], cfg)
+    return [max(d0, float(n)) for n in need]
 
 
 def _check_batch_args(args: argparse.Namespace) -> None:
@@ -171,6 +197,7 @@ def _run_batch(args: argparse.Namespace, cfg: dict[str, Any], contact: dict[str,
     from ssw.errors import SswError
 
     scenes = _config_scenes(cfg, args.scene)  # every id checked before the first solve
+    reach = scene_reach(scenes, cfg, contact, mats)
     cache = MeshCache()  # a set's scenes share their mesh (same plate, new soil)
     out_dir = Path(args.output_dir)
     radius = float(cfg["indenter"]["radius"])
@@ -180,7 +207,7 @@ def _run_batch(args: argparse.Namespace, cfg: dict[str, Any], contact: dict[str,
     curves = []
     for i, scene in enumerate(scenes):
         try:
-            curve = solve_scene(scene, contact, radius, mats, cache)
+            curve = solve_scene(scene, {**contact, "delta_reach": reach[i]}, radius, mats, cache)
         except SswError:
             print(f"ssw contact: scene {scene.scene_id} failed ({i} of {len(scenes)} written)",
                   file=sys.stderr, flush=True)

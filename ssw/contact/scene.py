@@ -59,6 +59,7 @@ RANGES: dict[str, tuple[str, float, bool, float | None]] = {
     "plate_layers": ("integer", 1, True, None),
     "candidate_factor": ("number", 1.0, True, None),
     "pressure_profiles": ("integer", 0, True, None),
+    "delta_reach": ("number", 0.0, False, None),
 }
 
 
@@ -228,6 +229,7 @@ def solve_curve(
     if not radius > 0:
         raise ConfigError("indenter_radius", radius, "a radius > 0 m")
     delta_max, steps = float(cfg["delta_max"]), int(cfg["steps"])
+    deltas = indentation_steps(delta_max, steps, cfg.get("delta_reach"))
     plate_radius = 0.5 * float(cfg["plate_diameter"])
     if cache is None:
         mesh, order_nodes = build_mesh(plate_thickness, plate_radius, mesh_settings(cfg)), nd_order
@@ -240,16 +242,16 @@ def solve_curve(
     t_asm = time.perf_counter()
     solver = LUSolver(sysm.rows, sysm.cols, sysm.vals, sysm.ndof, sysm.scale)
     t_fact = time.perf_counter()
-    a_ref = np.sqrt(radius * delta_max)
+    a_ref = np.sqrt(radius * deltas[-1])
     r_cand = float(cfg["candidate_factor"]) * a_ref
     cond, outside = condense(sysm, solver, mesh, radius, r_cand, cfg["interface"],
                              INITIAL_ZONE * a_ref)
     t_cond = time.perf_counter()
 
-    deltas = delta_max * np.arange(1, steps + 1) / steps
-    force = np.empty(steps)
-    a = np.empty(steps)
-    keep = np.unique(np.linspace(0, steps - 1, int(cfg["pressure_profiles"])).round().astype(int))
+    n_inc = deltas.size
+    force = np.empty(n_inc)
+    a = np.empty(n_inc)
+    keep = np.unique(np.linspace(0, n_inc - 1, int(cfg["pressure_profiles"])).round().astype(int))
     profiles = []
     tol = LCP_TOL * delta_max / steps
     active = np.zeros(len(cond.W), dtype=bool)
@@ -302,6 +304,18 @@ def solve_curve(
                   "p": np.array(profiles)[:, :ms]},
     )
     return curve, {"cond": cond, "lam": lam, "solver": solver, "system": sysm, "mesh": mesh}
+
+
+def indentation_steps(delta_max: float, steps: int, delta_reach: float | None = None) -> np.ndarray:
+    """Indentations (m) of the increments: ``steps`` equal ones to ``delta_max`` (the
+    thesis's 1000 x 0.1 um) then, when ``delta_reach > delta_max`` (``contact.delta_mode``
+    chain), ``steps`` equal ones on to ``delta_reach``: the small-indentation resolution of
+    the thesis is kept and the curve reaches what the chain presses in."""
+    d = delta_max * np.arange(1, steps + 1) / steps
+    if delta_reach is not None and float(delta_reach) > delta_max * (1 + 1e-12):
+        ext = delta_max + (float(delta_reach) - delta_max) * np.arange(1, steps + 1) / steps
+        d = np.concatenate([d, ext])
+    return d
 
 
 def _check_zone(cond: Condensed, sysm: System, outside: np.ndarray, lam: np.ndarray,

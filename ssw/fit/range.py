@@ -217,7 +217,16 @@ def scene_delta_max(
     foam) makes it larger than the soil's Hertz wall, but not larger than a half-space of
     the plate's material. In fit range mode ``curve`` it is ``contact.delta_max``.
     """
-    if cfg.get("fit", {}).get("range", {}).get("mode", "chain") == "curve":
-        return float(cfg["contact"]["delta_max"])
     pE, pnu = plate if plate is not None else (None, None)
-    return fit_range(soil_E, soil_nu, np.inf, cfg, pE, pnu).needed
+    return float(scenes_delta_max([soil_E], [soil_nu], [pE], [pnu], cfg)[0])
+
+
+def scenes_delta_max(
+    soil_E: ArrayLike, soil_nu: ArrayLike, plate_E: Any, plate_nu: Any, cfg: dict[str, Any]
+) -> NDArray[np.float64]:
+    """:func:`scene_delta_max` of many scenes (1-D), with one batched chain run."""
+    E = np.atleast_1d(np.asarray(soil_E, float))
+    if cfg.get("fit", {}).get("range", {}).get("mode", "chain") == "curve":
+        return np.full(E.size, float(cfg["contact"]["delta_max"]))
+    ranges = fit_ranges(E, soil_nu, np.full(E.size, np.inf), cfg, plate_E, plate_nu)
+    return np.array([r.needed for r in ranges])

@@ -65,8 +65,8 @@ def test_foams_outside_the_k_table_are_skipped_with_the_reason():
             return np.ones(np.broadcast_shapes(np.shape(E), nu.shape))
 
     cfg = load_config(ROOT / "config" / "config.yaml")
-    cal = calibrate_striker_velocity(ChainParams.from_config(cfg), "PCF30", "fit",
-                                     k_table=OneNuTable())
+    params = ChainParams.from_config(cfg, fit_law="k_hertz")
+    cal = calibrate_striker_velocity(params, "PCF30", "fit", k_table=OneNuTable())
     assert cal.tof["PCF30"] == pytest.approx(1.15e-3, rel=1e-5)
     assert cal.tof["PCF08"] is None and cal.tof["PCF15"] is None
     assert set(cal.skipped) == {"PCF08", "PCF15"}

@@ -78,6 +78,19 @@ def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
         tmp.write_text(text)
 
 
+def write_rows_csv(rows: list[dict[str, Any]], path: str | os.PathLike[str]) -> None:
+    """Rows (dicts) to a CSV file, atomically; columns in order of first appearance."""
+    import csv
+    import io
+
+    buf = io.StringIO()
+    cols = list(dict.fromkeys(k for r in rows for k in r))
+    w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
+    w.writeheader()
+    w.writerows(rows)
+    atomic_write_text(path, buf.getvalue())
+
+
 @contextlib.contextmanager
 def atomic_h5(
     path: str | os.PathLike[str], *, kind: str, inputs: Mapping[str, Any]

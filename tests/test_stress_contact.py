@@ -17,8 +17,6 @@ Truth used:
 
 from __future__ import annotations
 
-import signal
-
 import numpy as np
 import pytest
 
@@ -40,17 +38,7 @@ STEPS = 100
 CASE_TIMEOUT_S = 120
 
 
-@pytest.fixture(autouse=True)
-def no_hang():
-    """Fail a case that runs longer than CASE_TIMEOUT_S (SIGALRM; no pytest-timeout here)."""
-    def expire(signum, frame):
-        raise TimeoutError(f"stress case exceeded {CASE_TIMEOUT_S} s: a hang")
-
-    old = signal.signal(signal.SIGALRM, expire)
-    signal.alarm(CASE_TIMEOUT_S)
-    yield
-    signal.alarm(0)
-    signal.signal(signal.SIGALRM, old)
+pytestmark = pytest.mark.usefixtures("no_hang")  # tests/conftest.py
 
 
 def _solve(soil, plate=None, thickness=0.0, **cfg):

@@ -219,7 +219,7 @@ def run_deviation(args: argparse.Namespace) -> dict[str, Any]:
     for r in rows:
         r["material_set"] = cfg["material_set"]
     if args.output:
-        from ssw.fit.figures import write_rows_csv
+        from ssw.h5io import write_rows_csv
 
         write_rows_csv(rows, args.output)
     return {"rows": rows}
@@ -239,7 +239,7 @@ def run_tof_impact(args: argparse.Namespace) -> dict[str, Any]:
 
     rows = tof_impact([read_curve(p) for p in args.curves], load_config(args.config))
     if args.output:
-        from ssw.fit.figures import write_rows_csv
+        from ssw.h5io import write_rows_csv
 
         write_rows_csv(rows, args.output)
     worst = {
@@ -281,7 +281,7 @@ def run_statements(args: argparse.Namespace) -> dict[str, Any]:
 
     rows = thesis_statements(load_config(args.config), solve)
     if args.output:
-        from ssw.fit.figures import write_rows_csv
+        from ssw.h5io import write_rows_csv
 
         write_rows_csv(rows, args.output)
     return {"rows": rows}

@@ -10,8 +10,6 @@
 
 from __future__ import annotations
 
-import csv
-import io
 from collections.abc import Callable
 from pathlib import Path
 from typing import Any
@@ -22,18 +20,7 @@ from ssw import hertz
 from ssw.curve import read_curve
 from ssw.fit.deviation import deviation_rows
 from ssw.fit.fitting import scene_inputs
-from ssw.h5io import atomic_write_text
 from ssw.plotting import pyplot, save_png
-
-
-def write_rows_csv(rows: list[dict[str, Any]], path: str | Path) -> None:
-    """Rows (dicts) to CSV, columns in order of first appearance."""
-    buf = io.StringIO()
-    cols = list(dict.fromkeys(k for r in rows for k in r))
-    w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
-    w.writeheader()
-    w.writerows(rows)
-    atomic_write_text(path, buf.getvalue())
 
 
 def _label(sc: dict[str, Any]) -> str:

@@ -17,8 +17,6 @@ per scene).
 
 from __future__ import annotations
 
-import csv
-import io
 from collections.abc import Iterable
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -31,7 +29,7 @@ from ssw.errors import ConfigError, OutOfRangeError, SswError
 from ssw.fit.fitting import FitResult
 from ssw.fit.interp import GridInterpolant
 from ssw.fit.laws import LAWS
-from ssw.h5io import atomic_h5, atomic_write_text, check_kind, read_inputs, write_dataset
+from ssw.h5io import atomic_h5, check_kind, read_inputs, write_dataset, write_rows_csv
 
 KIND = "k_table"
 RESIDUALS = ("rms_rel_residual", "max_rel_residual")
@@ -240,13 +238,7 @@ def write_tables(
                 for r, v in tb.residuals[law].items():
                     write_dataset(lg, r, v, "1", "relative force residual of the fit")
     if csv_path is not None:
-        rows = [r for tb in tables for r in tb.rows()]
-        buf = io.StringIO()
-        cols = list(dict.fromkeys(k for r in rows for k in r))
-        w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
-        w.writeheader()
-        w.writerows(rows)
-        atomic_write_text(csv_path, buf.getvalue())
+        write_rows_csv([r for tb in tables for r in tb.rows()], csv_path)
 
 
 def load_tables(path: str | Path) -> tuple[list[KTable], dict[str, Any]]:

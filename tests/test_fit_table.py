@@ -130,3 +130,20 @@ def test_incomplete_grid_is_an_error():
     f = fits(E_GRID[:3], NU_GRID[:2])
     with pytest.raises(SswError, match="missing"):
         build_tables(f[:-1])
+
+
+def test_power_law_force_between_nodes_within_the_stated_bound(table):
+    """The power law's interpolated force, at the indentations its stated error covers
+    (0.1, 0.3 and 1 x the fit range's upper end), is within that error of the true law
+    between grid nodes in E and in nu; and the bound is informative."""
+    err = table.interp_error()["power"]
+    Em = np.sqrt(E_GRID[1:] * E_GRID[:-1])
+    worst = 0.0
+    for nu in (0.1, 0.2, 0.3, 0.4, 0.5):
+        C, n = table.power(Em, np.full(Em.shape, nu))
+        A = hertz.hertz_coefficient(hertz.effective_modulus(Em, nu), R)
+        for d in np.array([0.1, 0.3, 1.0]) * np.max(table.delta_hi):
+            F_true = A * 1e-6 ** (1.5 - n_true(Em, nu)) * d ** n_true(Em, nu)
+            worst = max(worst, float(np.max(np.abs(C * d**n / F_true - 1.0))))
+    assert worst <= err
+    assert err < 10 * worst

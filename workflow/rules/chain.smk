@@ -14,8 +14,6 @@
 #                                  fit-wall value would be circular: the fit range depends on it)
 
 
-import ssw.chain.workflow as chainwf  # noqa: E402
-
 CHAIN_DIR = f"{RESULTS}/chain"
 CHAIN_CHUNKS = int(config["chain"]["sweep"].get("chunks", 1))
 CHAIN_RANKS = int(config["chain"]["sweep"].get("mpi_ranks", 1))

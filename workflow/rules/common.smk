@@ -10,6 +10,7 @@ from pathlib import Path
 from snakemake.utils import validate
 
 sys.path.insert(0, str(Path(workflow.basedir)))
+import ssw.chain.workflow as chainwf  # noqa: E402
 import ssw.config as sswcfg  # noqa: E402
 from ssw.h5io import atomic_write_text  # noqa: E402
 
@@ -95,8 +96,8 @@ def validation_inputs(wildcards):
     ]
     if recs:
         inputs["recordings"] = recs
-    if config["chain"].get("use_calibration", True):
-        inputs["calibration"] = f"{RESULTS}/chain/calibration.json"
+    if chainwf.uses_calibration(config):
+        inputs["calibration"] = f"{RESULTS}/{chainwf.CALIBRATION}"
     return inputs
 
 

@@ -78,6 +78,17 @@ def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
         tmp.write_text(text)
 
 
+def read_datasets(path: str | os.PathLike[str]) -> dict[str, Any]:
+    """Every dataset of an HDF5 file, by its path in the file (attributes not included)."""
+    import h5py
+
+    out: dict[str, Any] = {}
+    with h5py.File(path, "r") as f:
+        f.visititems(lambda name, obj: out.__setitem__(name, obj[()])
+                     if isinstance(obj, h5py.Dataset) else None)
+    return out
+
+
 def write_rows_csv(rows: list[dict[str, Any]], path: str | os.PathLike[str]) -> None:
     """Rows (dicts) to a CSV file, atomically; columns in order of first appearance."""
     import csv

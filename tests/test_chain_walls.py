@@ -103,3 +103,32 @@ class _HertzKTable:
     def power(self, E, nu):
         E, nu = np.asarray(E, float), np.asarray(nu, float)
         return 4 / 3 * E / (1 - nu**2) * np.sqrt(P.bead_radius), np.full(E.shape, 1.5)
+
+
+def test_a_k_table_file_is_read_once_per_version(tmp_path):
+    """Building the fit wall again (a calibration's root search, an inverse) does not read
+    the K table file again; a rewritten file is read anew and its values are used."""
+    import os
+
+    from ssw.chain.walls import load_k_table
+    from ssw.fit.table import KTable, write_tables
+
+    def table(K):
+        Eg, nug = np.array([30e6, 500e6]), np.array([0.3, 0.35])
+        ones = np.ones((2, 2))
+        res = {"rms_rel_residual": 0 * ones, "max_rel_residual": 0 * ones}
+        return KTable("pla", P.plate_thickness, 9.53e-3, Eg, nug, {"k_hertz": {"K": K * ones}},
+                      {"k_hertz": res}, 1e-7 * ones, 1e-4 * ones)
+
+    path = tmp_path / "k_table.h5"
+    write_tables([table(1.5)], path, None, {})
+    first = load_k_table(str(path), P)
+    assert load_k_table(str(path), P) is first
+    write_tables([table(2.0)], path, None, {})
+    os.utime(path, ns=(1, 1))  # a new version even within the clock's resolution
+    again = load_k_table(str(path), P)
+    assert again is not first
+    assert again.K(100e6, 0.32) == pytest.approx(2.0)
+    w = build_wall("fit", P, 100e6, 0.32, k_table=str(path))
+    w1 = build_wall("fit", P, 100e6, 0.32, K=2.0)
+    np.testing.assert_allclose(w.force(np.array([[5e-5]])), w1.force(np.array([[5e-5]])))

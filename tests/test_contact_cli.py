@@ -16,6 +16,7 @@ from ssw.cli import main
 from ssw.config import Scene, library, load_config
 from ssw.contact import solve_scene
 from ssw.curve import read_curve
+from ssw.h5io import read_datasets
 
 REPO = Path(__file__).resolve().parent.parent
 CI = str(REPO / "config" / "ci.yaml")
@@ -97,14 +98,6 @@ def test_bad_inputs_name_the_field():
 # ---- batches: several scenes in one process (the workflow's contact jobs)
 
 
-def _datasets(path):
-    import h5py
-
-    out = {}
-    with h5py.File(path, "r") as f:
-        f.visititems(lambda n, o: out.__setitem__(n, o[()]) if isinstance(o, h5py.Dataset)
-                     else None)
-    return out
 
 
 def test_batch_writes_every_scene_as_the_single_scene_command_does(tmp_path, capsys):
@@ -123,7 +116,7 @@ def test_batch_writes_every_scene_as_the_single_scene_command_does(tmp_path, cap
     for i in ids:
         single = tmp_path / f"single-{i}.h5"
         assert main(["contact", "--scene", i, "--config", CI, "--output", str(single)]) == 0
-        a, b = _datasets(tmp_path / "batch" / f"{i}.h5"), _datasets(single)
+        a, b = read_datasets(tmp_path / "batch" / f"{i}.h5"), read_datasets(single)
         assert sorted(a) == sorted(b)
         for key in a:
             assert np.array_equal(a[key], b[key]), key

@@ -27,6 +27,8 @@ import h5py
 import numpy as np
 import pytest
 
+from ssw.h5io import read_datasets
+
 ROOT = Path(__file__).resolve().parents[1]
 VENV_BIN = Path(sys.executable).parent
 PROFILE = ROOT / "workflow" / "profiles" / "default"
@@ -234,12 +236,6 @@ def test_killed_ssw_contact_leaves_nothing_or_a_complete_curve(
     np.testing.assert_array_equal(again.delta, reference.delta)
 
 
-def _datasets(path: Path) -> dict[str, np.ndarray]:
-    out: dict[str, np.ndarray] = {}
-    with h5py.File(path, "r") as f:
-        f.visititems(lambda n, o: out.__setitem__(n, o[()])
-                     if isinstance(o, h5py.Dataset) else None)
-    return out
 
 
 @pytest.mark.slow
@@ -282,7 +278,7 @@ def test_killed_ci_study_reruns_to_the_same_results(tmp_path: Path, share: float
         if name.suffix == ".csv":
             assert (cut / name).read_text() == (ref / name).read_text(), name
             continue
-        a, b = _datasets(cut / name), _datasets(ref / name)
+        a, b = read_datasets(cut / name), read_datasets(ref / name)
         assert sorted(a) == sorted(b), name
         for key in a:
             assert np.array_equal(a[key], b[key], equal_nan=np.asarray(a[key]).dtype.kind == "f"), \

@@ -26,9 +26,10 @@ import textwrap
 import time
 from pathlib import Path
 
-import h5py
 import numpy as np
 import pytest
+
+from ssw.h5io import read_datasets
 
 pytestmark = pytest.mark.slurm
 
@@ -260,13 +261,6 @@ def test_tiny_workflow_slurm_equals_local(tmp_path: Path, slurm_cluster: str) ->
     assert proc.stderr.count("has been submitted with SLURM jobid") == 7, proc.stderr[-3000:]
 
 
-def _h5_datasets(path: Path) -> dict[str, np.ndarray]:
-    """Every dataset of an HDF5 file (name -> value); attributes hold run metadata."""
-    out: dict[str, np.ndarray] = {}
-    with h5py.File(path, "r") as f:
-        f.visititems(lambda n, o: out.__setitem__(n, o[()])
-                     if isinstance(o, h5py.Dataset) else None)
-    return out
 
 
 def assert_same_results(got: Path, want: Path) -> int:
@@ -281,7 +275,7 @@ def assert_same_results(got: Path, want: Path) -> int:
     for name in names:
         a, b = got / name, want / name
         if name.endswith(".h5"):
-            da, db = _h5_datasets(a), _h5_datasets(b)
+            da, db = read_datasets(a), read_datasets(b)
             assert sorted(da) == sorted(db), name
             for key in da:
                 x, y = np.asarray(da[key]), np.asarray(db[key])

@@ -32,6 +32,7 @@ sweep reaches beyond the FEM range.
 
 from __future__ import annotations
 
+import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -197,7 +198,7 @@ def fit_wall(
             "exactly one of K, power=(C, n) or k_table",
         )
     if k_table is not None:
-        table = _load_k_table(k_table, params)
+        table = load_k_table(k_table, params)
         if params.fit_law == "k_hertz":
             K = table.K(E, nu)
         else:
@@ -214,17 +215,28 @@ def fit_wall(
     return PowerWall(C / s**n, n)
 
 
-def _load_k_table(k_table: Any, params: ChainParams) -> Any:
+def load_k_table(k_table: Any, params: ChainParams) -> Any:
+    """The K table of the chain's plate: ``k_table`` itself if it is one (has ``.K``), else
+    read from that HDF5 path. Reads are remembered per file version (path, size, mtime), so
+    a calibration or an inverse that builds the wall many times reads the file once."""
     if hasattr(k_table, "K"):
         return k_table
     p = Path(k_table)
     if not p.is_file():
         raise ConfigError("--k-table", str(p), "an existing K table (results/fit/k_table.h5)")
+    st = p.stat()
+    return _read_k_table(str(p.resolve()), st.st_size, st.st_mtime_ns,
+                         params.plate_material, float(params.plate_thickness))
+
+
+@functools.lru_cache(maxsize=8)
+def _read_k_table(path: str, size: int, mtime_ns: int, plate_material: str,
+                  plate_thickness: float) -> Any:
     try:
         from ssw.fit.table import KTable
     except ImportError as exc:  # the fit stage is not installed
-        raise SswError(f"ssw.fit.table.KTable is not available to read {p}: {exc}") from exc
-    return KTable.load(p, params.plate_material, params.plate_thickness)
+        raise SswError(f"ssw.fit.table.KTable is not available to read {path}: {exc}") from exc
+    return KTable.load(path, plate_material, plate_thickness)
 
 
 def table_wall(

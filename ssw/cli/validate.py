@@ -29,7 +29,7 @@ def run_validate(args: argparse.Namespace) -> dict[str, Any]:
         over["striker_velocity"] = read_calibrated_velocity(args.calibration)
     params = ChainParams.from_config(cfg, **over)
     wall, opts = wall_of(args, cfg)
-    E_range = inverse_range(wall, opts, params)  # loads a K table once, into opts
+    E_range = inverse_range(wall, opts, params)
     val = cfg.get("validation", {})
     tof_opts = TofOptions(lowpass=val.get("lowpass"), min_hits=val.get("min_hits", 1))
     rows = validate_samples(cfg, params, wall, opts, root=args.root, tof_options=tof_opts)

@@ -3,20 +3,19 @@
 Fitting a law on the whole FEM curve (0..0.1 mm in the thesis) weights indentations the
 device never reaches (stiff soils) or misses those it does (soft soils). The default
 range, mode ``chain``, is ``[0, factor * delta_peak(E, nu)]`` with ``delta_peak`` the peak
-wall indentation of the chain on that soil, with the Hertz wall:
-
-* from ``ssw.chain.api.peak_wall_indentation(soil_E, soil_nu, params)`` when the chain
-  package provides it (the dynamics, Stage II);
-* otherwise (documented fallback, ``source = "energy_bound"``) from energy conservation:
-  the wall cannot store more than the striker's kinetic energy plus the work of the
-  chain's weight over the wall's indentation,
+wall indentation of the chain on that soil, with the Hertz wall, from
+``ssw.chain.api.peak_wall_indentation(soil_E, soil_nu, params)`` (the dynamics,
+Stage II). Energy conservation bounds it from above (``energy_bound_indentation``, the
+independent check of the tests): the wall cannot store more than the striker's kinetic
+energy plus the work of the chain's weight over the wall's indentation,
 
       ``(2/5) A_w delta^(5/2) = 1/2 m_s v^2 + M g delta``,
 
-  with ``A_w = 4/3 E* sqrt(R_b)``, ``1/E* = (1-nu_b^2)/E_b + (1-nu_s^2)/E_s``, ``m_s`` the
-  striker (one bead) mass, ``M`` the chain's mass (gravity on) and ``v`` the striker speed.
-  It bounds the Hertz-wall peak from above (bead-bead springs and kinetic energy left
-  in the chain only lower it); a plate makes the wall stiffer and the peak smaller still.
+with ``A_w = 4/3 E* sqrt(R_b)``, ``1/E* = (1-nu_b^2)/E_b + (1-nu_s^2)/E_s``, ``m_s`` the
+striker (one bead) mass, ``M`` the chain's mass (gravity on) and ``v`` the striker speed
+(bead-bead springs and kinetic energy left in the chain only lower the peak). A plate
+stiffer than the soil makes the peak smaller still; one softer than the soil makes it
+larger, which ``softer_half_space`` accounts for.
 
 Other modes: ``fixed`` (``[delta_min, delta_max]`` from the config) and ``curve`` (the whole
 curve). The upper end is clipped to the curve's last indentation; the result says so.
@@ -24,7 +23,6 @@ curve). The upper end is clipped to the curve's last indentation; the result say
 
 from __future__ import annotations
 
-import importlib
 from dataclasses import dataclass
 from typing import Any
 
@@ -100,30 +98,16 @@ def energy_bound_indentation(
     return np.exp(0.5 * (lo + hi))
 
 
-def _chain_api() -> Any | None:
-    try:
-        api = importlib.import_module("ssw.chain.api")
-    except ImportError:
-        return None
-    return api if hasattr(api, "peak_wall_indentation") else None
-
-
 def peak_wall_indentation(
     soil_E: ArrayLike, soil_nu: ArrayLike, cfg: dict[str, Any]
 ) -> tuple[NDArray[np.float64], str]:
-    """Peak wall indentation (m) of the config's chain on a Hertz wall, and its source.
+    """Peak wall indentation (m) of the config's chain on a Hertz wall (one batched run of
+    ``ssw.chain.api``), and its source, ``"chain"``."""
+    from ssw.chain import api
+    from ssw.chain.params import ChainParams
 
-    ``source`` is ``"chain"`` (``ssw.chain.api``) or ``"energy_bound"`` (the fallback).
-    """
-    api = _chain_api()
-    if api is not None:
-        from ssw.chain.params import ChainParams
-
-        params = ChainParams.from_config(cfg)
-        return np.asarray(api.peak_wall_indentation(soil_E, soil_nu, params), float), "chain"
-    return energy_bound_indentation(soil_E, soil_nu, ChainEstimate.from_config(cfg)), (
-        "energy_bound"
-    )
+    params = ChainParams.from_config(cfg)
+    return np.asarray(api.peak_wall_indentation(soil_E, soil_nu, params), float), "chain"
 
 
 @dataclass(frozen=True)
@@ -133,7 +117,7 @@ class FitRange:
     lo: float
     hi: float
     mode: str
-    source: str  # chain | energy_bound | config | curve
+    source: str  # chain | config | curve
     needed: float  # m, the upper end before clipping to the curve
     clipped: bool  # the curve stops short of ``needed``
 

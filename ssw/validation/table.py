@@ -76,19 +76,14 @@ def inverse_range(wall: str, wall_options: dict[str, Any], params: Any) -> tuple
     """E range (Pa) of the inverse: the thesis's 10..1000 MPa, cut to a K table's soils.
 
     With the ``fit`` wall and a K table, the forward model only exists over the table's
-    soil moduli (the table does not extrapolate); ``wall_options['k_table']`` is replaced by
-    the loaded table so that it is read once.
+    soil moduli (the table does not extrapolate).
     """
     from ssw.chain.inverse import E_RANGE
+    from ssw.chain.walls import load_k_table
 
-    table = wall_options.get("k_table")
-    if wall != "fit" or table is None:
+    if wall != "fit" or wall_options.get("k_table") is None:
         return E_RANGE
-    if not hasattr(table, "K"):
-        from ssw.fit.table import KTable
-
-        table = KTable.load(table, params.plate_material, params.plate_thickness)
-        wall_options["k_table"] = table
+    table = load_k_table(wall_options["k_table"], params)
     return (max(E_RANGE[0], float(table.soil_E.min())), min(E_RANGE[1], float(table.soil_E.max())))
 
 

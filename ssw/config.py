@@ -85,8 +85,20 @@ def validate_config(cfg: dict[str, Any]) -> dict[str, Any]:
 
 
 def load_config(path: str | Path | None = None, overrides: dict[str, Any] | None = None) -> dict:
-    """Read a YAML study config, apply ``overrides`` (top-level keys), validate it."""
-    p = Path(path) if path is not None else DEFAULT_CONFIG
+    """Read a YAML study config, apply ``overrides`` (top-level keys), validate it.
+
+    Without ``path``: ``config/config.yaml`` of the working folder when there is one (the
+    repository), else the schema's defaults alone (a config is optional where it is not
+    essential: every default comes with the package).
+    """
+    if path is None:
+        local = Path("config") / "config.yaml"
+        if not local.is_file():
+            cfg: dict[str, Any] = {}
+            cfg.update(overrides or {})
+            return validate_config(cfg)
+        path = local
+    p = Path(path)
     if not p.is_file():
         raise ConfigError("--config", str(p), "an existing YAML file")
     cfg = yaml.safe_load(p.read_text()) or {}
@@ -94,6 +106,18 @@ def load_config(path: str | Path | None = None, overrides: dict[str, Any] | None
         raise ConfigError("--config", str(p), "a YAML mapping at the top level")
     cfg.update(overrides or {})
     return validate_config(cfg)
+
+
+def device_of(cfg: dict[str, Any]) -> Any:
+    """The config's device (:class:`ssw.device.Device`): a path (relative to the working
+    folder, else to the repository) or the name of a shipped device."""
+    from ssw.device import load_device
+
+    spec = cfg.get("device", "thesis")
+    p = Path(spec)
+    if not p.is_file() and not p.is_absolute() and (REPO_ROOT / p).is_file():
+        spec = str(REPO_ROOT / p)
+    return load_device(spec)
 
 
 def dump_config(cfg: dict[str, Any]) -> str:
@@ -132,7 +156,14 @@ def library(cfg: dict[str, Any]) -> dict[str, Material]:
 
 
 def _materials_path(cfg: dict[str, Any]) -> Path:
-    p = Path(cfg.get("materials_file", "config/materials.yaml"))
+    """The config's materials library: ``materials_file`` (relative to the working folder,
+    else to the repository), or the library shipped with ssw when it is null."""
+    from ssw.materials import DEFAULT_LIBRARY
+
+    name = cfg.get("materials_file")
+    if name is None:
+        return DEFAULT_LIBRARY
+    p = Path(name)
     return p if p.is_absolute() or p.exists() else REPO_ROOT / p
 
 
@@ -161,20 +192,22 @@ def check_config(cfg: dict[str, Any]) -> None:
                 "Poisson's ratios in (-1, 0.5] (0.5 is solved with the mixed u-p element)",
             )
     ch = cfg.get("chain", {})
-    for key in ("bead_material", "plate_material"):
-        if key in ch:
-            need_material(f"chain.{key}", ch[key])
-    if "beads" in ch and "sensor_index" in ch and not ch["sensor_index"] < ch["beads"] - 1:
+    dev = device_of(cfg)
+    need_material("device: chain.bead_material", dev.bead_material)
+    if dev.has_plate:
+        need_material("device: plate.material", dev.plate_material)
+    cal = cfg.get("calibration", {})
+    if cal.get("use", False) and ch.get("wall_law") == "table":
         raise ConfigError(
-            "chain.sensor_index", ch["sensor_index"],
-            f"an index between 1 and beads - 2 = {ch['beads'] - 2}",
-        )
-    if ch.get("use_calibration", False) and ch.get("wall_law") == "table":
-        raise ConfigError(
-            "chain.use_calibration", True,
+            "calibration.use", True,
             "false with chain.wall_law table (the calibration needs a law defined at any E: "
-            "hertz or fit)",
+            "fem, hertz or fit)",
         )
+    for name, rng in cal.get("ranges", {}).items():
+        if name not in cal.get("free", []):
+            raise ConfigError(f"calibration.ranges.{name}", rng, "a range of a free parameter")
+    if ch.get("wall_law") == "fit" and cfg.get("fit", {}).get("set") is None:
+        raise ConfigError("chain.wall_law", "fit", "a K table: set fit.set, or use fem")
     sw = ch.get("sweep", {})
     if "soil_E" in sw:
         E = expand_grid(sw["soil_E"], "chain.sweep.soil_E")
@@ -189,6 +222,10 @@ def check_config(cfg: dict[str, Any]) -> None:
         raise ConfigError("fit.set", fit["set"], f"one of the sets: {', '.join(cfg['sets'])}")
     for i, smp in enumerate(cfg.get("validation", {}).get("samples", [])):
         need_material(f"validation.samples[{i}].material", smp["material"])
+        rng = smp.get("soil_nu_range")
+        if rng is not None and not -1.0 < rng[0] <= rng[1] <= 0.5:
+            raise ConfigError(f"validation.samples[{i}].soil_nu_range", rng,
+                              "[lo, hi] with -1 < lo <= hi <= 0.5")
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,7 @@
 """Materials library: named materials with E (Pa), nu, density (kg/m^3) and a source.
 
-The library is a YAML file (``config/materials.yaml``) with named sets. ``realistic`` is
+The library is a YAML file (shipped as ``ssw/data/materials.yaml``, linked from the
+repository's ``config/materials.yaml``) with named sets. ``realistic`` is
 complete; other sets (``as_printed``, the thesis's Table 1 moduli as printed) override
 fields of some materials and inherit the rest from ``realistic``.
 """
@@ -15,8 +16,8 @@ import yaml
 
 from ssw.errors import ConfigError
 
-#: The library shipped with ssw (the repository's ``config/materials.yaml``).
-DEFAULT_LIBRARY = Path(__file__).resolve().parent.parent / "config" / "materials.yaml"
+#: The library shipped with ssw (package data; ``config/materials.yaml`` links to it).
+DEFAULT_LIBRARY = Path(__file__).resolve().parent / "data" / "materials.yaml"
 BASE_SET = "realistic"
 
 

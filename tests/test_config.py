@@ -53,7 +53,8 @@ def test_defaults_are_filled():
          "sets.set1_materials.plate_material[0]"),
         (("indenter", "radius"), -1.0, "indenter.radius"),
         (("contact", "interface"), "glued", "contact.interface"),
-        (("chain", "bead_material"), "cheese", "chain.bead_material"),
+        (("chain", "wall_law"), "cheese", "chain.wall_law"),
+        (("device",), "no-such-device", "--device"),
     ],
 )
 def test_bad_values_are_refused_naming_the_field(thesis_raw, path, value, field):

@@ -3,19 +3,26 @@
 Equations of motion (REFERENCE.md "The chain"; Nesterenko 2001, Daraio et al. 2006), beads
 ``i = 0..N-1`` from the striker, positions ``u`` down (m)::
 
-    m_i u_i'' = F_{i-1} - F_i + m_i g,   F_j = A [u_j - u_{j+1}]_+^(3/2)  (j = 0..N-2),
-    F_{N-1} = wall law at [u_{N-1}]_+,   F_{-1} = 0,
+    m_i u_i'' = F_{i-1} - F_i + m_i g + P delta_{i1},   F_j = A [u_j - u_{j+1}]_+^(3/2)
+    (j = 0..N-2),   F_{N-1} = wall law at [u_{N-1}]_+,   F_{-1} = 0,
 
-plus, when ``damping > 0``, a dashpot ``c (v_j - v_{j+1})`` in every closed contact.
+with ``P`` the device's preload on bead 1, plus, when ``damping > 0``, a dashpot
+``c (v_j - v_{j+1})`` in every closed contact. The striker speed, the preload and the masses
+may differ from scene to scene (:class:`ssw.chain.params.Batch`: a calibration scan advances
+many parameter sets in one run).
 
 Method: velocity Verlet (Stormer-Verlet; Hairer, Lubich & Wanner 2006, *Geometric Numerical
 Integration*, sec. I.1.4): explicit, symplectic, second order, one force evaluation per step.
 Its energy error stays bounded (no drift) and the TOF converges as ``dt^2``. The step is a
 fixed fraction of the shortest Hertz contact time at the striker speed (Johnson 1985,
 eq. 11.24) of two beads and of the last bead on a rigid flat (:func:`time_step`), so that
-it depends on the chain alone. Every scene shares the step, so a whole sweep advances as
+it depends on the chain alone. Every scene shares the step (the shortest of the batch's
+scenes when their striker speeds or masses differ), so a whole sweep advances as
 (N, n_scenes) arrays; the default 80 steps per contact time keep the TOF within 5e-5 of
 its converged value (``tests/test_chain_physics.py``, ``ssw bench chain``).
+
+The sensor signal is what the device's sensor reads (``ChainParams.sensor_reads``): the mean
+of the sensor particle's two contact forces, or its upper or lower one.
 
 Early stop. Every ``check_every`` steps each scene's record is inspected; a scene stops when
 (1) its incident pulse has passed the sensor (the sensor signal fell below 30 % of its peak),
@@ -33,7 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ssw.chain.params import ChainParams
+from ssw.chain.params import Batch, ChainParams
 from ssw.chain.statics import (
     initial_state,
     kinetic_energy,
@@ -41,7 +48,6 @@ from ssw.chain.statics import (
     static_contact_forces,
 )
 from ssw.chain.walls import Wall
-from ssw.hertz import contact_time
 
 #: Fall of the sensor signal (share of its peak) that ends the incident pulse.
 INCIDENT_END = 0.3
@@ -77,34 +83,56 @@ class Run:
     dt: float
 
 
-def impact_scales(params: ChainParams) -> tuple[float, float]:
-    """Peak overlap (m) and force (N) of two beads meeting at the striker speed (Hertz)."""
-    m = params.masses
-    m_eff = m[0] * m[1] / (m[0] + m[1])
-    A = params.bead_coefficient
-    d_max = (5.0 * m_eff * params.striker_velocity**2 / (4.0 * A)) ** 0.4
-    return d_max, A * d_max**1.5
+def impact_scales(params: ChainParams | Batch) -> tuple[np.ndarray, np.ndarray]:
+    """Peak overlap (m) and force (N) of the striker meeting bead 1 (Hertz); floats for a
+    ChainParams, (n,) arrays for a Batch."""
+    b = params if isinstance(params, Batch) else Batch.of(params, 1)
+    m0, m1 = b.masses[:, 0], b.masses[:, 1]
+    m_eff = m0 * m1 / (m0 + m1)
+    A = b.params.bead_coefficient
+    d_max = (5.0 * m_eff * b.striker_velocity**2 / (4.0 * A)) ** 0.4
+    f = A * d_max**1.5
+    if isinstance(params, Batch):
+        return d_max, f
+    return float(d_max[0]), float(f[0])
 
 
-def time_step(params: ChainParams, wall: Wall) -> float:
+def sensor_reading(params: ChainParams, f_upper: np.ndarray, f_lower: np.ndarray
+                   ) -> np.ndarray:
+    """The sensor's signal (N) from the forces of its upper and lower contacts
+    (``params.sensor_reads``: mean, upper or lower)."""
+    if params.sensor_reads == "upper":
+        return np.asarray(f_upper, float)
+    if params.sensor_reads == "lower":
+        return np.asarray(f_lower, float)
+    return 0.5 * (np.asarray(f_upper, float) + np.asarray(f_lower, float))
+
+
+def time_step(params: ChainParams | Batch, wall: Wall) -> float:
     """``min(t_c bead-bead, t_c bead on a rigid flat, t_c bead on the wall) / steps_per_contact``.
 
     The rigid flat is the stiffest physical wall, so for every physical wall the step
     depends on the chain alone: a scene's TOF does not depend on the batch (chunk, MPI
-    rank) it is computed in. Only a wall stiffer than rigid at the impact's overlap
-    (``hertz_equivalent``) shortens the step further.
+    rank) it is computed in, as long as the batch's scenes share the striker speed and the
+    masses (a Batch takes its shortest scene's step). Only a wall stiffer than rigid at the
+    impact's overlap (``hertz_equivalent``) shortens the step further.
     """
-    d_ref, _ = impact_scales(params)
-    a_rigid = 4.0 / 3.0 * np.sqrt(params.bead_radius) / params.bead_compliance
+    from ssw.hertz import contact_time as hertz_time
+
+    b = params if isinstance(params, Batch) else Batch.of(params, 1)
+    p = b.params
+    d_ref = float(np.min(impact_scales(b)[0]))
+    a_rigid = 4.0 / 3.0 * np.sqrt(p.bead_radius) / p.bead_compliance
     a_wall = max(float(np.max(wall.hertz_equivalent(d_ref))), a_rigid)
-    t_wall = float(contact_time(params.masses[-1], a_wall, params.striker_velocity))
-    return min(params.contact_time(), t_wall) / params.steps_per_contact
+    t_wall = float(np.min(hertz_time(b.masses[:, -1], a_wall, b.striker_velocity)))
+    return min(float(np.min(b.contact_time())), t_wall) / p.steps_per_contact
 
 
 class _StopRule:
     """Per-scene state of the early-stop rule (module docstring); arrays over all scenes."""
 
-    def __init__(self, n: int, sensor0: float, wall0: float, f_noise: float, t_c: float):
+    def __init__(self, n: int, sensor0: np.ndarray, wall0: np.ndarray, f_noise: np.ndarray,
+                 t_c: np.ndarray):
         self.sensor0, self.wall0, self.f_noise, self.t_c = sensor0, wall0, f_noise, t_c
         self.inc_max = np.zeros(n)
         self.t_inc = np.zeros(n)
@@ -117,15 +145,16 @@ class _StopRule:
     def update(self, active: np.ndarray, times: np.ndarray, S: np.ndarray, W: np.ndarray
                ) -> np.ndarray:
         """Digest a block (k, n_active) of sensor and wall forces; the scenes that may stop."""
-        Sr, Wr = S - self.sensor0, W - self.wall0
+        Sr, Wr = S - self.sensor0[active], W - self.wall0[active]
+        f_noise, t_c = self.f_noise[active], self.t_c[active]
         bm = Sr.max(axis=0)
         upd = ~self.inc_done[active] & (bm > self.inc_max[active])
         self.inc_max[active[upd]] = bm[upd]
         self.t_inc[active[upd]] = times[np.argmax(Sr, axis=0)[upd]]
-        self.inc_done[active] |= (self.inc_max[active] > self.f_noise) & (
+        self.inc_done[active] |= (self.inc_max[active] > f_noise) & (
             Sr[-1] < INCIDENT_END * self.inc_max[active]
         )
-        above = Wr > self.f_noise
+        above = Wr > f_noise
         first = np.isnan(self.t_onset[active]) & above.any(axis=0)
         self.t_onset[active[first]] = times[np.argmax(above, axis=0)[first]]
         wm = Wr.max(axis=0)
@@ -134,19 +163,19 @@ class _StopRule:
         newly = (
             ~self.released[active]
             & self.inc_done[active]
-            & (self.w_max[active] > self.f_noise)
+            & (self.w_max[active] > f_noise)
             & (Wr[-1] < WALL_RELEASE * self.w_max[active])
         )
         self.released[active[newly]] = True
         self.t_rel[active[newly]] = times[-1]
-        travel = np.nan_to_num(self.t_onset[active] - self.t_inc[active]) + self.t_c
+        travel = np.nan_to_num(self.t_onset[active] - self.t_inc[active]) + t_c
         return self.released[active] & (
-            times[-1] > self.t_rel[active] + TRAVEL_FACTOR * travel + TAIL_CONTACTS * self.t_c
+            times[-1] > self.t_rel[active] + TRAVEL_FACTOR * travel + TAIL_CONTACTS * t_c
         )
 
 
 def simulate(
-    params: ChainParams,
+    params: ChainParams | Batch,
     wall: Wall,
     *,
     t_end: float | None = None,
@@ -161,32 +190,42 @@ def simulate(
 
     Parameters
     ----------
-    params : the chain.  wall : the last-contact law, one per scene.
+    params : the chain; a :class:`Batch` of ``wall.n`` scenes for per-scene striker speeds,
+        preloads or masses.  wall : the last-contact law, one per scene.
     t_end : s, the end time (default ``params.t_max``).  dt : s (default :func:`time_step`).
     stop_early : stop each scene once its reflected pulses have passed the sensor.
     record_forces, record_energy : also keep every contact force / the total energy.
     check_every : steps between stop checks.
     initial : ``(u, v)`` (m, m/s), shapes (n, N), instead of :func:`initial_state`.
     """
-    dt = float(dt if dt is not None else time_step(params, wall))
-    t_end = float(t_end if t_end is not None else params.t_max)
+    n = wall.n
+    b = params if isinstance(params, Batch) else Batch.of(params, n)
+    if b.n != n:
+        raise ValueError(f"batch of {b.n} scenes for a wall of {n}")
+    p = b.params
+    dt = float(dt if dt is not None else time_step(b, wall))
+    t_end = float(t_end if t_end is not None else p.t_max)
     n_steps = int(np.ceil(t_end / dt - 1e-9))
-    n, N, s = wall.n, params.n_beads, params.sensor_index
-    A, damping = params.bead_coefficient, params.damping
-    inv_m = (1.0 / params.masses)[:, None]
-    g_acc = params.g if params.gravity else 0.0
-    F0 = static_contact_forces(params)
-    _, f_impact = impact_scales(params)
-    rule = _StopRule(n, 0.5 * (F0[s - 1] + F0[s]), F0[-1], NOISE_SHARE * f_impact,
-                     params.contact_time())
+    N, s = p.n_beads, p.sensor_index
+    A, damping = p.bead_coefficient, p.damping
+    inv_m_all = np.ascontiguousarray((1.0 / b.masses).T)  # (N, n)
+    g_acc = p.g if p.gravity else 0.0
+    F0 = static_contact_forces(b)  # (n, N)
+    _, f_impact = impact_scales(b)
+    rule = _StopRule(n, sensor_reading(p, F0[:, s - 1], F0[:, s]), F0[:, -1].copy(),
+                     NOISE_SHARE * f_impact, b.contact_time())
+    preload_all = b.preload.copy()
+    has_preload = bool(np.any(preload_all > 0))
+    reads = p.sensor_reads
 
     # internal layout (N, n_scenes): every bead's row is contiguous
-    u0, v0 = initial if initial is not None else initial_state(params, wall)
+    u0, v0 = initial if initial is not None else initial_state(b, wall)
     u, v = np.ascontiguousarray(u0.T), np.ascontiguousarray(v0.T)
     forces = np.full((n_steps + 1, n, N), np.nan) if record_forces else None
     energy = np.full((n_steps + 1, n), np.nan) if record_energy else None
     peak_ind = u[-1].copy()  # per active scene
     peak_all = np.empty(n)
+    inv_m, preload = inv_m_all, preload_all
 
     def accel(u: np.ndarray, v: np.ndarray, w: Wall) -> tuple[np.ndarray, np.ndarray]:
         d = u[:-1] - u[1:]
@@ -203,6 +242,8 @@ def simulate(
             f += damping * dv * closed
         net = -f
         net[1:] += f[:-1]
+        if has_preload:
+            net[1] += preload
         net *= inv_m
         net += g_acc
         return net, f
@@ -211,16 +252,26 @@ def simulate(
         if forces is not None:
             forces[step, active] = f.T
         if energy is not None:
-            energy[step, active] = kinetic_energy(params, v.T) + potential_energy(
-                params, w, u.T
-            )
+            sub = b.take(active)
+            energy[step, active] = kinetic_energy(sub, v.T) + potential_energy(sub, w, u.T)
+
+    def read(f: np.ndarray, out: np.ndarray) -> None:
+        if reads == "upper":
+            out[:] = f[s - 1]
+        elif reads == "lower":
+            out[:] = f[s]
+        else:
+            np.add(f[s - 1], f[s], out=out)
+            out *= 0.5
 
     a, f = accel(u, v, wall)
     active = np.arange(n)
     w = wall
     record_state(0, active, f, w)
+    first = np.empty(n)
+    read(f, first)
     blocks: list[tuple[int, np.ndarray, np.ndarray, np.ndarray]] = [
-        (0, active, (0.5 * (f[s - 1] + f[s]))[None, :], f[-1][None, :])
+        (0, active, first[None, :], f[-1][None, :])
     ]
     stop_time = np.full(n, np.nan)
     blk_s = np.empty((check_every, n))
@@ -234,13 +285,13 @@ def simulate(
         v += half * a
         k = step - j0
         na = active.size
-        np.add(f[s - 1], f[s], out=blk_s[k, :na])
+        read(f, blk_s[k, :na])
         blk_w[k, :na] = f[-1]
         np.maximum(peak_ind, u[-1], out=peak_ind)
         record_state(step, active, f, w)
         if k + 1 < check_every and step < n_steps:
             continue
-        S = 0.5 * blk_s[: k + 1, :na]
+        S = blk_s[: k + 1, :na].copy()
         W = blk_w[: k + 1, :na].copy()
         blocks.append((j0, active, S, W))
         times = dt * np.arange(j0, step + 1)
@@ -256,7 +307,8 @@ def simulate(
             if active.size == 0:
                 break
             u, v, a = u[:, keep], v[:, keep], a[:, keep]
-            w = w.take(keep)
+            inv_m, preload = inv_m_all[:, active], preload_all[active]
+            w = w.take(np.flatnonzero(keep))
     peak_all[active] = peak_ind
     n_t = step + 1
     sensor = np.full((n_t, n), np.nan)

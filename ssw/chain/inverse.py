@@ -57,6 +57,98 @@ def _forward_grid(
     return E, api.tof(E, soil_nu, params, wall, **wall_options)
 
 
+@dataclass(frozen=True)
+class BatchInversion:
+    """E (Pa) of many targets, each with its own nu and per-scene chain values; (k,) arrays.
+
+    ``E`` is NaN where ``reason`` (a text per target, "" when inverted) says why not;
+    ``tof_lo``/``tof_hi`` (s) the forward model's TOF range of each target's group.
+    """
+
+    E: np.ndarray
+    tof_lo: np.ndarray
+    tof_hi: np.ndarray
+    reason: tuple[str, ...]
+    E_range: tuple[float, float]
+
+
+def invert_batch(
+    tof: Any, soil_nu: Any, params: ChainParams, wall: str = "hertz", *,
+    vary: dict[str, Any] | None = None, E_range: tuple[float, float] = E_RANGE,
+    strict: bool = True, refine: int = REFINE_STEPS, **wall_options: Any,
+) -> BatchInversion:
+    """E (Pa) from TOFs (s) of ``k`` targets with their own ``soil_nu`` and per-scene chain
+    values ``vary`` (:data:`ssw.chain.params.VARYING` -> (k,) arrays), in few batched runs.
+
+    Targets sharing nu and chain values share one forward grid (``GRID_POINTS`` log-spaced
+    E); every grid advances in ONE run; PCHIP in ``ln E`` against TOF, then ``refine``
+    secant steps on the forward model (one run each, all targets together).
+
+    Raises (``strict``; otherwise E is NaN and ``reason`` says why)
+    ------
+    OutOfRangeError : a TOF outside its forward model's range over ``E_range``.
+    SolverError : a forward TOF(E) that is not strictly decreasing (not invertible).
+    """
+    from scipy.interpolate import PchipInterpolator
+
+    T = np.atleast_1d(np.asarray(tof, float)).ravel()
+    k = T.size
+    nu = np.broadcast_to(np.asarray(soil_nu, float), (k,)).ravel()
+    vk = {n: np.broadcast_to(np.asarray(v, float), (k,)).ravel()
+          for n, v in (vary or {}).items() if v is not None}
+    if np.any(~(T > 0)):
+        raise ConfigError("tof", T.tolist(), "TOF > 0 s")
+    if not 0 < E_range[0] < E_range[1]:
+        raise ConfigError("E_range", E_range, "0 < E_min < E_max (Pa)")
+    keys = np.column_stack([nu, *vk.values()]) if vk else nu[:, None]
+    groups, gidx = np.unique(keys, axis=0, return_inverse=True)
+    gidx = np.asarray(gidx).ravel()
+    G = groups.shape[0]
+    E_g = np.geomspace(E_range[0], E_range[1], GRID_POINTS)
+    gvary = {n: np.repeat(groups[:, 1 + j], GRID_POINTS) for j, n in enumerate(vk)}
+    T_g = api.tof(np.tile(E_g, G), np.repeat(groups[:, 0], GRID_POINTS), params, wall,
+                  vary=gvary or None, **wall_options).reshape(G, GRID_POINTS)
+    reason = [""] * k
+    logE = np.full(k, np.nan)
+    lo_T, hi_T = T_g[:, -1].copy(), T_g[:, 0].copy()
+    splines = []
+    for g in range(G):
+        members = np.flatnonzero(gidx == g)
+        if np.any(np.diff(T_g[g]) >= 0) or not np.all(np.isfinite(T_g[g])):
+            msg = (f"TOF(E) at nu = {groups[g, 0]:g} is not strictly decreasing on the E grid "
+                   f"[{E_g[0]:.4g}, {E_g[-1]:.4g}] Pa: cannot invert")
+            if strict:
+                raise SolverError(msg)
+            for i in members:
+                reason[i] = msg
+            splines.append(None)
+            continue
+        sp = PchipInterpolator(T_g[g, ::-1], np.log(E_g[::-1]))
+        splines.append(sp)
+        for i in members:
+            if not lo_T[g] <= T[i] <= hi_T[g]:
+                msg = (f"TOF {T[i]:.6g} s is outside the valid range [{lo_T[g]:.6g}, "
+                       f"{hi_T[g]:.6g}] s (E {E_g[-1] / 1e6:g}..{E_g[0] / 1e6:g} MPa at nu = "
+                       f"{groups[g, 0]:g})")
+                if strict:
+                    raise OutOfRangeError(msg)
+                reason[i] = msg
+            else:
+                logE[i] = float(sp(T[i]))
+    ok = np.isfinite(logE)
+    lo, hi = np.log(E_g[0]), np.log(E_g[-1])
+    for _ in range(refine if ok.any() else 0):
+        sel = np.flatnonzero(ok)
+        Tm = api.tof(np.exp(logE[sel]), nu[sel], params, wall,
+                     vary={n: v[sel] for n, v in vk.items()} or None, **wall_options)
+        for j, i in enumerate(sel):
+            sp = splines[gidx[i]]
+            slope = float(sp.derivative()(np.clip(Tm[j], sp.x[0], sp.x[-1])))
+            logE[i] = float(np.clip(logE[i] + slope * (T[i] - Tm[j]), lo, hi))
+    return BatchInversion(np.exp(logE), lo_T[gidx], hi_T[gidx], tuple(reason),
+                          (float(E_g[0]), float(E_g[-1])))
+
+
 def invert(
     tof: Any,
     soil_nu: float,
@@ -66,6 +158,7 @@ def invert(
     tof_std: Any = 0.0,
     E_range: tuple[float, float] = E_RANGE,
     sweep: Sweep | None = None,
+    vary: dict[str, Any] | None = None,
     **wall_options: Any,
 ) -> Inversion:
     """E (Pa) from TOF (s) at Poisson's ratio ``soil_nu``, with the interval from ``tof_std``.
@@ -85,6 +178,29 @@ def invert(
         raise ConfigError("tof_std", S.tolist(), "standard deviations >= 0 s")
     if not 0 < E_range[0] < E_range[1]:
         raise ConfigError("E_range", E_range, "0 < E_min < E_max (Pa)")
+    if sweep is None:
+        # one batched inversion of T, T + std, T - std; the central TOFs must lie inside the
+        # model's range (an error otherwise); an interval end beyond it is the range's end
+        targets = np.stack([T, T + S, T - S]).ravel()
+        res = invert_batch(targets, soil_nu, params, wall, vary=vary, E_range=E_range,
+                           strict=False, **wall_options)
+        n = T.size
+        bad = [r for r in res.reason[:n] if r]
+        if bad:
+            if "not strictly decreasing" in bad[0]:
+                raise SolverError(bad[0])
+            raise OutOfRangeError(bad[0])
+        lo_T, hi_T = float(res.tof_lo[0]), float(res.tof_hi[0])
+        E = res.E.copy()
+        E = np.where(targets > hi_T, res.E_range[0], E)
+        E = np.where(targets < lo_T, res.E_range[1], E)
+        clipped = (targets < lo_T) | (targets > hi_T)
+        E_all = E.reshape((3, *T.shape))
+        return Inversion(
+            E=E_all[0], E_low=E_all[1], E_high=E_all[2],
+            clipped=clipped.reshape((3, *T.shape))[1:].any(axis=0),
+            tof_range=(lo_T, hi_T), E_range=res.E_range,
+        )
     E_g, T_g = _forward_grid(float(soil_nu), params, wall, E_range, sweep, wall_options)
     if E_g.size < 2 or np.any(np.diff(T_g) >= 0):
         raise SolverError(
@@ -100,30 +216,10 @@ def invert(
         )
     targets = np.stack([T, T + S, T - S]).ravel()
     clipped = (targets < lo_T) | (targets > hi_T)
-    targets_c = np.clip(targets, lo_T, hi_T)
     spline = PchipInterpolator(T_g[::-1], np.log(E_g[::-1]))
-    logE = spline(targets_c)
-    if sweep is None:
-        logE = _refine(logE, targets_c, spline, soil_nu, params, wall, E_g, wall_options)
-    E_all = np.exp(logE).reshape((3, *T.shape))
+    E_all = np.exp(spline(np.clip(targets, lo_T, hi_T))).reshape((3, *T.shape))
     return Inversion(
         E=E_all[0], E_low=E_all[1], E_high=E_all[2],
         clipped=clipped.reshape((3, *T.shape))[1:].any(axis=0),
         tof_range=(lo_T, hi_T), E_range=(float(E_g[0]), float(E_g[-1])),
     )
-
-
-def _refine(
-    logE: np.ndarray, targets: np.ndarray, spline: Any, soil_nu: float, params: ChainParams,
-    wall: str, E_g: np.ndarray, wall_options: dict[str, Any],
-) -> np.ndarray:
-    """Secant steps ``ln E += (d lnE/dT) (T* - T(E))`` on the forward model (batched)."""
-    slope = spline.derivative()
-    lo, hi = np.log(E_g[0]), np.log(E_g[-1])
-    uniq, inv = np.unique(logE, return_inverse=True)
-    t_u = np.empty_like(uniq)
-    t_u[inv] = targets
-    for _ in range(REFINE_STEPS):
-        Tm = api.tof(np.exp(uniq), soil_nu, params, wall, **wall_options)
-        uniq = np.clip(uniq + slope(np.clip(Tm, spline.x[0], spline.x[-1])) * (t_u - Tm), lo, hi)
-    return uniq[inv]

@@ -7,14 +7,10 @@ particle: same contact geometry as the others (a sphere of the bead's radius and
 its own mass (``sensor_mass``), and its signal the mean of its two contact forces. With
 ``uniform=True`` its mass is the bead's (the Daraio-lab instrumented-bead convention).
 
-Device defaults. The device of Villacreses et al. (2021) is not documented in what we have
-(REFERENCE.md [U]); the defaults below are documented choices:
-
-* beads: 3/4 in (19.05 mm) AISI 52100 chrome-steel bearing balls, the size of the thesis's
-  indenter (R = 9.53 mm), material ``chrome_steel`` of ``config/materials.yaml``;
-* 20 beads, the sensor in the middle (index 10), as in REFERENCE.md's [M] reference chain;
-* the striker velocity is the one parameter calibrated, on one foam of the thesis's
-  Table 2 (see :mod:`ssw.chain.calibration` and ``config/config.yaml``).
+The physical values come from a device (:class:`ssw.device.Device`, YAML files in
+``config/devices/``; the thesis's device is the default), the numerics (time steps, gravity,
+damping, the fit law) from the study config's ``chain:`` section:
+:meth:`ChainParams.from_config`. The dataclass defaults below are those of the thesis device.
 """
 
 from __future__ import annotations
@@ -29,6 +25,8 @@ from ssw.hertz import effective_modulus, hertz_coefficient, sphere_sphere_coeffi
 
 #: Standard gravity, m/s^2 (CGPM 1901).
 STANDARD_GRAVITY = 9.80665
+#: What the sensor particle can report: the mean of its two contact forces, or one of them.
+SENSOR_READS = ("mean", "upper", "lower")
 
 
 @dataclass(frozen=True)
@@ -47,8 +45,15 @@ class ChainParams:
     gravity : precompress the chain by its weight and keep gravity on during the run.
     g : m/s^2.
     damping : N s/m, viscous dashpot in every closed contact (0: conservative, the default).
-    plate_material, plate_thickness : the plate under the last bead (metadata of the
-        ``fit``/``table`` walls; the thesis's 0.4 mm PLA plate).
+    plate_material, plate_thickness : the plate under the last bead (the thesis's 0.4 mm
+        PLA plate; thickness 0 = no plate): the ``fit`` wall's K-table group, and with
+        ``plate_E``, ``plate_nu`` (Pa, -), ``plate_diameter`` (m) and ``plate_interface``
+        (``frictionless`` | ``bonded`` | ``unilateral``) the ``fem`` wall's plate.
+    preload : N, a constant downward force on bead 1 (the top of the resting column: a
+        guide sleeve, a spring, a weight), in the statics and during the hit.
+    sensor_reads : which force the sensor particle reports: ``mean`` of its two contact
+        forces (an instrumented bead), ``upper`` or ``lower`` contact (a load cell above or
+        below its mass).
     fit_law : ``k_hertz`` (F = K A_w d^1.5) or ``power`` (F = C d^n) for the ``fit`` wall.
     steps_per_contact : time steps per Hertz contact time of two beads at the striker speed.
     t_max : s, longest simulated time (a scene whose reflected wave has not passed the
@@ -70,6 +75,12 @@ class ChainParams:
     damping: float = 0.0
     plate_material: str = "pla"
     plate_thickness: float = 0.4e-3
+    plate_E: float = 3.5e9
+    plate_nu: float = 0.36
+    plate_diameter: float = 49.5e-3
+    plate_interface: str = "frictionless"
+    preload: float = 0.0
+    sensor_reads: str = "mean"
     fit_law: str = "k_hertz"
     steps_per_contact: int = 80
     t_max: float = 0.02
@@ -95,6 +106,15 @@ class ChainParams:
             raise ConfigError("chain.damping", self.damping, "must be >= 0 N s/m")
         if self.fit_law not in ("k_hertz", "power"):
             raise ConfigError("fit.law", self.fit_law, "k_hertz | power")
+        if self.preload < 0 or not np.isfinite(self.preload):
+            raise ConfigError("chain.preload", self.preload, "a force >= 0 N")
+        if self.sensor_reads not in SENSOR_READS:
+            raise ConfigError("sensor.reads", self.sensor_reads, " | ".join(SENSOR_READS))
+        if self.plate_thickness < 0:
+            raise ConfigError("plate.thickness", self.plate_thickness, ">= 0 m (0: no plate)")
+        if self.plate_interface not in ("frictionless", "bonded", "unilateral"):
+            raise ConfigError("plate.interface", self.plate_interface,
+                              "frictionless | bonded | unilateral")
         if self.steps_per_contact < 4:
             raise ConfigError("chain.steps_per_contact", self.steps_per_contact, ">= 4")
 
@@ -146,38 +166,87 @@ class ChainParams:
 
     # ------------------------------------------------------------------ config
     @classmethod
-    def from_config(cls, cfg: dict[str, Any], **overrides: Any) -> ChainParams:
-        """Parameters from a validated config (:func:`ssw.config.load_config`).
-
-        The bead's E, nu and density come from the materials library (``chain.bead_material``);
-        ``overrides`` replace any field afterwards.
+    def from_config(cls, cfg: dict[str, Any], device: Any = None, **overrides: Any
+                    ) -> ChainParams:
+        """Parameters of a validated config (:func:`ssw.config.load_config`): its device
+        (``device:``, or ``device`` given here: a :class:`ssw.device.Device`) with the
+        config's materials library and the numerics of its ``chain:`` section (and
+        ``fit.law``); ``overrides`` replace any field afterwards.
         """
-        from ssw.config import library
+        from ssw.config import device_of, library
 
-        ch = cfg.get("chain", {})
-        mats = library(cfg)
-        key = ch.get("bead_material", "chrome_steel")
-        if key not in mats:
-            raise ConfigError("chain.bead_material", key, f"one of {', '.join(sorted(mats))}")
-        bead = mats[key]
-        fields: dict[str, Any] = {
-            "n_beads": ch.get("beads", cls.n_beads),
-            "bead_radius": ch.get("bead_radius", cls.bead_radius),
-            "bead_density": bead.density,
-            "bead_E": bead.E,
-            "bead_nu": bead.nu,
-            "sensor_index": ch.get("sensor_index", cls.sensor_index),
-            "sensor_mass": ch.get("sensor_mass"),
-            "striker_mass": ch.get("striker_mass"),
-            "uniform": ch.get("uniform", cls.uniform),
-            "striker_velocity": ch.get("striker_velocity", cls.striker_velocity),
-            "gravity": ch.get("gravity", cls.gravity),
-            "damping": ch.get("damping", cls.damping),
-            "plate_material": ch.get("plate_material", cls.plate_material),
-            "plate_thickness": ch.get("plate_thickness", cls.plate_thickness),
-            "fit_law": cfg.get("fit", {}).get("law", cls.fit_law),
-            "steps_per_contact": ch.get("steps_per_contact", cls.steps_per_contact),
-            "t_max": ch.get("t_max", cls.t_max),
-        }
-        fields.update(overrides)
-        return cls(**fields)
+        dev = device if device is not None else device_of(cfg)
+        return dev.chain_params(library(cfg), **numerics_of(cfg), **overrides)
+
+
+def numerics_of(cfg: dict[str, Any]) -> dict[str, Any]:
+    """The non-device ChainParams fields of a validated config."""
+    ch = cfg.get("chain", {})
+    return {
+        "gravity": ch.get("gravity", ChainParams.gravity),
+        "damping": ch.get("damping", ChainParams.damping),
+        "fit_law": cfg.get("fit", {}).get("law", ChainParams.fit_law),
+        "steps_per_contact": ch.get("steps_per_contact", ChainParams.steps_per_contact),
+        "t_max": ch.get("t_max", ChainParams.t_max),
+    }
+
+
+#: ChainParams fields that may take one value per scene inside one batched run.
+VARYING = ("striker_velocity", "preload", "striker_mass", "sensor_mass")
+
+
+@dataclass(frozen=True)
+class Batch:
+    """The per-scene values of one batched run: a chain whose striker speed, preload and
+    masses may differ from scene to scene (a calibration scan). SI units.
+
+    ``striker_velocity`` (n,) m/s, ``preload`` (n,) N, ``masses`` (n, N) kg; every other
+    field is ``params``'s.
+    """
+
+    params: ChainParams
+    n: int
+    striker_velocity: np.ndarray
+    preload: np.ndarray
+    masses: np.ndarray
+
+    @classmethod
+    def of(cls, params: ChainParams, n: int, vary: dict[str, Any] | None = None) -> Batch:
+        """``params`` for ``n`` scenes, with the fields of ``vary`` (names of
+        :data:`VARYING` -> values broadcast to (n,)) replaced per scene."""
+        vary = {k: v for k, v in (vary or {}).items() if v is not None}
+        unknown = set(vary) - set(VARYING)
+        if unknown:
+            raise ConfigError("vary", sorted(unknown), f"fields of {VARYING}")
+        vals = {k: np.broadcast_to(np.asarray(v, float), (n,)).copy() for k, v in vary.items()}
+        for k, v in vals.items():
+            bad = ~np.isfinite(v) | ((v < 0) if k == "preload" else (v <= 0))
+            if np.any(bad):
+                raise ConfigError(f"chain.{k}", v[bad][:5].tolist(),
+                                  ">= 0 N" if k == "preload" else "values > 0")
+        masses = np.tile(params.masses, (n, 1))
+        if "striker_mass" in vals:
+            masses[:, 0] = vals["striker_mass"]
+        if "sensor_mass" in vals and not params.uniform:
+            masses[:, params.sensor_index] = vals["sensor_mass"]
+        return cls(
+            params=params, n=n,
+            striker_velocity=vals.get("striker_velocity",
+                                      np.full(n, float(params.striker_velocity))),
+            preload=vals.get("preload", np.full(n, float(params.preload))),
+            masses=masses,
+        )
+
+    def take(self, idx: np.ndarray) -> Batch:
+        """The scenes ``idx``."""
+        idx = np.asarray(idx)
+        return Batch(self.params, int(idx.size), self.striker_velocity[idx], self.preload[idx],
+                     self.masses[idx])
+
+    def contact_time(self) -> np.ndarray:
+        """(n,) Hertz contact time (s) of the striker meeting bead 1 (Johnson 11.24)."""
+        from ssw.hertz import contact_time
+
+        m0, m1 = self.masses[:, 0], self.masses[:, 1]
+        return contact_time(m0 * m1 / (m0 + m1), self.params.bead_coefficient,
+                            self.striker_velocity)

@@ -64,6 +64,7 @@ def pick_peaks(
     split_share: float = SPLIT_SHARE,
     incident_share: float = INCIDENT_SHARE,
     gap_share: float = GAP_SHARE,
+    strict: bool = True,
 ) -> Peaks:
     """Incident and reflected peaks of ``F`` sampled at uniform times ``t``.
 
@@ -72,10 +73,11 @@ def pick_peaks(
     t : (n_t,) s, uniform.  F : (n_t,) or (n_t, n) N; NaN samples (a stopped scene) count
         as the baseline.
     split_share, incident_share, gap_share : the rule's shares (module docstring).
+    strict : raise on a column without two peaks (else its values are NaN).
 
     Raises
     ------
-    RecordingError : a column has no incident or no reflected peak.
+    RecordingError : (strict) a column has no incident or no reflected peak.
     """
     t = np.asarray(t, float)
     Fa = np.asarray(F, float)
@@ -104,18 +106,19 @@ def pick_peaks(
     has_ref = ok_ref.any(axis=0) & has_gap
     k_ref = np.argmax(ok_ref, axis=0)
     bad = ~(has_inc & has_ref)
-    if np.any(bad):
+    if np.any(bad) and strict:
         raise RecordingError(
             f"no {'incident' if not has_inc.all() else 'reflected'} peak in "
             f"{np.count_nonzero(bad)} of {bad.size} signals (columns {np.flatnonzero(bad)[:5]})"
         )
     o_i, h_i = _parabolic(s, k_inc, cols)
     o_r, h_r = _parabolic(s, k_ref, cols)
+    nan = np.where(bad, np.nan, 0.0)
     res = Peaks(
-        t_incident=t[0] + (k_inc + o_i) * dt,
-        t_reflected=t[0] + (k_ref + o_r) * dt,
-        f_incident=h_i,
-        f_reflected=h_r,
+        t_incident=t[0] + (k_inc + o_i) * dt + nan,
+        t_reflected=t[0] + (k_ref + o_r) * dt + nan,
+        f_incident=h_i + nan,
+        f_reflected=h_r + nan,
     )
     if one:
         return Peaks(*(np.asarray(x[0]) for x in (res.t_incident, res.t_reflected,

@@ -36,7 +36,7 @@ import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -58,6 +58,8 @@ class PowerWall:
     coef: np.ndarray  # N / m^n
     exponent: np.ndarray  # -
     hertzian: bool = field(init=False)  # every exponent is 1.5 (a faster path)
+    #: stated relative (1 sigma) error of the law's force, None when not known
+    force_error: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "hertzian", bool(np.all(self.exponent == 1.5)))
@@ -83,7 +85,7 @@ class PowerWall:
         return (np.maximum(F, 0.0) / self.coef) ** (1.0 / self.exponent)
 
     def take(self, idx: np.ndarray) -> PowerWall:
-        return PowerWall(self.coef[idx], self.exponent[idx])
+        return PowerWall(self.coef[idx], self.exponent[idx], force_error=self.force_error)
 
     def hertz_equivalent(self, d_ref: float) -> np.ndarray:
         """``F(d_ref) / d_ref^1.5`` (N/m^1.5): a Hertz coefficient for time-step choice."""
@@ -143,7 +145,30 @@ class TableWall:
         return self.force(np.full(self.n, d_ref)) / d_ref**1.5
 
 
-Wall = PowerWall | TableWall
+class Wall(Protocol):
+    """What the integrator needs of a last-contact law (one law per scene, ``n`` scenes).
+
+    Every method is vectorized over the scenes: arrays of shape (n,), SI units.
+    ``take(idx)`` selects scenes by index; ``idx`` may repeat one (a calibration scan
+    tiles the walls of a few references over many parameter sets).
+    """
+
+    @property
+    def n(self) -> int: ...
+
+    def force(self, d: np.ndarray) -> np.ndarray:
+        """Wall force (N) at indentation ``d`` (m); 0 for ``d <= 0``."""
+
+    def potential(self, d: np.ndarray) -> np.ndarray:
+        """Stored energy ``int_0^d F`` (J)."""
+
+    def indentation(self, F: np.ndarray) -> np.ndarray:
+        """Indentation (m) carrying the force ``F >= 0`` (N): the inverse of :meth:`force`."""
+
+    def take(self, idx: np.ndarray) -> Wall: ...
+
+    def hertz_equivalent(self, d_ref: float) -> np.ndarray:
+        """``F(d_ref) / d_ref^1.5`` (N/m^1.5), for the time-step choice."""
 
 
 def compliance_scale(params: ChainParams, soil_E: np.ndarray, soil_nu: np.ndarray) -> np.ndarray:
@@ -197,22 +222,32 @@ def fit_wall(
             "fit wall", {"K": K, "power": power, "k_table": k_table},
             "exactly one of K, power=(C, n) or k_table",
         )
+    force_error = None
     if k_table is not None:
         table = load_k_table(k_table, params)
+        # the table's stated leave-one-out interpolation bound (ssw.fit.table.interp_error),
+        # taken as the law's force error: conservative as a 1-sigma figure, and it leaves
+        # out the fitted shape's own misfit to the FEM curve (rule fit_tof_impact)
+        stated = table.interp_error() if hasattr(table, "interp_error") else {}
         if params.fit_law == "k_hertz":
             K = table.K(E, nu)
+            force_error = stated.get("K")
         else:
             power = table.power(E, nu)
+            force_error = stated.get("power")
+        force_error = None if force_error is None or not np.isfinite(force_error) else float(
+            force_error)
     if K is not None:
         Kv = np.broadcast_to(np.asarray(K, float), E.shape).copy()
         if np.any(~(Kv > 0)):
             raise ConfigError("K", Kv.tolist(), "K > 0")
-        return PowerWall(Kv * params.wall_coefficient(E, nu), np.full(E.size, 1.5))
+        return PowerWall(Kv * params.wall_coefficient(E, nu), np.full(E.size, 1.5),
+                         force_error=force_error)
     C, n = (np.broadcast_to(np.asarray(x, float), E.shape).copy() for x in power)  # type: ignore[union-attr]
     if np.any(~(C > 0)) or np.any(~((n >= 1.0) & (n <= 3.0))):
         raise ConfigError("power", (C.tolist(), n.tolist()), "C > 0 and 1 <= n <= 3")
     s = compliance_scale(params, E, nu)
-    return PowerWall(C / s**n, n)
+    return PowerWall(C / s**n, n, force_error=force_error)
 
 
 def load_k_table(k_table: Any, params: ChainParams) -> Any:

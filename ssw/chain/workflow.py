@@ -8,7 +8,7 @@ from __future__ import annotations
 
 from typing import Any
 
-from ssw.config import Scene, all_scenes, expand_grid
+from ssw.config import Scene, all_scenes, device_of, expand_grid
 
 
 def wall_law(config: dict[str, Any]) -> str:
@@ -22,10 +22,12 @@ def sweep_scene_ids(config: dict[str, Any]) -> list[str]:
     Raises ``ValueError`` when a sweep point is in no contact set.
     """
     ch = config["chain"]
+    dev = device_of(config)
     E = expand_grid(ch["sweep"]["soil_E"], "chain.sweep.soil_E")
     nu = expand_grid(ch["sweep"]["soil_nu"], "chain.sweep.soil_nu")
+    plate = dev.plate_material if dev.has_plate else "none"
     ids = [
-        Scene(ch["plate_material"], float(ch["plate_thickness"]), float(e), float(n)).scene_id
+        Scene(plate, float(dev.plate_thickness), float(e), float(n)).scene_id
         for n in nu
         for e in E
     ]
@@ -39,16 +41,19 @@ def sweep_scene_ids(config: dict[str, Any]) -> list[str]:
     return ids
 
 
-CALIBRATION = "chain/calibration.json"
+#: The study's calibration file, relative to the results folder (``ssw calibrate
+#: --from-config``; ``ssw.cli._device.STUDY_CALIBRATION`` is the same file seen from the
+#: working folder).
+CALIBRATION = "calibration/calibration.json"
 
 
 def uses_calibration(config: dict[str, Any]) -> bool:
-    """Whether the sweep and the validation take the striker speed calibrated on PCF 30."""
-    return bool(config["chain"].get("use_calibration", True))
+    """Whether the sweep, the validation and the inverse use the calibrated device."""
+    return bool(config.get("calibration", {}).get("use", True))
 
 
 def calibrated_inputs(config: dict[str, Any], results: str) -> dict[str, Any]:
-    """The wall law's inputs plus, with chain.use_calibration, the calibration result."""
+    """The wall law's inputs plus, with calibration.use, the calibration file."""
     inputs = wall_inputs(config, results)
     if uses_calibration(config):
         inputs["calibration"] = f"{results}/{CALIBRATION}"
@@ -56,8 +61,19 @@ def calibrated_inputs(config: dict[str, Any], results: str) -> dict[str, Any]:
 
 
 def calibration_flag(inputs: Any) -> str:
-    """``--calibration FILE`` when the job's inputs hold the calibration result."""
-    return f"--calibration {inputs.calibration}" if "calibration" in inputs.keys() else ""
+    """``--calibration FILE`` when the job's inputs hold the calibration, else ``none``
+    (a job never picks up a calibration its rule does not depend on)."""
+    if "calibration" in inputs.keys():
+        return f"--calibration {inputs.calibration}"
+    return "--calibration none"
+
+
+def recordings(config: dict[str, Any], root: str) -> list[str]:
+    """The validation samples' recordings (paths from ``root``, the repository)."""
+    import os
+
+    return [os.path.join(root, s["recordings"]) for s in
+            config.get("validation", {}).get("samples", []) if s.get("recordings")]
 
 
 def wall_inputs(config: dict[str, Any], results: str) -> dict[str, Any]:

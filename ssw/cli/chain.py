@@ -1,109 +1,22 @@
 """``ssw chain``, ``ssw tof``, ``ssw tof-sweep``, ``ssw tof-merge``, ``ssw invert``.
 
-The chain's parameters come from the study config's ``chain:`` section (``--config``) and
-are overridden by the options given. Bead indices count from the striker (bead 0), 0-based;
-``--beads`` counts every bead, the striker included. SI units.
+The chain is a device (``--device``, or the config's) or a calibrated device
+(``--calibration``), with flags overriding single fields; the numerics come from the study
+config's ``chain:`` section (see :mod:`ssw.cli._device` for the resolution order). Bead
+indices count from the striker (bead 0), 0-based; ``--beads`` counts every bead, the striker
+included. SI units.
 """
 
 from __future__ import annotations
 
 import argparse
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ssw.cli import add_json_flag
+from ssw.cli._device import add_device_options, chain_context
 from ssw.errors import ConfigError
-
-DEFAULT_K_TABLE = "results/fit/k_table.h5"
-DEFAULT_CONTACT_DIR = "results/contact"
-
-
-def _chain_options(p: argparse.ArgumentParser, wall_flag: str = "--law") -> None:
-    p.add_argument("--config", default="config/config.yaml", help="study config (YAML)")
-    p.add_argument("--beads", type=int, help="beads including the striker (bead 0)")
-    p.add_argument("--sensor-index", type=int, help="0-based index of the sensor particle")
-    p.add_argument("--sensor-mass", type=float, help="sensor particle mass, kg")
-    p.add_argument("--uniform", action="store_true", default=None,
-                   help="the sensor is a plain bead; signal = mean of its two contact forces")
-    p.add_argument("--striker-velocity", type=float, help="striker speed at contact, m/s")
-    p.add_argument("--drop-height", type=float,
-                   help="striker dropped from this height, m (speed sqrt(2 g h))")
-    p.add_argument("--calibration", metavar="FILE",
-                   help="striker speed from a `ssw tof-calibrate --json` result "
-                   "(results/chain/calibration.json)")
-    p.add_argument("--no-gravity", action="store_true", help="no gravity, no precompression")
-    p.add_argument("--bead-radius", type=float, help="bead radius, m")
-    p.add_argument("--bead-density", type=float, help="bead density, kg/m^3")
-    p.add_argument("--bead-E", type=float, help="bead Young's modulus, Pa")
-    p.add_argument("--bead-nu", type=float, help="bead Poisson's ratio")
-    p.add_argument("--damping", type=float, help="contact dashpot, N s/m (default 0)")
-    p.add_argument("--steps-per-contact", type=int, help="time steps per Hertz contact time")
-    p.add_argument(wall_flag, dest="wall", choices=["rigid", "hertz", "fit", "table"],
-                   help="last-contact law (default: the config's chain.wall_law)")
-    p.add_argument("--K", type=float, help="fit wall: a constant K instead of --k-table")
-    p.add_argument("--fit-law", choices=["k_hertz", "power"],
-                   help="fit wall: the law read from the K table (default: config fit.law)")
-    p.add_argument("--k-table", help=f"fit wall: K table HDF5 (default {DEFAULT_K_TABLE})")
-    p.add_argument("--curve", help="table wall: one FEM contact curve HDF5 for every scene")
-    p.add_argument("--contact-dir", default=DEFAULT_CONTACT_DIR,
-                   help="table wall without --curve: the {scene_id}.h5 curves' folder")
-
-
-def _params(args: argparse.Namespace) -> tuple[Any, dict[str, Any]]:
-    from ssw.chain.params import STANDARD_GRAVITY, ChainParams
-    from ssw.config import load_config
-
-    cfg = load_config(args.config)
-    over = {
-        "n_beads": args.beads, "sensor_index": args.sensor_index,
-        "sensor_mass": args.sensor_mass, "uniform": args.uniform,
-        "striker_velocity": args.striker_velocity, "bead_radius": args.bead_radius,
-        "bead_density": args.bead_density, "bead_E": args.bead_E, "bead_nu": args.bead_nu,
-        "damping": args.damping, "steps_per_contact": args.steps_per_contact,
-        "fit_law": args.fit_law,
-    }
-    over = {k: v for k, v in over.items() if v is not None}
-    if args.drop_height is not None:
-        if args.striker_velocity is not None or not args.drop_height > 0:
-            raise ConfigError("--drop-height", args.drop_height,
-                              "a height > 0 m, without --striker-velocity")
-        over["striker_velocity"] = float(np.sqrt(2.0 * STANDARD_GRAVITY * args.drop_height))
-    calibration = getattr(args, "calibration", None)
-    if calibration is not None:
-        if "striker_velocity" in over:
-            raise ConfigError("--calibration", calibration,
-                              "a calibration file without --striker-velocity/--drop-height")
-        from ssw.chain.calibration import read_calibrated_velocity
-
-        over["striker_velocity"] = read_calibrated_velocity(calibration)
-    if args.no_gravity:
-        over["gravity"] = False
-    if "n_beads" in over and "sensor_index" not in over:
-        over["sensor_index"] = over["n_beads"] // 2
-    return ChainParams.from_config(cfg, **over), cfg
-
-
-def _wall(args: argparse.Namespace, cfg: dict[str, Any], params: Any, E: Any, nu: Any
-          ) -> tuple[str, dict[str, Any]]:
-    wall = args.wall or cfg["chain"].get("wall_law", "hertz")
-    if wall == "fit":
-        if args.K is not None:
-            return wall, {"K": args.K}
-        return wall, {"k_table": args.k_table or DEFAULT_K_TABLE}
-    if wall == "table":
-        if args.curve:
-            return wall, {"curve": args.curve}
-        from ssw.config import Scene
-
-        Eb, nub = np.broadcast_arrays(np.asarray(E, float), np.asarray(nu, float))
-        paths = [
-            str(Path(args.contact_dir) / f"{Scene(params.plate_material, params.plate_thickness, float(e), float(n)).scene_id}.h5")  # noqa: E501
-            for e, n in zip(Eb.ravel(), nub.ravel(), strict=True)
-        ]
-        return wall, {"curve": paths}
-    return wall, {}
 
 
 def _params_dict(params: Any) -> dict[str, Any]:
@@ -117,8 +30,8 @@ def run_chain(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.chain.api import run_chain as simulate_one
     from ssw.h5io import atomic_h5, write_dataset
 
-    params, cfg = _params(args)
-    wall, opts = _wall(args, cfg, params, args.soil_E, args.soil_nu)
+    ctx = chain_context(args, args.soil_E, args.soil_nu)
+    params, wall, opts = ctx.params, ctx.wall, ctx.wall_options
     if not args.t_end > 0:
         raise ConfigError("--t-end", args.t_end, "a duration > 0 s")
     run = simulate_one(params, args.soil_E, args.soil_nu, wall, t_end=args.t_end, **opts)
@@ -126,7 +39,7 @@ def run_chain(args: argparse.Namespace) -> dict[str, Any]:
     t = run.t[::every]
     forces = run.forces[::every, 0, :]
     energy = run.energy[::every, 0]
-    inputs = {**vars(args), **_params_dict(params), "wall": wall}
+    inputs = {**vars(args), **_params_dict(params), **ctx.inputs()}
     inputs = {k: v for k, v in inputs.items() if k not in ("func", "human")}
     with atomic_h5(args.output, kind="chain_run", inputs=inputs) as f:
         write_dataset(f, "time", t, "s", "time from the striker's first contact")
@@ -150,13 +63,14 @@ def run_chain(args: argparse.Namespace) -> dict[str, Any]:
 def run_tof(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.chain.api import peaks
 
-    params, cfg = _params(args)
-    wall, opts = _wall(args, cfg, params, args.soil_E, args.soil_nu)
-    pk, run = peaks(args.soil_E, args.soil_nu, params, wall, **opts)
+    ctx = chain_context(args, args.soil_E, args.soil_nu)
+    params = ctx.params
+    pk, run = peaks(args.soil_E, args.soil_nu, params, ctx.wall, **ctx.wall_options)
     return {
+        **ctx.inputs(),
         "tof": float(pk.tof[0]), "t_incident": float(pk.t_incident[0]),
         "t_reflected": float(pk.t_reflected[0]), "f_incident": float(pk.f_incident[0]),
-        "f_reflected": float(pk.f_reflected[0]), "wall": wall, "dt": run.dt,
+        "f_reflected": float(pk.f_reflected[0]), "dt": run.dt,
         "peak_wall_indentation": float(run.peak_wall_indentation[0]),
         "striker_velocity": params.striker_velocity,
     }
@@ -184,13 +98,14 @@ def run_tof_sweep(args: argparse.Namespace) -> dict[str, Any] | None:
     import time
 
     from ssw.chain.sweep import chunk_slice, run_sweep, write_csv, write_sweep
+    from ssw.config import load_config
 
-    params, cfg = _params(args)
-    E, nu = _sweep_points(args, cfg)
+    E, nu = _sweep_points(args, load_config(args.config))
     chunks = args.chunks or 1
     idx = chunk_slice(E.size, args.chunk, chunks)
     E, nu = E[idx], nu[idx]
-    wall, opts = _wall(args, cfg, params, E, nu)
+    ctx = chain_context(args, E, nu)
+    params, wall, opts = ctx.params, ctx.wall, ctx.wall_options
     comm = None
     if args.mpi:
         from mpi4py import MPI
@@ -203,11 +118,11 @@ def run_tof_sweep(args: argparse.Namespace) -> dict[str, Any] | None:
         return None  # rank 0 writes and reports
     if args.output:
         inputs = {k: v for k, v in vars(args).items() if k not in ("func", "human")}
-        write_sweep(args.output, sw, {**inputs, **_params_dict(params), "wall": wall})
+        write_sweep(args.output, sw, {**inputs, **_params_dict(params), **ctx.inputs()})
         if args.csv:
             write_csv(args.csv, sw)
     return {
-        "soil_E": sw.soil_E, "soil_nu": sw.soil_nu, "tof": sw.tof, "wall": wall,
+        **ctx.inputs(), "soil_E": sw.soil_E, "soil_nu": sw.soil_nu, "tof": sw.tof,
         "points": int(sw.tof.size), "wall_time": wall_time,
         "ranks": 1 if comm is None else comm.Get_size(),
     }
@@ -229,42 +144,24 @@ def run_tof_merge(args: argparse.Namespace) -> dict[str, Any]:
             "tof_min": float(np.min(sw.tof)), "tof_max": float(np.max(sw.tof))}
 
 
-def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
-    from ssw.chain.calibration import calibrate_striker_velocity
-
-    params, cfg = _params(args)
-    wall, opts = _wall(args, cfg, params, 1e8, 0.3)
-    if wall == "table":
-        raise ConfigError("--law", "table", "rigid | hertz | fit for the calibration")
-    cal = calibrate_striker_velocity(params, args.foam, wall, **opts)
-    return {
-        "striker_velocity": cal.striker_velocity, "drop_height": cal.drop_height,
-        "foam": cal.foam, "wall": wall, "tof": cal.tof, "tof_thesis": cal.tof_thesis,
-        "relative_difference": {
-            k: None if t is None else t / cal.tof_thesis[k] - 1 for k, t in cal.tof.items()
-        },
-        "skipped": cal.skipped,
-    }
-
-
 # ---------------------------------------------------------------------------- ssw invert
 def run_invert(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.chain.inverse import invert
     from ssw.chain.sweep import read_sweep
 
-    params, cfg = _params(args)
-    sweep = read_sweep(args.table)[0] if args.table else None
     E_range = (args.soil_E_min, args.soil_E_max)
-    wall, opts = _wall(args, cfg, params, np.geomspace(*E_range, 48), args.soil_nu)
-    if wall == "table":
-        raise ConfigError("--law", "table", "rigid | hertz | fit for the inverse "
+    ctx = chain_context(args, np.geomspace(*E_range, 48), args.soil_nu)
+    if ctx.wall == "table":
+        raise ConfigError("--law", "table", "fem | hertz | fit | rigid for the inverse "
                           "(the table wall needs one FEM curve per E)")
-    res = invert(args.tof, args.soil_nu, params, wall, tof_std=args.tof_std,
-                 E_range=E_range, sweep=sweep, **opts)
+    sweep = read_sweep(args.table)[0] if args.table else None
+    res = invert(args.tof, args.soil_nu, ctx.params, ctx.wall, tof_std=args.tof_std,
+                 E_range=E_range, sweep=sweep, **ctx.wall_options)
     return {
+        **ctx.inputs(),
         "E": float(res.E), "E_low": float(res.E_low), "E_high": float(res.E_high),
         "interval_clipped": bool(res.clipped), "tof_range": list(res.tof_range),
-        "E_range": list(res.E_range), "wall": wall,
+        "E_range": list(res.E_range),
     }
 
 
@@ -272,7 +169,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("chain", help="simulate the bead chain; write every contact force",
                        description="One chain run to --t-end; HDF5 datasets time (s) and "
                        "contact_force (N, n_time x n_contacts, last column the wall).")
-    _chain_options(p, "--wall")
+    add_device_options(p)
     p.add_argument("--soil-E", type=float, default=100.0e6, help="soil modulus, Pa")
     p.add_argument("--soil-nu", type=float, default=0.3, help="soil Poisson's ratio")
     p.add_argument("--t-end", type=float, required=True, help="simulated time, s")
@@ -283,7 +180,7 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser("tof", help="TOF at the sensor for one soil",
                        description="TOF (s) between the incident and reflected peaks.")
-    _chain_options(p)
+    add_device_options(p)
     p.add_argument("--soil-E", type=float, required=True, help="soil modulus, Pa")
     p.add_argument("--soil-nu", type=float, required=True, help="soil Poisson's ratio")
     add_json_flag(p)
@@ -292,7 +189,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("tof-sweep", help="TOF over a grid of soil E and nu (batched)",
                        description="TOF(E, nu); without --soil-E-min the config's "
                        "chain.sweep grid. --chunk/--chunks select an interleaved part.")
-    _chain_options(p)
+    add_device_options(p)
     p.add_argument("--soil-E-min", type=float, help="Pa")
     p.add_argument("--soil-E-max", type=float, help="Pa (included)")
     p.add_argument("--soil-E-step", type=float, help="Pa")
@@ -313,18 +210,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_json_flag(p)
     p.set_defaults(func=run_tof_merge)
 
-    p = sub.add_parser("tof-calibrate", help="striker speed matching one Table 2 foam",
-                       description="Calibrate the striker speed on ONE foam of the thesis's "
-                       "Table 2; the other foams are predictions.")
-    _chain_options(p)
-    p.add_argument("--foam", default="PCF30", choices=["PCF08", "PCF15", "PCF30"],
-                   help="the foam calibrated on")
-    add_json_flag(p)
-    p.set_defaults(func=run_calibrate)
-
     p = sub.add_parser("invert", help="soil E from a TOF and an assumed nu",
                        description="E (Pa) with the interval E(TOF +- std).")
-    _chain_options(p)
+    add_device_options(p)
     p.add_argument("--tof", type=float, required=True, help="measured TOF, s")
     p.add_argument("--tof-std", type=float, default=0.0, help="its standard deviation, s")
     p.add_argument("--soil-nu", type=float, required=True, help="assumed Poisson's ratio")

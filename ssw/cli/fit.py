@@ -25,7 +25,8 @@ from ssw.fit.range import RANGE_MODES
 
 
 def _config_arg(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--config", default="config/config.yaml", help="study config (YAML)")
+    p.add_argument("--config",
+                   help="study config YAML (default: ./config/config.yaml, else ssw's defaults)")
 
 
 def register(sub: argparse._SubParsersAction) -> None:

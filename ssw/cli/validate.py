@@ -9,39 +9,36 @@ from typing import Any
 import numpy as np
 
 from ssw.cli import add_json_flag
-from ssw.cli.daq import add_wall_options, wall_of
+from ssw.cli._device import add_device_options, chain_context
 
 CURVE_POINTS = 40  # E points of each model curve in Fig 10
 
 
 def run_validate(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.chain import api
-    from ssw.chain.params import ChainParams
-    from ssw.config import load_config
     from ssw.signal.tof import TofOptions
     from ssw.validation.table import inverse_range, validate_samples
 
-    cfg = load_config(args.config)
-    over: dict[str, float] = {}
-    if args.calibration:
-        from ssw.chain.calibration import read_calibrated_velocity
+    ctx = chain_context(args)
+    cfg, params, wall, opts = ctx.cfg, ctx.params, ctx.wall, ctx.wall_options
+    if wall == "table":
+        from ssw.errors import ConfigError
 
-        over["striker_velocity"] = read_calibrated_velocity(args.calibration)
-    params = ChainParams.from_config(cfg, **over)
-    wall, opts = wall_of(args, cfg)
+        raise ConfigError("--law", "table", "fem | hertz | fit (the inverse needs a law at "
+                          "any E)")
     E_range = inverse_range(wall, opts, params)
     val = cfg.get("validation", {})
     tof_opts = TofOptions(lowpass=val.get("lowpass"), min_hits=val.get("min_hits", 1))
-    rows = validate_samples(cfg, params, wall, opts, root=args.root, tof_options=tof_opts)
-    out: dict[str, Any] = {"samples": [r.to_dict() for r in rows], "wall": wall,
+    rows = validate_samples(cfg, params, wall, opts, root=args.root, tof_options=tof_opts,
+                            calibration=ctx.calibration)
+    out: dict[str, Any] = {**ctx.inputs(), "samples": [r.to_dict() for r in rows],
                            "E_range": list(E_range)}
     if args.outdir:
         from ssw.validation.figures import plot_fig9, plot_fig10
         from ssw.validation.output import write_table, write_thesis_tables
 
         d = Path(args.outdir)
-        inputs = {"config": args.config, "calibration": args.calibration, "wall": wall,
-                  "K": args.K, "k_table": args.k_table, "chain_params": params.__dict__,
+        inputs = {"config": args.config, **ctx.inputs(), "chain_params": params.__dict__,
                   "E_range": E_range}
         write_table(d / "validation.csv", d / "validation.h5", rows, inputs)
         write_thesis_tables(d / "table2_tof.csv", d / "table3_modulus.csv", rows)
@@ -64,16 +61,21 @@ def run_validate(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _human(r: dict[str, Any]) -> str:
+    cal = r.get("calibration_file") or "none (the device as described)"
     head = (f"{'sample':8} {'E_man MPa':>9} {'nu':>5} {'TOF_sim ms':>10} {'TOF_meas ms':>11} "
-            f"{'dTOF %':>7} {'E_meas MPa':>10} {'COV E %':>8} {'dE %':>6}  source")
-    lines = [f"wall law: {r['wall']}", head]
+            f"{'dTOF %':>7} {'E MPa':>7} {'95 % interval':>15} {'dE %':>6} {'E_loo MPa':>9}  "
+            "source")
+    lines = [f"wall law: {r['wall']}; device {r['device_name']}; calibration: {cal}", head]
     for s in r["samples"]:
-        cov = "-" if s["E_cov_pct"] is None else f"{s['E_cov_pct']:.2f}"
+        loo = "-" if s["E_loo"] is None else f"{s['E_loo'] / 1e6:.1f}"
         lines.append(
             f"{s['sample']:8} {s['E_manufacturer'] / 1e6:9.1f} {s['nu']:5.2f} "
             f"{s['tof_sim'] * 1e3:10.4f} {s['tof_measured'] * 1e3:11.4f} "
-            f"{s['tof_diff_pct']:7.2f} {s['E_measured'] / 1e6:10.1f} {cov:>8} "
-            f"{s['E_diff_pct']:6.2f}  {s['tof_source']}")
+            f"{s['tof_diff_pct']:7.2f} {s['E_measured'] / 1e6:7.1f} "
+            f"{s['E_low'] / 1e6:7.1f}-{s['E_high'] / 1e6:<7.1f} "
+            f"{s['E_diff_pct']:6.2f} {loo:>9}  {s['tof_source']}")
+        budget = ", ".join(f"{k} {v:.2f} %" for k, v in s["E_contributions_pct"].items())
+        lines.append(f"{'':8} uncertainty of E (1 sigma): {s['E_u_pct']:.2f} % = {budget}")
     lines += [f"wrote {p}" for p in r.get("outputs", [])]
     return "\n".join(lines)
 
@@ -84,13 +86,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="For each config validation sample: TOF simulated at the manufacturer's "
         "E, measured TOF (recording, else the thesis's mean), % difference, E inverted "
         "from the measured TOF with its COV and % difference. SI units.")
-    p.add_argument("--config", help="study config YAML (default config/config.yaml)")
     p.add_argument("--outdir", help="write validation.csv/.h5 and Figs 9, 10 here")
     p.add_argument("--root", default=".", help="folder relative recording paths start from")
     p.add_argument("--sweep", help="the chain's TOF(E, nu) sweep HDF5, drawn in Fig 10")
-    p.add_argument("--calibration", metavar="FILE",
-                   help="striker speed from a `ssw tof-calibrate --json` result (replaces "
-                   "chain.striker_velocity; the workflow passes it when chain.use_calibration)")
-    add_wall_options(p)
+    add_device_options(p)
     add_json_flag(p)
     p.set_defaults(func=run_validate, human=_human)

@@ -9,10 +9,11 @@ Stage II). Energy conservation bounds it from above (``energy_bound_indentation`
 independent check of the tests): the wall cannot store more than the striker's kinetic
 energy plus the work of the chain's weight over the wall's indentation,
 
-      ``(2/5) A_w delta^(5/2) = 1/2 m_s v^2 + M g delta``,
+      ``(2/5) A_w delta^(5/2) = 1/2 m_s v^2 + (M g + P) delta``,
 
 with ``A_w = 4/3 E* sqrt(R_b)``, ``1/E* = (1-nu_b^2)/E_b + (1-nu_s^2)/E_s``, ``m_s`` the
-striker (one bead) mass, ``M`` the chain's mass (gravity on) and ``v`` the striker speed
+striker (one bead) mass, ``M`` the chain's mass (gravity on), ``P`` the preload on bead 1
+and ``v`` the striker speed
 (bead-bead springs and kinetic energy left in the chain only lower the peak). A plate
 stiffer than the soil makes the peak smaller still; one softer than the soil makes it
 larger, which ``softer_half_space`` accounts for.
@@ -49,6 +50,7 @@ class ChainEstimate:
     bead_nu: float  # -
     striker_velocity: float  # m/s
     gravity: bool
+    preload: float = 0.0  # N, constant force on bead 1
 
     @property
     def bead_mass(self) -> float:
@@ -57,19 +59,20 @@ class ChainEstimate:
 
     @classmethod
     def from_config(cls, cfg: dict[str, Any]) -> ChainEstimate:
-        """From a validated study config (``chain`` section and the materials library)."""
-        from ssw.config import library
+        """From a validated study config (its device and the materials library)."""
+        from ssw.config import device_of, library
 
-        ch = cfg["chain"]
-        mat = library(cfg)[ch["bead_material"]]
+        dev = device_of(cfg)
+        mat = library(cfg)[dev.bead_material]
         return cls(
-            beads=int(ch["beads"]),
-            bead_radius=float(ch["bead_radius"]),
+            beads=dev.beads,
+            bead_radius=dev.bead_radius,
             bead_density=mat.density,
             bead_E=mat.E,
             bead_nu=mat.nu,
-            striker_velocity=float(ch["striker_velocity"]),
-            gravity=bool(ch["gravity"]),
+            striker_velocity=dev.striker_velocity,
+            gravity=bool(cfg["chain"]["gravity"]),
+            preload=dev.preload,
         )
 
 
@@ -78,7 +81,7 @@ def energy_bound_indentation(
 ) -> NDArray[np.float64]:
     """Upper bound (m) of the Hertz-wall peak indentation from energy conservation.
 
-    Solves ``(2/5) A_w d^(5/2) - M g d = 1/2 m_s v^2`` for its positive root (the left side
+    Solves ``(2/5) A_w d^(5/2) - (M g + P) d = 1/2 m_s v^2`` for its positive root (the left side
     is negative, then increasing, beyond its minimum) by bisection in ``log d``; vectorized
     over ``soil_E`` and ``soil_nu``.
     """
@@ -86,7 +89,7 @@ def energy_bound_indentation(
     A = hertz.hertz_coefficient(E_star, chain.bead_radius)
     m = chain.bead_mass
     W0 = 0.5 * m * chain.striker_velocity**2
-    Mg = chain.beads * m * G if chain.gravity else 0.0
+    Mg = (chain.beads * m * G if chain.gravity else 0.0) + chain.preload
     lo = np.full(np.shape(A), np.log(1e-12))
     hi = np.full(np.shape(A), np.log(1.0))
     for _ in range(_BISECT_STEPS):

@@ -17,7 +17,9 @@ KIND = "validation"
 COLUMNS = {
     "sample": "", "material": "", "E_manufacturer": "Pa", "nu": "1", "tof_sim": "s",
     "tof_measured": "s", "tof_measured_std": "s", "tof_source": "", "tof_diff_pct": "%",
-    "tof_diff_signed_pct": "%", "E_measured": "Pa", "E_cov_pct": "%", "E_diff_pct": "%",
+    "tof_diff_signed_pct": "%", "tof_sem": "s", "E_measured": "Pa", "E_low": "Pa",
+    "E_high": "Pa", "E_u_pct": "%", "E_cov_pct": "%", "E_diff_pct": "%", "E_loo": "Pa",
+    "E_loo_diff_pct": "%",
     "n_hits": "1", "n_accepted": "1", "tof_published": "s", "tof_sim_published": "s",
     "E_published": "Pa", "E_cov_published": "%", "synthetic": "",
 }
@@ -58,8 +60,9 @@ def thesis_tables_text(rows: list[SampleResult]) -> tuple[str, str]:
     """Thesis Tables 2 and 3 side by side with ssw's values, in the thesis's units.
 
     Table 2: E (MPa), nu, TOF simulated (ssw / thesis, s), TOF measured (s), difference
-    (ssw / thesis, %). Table 3: E (MPa), measured E (ssw / thesis, MPa), its COV
-    (ssw / thesis, %), difference (ssw / thesis, %). Thesis differences are recomputed
+    (ssw / thesis, %). Table 3: E (MPa), measured E (ssw with its 95 % interval / thesis,
+    MPa), the leave-one-out E (ssw: calibrated without that sample), its COV (ssw / thesis,
+    %), difference (ssw / leave-one-out / thesis, %). Thesis differences are recomputed
     from its printed values with the same formulas.
     """
     t2 = io.StringIO()
@@ -74,14 +77,18 @@ def thesis_tables_text(rows: list[SampleResult]) -> tuple[str, str]:
                     _r(r.tof_diff_pct, nd=3), _r(thesis, nd=3)])
     t3 = io.StringIO()
     w = csv.writer(t3, lineterminator="\n")
-    w.writerow(["sample", "E [MPa]", "E measured ssw [MPa]", "E measured thesis [MPa]",
-                "COV ssw [%]", "COV thesis [%]", "diff ssw [%]", "diff thesis [%]"])
+    w.writerow(["sample", "E [MPa]", "E measured ssw [MPa]", "E low 95% [MPa]",
+                "E high 95% [MPa]", "E leave-one-out ssw [MPa]", "E measured thesis [MPa]",
+                "COV ssw [%]", "COV thesis [%]", "diff ssw [%]", "diff leave-one-out [%]",
+                "diff thesis [%]"])
     for r in rows:
         thesis = (abs(r.E_published - r.E_manufacturer) / r.E_manufacturer * 100
                   if r.E_published else None)
+        loo = None if r.E_loo_diff_pct is None else abs(r.E_loo_diff_pct)
         w.writerow([r.sample, _r(r.E_manufacturer, 1e-6), _r(r.E_measured, 1e-6),
+                    _r(r.E_low, 1e-6), _r(r.E_high, 1e-6), _r(r.E_loo, 1e-6),
                     _r(r.E_published, 1e-6), _r(r.E_cov_pct, nd=3), _r(r.E_cov_published, nd=3),
-                    _r(r.E_diff_pct, nd=3), _r(thesis, nd=3)])
+                    _r(r.E_diff_pct, nd=3), _r(loo, nd=3), _r(thesis, nd=3)])
     return t2.getvalue(), t3.getvalue()
 
 

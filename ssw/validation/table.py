@@ -9,11 +9,16 @@ For each sample of config ``validation.samples`` (thesis defaults PCF 08, 15, 30
   (``tof_published``, Table 2);
 * ``tof_diff_pct = 100 |tof_measured - tof_sim| / tof_sim`` (Table 2 prints the absolute
   difference; the signed one is kept as ``tof_diff_signed_pct``);
-* ``E_measured``: E inverted from the measured TOF at the sample's nu
-  (:func:`ssw.chain.inverse.invert`). With a recording every accepted hit is inverted and
-  ``E_measured`` is their mean, ``E_cov_pct`` their COV (Table 3's "COV measured E"); with
-  the published mean only, one inversion and ``E_cov_pct = None`` (the hit data are not
-  published; the thesis's COV is reported as ``E_cov_published``);
+* ``E_measured``: E inverted from the measured mean TOF at the sample's nu, with its 95 %
+  interval ``E_low``..``E_high`` and the uncertainty budget (:func:`ssw.modulus.estimate_moduli`:
+  the TOF's standard error, the calibration's covariance, a Poisson's ratio range, the wall
+  law's and the integrator's errors). With a recording every accepted hit is also inverted
+  and ``E_cov_pct`` is their COV (Table 3's "COV measured E"); with the published mean
+  only, ``E_cov_pct = None`` (the hit data are not published; the thesis's COV is reported
+  as ``E_cov_published``) and the TOF's standard error is the one the calibration uses
+  (:mod:`ssw.calibration.references`);
+* ``E_loo``: the sample's E predicted by the calibration made WITHOUT it (the calibration's
+  leave-one-out; None without a calibration or when the sample was not a reference);
 * ``E_diff_pct = 100 |E_measured - E_manufacturer| / E_manufacturer`` (Table 3; this
   reproduces its printed 3 / 1 / 1 % from 39/38, 122/123, 442/445 MPa).
 """
@@ -46,6 +51,14 @@ class SampleResult:
     E_measured: float
     E_cov_pct: float | None
     E_diff_pct: float
+    E_low: float | None = None
+    E_high: float | None = None
+    E_u_pct: float | None = None
+    E_contributions_pct: dict[str, float] = field(default_factory=dict)
+    E_notes: list[str] = field(default_factory=list)
+    E_loo: float | None = None
+    E_loo_diff_pct: float | None = None
+    tof_sem: float | None = None
     n_hits: int | None = None
     n_accepted: int | None = None
     recording: str | None = None
@@ -89,17 +102,21 @@ def inverse_range(wall: str, wall_options: dict[str, Any], params: Any) -> tuple
 
 def validate_samples(
     cfg: dict[str, Any], params: Any, wall: str, wall_options: dict[str, Any], *,
-    root: str | Path = ".", tof_options: Any = None,
+    root: str | Path = ".", tof_options: Any = None, calibration: Any = None,
 ) -> list[SampleResult]:
     """Compute the validation rows of every sample in ``cfg['validation']['samples']``.
 
-    ``params`` is a :class:`ssw.chain.params.ChainParams`; ``wall``/``wall_options`` the
-    last-contact law; ``root`` the folder relative recording paths start from.
+    ``params`` is the (calibrated) device's :class:`ssw.chain.params.ChainParams`;
+    ``wall``/``wall_options`` the last-contact law; ``root`` the folder relative recording
+    paths start from; ``calibration`` the :class:`ssw.calibration.Calibration` (its
+    covariance enters the E intervals, its leave-one-out rows the E_loo column).
     """
+    from ssw.calibration.references import from_config
     from ssw.chain import api
-    from ssw.chain.inverse import invert
+    from ssw.chain.inverse import invert_batch
     from ssw.config import library
     from ssw.daq.importers import read_any
+    from ssw.modulus import estimate_moduli
     from ssw.signal.tof import recording_tof
 
     samples = cfg.get("validation", {}).get("samples", [])
@@ -111,40 +128,64 @@ def validate_samples(
     E_man = np.array([mats[s["material"]].E for s in samples])
     nus = np.array([mats[s["material"]].nu for s in samples])
     tof_sim = np.asarray(api.tof(E_man, nus, params, wall, **wall_options), dtype=float)
-    rows = []
-    for i, smp in enumerate(samples):
-        rec_path = smp.get("recordings")
+    # measured TOFs and their standard errors: what the calibration uses
+    refs = {r.id: r for r in from_config(cfg, params, wall, wall_options, root=root,
+                                         tof_options=tof_options, require_std=False)}
+    extras: list[dict[str, Any]] = []
+    for smp in samples:
         extra: dict[str, Any] = {}
-        if rec_path:
-            p = Path(rec_path)
+        if smp.get("recordings"):
+            p = Path(smp["recordings"])
             p = p if p.is_absolute() else Path(root) / p
             rec = read_any(p, clipped="drop")
             res = recording_tof(rec, tof_options)
             t_hits = res.tof[res.accepted]
-            inv = invert(t_hits, nus[i], params, wall, E_range=E_range, **wall_options)
-            E_hits = np.atleast_1d(inv.E)
-            t_meas, t_std = res.mean, res.std
-            E_meas, E_cov = float(np.mean(E_hits)), cov_pct(E_hits)
             extra = dict(n_hits=int(res.tof.size), n_accepted=res.n_accepted,
-                         recording=str(rec_path), synthetic=bool(rec.meta.get("synthetic", False)),
-                         tof_per_hit=t_hits.tolist(), E_per_hit=E_hits.tolist(),
-                         rejections=list(res.reasons) + list(rec.dropped))
-            source = "recording"
-        elif "tof_published" in smp:
-            t_meas, t_std = float(smp["tof_published"]), None
-            E_meas = float(invert(t_meas, nus[i], params, wall, E_range=E_range,
-                                  **wall_options).E)
-            E_cov = None
-            source = "published"
-        else:
-            raise ConfigError(f"validation.samples[{i}]", smp["id"],
-                              "a sample with recordings or tof_published")
+                         recording=str(smp["recordings"]),
+                         synthetic=bool(rec.meta.get("synthetic", False)),
+                         tof_per_hit=t_hits.tolist(),
+                         rejections=list(res.reasons) + list(rec.dropped),
+                         tof_measured_std=res.std)
+        extras.append(extra)
+    T = np.array([refs[s["id"]].tof for s in samples])
+    S = np.array([refs[s["id"]].tof_std or 0.0 for s in samples])
+    nu_arg = np.array([s.get("soil_nu_range") or [nus[i], nus[i]]
+                       for i, s in enumerate(samples)], float)
+    est = estimate_moduli(T, S, nu_arg, params, wall, wall_options, calibration=calibration,
+                          E_range=E_range)
+    # per-hit moduli (Table 3's COV) in one batched inversion
+    hit_T = [np.asarray(x.get("tof_per_hit", []), float) for x in extras]
+    if any(h.size for h in hit_T):
+        allT = np.concatenate(hit_T)
+        allnu = np.concatenate([np.full(h.size, est[i].nu) for i, h in enumerate(hit_T)])
+        inv = invert_batch(allT, allnu, params, wall, E_range=E_range, strict=False,
+                           **wall_options)
+        k = 0
+        for i, h in enumerate(hit_T):
+            extras[i]["E_per_hit"] = inv.E[k:k + h.size].tolist()
+            k += h.size
+    loo = {row["id"]: row for row in (calibration.loo if calibration is not None else [])}
+    rows = []
+    for i, smp in enumerate(samples):
+        e = est[i]
+        extra = extras[i]
+        E_hits = np.asarray(extra.get("E_per_hit", []), float)
+        E_hits = E_hits[np.isfinite(E_hits)]
+        source = "recording" if smp.get("recordings") else "published"
+        std = extra.pop("tof_measured_std", None)
+        lo = loo.get(smp["id"], {}).get("E_predicted")
         rows.append(SampleResult(
             sample=smp["id"], material=smp["material"], E_manufacturer=float(E_man[i]),
-            nu=float(nus[i]), tof_sim=float(tof_sim[i]), tof_measured=float(t_meas),
-            tof_measured_std=t_std, tof_source=source,
-            tof_diff_pct=abs(pct(t_meas, tof_sim[i])), tof_diff_signed_pct=pct(t_meas, tof_sim[i]),
-            E_measured=E_meas, E_cov_pct=E_cov, E_diff_pct=abs(pct(E_meas, E_man[i])),
+            nu=e.nu, tof_sim=float(tof_sim[i]), tof_measured=float(T[i]),
+            tof_measured_std=std, tof_source=source,
+            tof_diff_pct=abs(pct(T[i], tof_sim[i])), tof_diff_signed_pct=pct(T[i], tof_sim[i]),
+            E_measured=e.E, E_cov_pct=cov_pct(E_hits) if E_hits.size else None,
+            E_diff_pct=abs(pct(e.E, E_man[i])), E_low=e.E_low, E_high=e.E_high,
+            E_u_pct=100.0 * e.u,
+            E_contributions_pct={k_: 100.0 * v for k_, v in e.contributions.items()},
+            E_notes=list(e.notes), E_loo=lo,
+            E_loo_diff_pct=None if lo is None else pct(lo, E_man[i]),
+            tof_sem=float(S[i]),
             tof_published=smp.get("tof_published"),
             tof_sim_published=smp.get("tof_sim_published"),
             E_published=smp.get("E_published"), E_cov_published=smp.get("E_cov_published"),

@@ -1,17 +1,19 @@
-# Stage II: chain dynamics. TOF(E, nu) sweep (thesis Fig 8) split into chain.sweep.chunks
-# jobs, merged; the striker speed calibration on PCF 30. (What a fitted law's error costs in
-# TOF, against the FEM curve itself, is the fit stage's rule fit_tof_impact.)
-# Science lives in ssw.chain; these rules call `ssw tof-sweep`, `ssw tof-merge` and
-# `ssw tof-calibrate`; input helpers are ssw.chain.workflow.
+# Stage II: the device's calibration on MEASURED TOFs, and the chain dynamics: TOF(E, nu)
+# sweep (thesis Fig 8) split into chain.sweep.chunks jobs, merged. (What a fitted law's error
+# costs in TOF, against the FEM law itself, is the fit stage's rule fit_tof_impact.)
+# Science lives in ssw.calibration and ssw.chain; these rules call `ssw calibrate`,
+# `ssw tof-sweep` and `ssw tof-merge`; input helpers are ssw.chain.workflow.
 #
-# Outputs (results/chain/):
-#   chunks/tof_{chunk}.h5          one interleaved share of the sweep points per job
-#   tof_sweep.h5 / .csv            every sweep point: soil_E (Pa), soil_nu, tof (s), peaks
-#   figures/fig8_tof_vs_E.png      Fig 8 style: TOF vs E, one line per nu
-#   calibration.json               striker speed calibrated on PCF 30 with the config's wall
-#                                  law, and the PCF 08/15 predictions (thesis Table 2); the
-#                                  config's chain.striker_velocity is the Hertz-wall value (a
-#                                  fit-wall value would be circular: the fit range depends on it)
+# Outputs:
+#   results/calibration/calibration.json  the calibrated device: the config's calibration.free
+#                                  parameters identified from the validation samples'
+#                                  measured TOFs (recordings, else the published means), with
+#                                  standard errors, singular values, residuals, leave-one-out
+#                                  (read by the sweep, the validation and `ssw ... --calibration`)
+#   results/calibration/summary.json      the same as `ssw calibrate --json` prints
+#   results/chain/chunks/tof_{chunk}.h5   one interleaved share of the sweep points per job
+#   results/chain/tof_sweep.h5 / .csv     every sweep point: soil_E (Pa), soil_nu, tof (s), peaks
+#   results/chain/figures/fig8_tof_vs_E.png  Fig 8 style: TOF vs E, one line per nu
 
 
 CHAIN_DIR = f"{RESULTS}/chain"
@@ -64,21 +66,25 @@ rule tof_sweep:
         "> {log} 2>&1"
 
 
-rule tof_calibration:
-    """Striker speed calibrated on PCF 30 with the config's wall law; PCF 08/15 predicted."""
+rule calibration:
+    """The device's free parameters identified from the validation samples' measured TOFs."""
     input:
         unpack(lambda wc: chainwf.wall_inputs(config, RESULTS)),
+        recordings=chainwf.recordings(config, RECORDINGS_ROOT),
     output:
-        json=f"{RESULTS}/{chainwf.CALIBRATION}",
+        cal=f"{RESULTS}/{chainwf.CALIBRATION}",
+        json=f"{RESULTS}/calibration/summary.json",
     log:
-        f"{LOGS}/chain/calibration.log",
+        f"{LOGS}/calibration/calibration.log",
     params:
         config=CONFIG_FILE,
         wall=lambda wc, input: chainwf.wall_flags(config, input, RESULTS),
+        root=RECORDINGS_ROOT,
     conda:
         SSW_ENV
     shell:
-        "python -m ssw tof-calibrate --config {params.config} {params.wall} --foam PCF30 --json "
+        "python -m ssw calibrate --from-config --config {params.config} {params.wall} "
+        "--root {params.root} --calibration none --output {output.cal} --json "
         "> {output.json} 2> {log}"
 
 
@@ -86,5 +92,5 @@ CHAIN_TARGETS = [
     rules.tof_sweep.output.h5,
     rules.tof_sweep.output.csv,
     rules.tof_sweep.output.fig8,
-    rules.tof_calibration.output.json,
+    *(rules.calibration.output if chainwf.uses_calibration(config) else []),
 ]

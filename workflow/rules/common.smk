@@ -84,26 +84,15 @@ RECORDINGS_ROOT = workflow.basedir
 
 
 def validation_inputs(wildcards):
-    """The chain's TOF sweep (drawn in Fig 10), the K table when the chain uses the fit
-    law, and every sample's recording."""
-    inputs = {"sweep": rules.tof_sweep.output.h5}
-    if config["chain"].get("wall_law", "fit") == "fit":
-        inputs["k_table"] = f"{RESULTS}/fit/k_table.h5"
-    recs = [
-        os.path.join(RECORDINGS_ROOT, s["recordings"])
-        for s in config["validation"]["samples"]
-        if s.get("recordings")
-    ]
+    """The chain's TOF sweep (drawn in Fig 10), the wall law's inputs, every sample's
+    recording and, with calibration.use, the calibration."""
+    inputs = {"sweep": rules.tof_sweep.output.h5, **chainwf.calibrated_inputs(config, RESULTS)}
+    recs = chainwf.recordings(config, RECORDINGS_ROOT)
     if recs:
         inputs["recordings"] = recs
-    if chainwf.uses_calibration(config):
-        inputs["calibration"] = f"{RESULTS}/{chainwf.CALIBRATION}"
     return inputs
 
 
 def validation_flags(wildcards, input):
-    """--k-table and --calibration for the inputs the validation job has."""
-    keys = input.keys()
-    flags = [f"--k-table {input.k_table}" if "k_table" in keys else "",
-             f"--calibration {input.calibration}" if "calibration" in keys else ""]
-    return " ".join(f for f in flags if f)
+    """The wall law's flags and --calibration for the inputs the validation job has."""
+    return " ".join([chainwf.wall_flags(config, input, RESULTS), chainwf.calibration_flag(input)])

@@ -1,0 +1,242 @@
+"""The calibration procedure and its file: one source of truth for a calibrated device.
+
+:func:`calibrate` identifies the free parameters (:mod:`ssw.calibration.fit`), evaluates the
+calibrated device once more canonically (one plain run, as ``ssw tof --calibration`` would),
+and predicts each reference's E from a calibration made without it (leave-one-out: the
+honest estimate of the error on an unseen sample).
+
+The file (JSON, ``ssw_kind = "calibration"``) holds the calibrated device, its nominal
+version, the identified values with their standard errors and covariance, the singular
+values, the residuals, the leave-one-out predictions, the wall law and the numerics it was
+made with, the materials, and the provenance. Every chain command takes it
+(``--calibration FILE``) and runs the calibrated device with that wall law and numerics.
+"""
+
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass, field
+from datetime import UTC, datetime
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ssw import __version__
+from ssw.calibration.fit import identify, leave_one_out_sets, theta_dict
+from ssw.calibration.model import Reference, TofModel
+from ssw.device import Device, device_from_dict, parameter
+from ssw.errors import ConfigError
+
+KIND = "calibration"
+SCHEMA_VERSION = 1
+
+
+@dataclass(frozen=True)
+class Calibration:
+    """A calibrated device and how it was obtained. SI units."""
+
+    device: Device
+    device_nominal: Device
+    free: tuple[str, ...]
+    parameters: dict[str, Any]
+    parameter_std: dict[str, float] | None
+    covariance: list[list[float]] | None
+    singular_values: list[float]
+    unidentified: list[str]
+    references: list[dict[str, Any]]
+    loo: list[dict[str, Any]]
+    alternatives: list[dict[str, float]]
+    wall: dict[str, Any]
+    numerics: dict[str, Any]
+    material_set: str = "realistic"
+    materials_file: str | None = None
+    provenance: dict[str, Any] = field(default_factory=dict)
+    path: str = ""
+
+    @property
+    def residuals(self) -> list[float]:
+        """Model minus measured TOF (s) per reference."""
+        return [r["residual"] for r in self.references]
+
+    def materials(self) -> dict[str, Any]:
+        """The materials library the calibration used."""
+        from ssw.config import library
+
+        return library({"material_set": self.material_set, "materials_file": self.materials_file})
+
+    def chain_params(self, **numerics: Any) -> Any:
+        """ChainParams of the calibrated device with the calibration's numerics (``numerics``
+        override them)."""
+        return self.device.chain_params(self.materials(), **{**self.numerics, **numerics})
+
+    def covariance_array(self) -> np.ndarray | None:
+        """The continuous parameters' covariance (SI), or None."""
+        return None if self.covariance is None else np.asarray(self.covariance, float)
+
+    def continuous(self) -> tuple[str, ...]:
+        """The free parameters the covariance is over (continuous ones, in order)."""
+        return tuple(n for n in self.free if parameter(n).kind == "continuous")
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "ssw_kind": KIND, "schema_version": SCHEMA_VERSION,
+            "device": self.device.to_dict(), "device_nominal": self.device_nominal.to_dict(),
+            "free": list(self.free), "parameters": self.parameters,
+            "parameter_std": self.parameter_std, "covariance": self.covariance,
+            "covariance_parameters": list(self.continuous()),
+            "singular_values": self.singular_values, "unidentified": self.unidentified,
+            "references": self.references, "residuals": self.residuals, "loo": self.loo,
+            "alternatives": self.alternatives, "wall": self.wall, "numerics": self.numerics,
+            "material_set": self.material_set, "materials_file": self.materials_file,
+            "provenance": self.provenance,
+        }
+
+
+def write_calibration(path: str | Path, cal: Calibration) -> None:
+    """Write the calibration file atomically."""
+    from ssw.h5io import atomic_write_text, to_json
+
+    atomic_write_text(path, to_json(cal.to_dict()) + "\n")
+
+
+def load_calibration(path: str | Path) -> Calibration:
+    """Read a calibration file written by :func:`write_calibration` (``ssw calibrate``)."""
+    p = Path(path)
+    try:
+        d = json.loads(p.read_text())
+    except (OSError, ValueError) as exc:
+        raise ConfigError("--calibration", str(p), f"a readable JSON file ({exc})") from exc
+    if not isinstance(d, dict) or d.get("ssw_kind") != KIND:
+        raise ConfigError("--calibration", str(p),
+                          "a calibration file written by `ssw calibrate --output FILE.json`")
+    if d.get("schema_version") != SCHEMA_VERSION:
+        raise ConfigError("--calibration", str(p),
+                          f"calibration schema version {SCHEMA_VERSION} (found "
+                          f"{d.get('schema_version')}): recalibrate with this ssw")
+    return Calibration(
+        device=device_from_dict(d["device"], f"{p} (device)"),
+        device_nominal=device_from_dict(d["device_nominal"], f"{p} (device_nominal)"),
+        free=tuple(d["free"]), parameters=d["parameters"], parameter_std=d["parameter_std"],
+        covariance=d["covariance"], singular_values=d["singular_values"],
+        unidentified=d["unidentified"], references=d["references"], loo=d["loo"],
+        alternatives=d["alternatives"], wall=d["wall"], numerics=d["numerics"],
+        material_set=d.get("material_set", "realistic"),
+        materials_file=d.get("materials_file"), provenance=d.get("provenance", {}),
+        path=str(p),
+    )
+
+
+def calibrate(
+    refs: list[Reference], device: Device, free: list[str] | tuple[str, ...], *,
+    materials: dict[str, Any], numerics: dict[str, Any], wall: str,
+    wall_options: dict[str, Any] | None = None,
+    ranges: dict[str, tuple[float, float]] | None = None, loo: bool = True,
+    scan_points: int | None = None, material_set: str = "realistic",
+    materials_file: str | None = None, provenance: dict[str, Any] | None = None,
+) -> Calibration:
+    """Identify ``free`` device parameters from ``refs`` (see :mod:`ssw.calibration.fit`).
+
+    Parameters
+    ----------
+    refs : reference samples with measured TOFs.  device : the nominal device.
+    free : names of :data:`ssw.device.PARAMETERS`.
+    materials : materials library; numerics : non-device ChainParams fields.
+    wall, wall_options : the last-contact law.  ranges : scan ranges (SI) per parameter.
+    loo : also calibrate without each reference and predict its E.
+    """
+    from ssw.chain import api
+
+    if not refs:
+        raise ConfigError("--reference", [], "at least one reference sample")
+    t0 = time.perf_counter()
+    opts = dict(wall_options or {})
+    model = TofModel(device, tuple(free), np.array([r.E for r in refs]),
+                     np.array([r.nu for r in refs]), materials, dict(numerics), wall, opts)
+    subsets = leave_one_out_sets(len(refs)) if loo else []
+    fit, subs = identify(model, refs, ranges=ranges, subsets=subsets, scan_points=scan_points)
+    values = theta_dict(model.free, fit.theta)
+    cal_device = device.with_(**values)
+    params = cal_device.chain_params(materials, **numerics)
+    # canonical evaluation: one plain run of the calibrated device (what users reproduce)
+    tof_c = np.asarray(api.tof(model.refs_E, model.refs_nu, params, wall, **opts), float)
+    references = [
+        {"id": r.id, "E": r.E, "nu": r.nu, "tof": r.tof, "tof_std": r.tof_std,
+         "source": r.source, "tof_model": float(tc), "residual": float(tc - r.tof),
+         "residual_pct": float(100.0 * (tc - r.tof) / r.tof)}
+        for r, tc in zip(refs, tof_c, strict=True)
+    ]
+    cont = tuple(n for n in model.free if parameter(n).kind == "continuous")
+    std = None if fit.std is None else {n: float(s) for n, s in zip(cont, fit.std, strict=True)}
+    loo_rows = _loo_predictions(model, refs, subs, materials, numerics, wall, opts) if loo \
+        else []
+    prov = {"ssw_version": __version__, "created_utc": datetime.now(UTC).isoformat(),
+            "wall_time_s": time.perf_counter() - t0, "scan_points": fit.scan_points,
+            "parameter_sets_evaluated": model.evaluations, "batched_runs": model.runs,
+            "converged": fit.converged, "chi2": fit.chi2,
+            "weights": "given TOF uncertainties" if fit.weights_known else
+            "1 % of each TOF, covariance scaled by chi2/(n - p)", **(provenance or {})}
+    return Calibration(
+        device=cal_device, device_nominal=device, free=model.free, parameters=values,
+        parameter_std=std,
+        covariance=None if fit.covariance is None else fit.covariance.tolist(),
+        singular_values=fit.singular_values.tolist(), unidentified=list(fit.unidentified),
+        references=references, loo=loo_rows, alternatives=list(fit.alternatives),
+        wall={"law": wall, "options": _plain_options(opts)}, numerics=dict(numerics),
+        material_set=material_set, materials_file=materials_file, provenance=prov,
+    )
+
+
+def _plain_options(opts: dict[str, Any]) -> dict[str, Any]:
+    """Wall options as JSON (paths as text; objects by their type name)."""
+    out = {}
+    for k, v in opts.items():
+        if isinstance(v, str | int | float | bool) or v is None:
+            out[k] = v
+        elif isinstance(v, Path):
+            out[k] = str(v)
+        elif isinstance(v, dict):
+            out[k] = _plain_options(v)
+        else:
+            out[k] = f"<{type(v).__name__}>"
+    return out
+
+
+def _loo_predictions(model: TofModel, refs: list[Reference], subs: dict, materials: dict,
+                     numerics: dict, wall: str, opts: dict) -> list[dict[str, Any]]:
+    """E of each reference inverted with the calibration made without it (batched)."""
+    from ssw.chain.inverse import invert_batch
+
+    rows: list[dict[str, Any]] = []
+    keys = leave_one_out_sets(len(refs))
+    cont = model.continuous
+    ints = model.integers
+    groups: dict[tuple, list[int]] = {}
+    for i, key in enumerate(keys):
+        sol = subs[key]
+        ivals = tuple(round(float(sol.theta[model.free.index(n)])) for n in ints)
+        groups.setdefault(ivals, []).append(i)
+    E_pred = np.full(len(refs), np.nan)
+    reasons = [""] * len(refs)
+    for ivals, members in groups.items():
+        base = model.device.with_(**dict(zip(ints, ivals, strict=True))).chain_params(
+            materials, **numerics)
+        vary = {n: np.array([subs[keys[i]].theta[model.free.index(n)] for i in members])
+                for n in cont}
+        res = invert_batch([refs[i].tof for i in members], [refs[i].nu for i in members],
+                           base, wall, vary=vary or None, strict=False, **opts)
+        for j, i in enumerate(members):
+            E_pred[i] = res.E[j]
+            reasons[i] = res.reason[j]
+    for i, (key, r) in enumerate(zip(keys, refs, strict=True)):
+        sol = subs[key]
+        ok = np.isfinite(E_pred[i])
+        rows.append({
+            "id": r.id, "E": r.E, "nu": r.nu, "tof": r.tof,
+            "E_predicted": float(E_pred[i]) if ok else None,
+            "error_pct": float(100.0 * (E_pred[i] - r.E) / r.E) if ok else None,
+            "parameters": theta_dict(model.free, sol.theta), "chi2": sol.chi2,
+            "reason": reasons[i],
+        })
+    return rows

@@ -1,0 +1,482 @@
+"""Least-squares identification of device parameters from measured TOFs on reference samples.
+
+Problem. References ``i`` (known ``E_i``, ``nu_i``; measured ``T_i`` with standard uncertainty
+``s_i``) and free parameters ``theta`` of the device: minimize the weighted sum of squares
+
+    ``chi^2(theta) = sum_i ((TOF(E_i, nu_i; theta) - T_i) / s_i)^2``.
+
+TOF is not monotone in the parameters (REFERENCE.md: TOF rises then falls with the striker
+speed under gravity), so no bracketing is assumed:
+
+1. **global scan**: a tensor grid of the continuous parameters (log-spaced where a parameter
+   is scaled, :data:`ssw.device.PARAMETERS`) times every value of the integer ones, all
+   evaluated in batched runs (:class:`ssw.calibration.model.TofModel`); every grid local
+   minimum of ``chi^2`` is a start;
+2. **local refinement**: Levenberg-Marquardt (Marquardt 1963; Nocedal & Wright 2006,
+   sec. 10.3) in the scaled coordinates ``x`` (``ln theta`` or ``theta / scale``), forward
+   differences for the Jacobian; the starts of every problem (the full set and each
+   leave-one-out subset) advance together, one batched run per iteration;
+3. **result**: the best solution; other solutions with ``chi^2`` within 1 of it are listed
+   (the data do not choose between them); on a tie the one nearest the device's nominal
+   values is taken.
+
+Uncertainty (Bard 1974; Press et al. 2007, sec. 15.5): with the weighted Jacobian ``J``
+(central differences at the solution) the parameter covariance is ``(J^T J)^-1``; when no
+TOF uncertainty is given, the weights are ``1 / (1 % of T_i)`` and the covariance is scaled
+by the residual variance ``chi^2 / (n - p)`` (none when ``n = p``). The singular values of
+``J`` in the scaled coordinates say what the data identify: a direction ``v`` with a small
+singular value ``sigma`` moves the TOFs by one standard uncertainty only when the parameters
+move by ``1/sigma`` along ``v`` (scaled units), i.e. the data cannot separate the
+parameters mixed in ``v``.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ssw.calibration.model import Reference, TofModel
+from ssw.device import parameter, parameter_value
+from ssw.errors import ConfigError, SolverError
+
+#: Grid points per continuous parameter: this many for one, fewer for several (product cap).
+SCAN_POINTS_1D = 32
+SCAN_BUDGET = 256
+#: Local minima of the scan refined per problem.
+STARTS = 4
+#: After PRUNE_AFTER iterations a start stops when its chi^2 exceeds its problem's best by
+#: more than PRUNE_CHI2 (a basin that far worse is no candidate: the alternatives reported
+#: are those within chi^2 + 1).
+PRUNE_AFTER, PRUNE_CHI2 = 4, 10.0
+#: Relative step of the forward-difference Jacobian in the scaled coordinates.
+FD_STEP = 1e-3
+#: Levenberg-Marquardt: iterations, initial damping, convergence tolerances: a step below
+#: LM_XTOL in the scaled coordinates (1e-6 relative for a log parameter), or a decrease of
+#: chi^2 below LM_FTOL (chi^2 is in units of the TOF uncertainties squared: a change of 1
+#: is one standard uncertainty, so 1e-3 moves the parameters by ~0.03 of their standard
+#: errors; the model TOF's own noise, the sub-step interpolation of its peaks, makes chi^2
+#: jitter by ~1e-5 near chi^2 ~ 1), or chi^2 itself below LM_FTOL (an exact fit).
+LM_ITERATIONS = 40
+LM_LAMBDA0 = 1e-2
+LM_XTOL = 1e-6
+LM_FTOL = 1e-3
+#: Relative TOF weight when no uncertainty is given (covariance rescaled by chi^2/(n-p)).
+DEFAULT_REL_STD = 0.01
+#: Solutions count as distinct when a scaled coordinate differs by more than this (5 % of
+#: a log-scanned parameter, 0.05 x the scale of another).
+DISTINCT = 0.05
+#: Singular value ratio below which a direction counts as not identified.
+IDENTIFIED_RATIO = 1e-3
+
+
+# --------------------------------------------------------------------- coordinates
+def to_x(theta: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
+    """Scaled coordinates of parameter values (columns in ``names`` order)."""
+    th = np.asarray(theta, float)
+    out = np.empty_like(th)
+    for j, n in enumerate(names):
+        p = parameter(n)
+        out[..., j] = np.log(th[..., j]) if p.log else th[..., j] / p.scale
+    return out
+
+
+def from_x(x: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
+    """Parameter values (SI) of scaled coordinates."""
+    xx = np.asarray(x, float)
+    out = np.empty_like(xx)
+    for j, n in enumerate(names):
+        p = parameter(n)
+        out[..., j] = np.exp(xx[..., j]) if p.log else xx[..., j] * p.scale
+    return out
+
+
+def dtheta_dx(theta: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
+    """``d theta / d x`` per parameter (theta for log coordinates, scale otherwise)."""
+    return np.array([theta[j] if parameter(n).log else parameter(n).scale
+                     for j, n in enumerate(names)])
+
+
+def bounds_x(names: tuple[str, ...], ranges: dict[str, tuple[float, float]]
+             ) -> tuple[np.ndarray, np.ndarray]:
+    lo = np.array([ranges[n][0] for n in names], float)
+    hi = np.array([ranges[n][1] for n in names], float)
+    return to_x(lo, names), to_x(hi, names)
+
+
+def scan_ranges(free: tuple[str, ...], overrides: dict[str, tuple[float, float]] | None,
+                device: Any = None) -> dict[str, tuple[float, float]]:
+    """The scan range of each free parameter (defaults of :data:`ssw.device.PARAMETERS`;
+    the bead count starts where the device's beads below the sensor still leave a sensor
+    with a bead above it)."""
+    out = {}
+    for n in free:
+        p = parameter(n)
+        lo, hi = (overrides or {}).get(n, (p.lower, p.upper))
+        if n == "beads" and device is not None and n not in (overrides or {}):
+            lo = max(lo, device.beads_below_sensor + 2)
+        if not (np.isfinite(lo) and np.isfinite(hi) and lo < hi) or (p.log and lo <= 0) or (
+                n == "preload" and lo < 0):
+            raise ConfigError(f"--range {n}", f"{lo}:{hi}",
+                              "LO:HI with LO < HI (LO > 0 for a log-scanned parameter)")
+        out[n] = (float(lo), float(hi))
+    return out
+
+
+# --------------------------------------------------------------------- results
+@dataclass(frozen=True)
+class Solution:
+    """One local least-squares solution of one problem (a subset of the references)."""
+
+    refs: tuple[int, ...]
+    theta: np.ndarray  # SI, model.free order
+    chi2: float
+    tof_model: np.ndarray  # s, at the subset's references
+    converged: bool
+    iterations: int
+
+
+@dataclass(frozen=True)
+class Fit:
+    """The identification on all references, its uncertainty and the alternatives."""
+
+    names: tuple[str, ...]
+    theta: np.ndarray
+    chi2: float
+    tof_model: np.ndarray
+    residuals: np.ndarray  # s, model - measured
+    weights_known: bool
+    covariance: np.ndarray | None  # SI, (p, p); None if not estimable
+    std: np.ndarray | None  # SI
+    singular_values: np.ndarray  # of the weighted Jacobian in scaled coordinates
+    singular_vectors: np.ndarray  # (p, p), columns: right singular vectors
+    jacobian: np.ndarray  # (n, p) d TOF / d theta, s per SI unit
+    unidentified: tuple[str, ...]  # texts: directions the data cannot pin
+    alternatives: tuple[dict[str, float], ...]  # other solutions within chi^2 + 1
+    converged: bool
+    scan_points: int
+    evaluations: int
+    runs: int
+
+
+# --------------------------------------------------------------------- scan
+def scan_grid(model: TofModel, ranges: dict[str, tuple[float, float]],
+              points: int | None = None) -> tuple[np.ndarray, list[np.ndarray]]:
+    """The scan's parameter sets (m, p) in ``model.free`` order, and each axis's values."""
+    cont, ints = model.continuous, model.integers
+    n = points or (SCAN_POINTS_1D if len(cont) == 1 else
+                   max(6, int(np.floor(SCAN_BUDGET ** (1.0 / max(len(cont), 1))))))
+    axes: dict[str, np.ndarray] = {}
+    for name in cont:
+        lo, hi = ranges[name]
+        axes[name] = (np.geomspace(lo, hi, n) if parameter(name).log else np.linspace(lo, hi, n))
+    for name in ints:
+        lo, hi = ranges[name]
+        axes[name] = np.arange(int(np.ceil(lo)), int(np.floor(hi)) + 1, dtype=float)
+    grid = np.array(list(itertools.product(*(axes[nm] for nm in model.free))), float)
+    return grid, [axes[nm] for nm in model.free]
+
+
+def _chi2(tof: np.ndarray, refs: np.ndarray, T: np.ndarray, s: np.ndarray) -> np.ndarray:
+    r = (tof[:, refs] - T[refs]) / s[refs]
+    c = np.sum(r**2, axis=1)
+    return np.where(np.all(np.isfinite(r), axis=1), c, np.inf)
+
+
+def _grid_minima(cost: np.ndarray, shape: tuple[int, ...], n_best: int) -> np.ndarray:
+    """Indices (flat) of the grid's local minima (<= every axis neighbour), best first."""
+    c = cost.reshape(shape)
+    is_min = np.isfinite(c)
+    for ax in range(c.ndim):
+        if shape[ax] < 2:
+            continue
+        pad = [(0, 0)] * c.ndim
+        pad[ax] = (1, 1)
+        cp = np.pad(c, pad, constant_values=np.inf)
+        lo = np.take(cp, range(0, shape[ax]), axis=ax)
+        hi = np.take(cp, range(2, shape[ax] + 2), axis=ax)
+        is_min &= (c <= lo) & (c <= hi)
+    idx = np.flatnonzero(is_min.ravel())
+    idx = idx[np.argsort(cost[idx])]
+    return idx[:n_best]
+
+
+# --------------------------------------------------------------------- refinement
+def _lm_batch(model: TofModel, T: np.ndarray, s: np.ndarray,
+              problems: list[tuple[tuple[int, ...], np.ndarray, np.ndarray]],
+              ranges: dict[str, tuple[float, float]]) -> list[Solution]:
+    """Levenberg-Marquardt on every (refs, x0 of the continuous parameters, integer values)
+    problem at once: each iteration evaluates every unfinished problem's trial point and
+    its forward-difference Jacobian in one batched model call."""
+    cont, ints = model.continuous, model.integers
+    p = len(cont)
+    lo, hi = bounds_x(cont, ranges)
+    P = len(problems)
+    x = np.array([pr[1] for pr in problems], float).reshape(P, p)
+    fixed = [pr[2] for pr in problems]
+    refs = [np.asarray(pr[0], int) for pr in problems]
+    h = np.full(p, FD_STEP)
+
+    def evaluate(xs: np.ndarray, active: np.ndarray) -> tuple[list, list]:
+        rows, owner = [], []
+        for i in active:
+            pts = [xs[i]] + [xs[i] + h[j] * np.eye(p)[j] for j in range(p)]
+            for pt in pts:
+                rows.append(np.concatenate([from_x(pt, cont), fixed[i]]))
+                owner.append(i)
+        theta = _order(np.array(rows), cont, ints, model.free)
+        tof = model(theta)
+        res_r, res_J = [None] * P, [None] * P
+        k = 0
+        for i in active:
+            block = tof[k:k + p + 1][:, refs[i]]
+            k += p + 1
+            r = (block[0] - T[refs[i]]) / s[refs[i]]
+            J = ((block[1:] - block[0]) / s[refs[i]]).T / h[None, :]
+            res_r[i], res_J[i] = r, J
+        return res_r, res_J
+
+    all_idx = np.arange(P)
+    r, J = evaluate(x, all_idx)
+    cost = np.array([np.sum(ri**2) if np.all(np.isfinite(ri)) else np.inf for ri in r])
+    if not np.all(np.isfinite(cost)):
+        bad = [i for i in all_idx if not np.isfinite(cost[i])]
+        for i in bad:  # a start on a failing corner: drop it (inf cost)
+            J[i] = np.zeros((len(refs[i]), p))
+    lam = np.full(P, LM_LAMBDA0)
+    done = ~np.isfinite(cost)
+    iters = np.zeros(P, int)
+    converged = np.zeros(P, bool)
+    keys = [tuple(rf.tolist()) for rf in refs]
+    for it in range(LM_ITERATIONS):
+        if it >= PRUNE_AFTER:
+            best = {}
+            for i in range(P):
+                best[keys[i]] = min(best.get(keys[i], np.inf), cost[i])
+            for i in np.flatnonzero(~done):
+                if cost[i] > best[keys[i]] + PRUNE_CHI2:
+                    done[i] = True
+        active = np.flatnonzero(~done)
+        if active.size == 0:
+            break
+        trial = x.copy()
+        for i in active:
+            A = J[i].T @ J[i]
+            g = J[i].T @ r[i]
+            D = np.diag(np.maximum(np.diag(A), 1e-12))
+            try:
+                step = -np.linalg.solve(A + lam[i] * D, g)
+            except np.linalg.LinAlgError:
+                step = -g / (np.diag(D) * (1 + lam[i]))
+            trial[i] = np.clip(x[i] + step, lo, hi)
+        rt, Jt = evaluate(trial, active)
+        for i in active:
+            iters[i] += 1
+            ct = np.sum(rt[i] ** 2) if np.all(np.isfinite(rt[i])) and np.all(
+                np.isfinite(Jt[i])) else np.inf
+            moved = float(np.max(np.abs(trial[i] - x[i]))) if p else 0.0
+            if ct < cost[i]:
+                small = (cost[i] - ct) <= LM_FTOL or moved < LM_XTOL
+                x[i], r[i], J[i], cost[i] = trial[i], rt[i], Jt[i], ct
+                lam[i] = max(lam[i] / 3.0, 1e-9)
+                if small or ct < LM_FTOL:
+                    done[i], converged[i] = True, True
+            else:
+                lam[i] *= 4.0
+                if moved < LM_XTOL or lam[i] > 1e8:
+                    done[i], converged[i] = True, True
+    out = []
+    for i in range(P):
+        theta = _order(np.concatenate([from_x(x[i], cont), fixed[i]])[None, :], cont, ints,
+                       model.free)[0]
+        tof = T[refs[i]] + s[refs[i]] * r[i] if np.isfinite(cost[i]) else np.full(
+            len(refs[i]), np.nan)
+        out.append(Solution(tuple(int(j) for j in refs[i]), theta, float(cost[i]), tof,
+                            bool(converged[i]), int(iters[i])))
+    return out
+
+
+def _order(rows: np.ndarray, cont: tuple[str, ...], ints: tuple[str, ...],
+           free: tuple[str, ...]) -> np.ndarray:
+    """Columns (continuous..., integer...) reordered to ``free``."""
+    names = list(cont) + list(ints)
+    return rows[:, [names.index(n) for n in free]]
+
+
+def _starts(model: TofModel, grid: np.ndarray, axes: list[np.ndarray], tof: np.ndarray,
+            refs: tuple[int, ...], T: np.ndarray, s: np.ndarray, nominal: np.ndarray,
+            ranges: dict[str, tuple[float, float]]) -> list[tuple[np.ndarray, np.ndarray]]:
+    """(x of the continuous parameters, integer values) starts of one problem: for each
+    value of the integer parameters whose best grid point is within PRUNE_CHI2 of the
+    scan's best, the local minima of its continuous grid; and the device's nominal values
+    (with the best integer values)."""
+    cont_idx = [model.free.index(n) for n in model.continuous]
+    int_idx = [model.free.index(n) for n in model.integers]
+    cost = _chi2(tof, np.asarray(refs), T, s)
+    starts = []
+    cont_shape = tuple(axes[j].size for j in cont_idx)
+    ints = grid[:, int_idx]
+    combos = np.unique(ints, axis=0) if int_idx else np.zeros((1, 0))
+    best_all = float(np.min(cost)) if np.isfinite(cost).any() else np.inf
+    for combo in combos:
+        rows = np.flatnonzero(np.all(ints == combo, axis=1))
+        sub = cost[rows]
+        if not np.isfinite(sub).any() or float(np.min(sub)) > best_all + PRUNE_CHI2:
+            continue
+        # the grid is a product with the integer axes last-varying or not: rebuild the
+        # continuous sub-grid by sorting its rows lexicographically
+        order = np.lexsort(grid[rows][:, cont_idx].T[::-1]) if cont_idx else np.arange(1)
+        for flat in _grid_minima(sub[order], cont_shape, STARTS):
+            th = grid[rows[order[flat]]]
+            starts.append((to_x(th[cont_idx], model.continuous), th[int_idx]))
+    lo, hi = bounds_x(model.continuous, ranges)
+    nom_x = np.clip(to_x(nominal[cont_idx], model.continuous), lo, hi)
+    best = grid[int(np.argmin(cost))] if np.isfinite(cost).any() else nominal
+    starts.append((nom_x, best[int_idx]))
+    return starts
+
+
+def _pick(sols: list[Solution], nominal_x: np.ndarray, model: TofModel
+          ) -> tuple[Solution, list[Solution]]:
+    """The best solution (ties within chi^2 + 1e-9 (1 + chi^2) go to the one nearest the
+    nominal values) and the distinct others within chi^2 + 1."""
+    finite = [so for so in sols if np.isfinite(so.chi2)]
+    if not finite:
+        raise SolverError("no parameter set of the scan gives a TOF on every reference: widen "
+                          "the ranges (--range) or check the references")
+    best_c = min(so.chi2 for so in finite)
+    ties = [so for so in finite if so.chi2 <= best_c + 1e-9 * (1 + best_c)]
+
+    def dist(so: Solution) -> float:
+        return float(np.linalg.norm(to_x(so.theta, model.free) - nominal_x))
+
+    best = min(ties, key=dist)
+    others = []
+    for so in sorted(finite, key=lambda q: q.chi2):
+        if so is best or so.chi2 > best.chi2 + 1.0:
+            continue
+        xs = to_x(so.theta, model.free)
+        if all(np.max(np.abs(xs - to_x(o.theta, model.free))) > DISTINCT
+               for o in [best, *others]):
+            others.append(so)
+    return best, others
+
+
+# --------------------------------------------------------------------- public
+def identify(
+    model: TofModel, refs: list[Reference], *, ranges: dict[str, tuple[float, float]] | None = None,
+    subsets: list[tuple[int, ...]] | None = None, scan_points: int | None = None,
+) -> tuple[Fit, dict[tuple[int, ...], Solution]]:
+    """Identify ``model.free`` from ``refs``; also solve each subset of ``subsets`` (indices
+    of ``refs``, e.g. the leave-one-out sets) from the same scan.
+
+    Returns the fit on all references and each subset's best solution.
+    """
+    if len(refs) != model.n_refs:
+        raise ValueError("references and model disagree")
+    T = np.array([r.tof for r in refs])
+    known = all(r.tof_std is not None for r in refs)
+    s = np.array([r.tof_std if known else DEFAULT_REL_STD * r.tof for r in refs], float)
+    rng = scan_ranges(model.free, ranges, model.device)
+    nominal = np.array([parameter_value(model.device, n) for n in model.free])
+    for j, n in enumerate(model.free):  # the nominal start inside the scan
+        nominal[j] = np.clip(nominal[j], *rng[n])
+    model.fix_time_step(rng)
+    grid, axes = scan_grid(model, rng, scan_points)
+    tof = model(grid)
+    problems: list[tuple[tuple[int, ...], np.ndarray, np.ndarray]] = []
+    keys = [tuple(range(len(refs))), *list(subsets or [])]
+    for key in keys:
+        for x0, fixed in _starts(model, grid, axes, tof, key, T, s, nominal, rng):
+            problems.append((key, x0, fixed))
+    sols = _lm_batch(model, T, s, problems, rng)
+    nominal_x = to_x(nominal, model.free)
+    by_key: dict[tuple[int, ...], Solution] = {}
+    best_all, others = None, []
+    for key in keys:
+        mine = [so for so in sols if so.refs == key]
+        b, o = _pick(mine, nominal_x, model)
+        by_key[key] = b
+        if key == keys[0]:
+            best_all, others = b, o
+    assert best_all is not None
+    fit = _uncertainty(model, refs, T, s, known, best_all, others, rng, grid.shape[0])
+    return fit, {k: v for k, v in by_key.items() if k != keys[0]}
+
+
+def _uncertainty(model: TofModel, refs: list[Reference], T: np.ndarray, s: np.ndarray,
+                 known: bool, best: Solution, others: list[Solution],
+                 ranges: dict[str, tuple[float, float]], scan_points: int) -> Fit:
+    """Central-difference Jacobian at the solution, covariance, singular values."""
+    names = model.free
+    cont_idx = [names.index(n) for n in model.continuous]
+    p = len(cont_idx)
+    n = len(refs)
+    x0 = to_x(best.theta, names)
+    rows = [best.theta]
+    for j in cont_idx:
+        for sign in (1.0, -1.0):
+            xx = x0.copy()
+            xx[j] += sign * FD_STEP
+            rows.append(from_x(xx, names))
+    for j, nm in enumerate(names):  # integers: exact values
+        if parameter(nm).kind == "integer":
+            for r_ in rows:
+                r_[j] = best.theta[j]
+    tof = model(np.array(rows))
+    f0 = tof[0]
+    Jx = np.zeros((n, p))
+    for k in range(p):
+        Jx[:, k] = (tof[1 + 2 * k] - tof[2 + 2 * k]) / (2.0 * FD_STEP)
+    Jw = Jx / s[:, None]
+    if p:
+        _, sv, Vt = np.linalg.svd(Jw, full_matrices=True)
+        sv_full = np.zeros(p)
+        sv_full[: sv.size] = sv
+        V = Vt.T
+    else:
+        sv_full, V = np.zeros(0), np.zeros((0, 0))
+    D = dtheta_dx(best.theta[cont_idx], model.continuous) if p else np.zeros(0)
+    J_theta = Jx / D[None, :] if p else Jx
+    resid = f0 - T
+    chi2 = float(np.sum((resid / s) ** 2))
+    cov = std = None
+    smax = float(sv_full.max()) if p else 0.0
+    identified = p > 0 and n >= p and smax > 0 and float(sv_full.min()) > IDENTIFIED_RATIO * smax
+    if identified:
+        cov_x = V @ np.diag(1.0 / sv_full**2) @ V.T
+        if not known:
+            cov_x = cov_x * chi2 / (n - p) if n > p else None
+        if cov_x is not None:
+            cov = D[:, None] * cov_x * D[None, :]
+            std = np.sqrt(np.diag(cov))
+    unid = []
+    for k in range(p):
+        if sv_full[k] <= IDENTIFIED_RATIO * max(smax, 1e-300) or k >= n:
+            v = V[:, k]
+            terms = " ".join(f"{v[j]:+.2f} {_coord(model.continuous[j])}"
+                             for j in range(p) if abs(v[j]) > 0.2)
+            unid.append(f"direction {terms} (singular value {sv_full[k]:.3g}): the data "
+                        "cannot separate these parameters")
+    alts = tuple({nm: float(v) for nm, v in zip(names, so.theta, strict=True)}
+                 | {"chi2": so.chi2} for so in others)
+    return Fit(names, best.theta, chi2, f0, resid, known, cov, std, sv_full, V, J_theta,
+               tuple(unid), alts, best.converged, scan_points, model.evaluations, model.runs)
+
+
+def _coord(name: str) -> str:
+    p = parameter(name)
+    return f"ln({name})" if p.log else f"{name}/{p.scale:g} {p.unit}"
+
+
+def leave_one_out_sets(n: int) -> list[tuple[int, ...]]:
+    """Every subset of ``range(n)`` without one element (none for n < 2)."""
+    return [tuple(j for j in range(n) if j != i) for i in range(n)] if n >= 2 else []
+
+
+def theta_dict(names: tuple[str, ...], theta: np.ndarray) -> dict[str, Any]:
+    """Named values, integers as ints."""
+    return {n: (round(float(v)) if parameter(n).kind == "integer" else float(v))
+            for n, v in zip(names, theta, strict=True)}

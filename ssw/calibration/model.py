@@ -1,0 +1,172 @@
+"""The forward model of a calibration: TOF of the reference samples for many parameter sets.
+
+A calibration asks, many times over, "what TOF does the device give on each reference sample
+(E, nu) when its free parameters take the values theta?". :class:`TofModel` answers for a
+whole table of parameter sets at once: the walls of the references are built once (their laws
+do not depend on the free parameters), tiled over the parameter sets, and every set whose
+integer parameters agree (the bead count) advances in ONE batched run of the integrator, the
+continuous parameters (striker speed, preload, masses) varying per scene
+(:class:`ssw.chain.params.Batch`). A set whose run fails (no reflected wave, a truncated
+record) gets NaN, so a global scan over wide ranges never stops on one bad corner.
+
+Every run of one model uses ONE time step, that of the fastest striker the scan may try
+(:meth:`TofModel.fix_time_step`): otherwise the step would follow each batch's fastest
+scene, and the O(dt^2) TOF error (3.5e-5 relative at 80 steps per contact) would differ
+from run to run, a noise the least squares would chase.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ssw.chain.params import VARYING, Batch, ChainParams
+from ssw.device import Device, parameter
+from ssw.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class Reference:
+    """A reference sample: known E (Pa) and nu, the TOF measured on it (s) and the TOF's
+    standard uncertainty (s; the standard error of its mean), or None if not known."""
+
+    E: float
+    nu: float
+    tof: float
+    tof_std: float | None = None
+    id: str = ""
+    source: str = "given"
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.E) and self.E > 0):
+            raise ConfigError(f"reference {self.id or '?'}: E", self.E, "a modulus > 0 Pa")
+        if not -1.0 < self.nu <= 0.5:
+            raise ConfigError(f"reference {self.id or '?'}: nu", self.nu, "in (-1, 0.5]")
+        if not (np.isfinite(self.tof) and self.tof > 0):
+            raise ConfigError(f"reference {self.id or '?'}: TOF", self.tof, "a TOF > 0 s")
+        if self.tof_std is not None and not (np.isfinite(self.tof_std) and self.tof_std > 0):
+            raise ConfigError(f"reference {self.id or '?'}: TOF_STD", self.tof_std,
+                              "a standard uncertainty > 0 s (or none)")
+
+
+def parse_reference(text: str, index: int = 0) -> Reference:
+    """``E,nu,TOF[,TOF_STD]`` (SI: Pa, -, s, s) from the command line."""
+    parts = [p.strip() for p in str(text).split(",")]
+    if len(parts) not in (3, 4):
+        raise ConfigError(f"--reference[{index}]", text, "E,nu,TOF or E,nu,TOF,TOF_STD (SI)")
+    try:
+        vals = [float(p) for p in parts]
+    except ValueError as exc:
+        raise ConfigError(f"--reference[{index}]", text, "numbers: E,nu,TOF[,TOF_STD]") from exc
+    return Reference(vals[0], vals[1], vals[2], vals[3] if len(vals) == 4 else None,
+                     id=f"ref{index}")
+
+
+@dataclass
+class TofModel:
+    """TOF (s) of the references for parameter sets of the free device parameters.
+
+    Parameters
+    ----------
+    device : the device (its values of the free parameters are the nominal ones).
+    free : names of :data:`ssw.device.PARAMETERS` to identify.
+    refs_E, refs_nu : the references' moduli (Pa) and Poisson's ratios.
+    materials : the materials library (key -> Material).
+    numerics : non-device ChainParams fields (steps_per_contact, t_max, gravity, ...).
+    wall, wall_options : the last-contact law (:data:`ssw.chain.walls.WALLS`).
+    """
+
+    device: Device
+    free: tuple[str, ...]
+    refs_E: np.ndarray
+    refs_nu: np.ndarray
+    materials: dict[str, Any]
+    numerics: dict[str, Any]
+    wall: str
+    wall_options: dict[str, Any]
+    evaluations: int = 0  # parameter sets evaluated (a cost counter)
+    runs: int = 0  # batched integrator runs
+    dt: float | None = None  # s, the time step of every run (fix_time_step)
+    _walls: Any = field(default=None, repr=False)
+
+    def __post_init__(self) -> None:
+        self.refs_E = np.asarray(self.refs_E, float).ravel()
+        self.refs_nu = np.asarray(self.refs_nu, float).ravel()
+        if len(set(self.free)) != len(self.free) or not self.free:
+            raise ConfigError("--free", list(self.free), "one or more distinct parameter names")
+        for name in self.free:
+            parameter(name)
+        self.continuous = tuple(n for n in self.free if parameter(n).kind == "continuous")
+        self.integers = tuple(n for n in self.free if parameter(n).kind == "integer")
+        for name in self.continuous:
+            if name not in VARYING:
+                raise ConfigError("--free", name, f"a batched field: {', '.join(VARYING)}")
+
+    @property
+    def n_refs(self) -> int:
+        return int(self.refs_E.size)
+
+    def params_for(self, values: dict[str, float]) -> ChainParams:
+        """ChainParams of the device with ``values`` of the free parameters (one set)."""
+        return self.device.with_(**_cast(values)).chain_params(self.materials, **self.numerics)
+
+    def walls(self) -> Any:
+        """The references' walls (built once: no free parameter changes a wall law)."""
+        if self._walls is None:
+            from ssw.chain.walls import build_wall
+
+            self._walls = build_wall(self.wall, self.params_for({}), self.refs_E, self.refs_nu,
+                                     **self.wall_options)
+        return self._walls
+
+    def fix_time_step(self, ranges: dict[str, tuple[float, float]]) -> float:
+        """Fix the time step of every run: the integrator's step for the fastest and
+        lightest striker of ``ranges`` (SI) on the stiffest reference wall."""
+        from ssw.chain.integrate import time_step
+
+        vals = {}
+        for n in self.continuous:
+            lo, hi = ranges[n]
+            vals[n] = hi if n == "striker_velocity" else (lo if n.endswith("mass") else hi)
+        ints = {n: ranges[n][1] for n in self.integers}
+        base = self.params_for(ints)
+        b = Batch.of(base, self.n_refs, {k: np.full(self.n_refs, v) for k, v in vals.items()})
+        self.dt = float(time_step(b, self.walls()))
+        return self.dt
+
+    def __call__(self, theta: np.ndarray, refs: np.ndarray | None = None) -> np.ndarray:
+        """TOF (s), shape (m, n_refs): rows of ``theta`` (m, len(free)) in SI units, columns
+        the references (``refs``: a subset of their indices, default all). NaN where the
+        run gives no TOF."""
+        from ssw.chain.api import run_peaks
+
+        th = np.atleast_2d(np.asarray(theta, float))
+        if th.shape[1] != len(self.free):
+            raise ValueError(f"theta has {th.shape[1]} columns for {len(self.free)} parameters")
+        idx = np.arange(self.n_refs) if refs is None else np.asarray(refs, int)
+        m, k = th.shape[0], idx.size
+        out = np.full((m, k), np.nan)
+        cols = {name: th[:, j] for j, name in enumerate(self.free)}
+        ints = np.stack([np.rint(cols[n]) for n in self.integers], axis=1) if self.integers \
+            else np.zeros((m, 0))
+        walls = self.walls()
+        for combo in np.unique(ints, axis=0):
+            rows = np.flatnonzero(np.all(ints == combo, axis=1))
+            base = self.params_for({n: float(v) for n, v in zip(self.integers, combo,
+                                                                 strict=True)})
+            vary = {n: np.repeat(cols[n][rows], k) for n in self.continuous}
+            batch = Batch.of(base, rows.size * k, vary)
+            w = walls.take(np.tile(idx, rows.size))
+            pk, _ = run_peaks(batch, w, strict=False, dt=self.dt)
+            out[rows] = pk.tof.reshape(rows.size, k)
+            self.runs += 1
+        self.evaluations += m
+        return out
+
+
+def _cast(values: dict[str, float]) -> dict[str, Any]:
+    """Integer parameters as ints."""
+    return {k: (round(float(v)) if parameter(k).kind == "integer" else float(v))
+            for k, v in values.items()}

@@ -1,0 +1,208 @@
+"""Command-line options shared by every command that runs the chain: the study config, the
+device, its calibration, flags overriding single device fields, and the wall law.
+
+Resolution (the same for ``ssw tof``, ``tof-sweep``, ``invert``, ``calibrate``, ``validate``,
+``measure`` and ``acquire``, so that a standalone command and the workflow give the same number
+for the same inputs):
+
+1. the config: ``--config`` or ``config/config.yaml`` of the working folder, else the
+   defaults shipped with ssw;
+2. the calibration: ``--calibration FILE``; by default (``auto``) the study's
+   ``results/calibration/calibration.json`` when the config's ``calibration.use`` is true
+   and that file exists in the working folder; ``none`` for the uncalibrated device;
+3. the device: the calibration's (calibrated) device, else ``--device`` (a YAML file or a
+   shipped device's name), else the config's ``device:``; device flags (``--beads``,
+   ``--striker-velocity``, ``--preload``, ...) override single fields;
+4. numerics (time steps, gravity, damping, fit law): the calibration's, else the config's;
+   flags override;
+5. the wall law: the calibration's (another ``--law`` is an error: recalibrate for it),
+   else ``--law``, else the config's ``chain.wall_law``.
+"""
+
+from __future__ import annotations
+
+import argparse
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ssw.errors import ConfigError
+
+DEFAULT_K_TABLE = "results/fit/k_table.h5"
+DEFAULT_CONTACT_DIR = "results/contact"
+#: The study's calibration file (rule calibration), relative to the working folder.
+STUDY_CALIBRATION = "results/calibration/calibration.json"
+WALL_CHOICES = ("rigid", "hertz", "fit", "table", "fem")
+
+#: Device flags: option -> Device field.
+DEVICE_FLAGS = {
+    "beads": "beads", "sensor_index": "sensor_index", "sensor_mass": "sensor_mass",
+    "sensor_reads": "sensor_reads", "striker_mass": "striker_mass",
+    "striker_velocity": "striker_velocity", "drop_height": "drop_height",
+    "preload": "preload", "bead_radius": "bead_radius", "plate_material": "plate_material",
+    "plate_thickness": "plate_thickness", "plate_diameter": "plate_diameter",
+    "plate_interface": "plate_interface",
+}
+
+
+def add_device_options(p: argparse.ArgumentParser,
+                       walls: tuple[str, ...] = WALL_CHOICES) -> None:
+    """Config, device, calibration, device-field and wall options."""
+    g = p.add_argument_group("device and calibration")
+    g.add_argument("--config", help="study config YAML (default: config/config.yaml of the "
+                   "working folder if any, else ssw's defaults)")
+    g.add_argument("--device", help="device YAML file or shipped device name (default: the "
+                   "config's device, thesis)")
+    g.add_argument("--calibration", default="auto", metavar="FILE|auto|none",
+                   help="calibration file of `ssw calibrate` (default auto: the study's "
+                   f"{STUDY_CALIBRATION} when present and the config's calibration.use)")
+    d = p.add_argument_group("device fields (override the device's)")
+    d.add_argument("--beads", type=int, help="beads including the striker (bead 0); keeps "
+                   "the beads below the sensor unless --sensor-index is given")
+    d.add_argument("--sensor-index", type=int, help="0-based index of the sensor particle")
+    d.add_argument("--sensor-mass", type=float, help="sensor particle mass, kg")
+    d.add_argument("--sensor-reads", choices=["mean", "upper", "lower"],
+                   help="force the sensor reads: mean of its two contacts, upper or lower")
+    d.add_argument("--striker-mass", type=float, help="striker mass, kg")
+    d.add_argument("--striker-velocity", type=float, help="striker speed at contact, m/s")
+    d.add_argument("--drop-height", type=float,
+                   help="striker dropped from this height, m (speed sqrt(2 g h))")
+    d.add_argument("--preload", type=float, help="constant force on bead 1, N")
+    d.add_argument("--bead-radius", type=float, help="bead radius, m")
+    d.add_argument("--plate-material", help="plate material key (materials library)")
+    d.add_argument("--plate-thickness", type=float, help="plate thickness, m (0: no plate)")
+    d.add_argument("--plate-diameter", type=float, help="plate diameter, m")
+    d.add_argument("--plate-interface", choices=["frictionless", "bonded", "unilateral"],
+                   help="how the plate sits on the medium")
+    n = p.add_argument_group("numerics and model")
+    n.add_argument("--uniform", action="store_true", default=None,
+                   help="the sensor is a plain bead (its mass is ignored)")
+    n.add_argument("--no-gravity", action="store_true", help="no gravity, no precompression")
+    n.add_argument("--bead-density", type=float, help="bead density, kg/m^3")
+    n.add_argument("--bead-E", type=float, help="bead Young's modulus, Pa")
+    n.add_argument("--bead-nu", type=float, help="bead Poisson's ratio")
+    n.add_argument("--damping", type=float, help="contact dashpot, N s/m (default 0)")
+    n.add_argument("--steps-per-contact", type=int, help="time steps per Hertz contact time")
+    w = p.add_argument_group("wall law (the last contact)")
+    w.add_argument("--law", "--wall", dest="wall", choices=list(walls),
+                   help="last-contact law (default: the calibration's, else the config's "
+                   "chain.wall_law)")
+    w.add_argument("--K", type=float, help="fit wall: a constant K instead of --k-table")
+    w.add_argument("--fit-law", choices=["k_hertz", "power"],
+                   help="fit wall: the law read from the K table (default: config fit.law)")
+    w.add_argument("--k-table", help=f"fit wall: K table HDF5 (default {DEFAULT_K_TABLE})")
+    w.add_argument("--curve", help="table wall: one FEM contact curve HDF5 for every scene")
+    w.add_argument("--contact-dir", default=DEFAULT_CONTACT_DIR,
+                   help="table wall without --curve: the {scene_id}.h5 curves' folder")
+
+
+@dataclass(frozen=True)
+class ChainContext:
+    """What a chain command runs: config, device, calibration, ChainParams, wall law."""
+
+    cfg: dict[str, Any]
+    device: Any
+    calibration: Any
+    params: Any
+    wall: str
+    wall_options: dict[str, Any]
+
+    def inputs(self) -> dict[str, Any]:
+        """Provenance for --json and output files."""
+        return {
+            "device_name": self.device.name, "device_source": self.device.source,
+            "device_values": self.device.physics_dict(),
+            "calibration_file": None if self.calibration is None else self.calibration.path,
+            "wall": self.wall,
+            "wall_options": {k: (v if isinstance(v, str | int | float | bool | None)
+                                 else str(type(v).__name__)) for k, v in
+                             self.wall_options.items() if k != "curve"},
+        }
+
+
+def resolve_calibration(spec: str | None, cfg: dict[str, Any]) -> Any:
+    """The calibration of ``--calibration`` (see the module docstring) or None."""
+    from ssw.calibration import load_calibration
+
+    if spec is None or spec == "auto":
+        if cfg.get("calibration", {}).get("use", True) and Path(STUDY_CALIBRATION).is_file():
+            return load_calibration(STUDY_CALIBRATION)
+        return None
+    if spec == "none":
+        return None
+    return load_calibration(spec)
+
+
+def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
+                  numerics_only: bool = False) -> ChainContext:
+    """Resolve config, calibration, device, params and wall (module docstring)."""
+    from ssw.chain.params import numerics_of
+    from ssw.config import device_of, library, load_config
+    from ssw.device import load_device
+
+    cfg = load_config(getattr(args, "config", None))
+    cal = resolve_calibration(getattr(args, "calibration", "auto"), cfg)
+    if cal is not None and getattr(args, "device", None):
+        raise ConfigError("--device", args.device, "no --device with a calibration (its "
+                          "device is the calibrated one); --calibration none to use a device")
+    if cal is not None:
+        device = cal.device
+    elif getattr(args, "device", None):
+        device = load_device(args.device)
+    else:
+        device = device_of(cfg)
+    changes = {f: getattr(args, o) for o, f in DEVICE_FLAGS.items()
+               if getattr(args, o, None) is not None}
+    if "drop_height" in changes and "striker_velocity" in changes:
+        raise ConfigError("--drop-height", changes["drop_height"], "not with --striker-velocity")
+    if changes:
+        device = device.with_(**changes)
+    numerics = dict(cal.numerics) if cal is not None else numerics_of(cfg)
+    over = {"uniform": args.uniform, "bead_density": args.bead_density, "bead_E": args.bead_E,
+            "bead_nu": args.bead_nu, "damping": args.damping,
+            "steps_per_contact": args.steps_per_contact, "fit_law": args.fit_law}
+    numerics.update({k: v for k, v in over.items() if v is not None})
+    if args.no_gravity:
+        numerics["gravity"] = False
+    mats = cal.materials() if cal is not None else library(cfg)
+    params = device.chain_params(mats, **numerics)
+    if numerics_only:
+        return ChainContext(cfg, device, cal, params, "", {})
+    wall, opts = wall_law(args, cfg, cal, params, E, nu)
+    return ChainContext(cfg, device, cal, params, wall, opts)
+
+
+def wall_law(args: argparse.Namespace, cfg: dict[str, Any], cal: Any, params: Any,
+             E: Any, nu: Any) -> tuple[str, dict[str, Any]]:
+    """The last-contact law and its options (module docstring, step 5)."""
+    given = getattr(args, "wall", None)
+    if cal is not None:
+        law = cal.wall["law"]
+        if given is not None and given != law:
+            raise ConfigError("--law", given, f"{law}, the law the calibration "
+                              f"{cal.path} was made with (recalibrate for another law)")
+        opts = {k: v for k, v in cal.wall.get("options", {}).items()}
+        if law == "fit" and "k_table" in opts and args.k_table:
+            opts["k_table"] = args.k_table
+        return law, opts
+    law = given or cfg.get("chain", {}).get("wall_law", "hertz")
+    if law == "fit":
+        if args.K is not None:
+            return law, {"K": args.K}
+        return law, {"k_table": args.k_table or DEFAULT_K_TABLE}
+    if law == "fem":
+        return law, {"contact": dict(cfg.get("contact", {}))}
+    if law == "table":
+        if args.curve:
+            return law, {"curve": args.curve}
+        from ssw.config import Scene
+
+        Eb, nub = np.broadcast_arrays(np.asarray(E, float), np.asarray(nu, float))
+        paths = [str(Path(args.contact_dir) / (Scene(params.plate_material,
+                                                     params.plate_thickness, float(e),
+                                                     float(n)).scene_id + ".h5"))
+                 for e, n in zip(Eb.ravel(), nub.ravel(), strict=True)]
+        return law, {"curve": paths}
+    return law, {}

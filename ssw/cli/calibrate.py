@@ -1,0 +1,162 @@
+"""``ssw calibrate``: identify device parameters from measured TOFs on reference samples.
+
+    ssw calibrate --reference E,nu,TOF[,TOF_STD] ... --free NAME ... [device flags]
+                  [--output FILE.json] [--json]
+    ssw calibrate --reference-recording FILE,E,nu ... --free NAME ...
+    ssw calibrate --from-config [--config C] [--output FILE.json]   (the study's samples)
+
+Prints (``--json``) ``{"parameters": {NAME: value}, "parameter_std": {...},
+"singular_values": [...], "residuals": [...], "loo": [{"E", "E_predicted", "error_pct"}],
+...inputs}`` and writes the calibration file (:mod:`ssw.calibration.file`) with
+``--output``. SI units.
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from ssw.cli import add_json_flag
+from ssw.cli._device import add_device_options, chain_context
+from ssw.errors import ConfigError
+
+
+def _ranges(items: list[str] | None) -> dict[str, tuple[float, float]]:
+    out: dict[str, tuple[float, float]] = {}
+    for it in items or []:
+        try:
+            name, span = it.split("=", 1)
+            lo, hi = (float(x) for x in span.split(":", 1))
+        except ValueError as exc:
+            raise ConfigError("--range", it, "NAME=LO:HI (SI units)") from exc
+        out[name.strip()] = (lo, hi)
+    return out
+
+
+def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
+    from ssw.calibration import calibrate, parse_reference, write_calibration
+    from ssw.calibration.references import from_config, recording_reference
+    from ssw.chain.params import numerics_of
+
+    if args.calibration not in ("auto", "none"):
+        raise ConfigError("--calibration", args.calibration,
+                          "none here: a calibration starts from a device (--device)")
+    args.calibration = "none"
+    ctx = chain_context(args)
+    if ctx.wall == "table":
+        raise ConfigError("--law", "table", "fem | hertz | fit | rigid (a law at any E)")
+    refs = [parse_reference(t, i) for i, t in enumerate(args.reference or [])]
+    for j, t in enumerate(args.reference_recording or []):
+        parts = t.split(",")
+        if len(parts) != 3:
+            raise ConfigError(f"--reference-recording[{j}]", t, "FILE,E,nu")
+        try:
+            E, nu = float(parts[1]), float(parts[2])
+        except ValueError as exc:
+            raise ConfigError(f"--reference-recording[{j}]", t, "FILE,E,nu") from exc
+        refs.append(recording_reference(parts[0], E, nu))
+    cal_cfg = ctx.cfg.get("calibration", {})
+    if args.from_config:
+        refs += from_config(ctx.cfg, ctx.params, ctx.wall, ctx.wall_options, root=args.root)
+    if not refs:
+        raise ConfigError("--reference", None, "references: --reference E,nu,TOF[,STD], "
+                          "--reference-recording FILE,E,nu or --from-config")
+    free = args.free or (cal_cfg.get("free") if args.from_config else None)
+    if not free:
+        raise ConfigError("--free", None, "one or more device parameters to identify")
+    ranges = {**{k: tuple(v) for k, v in cal_cfg.get("ranges", {}).items()},
+              **_ranges(args.range)} if args.from_config else _ranges(args.range)
+    numerics = numerics_of(ctx.cfg)
+    numerics.update({k: getattr(ctx.params, k) for k in numerics})
+    loo = not args.no_loo and (cal_cfg.get("loo", True) if args.from_config else True)
+    cal = calibrate(
+        refs, ctx.device, free, materials=_materials(ctx.cfg), numerics=numerics,
+        wall=ctx.wall, wall_options=ctx.wall_options, ranges=ranges, loo=loo,
+        scan_points=args.scan_points or cal_cfg.get("scan_points"),
+        material_set=ctx.cfg.get("material_set", "realistic"),
+        materials_file=ctx.cfg.get("materials_file"),
+        provenance={"command": "ssw calibrate", "config": args.config},
+    )
+    if args.output:
+        write_calibration(args.output, cal)
+    out = {
+        **ctx.inputs(),
+        "parameters": cal.parameters, "parameter_std": cal.parameter_std,
+        "covariance": cal.covariance, "singular_values": cal.singular_values,
+        "unidentified": cal.unidentified, "residuals": cal.residuals,
+        "references": cal.references,
+        "loo": cal.loo, "alternatives": cal.alternatives,
+        "drop_height": cal.device.drop_height, "output": args.output,
+        "wall_time": cal.provenance["wall_time_s"],
+        "parameter_sets_evaluated": cal.provenance["parameter_sets_evaluated"],
+        "batched_runs": cal.provenance["batched_runs"],
+    }
+    return out
+
+
+def _materials(cfg: dict[str, Any]) -> dict[str, Any]:
+    from ssw.config import library
+
+    return library(cfg)
+
+
+def _human(r: dict[str, Any]) -> str:
+    lines = [f"device {r['device_name']} calibrated with the {r['wall']} wall on "
+             f"{len(r['references'])} reference(s):"]
+    for k, v in r["parameters"].items():
+        std = (r["parameter_std"] or {}).get(k)
+        lines.append(f"  {k} = {v:.6g}" + (f" +- {std:.3g}" if std is not None else
+                                            " (no standard error: see below)"))
+    lines.append(f"  (striker drop height {r['drop_height'] * 1e3:.3g} mm)")
+    lines.append("  singular values: " + ", ".join(f"{s:.3g}" for s in r["singular_values"]))
+    lines += [f"  not identified: {u}" for u in r["unidentified"]]
+    lines.append(f"{'reference':10} {'E MPa':>8} {'nu':>5} {'TOF ms':>9} {'model ms':>9} "
+                 f"{'resid %':>8}")
+    for ref in r["references"]:
+        lines.append(f"{ref['id']:10} {ref['E'] / 1e6:8.1f} {ref['nu']:5.2f} "
+                     f"{ref['tof'] * 1e3:9.5f} {ref['tof_model'] * 1e3:9.5f} "
+                     f"{ref['residual_pct']:8.3f}")
+    if r["loo"]:
+        lines.append("leave-one-out (each E from a calibration without it):")
+        for row in r["loo"]:
+            if row["E_predicted"] is None:
+                lines.append(f"  {row['id']}: no prediction ({row['reason']})")
+            else:
+                lines.append(f"  {row['id']}: E {row['E'] / 1e6:.1f} MPa -> "
+                             f"{row['E_predicted'] / 1e6:.1f} MPa ({row['error_pct']:+.1f} %)")
+    for alt in r["alternatives"]:
+        lines.append(f"  another solution within chi2 + 1: {alt}")
+    if r["output"]:
+        lines.append(f"wrote {r['output']}")
+    return "\n".join(lines)
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "calibrate", help="identify device parameters from measured TOFs on references",
+        description="Least-squares identification of device parameters (a batched global "
+        "scan, then Levenberg-Marquardt; no monotonicity assumed) from measured TOFs on "
+        "samples of known E and nu. Reports standard errors, singular values, residuals and "
+        "leave-one-out predictions; writes a calibration file every chain command takes "
+        "(--calibration). SI units.")
+    p.add_argument("--reference", action="append", metavar="E,nu,TOF[,TOF_STD]",
+                   help="a reference sample: E (Pa), nu, measured mean TOF (s) and its "
+                   "standard uncertainty (s); repeat it")
+    p.add_argument("--reference-recording", action="append", metavar="FILE,E,nu",
+                   help="a recording of a sample of known E (Pa) and nu; repeat it")
+    p.add_argument("--from-config", action="store_true",
+                   help="the config's validation samples (recordings, else the published "
+                   "measured means) and its calibration.free/ranges/loo")
+    p.add_argument("--root", default=".",
+                   help="folder the config's relative recording paths start from")
+    p.add_argument("--free", action="append", metavar="NAME",
+                   help="a device parameter to identify (striker_velocity, preload, "
+                   "sensor_mass, striker_mass, beads); repeat it")
+    p.add_argument("--range", action="append", metavar="NAME=LO:HI",
+                   help="scan range of a free parameter, SI units")
+    p.add_argument("--scan-points", type=int, help="grid points per continuous parameter")
+    p.add_argument("--no-loo", action="store_true", help="skip the leave-one-out predictions")
+    p.add_argument("--output", help="calibration file to write (JSON)")
+    add_device_options(p)
+    add_json_flag(p)
+    p.set_defaults(func=run_calibrate, human=_human)

@@ -1,0 +1,367 @@
+"""The SSW device as a first-class object: one instrument, described in one YAML file.
+
+A device holds everything physical about one instrument (schema
+``ssw/data/device.schema.yaml``): the chain (bead count, material, radius, any preload on its
+top), the sensor particle (position, mass, which force it reads), the striker (mass, speed or
+drop height), the plate under the last bead (material, thickness, diameter, interface) and
+the DAQ force sensor (model, sensitivity, range). The thesis's device is the default
+(``ssw/data/devices/thesis.yaml``, linked from ``config/devices/``).
+
+Devices are found by path, or by name among the shipped devices. Study configs name one
+(``device:``); the command line takes ``--device FILE`` and individual flags override its
+fields (:meth:`Device.with_`). :meth:`Device.chain_params` turns a device and the numerics
+of a study into the :class:`ssw.chain.params.ChainParams` the integrator runs.
+
+Calibratable parameters (:data:`PARAMETERS`) are device fields that ``ssw calibrate`` may
+identify from measured TOFs: continuous ones (striker speed, preload, masses) and integer
+ones (the bead count, scanned).
+"""
+
+from __future__ import annotations
+
+import copy
+from dataclasses import asdict, dataclass, fields, replace
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import yaml
+
+from ssw.errors import ConfigError
+
+DATA = Path(__file__).resolve().parent / "data"
+SCHEMA_PATH = DATA / "device.schema.yaml"
+DEVICES_DIR = DATA / "devices"
+#: The device a command uses when none is named.
+DEFAULT_DEVICE = "thesis"
+#: Standard gravity, m/s^2 (CGPM 1901), for the drop height.
+STANDARD_GRAVITY = 9.80665
+
+
+@dataclass(frozen=True)
+class Device:
+    """One SSW instrument. SI units; the YAML layout is nested (:meth:`to_dict`).
+
+    Attributes
+    ----------
+    name, description : identification.
+    beads : beads including the striker (bead 0) and the bead on the plate (>= 3).
+    bead_material : material key (materials library); bead_radius : m.
+    preload : N, constant downward force on bead 1 (top of the resting column).
+    sensor_index : 0-based index of the sensor particle from the striker.
+    sensor_mass : kg or None (a bead's).  sensor_reads : ``mean`` | ``upper`` | ``lower``.
+    striker_mass : kg or None (a bead's).  striker_velocity : m/s at first contact.
+    plate_material : material key or ``none``; plate_thickness : m (0: no plate);
+    plate_diameter : m; plate_interface : ``frictionless`` | ``bonded`` | ``unilateral``.
+    sensor_model : text; sensitivity : V/N; sensor_range : N.
+    source : where the device was read from (not part of its physics).
+    """
+
+    name: str
+    beads: int
+    bead_material: str
+    bead_radius: float
+    preload: float
+    sensor_index: int
+    sensor_mass: float | None
+    sensor_reads: str
+    striker_mass: float | None
+    striker_velocity: float
+    plate_material: str
+    plate_thickness: float
+    plate_diameter: float
+    plate_interface: str
+    sensor_model: str
+    sensitivity: float
+    sensor_range: float
+    description: str = ""
+    source: str = ""
+
+    def __post_init__(self) -> None:
+        if not self.beads >= 3:
+            raise ConfigError("chain.beads", self.beads, "at least 3 (striker, sensor, last)")
+        if not 1 <= self.sensor_index <= self.beads - 2:
+            raise ConfigError("sensor.index", self.sensor_index,
+                              f"an index between 1 and beads - 2 = {self.beads - 2}")
+        for name in ("bead_radius", "striker_velocity", "plate_diameter", "sensitivity",
+                     "sensor_range"):
+            v = getattr(self, name)
+            if not (np.isfinite(v) and v > 0):
+                raise ConfigError(_yaml_field(name), v, "a finite value > 0")
+        for name in ("sensor_mass", "striker_mass"):
+            v = getattr(self, name)
+            if v is not None and not (np.isfinite(v) and v > 0):
+                raise ConfigError(_yaml_field(name), v, "a mass > 0 kg, or null (a bead's)")
+        if not (np.isfinite(self.preload) and self.preload >= 0):
+            raise ConfigError("chain.preload", self.preload, "a force >= 0 N")
+        if not (np.isfinite(self.plate_thickness) and self.plate_thickness >= 0):
+            raise ConfigError("plate.thickness", self.plate_thickness, ">= 0 m (0: no plate)")
+        if self.plate_thickness > 0 and self.plate_material == "none":
+            raise ConfigError("plate.material", "none", "a material key when thickness > 0")
+        if self.sensor_reads not in ("mean", "upper", "lower"):
+            raise ConfigError("sensor.reads", self.sensor_reads, "mean | upper | lower")
+        if self.plate_interface not in ("frictionless", "bonded", "unilateral"):
+            raise ConfigError("plate.interface", self.plate_interface,
+                              "frictionless | bonded | unilateral")
+
+    # ------------------------------------------------------------------ derived
+    @property
+    def drop_height(self) -> float:
+        """Free-fall height (m) giving the striker speed, ``v^2 / (2 g)``."""
+        return self.striker_velocity**2 / (2.0 * STANDARD_GRAVITY)
+
+    @property
+    def beads_below_sensor(self) -> int:
+        """Beads between the sensor particle and the plate, the last bead included."""
+        return self.beads - 1 - self.sensor_index
+
+    @property
+    def has_plate(self) -> bool:
+        return self.plate_thickness > 0
+
+    def with_(self, **changes: Any) -> Device:
+        """A copy with ``changes`` (field names; ``drop_height`` sets the striker speed).
+
+        Changing ``beads`` without ``sensor_index`` keeps the beads below the sensor (the
+        sensor stays at the same height above the plate: what a longer or shorter column
+        above it means physically).
+        """
+        ch = dict(changes)
+        if "drop_height" in ch:
+            h = ch.pop("drop_height")
+            if "striker_velocity" in ch:
+                raise ConfigError("striker.drop_height", h, "not together with a velocity")
+            if not (np.isfinite(h) and h > 0):
+                raise ConfigError("striker.drop_height", h, "a height > 0 m")
+            ch["striker_velocity"] = float(np.sqrt(2.0 * STANDARD_GRAVITY * h))
+        if "beads" in ch and "sensor_index" not in ch:
+            ch["sensor_index"] = int(ch["beads"]) - 1 - self.beads_below_sensor
+        unknown = set(ch) - {f.name for f in fields(self)}
+        if unknown:
+            raise ConfigError("device field", sorted(unknown),
+                              f"fields of a device: {', '.join(f.name for f in fields(self))}")
+        if "beads" in ch:
+            ch["beads"] = int(ch["beads"])
+            ch["sensor_index"] = int(ch["sensor_index"])
+        return replace(self, **ch)
+
+    # ------------------------------------------------------------------ numerics
+    def chain_params(self, materials: dict[str, Any] | None = None, **numerics: Any) -> Any:
+        """The :class:`ssw.chain.params.ChainParams` of this device.
+
+        ``materials`` is the materials library (key -> Material; default: the shipped one,
+        ``realistic``); ``numerics`` are the non-device fields of ChainParams
+        (``steps_per_contact``, ``t_max``, ``gravity``, ``damping``, ``fit_law``, ...).
+        """
+        from ssw.chain.params import ChainParams
+        from ssw.materials import material_set
+
+        mats = materials if materials is not None else material_set()
+        bead = _material(mats, self.bead_material, "chain.bead_material")
+        fields_: dict[str, Any] = {
+            "n_beads": self.beads, "bead_radius": self.bead_radius,
+            "bead_density": bead.density, "bead_E": bead.E, "bead_nu": bead.nu,
+            "sensor_index": self.sensor_index, "sensor_mass": self.sensor_mass,
+            "striker_mass": self.striker_mass, "striker_velocity": self.striker_velocity,
+            "preload": self.preload, "sensor_reads": self.sensor_reads,
+            "plate_material": self.plate_material if self.has_plate else "none",
+            "plate_thickness": self.plate_thickness, "plate_diameter": self.plate_diameter,
+            "plate_interface": self.plate_interface,
+        }
+        if self.has_plate:
+            plate = _material(mats, self.plate_material, "plate.material")
+            fields_["plate_E"], fields_["plate_nu"] = plate.E, plate.nu
+        unknown = set(numerics) - {f.name for f in fields(ChainParams)}
+        if unknown:
+            raise ConfigError("chain numerics", sorted(unknown), "fields of ChainParams")
+        fields_.update(numerics)
+        return ChainParams(**fields_)
+
+    # ------------------------------------------------------------------ I/O
+    def to_dict(self) -> dict[str, Any]:
+        """The nested YAML/JSON layout of the schema (SI units)."""
+        return {
+            "name": self.name,
+            "description": self.description,
+            "chain": {"beads": self.beads, "bead_material": self.bead_material,
+                      "bead_radius": self.bead_radius, "preload": self.preload},
+            "sensor": {"index": self.sensor_index, "mass": self.sensor_mass,
+                       "reads": self.sensor_reads},
+            "striker": {"mass": self.striker_mass, "velocity": self.striker_velocity,
+                        "drop_height": None},
+            "plate": {"material": self.plate_material, "thickness": self.plate_thickness,
+                      "diameter": self.plate_diameter, "interface": self.plate_interface},
+            "daq_sensor": {"model": self.sensor_model, "sensitivity": self.sensitivity,
+                           "range": self.sensor_range},
+        }
+
+    def physics_dict(self) -> dict[str, Any]:
+        """Every physical field, flat (no name, description or source)."""
+        d = asdict(self)
+        for k in ("name", "description", "source"):
+            d.pop(k)
+        return d
+
+
+def _material(mats: dict[str, Any], key: str, field: str) -> Any:
+    if key not in mats:
+        raise ConfigError(field, key, f"a material of the library: {', '.join(sorted(mats))}")
+    return mats[key]
+
+
+#: Flat field -> its place in the YAML layout (for error messages).
+_YAML_FIELDS = {
+    "beads": "chain.beads", "bead_material": "chain.bead_material",
+    "bead_radius": "chain.bead_radius", "preload": "chain.preload",
+    "sensor_index": "sensor.index", "sensor_mass": "sensor.mass", "sensor_reads": "sensor.reads",
+    "striker_mass": "striker.mass", "striker_velocity": "striker.velocity",
+    "plate_material": "plate.material", "plate_thickness": "plate.thickness",
+    "plate_diameter": "plate.diameter", "plate_interface": "plate.interface",
+    "sensor_model": "daq_sensor.model", "sensitivity": "daq_sensor.sensitivity",
+    "sensor_range": "daq_sensor.range",
+}
+
+
+def _yaml_field(name: str) -> str:
+    return _YAML_FIELDS.get(name, name)
+
+
+def _validator() -> Any:
+    from ssw.config import _validator as config_validator
+
+    return config_validator(yaml.safe_load(SCHEMA_PATH.read_text()))
+
+
+def device_from_dict(data: dict[str, Any], source: str = "") -> Device:
+    """A device from its nested layout: schema-validated, defaults filled.
+
+    Raises :class:`ConfigError` naming the field (``device.<path>``), the value and what is
+    allowed.
+    """
+    from ssw.config import _path_of
+
+    if not isinstance(data, dict):
+        raise ConfigError("device", source or type(data).__name__, "a YAML mapping")
+    d = copy.deepcopy(data)
+    errors = sorted(_validator().iter_errors(d), key=lambda e: -len(e.absolute_path))
+    if errors:
+        err = errors[0]
+        raise ConfigError(f"device {source}: {_path_of(err)}".strip(), err.instance, err.message)
+    st = d["striker"]
+    if (st.get("velocity") is None) == (st.get("drop_height") is None):
+        raise ConfigError(f"device {source}: striker".strip(),
+                          {"velocity": st.get("velocity"), "drop_height": st.get("drop_height")},
+                          "exactly one of velocity (m/s) and drop_height (m)")
+    v = st["velocity"]
+    if v is None:
+        v = float(np.sqrt(2.0 * STANDARD_GRAVITY * st["drop_height"]))
+    ch, se, pl, daq = d["chain"], d["sensor"], d["plate"], d["daq_sensor"]
+    return Device(
+        name=d["name"], description=str(d.get("description", "")).strip(),
+        beads=int(ch["beads"]), bead_material=ch["bead_material"],
+        bead_radius=float(ch["bead_radius"]), preload=float(ch["preload"]),
+        sensor_index=int(se["index"]),
+        sensor_mass=None if se["mass"] is None else float(se["mass"]),
+        sensor_reads=se["reads"],
+        striker_mass=None if st["mass"] is None else float(st["mass"]),
+        striker_velocity=float(v),
+        plate_material=pl["material"], plate_thickness=float(pl["thickness"]),
+        plate_diameter=float(pl["diameter"]), plate_interface=pl["interface"],
+        sensor_model=daq["model"], sensitivity=float(daq["sensitivity"]),
+        sensor_range=float(daq["range"]), source=source,
+    )
+
+
+def available_devices() -> list[str]:
+    """Names of the devices shipped with ssw."""
+    return sorted(p.stem for p in DEVICES_DIR.glob("*.yaml"))
+
+
+def device_path(spec: str | Path) -> Path:
+    """The YAML file of ``spec``: an existing path, or the name of a shipped device."""
+    p = Path(spec)
+    if p.is_file():
+        return p
+    shipped = DEVICES_DIR / f"{spec}.yaml"
+    if shipped.is_file():
+        return shipped
+    raise ConfigError("--device", str(spec),
+                      f"a device YAML file or one of the shipped devices: "
+                      f"{', '.join(available_devices())}")
+
+
+def load_device(spec: str | Path | dict[str, Any] | Device | None = None) -> Device:
+    """A device from a path, a shipped device's name, a mapping, or the default (thesis)."""
+    if isinstance(spec, Device):
+        return spec
+    if isinstance(spec, dict):
+        return device_from_dict(spec, "(mapping)")
+    p = device_path(DEFAULT_DEVICE if spec is None else spec)
+    try:
+        data = yaml.safe_load(p.read_text())
+    except (OSError, yaml.YAMLError) as exc:
+        raise ConfigError("--device", str(p), f"a readable YAML device file ({exc})") from exc
+    return device_from_dict(data, str(p))
+
+
+def write_device(path: str | Path, device: Device, header: str = "") -> None:
+    """Write a device YAML file atomically (re-loadable by :func:`load_device`)."""
+    from ssw.h5io import atomic_write_text
+
+    text = (header + "\n" if header else "") + yaml.safe_dump(
+        device.to_dict(), sort_keys=False, default_flow_style=False)
+    atomic_write_text(path, text)
+
+
+# ---------------------------------------------------------------------- calibratable
+@dataclass(frozen=True)
+class Parameter:
+    """A device field ``ssw calibrate`` may identify.
+
+    ``kind`` is ``continuous`` (refined by least squares) or ``integer`` (scanned);
+    ``lower``/``upper`` bound the global scan (SI); ``log`` scans and steps it in log
+    space; ``scale`` (SI) makes Jacobian columns comparable when a value may be 0.
+    """
+
+    name: str
+    unit: str
+    kind: str
+    lower: float
+    upper: float
+    log: bool
+    scale: float
+    description: str
+
+
+#: Calibratable device parameters by name.
+PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
+    Parameter("striker_velocity", "m/s", "continuous", 0.1, 2.0, True, 0.5,
+              "striker speed at first contact (drop heights 0.5 mm .. 0.2 m)"),
+    Parameter("preload", "N", "continuous", 0.0, 60.0, False, 5.0,
+              "constant force on bead 1 (0 .. 10x the weight of a 20-bead chain)"),
+    Parameter("sensor_mass", "kg", "continuous", 0.005, 0.2, True, 0.03,
+              "mass of the sensor particle"),
+    Parameter("striker_mass", "kg", "continuous", 0.005, 0.5, True, 0.03,
+              "mass of the striker"),
+    Parameter("beads", "1", "integer", 8, 40, False, 1.0,
+              "bead count (the beads below the sensor are kept)"),
+)}
+
+
+def parameter(name: str) -> Parameter:
+    """The calibratable parameter ``name`` (ConfigError listing them otherwise)."""
+    if name not in PARAMETERS:
+        raise ConfigError("--free", name, f"one of {', '.join(PARAMETERS)}")
+    return PARAMETERS[name]
+
+
+def parameter_value(device: Device, name: str) -> float:
+    """The device's value of a calibratable parameter (a None mass is a bead's mass)."""
+    parameter(name)
+    v = getattr(device, name)
+    if v is None:  # a mass given as "a bead's"
+        from ssw.materials import material_set
+
+        rho = material_set()[device.bead_material].density
+        v = 4.0 / 3.0 * np.pi * device.bead_radius**3 * rho
+    return float(v)

@@ -1,0 +1,188 @@
+"""E of a sample with an honest interval: the measured TOF through a (calibrated) device.
+
+For each sample, E is the inverse of the device's TOF(E, nu) at the measured mean TOF
+(:func:`ssw.chain.inverse.invert_batch`; at the middle of a Poisson's ratio range). Its
+uncertainty combines, as standard uncertainties of ``ln E`` (i.e. relative ones; GUM,
+JCGM 100:2008, sec. 5.1: independent contributions add in quadrature):
+
+* ``tof``: the standard error of the mean TOF over the accepted hits,
+  ``u = s_T / (T |k|)``, ``k = d ln TOF / d ln E`` at the sample (central difference);
+* ``calibration``: the covariance ``C`` of the calibrated continuous parameters,
+  ``u^2 = g^T C g`` with ``g_j = - (d ln TOF / d theta_j) / k`` (central differences);
+* ``poisson``: a Poisson's ratio known only as a range ``[lo, hi]``, taken as uniform
+  (GUM 4.3.7): ``u = |ln E(hi) - ln E(lo)| / sqrt(12)``;
+* ``wall``: the stated relative force error ``e`` of the wall law (``wall.force_error``: a
+  fit's interpolation error, the FEM's discretisation error): a wall stiffer by ``(1 + e)``
+  is a soil stiffer by about ``(1 + e)`` (exactly so for a Hertzian wall on a rigid bead),
+  so ``u = e``;
+* ``integrator``: the TOF error of the time step, ``c (80 / steps_per_contact)^2`` with
+  ``c`` the relative error measured at 80 steps against an independent DOP853 solution
+  (:data:`INTEGRATOR_REL_ERROR_80`), ``u = c / |k|``.
+
+The interval is ``E exp(+- z u)`` with ``z = 1.96`` (95 % for a normal ``ln E``). Every
+contribution is reported, so a user sees what dominates.
+"""
+
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ssw.chain.inverse import E_RANGE, invert_batch
+from ssw.errors import ConfigError
+
+#: Coverage factor of the interval (95 % for a normal ln E).
+COVERAGE_Z = 1.96
+#: Relative TOF error of the default 80 velocity-Verlet steps per contact against DOP853
+#: (rtol 1e-10): 3.5e-5, ``ssw bench chain`` (README, Stage II table); it scales as dt^2.
+INTEGRATOR_REL_ERROR_80 = 3.5e-5
+#: Relative step of E for k = d ln TOF / d ln E.
+E_STEP = 0.01
+#: Relative (log) step of a calibrated parameter for d ln TOF / d theta.
+THETA_STEP = 1e-3
+
+
+@dataclass(frozen=True)
+class ModulusEstimate:
+    """E (Pa) of one sample with its 95 % interval and the uncertainty budget.
+
+    ``contributions``: standard uncertainty of ln E per source (about the relative
+    standard uncertainty of E); ``u``: their quadrature sum.
+    """
+
+    E: float
+    E_low: float
+    E_high: float
+    u: float
+    contributions: dict[str, float]
+    tof: float
+    tof_sem: float
+    nu: float
+    nu_range: tuple[float, float] | None
+    dlnTOF_dlnE: float
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+    def to_dict(self) -> dict[str, Any]:
+        d = asdict(self)
+        d["nu_range"] = None if self.nu_range is None else list(self.nu_range)
+        d["notes"] = list(self.notes)
+        d["coverage"] = 0.95
+        return d
+
+
+def _nu_args(nu: Any, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """(central, lo, hi) Poisson's ratios: a number, or (lo, hi) pairs."""
+    arr = np.asarray(nu, float)
+    if arr.ndim >= 1 and arr.shape[-1] == 2 and (arr.ndim == 2 or (k == 1 and arr.ndim == 1)):
+        pairs = np.broadcast_to(arr.reshape(-1, 2), (k, 2))
+        lo, hi = pairs[:, 0].copy(), pairs[:, 1].copy()
+    else:
+        lo = hi = np.broadcast_to(arr, (k,)).astype(float).copy()
+    if np.any(~((lo > -1) & (lo <= hi) & (hi <= 0.5))):
+        raise ConfigError("soil_nu", np.asarray(nu).tolist(),
+                          "Poisson's ratios, or ranges lo:hi, with -1 < lo <= hi <= 0.5")
+    return 0.5 * (lo + hi), lo, hi
+
+
+def estimate_moduli(
+    tof: Any, tof_sem: Any, nu: Any, params: Any, wall: str,
+    wall_options: dict[str, Any] | None = None, *, calibration: Any = None,
+    E_range: tuple[float, float] = E_RANGE,
+) -> list[ModulusEstimate]:
+    """E with its interval for ``k`` samples (module docstring), in a few batched runs.
+
+    Parameters
+    ----------
+    tof : (k,) measured mean TOFs, s.  tof_sem : (k,) their standard errors, s (0: none).
+    nu : a Poisson's ratio per sample, or (k, 2) ranges ``[lo, hi]``.
+    params : ChainParams of the (calibrated) device.  wall, wall_options : the wall law.
+    calibration : :class:`ssw.calibration.Calibration` whose covariance enters (or None).
+    """
+    from ssw.chain import api
+    from ssw.chain.walls import build_wall
+
+    opts = dict(wall_options or {})
+    T = np.atleast_1d(np.asarray(tof, float)).ravel()
+    k = T.size
+    S = np.broadcast_to(np.asarray(tof_sem, float), (k,)).astype(float)
+    if np.any(~(S >= 0)):
+        raise ConfigError("tof_sem", S.tolist(), "standard errors >= 0 s")
+    nu_c, nu_lo, nu_hi = _nu_args(nu, k)
+    ranged = nu_hi > nu_lo
+    # E at the central nu, and at the range ends (one batched inversion)
+    targets = np.concatenate([T, T[ranged], T[ranged]])
+    nus = np.concatenate([nu_c, nu_lo[ranged], nu_hi[ranged]])
+    inv = invert_batch(targets, nus, params, wall, E_range=E_range, **opts)
+    E = inv.E[:k]
+    nr = int(ranged.sum())
+    lnE_lo = np.full(k, np.nan)
+    lnE_hi = np.full(k, np.nan)
+    lnE_lo[ranged] = np.log(inv.E[k:k + nr])
+    lnE_hi[ranged] = np.log(inv.E[k + nr:])
+    # one run: slope in E, and d TOF / d theta of the calibrated continuous parameters
+    names: tuple[str, ...] = ()
+    cov = None
+    if calibration is not None and calibration.covariance is not None:
+        names = calibration.continuous()
+        cov = calibration.covariance_array()
+    Es = [E * (1 + E_STEP), E * (1 - E_STEP)]
+    nus_run = [nu_c, nu_c]
+    vary: dict[str, list[np.ndarray]] = {n: [] for n in names}
+    base = {n: float(getattr(params, n)) for n in names}
+    for n in names:
+        vary[n] = [np.full(k, base[n])] * 2
+    for n in names:
+        h = THETA_STEP * max(abs(base[n]), _scale(n))
+        for sgn in (1.0, -1.0):
+            Es.append(E)
+            nus_run.append(nu_c)
+            for m in names:
+                vary[m].append(np.full(k, base[m] + (sgn * h if m == n else 0.0)))
+    vary_flat = {n: np.concatenate(v) for n, v in vary.items()} or None
+    Tr = np.asarray(api.tof(np.concatenate(Es), np.concatenate(nus_run), params, wall,
+                            vary=vary_flat, **opts), float).reshape(-1, k)
+    slope = np.log(Tr[0] / Tr[1]) / np.log((1 + E_STEP) / (1 - E_STEP))
+    w = build_wall(wall, params, E[:1], nu_c[:1], **opts)
+    force_error = getattr(w, "force_error", None)
+    out = []
+    for i in range(k):
+        contrib: dict[str, float] = {}
+        notes: list[str] = []
+        kk = float(slope[i])
+        contrib["tof"] = float(S[i] / (T[i] * abs(kk)))
+        if cov is not None:
+            g = np.empty(len(names))
+            for j, n in enumerate(names):
+                h = THETA_STEP * max(abs(base[n]), _scale(n))
+                dln = np.log(Tr[2 + 2 * j, i] / Tr[3 + 2 * j, i]) / (2 * h)
+                g[j] = -dln / kk
+            contrib["calibration"] = float(np.sqrt(max(g @ cov @ g, 0.0)))
+        elif calibration is not None:
+            notes.append("the calibration has no covariance (parameters not identified, or "
+                         "as many parameters as references without TOF uncertainties)")
+        else:
+            notes.append("uncalibrated device: its parameters' uncertainty is not included")
+        if ranged[i]:
+            contrib["poisson"] = float(abs(lnE_hi[i] - lnE_lo[i]) / np.sqrt(12.0))
+        if force_error is not None:
+            contrib["wall"] = float(force_error)
+        else:
+            notes.append(f"the {wall} wall states no force error (not included)")
+        steps = float(params.steps_per_contact)
+        contrib["integrator"] = float(INTEGRATOR_REL_ERROR_80 * (80.0 / steps) ** 2 / abs(kk))
+        u = float(np.sqrt(sum(v**2 for v in contrib.values())))
+        out.append(ModulusEstimate(
+            E=float(E[i]), E_low=float(E[i] * np.exp(-COVERAGE_Z * u)),
+            E_high=float(E[i] * np.exp(COVERAGE_Z * u)), u=u, contributions=contrib,
+            tof=float(T[i]), tof_sem=float(S[i]), nu=float(nu_c[i]),
+            nu_range=(float(nu_lo[i]), float(nu_hi[i])) if ranged[i] else None,
+            dlnTOF_dlnE=kk, notes=tuple(notes)))
+    return out
+
+
+def _scale(name: str) -> float:
+    from ssw.device import parameter
+
+    return parameter(name).scale

@@ -8,10 +8,14 @@ min_version("9.0")
 configfile: "config/config.yaml"
 
 
+report: "workflow/report/workflow.rst"
+
+
 include: "workflow/rules/common.smk"
 include: "workflow/rules/contact.smk"
 include: "workflow/rules/fit.smk"
 include: "workflow/rules/chain.smk"
+include: "workflow/rules/survey.smk"
 include: "workflow/rules/validation.smk"
 
 
@@ -21,4 +25,5 @@ rule all:
         CONTACT_TARGETS,
         FIT_TARGETS,
         CHAIN_TARGETS,
+        SURVEY_TARGETS,
         VALIDATION_TARGETS,

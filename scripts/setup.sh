@@ -26,8 +26,10 @@ log() { printf '[setup] %s\n' "$*" >&2; }
 # libopenblas-dev: BLAS/LAPACK for PETSc; libmpich-dev + mpich: the one MPI (mpicc, mpiexec);
 # libglu1-mesa, libxrender1, libxcursor1, libxft2, libxinerama1: shared libraries the
 # gmsh wheel's libgmsh.so links against even when no window is opened.
+# chromium + chromium-driver: the headless browser the report test opens the study report in
+# (tests/test_report_browser.py, through selenium; no browser download).
 SYS_PKGS=(libopenblas-dev libmpich-dev mpich libglu1-mesa libxrender1 libxcursor1 libxft2
-          libxinerama1 libgl1)
+          libxinerama1 libgl1 chromium chromium-driver)
 missing=()
 for p in "${SYS_PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -11,4 +11,14 @@ Stages (Torres Constante 2024, USFQ thesis; see ``shared/REFERENCE.md``):
 All quantities are SI (m, N, Pa, kg, s) unless a name says otherwise.
 """
 
+import os as _os
+
+# ssw runs in parallel across processes (Snakemake jobs, MPI ranks over scenes and sweep
+# points), never inside one: a threaded BLAS only contends for the cores those processes
+# use, and on ssw's small dense systems (condensed operators, LCPs, Jacobians) it was
+# measured up to 10x slower than one thread on the 2-core machines we run on. Set before
+# numpy loads; an explicit setting of the user's wins.
+for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
+    _os.environ.setdefault(_var, "1")
+
 __version__ = "0.1.0"

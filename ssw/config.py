@@ -220,6 +220,11 @@ def check_config(cfg: dict[str, Any]) -> None:
     fit = cfg.get("fit", {})
     if fit.get("set") is not None and fit["set"] not in cfg["sets"]:
         raise ConfigError("fit.set", fit["set"], f"one of the sets: {', '.join(cfg['sets'])}")
+    points = cfg.get("survey", {}).get("points", [])
+    if points:
+        from ssw.survey import check_points
+
+        check_points(points)
     for i, smp in enumerate(cfg.get("validation", {}).get("samples", [])):
         need_material(f"validation.samples[{i}].material", smp["material"])
         rng = smp.get("soil_nu_range")

@@ -186,3 +186,64 @@ def _scale(name: str) -> float:
     from ssw.device import parameter
 
     return parameter(name).scale
+
+
+class Estimator:
+    """E with its interval from (mean TOF, standard error), fast enough to call after every
+    hit (``ssw acquire``'s running E; :class:`ssw.signal.live.LiveTof`).
+
+    The device's TOF(E) is computed once on the inverse's grid (one batched run) and
+    inverted by PCHIP in ln E; the contributions that do not depend on the TOF's scatter
+    (calibration, Poisson's ratio, wall law, integrator) come from one full
+    :func:`estimate_moduli` at the first estimate's TOF and are kept (they change slowly
+    with E); the TOF's own contribution is recomputed at every call.
+    """
+
+    def __init__(self, params: Any, wall: str, wall_options: dict[str, Any] | None,
+                 nu: Any, *, calibration: Any = None, E_range: tuple[float, float] = E_RANGE,
+                 extra: dict[str, float] | None = None) -> None:
+        from scipy.interpolate import PchipInterpolator
+
+        from ssw.chain import api
+        from ssw.chain.inverse import GRID_POINTS
+
+        self.params, self.wall, self.opts = params, wall, dict(wall_options or {})
+        self.nu, self.calibration, self.E_range = nu, calibration, E_range
+        self.extra = dict(extra or {})  # further ln E contributions per TOF, e.g. sampling
+        nu_c = float(np.mean(np.atleast_1d(np.asarray(nu, float))))
+        E = np.geomspace(E_range[0], E_range[1], GRID_POINTS)
+        T = np.asarray(api.tof(E, nu_c, params, wall, **self.opts), float)
+        if np.any(np.diff(T) >= 0):
+            from ssw.errors import SolverError
+
+            raise SolverError(f"TOF(E) at nu = {nu_c:g} is not strictly decreasing: cannot "
+                              "invert")
+        self._spline = PchipInterpolator(T[::-1], np.log(E[::-1]))
+        self._slope = self._spline.derivative()
+        self.tof_range = (float(T[-1]), float(T[0]))
+        self._fixed: dict[str, float] | None = None
+
+    def __call__(self, tof_mean: float, tof_sem: float) -> dict[str, Any]:
+        """``{"E", "E_low", "E_high", "u", "contributions"}`` (Pa; ln E standard
+        uncertainties) for a mean TOF (s) and its standard error (s)."""
+        from ssw.errors import OutOfRangeError
+
+        lo, hi = self.tof_range
+        if not lo <= tof_mean <= hi:
+            raise OutOfRangeError(f"TOF {tof_mean:.6g} s is outside the device's range "
+                                  f"[{lo:.6g}, {hi:.6g}] s")
+        lnE = float(self._spline(tof_mean))
+        if self._fixed is None:
+            est = estimate_moduli([tof_mean], [0.0], np.asarray(self.nu, float), self.params,
+                                  self.wall, self.opts, calibration=self.calibration,
+                                  E_range=self.E_range)[0]
+            self._fixed = {k: v for k, v in est.contributions.items() if k != "tof"}
+            self.notes = est.notes
+        dlnE_dT = abs(float(self._slope(tof_mean)))
+        contrib = {"tof": float(tof_sem) * dlnE_dT, **self._fixed}
+        for k, v in self.extra.items():  # TOF uncertainties (s) -> ln E
+            contrib[k] = float(v) * dlnE_dT
+        u = float(np.sqrt(sum(v**2 for v in contrib.values())))
+        E = float(np.exp(lnE))
+        return {"E": E, "E_low": E * float(np.exp(-COVERAGE_Z * u)),
+                "E_high": E * float(np.exp(COVERAGE_Z * u)), "u": u, "contributions": contrib}

@@ -43,3 +43,29 @@ def test_tof_recording_of_a_broken_file_fails_cleanly(capsys, tmp_path, content)
     p.write_bytes(content)
     assert main(["tof-recording", str(p)]) == 2
     assert "not a readable HDF5" in capsys.readouterr().err
+
+
+def test_acquire_prints_each_hits_tof_and_the_running_modulus(capsys, tmp_path):
+    """At the bench (no --json): one stderr line per hit with its TOF and, the soil's nu
+    being known, E with its interval inverted through the chain. The simulated foam's own
+    modulus (123 MPa) comes back within 0.5 %: TOF picking within 0.5 us (0.03 %) times
+    the TOF ~ E^-1/5 sensitivity, plus the inverse's interpolation on its E grid."""
+    assert main(["acquire", "--simulate", "--material", "pcf15", "--wall", "hertz", "--hits",
+                 "3", "--sample", "P1", "--output", str(tmp_path / "p.h5")]) == 0
+    lines = [ln for ln in capsys.readouterr().err.splitlines() if ln.startswith("hit ")]
+    assert [ln.split(":")[0] for ln in lines] == ["hit 1", "hit 2", "hit 3"]
+    assert all("TOF" in ln and "MPa" in ln for ln in lines)
+    E = float(lines[-1].split("| E ")[1].split(" MPa")[0])
+    lo, hi = (float(x) for x in lines[-1].split("[")[1].split("]")[0].split(","))
+    assert lo <= E <= hi and abs(E / 123.0 - 1) < 0.005
+
+
+def test_tof_recording_reads_tdms_and_reports_the_bound(capsys, tmp_path):
+    a = run_json(capsys, ["acquire", "--simulate", "--tof", "1.3e-3", "--hits", "2",
+                          "--sample", "T1", "--output", str(tmp_path / "s.h5")])
+    from ssw.daq.importers import read_any, write_any
+
+    write_any(tmp_path / "s.tdms", read_any(tmp_path / "s.h5"))
+    b = run_json(capsys, ["tof-recording", str(tmp_path / "s.tdms")])
+    assert b["format"] == "tdms" and b["tof_per_hit"] == a["tof_per_hit"]
+    assert 0 < b["min_tof"] < b["tof_mean"]

@@ -20,9 +20,17 @@ from nidaqmx.task.collections import AIChannelCollection  # noqa: E402
 from nidaqmx.task.triggering import ReferenceTrigger, Triggers  # noqa: E402
 
 from ssw.daq.backend import get_backend, run_session  # noqa: E402
-from ssw.daq.nidaq import NidaqBackend, check_device, configure_task  # noqa: E402
+from ssw.daq.nidaq import (  # noqa: E402
+    NidaqBackend,
+    buffer_samples,
+    check_device,
+    chunk_samples,
+    configure_task,
+)
 from ssw.daq.recording import read_recording  # noqa: E402
 from ssw.daq.settings import DaqSettings  # noqa: E402
+from ssw.daq.simulated import sech2  # noqa: E402
+from ssw.daq.trigger import TriggerRule, split_records  # noqa: E402
 from ssw.errors import DaqError, RecordingError  # noqa: E402
 
 
@@ -112,7 +120,59 @@ def test_short_read_is_a_daq_error():
     ("NI 9215", True, "NI 9234"), ("NI 9234", False, "analog trigger")])
 def test_check_device_rejects_modules_it_was_not_checked_for(product, analog, match):
     with pytest.raises(DaqError, match=match):
-        check_device(fake_device(product, analog), DaqSettings())
+        check_device(fake_device(product, analog), DaqSettings(trigger_mode="hardware"))
+
+
+@pytest.mark.parametrize(("analog", "mode", "trigger"), [
+    (True, "auto", "hardware"), (False, "auto", "software"), (True, "software", "software")])
+def test_trigger_choice(analog, mode, trigger):
+    d = check_device(fake_device(analog=analog), DaqSettings(trigger_mode=mode))
+    assert d["trigger"] == trigger and d["analog_reference_trigger"] is analog
+
+
+def hit_stream(starts, n, rng):
+    """Noise (0.05 N rms) with a two-pulse hit (40 N, then 20 N 60 samples later) at ``starts``."""
+    k = np.arange(n)
+    y = rng.normal(0.0, 0.05, n)
+    for s in starts:
+        y += 40.0 * sech2((k - s) / 2.0) + 20.0 * sech2((k - s - 60.0) / 3.0)
+    return y
+
+
+def test_software_trigger_fallback_cuts_the_stream_like_the_simulated_rule(tmp_path):
+    """A module without an analog reference trigger: continuous task, records cut in software
+    across read boundaries, identical to the trigger rule applied to the whole stream."""
+    s = DaqSettings(record_samples=256, pretrigger_samples=32, hits=3, trigger_level=5.0)
+    chunk = chunk_samples(s)
+    y = hit_stream([3000, 5100, 9000, 12000], 6 * chunk, np.random.default_rng(4))
+    task = fake_task([y[i : i + chunk] for i in range(0, y.size, chunk)])
+    backend = NidaqBackend(task_factory=lambda: task,
+                           device_factory=lambda name: fake_device(analog=False))
+    path = run_session(backend, s, tmp_path / "sw.h5", sample_id="PCF15")
+    task.timing.cfg_samp_clk_timing.assert_called_once_with(
+        51200.0, sample_mode=c.AcquisitionType.CONTINUOUS, samps_per_chan=buffer_samples(s))
+    task.triggers.reference_trigger.cfg_anlg_edge_ref_trig.assert_not_called()
+    assert task.start.call_count == 1 and task.stop.call_count == 1
+    task.close.assert_called_once()
+    rec = read_recording(path)
+    want = split_records(y, TriggerRule.of(s))[:3]
+    assert len(rec.hits) == 3 and rec.meta["hw_trigger"] == "software"
+    for h, w in zip(rec.hits, want, strict=True):
+        np.testing.assert_array_equal(h.force, w)
+        assert h.trigger_index == 32 and h.extra["trigger"] == "software"
+
+
+def test_software_trigger_times_out_clearly():
+    s = DaqSettings(record_samples=256, pretrigger_samples=32, timeout=0.1,
+                    trigger_mode="software")
+    chunk = chunk_samples(s)
+    quiet = np.random.default_rng(0).normal(0.0, 0.05, chunk)
+    task = fake_task([quiet] * 10)
+    backend = NidaqBackend(task_factory=lambda: task, device_factory=lambda name: fake_device())
+    with pytest.raises(DaqError, match=r"no trigger within 0\.1 s"):
+        list(backend.hits(s, 1))
+    task.stop.assert_called_once()
+    task.close.assert_called_once()
 
 
 def test_missing_driver_is_a_clear_daq_error():

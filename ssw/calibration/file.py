@@ -135,6 +135,7 @@ def calibrate(
     ranges: dict[str, tuple[float, float]] | None = None, loo: bool = True,
     scan_points: int | None = None, material_set: str = "realistic",
     materials_file: str | None = None, provenance: dict[str, Any] | None = None,
+    on_run: Any = None,
 ) -> Calibration:
     """Identify ``free`` device parameters from ``refs`` (see :mod:`ssw.calibration.fit`).
 
@@ -145,6 +146,7 @@ def calibrate(
     materials : materials library; numerics : non-device ChainParams fields.
     wall, wall_options : the last-contact law.  ranges : scan ranges (SI) per parameter.
     loo : also calibrate without each reference and predict its E.
+    on_run : called after each batched run of the forward model (a progress bar's update).
     """
     from ssw.chain import api
 
@@ -153,7 +155,8 @@ def calibrate(
     t0 = time.perf_counter()
     opts = dict(wall_options or {})
     model = TofModel(device, tuple(free), np.array([r.E for r in refs]),
-                     np.array([r.nu for r in refs]), materials, dict(numerics), wall, opts)
+                     np.array([r.nu for r in refs]), materials, dict(numerics), wall, opts,
+                     on_run=on_run)
     subsets = leave_one_out_sets(len(refs)) if loo else []
     fit, subs = identify(model, refs, ranges=ranges, subsets=subsets, scan_points=scan_points)
     values = theta_dict(model.free, fit.theta)

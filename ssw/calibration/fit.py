@@ -340,14 +340,16 @@ def _starts(model: TofModel, grid: np.ndarray, axes: list[np.ndarray], tof: np.n
 
 def _pick(sols: list[Solution], nominal_x: np.ndarray, model: TofModel
           ) -> tuple[Solution, list[Solution]]:
-    """The best solution (ties within chi^2 + 1e-9 (1 + chi^2) go to the one nearest the
+    """The best solution (ties within LM_FTOL of the least chi^2 go to the one nearest the
     nominal values) and the distinct others within chi^2 + 1."""
     finite = [so for so in sols if np.isfinite(so.chi2)]
     if not finite:
         raise SolverError("no parameter set of the scan gives a TOF on every reference: widen "
                           "the ranges (--range) or check the references")
     best_c = min(so.chi2 for so in finite)
-    ties = [so for so in finite if so.chi2 <= best_c + 1e-9 * (1 + best_c)]
+    # solutions the refinement cannot tell apart (chi^2 within its convergence tolerance,
+    # e.g. the two roots of a non-monotone TOF fitted exactly) go to the nominal's nearest
+    ties = [so for so in finite if so.chi2 <= best_c + LM_FTOL]
 
     def dist(so: Solution) -> float:
         return float(np.linalg.norm(to_x(so.theta, model.free) - nominal_x))

@@ -89,6 +89,7 @@ class TofModel:
     evaluations: int = 0  # parameter sets evaluated (a cost counter)
     runs: int = 0  # batched integrator runs
     dt: float | None = None  # s, the time step of every run (fix_time_step)
+    on_run: Any = None  # called after each batched run (a progress bar's update)
     _walls: Any = field(default=None, repr=False)
 
     def __post_init__(self) -> None:
@@ -162,6 +163,8 @@ class TofModel:
             pk, _ = run_peaks(batch, w, strict=False, dt=self.dt)
             out[rows] = pk.tof.reshape(rows.size, k)
             self.runs += 1
+            if self.on_run is not None:
+                self.on_run(1, sets=self.evaluations + m)
         self.evaluations += m
         return out
 

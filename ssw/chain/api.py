@@ -58,7 +58,7 @@ def check_complete(run: Run, params: ChainParams) -> None:
 
 
 def run_peaks(params: ChainParams | Batch, wall: Wall, *, strict: bool = True,
-              dt: float | None = None) -> tuple[Peaks, Run]:
+              dt: float | None = None, on_progress: Any = None) -> tuple[Peaks, Run]:
     """Picked peaks and the run of prebuilt walls (one per scene).
 
     A scene whose reflected wave has not passed the sensor by ``t_max`` (a long, slow chain
@@ -68,11 +68,12 @@ def run_peaks(params: ChainParams | Batch, wall: Wall, *, strict: bool = True,
     record is the first run's). ``strict`` raises on a scene still truncated at the cap or
     a signal without two peaks (:func:`check_complete`, :func:`ssw.chain.tof.pick_peaks`);
     otherwise those scenes get NaN (a calibration scan over wide parameter ranges). ``dt``
-    (s) fixes the time step (default :func:`ssw.chain.integrate.time_step` of the batch).
+    (s) fixes the time step (default :func:`ssw.chain.integrate.time_step` of the batch);
+    ``on_progress(k)`` is told when ``k`` scenes finish.
     """
     from dataclasses import replace
 
-    run = simulate(params, wall, dt=dt)
+    run = simulate(params, wall, dt=dt, on_progress=on_progress)
     b = params if isinstance(params, Batch) else Batch.of(params, wall.n)
     p = b.params
     pk = pick_peaks(run.t, run.sensor, strict=False)
@@ -83,7 +84,8 @@ def run_peaks(params: ChainParams | Batch, wall: Wall, *, strict: bool = True,
     while nan.any() and t_end < T_END_CAP:
         t_end = min(2.0 * t_end, T_END_CAP)
         idx = np.flatnonzero(nan)
-        sub = simulate(b.take(idx), wall.take(idx), dt=run.dt, t_end=t_end)
+        sub = simulate(b.take(idx), wall.take(idx), dt=run.dt, t_end=t_end,
+                       on_progress=on_progress)
         sp = pick_peaks(sub.t, sub.sensor, strict=False)
         for c, v in zip(cols, (sp.t_incident, sp.t_reflected, sp.f_incident, sp.f_reflected),
                         strict=True):
@@ -103,14 +105,15 @@ def run_peaks(params: ChainParams | Batch, wall: Wall, *, strict: bool = True,
 
 def peaks(
     soil_E: Any, soil_nu: Any, params: ChainParams, wall: str = "hertz", *,
-    vary: dict[str, Any] | None = None, strict: bool = True, **wall_options: Any,
+    vary: dict[str, Any] | None = None, strict: bool = True, on_progress: Any = None,
+    **wall_options: Any,
 ) -> tuple[Peaks, Run]:
     """Picked peaks (flat, one per scene) and the run, for broadcast ``soil_E``, ``soil_nu``
     and the per-scene fields ``vary`` (:data:`ssw.chain.params.VARYING` -> values)."""
     E, nu, flat = _broadcast(soil_E, soil_nu, vary)
     w = build_wall(wall, params, E, nu, **wall_options)
     b = Batch.of(params, w.n, flat) if flat else params
-    return run_peaks(b, w, strict=strict)
+    return run_peaks(b, w, strict=strict, on_progress=on_progress)
 
 
 def tof(

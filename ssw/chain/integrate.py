@@ -37,6 +37,7 @@ the arrays.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -185,6 +186,7 @@ def simulate(
     record_energy: bool = False,
     check_every: int = 32,
     initial: tuple[np.ndarray, np.ndarray] | None = None,
+    on_progress: Any = None,
 ) -> Run:
     """Integrate ``wall.n`` chains from the initial state of :mod:`ssw.chain.statics`.
 
@@ -197,6 +199,8 @@ def simulate(
     record_forces, record_energy : also keep every contact force / the total energy.
     check_every : steps between stop checks.
     initial : ``(u, v)`` (m, m/s), shapes (n, N), instead of :func:`initial_state`.
+    on_progress : called as ``on_progress(k)`` when ``k`` more scenes have finished (a
+        progress bar's update; ``ssw.progress``).
     """
     n = wall.n
     b = params if isinstance(params, Batch) else Batch.of(params, n)
@@ -300,6 +304,8 @@ def simulate(
             continue
         done = rule.update(active, times, S, W)
         if np.any(done):
+            if on_progress is not None:
+                on_progress(int(np.count_nonzero(done)))
             stop_time[active[done]] = times[-1]
             keep = ~done
             peak_all[active[done]] = peak_ind[done]

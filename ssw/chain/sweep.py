@@ -72,12 +72,14 @@ def run_sweep(
     wall: str = "hertz",
     *,
     comm: Any = None,
+    on_progress: Any = None,
     **wall_options: Any,
 ) -> Sweep:
     """TOF at the flat points ``(soil_E[i], soil_nu[i])``, split over ``comm``'s ranks.
 
     ``wall_options`` with a per-point sequence (``curve=[...]``, ``K=[...]``) are split
-    along with the points.
+    along with the points; ``on_progress(k)`` is told when ``k`` of this rank's points
+    finish.
     """
     E, nu = (np.asarray(x, float).ravel() for x in (soil_E, soil_nu))
     size, rank = (1, 0) if comm is None else (comm.Get_size(), comm.Get_rank())
@@ -85,7 +87,7 @@ def run_sweep(
     opts = {k: _part(v, mine, E.size) for k, v in wall_options.items()}
     cols = np.full((len(FIELDS) - 2, E.size), np.nan)
     if mine.size:
-        pk, _ = peaks(E[mine], nu[mine], params, wall, **opts)
+        pk, _ = peaks(E[mine], nu[mine], params, wall, on_progress=on_progress, **opts)
         cols[:, mine] = [pk.tof, pk.t_incident, pk.f_incident, pk.f_reflected]
     if comm is not None and size > 1:
         parts = comm.allgather((mine, cols[:, mine]))

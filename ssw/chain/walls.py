@@ -323,12 +323,20 @@ def _resample(curve: Any, scale: float) -> tuple[float, np.ndarray, float, float
     return h, g, float(F[-1]), float(np.clip(n_ext, 1.0, 2.0))
 
 
+def fem_wall(params: ChainParams, soil_E: Any, soil_nu: Any, **options: Any) -> Wall:
+    """The FEM law itself, computed on demand: :func:`ssw.chain.fem_wall.fem_wall`."""
+    from ssw.chain.fem_wall import fem_wall as build
+
+    return build(params, soil_E, soil_nu, **options)
+
+
 #: Registry: wall name -> builder(params, soil_E, soil_nu, **options).
 WALLS: dict[str, Callable[..., Wall]] = {
     "rigid": rigid_wall,
     "hertz": hertz_wall,
     "fit": fit_wall,
     "table": table_wall,
+    "fem": fem_wall,
 }
 
 

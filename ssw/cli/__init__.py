@@ -89,6 +89,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         opts = os.environ.get("PETSC_OPTIONS", "")
         if "-no_signal_handler" not in opts.split():
             os.environ["PETSC_OPTIONS"] = f"{opts} -no_signal_handler".strip()
+    if getattr(args, "json", False):  # machine output: no progress bars (ssw.progress)
+        from ssw.progress import set_enabled
+
+        set_enabled(False)
     try:
         result = args.func(args)
     except SswError as exc:

@@ -69,14 +69,17 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
     numerics = numerics_of(ctx.cfg)
     numerics.update({k: getattr(ctx.params, k) for k in numerics})
     loo = not args.no_loo and (cal_cfg.get("loo", True) if args.from_config else True)
-    cal = calibrate(
-        refs, ctx.device, free, materials=_materials(ctx.cfg), numerics=numerics,
-        wall=ctx.wall, wall_options=ctx.wall_options, ranges=ranges, loo=loo,
-        scan_points=args.scan_points or cal_cfg.get("scan_points"),
-        material_set=ctx.cfg.get("material_set", "realistic"),
-        materials_file=ctx.cfg.get("materials_file"),
-        provenance={"command": "ssw calibrate", "config": args.config},
-    )
+    from ssw.progress import progress_bar
+
+    with progress_bar(None, desc="calibration", unit="run") as bar:
+        cal = calibrate(
+            refs, ctx.device, free, materials=_materials(ctx.cfg), numerics=numerics,
+            wall=ctx.wall, wall_options=ctx.wall_options, ranges=ranges, loo=loo,
+            scan_points=args.scan_points or cal_cfg.get("scan_points"),
+            material_set=ctx.cfg.get("material_set", "realistic"),
+            materials_file=ctx.cfg.get("materials_file"),
+            provenance={"command": "ssw calibrate", "config": args.config}, on_run=bar,
+        )
     if args.output:
         write_calibration(args.output, cal)
     out = {

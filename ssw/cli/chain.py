@@ -111,8 +111,12 @@ def run_tof_sweep(args: argparse.Namespace) -> dict[str, Any] | None:
         from mpi4py import MPI
 
         comm = MPI.COMM_WORLD
+    from ssw.progress import progress_bar
+
     t0 = time.perf_counter()
-    sw = run_sweep(params, E, nu, wall, comm=comm, **opts)
+    with progress_bar(E.size, desc="TOF sweep", unit="pt",
+                      enabled=False if comm is not None and comm.Get_rank() else None) as bar:
+        sw = run_sweep(params, E, nu, wall, comm=comm, on_progress=bar, **opts)
     wall_time = time.perf_counter() - t0
     if comm is not None and comm.Get_rank() != 0:
         return None  # rank 0 writes and reports
@@ -146,22 +150,38 @@ def run_tof_merge(args: argparse.Namespace) -> dict[str, Any]:
 
 # ---------------------------------------------------------------------------- ssw invert
 def run_invert(args: argparse.Namespace) -> dict[str, Any]:
-    from ssw.chain.inverse import invert
-    from ssw.chain.sweep import read_sweep
+    from ssw.measure import parse_nu
 
     E_range = (args.soil_E_min, args.soil_E_max)
-    ctx = chain_context(args, np.geomspace(*E_range, 48), args.soil_nu)
+    nu = parse_nu(args.soil_nu)
+    nu_mid = 0.5 * (nu[0] + nu[1]) if isinstance(nu, tuple) else nu
+    ctx = chain_context(args, np.geomspace(*E_range, 48), nu_mid)
     if ctx.wall == "table":
         raise ConfigError("--law", "table", "fem | hertz | fit | rigid for the inverse "
                           "(the table wall needs one FEM curve per E)")
-    sweep = read_sweep(args.table)[0] if args.table else None
-    res = invert(args.tof, args.soil_nu, ctx.params, ctx.wall, tof_std=args.tof_std,
-                 E_range=E_range, sweep=sweep, **ctx.wall_options)
+    if args.table:
+        from ssw.chain.inverse import invert
+        from ssw.chain.sweep import read_sweep
+
+        if isinstance(nu, tuple):
+            raise ConfigError("--soil-nu", args.soil_nu, "one Poisson's ratio with --table")
+        res = invert(args.tof, nu, ctx.params, ctx.wall, tof_std=args.tof_std,
+                     E_range=E_range, sweep=read_sweep(args.table)[0], **ctx.wall_options)
+        return {**ctx.inputs(), "E": float(res.E), "E_low": float(res.E_low),
+                "E_high": float(res.E_high), "interval": "E(TOF -+ tof_std) on the sweep",
+                "interval_clipped": bool(res.clipped), "tof_range": list(res.tof_range),
+                "E_range": list(res.E_range)}
+    from ssw.modulus import estimate_moduli
+
+    nu_arg = np.array(nu, float) if isinstance(nu, tuple) else nu
+    est = estimate_moduli([args.tof], [args.tof_std], nu_arg, ctx.params, ctx.wall,
+                          ctx.wall_options, calibration=ctx.calibration, E_range=E_range)[0]
     return {
-        **ctx.inputs(),
-        "E": float(res.E), "E_low": float(res.E_low), "E_high": float(res.E_high),
-        "interval_clipped": bool(res.clipped), "tof_range": list(res.tof_range),
-        "E_range": list(res.E_range),
+        **ctx.inputs(), **est.to_dict(),
+        "interval": "95 %: tof_std as the TOF's standard error, with the calibration, "
+        "Poisson's ratio range, wall law and integrator contributions",
+        "contributions_pct": {k: 100.0 * v for k, v in est.contributions.items()},
+        "E_range": list(E_range),
     }
 
 
@@ -211,11 +231,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run_tof_merge)
 
     p = sub.add_parser("invert", help="soil E from a TOF and an assumed nu",
-                       description="E (Pa) with the interval E(TOF +- std).")
+                       description="E (Pa) with its 95 % interval and the uncertainty "
+                       "budget (ssw.modulus); with --table, E(TOF -+ std) on a stored sweep.")
     add_device_options(p)
     p.add_argument("--tof", type=float, required=True, help="measured TOF, s")
-    p.add_argument("--tof-std", type=float, default=0.0, help="its standard deviation, s")
-    p.add_argument("--soil-nu", type=float, required=True, help="assumed Poisson's ratio")
+    p.add_argument("--tof-std", type=float, default=0.0,
+                   help="its standard uncertainty (the standard error of a mean), s")
+    p.add_argument("--soil-nu", required=True, metavar="NU|LO:HI",
+                   help="assumed Poisson's ratio, or a range LO:HI")
     p.add_argument("--soil-E-min", type=float, default=10.0e6, help="range searched, Pa")
     p.add_argument("--soil-E-max", type=float, default=1000.0e6, help="range searched, Pa")
     p.add_argument("--table", help="use a stored sweep (tof_sweep HDF5) instead of the model")

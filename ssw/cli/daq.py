@@ -5,50 +5,101 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+import numpy as np
+
 from ssw.cli import add_json_flag
-from ssw.errors import ConfigError
-
-DEFAULT_K_TABLE = "results/fit/k_table.h5"
-
-
-def wall_of(args: argparse.Namespace, cfg: dict[str, Any]) -> tuple[str, dict[str, Any]]:
-    """The chain's last-contact law and options from ``--wall/--K/--k-table`` or the config."""
-    wall = args.wall or cfg.get("chain", {}).get("wall_law", "hertz")
-    if wall == "fit":
-        if args.K is not None:
-            return wall, {"K": args.K}
-        return wall, {"k_table": args.k_table or DEFAULT_K_TABLE}
-    if wall == "table":
-        raise ConfigError("--wall", wall, "rigid | hertz | fit here (table needs one FEM "
-                          "curve per soil E)")
-    return wall, {}
+from ssw.cli._device import add_device_options
+from ssw.errors import ConfigError, SswError
 
 
-def add_wall_options(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--wall", choices=["rigid", "hertz", "fit"],
-                   help="chain last-contact law (default: the config's chain.wall_law)")
-    p.add_argument("--K", type=float, help="fit wall: a constant K instead of the K table")
-    p.add_argument("--k-table", help=f"fit wall: K table HDF5 (default {DEFAULT_K_TABLE})")
+def add_recording_options(p: argparse.ArgumentParser) -> None:
+    """Flags of every command that reads recordings (.h5, .csv, .tdms, .mat)."""
+    p.add_argument("--units", help="unit of data columns/channels whose file gives none: "
+                   "N, kN, lbf (force) or V, mV (sensor voltage, with --sensitivity)")
+    p.add_argument("--sensitivity", type=float, help="data in volts: sensor sensitivity, V/N")
+    p.add_argument("--sample-rate", type=float,
+                   help="files without a time axis (no time column, no wf_increment): S/s")
+    p.add_argument("--clipped", choices=["raise", "drop", "keep"], default="raise",
+                   help="clipped hits: error (default), drop them, or keep them")
 
 
-def _tof_options(lowpass: float | None, min_hits: int = 1) -> Any:
-    from ssw.signal.tof import TofOptions
+def read_options(args: argparse.Namespace) -> dict[str, Any]:
+    """Keyword options of :func:`ssw.daq.importers.read_any` from those flags."""
+    opts: dict[str, Any] = {"clipped": args.clipped}
+    for key in ("units", "sensitivity", "sample_rate"):
+        if getattr(args, key, None) is not None:
+            opts[key] = getattr(args, key)
+    return opts
 
-    return TofOptions(lowpass=lowpass, min_hits=min_hits)
+
+def add_tof_options(p: argparse.ArgumentParser) -> None:
+    """Flags of the TOF picking (:class:`ssw.signal.tof.TofOptions`)."""
+    from ssw.signal.peaks import UPSAMPLE
+
+    p.add_argument("--lowpass", type=float, help="zero-phase low-pass cutoff, Hz (default none)")
+    p.add_argument("--min-hits", type=int, default=1, help="accepted hits needed")
+    p.add_argument("--upsample", type=int, default=UPSAMPLE,
+                   help=f"band-limited interpolation before the parabolic vertex (default "
+                   f"{UPSAMPLE}; 1: parabola on the samples)")
+    p.add_argument("--min-tof", type=float,
+                   help="shortest physical TOF, s (default: from the chain of --config: "
+                   "sensor -> wall -> sensor at the fastest solitary wave speed)")
+    p.add_argument("--no-bound", action="store_true",
+                   help="no physical TOF bound (a record of an unknown device)")
+
+
+def tof_options(args: argparse.Namespace, params: Any = None) -> Any:
+    """:class:`ssw.signal.tof.TofOptions` from the flags; ``params`` (ChainParams) gives the
+    physical bound (:class:`ssw.signal.tof.ChainPath`) unless ``--no-bound``."""
+    from ssw.signal.tof import ChainPath, TofOptions
+
+    bound = not getattr(args, "no_bound", False)
+    return TofOptions(
+        lowpass=getattr(args, "lowpass", None), min_hits=getattr(args, "min_hits", 1),
+        upsample=getattr(args, "upsample", TofOptions.upsample),
+        min_tof=getattr(args, "min_tof", None) if bound else None,
+        chain=ChainPath.from_params(params) if bound and params is not None else None,
+    )
+
+
+def format_hit(r: Any) -> str:
+    """One line per hit (a :class:`ssw.signal.live.HitReport`) for the person at the bench."""
+    head = f"hit {r.index + 1}: " + (f"TOF {r.tof * 1e3:.4f} ms" if r.tof is not None
+                                     else f"rejected ({r.reason})")
+    if r.tof_mean is None:
+        return head
+    line = f"{head} | mean {r.tof_mean * 1e3:.4f} ms"
+    if r.n_accepted > 1:
+        line += f" +- {r.tof_sem * 1e6:.2f} us (SEM)"
+    line += f", {r.n_accepted} of {r.n_hits} hits"
+    if r.estimate is not None:
+        e = r.estimate
+        line += f" | E {e['E'] / 1e6:.1f} MPa [{e['E_low'] / 1e6:.1f}, {e['E_high'] / 1e6:.1f}]"
+    elif r.estimate_error:
+        line += f" | E: {r.estimate_error}"
+    return line
 
 
 def run_acquire(args: argparse.Namespace) -> dict[str, Any]:
-    from ssw.config import library, load_config
+    from ssw.cli._device import chain_context
+    from ssw.config import library
     from ssw.daq.backend import get_backend, run_session
     from ssw.daq.recording import read_recording
     from ssw.daq.settings import settings_from_config
+    from ssw.measure import parse_nu, sampling_uncertainty
+    from ssw.modulus import Estimator
+    from ssw.signal.live import LiveTof
     from ssw.signal.tof import recording_tof
 
-    cfg = load_config(args.config)
+    ctx = chain_context(args)
+    cfg = ctx.cfg
     if args.striker_velocity_cov is not None:
         cfg["daq"]["simulation"]["striker_velocity_cov"] = args.striker_velocity_cov
-    settings = settings_from_config(cfg, hits=args.hits, sample_rate=args.sample_rate)
-    info: dict[str, Any] = {}
+    settings = settings_from_config(cfg, ctx.device, hits=args.hits,
+                                    sample_rate=args.sample_rate, trigger_mode=args.trigger)
+    params, wall, wall_opts = ctx.params, ctx.wall, ctx.wall_options
+    info: dict[str, Any] = {**ctx.inputs()}
+    nu: Any = None if args.soil_nu is None else parse_nu(args.soil_nu)
     if args.simulate:
         from ssw.daq.simulated import analytic_waveform
 
@@ -59,29 +110,45 @@ def run_acquire(args: argparse.Namespace) -> dict[str, Any]:
             backend = get_backend("simulated", waveform=analytic_waveform(args.tof), seed=seed,
                                   true_tof=args.tof)
         else:
-            from ssw.chain.params import ChainParams
-
             if args.material:
                 mats = library(cfg)
                 if args.material not in mats:
                     raise ConfigError("--material", args.material, f"one of {sorted(mats)}")
-                E, nu = mats[args.material].E, mats[args.material].nu
-            elif args.soil_E is not None and args.soil_nu is not None:
-                E, nu = args.soil_E, args.soil_nu
+                E, nu_sim = mats[args.material].E, mats[args.material].nu
+                nu = nu if nu is not None else nu_sim
+            elif args.soil_E is not None and isinstance(nu, float):
+                E, nu_sim = args.soil_E, nu
             else:
                 raise ConfigError("--material", None, "a material key or --soil-E and --soil-nu "
-                                  "for a simulated session")
-            wall, opts = wall_of(args, cfg)
-            backend = get_backend("simulated", soil_E=E, soil_nu=nu,
-                                  chain_params=ChainParams.from_config(cfg), wall=wall,
-                                  wall_options=opts, seed=seed)
-            info = {"soil_E": E, "soil_nu": nu, "wall": wall}
+                                  "(one value) for a simulated session")
+            backend = get_backend("simulated", soil_E=E, soil_nu=nu_sim, chain_params=params,
+                                  wall=wall, wall_options=wall_opts, seed=seed)
+            info.update({"soil_E": E, "soil_nu": nu_sim})
     else:
         backend = get_backend("nidaqmx")
+    opts = tof_options(args, params)
+    on_hit = None
+    if not args.json:  # one line per hit on stderr for the person at the bench
+        import sys
+
+        estimate = None
+        if nu is not None and args.tof is None:
+            try:
+                estimate = Estimator(
+                    params, wall, wall_opts, np.asarray(nu, float),
+                    calibration=ctx.calibration,
+                    extra={"sampling": sampling_uncertainty(settings.sample_rate)})
+            except (SswError, OSError) as exc:
+                print(f"E per hit unavailable: {exc}", file=sys.stderr)
+        live = LiveTof(settings.sample_rate, settings.pretrigger_samples, opts, estimate)
+
+        def on_hit(i: int, hit: Any) -> None:
+            print(format_hit(live(i, hit)), file=sys.stderr, flush=True)
+
     path = run_session(backend, settings, args.output, sample_id=args.sample,
                        plate=args.plate, operator=args.operator, synthetic=args.simulate,
-                       notes=args.notes, overwrite=args.overwrite)
-    res = recording_tof(read_recording(path, clipped="drop"))
+                       notes=args.notes, overwrite=args.overwrite, on_hit=on_hit)
+    res = recording_tof(read_recording(path, clipped="drop"), opts)
     out = {"output": str(path), "backend": backend.name, "sample_id": args.sample,
            "hits": settings.hits, **info, **res.to_dict()}
     if getattr(backend, "true_tof", None) is not None:
@@ -90,20 +157,20 @@ def run_acquire(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def run_tof_recording(args: argparse.Namespace) -> dict[str, Any]:
+    from ssw.cli._device import chain_context
     from ssw.daq.importers import read_any
     from ssw.signal.tof import recording_tof
 
-    opts = {}
-    if args.sensitivity is not None:
-        opts["sensitivity"] = args.sensitivity
-    if args.sample_rate is not None:
-        opts["sample_rate"] = args.sample_rate
-    rec = read_any(args.file, clipped=args.clipped, **opts)
-    res = recording_tof(rec, _tof_options(args.lowpass, args.min_hits))
+    params = None if args.no_bound else chain_context(args, numerics_only=True).params
+    rec = read_any(args.file, **read_options(args))
+    opts = tof_options(args, params)
+    res = recording_tof(rec, opts)
     meta = {k: rec.meta.get(k) for k in ("sample_id", "plate", "operator", "synthetic",
-                                         "backend", "complete", "device", "channel")
-            if k in rec.meta}
-    return {"file": args.file, **meta, **res.to_dict(), "dropped": list(rec.dropped)}
+                                         "backend", "complete", "device", "channel", "format",
+                                         "layout") if k in rec.meta}
+    bound = opts.bound(float(np.nanmax(res.f_incident))) if np.any(res.accepted) else None
+    return {"file": args.file, **meta, **res.to_dict(), "dropped": list(rec.dropped),
+            "min_tof": bound}
 
 
 def _human_tof(r: dict[str, Any]) -> str:
@@ -123,7 +190,6 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="One finite reference-triggered record per hit, written to one HDF5 "
         "file flushed after every hit. Without --simulate the NI-DAQmx driver and the "
         "module must be present.")
-    p.add_argument("--config", help="study config YAML (default config/config.yaml)")
     p.add_argument("--sample", required=True, help="sample id (e.g. PCF15)")
     p.add_argument("--output", required=True, help="session HDF5 file to create")
     p.add_argument("--hits", type=int, help="hits (default: config daq.hits)")
@@ -136,26 +202,31 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="simulated backend (chain model through a modelled NI 9234)")
     p.add_argument("--material", help="simulate: material key giving E and nu")
     p.add_argument("--soil-E", type=float, help="simulate: soil modulus, Pa")
-    p.add_argument("--soil-nu", type=float, help="simulate: soil Poisson's ratio")
+    p.add_argument("--soil-nu", metavar="NU|LO:HI", help="the medium's Poisson's ratio "
+                   "(simulate; and the running E printed after each hit: NU or a range LO:HI)")
     p.add_argument("--tof", type=float, help="simulate: two analytic pulses this TOF apart, s")
     p.add_argument("--seed", type=int, help="simulate: RNG seed (default: config seed)")
     p.add_argument("--striker-velocity-cov", type=float,
                    help="simulate: relative std of the striker speed hit to hit "
                    "(default: config daq.simulation.striker_velocity_cov)")
-    add_wall_options(p)
+    p.add_argument("--trigger", choices=["auto", "hardware", "software"],
+                   help="hardware: the module's analog reference trigger; software: "
+                   "continuous acquisition cut by the same rule; auto (default): hardware "
+                   "where the module supports it")
+    add_device_options(p)
+    add_tof_options(p)
     add_json_flag(p)
     p.set_defaults(func=run_acquire, human=_human_tof)
 
     p = sub.add_parser(
         "tof-recording", help="TOF (mean, std, COV, per hit) of a recording",
-        description="Incident/reflected peaks with parabolic interpolation per hit, the "
-        "hit rejection rule, statistics. Reads .h5 sessions, .csv and .mat.")
-    p.add_argument("file", help="recording (.h5, .csv, .mat)")
-    p.add_argument("--lowpass", type=float, help="zero-phase low-pass cutoff, Hz (default none)")
-    p.add_argument("--min-hits", type=int, default=1, help="accepted hits needed")
-    p.add_argument("--clipped", choices=["raise", "drop", "keep"], default="raise",
-                   help="clipped hits: error (default), drop them, or keep them")
-    p.add_argument("--sensitivity", type=float, help="CSV/MAT in volts: sensor V/N")
-    p.add_argument("--sample-rate", type=float, help="CSV without a time column: S/s")
+        description="Incident/reflected peaks per hit (band-limited upsampling, parabolic "
+        "vertex; the reflected peak only after the shortest physical round trip), the hit "
+        "rejection rule, statistics. Reads .h5 sessions, .csv (units in the header: "
+        "time_s,force_N or 'force [N]'), .tdms (NI waveform channels) and .mat.")
+    p.add_argument("file", help="recording (.h5, .csv, .tdms, .mat)")
+    add_device_options(p)
+    add_recording_options(p)
+    add_tof_options(p)
     add_json_flag(p)
     p.set_defaults(func=run_tof_recording, human=_human_tof)

@@ -9,6 +9,10 @@
 * ``ssw fit-deviation CURVES... --set-kind materials|thickness [--output F.csv]``:
   deviation from Hertz at ``fit.delta_ref`` next to the thesis's statements.
 * ``ssw fit-plot {deviation,curves,k} INPUTS... --output F.png``: the Figs 5-7 analogues.
+* ``ssw fit-set SET CURVES... --outdir results/fit [--config C]``: everything the study
+  reports of one set, in one process (the workflow's one job per set): its table, and for a
+  one-soil set the deviation from Hertz and its figures, for a grid set the K(E) figure and
+  the fits' TOF cost; for the set of ``fit.set`` also ``k_table.*`` (the chain's fit wall).
 """
 
 from __future__ import annotations
@@ -123,6 +127,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     _config_arg(g)
     add_json_flag(g)
     g.set_defaults(func=run_range)
+
+    fs = sub.add_parser(
+        "fit-set", help="every fit output of one set of the config (the workflow's fit job)",
+        description="Table, deviation, figures and TOF cost of one set's curves, in one "
+        "process; file names as listed in workflow/rules/fit.smk.")
+    fs.add_argument("set", help="set name of the config")
+    fs.add_argument("curves", nargs="+", help="the set's contact curve files")
+    fs.add_argument("--outdir", required=True, help="the fit results folder (results/fit)")
+    _config_arg(fs)
+    add_json_flag(fs)
+    fs.set_defaults(func=run_set)
 
     f = sub.add_parser("fit-plot", help="figures of the fits (thesis Figs 5-7 analogues)")
     f.add_argument("kind", choices=["deviation", "curves", "k"])
@@ -298,3 +313,72 @@ def run_range(args: argparse.Namespace) -> dict[str, Any]:
         "delta_hi": scene_delta_max(args.soil_E, args.soil_nu, cfg),
         "mode": rc["mode"],
     }
+
+
+def run_set(args: argparse.Namespace) -> dict[str, Any]:
+    """Every fit output of one set (the module docstring), one process."""
+    import shutil
+    from pathlib import Path
+
+    from ssw.config import expand_grid
+    from ssw.h5io import atomic_write_text, to_json
+
+    cfg = load_config(args.config)
+    if args.set not in cfg["sets"]:
+        from ssw.errors import ConfigError
+
+        raise ConfigError("set", args.set, f"one of the sets: {', '.join(cfg['sets'])}")
+    spec = cfg["sets"][args.set]
+    one_soil = expand_grid(spec["soil_E"], f"sets.{args.set}.soil_E").size == 1
+    kind = "materials" if len(spec["plate_material"]) > 1 else "thickness"
+    out = Path(args.outdir)
+    (out / "sets" / args.set).mkdir(parents=True, exist_ok=True)
+    (out / "figures").mkdir(parents=True, exist_ok=True)
+    ns = argparse.Namespace
+    written: list[str] = []
+
+    def dump(path: Path, res: dict[str, Any]) -> None:
+        atomic_write_text(path, to_json({**res, "ssw_version": _version()}) + "\n")
+        written.append(str(path))
+
+    tdir = out / "sets" / args.set
+    res = run_table(ns(curves=args.curves, output=str(tdir / "k_table.h5"),
+                       csv=str(tdir / "k_table.csv"), config=args.config))
+    dump(tdir / "k_table.json", res)
+    written += [str(tdir / "k_table.h5"), str(tdir / "k_table.csv")]
+    if cfg["fit"].get("set") == args.set:
+        for ext in ("h5", "csv", "json"):
+            with _atomic_copy(out / f"k_table.{ext}") as tmp:
+                shutil.copyfile(tdir / f"k_table.{ext}", tmp)
+            written.append(str(out / f"k_table.{ext}"))
+    plots = []
+    if one_soil:
+        res = run_deviation(ns(curves=args.curves, set_kind=kind, config=args.config,
+                               output=str(out / f"deviation_{args.set}.csv")))
+        dump(out / f"deviation_{args.set}.json", res)
+        written.append(str(out / f"deviation_{args.set}.csv"))
+        plots += [("curves", args.curves, f"{args.set}_curves.png"),
+                  ("deviation", args.curves, f"{args.set}_deviation.png")]
+    else:
+        plots.append(("k", [str(tdir / "k_table.h5")], f"{args.set}_k_vs_E.png"))
+        res = run_tof_impact(ns(curves=args.curves, config=args.config,
+                                output=str(out / f"tof_impact_{args.set}.csv")))
+        dump(out / f"tof_impact_{args.set}.json", res)
+        written.append(str(out / f"tof_impact_{args.set}.csv"))
+    for kind_, inputs, name in plots:
+        run_plot(ns(kind=kind_, inputs=inputs, output=str(out / "figures" / name),
+                    config=args.config, title=args.set))
+        written.append(str(out / "figures" / name))
+    return {"set": args.set, "outputs": written}
+
+
+def _version() -> str:
+    from ssw import __version__
+
+    return __version__
+
+
+def _atomic_copy(path: Any) -> Any:
+    from ssw.h5io import atomic_path
+
+    return atomic_path(path)

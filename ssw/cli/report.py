@@ -1,4 +1,9 @@
-"""``ssw report``: one self-contained HTML file with every figure and table of a study."""
+"""``ssw report``: a stage's tables (CSV) as one HTML page for Snakemake's study report.
+
+The study report itself is ``snakemake --report results/report.html`` (figures and tables
+flagged ``report(...)`` in the rules); CSV files appear there only as downloads, so the
+workflow renders them with this command and flags the page (rule ``report_tables``).
+"""
 
 from __future__ import annotations
 
@@ -9,21 +14,19 @@ from ssw.cli import add_json_flag
 
 
 def run_report(args: argparse.Namespace) -> dict[str, Any]:
-    from ssw.config import DEFAULT_CONFIG, load_config
-    from ssw.report import write_report
+    from ssw.report import write_tables
 
-    cfg = load_config(args.config)
-    return write_report(args.results, args.output, title=f"ssw study: {cfg.get('study', '')}",
-                        captions_file=args.captions, config_file=args.config or DEFAULT_CONFIG)
+    return write_tables(args.tables, args.output, title=args.title,
+                        captions_file=args.captions)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
-    p = sub.add_parser("report", help="self-contained HTML report of a study's results",
-                       description="Embeds every PNG and CSV under --results in one HTML file.")
-    p.add_argument("--config", help="study config YAML (default config/config.yaml)")
-    p.add_argument("--results", default="results", help="results folder")
-    p.add_argument("--output", default="results/report/report.html", help="HTML file")
-    p.add_argument("--captions", default="workflow/report/captions.yaml",
-                   help="YAML: file-name glob -> caption")
+    p = sub.add_parser("report", help="CSV tables as one HTML page (for the Snakemake report)",
+                       description="Renders CSV tables (6 significant digits, long tables "
+                       "cut) with their notes into one HTML page.")
+    p.add_argument("tables", nargs="+", help="CSV files")
+    p.add_argument("--output", required=True, help="HTML file")
+    p.add_argument("--title", default="ssw study tables", help="page title")
+    p.add_argument("--captions", help="YAML: file-name glob -> note under the table")
     add_json_flag(p)
     p.set_defaults(func=run_report)

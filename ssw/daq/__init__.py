@@ -5,5 +5,7 @@
 * :mod:`ssw.daq.nidaq`: real acquisition through NI-DAQmx;
 * :mod:`ssw.daq.simulated`: the chain's sensor force through a modelled NI 9234;
 * :mod:`ssw.daq.recording`: session files (one dataset per hit, flushed per hit);
-* :mod:`ssw.daq.importers`: CSV and MAT recordings made elsewhere.
+* :mod:`ssw.daq.trigger`: the one trigger rule (first crossing, long-channel splitting, the
+  ring-buffer software trigger of continuous acquisition);
+* :mod:`ssw.daq.importers`: recordings made elsewhere (TDMS, CSV, MAT; :mod:`ssw.daq.formats`).
 """

@@ -81,7 +81,9 @@ class RecordingWriter:
                     "full_scale_force"):
             a[key] = getattr(settings, key)
         a["sensitivity_units"] = "V/N"
-        a["trigger_type"] = "analog edge, reference trigger on the force channel"
+        a["trigger_type"] = ("analog edge on the force channel: the module's reference "
+                             "trigger, or the same rule in software over a continuous "
+                             "stream (hw_trigger)")
         self.set_meta(meta)
         a["n_hits"] = 0
         a["complete"] = False

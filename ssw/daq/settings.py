@@ -24,6 +24,7 @@ NI9234_RANGE_V = 5.0  # V, input range +-5 V (NI 9234 specs)
 NI9234_BITS = 24  # delta-sigma ADC resolution (NI 9234 specs)
 NI9234_IEPE_A = 0.002  # A, the only IEPE excitation current the module supplies
 RATE_RTOL = 1e-9  # relative tolerance when matching a rate to 51200/n
+TRIGGER_MODES = ("auto", "hardware", "software")
 
 
 def allowed_rates() -> list[float]:
@@ -72,7 +73,10 @@ class DaqSettings:
     """One force channel of an NI 9234 in a cDAQ chassis, from config ``daq:`` (SI units).
 
     ``sensitivity`` is in V/N (NI-DAQmx takes mV/N: :attr:`sensitivity_mv_per_n`);
-    ``trigger_level`` and ``max_force`` are in N.
+    ``trigger_level`` and ``max_force`` are in N. ``trigger_mode``: ``hardware`` (an analog
+    reference trigger in the module), ``software`` (continuous acquisition, the same rule
+    over a ring buffer: :mod:`ssw.daq.trigger`) or ``auto`` (hardware where the module can
+    source it, else software).
     """
 
     device: str = "cDAQ1Mod1"
@@ -89,6 +93,7 @@ class DaqSettings:
     record_samples: int = 2048
     hits: int = 10
     timeout: float = 60.0
+    trigger_mode: str = "auto"
     simulation: SimulationSettings = field(default_factory=SimulationSettings)
 
     def __post_init__(self) -> None:
@@ -147,6 +152,8 @@ def check_settings(s: DaqSettings) -> None:
         )
     if s.trigger_slope not in ("rising", "falling"):
         raise ConfigError("daq.trigger_slope", s.trigger_slope, "rising or falling")
+    if s.trigger_mode not in TRIGGER_MODES:
+        raise ConfigError("daq.trigger_mode", s.trigger_mode, " | ".join(TRIGGER_MODES))
     if not 0 < abs(s.trigger_level) < s.max_force:
         raise ConfigError(
             "daq.trigger_level", s.trigger_level, f"a nonzero force below max_force {s.max_force} N"
@@ -172,9 +179,18 @@ def check_settings(s: DaqSettings) -> None:
         raise ConfigError("daq.simulation.source", sim.source, "chain or analytic")
 
 
-def settings_from_config(cfg: dict[str, Any], **overrides: Any) -> DaqSettings:
-    """Build :class:`DaqSettings` from a loaded config's ``daq:`` section plus overrides."""
+def settings_from_config(cfg: dict[str, Any], device: Any = None,
+                         **overrides: Any) -> DaqSettings:
+    """Build :class:`DaqSettings` from a loaded config's ``daq:`` section (the acquisition:
+    module, channel, rate, trigger, hits) and the device's DAQ sensor (model, sensitivity
+    V/N, range N: ``device`` or the config's, :func:`ssw.config.device_of`), plus
+    overrides."""
+    from ssw.config import device_of
+
+    dev = device if device is not None else device_of(cfg)
     raw = dict(cfg.get("daq", {}) or {})
+    raw.update({"sensor_model": dev.sensor_model, "sensitivity": dev.sensitivity,
+                "max_force": dev.sensor_range})
     raw.update({k: v for k, v in overrides.items() if v is not None})
     sim_raw = raw.pop("simulation", {}) or {}
     known = set(DaqSettings.__dataclass_fields__)

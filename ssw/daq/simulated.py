@@ -19,7 +19,8 @@ config ``seed``):
 5. 24-bit quantization over +-5 V (LSB = 10 V / 2^24 = 0.596 uV, i.e. 53 uN at
    11.24 mV/N) and clipping at the rails;
 6. a software analog-edge reference trigger on the sampled record: the record starts
-   ``pretrigger_samples`` before the first crossing of ``trigger_level``.
+   ``pretrigger_samples`` before the first crossing of ``trigger_level`` (the rule of
+   :mod:`ssw.daq.trigger`).
 
 The filter's delay is the same for the incident and the reflected peak, so it cancels in
 the peak-to-peak TOF; the test suite checks this round trip.
@@ -81,15 +82,17 @@ def sech2(x: np.ndarray) -> np.ndarray:
 def analytic_waveform(
     tof: float, *, t_incident: float = 1.0e-3, width: float = 40e-6, f_incident: float = 60.0,
     f_reflected: float = 30.0, duration: float = 6e-3, dt: float = 1e-6,
+    width_reflected: float | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
-    """Two sech^2 pulses: ``F = f_i sech^2((t - t_i)/w) + f_r sech^2((t - t_i - tof)/w)``.
+    """Two sech^2 pulses: ``F = f_i sech^2((t - t_i)/w) + f_r sech^2((t - t_i - tof)/w_r)``.
 
     A stand-in for the chain's sensor force with an exactly known peak-to-peak TOF
-    (s); forces in N, times in s. Returns ``(t, F)``.
+    (s): each pulse is symmetric, so a linear-phase filter delays both peaks by its group
+    delay. ``w_r`` (s) defaults to ``w``; forces in N, times in s. Returns ``(t, F)``.
     """
     t = np.arange(0.0, duration, dt)
     f = f_incident * sech2((t - t_incident) / width)
-    f += f_reflected * sech2((t - t_incident - tof) / width)
+    f += f_reflected * sech2((t - t_incident - tof) / (width_reflected or width))
     return t, f
 
 
@@ -241,24 +244,15 @@ def sample_hit(ana: tuple[np.ndarray, np.ndarray], settings: DaqSettings,
 def trigger_index(y: np.ndarray, settings: DaqSettings) -> int:
     """First sample index ``k >= pretrigger`` where ``y`` crosses the trigger level.
 
-    Rising slope: ``y[k-1] < level <= y[k]``; falling: ``y[k-1] > level >= y[k]``.
-    Raises :class:`DaqError` (as the hardware times out) if no crossing leaves room for a
-    whole record.
+    Rising slope: ``y[k-1] < level <= y[k]``; falling: ``y[k-1] > level >= y[k]``
+    (:mod:`ssw.daq.trigger`, the rule shared with long-channel splitting and the ring-buffer
+    software trigger). Raises :class:`DaqError` (as the hardware times out) if no crossing
+    leaves room for a whole record.
     """
-    lvl = settings.trigger_level
-    if settings.trigger_slope == "rising":
-        hit = (y[:-1] < lvl) & (y[1:] >= lvl)
-    else:
-        hit = (y[:-1] > lvl) & (y[1:] <= lvl)
-    ks = np.flatnonzero(hit) + 1
-    ks = ks[(ks >= settings.pretrigger_samples)
-            & (ks + settings.record_samples - settings.pretrigger_samples <= y.size)]
-    if ks.size == 0:
-        raise DaqError(
-            f"no trigger: the signal (peak {np.max(np.abs(y)):.4g} N) never crosses "
-            f"trigger_level = {lvl} N ({settings.trigger_slope}) with room for a record"
-        )
-    return int(ks[0])
+    from ssw.daq.trigger import TriggerRule
+    from ssw.daq.trigger import trigger_index as first_trigger
+
+    return first_trigger(y, TriggerRule.of(settings))
 
 
 register_backend("simulated", SimulatedBackend)

@@ -2,9 +2,19 @@
 
 Per hit: subtract the pretrigger baseline (median), estimate the noise (1.4826 MAD of the
 pretrigger samples), low-pass with a zero-phase filter (:func:`ssw.signal.filters.lowpass`,
-no delay), pick the incident and reflected peaks (:func:`ssw.signal.peaks.pick_peaks`),
-``TOF = t_reflected - t_incident``. Any constant delay (NI 9234 input delay, trigger
-position, cable) shifts both peaks equally and cancels.
+no delay), pick the incident and reflected peaks (:func:`ssw.signal.peaks.pick_peaks`,
+band-limited upsampling then a parabolic vertex), ``TOF = t_reflected - t_incident``. Any
+constant delay (NI 9234 input delay, trigger position, cable) shifts both peaks equally and
+cancels.
+
+The physical bound. The reflected wave cannot return sooner than the shortest round trip
+sensor -> wall -> sensor (:func:`shortest_round_trip`): the path ``L = (2 n_below + 1) R``
+from the sensor's centre through the ``n_below`` beads under it to the wall, twice, at the
+fastest speed a solitary wave in the chain can have (Daraio et al. 2006, with the chain's
+static load), the speed at the largest contact force on the path, bounded by
+:data:`WALL_AMPLIFICATION` times the largest force the record shows. The reflected peak is
+searched only after it; a TOF below it is a :class:`ssw.signal.peaks.PeakError`, never a
+number.
 
 Rejection rule for a session (thesis: "three consecutive tests"; its MATLAB rule is not
 published, so this one is ours):
@@ -25,36 +35,162 @@ The statistics are over the accepted hits: mean, sample standard deviation (ddof
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
-from ssw.errors import RecordingError
+from ssw.errors import ConfigError, RecordingError
 from ssw.signal.filters import MAD_TO_SIGMA, baseline, lowpass, noise_sigma
-from ssw.signal.peaks import PeakError, PeakPair, PeakRule, pick_peaks
+from ssw.signal.peaks import UPSAMPLE, PeakError, PeakPair, PeakRule, pick_peaks
 
 OUTLIER_K = 3.5  # robust sigmas from the median beyond which a hit's TOF is an outlier
 OUTLIER_FLOOR_SAMPLES = 0.1  # robust-sigma floor, in sample periods
+#: Daraio et al. (2006): solitary wave speed coefficient without precompression, and the
+#: precompressed chain's coefficient (its long-wave sound speed as f_r -> 1).
+SPEED_COEFFICIENT = 0.6802
+SOUND_COEFFICIENT = 0.9314
+#: Largest contact force between the sensor and the wall over the largest force at the
+#: sensor: at a stiff wall the incident and reflected waves overlap on a contact 2 sqrt(2)
+#: times stiffer than a bead pair. Measured with ssw.chain on rigid and steel walls
+#: (20-, 12-, 30- and 5-bead chains, 0.01-3 m/s, gravity on/off, preload 0-50 N): 2.1-3.2.
+WALL_AMPLIFICATION = 3.2
+
+
+def solitary_wave_speed(force: float, bead_radius: float, bead_E: float, bead_nu: float,
+                        bead_density: float, static_force: float = 0.0) -> float:
+    """Speed (m/s) of a solitary wave whose largest contact force is ``force`` (N).
+
+    Without precompression (``static_force = 0``)
+    ``V_s = 0.6802 X F_m^(1/6)``, ``X = [2 E / (a rho^(3/2) (1 - nu^2))]^(1/3)``, ``a = 2 R``
+    the bead diameter (m), ``E`` (Pa), ``nu``, ``rho`` (kg/m^3) the beads'. With a static
+    contact force ``F_0`` (N) and ``F_m = F_0 + force``, ``f_r = F_m / F_0``:
+    ``V_s = 0.9314 X F_0^(1/6) / (f_r^(2/3) - 1) [4/15 (3 + 2 f_r^(5/3) - 5 f_r^(2/3))]^(1/2)``,
+    which tends to the first law as ``f_r -> inf`` and to the long-wave sound speed
+    ``c_0 = 0.9314 X F_0^(1/6)`` as ``f_r -> 1``. Long-wave approximations: a discrete chain
+    runs faster by a share that is the same at every amplitude, under 2 %
+    (tests/test_chain_physics.py).
+
+    References
+    ----------
+    Daraio, C., Nesterenko, V. F., Herbold, E. B. and Jin, S. (2006). Tunability of solitary
+    wave properties in one-dimensional strongly nonlinear phononic crystals. Phys. Rev. E
+    73, 026610, eqs. (2)-(3). Nesterenko, V. F. (2001). Dynamics of Heterogeneous
+    Materials, ch. 1.
+    """
+    for name, val in (("force", force), ("bead_radius", bead_radius), ("bead_E", bead_E),
+                      ("bead_density", bead_density)):
+        if not (np.isfinite(val) and val > 0):
+            raise ConfigError(name, val, "a positive finite number (SI)")
+    if not (np.isfinite(static_force) and static_force >= 0):
+        raise ConfigError("static_force", static_force, "a finite force >= 0 N")
+    if not -1.0 < bead_nu <= 0.5:
+        raise ConfigError("bead_nu", bead_nu, "a Poisson's ratio in (-1, 0.5]")
+    x = (2.0 * bead_E / (2.0 * bead_radius * bead_density**1.5 * (1.0 - bead_nu**2))) ** (1 / 3)
+    if static_force == 0:
+        return float(SPEED_COEFFICIENT * x * force ** (1 / 6))
+    fr = (static_force + force) / static_force
+    c0 = SOUND_COEFFICIENT * x * static_force ** (1 / 6)
+    if fr - 1.0 < 1e-6:  # the weak-wave limit (0/0 in the formula)
+        return float(c0)
+    shape = np.sqrt(4.0 / 15.0 * (3.0 + 2.0 * fr ** (5 / 3) - 5.0 * fr ** (2 / 3)))
+    return float(c0 * shape / (fr ** (2 / 3) - 1.0))
+
+
+def shortest_round_trip(beads_below: int, bead_radius: float, bead_E: float, bead_nu: float,
+                        bead_density: float, force: float, static_force: float = 0.0,
+                        amplification: float = WALL_AMPLIFICATION) -> float:
+    """The shortest physical TOF (s): sensor -> wall -> sensor at the fastest wave speed.
+
+    ``t_min = 2 L / V_s`` with ``L = (2 n + 1) R`` the path (m) from the sensor's centre
+    through the ``n = beads_below`` beads under it to the wall, and ``V_s`` the solitary
+    wave speed (:func:`solitary_wave_speed`) at the largest contact force on that path:
+    ``amplification x force`` over the static load ``static_force`` (N), ``force`` (N) the
+    largest force the record shows. No reflected peak can come back sooner.
+
+    ``amplification = 1`` is the bound at the recorded force itself; it is not a bound on a
+    stiff wall: there the peak-to-peak TOF of ssw.chain falls to 0.85-0.93 of it, because
+    the waves overlapping at the wall run faster (:data:`WALL_AMPLIFICATION`).
+    """
+    n = int(beads_below)
+    if n != beads_below or n < 0:
+        raise ConfigError("beads_below", beads_below, "a whole number of beads >= 0")
+    if not amplification >= 1:
+        raise ConfigError("amplification", amplification, "a factor >= 1")
+    path = (2 * n + 1) * bead_radius
+    v = solitary_wave_speed(amplification * force, bead_radius, bead_E, bead_nu, bead_density,
+                            static_force)
+    return 2.0 * path / v
+
+
+@dataclass(frozen=True)
+class ChainPath:
+    """The chain between the sensor and the wall, for the bound of :func:`shortest_round_trip`.
+
+    Attributes
+    ----------
+    beads_below : beads between the sensor and the wall.
+    bead_radius : m.  bead_E : Pa.  bead_nu : -.  bead_density : kg/m^3.
+    static_force : N, the largest static contact force on the path (the chain's weight on
+        the wall plus any preload); an AC-coupled IEPE sensor records from zero.
+    """
+
+    beads_below: int
+    bead_radius: float
+    bead_E: float
+    bead_nu: float
+    bead_density: float
+    static_force: float = 0.0
+
+    def min_tof(self, force: float) -> float:
+        """Shortest round trip (s) when the record's largest force is ``force`` (N)."""
+        return shortest_round_trip(self.beads_below, self.bead_radius, self.bead_E,
+                                   self.bead_nu, self.bead_density, force, self.static_force)
+
+    @classmethod
+    def from_params(cls, params: Any) -> ChainPath:
+        """From a :class:`ssw.chain.params.ChainParams` (its gravity load and preload)."""
+        weight = float(np.sum(params.masses)) * params.g if params.gravity else 0.0
+        return cls(beads_below=params.n_beads - 1 - params.sensor_index,
+                   bead_radius=params.bead_radius, bead_E=params.bead_E,
+                   bead_nu=params.bead_nu, bead_density=params.bead_density,
+                   static_force=weight + params.preload)
 
 
 @dataclass(frozen=True)
 class TofOptions:
-    """Processing options: low-pass cutoff, peak rule, minimum accepted hits.
+    """Processing options: low-pass cutoff, peak rule, interpolation, bound, minimum hits.
 
     ``lowpass`` (Hz) is off by default: the NI 9234 has band-limited the record to
     0.45 f_s already, and even a zero-phase filter reshapes the broader, asymmetric
     reflected pulse of a soft medium and biases the TOF (``ssw bench tof --lowpass``).
+    ``upsample``: band-limited interpolation factor before the parabolic vertex (1: the
+    parabola on the samples). The physical bound of the reflected peak: ``min_tof`` (s),
+    fixed, or ``chain`` (:class:`ChainPath`), evaluated per hit at its largest force; the
+    larger applies. Neither: no bound (a record of unknown origin).
     """
 
     lowpass: float | None = None
     rule: PeakRule = field(default_factory=PeakRule)
     min_hits: int = 1
+    upsample: int = UPSAMPLE
+    min_tof: float | None = None
+    chain: ChainPath | None = None
+
+    def bound(self, force_max: float) -> float | None:
+        """The shortest physical TOF (s) of a record whose largest force is ``force_max``."""
+        b = [self.min_tof] if self.min_tof is not None else []
+        if self.chain is not None and force_max > 0:
+            b.append(self.chain.min_tof(force_max))
+        return max(b) if b else None
 
 
 def hit_peaks(force: np.ndarray, rate: float, n_pre: int, opts: TofOptions) -> PeakPair:
     """Peaks of one record (force in N, ``n_pre`` pretrigger samples). Raises PeakError."""
     y = np.asarray(force, dtype=np.float64) - baseline(force, n_pre)
     sigma = noise_sigma(y, n_pre)
-    return pick_peaks(lowpass(y, rate, opts.lowpass), rate, sigma, opts.rule)
+    y = lowpass(y, rate, opts.lowpass)
+    return pick_peaks(y, rate, sigma, opts.rule, min_tof=opts.bound(float(np.max(y))),
+                      upsample=opts.upsample)
 
 
 @dataclass(frozen=True)

@@ -56,7 +56,12 @@ rule tof_sweep:
     output:
         h5=f"{CHAIN_DIR}/tof_sweep.h5",
         csv=f"{CHAIN_DIR}/tof_sweep.csv",
-        fig8=f"{CHAIN_DIR}/figures/fig8_tof_vs_E.png",
+        fig8=report(
+            f"{CHAIN_DIR}/figures/fig8_tof_vs_E.png",
+            caption="../report/fig8.rst",
+            category="3. Chain (Stage II)",
+            subcategory="Figures",
+        ),
     log:
         f"{LOGS}/chain/tof_sweep.log",
     conda:

@@ -96,3 +96,25 @@ def validation_inputs(wildcards):
 def validation_flags(wildcards, input):
     """The wall law's flags and --calibration for the inputs the validation job has."""
     return " ".join([chainwf.wall_flags(config, input, RESULTS), chainwf.calibration_flag(input)])
+
+
+# ---- survey (workflow/rules/survey.smk)
+def survey_point_inputs(point_id):
+    """A test point's recordings (from the repository), the wall law's inputs and, with
+    calibration.use, the calibration."""
+    pt = {p["id"]: p for p in config["survey"]["points"]}[point_id]
+    return {"recordings": [os.path.join(RECORDINGS_ROOT, r) for r in pt["recordings"]],
+            **chainwf.calibrated_inputs(config, RESULTS)}
+
+
+def survey_nu(point_id):
+    """The point's --soil-nu argument (NU or LO:HI)."""
+    from ssw.survey import nu_text
+
+    return nu_text({p["id"]: p for p in config["survey"]["points"]}[point_id]["soil_nu"])
+
+
+def survey_has_coordinates():
+    """Whether any survey point has plan or geographic coordinates (a map is drawn)."""
+    return any(p.get("x") is not None or p.get("latitude") is not None
+               for p in config.get("survey", {}).get("points", []))

@@ -75,7 +75,12 @@ rule contact_figure:
     input:
         lambda wc: CONTACT_FIGURE_JOBS[wc.figure][0],
     output:
-        png=f"{RESULTS}/contact/figures/{{figure}}.png",
+        png=report(
+            f"{RESULTS}/contact/figures/{{figure}}.png",
+            caption="../report/contact_figure.rst",
+            category="1. Contact (Stage I)",
+            subcategory="Figures",
+        ),
     log:
         f"{LOGS}/contact/figures/{{figure}}.log",
     params:

@@ -1,13 +1,14 @@
 # Stage III: validation on the control foams (thesis Tables 2 and 3, Figs 9 and 10) and the
-# study report. Science lives in ssw.validation / ssw.signal / ssw.report; these rules call
-# `ssw validate` and `ssw report`.
+# tables of the study report. Science lives in ssw.validation / ssw.signal / ssw.report;
+# these rules call `ssw validate` and `ssw report`.
 #
 # Outputs:
 #   results/validation/validation.csv / .h5 / .json   every field of Tables 2 and 3 (SI)
 #   results/validation/table2_tof.csv, table3_modulus.csv  the thesis's tables, ssw beside it
 #   results/validation/fig10_tof_validation.png      Fig 10: measured vs simulated TOF
 #   results/validation/fig9_tof_scatter.png          Fig 9 style: TOF scatter of repeated hits
-#   results/report/report.html                       every figure and table of the study
+#   results/report/tables_{stage}.html               each stage's tables for the study report
+#                                                    (snakemake --report results/report.html)
 
 
 VALIDATION_DIR = f"{RESULTS}/validation"
@@ -23,8 +24,18 @@ rule validation:
         json=f"{VALIDATION_DIR}/validation.json",
         table2=f"{VALIDATION_DIR}/table2_tof.csv",
         table3=f"{VALIDATION_DIR}/table3_modulus.csv",
-        fig10=f"{VALIDATION_DIR}/fig10_tof_validation.png",
-        fig9=f"{VALIDATION_DIR}/fig9_tof_scatter.png",
+        fig10=report(
+            f"{VALIDATION_DIR}/fig10_tof_validation.png",
+            caption="../report/fig10.rst",
+            category="4. Validation (Stage III)",
+            subcategory="Figures",
+        ),
+        fig9=report(
+            f"{VALIDATION_DIR}/fig9_tof_scatter.png",
+            caption="../report/fig9.rst",
+            category="4. Validation (Stage III)",
+            subcategory="Figures",
+        ),
     log:
         f"{LOGS}/validation/validation.log",
     params:
@@ -39,32 +50,67 @@ rule validation:
         "--outdir $(dirname {output.csv}) --json > {output.json} 2> {log}"
 
 
+# The study report is Snakemake's own, built after the run:
+#   snakemake --report results/report.html [--configfile ...]
+# with every figure and table the stages flag with report(...) (a category per stage,
+# captions in workflow/report/*.rst, the description workflow/report/workflow.rst). It shows
+# CSV files only as downloads, so rule report_tables renders each stage's tables as one HTML
+# page (ssw report) that the report opens inline.
 # Every other stage's targets exist when this file is included (the Snakefile includes it
-# last); the report waits for all of them.
+# last).
 _STAGE_TARGETS = [
     t
-    for name in ("CONTACT_TARGETS", "FIT_TARGETS", "CHAIN_TARGETS")
+    for name in ("CONTACT_TARGETS", "FIT_TARGETS", "CHAIN_TARGETS", "SURVEY_TARGETS")
     for t in globals().get(name, [])
 ]
+# results sub-folder -> the report's category (numbered: the report sorts categories by name)
+REPORT_CATEGORIES = {
+    "contact": "1. Contact (Stage I)",
+    "fit": "2. Fits (Stage I)",
+    "chain": "3. Chain (Stage II)",
+    "validation": "4. Validation (Stage III)",
+    "survey": "5. Survey",
+}
+# stage -> its CSV tables
+REPORT_TABLES = {
+    stage: tables
+    for stage in REPORT_CATEGORIES
+    if (
+        tables := [
+            str(t)
+            for t in [*_STAGE_TARGETS, *rules.validation.output]
+            if str(t).startswith(f"{RESULTS}/{stage}/") and str(t).endswith(".csv")
+        ]
+    )
+}
 
 
-rule report:
-    """A self-contained HTML report with every figure and table of the study."""
+rule report_tables:
+    """A stage's tables (CSV) as one HTML page for the Snakemake report."""
     input:
-        stages=_STAGE_TARGETS,
-        validation=rules.validation.output,
+        tables=lambda wc: REPORT_TABLES[wc.stage],
         captions=os.path.join(workflow.basedir, "workflow", "report", "captions.yaml"),
     output:
-        html=f"{RESULTS}/report/report.html",
+        html=report(
+            f"{RESULTS}/report/tables_{{stage}}.html",
+            caption="../report/tables.rst",
+            category=lambda wc: REPORT_CATEGORIES[wc.stage],
+            subcategory="Tables",
+        ),
     log:
-        f"{LOGS}/report/report.log",
+        f"{LOGS}/report/tables_{{stage}}.log",
     params:
-        config=CONFIG_FILE,
+        title=lambda wc: f"{REPORT_CATEGORIES[wc.stage]}: tables",
+    wildcard_constraints:
+        stage="|".join(REPORT_TABLES) or "none",
     conda:
         SSW_ENV
     shell:
-        "python -m ssw report --config {params.config} --results $(dirname $(dirname {output.html})) "
-        "--captions {input.captions} --output {output.html} > {log} 2>&1"
+        "python -m ssw report {input.tables} --captions {input.captions} --title {params.title:q} "
+        "--output {output.html} > {log} 2>&1"
 
 
-VALIDATION_TARGETS = [*rules.validation.output, rules.report.output.html]
+VALIDATION_TARGETS = [
+    *rules.validation.output,
+    *expand(rules.report_tables.output.html, stage=list(REPORT_TABLES)),
+]

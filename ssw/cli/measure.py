@@ -1,0 +1,83 @@
+"""``ssw measure``: recordings of one test point -> its modulus with an interval.
+
+    ssw measure FILE... [--device D] [--calibration C] --soil-nu NU|LO:HI [--json]
+
+Works from any folder: the device defaults to the shipped thesis device, the calibration to
+the study's (``results/calibration/calibration.json``) when there is one, the wall law to the
+config's (``fem``: computed on demand). Prints E, its 95 % interval and what it is made of;
+``--json`` prints ``{"E", "E_low", "E_high", "tof_mean", "tof_sem", "n_accepted", ...inputs}``.
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from ssw.cli import add_json_flag
+from ssw.cli._device import add_device_options, chain_context
+from ssw.cli.daq import add_recording_options, add_tof_options
+
+
+def run_measure(args: argparse.Namespace) -> dict[str, Any]:
+    from ssw.cli.daq import read_options, tof_options
+    from ssw.daq.importers import read_any
+    from ssw.measure import measure, parse_nu
+
+    nu = parse_nu(args.soil_nu)
+    ctx = chain_context(args)
+    ropts = read_options(args)
+    if args.clipped == "raise":  # a field session keeps its good hits: drop clipped ones
+        ropts["clipped"] = "drop"
+    if "sensitivity" not in ropts:  # data in volts: the device's sensor
+        ropts["sensitivity"] = ctx.device.sensitivity
+    recs = [read_any(f, **_format_options(f, ropts)) for f in args.files]
+    if args.lowpass is None:
+        args.lowpass = ctx.cfg.get("validation", {}).get("lowpass")
+    m = measure(recs, nu, ctx.params, ctx.wall, ctx.wall_options,
+                calibration=ctx.calibration, tof_options=tof_options(args, ctx.params))
+    return {**ctx.inputs(), **m.to_dict()}
+
+
+def _format_options(path: str, opts: dict[str, Any]) -> dict[str, Any]:
+    """The reading options a file's format takes (an HDF5 session is in N already)."""
+    from pathlib import Path
+
+    if Path(path).suffix.lower() in (".h5", ".hdf5"):
+        return {"clipped": opts["clipped"]}
+    return opts
+
+
+def _human(r: dict[str, Any]) -> str:
+    nu = (f"nu {r['nu_range'][0]:g}..{r['nu_range'][1]:g}" if r["nu_range"]
+          else f"nu {r['nu']:g}")
+    cal = r.get("calibration_file") or "none"
+    lines = [
+        f"E = {r['E'] / 1e6:.1f} MPa, 95 % interval {r['E_low'] / 1e6:.1f} .. "
+        f"{r['E_high'] / 1e6:.1f} MPa ({nu}; device {r['device_name']}, calibration {cal}, "
+        f"{r['wall']} wall)",
+        f"TOF {r['tof_mean'] * 1e3:.5f} ms +- {r['tof_sem'] * 1e6:.2f} us (standard error) "
+        f"from {r['n_accepted']} of {r['n_hits']} hits in {len(r['files'])} file(s)",
+        "uncertainty of E (1 sigma): {:.2f} % = {}".format(
+            r["E_u_pct"], ", ".join(f"{k} {v:.2f} %" for k, v in r["contributions_pct"].items())),
+    ]
+    lines += [f"note: {n}" for n in r["notes"]]
+    lines += [f"rejected: {x}" for x in r["rejections"]]
+    if r["synthetic"]:
+        lines.append("SYNTHETIC recording(s): made by the simulated backend, not measured")
+    return "\n".join(lines)
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    p = sub.add_parser(
+        "measure", help="recordings of one test point -> E with its 95 % interval",
+        description="Per-hit TOF (rejection rule per session), pooled mean and standard "
+        "error, then E through the device and its calibration, with every contribution to "
+        "its uncertainty. Reads HDF5 sessions, CSV, MAT and TDMS. SI units.")
+    p.add_argument("files", nargs="+", help="recordings of one test point")
+    p.add_argument("--soil-nu", required=True, metavar="NU|LO:HI",
+                   help="Poisson's ratio of the medium, or a range LO:HI")
+    add_recording_options(p)
+    add_tof_options(p)
+    add_device_options(p)
+    add_json_flag(p)
+    p.set_defaults(func=run_measure, human=_human)

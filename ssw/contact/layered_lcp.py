@@ -1,0 +1,223 @@
+"""Frictionless contact of a rigid sphere on ring influence coefficients: the exact LCP.
+
+Unknowns are the ring pressures ``p >= 0`` (Pa); at the collocation radii ``r_i`` the gap
+between the sphere, pushed down by ``delta``, and the deflected surface is
+
+    ``g = s - delta + C p >= 0``,  ``s(r) = r^2 / (R + sqrt(R^2 - r^2))``  (exact sphere),
+
+with ``p_i g_i = 0`` (a linear complementarity problem). Its solution on an active set
+``A`` (the rings in contact) is linear in ``delta``: ``p_A = delta u - v`` with
+``C_AA u = 1`` and ``C_AA v = s_A``; the gap is ``g = g0 + delta g1``. So the active set
+is found once (an active-set iteration from the previous one: drop negative pressures,
+add closed gaps; Murty's least-index rule if that cycles) and every increment up to the
+first ``delta`` at which a pressure or a gap changes sign is filled at once.
+
+Active sets are almost always the leading rings ``0..k-1``; their systems are the leading
+blocks of ``C``, solved from one LU factorization without pivoting of ``C`` (the leading
+blocks of ``L U`` are the LU factors of the leading blocks of ``C``): ``O(k^2)`` each,
+checked by their residual (a general solve otherwise).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from ssw.errors import SolverError
+
+#: Gap tolerance, relative to the largest indentation of the curve.
+GAP_TOL = 1e-11
+#: Negative pressure accepted as round-off, relative to the largest (a ring whose pressure
+#: vanishes exactly at an increment must not cycle in and out).
+PRESSURE_TOL = 1e-12
+#: Relative residual above which a leading-block solve is redone by a pivoted solve.
+RESIDUAL_TOL = 1e-9
+#: Leading-block size below which the LU recursion switches to row-by-row elimination.
+LU_BLOCK = 48
+
+
+class ZoneError(SolverError):
+    """The contact reached the outermost rings: the candidate zone is too small."""
+
+
+@dataclass
+class LcpResult:
+    """Force (N), contact radius (m), the pressures (Pa) of chosen increments and counts."""
+
+    force: NDArray[np.float64]
+    contact_radius: NDArray[np.float64]
+    profiles: dict[int, NDArray[np.float64]] = field(default_factory=dict)
+    active_sets: int = 0
+    iterations: int = 0
+    general_solves: int = 0
+    max_ring: int = 0
+
+
+def sphere_surface(r: NDArray, radius: float) -> NDArray[np.float64]:
+    """Height (m) of a sphere of ``radius`` above its lowest point at radius ``r`` (m):
+    ``r^2 / (R + sqrt(R^2 - r^2))`` (no cancellation for small r)."""
+    r = np.asarray(r, float)
+    if np.any(r >= radius):
+        raise SolverError("a collocation radius lies beyond the sphere's radius: "
+                          "shrink the candidate zone")
+    return r * r / (radius + np.sqrt(radius * radius - r * r))
+
+
+def lu_nopivot(C: NDArray) -> tuple[NDArray, NDArray, int]:
+    """``C = L U`` without pivoting (L unit lower, U upper); also the size of the largest
+    leading block the factors are valid for (a zero pivot stops them)."""
+    from scipy.linalg import solve_triangular
+
+    n = C.shape[0]
+    L, U = np.eye(n), np.zeros((n, n))
+    if n <= LU_BLOCK:
+        for i in range(n):
+            U[i, i:] = C[i, i:] - L[i, :i] @ U[:i, i:]
+            if not abs(U[i, i]) > 1e-14 * np.abs(C[i]).max():
+                return L, U, i
+            L[i + 1:, i] = (C[i + 1:, i] - L[i + 1:, :i] @ U[:i, i]) / U[i, i]
+        return L, U, n
+    k = n // 2
+    L11, U11, ok = lu_nopivot(C[:k, :k])
+    L[:k, :k], U[:k, :k] = L11, U11
+    if ok < k:
+        return L, U, ok
+    U[:k, k:] = solve_triangular(L11, C[:k, k:], lower=True, unit_diagonal=True)
+    L[k:, :k] = solve_triangular(U11, C[k:, :k].T, trans="T", lower=False).T
+    L22, U22, ok2 = lu_nopivot(C[k:, k:] - L[k:, :k] @ U[:k, k:])
+    L[k:, k:], U[k:, k:] = L22, U22
+    return L, U, k + ok2
+
+
+class _ActiveSolver:
+    """``C_AA^{-1} [1, s_A]`` for active sets A, from the LU of the leading blocks."""
+
+    def __init__(self, C: NDArray, s: NDArray) -> None:
+        from scipy.linalg import solve_triangular
+
+        self.C, self.rhs = C, np.stack([np.ones_like(s), s], axis=1)
+        L, U, self.valid = lu_nopivot(C)
+        k = self.valid
+        self.y = solve_triangular(L[:k, :k], self.rhs[:k], lower=True, unit_diagonal=True)
+        # the leading blocks of U^-1 are the inverses of U's leading blocks
+        self.U_inv = solve_triangular(U[:k, :k], np.eye(k), lower=False)
+        self.general = 0
+
+    def solve(self, idx: NDArray) -> NDArray:
+        k = idx.size
+        if k == 0:
+            return np.zeros((0, 2))
+        rhs = self.rhs[idx]
+        if idx[-1] == k - 1 and k <= self.valid:  # the leading rings 0..k-1
+            x = self.U_inv[:k, :k] @ self.y[:k]
+            res = self.C[:k, :k] @ x - rhs
+            scale = np.abs(self.C[:k, :k]) @ np.abs(x) + np.abs(rhs)
+            if np.all(np.abs(res) <= RESIDUAL_TOL * scale):
+                return x
+        self.general += 1
+        try:
+            return np.linalg.solve(self.C[np.ix_(idx, idx)], rhs)
+        except np.linalg.LinAlgError as exc:
+            raise SolverError(f"singular contact system on {k} rings ({exc})") from exc
+
+
+def solve_sphere(C: NDArray, points: NDArray, areas: NDArray, radius: float,
+                 deltas: NDArray, keep: NDArray | None = None) -> LcpResult:
+    """Force-indentation curve of a rigid frictionless sphere on the influence matrix.
+
+    Parameters
+    ----------
+    C : (n, n) influence coefficients (m/Pa) at the ring midpoints ``points`` (m).
+    areas : (n,) ring areas (m^2): the force is ``areas @ p``.
+    radius : sphere radius (m).
+    deltas : (m,) increasing indentations (m).
+    keep : increments whose pressure profile is returned.
+
+    Returns
+    -------
+    :class:`LcpResult`; raises :class:`ZoneError` when the contact reaches the last rings
+    (the candidate zone is too small), SolverError when the active-set iteration does not
+    converge.
+    """
+    n = len(points)
+    s = sphere_surface(points, radius)
+    solver = _ActiveSolver(C, s)
+    deltas = np.asarray(deltas, float)
+    tol = GAP_TOL * float(deltas[-1])
+    keep_set = set() if keep is None else {int(k) for k in keep}
+    out = LcpResult(np.zeros(deltas.size), np.zeros(deltas.size))
+    active = np.zeros(n, dtype=bool)
+    i = 0
+    while i < deltas.size:
+        d = deltas[i]
+        active, u, v, g0, g1 = _active_set(solver, s, active, d, tol, out)
+        idx = np.flatnonzero(active)
+        out.active_sets += 1
+        # the set stays the solution while p_A = delta u - v >= 0 and g = g0 + delta g1 >= -tol
+        with np.errstate(divide="ignore", invalid="ignore"):
+            lim_p = np.where(u < 0, v / u, np.inf)
+            lim_g = np.where(~active & (g1 < 0), (-tol - g0) / g1, np.inf)
+        d_hi = min(lim_p.min(initial=np.inf), lim_g.min(initial=np.inf))
+        j = max(int(np.searchsorted(deltas, d_hi, side="right")), i + 1)
+        seg = deltas[i:j]
+        out.force[i:j] = seg * (areas[idx] @ u) - areas[idx] @ v
+        if idx.size:
+            k = int(idx[-1])
+            out.max_ring = max(out.max_ring, k)
+            if k >= n - 3:
+                raise ZoneError(f"the contact reached ring {k} of {n} (r = {points[k]:.4g} m):"
+                                " raise the candidate zone")
+            out.contact_radius[i:j] = _edge_radius(points, g0, g1, k, seg)
+        for m in keep_set.intersection(range(i, j)):
+            p = np.zeros(n)
+            p[idx] = deltas[m] * u - v
+            out.profiles[m] = p
+        i = j
+    out.general_solves = solver.general
+    return out
+
+
+def _active_set(solver: _ActiveSolver, s: NDArray, active: NDArray, d: float, tol: float,
+                out: LcpResult) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+    """The active set at indentation ``d`` from the guess ``active``, with ``u, v`` on it
+    and the gap coefficients ``g0, g1`` on all rings."""
+    n = s.size
+    C = solver.C
+    active = active.copy()
+    for it in range(4 * n + 10):
+        out.iterations += 1
+        idx = np.flatnonzero(active)
+        uv = solver.solve(idx)
+        u, v = uv[:, 0], uv[:, 1]
+        cols = C[:, :idx.size] if idx.size == 0 or idx[-1] == idx.size - 1 else C[:, idx]
+        g0 = s - cols @ v
+        g1 = cols @ u - 1.0
+        p = d * u - v
+        g = g0 + d * g1
+        neg = p < -PRESSURE_TOL * np.abs(p).max(initial=0.0)
+        closed = ~active & (g < -tol)
+        if not neg.any() and not closed.any():
+            return active, u, v, g0, g1
+        if it < 2 * n:  # block update: drop every negative pressure, add every closed gap
+            active[idx[neg]] = False
+            active |= closed
+        else:  # Murty's least-index rule: finite for P-matrices
+            bad = np.flatnonzero(closed | np.isin(np.arange(n), idx[neg]))
+            active[bad[0]] = not active[bad[0]]
+    raise SolverError(f"the contact active set did not converge at delta = {d:.6g} m")
+
+
+def _edge_radius(points: NDArray, g0: NDArray, g1: NDArray, k: int,
+                 seg: NDArray) -> NDArray[np.float64]:
+    """Contact radius (m) for the indentations ``seg`` with last active ring ``k``: the
+    gap opens as ``(r - a)^(3/2)`` at a smooth edge (Johnson 1985, eq. 3.42), so
+    ``g^(2/3)`` is extrapolated linearly to zero from the next two collocation radii,
+    and kept between the last active and the first inactive radius."""
+    ga = np.clip(g0[k + 1] + seg * g1[k + 1], 0.0, None) ** (2.0 / 3.0)
+    gb = np.clip(g0[k + 2] + seg * g1[k + 2], 0.0, None) ** (2.0 / 3.0)
+    r1, r2 = points[k + 1], points[k + 2]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = np.where(gb > ga, r1 - ga * (r2 - r1) / (gb - ga), points[k])
+    return np.clip(a, points[k], r1)

@@ -1,0 +1,83 @@
+"""MATLAB ``.mat`` recordings (``scipy.io``, MATLAB v5/v7; v7.3 files are HDF5).
+
+Variables: ``force`` (N) or ``voltage`` (V) of shape (n_samples, n_hits) or
+(n_samples,), and ``fs`` (S/s) or ``t`` (s, 0 at the trigger when it starts before 0);
+optional ``sensitivity`` (V/N) and ``units`` (the unit of ``force``/``voltage`` when it is
+not N/V, e.g. ``lbf``, ``mV``). Written files hold ``force`` (N), ``t`` and ``fs``.
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from ssw.daq.formats.common import (
+    hit_matrix,
+    make_recording,
+    pretrigger,
+    rate_from_time,
+    to_newtons,
+    unit_of,
+)
+from ssw.daq.recording import Recording
+from ssw.errors import RecordingError
+from ssw.h5io import atomic_path
+
+
+def read(path: str | Path, *, units: str | None = None, sensitivity: float | None = None,
+         sample_rate: float | None = None, clipped: str = "raise",
+         full_scale: float | None = None, **_: object) -> Recording:
+    """Read a ``.mat`` recording (module doc)."""
+    from scipy import io
+
+    p = str(path)
+    try:
+        mat = io.loadmat(p, squeeze_me=True)
+    except (OSError, ValueError, NotImplementedError) as exc:
+        raise RecordingError(f"{p}: not a readable MAT file (v7.3 files are HDF5: "
+                             f"export as -v7): {exc}") from exc
+    stored = str(mat["units"]) if "units" in mat else None
+    if "force" in mat:
+        var, default = "force", "N"
+    elif "voltage" in mat:
+        var, default = "voltage", "V"
+        if sensitivity is None and "sensitivity" in mat:
+            sensitivity = float(mat["sensitivity"])
+    else:
+        raise RecordingError(f"{p}: no 'force' (N) or 'voltage' (V) variable; found "
+                             f"{sorted(k for k in mat if not k.startswith('__'))}")
+    unit = units or stored or default
+    if stored and units and unit_of(stored) != unit_of(units):
+        raise RecordingError(f"{p}: variable {var!r}: the file says {stored!r}, --units says "
+                             f"{units!r}")
+    data = np.asarray(mat[var], dtype=np.float64)
+    if data.ndim == 1:
+        data = data[:, None]
+    data = to_newtons(data, unit, sensitivity, f"{p}: variable {var!r}")
+    t = np.asarray(mat["t"], dtype=np.float64).ravel() if "t" in mat else None
+    if t is not None:
+        if t.size != data.shape[0]:
+            raise RecordingError(f"{p}: variable 't' has {t.size} samples, {var!r} "
+                                 f"{data.shape[0]}")
+        rate = rate_from_time(t, f"{p}: variable 't'")
+    elif "fs" in mat:
+        rate = float(mat["fs"])
+    elif sample_rate is not None:
+        rate = float(sample_rate)
+    else:
+        raise RecordingError(f"{p}: neither 'fs' (S/s) nor 't' (s) is stored; pass the "
+                             "sample rate (--sample-rate)")
+    return make_recording(p, [data[:, i] for i in range(data.shape[1])], rate,
+                          pretrigger(t, data.shape[0]), {"format": "mat"}, clipped, full_scale)
+
+
+def write(path: str | Path, rec: Recording, **_: object) -> Path:
+    """Write ``rec`` as ``.mat`` (``force`` N, ``t`` s, ``fs`` S/s), atomically."""
+    from scipy import io
+
+    force, n_pre = hit_matrix(rec)
+    t = (np.arange(force.shape[0]) - n_pre) / rec.sample_rate
+    with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+        io.savemat(fh, {"force": force, "t": t, "fs": rec.sample_rate, "units": "N"})
+    return Path(path)

@@ -1,0 +1,176 @@
+"""From recordings of hits on one test point to its modulus, with an honest interval.
+
+:func:`measure` takes the recordings of one test point (sessions of hits: HDF5, CSV, MAT,
+TDMS, :func:`ssw.daq.importers.read_any`), picks every hit's TOF with the rejection rule of
+:mod:`ssw.signal.tof` (per session), pools the accepted hits, and inverts their mean TOF
+through the device (calibrated or not) with the uncertainty budget of
+:func:`ssw.modulus.estimate_moduli`: the standard error of the mean TOF, the calibration's
+covariance, the Poisson's ratio range, the wall law's and the integrator's errors, and the
+TOF's sampling uncertainty (below).
+
+Sampling. A peak time read from a record sampled at ``f_s`` carries a systematic error (the
+module's anti-alias filter reshaping the pulses, the sub-sample interpolation) that the mean
+over hits does not average away. It enters as a TOF uncertainty
+:func:`sampling_uncertainty`, the largest bias measured by ``ssw bench tof`` from simulated
+NI 9234 records of known TOF (x16 band-limited interpolation before the parabolic vertex):
+0.72 us at 51.2 kS/s (PCF 08, the broadest reflected pulse: 0.04 sample), and 2 to 5 us at
+25.6 kS/s and below, where the module's filter cuts into the pulse (0.13 sample).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+
+from ssw.errors import RecordingError
+
+#: Systematic TOF uncertainty of the peak picking, in sample periods (1 sigma): the largest
+#: bias measured against records of known TOF (``ssw bench tof``, README Stage III), at the
+#: NI 9234's full rate and below half of it.
+SAMPLING_FRACTION_FULL_RATE = 0.04
+SAMPLING_FRACTION = 0.13
+#: The NI 9234's full rate, S/s (REFERENCE.md: 13.1072 MHz / 256).
+FULL_RATE = 51200.0
+
+
+def sampling_uncertainty(rate: float) -> float:
+    """TOF uncertainty (s) of the peak picking at sample rate ``rate`` (S/s)."""
+    frac = SAMPLING_FRACTION_FULL_RATE if rate >= 0.99 * FULL_RATE else SAMPLING_FRACTION
+    return frac / rate
+
+
+@dataclass(frozen=True)
+class Measurement:
+    """The modulus of one test point and how it was obtained. SI units."""
+
+    E: float
+    E_low: float
+    E_high: float
+    u: float
+    contributions: dict[str, float]
+    notes: tuple[str, ...]
+    tof_mean: float
+    tof_sem: float
+    tof_std: float
+    n_hits: int
+    n_accepted: int
+    tof_per_hit: list[float | None]
+    accepted: list[bool]
+    rejections: list[str]
+    files: list[str]
+    sample_rate: float
+    nu: float
+    nu_range: tuple[float, float] | None
+    synthetic: bool
+    extra: dict[str, Any] = field(default_factory=dict)
+
+    def to_dict(self) -> dict[str, Any]:
+        return {
+            "E": self.E, "E_low": self.E_low, "E_high": self.E_high, "coverage": 0.95,
+            "E_u_pct": 100.0 * self.u,
+            "contributions_pct": {k: 100.0 * v for k, v in self.contributions.items()},
+            "notes": list(self.notes), "tof_mean": self.tof_mean, "tof_sem": self.tof_sem,
+            "tof_std": self.tof_std, "n_hits": self.n_hits, "n_accepted": self.n_accepted,
+            "tof_per_hit": self.tof_per_hit, "accepted": self.accepted,
+            "rejections": self.rejections, "files": self.files,
+            "sample_rate": self.sample_rate, "nu": self.nu,
+            "nu_range": None if self.nu_range is None else list(self.nu_range),
+            "synthetic": self.synthetic, **self.extra,
+        }
+
+
+def pooled_tof(recordings: list[Any], tof_options: Any = None) -> dict[str, Any]:
+    """Per-hit TOFs of every recording (the rejection rule applied per session), pooled:
+    the accepted hits' mean, sample std and standard error of the mean (s)."""
+    from ssw.signal.tof import recording_tof
+
+    per_hit: list[float | None] = []
+    accepted: list[bool] = []
+    reasons: list[str] = []
+    rates = set()
+    for rec in recordings:
+        res = recording_tof(rec, tof_options)
+        per_hit += [None if not np.isfinite(v) else float(v) for v in res.tof]
+        accepted += res.accepted.tolist()
+        reasons += [f"{Path(rec.path).name}: {r}" for r in (*res.reasons, *rec.dropped)]
+        rates.add(float(res.sample_rate))
+    t = np.array([v for v, a in zip(per_hit, accepted, strict=True) if a], float)
+    if t.size == 0:
+        raise RecordingError("no accepted hit in " + ", ".join(r.path for r in recordings))
+    std = float(np.std(t, ddof=1)) if t.size > 1 else 0.0
+    return {"tof_mean": float(np.mean(t)), "tof_std": std,
+            "tof_sem": std / np.sqrt(t.size), "n_accepted": int(t.size),
+            "n_hits": len(per_hit), "tof_per_hit": per_hit, "accepted": accepted,
+            "rejections": reasons, "sample_rate": min(rates)}
+
+
+def measure(
+    recordings: list[Any], nu: float | tuple[float, float], params: Any, wall: str,
+    wall_options: dict[str, Any] | None = None, *, calibration: Any = None,
+    tof_options: Any = None,
+) -> Measurement:
+    """E with its 95 % interval from the recordings of one test point (module docstring).
+
+    Parameters
+    ----------
+    recordings : :class:`ssw.daq.recording.Recording` objects (one or more sessions).
+    nu : the medium's Poisson's ratio, or a range ``(lo, hi)``.
+    params, wall, wall_options : the (calibrated) device's chain and wall law.
+    calibration : the :class:`ssw.calibration.Calibration` (its covariance enters) or None.
+    """
+    from ssw.modulus import estimate_moduli
+
+    if not recordings:
+        raise RecordingError("no recording to measure")
+    pool = pooled_tof(recordings, tof_options)
+    if pool["n_accepted"] < 2:
+        sem_note = ("one accepted hit: the TOF's scatter is unknown, its standard error is "
+                    "not included (record more hits)")
+    else:
+        sem_note = ""
+    nu_arg = np.array([nu[0], nu[1]], float) if isinstance(nu, tuple | list) else float(nu)
+    est = estimate_moduli([pool["tof_mean"]], [pool["tof_sem"]], nu_arg, params, wall,
+                          wall_options, calibration=calibration)[0]
+    contrib = dict(est.contributions)
+    # sampling: a systematic TOF uncertainty of the peak picking at the record's rate
+    u_samp = sampling_uncertainty(pool["sample_rate"]) / (
+        pool["tof_mean"] * abs(est.dlnTOF_dlnE))
+    contrib["sampling"] = float(u_samp)
+    u = float(np.sqrt(sum(v**2 for v in contrib.values())))
+    from ssw.modulus import COVERAGE_Z
+
+    notes = [*est.notes, *([sem_note] if sem_note else [])]
+    return Measurement(
+        E=est.E, E_low=est.E * float(np.exp(-COVERAGE_Z * u)),
+        E_high=est.E * float(np.exp(COVERAGE_Z * u)), u=u, contributions=contrib,
+        notes=tuple(notes), tof_mean=pool["tof_mean"], tof_sem=pool["tof_sem"],
+        tof_std=pool["tof_std"], n_hits=pool["n_hits"], n_accepted=pool["n_accepted"],
+        tof_per_hit=pool["tof_per_hit"], accepted=pool["accepted"],
+        rejections=pool["rejections"], files=[r.path for r in recordings],
+        sample_rate=pool["sample_rate"], nu=est.nu, nu_range=est.nu_range,
+        synthetic=any(bool(r.meta.get("synthetic", False)) for r in recordings),
+        extra={"dlnTOF_dlnE": est.dlnTOF_dlnE},
+    )
+
+
+def parse_nu(text: str | float) -> float | tuple[float, float]:
+    """``NU`` or ``LO:HI`` (a Poisson's ratio range) from the command line."""
+    from ssw.errors import ConfigError
+
+    s = str(text).strip()
+    try:
+        if ":" in s:
+            lo, hi = (float(x) for x in s.split(":", 1))
+            if not -1.0 < lo <= hi <= 0.5:
+                raise ValueError
+            return (lo, hi)
+        v = float(s)
+        if not -1.0 < v <= 0.5:
+            raise ValueError
+        return v
+    except ValueError as exc:
+        raise ConfigError("--soil-nu", text, "a Poisson's ratio NU or a range LO:HI with "
+                          "-1 < LO <= HI <= 0.5") from exc

@@ -1,0 +1,117 @@
+"""TOF hit by hit during an acquisition, with the running mean and (optionally) E.
+
+:class:`LiveTof` is the per-hit hook of :func:`ssw.daq.backend.run_session`
+(``on_hit=live``): each hit's TOF by :func:`ssw.signal.tof.hit_peaks` (or why it was
+rejected), the session rule so far (:func:`ssw.signal.tof.outliers` once three hits are
+in), the mean TOF of the accepted hits and its standard error ``s / sqrt(n)``, and, given an
+``estimate`` function, the soil modulus with its interval from that mean and standard
+error. It returns a :class:`HitReport`; printing is the caller's (the CLI's) business.
+
+``estimate(tof_mean, tof_sem) -> {"E": Pa, "E_low": Pa, "E_high": Pa, ...}`` is pluggable:
+:func:`chain_estimate` inverts through the chain model (``ssw.chain.inverse.invert`` on a
+forward grid computed once); a device calibration's estimator plugs in the same way.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ssw.errors import SswError
+from ssw.signal.peaks import PeakError
+from ssw.signal.tof import TofOptions, hit_peaks, outliers
+
+Estimate = Callable[[float, float], dict[str, float]]
+
+
+@dataclass(frozen=True)
+class HitReport:
+    """What one hit adds: its TOF (s, or None and the reason) and the running statistics."""
+
+    index: int
+    tof: float | None
+    reason: str | None
+    n_hits: int
+    n_accepted: int
+    tof_mean: float | None
+    tof_sem: float | None
+    estimate: dict[str, float] | None = None
+    estimate_error: str | None = None
+
+    def to_dict(self) -> dict[str, Any]:
+        return {k: getattr(self, k) for k in self.__dataclass_fields__}
+
+
+@dataclass
+class LiveTof:
+    """Running TOF of a session (the per-hit hook; call ``live(i, hit)`` or ``live.add(F)``).
+
+    Parameters
+    ----------
+    rate : S/s.  n_pre : pretrigger samples.  opts : TOF options (peak rule, bound).
+    estimate : optional ``(tof_mean, tof_sem) -> {"E", "E_low", "E_high"}`` (Pa).
+    """
+
+    rate: float
+    n_pre: int
+    opts: TofOptions = field(default_factory=TofOptions)
+    estimate: Estimate | None = None
+    tofs: list[float] = field(default_factory=list)
+
+    def __call__(self, i: int, hit: Any) -> HitReport:
+        return self.add(hit.force, overloaded=bool(getattr(hit, "overloaded", False)))
+
+    def add(self, force: np.ndarray, *, overloaded: bool = False) -> HitReport:
+        """Process one record (N); return its report."""
+        i = len(self.tofs)
+        tof, reason = np.nan, None
+        if overloaded:
+            reason = "clipped (overrange)"
+        else:
+            try:
+                tof = hit_peaks(force, self.rate, self.n_pre, self.opts).tof
+            except PeakError as exc:
+                reason = str(exc)
+        self.tofs.append(float(tof))
+        t = np.asarray(self.tofs)
+        out = outliers(t, self.rate)
+        ok = np.isfinite(t) & ~out
+        if reason is None and out[i]:
+            reason = "outlier (> 3.5 robust sigmas from the median so far)"
+        n = int(ok.sum())
+        mean = float(np.mean(t[ok])) if n else None
+        sem = float(np.std(t[ok], ddof=1) / np.sqrt(n)) if n > 1 else (0.0 if n else None)
+        est, err = None, None
+        if self.estimate is not None and mean is not None:
+            try:
+                est = self.estimate(mean, sem or 0.0)
+            except SswError as exc:
+                err = str(exc)
+        return HitReport(i, None if reason else float(tof), reason, len(self.tofs), n, mean,
+                         sem, est, err)
+
+
+def chain_estimate(params: Any, soil_nu: float, wall: str = "hertz",
+                   E_range: tuple[float, float] | None = None, **wall_options: Any) -> Estimate:
+    """An ``estimate`` through the chain model: ``ssw.chain.inverse.invert`` on a TOF(E) grid
+    at ``soil_nu`` computed once (one batched run), so each hit costs an interpolation."""
+    from ssw.chain import api
+    from ssw.chain.inverse import E_RANGE, GRID_POINTS, invert
+    from ssw.chain.sweep import Sweep
+
+    lo, hi = E_range or E_RANGE
+    E = np.geomspace(lo, hi, GRID_POINTS)
+    T = np.asarray(api.tof(E, soil_nu, params, wall, **wall_options), float)
+    nan = np.full_like(E, np.nan)
+    sweep = Sweep(E, np.full_like(E, soil_nu), T, nan, nan, nan)
+
+    def estimate(tof_mean: float, tof_sem: float) -> dict[str, float]:
+        inv = invert(tof_mean, soil_nu, params, wall, tof_std=tof_sem, E_range=(lo, hi),
+                     sweep=sweep, **wall_options)
+        return {"E": float(inv.E), "E_low": float(inv.E_low), "E_high": float(inv.E_high),
+                "soil_nu": soil_nu}
+
+    return estimate

@@ -1,0 +1,77 @@
+# Survey studies: the modulus of every test point of config `survey.points` (ssw measure,
+# one job per point, through the study's calibrated device), gathered into a table with
+# pass/fail/inconclusive verdicts against each point's target, and its figures.
+# Science lives in ssw.measure and ssw.survey; these rules call `ssw measure` and
+# `ssw survey-table`.
+#
+# Outputs (results/survey/):
+#   points/{point}.json            ssw measure --json of one point (E, E_low, E_high, budget)
+#   survey.csv / survey.h5         one row per point: E, interval, target, verdict, coordinates
+#   figures/survey_E.png           E per point with its 95 % interval against its target
+#   figures/survey_map.png         plan view (only when the points have coordinates)
+
+SURVEY_DIR = f"{RESULTS}/survey"
+SURVEY_POINTS = {pt["id"]: pt for pt in config.get("survey", {}).get("points", [])}
+
+
+rule survey_point:
+    """One test point: its recordings -> E with its interval (ssw measure)."""
+    input:
+        unpack(lambda wc: survey_point_inputs(wc.point)),
+    output:
+        json=f"{SURVEY_DIR}/points/{{point}}.json",
+    log:
+        f"{LOGS}/survey/{{point}}.log",
+    params:
+        config=CONFIG_FILE,
+        nu=lambda wc: survey_nu(wc.point),
+        flags=lambda wc, input: " ".join(
+            [chainwf.wall_flags(config, input, RESULTS), chainwf.calibration_flag(input)]
+        ),
+    wildcard_constraints:
+        point=r"[A-Za-z0-9_.\-]+",
+    conda:
+        SSW_ENV
+    shell:
+        "python -m ssw measure {input.recordings} --soil-nu {params.nu} --config {params.config} "
+        "{params.flags} --json > {output.json} 2> {log}"
+
+
+rule survey_table:
+    """The survey table, verdicts and figures."""
+    input:
+        expand(f"{SURVEY_DIR}/points/{{point}}.json", point=list(SURVEY_POINTS)),
+    output:
+        csv=f"{SURVEY_DIR}/survey.csv",
+        h5=f"{SURVEY_DIR}/survey.h5",
+        plot=report(
+            f"{SURVEY_DIR}/figures/survey_E.png",
+            caption="../report/survey_E.rst",
+            category="5. Survey",
+            subcategory="Figures",
+        ),
+        **(
+            {
+                "map": report(
+                    f"{SURVEY_DIR}/figures/survey_map.png",
+                    caption="../report/survey_map.rst",
+                    category="5. Survey",
+                    subcategory="Figures",
+                )
+            }
+            if survey_has_coordinates()
+            else {}
+        ),
+    log:
+        f"{LOGS}/survey/survey_table.log",
+    params:
+        config=CONFIG_FILE,
+        map=lambda wc, output: f"--map {output.map}" if "map" in output.keys() else "",
+    conda:
+        SSW_ENV
+    shell:
+        "python -m ssw survey-table {input} --config {params.config} --csv {output.csv} "
+        "--h5 {output.h5} --plot {output.plot} {params.map} > {log} 2>&1"
+
+
+SURVEY_TARGETS = list(rules.survey_table.output) if SURVEY_POINTS else []

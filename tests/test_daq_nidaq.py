@@ -11,27 +11,25 @@ from unittest import mock
 
 import numpy as np
 import pytest
+from nidaqmx import constants as c
+from nidaqmx.system import Device
+from nidaqmx.task import InStream, Task, Timing
+from nidaqmx.task.collections import AIChannelCollection
+from nidaqmx.task.triggering import ReferenceTrigger, Triggers
 
-nidaqmx = pytest.importorskip("nidaqmx")
-from nidaqmx import constants as c  # noqa: E402
-from nidaqmx.system import Device  # noqa: E402
-from nidaqmx.task import InStream, Task, Timing  # noqa: E402
-from nidaqmx.task.collections import AIChannelCollection  # noqa: E402
-from nidaqmx.task.triggering import ReferenceTrigger, Triggers  # noqa: E402
-
-from ssw.daq.backend import get_backend, run_session  # noqa: E402
-from ssw.daq.nidaq import (  # noqa: E402
+from ssw.daq.backend import get_backend, run_session
+from ssw.daq.nidaq import (
     NidaqBackend,
     buffer_samples,
     check_device,
     chunk_samples,
     configure_task,
 )
-from ssw.daq.recording import read_recording  # noqa: E402
-from ssw.daq.settings import DaqSettings  # noqa: E402
-from ssw.daq.simulated import sech2  # noqa: E402
-from ssw.daq.trigger import TriggerRule, split_records  # noqa: E402
-from ssw.errors import DaqError, RecordingError  # noqa: E402
+from ssw.daq.recording import read_recording
+from ssw.daq.settings import DaqSettings
+from ssw.daq.simulated import sech2
+from ssw.daq.trigger import TriggerRule, split_records
+from ssw.errors import DaqError, RecordingError
 
 
 def fake_task(records=(), overloaded=False):

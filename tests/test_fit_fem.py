@@ -2,10 +2,9 @@
 
 import pytest
 
+from ssw import contact
 from ssw.config import Scene, library, load_config
 from ssw.fit.fitting import fit_curve
-
-contact = pytest.importorskip("ssw.contact")
 
 
 @pytest.fixture(scope="module")

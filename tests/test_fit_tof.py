@@ -7,8 +7,6 @@ from ssw import hertz
 from ssw.config import load_config
 from ssw.curve import ForceCurve
 
-pytest.importorskip("ssw.chain.api")
-
 
 def test_hertz_curve_gives_the_hertz_tof_with_every_law():
     from ssw.fit.tof_impact import tof_impact

@@ -10,7 +10,8 @@ contact FEM over PETSc) is ``slow``. A Ctrl-C test checks that an interrupted ru
 job in the queue and no lock.
 
 Skipped, with the reason, only when this process is not root (the script needs root) or the
-cluster cannot start on this machine.
+cluster cannot start on this machine, and never in CI: with ``CI=true`` in the environment
+(``.ci/run``) either of those fails the tests instead, so a CI run cannot pass without them.
 """
 
 from __future__ import annotations
@@ -56,11 +57,25 @@ def _env() -> dict[str, str]:
     return env
 
 
+def in_ci() -> bool:
+    """``CI=true`` in the environment (.ci/run; GitHub Actions and most CI services)."""
+    return os.environ.get("CI", "").strip().lower() == "true"
+
+
+def unavailable(reason: str) -> None:
+    """Skip, naming the reason; under ``CI=true`` fail instead (no silent pass in CI)."""
+    if in_ci():
+        pytest.fail(f"CI=true and the local Slurm cluster is unavailable: {reason}",
+                    pytrace=False)
+    pytest.skip(reason)
+
+
 @pytest.fixture(scope="module")
 def slurm_cluster() -> str:
-    """Start the local cluster (idempotent); skip with the reason when it cannot start."""
+    """Start the local cluster (idempotent); skip with the reason when it cannot start
+    (fail under ``CI=true``)."""
     if os.geteuid() != 0:
-        pytest.skip("the local Slurm cluster needs root (scripts/slurm-local.sh installs and "
+        unavailable("the local Slurm cluster needs root (scripts/slurm-local.sh installs and "
                     "starts slurm-wlm and munge); run the tests as root")
     try:
         proc = subprocess.run(
@@ -68,11 +83,24 @@ def slurm_cluster() -> str:
             capture_output=True, text=True, timeout=240,
         )
     except subprocess.TimeoutExpired:
-        pytest.skip("scripts/slurm-local.sh start did not finish within 240 s")
+        unavailable("scripts/slurm-local.sh start did not finish within 240 s")
     if proc.returncode != 0:
-        pytest.skip(f"the local Slurm cluster cannot start: {proc.stderr.strip()[-500:]}")
+        unavailable(f"the local Slurm cluster cannot start: {proc.stderr.strip()[-500:]}")
     sinfo = subprocess.run(["sinfo", "-h", "-o", "%P %T"], capture_output=True, text=True)
-    return sinfo.stdout.strip()
+    state = sinfo.stdout.strip()
+    if sinfo.returncode != 0 or not re.search(r"\b(idle|mix\w*|alloc\w*)\b", state):
+        unavailable(f"sinfo shows no usable node after the start: {state!r} {sinfo.stderr!r}")
+    return state
+
+
+def test_ci_does_not_skip(monkeypatch) -> None:
+    """Under CI=true an unavailable cluster fails the test run; elsewhere it skips."""
+    monkeypatch.setenv("CI", "true")
+    with pytest.raises(pytest.fail.Exception, match="CI=true"):
+        unavailable("no cluster here")
+    monkeypatch.setenv("CI", "false")
+    with pytest.raises(pytest.skip.Exception, match="no cluster here"):
+        unavailable("no cluster here")
 
 
 def cancel_test_jobs() -> None:

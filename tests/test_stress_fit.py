@@ -3,8 +3,8 @@ indentations from 1e-9 m, degenerate curves.
 
 Truth: a synthetic curve built from a law is recovered exactly by a fit of that law (to
 rounding: 1e-10 relative over five decades of indentation); a curve with nothing to fit
-(no positive force) stops with an ssw error; a law that does not fit says so through its
-residual instead of returning a plausible-looking number.
+(no positive force) stops with an ssw error that says so (checked); a law that does not fit
+says so through its residual instead of returning a plausible-looking number.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ import pytest
 
 from ssw import hertz
 from ssw.curve import ForceCurve
-from ssw.errors import SswError
+from ssw.errors import OutOfRangeError, SswError
 from ssw.fit.fitting import fit_curve
 
 R = 9.53e-3  # m
@@ -68,8 +68,9 @@ def test_a_law_that_does_not_fit_says_so() -> None:
                          ids=["no-force", "tension"])
 @pytest.mark.parametrize("law", ["k_hertz", "power"])
 def test_curves_without_contact_are_refused(force: np.ndarray, law: str) -> None:
-    """No positive force anywhere: nothing to fit, an ssw error (not K = 0 or NaN)."""
-    with pytest.raises(SswError):
+    """No positive force anywhere: nothing to fit, an ssw error saying so (not K = 0 or
+    NaN): no point with d > 0 and F > 0 in the fit range."""
+    with pytest.raises(OutOfRangeError, match=r"only 0 points with delta > 0 and F > 0"):
         fit_curve(_curve(force), law)
 
 

@@ -22,8 +22,14 @@ STEEL = (200e9, 0.26)
 COARSE = {"mesh_growth": 0.2, "steps": 50}
 
 
-def _curve(soil, plate=None, t=0.0, **cfg):
-    curve, state = solve_curve(soil, plate, t, R, {"steps": 100, **cfg})
+def _release(state):
+    """Free the PETSc objects of a monolithic solve (the substructured engine holds none)."""
+    if "solver" in state:
+        state["solver"].destroy()
+
+
+def _curve(soil, plate=None, t=0.0, engine="substructured", **cfg):
+    curve, state = solve_curve(soil, plate, t, R, {"steps": 100, **cfg}, engine=engine)
     return curve, state
 
 
@@ -31,7 +37,7 @@ def _curve(soil, plate=None, t=0.0, **cfg):
 def test_no_plate_matches_hertz(nu):
     """F = 4/3 E/(1-nu^2) sqrt(R) delta^1.5 within 0.5 % for delta in [1e-6, 1e-4] m."""
     curve, state = _curve((E_SOIL, nu))
-    state["solver"].destroy()
+    _release(state)
     m = curve.delta >= 1e-6 * (1 - 1e-9)
     fh = hertz.force(curve.delta[m], hertz.effective_modulus(E_SOIL, nu), R)
     assert np.max(np.abs(curve.force[m] / fh - 1)) < 5e-3
@@ -46,7 +52,7 @@ def test_bonded_plate_of_soil_material_is_no_plate():
     c0, s0 = _curve(soil)
     c1, s1 = _curve(soil, soil, 0.4e-3, interface="bonded")
     for s in (s0, s1):
-        s["solver"].destroy()
+        _release(s)
     m = c0.delta >= 1e-6 * (1 - 1e-9)
     assert np.max(np.abs(c1.force[m] / c0.force[m] - 1)) < 5e-3
 
@@ -59,7 +65,7 @@ def test_work_equals_stored_energy(interface):
     f = np.concatenate([[0.0], curve.force])
     work = np.trapezoid(f, d)
     energy = strain_energy(state, state["lam"])
-    state["solver"].destroy()
+    _release(state)
     # trapezoid rule on a piecewise-linear F(delta): measured 3e-6
     assert work == pytest.approx(energy, rel=1e-4)
 
@@ -69,7 +75,7 @@ def test_stiffer_plates_are_stiffer():
     forces = []
     for plate, t in ((None, 0.0), (PLA, 0.4e-3), (AL, 0.4e-3), (STEEL, 0.4e-3)):
         c, s = _curve((E_SOIL, 0.3), plate, t, **COARSE)
-        s["solver"].destroy()
+        _release(s)
         forces.append(c.force)
     assert np.all(np.diff(np.array(forces), axis=0) > 0)
 
@@ -79,14 +85,14 @@ def test_thicker_plates_are_stiffer_and_unilateral_is_softer():
     forces = []
     for t in (0.0, 0.1e-3, 0.4e-3, 1.0e-3):
         c, s = _curve((E_SOIL, 0.3), PLA if t > 0 else None, t, **COARSE)
-        s["solver"].destroy()
+        _release(s)
         forces.append(c.force)
     assert np.all(np.diff(np.array(forces), axis=0) > 0)
     cu, s = _curve((E_SOIL, 0.3), PLA, 0.4e-3, interface="unilateral", **COARSE)
-    s["solver"].destroy()
+    _release(s)
     assert np.all(cu.force <= forces[2] * (1 + 1e-9))
     cb, s = _curve((E_SOIL, 0.3), PLA, 0.4e-3, interface="bonded", **COARSE)
-    s["solver"].destroy()
+    _release(s)
     assert np.all(cb.force >= forces[2] * (1 - 1e-9))
 
 
@@ -106,7 +112,7 @@ def test_mesh_convergence_rate():
     for g in growth:
         c, s = _curve((E_SOIL, nu), soil_radius=3.0, soil_depth=3.0, mesh_size_max=0.3,
                       mesh_growth=g, mesh_size_contact=5e-5 * g)
-        s["solver"].destroy()
+        _release(s)
         m = c.delta >= 1e-6 * (1 - 1e-9)
         err.append(np.max(np.abs(c.force[m] / np.interp(c.delta[m], d_ref, f_ref) - 1)))
     rate = np.polyfit(np.log(growth), np.log(err), 1)[0]
@@ -144,11 +150,11 @@ def test_lazy_condensation_equals_full(monkeypatch):
     import ssw.contact.scene as scene
 
     soil = (E_SOIL, 0.3)
-    lazy, s1 = _curve(soil, STEEL, 0.2e-3, **COARSE)
+    lazy, s1 = _curve(soil, STEEL, 0.2e-3, engine="monolithic", **COARSE)
     monkeypatch.setattr(scene, "INITIAL_ZONE", 10.0)  # everything condensed at once
-    full, s2 = _curve(soil, STEEL, 0.2e-3, **COARSE)
+    full, s2 = _curve(soil, STEEL, 0.2e-3, engine="monolithic", **COARSE)
     for s in (s1, s2):
-        s["solver"].destroy()
+        _release(s)
     assert lazy.stats["solves"] < full.stats["solves"]
     assert np.allclose(lazy.force, full.force, rtol=1e-9, atol=0)
 
@@ -161,7 +167,7 @@ def test_steel_plate_on_soft_soil(nu):
     c0, s0 = _curve(soil, **COARSE)
     c1, s1 = _curve(soil, STEEL, 0.1e-3, **COARSE)
     for s in (s0, s1):
-        s["solver"].destroy()
+        _release(s)
     assert np.all(c1.force > c0.force)
 
 
@@ -169,7 +175,7 @@ def test_pressure_profile_is_hertzian():
     """Contact pressure vs Hertz p(r) = p0 sqrt(1 - r^2/a^2) inside 0.8 a (measured 0.3 %)."""
     nu = 0.3
     curve, s = _curve((E_SOIL, nu))
-    s["solver"].destroy()
+    _release(s)
     r, p, d = curve.pressure["r"], curve.pressure["p"][-1], curve.pressure["delta"][-1]
     es = hertz.effective_modulus(E_SOIL, nu)
     inside = r <= 0.8 * hertz.contact_radius(d, R)
@@ -185,7 +191,7 @@ def test_plate_curve_converges_under_refinement():
     forces = []
     for g in (0.2, 0.1, 0.05):
         c, s = _curve((E_SOIL, 0.3), STEEL, 0.4e-3, mesh_growth=g, mesh_size_contact=5e-5 * g)
-        s["solver"].destroy()
+        _release(s)
         forces.append(c.force)
     d1 = np.max(np.abs(forces[1] / forces[0] - 1))
     d2 = np.max(np.abs(forces[2] / forces[1] - 1))

@@ -13,7 +13,7 @@ import pytest
 
 from ssw import hertz
 from ssw.cli import main
-from ssw.config import Scene, library, load_config
+from ssw.config import Scene, all_scenes, library, load_config
 from ssw.contact import solve_scene
 from ssw.curve import read_curve
 from ssw.h5io import read_datasets
@@ -59,19 +59,32 @@ def test_solve_scene_api_no_plate():
 
 
 @pytest.mark.mpi
-@pytest.mark.skipif(shutil.which("mpiexec") is None, reason="no mpiexec")
-def test_two_ranks_give_the_serial_answer(tmp_path):
-    args = [str(Path(sys.executable).parent / "ssw"), "contact", "--soil-E", "50e6",
-            "--soil-nu", "0.5", "--plate-material", "al6061", "--plate-thickness", "0.2e-3",
-            "--steps", "10", "--config", CI, "--json"]
-    par = subprocess.run(["mpiexec", "-n", "2", *args], capture_output=True, text=True,
-                         timeout=300, check=True)
-    ser = subprocess.run(args, capture_output=True, text=True, timeout=300, check=True)
+def test_two_ranks_share_a_batch_and_give_the_serial_curves(tmp_path):
+    """`mpiexec -n 2 ssw contact --scene ... --output-dir D`: the batch's operator groups are
+    dealt to the ranks (each solves its own scenes, none twice) and every curve equals the
+    serial run's to the bit; rank 0 alone reports."""
+    from conftest import require
+
+    require(shutil.which("mpiexec") is not None, "no mpiexec")
+    cfg = load_config(CI)
+    ids = sorted(s for s in all_scenes(cfg) if s.startswith(("pla-t400um-E50", "al6061")))
+    exe = str(Path(sys.executable).parent / "ssw")
+    args = ["contact", *[a for i in ids for a in ("--scene", i)], "--config", CI, "--json"]
+    par = subprocess.run(["mpiexec", "-n", "2", exe, *args, "--output-dir",
+                          str(tmp_path / "par")], capture_output=True, text=True, timeout=300,
+                         check=True)
+    ser = subprocess.run([exe, *args, "--output-dir", str(tmp_path / "ser")],
+                         capture_output=True, text=True, timeout=300, check=True)
     lines = par.stdout.strip().splitlines()
     assert len(lines) == 1  # rank 0 alone reports
-    fp, fs = np.array(json.loads(lines[0])["force"]), np.array(json.loads(ser.stdout)["force"])
-    assert json.loads(lines[0])["stats"]["ranks"] == 2
-    assert np.allclose(fp, fs, rtol=1e-9, atol=0)
+    res = json.loads(lines[0])
+    assert res["ranks"] == 2 and sorted(res["scenes"]) == ids
+    ranks = {c["scene_id"]: c["rank"] for c in res["curves"]}
+    assert set(ranks.values()) == {0, 1}  # two operator groups (pla, al6061): one each
+    for i in ids:
+        a, b = read_curve(tmp_path / "par" / f"{i}.h5"), read_curve(tmp_path / "ser" / f"{i}.h5")
+        assert np.array_equal(a.force, b.force) and np.array_equal(a.delta, b.delta)
+    assert ser.returncode == 0
 
 
 def test_schema_defaults_are_the_solver_defaults():
@@ -144,27 +157,33 @@ def test_batch_refusals_write_nothing(tmp_path, capsys, argv, field):
     assert not out_dir.exists() or not any(out_dir.iterdir())
 
 
-def test_batches_cut_every_set_into_equal_chunks():
-    """Every scene in exactly one batch of at most jobs_per_group, per set, sizes +-1."""
-    from ssw.config import all_scenes, scenes
-    from ssw.contact.batch import batches, chunks
+def test_batches_are_mesh_families():
+    """Every scene in exactly one batch; a batch holds one mesh family (plate thickness:
+    scenes sharing the mesh and its operators), cut into equal chunks of at most
+    jobs_per_group; the thesis study's five families with a large enough size."""
+    from ssw.config import all_scenes
+    from ssw.contact.batch import batches, chunks, group_key, rank_share
 
     assert [len(c) for c in chunks(list("abcdefghij"), 4)] == [3, 3, 4]
     assert chunks(list("abc"), 5) == [["a", "b", "c"]] and chunks([], 3) == []
     cfg = load_config(REPO / "config" / "config.yaml")
-    size = cfg["contact"]["jobs_per_group"]
-    got = batches(cfg)
-    ids = [i for b in got.values() for i in b]
-    assert sorted(ids) == sorted(all_scenes(cfg)) and len(ids) == len(set(ids))
-    for name, members in got.items():
-        assert 1 <= len(members) <= size and name.isidentifier()
-    set3 = [b for n, b in got.items() if n.startswith("set3_soil_")]
-    assert [i for b in set3 for i in b] == [s.scene_id for s in scenes(cfg, "set3_soil")]
-    assert max(map(len, set3)) - min(map(len, set3)) <= 1
-    assert len(batches(cfg, 1)) == len(ids)
-    # a scene shared by two sets belongs to the first set's batch only
-    cfg2 = {**cfg, "sets": {"a": cfg["sets"]["set2_thickness"], "b": cfg["sets"]["set2_thickness"]}}
-    assert list(batches(cfg2)) == ["a_0"]
+    scenes = all_scenes(cfg)
+    for size in (cfg["contact"]["jobs_per_group"], 7, 1000):
+        got = batches(cfg, size)
+        ids = [i for b in got.values() for i in b]
+        assert sorted(ids) == sorted(scenes) and len(ids) == len(set(ids))
+        for name, members in got.items():
+            assert 1 <= len(members) <= size and name.isidentifier()
+            assert len({scenes[i].plate_thickness for i in members}) == 1
+    assert sorted(batches(cfg, 1000)) == ["noplate", "t1000um", "t100um", "t200um", "t400um"]
+    assert len(batches(cfg, 1)) == len(scenes)
+    # MPI: whole operator groups per rank, every scene once
+    fam = [scenes[i] for i in batches(cfg, 1000)["t400um"]]
+    shares = [rank_share(fam, r, 3) for r in range(3)]
+    assert sorted(i for s in shares for i in s) == list(range(len(fam)))
+    for s in shares:
+        others = {group_key(fam[i]) for t in shares if t is not s for i in t}
+        assert not others & {group_key(fam[i]) for i in s}
 
 
 def test_jobs_per_group_is_checked():
@@ -177,9 +196,9 @@ def test_jobs_per_group_is_checked():
 
 def test_delta_mode_chain_extends_the_curve_to_what_the_chain_reaches(tmp_path):
     """contact.delta_mode chain: a soft soil's curve goes on past delta_max to the chain's
-    indentation (Hertz wall of the softer material, fit.range.factor); its first `steps`
-    increments are the fixed-mode curve (the extra, wider candidate zone changes nothing
-    the LCP solves exactly); a stiff soil goes just past it."""
+    indentation (Hertz wall of the softer material, fit.range.factor) with the increments of
+    delta_max / steps all along, the curve a fixed-mode run to that indentation with as many
+    steps gives; a stiff soil's ends at delta_max or just past it."""
     from ssw.fit.range import scene_delta_max
 
     ROOT = Path(__file__).resolve().parent.parent
@@ -193,16 +212,18 @@ def test_delta_mode_chain_extends_the_curve_to_what_the_chain_reaches(tmp_path):
     pla = library(cfg)["pla"]
     need = scene_delta_max(30e6, 0.3, cfg, (pla.E, pla.nu))
     assert need > 2 * cfg["contact"]["delta_max"]  # 30 MPa: the chain presses > 0.2 mm
-    assert c.delta.size == 2 * steps and c.delta[-1] == pytest.approx(need, rel=1e-12)
+    h = cfg["contact"]["delta_max"] / steps  # one step over the whole curve
+    assert c.delta[-1] == pytest.approx(need, rel=1e-12) and c.delta.size == np.ceil(need / h)
+    np.testing.assert_allclose(np.diff(c.delta[:-1]), h, rtol=1e-9)
     assert np.all(np.diff(c.force) > 0)
+    end = h * (c.delta.size - 1)  # the last whole step
     assert main(["contact", "--config", str(ROOT / "config" / "ci.yaml"), "--scene", soft,
-                 "--delta-max", str(cfg["contact"]["delta_max"]),
+                 "--delta-max", repr(end), "--steps", str(c.delta.size - 1),
                  "--output", str(tmp_path / "fixed.h5")]) == 0
     f = read_curve(tmp_path / "fixed.h5")
-    assert f.delta.size == steps
-    np.testing.assert_allclose(c.delta[:steps], f.delta, rtol=1e-15)
-    np.testing.assert_allclose(c.force[:steps], f.force, rtol=1e-8)
+    np.testing.assert_allclose(f.delta, c.delta[:-1], rtol=1e-12)
+    np.testing.assert_allclose(f.force, c.force[:-1], rtol=1e-12)
     s = read_curve(tmp_path / "chain" / f"{stiff}.h5")
     need_stiff = scene_delta_max(660e6, 0.3, cfg, (pla.E, pla.nu))
-    assert cfg["contact"]["delta_max"] < need_stiff < 1.5 * cfg["contact"]["delta_max"]
-    assert s.delta[-1] == pytest.approx(need_stiff, rel=1e-12)
+    assert need_stiff < 1.5 * cfg["contact"]["delta_max"]
+    assert s.delta[-1] == pytest.approx(max(need_stiff, cfg["contact"]["delta_max"]), rel=1e-12)

@@ -33,10 +33,10 @@ def test_hertz_curve_gives_the_hertz_tof_with_every_law():
     for r in rows:
         assert r["K"] == pytest.approx(1.0, rel=1e-12)
         assert r["n"] == pytest.approx(1.5, rel=1e-12)
-        # power and table walls rescale the same rigid-sphere law: identical TOF; the K and
-        # Hertz walls use the bead radius (9.525 mm) instead of the FEM indenter's (9.53 mm):
-        # force ratio sqrt(9.53/9.525) - 1 = 2.6e-4, TOF ~ F^(-1/5): ~5e-5
-        assert abs(r["tof_err_fit_power"]) < 1e-9
-        for law in ("fit_k", "hertz"):
-            assert abs(r[f"tof_err_{law}"]) < 1.5e-4
+        # power and table walls rescale the same rigid-sphere law: identical TOF
+        assert r["tof_fit_power"] == pytest.approx(r["tof_table"], rel=1e-9)
+        # the reference is the FEM law itself (ci mesh, growth 0.2: ~0.4 % force error):
+        # a Hertz curve's laws are within the FEM's accuracy of it in TOF (measured 1.2e-3)
+        for law in ("fit_k", "fit_power", "table", "hertz"):
+            assert abs(r[f"tof_err_{law}"]) < 3e-3
         assert -0.3 < r["dlnTOF_dlnE"] < -0.1  # TOF ~ E^(-1/5) for a Hertz wall

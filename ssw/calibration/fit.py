@@ -27,7 +27,8 @@ by the residual variance ``chi^2 / (n - p)`` (none when ``n = p``). The singular
 ``J`` in the scaled coordinates say what the data identify: a direction ``v`` with a small
 singular value ``sigma`` moves the TOFs by one standard uncertainty only when the parameters
 move by ``1/sigma`` along ``v`` (scaled units), i.e. the data cannot separate the
-parameters mixed in ``v``.
+parameters mixed in ``v``; below 1 (more than an e-fold) the calibration says so and gives
+no standard errors (:data:`IDENTIFIED_MIN`).
 """
 
 from __future__ import annotations
@@ -60,7 +61,7 @@ FD_STEP = 1e-3
 #: errors; the model TOF's own noise, the sub-step interpolation of its peaks, makes chi^2
 #: jitter by ~1e-5 near chi^2 ~ 1), or chi^2 itself below LM_FTOL (an exact fit).
 LM_ITERATIONS = 40
-LM_LAMBDA0 = 1e-2
+LM_LAMBDA0 = 1e-3
 LM_XTOL = 1e-6
 LM_FTOL = 1e-3
 #: Relative TOF weight when no uncertainty is given (covariance rescaled by chi^2/(n-p)).
@@ -68,7 +69,12 @@ DEFAULT_REL_STD = 0.01
 #: Solutions count as distinct when a scaled coordinate differs by more than this (5 % of
 #: a log-scanned parameter, 0.05 x the scale of another).
 DISTINCT = 0.05
-#: Singular value ratio below which a direction counts as not identified.
+#: A direction counts as not identified when its singular value (of the Jacobian weighted
+#: by the TOF uncertainties, in the scaled coordinates) is below IDENTIFIED_MIN: the data
+#: then tolerate, within one standard uncertainty, a change of more than one e-fold of a
+#: log-scaled parameter (one ``scale`` of another) along it; or below IDENTIFIED_RATIO of
+#: the largest one (numerically rank deficient).
+IDENTIFIED_MIN = 1.0
 IDENTIFIED_RATIO = 1e-3
 
 
@@ -246,10 +252,12 @@ def _lm_batch(model: TofModel, T: np.ndarray, s: np.ndarray,
         for i in bad:  # a start on a failing corner: drop it (inf cost)
             J[i] = np.zeros((len(refs[i]), p))
     lam = np.full(P, LM_LAMBDA0)
+    nu_up = np.full(P, 2.0)  # Nielsen's growth factor of the damping after a rejection
     done = ~np.isfinite(cost)
     iters = np.zeros(P, int)
     converged = np.zeros(P, bool)
     keys = [tuple(rf.tolist()) for rf in refs]
+    predicted = np.zeros(P)
     for it in range(LM_ITERATIONS):
         if it >= PRUNE_AFTER:
             best = {}
@@ -258,11 +266,8 @@ def _lm_batch(model: TofModel, T: np.ndarray, s: np.ndarray,
             for i in np.flatnonzero(~done):
                 if cost[i] > best[keys[i]] + PRUNE_CHI2:
                     done[i] = True
-        active = np.flatnonzero(~done)
-        if active.size == 0:
-            break
         trial = x.copy()
-        for i in active:
+        for i in np.flatnonzero(~done):
             A = J[i].T @ J[i]
             g = J[i].T @ r[i]
             D = np.diag(np.maximum(np.diag(A), 1e-12))
@@ -271,21 +276,36 @@ def _lm_batch(model: TofModel, T: np.ndarray, s: np.ndarray,
             except np.linalg.LinAlgError:
                 step = -g / (np.diag(D) * (1 + lam[i]))
             trial[i] = np.clip(x[i] + step, lo, hi)
+            st = trial[i] - x[i]
+            # decrease of chi^2 the linear model predicts for the (clipped) step
+            predicted[i] = -(2.0 * st @ g + st @ A @ st)
+            # at the minimum when even the undamped Gauss-Newton step (g^T A^+ g) gains less
+            # than the tolerance, or a step leaves every coordinate where it is
+            gain = float(g @ np.linalg.lstsq(A, g, rcond=None)[0])
+            if gain < LM_FTOL or float(np.max(np.abs(st), initial=0.0)) < LM_XTOL:
+                done[i], converged[i] = True, True
+        active = np.flatnonzero(~done)
+        if active.size == 0:
+            break
         rt, Jt = evaluate(trial, active)
         for i in active:
             iters[i] += 1
             ct = np.sum(rt[i] ** 2) if np.all(np.isfinite(rt[i])) and np.all(
                 np.isfinite(Jt[i])) else np.inf
-            moved = float(np.max(np.abs(trial[i] - x[i]))) if p else 0.0
             if ct < cost[i]:
-                small = (cost[i] - ct) <= LM_FTOL or moved < LM_XTOL
+                # Nielsen (1999): shrink the damping by the gain ratio rho of actual to
+                # predicted decrease (Madsen, Nielsen & Tingleff 2004, eq. 2.21)
+                rho = (cost[i] - ct) / max(predicted[i], 1e-300)
+                small = (cost[i] - ct) <= LM_FTOL
                 x[i], r[i], J[i], cost[i] = trial[i], rt[i], Jt[i], ct
-                lam[i] = max(lam[i] / 3.0, 1e-9)
+                lam[i] = max(lam[i] * max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3), 1e-12)
+                nu_up[i] = 2.0
                 if small or ct < LM_FTOL:
                     done[i], converged[i] = True, True
             else:
-                lam[i] *= 4.0
-                if moved < LM_XTOL or lam[i] > 1e8:
+                lam[i] *= nu_up[i]
+                nu_up[i] *= 2.0
+                if lam[i] > 1e8:
                     done[i], converged[i] = True, True
     out = []
     for i in range(P):
@@ -367,14 +387,110 @@ def _pick(sols: list[Solution], nominal_x: np.ndarray, model: TofModel
 
 
 # --------------------------------------------------------------------- public
+@dataclass(frozen=True)
+class SubsetFit:
+    """A calibration on a subset of the references (a leave-one-out fit).
+
+    ``theta``: its values (SI); ``chi2``; ``identified``: the subset's Jacobian has every
+    singular value >= the floor (:data:`IDENTIFIED_MIN`); ``covariance`` (SI, continuous
+    parameters) from its singular values, the unidentified directions included (large);
+    ``dtof_dtheta`` (n_refs, p): d TOF / d theta of EVERY reference at ``theta`` (s per SI
+    unit), for what the fit predicts of the references it left out.
+    """
+
+    refs: tuple[int, ...]
+    theta: np.ndarray
+    chi2: float
+    identified: bool
+    singular_values: np.ndarray
+    covariance: np.ndarray | None
+    dtof_dtheta: np.ndarray
+    iterations: int
+
+
+def refine_subsets(model: TofModel, T: np.ndarray, s: np.ndarray, start: np.ndarray,
+                   subsets: list[tuple[int, ...]], ranges: dict[str, tuple[float, float]],
+                   iterations: int = 12) -> dict[tuple[int, ...], SubsetFit]:
+    """Fits of subsets of the references, each the smallest change of ``start`` (the full
+    calibration, SI) that fits the subset: Gauss-Newton steps from ``start`` in the scaled
+    coordinates with the truncated pseudo-inverse of the subset's Jacobian (directions
+    with singular values below :data:`IDENTIFIED_MIN` are not moved; Hansen 1998,
+    truncated SVD). Where the subset identifies the parameters this is its least-squares
+    solution; where it does not (a valley of near-exact fits), the point of the valley
+    nearest the full calibration, instead of an arbitrary one. All subsets advance
+    together: one batched run (central differences) per iteration."""
+    cont = model.continuous
+    idx = [model.free.index(n) for n in cont]
+    p = len(cont)
+    lo, hi = bounds_x(cont, ranges)
+    x = {key: to_x(start[idx], cont) for key in subsets}
+    done = {key: False for key in subsets}
+    its = {key: 0 for key in subsets}
+    last: dict[tuple[int, ...], tuple[np.ndarray, np.ndarray]] = {}
+
+    def evaluate(keys: list[tuple[int, ...]]) -> None:
+        rows = []
+        for key in keys:
+            for pt in [x[key]] + [x[key] + sg * FD_STEP * np.eye(p)[j]
+                                  for j in range(p) for sg in (1.0, -1.0)]:
+                th = start.copy()
+                th[idx] = from_x(pt, cont)
+                rows.append(th)
+        tof = model(np.array(rows))
+        for k, key in enumerate(keys):
+            blk = tof[k * (1 + 2 * p):(k + 1) * (1 + 2 * p)]
+            Jx = np.stack([(blk[1 + 2 * j] - blk[2 + 2 * j]) / (2 * FD_STEP)
+                           for j in range(p)], axis=1)  # (n_refs, p), s per scaled unit
+            last[key] = (blk[0], Jx)
+
+    for _ in range(iterations):
+        todo = [k for k in subsets if not done[k]]
+        if not todo:
+            break
+        evaluate(todo)
+        for key in todo:
+            its[key] += 1
+            f0, Jx = last[key]
+            sub = np.asarray(key)
+            r = (f0[sub] - T[sub]) / s[sub]
+            Jw = Jx[sub] / s[sub, None]
+            U, sv, Vt = np.linalg.svd(Jw, full_matrices=False)
+            keep = sv >= max(IDENTIFIED_MIN, IDENTIFIED_RATIO * float(sv.max(initial=0.0)))
+            step = -(Vt[keep].T @ ((U[:, keep].T @ r) / sv[keep]))
+            x[key] = np.clip(x[key] + step, lo, hi)
+            if float(np.max(np.abs(step), initial=0.0)) < LM_XTOL or float(r @ r) < LM_FTOL:
+                done[key] = True
+    evaluate(list(subsets))  # the Jacobian at the final points
+    out = {}
+    for key in subsets:
+        f0, Jx = last[key]
+        sub = np.asarray(key)
+        r = (f0[sub] - T[sub]) / s[sub]
+        Jw = Jx[sub] / s[sub, None]
+        sv_ = np.linalg.svd(Jw, compute_uv=False)
+        svf = np.zeros(p)
+        svf[: sv_.size] = sv_
+        _, _, Vt = np.linalg.svd(Jw, full_matrices=True)
+        floor = max(IDENTIFIED_MIN, IDENTIFIED_RATIO * float(svf.max(initial=0.0)))
+        theta = start.copy()
+        theta[idx] = from_x(x[key], cont)
+        D = dtheta_dx(theta[idx], cont)
+        cov = None
+        if np.all(svf > 0):
+            cov_x = Vt.T @ np.diag(1.0 / svf**2) @ Vt
+            cov = D[:, None] * cov_x * D[None, :]
+        out[key] = SubsetFit(key, theta, float(r @ r), bool(np.all(svf >= floor)), svf, cov,
+                             Jx / D[None, :], its[key])
+    return out
+
+
 def identify(
     model: TofModel, refs: list[Reference], *, ranges: dict[str, tuple[float, float]] | None = None,
     subsets: list[tuple[int, ...]] | None = None, scan_points: int | None = None,
-) -> tuple[Fit, dict[tuple[int, ...], Solution]]:
-    """Identify ``model.free`` from ``refs``; also solve each subset of ``subsets`` (indices
-    of ``refs``, e.g. the leave-one-out sets) from the same scan.
-
-    Returns the fit on all references and each subset's best solution.
+) -> tuple[Fit, dict[tuple[int, ...], SubsetFit]]:
+    """Identify ``model.free`` from ``refs`` (scan, then Levenberg-Marquardt); also fit each
+    subset of ``subsets`` (indices of ``refs``, e.g. the leave-one-out sets) as the smallest
+    change of that calibration (:func:`refine_subsets`).
     """
     if len(refs) != model.n_refs:
         raise ValueError("references and model disagree")
@@ -388,24 +504,15 @@ def identify(
     model.fix_time_step(rng)
     grid, axes = scan_grid(model, rng, scan_points)
     tof = model(grid)
-    problems: list[tuple[tuple[int, ...], np.ndarray, np.ndarray]] = []
-    keys = [tuple(range(len(refs))), *list(subsets or [])]
-    for key in keys:
-        for x0, fixed in _starts(model, grid, axes, tof, key, T, s, nominal, rng):
-            problems.append((key, x0, fixed))
+    key = tuple(range(len(refs)))
+    problems = [(key, x0, fixed) for x0, fixed in
+                _starts(model, grid, axes, tof, key, T, s, nominal, rng)]
     sols = _lm_batch(model, T, s, problems, rng)
-    nominal_x = to_x(nominal, model.free)
-    by_key: dict[tuple[int, ...], Solution] = {}
-    best_all, others = None, []
-    for key in keys:
-        mine = [so for so in sols if so.refs == key]
-        b, o = _pick(mine, nominal_x, model)
-        by_key[key] = b
-        if key == keys[0]:
-            best_all, others = b, o
-    assert best_all is not None
-    fit = _uncertainty(model, refs, T, s, known, best_all, others, rng, grid.shape[0])
-    return fit, {k: v for k, v in by_key.items() if k != keys[0]}
+    best, others = _pick(sols, to_x(nominal, model.free), model)
+    fit = _uncertainty(model, refs, T, s, known, best, others, rng, grid.shape[0])
+    subs = refine_subsets(model, T, s, best.theta, list(subsets or []), rng) if subsets \
+        else {}
+    return fit, subs
 
 
 def _uncertainty(model: TofModel, refs: list[Reference], T: np.ndarray, s: np.ndarray,
@@ -446,7 +553,8 @@ def _uncertainty(model: TofModel, refs: list[Reference], T: np.ndarray, s: np.nd
     chi2 = float(np.sum((resid / s) ** 2))
     cov = std = None
     smax = float(sv_full.max()) if p else 0.0
-    identified = p > 0 and n >= p and smax > 0 and float(sv_full.min()) > IDENTIFIED_RATIO * smax
+    floor = max(IDENTIFIED_MIN, IDENTIFIED_RATIO * smax)
+    identified = p > 0 and n >= p and smax > 0 and float(sv_full.min()) >= floor
     if identified:
         cov_x = V @ np.diag(1.0 / sv_full**2) @ V.T
         if not known:
@@ -456,7 +564,7 @@ def _uncertainty(model: TofModel, refs: list[Reference], T: np.ndarray, s: np.nd
             std = np.sqrt(np.diag(cov))
     unid = []
     for k in range(p):
-        if sv_full[k] <= IDENTIFIED_RATIO * max(smax, 1e-300) or k >= n:
+        if sv_full[k] < floor or k >= n:
             v = V[:, k]
             terms = " ".join(f"{v[j]:+.2f} {_coord(model.continuous[j])}"
                              for j in range(p) if abs(v[j]) > 0.2)

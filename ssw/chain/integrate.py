@@ -8,9 +8,10 @@ Equations of motion (REFERENCE.md "The chain"; Nesterenko 2001, Daraio et al. 20
 
 with ``P`` the device's preload on bead 1, plus, when ``damping > 0``, a dashpot
 ``c (v_j - v_{j+1})`` in every closed contact (evaluated at the new time's velocity,
-predicted as ``v_{n+1/2} + dt/2 a_n``, which keeps the scheme second order). The striker speed, the preload and the masses
-may differ from scene to scene (:class:`ssw.chain.params.Batch`: a calibration scan advances
-many parameter sets in one run).
+predicted as ``v_{n+1/2} + dt/2 a_n``, which keeps the scheme second order). The striker
+speed, the preload and the masses may differ from scene to scene
+(:class:`ssw.chain.params.Batch`: a calibration scan advances many parameter sets in one
+run).
 
 Method: velocity Verlet (Stormer-Verlet; Hairer, Lubich & Wanner 2006, *Geometric Numerical
 Integration*, sec. I.1.4): explicit, symplectic, second order, one force evaluation per step.

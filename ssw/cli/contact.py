@@ -45,10 +45,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--steps", type=int, help="indentation increments (contact.steps)")
     p.add_argument("--mesh-growth", type=float,
                    help="element size / distance from the contact (contact.mesh_growth)")
+    p.add_argument("--engine", choices=["fem", "layered"], default="fem",
+                   help="fem: the axisymmetric FEM (default); layered: the semi-analytic "
+                   "oracle, an infinite plate on a half-space (ssw.contact.layered)")
     p.add_argument("--output", help="curve file to write (HDF5), one scene")
     p.add_argument("--output-dir",
                    help="folder of the curve files of the --scene batch (ID.h5 each)")
-    p.add_argument("--config", default="config/config.yaml", help="study config (YAML)")
+    p.add_argument("--config",
+                   help="study config YAML (default: ./config/config.yaml, else ssw's defaults)")
     add_json_flag(p)
     p.set_defaults(func=run, human=_human)
 
@@ -101,9 +105,10 @@ def _scene(args: argparse.Namespace, cfg: dict[str, Any], mats: dict) -> Any:
 
 def run(args: argparse.Namespace) -> dict[str, Any] | None:
     from ssw.config import library, load_config
-    from ssw.contact import solve_scene
     from ssw.contact.petsc_solver import comm_rank
     from ssw.curve import write_curve
+
+    solve_scene = _engine(args)
 
     if args.scene:
         args.scene = list(dict.fromkeys(args.scene))  # a repeated id is solved once
@@ -123,13 +128,13 @@ def run(args: argparse.Namespace) -> dict[str, Any] | None:
     if args.output_dir is not None:
         return _run_batch(args, cfg, contact, mats)
     scene, mats = _scene(args, cfg, mats)
+    if comm_rank() != 0:  # under mpiexec, rank 0 alone solves (one scene is serial work)
+        return None
     contact["delta_reach"] = scene_reach([scene], cfg, contact, mats)[0]
     curve = solve_scene(scene, contact, float(cfg["indenter"]["radius"]), mats)
     inputs = {**curve.inputs, "material_set": cfg.get("material_set", "realistic")}
     if scene.plate_material == "custom":
         inputs["material_set"] = "custom"
-    if comm_rank() != 0:  # under mpiexec, rank 0 alone writes and reports
-        return None
     if args.output:
         from dataclasses import replace
 
@@ -187,50 +192,56 @@ def _run_batch(args: argparse.Namespace, cfg: dict[str, Any], contact: dict[str,
     """Solve the --scene batch in turn; write each curve (atomically) as soon as it is done."""
     import sys
     import time
-    from dataclasses import replace
     from pathlib import Path
 
-    from ssw.contact import solve_scene
-    from ssw.contact.petsc_solver import comm_rank
-    from ssw.contact.scene import MeshCache
-    from ssw.curve import write_curve
+    from ssw.contact.batch import gather, solve_batch
+    from ssw.contact.petsc_solver import comm_rank, comm_size
     from ssw.errors import SswError
 
+    solve_scene = _engine(args)
     scenes = _config_scenes(cfg, args.scene)  # every id checked before the first solve
     reach = scene_reach(scenes, cfg, contact, mats)
-    cache = MeshCache()  # a set's scenes share their mesh (same plate, new soil)
     out_dir = Path(args.output_dir)
-    radius = float(cfg["indenter"]["radius"])
     material_set = cfg.get("material_set", "realistic")
-    rank0 = comm_rank() == 0
+    rank, size = comm_rank(), comm_size()  # under mpiexec: operator groups over the ranks
+    tag = f"rank {rank}: " if size > 1 else ""
+
+    def progress(j: int, n: int, scene: Any, curve: Any, out: Path) -> None:
+        print(f"{tag}[{j + 1}/{n}] {scene.scene_id}: F = {curve.force[-1]:.6g} N, "
+              f"solve {curve.stats['wall_total']:.3f} s -> {out}", file=sys.stderr, flush=True)
+
     t0 = time.perf_counter()
-    curves = []
-    for i, scene in enumerate(scenes):
-        try:
-            curve = solve_scene(scene, {**contact, "delta_reach": reach[i]}, radius, mats, cache)
-        except SswError:
-            print(f"ssw contact: scene {scene.scene_id} failed ({i} of {len(scenes)} written)",
-                  file=sys.stderr, flush=True)
-            raise
-        out = out_dir / f"{scene.scene_id}.h5"
-        if rank0:
-            write_curve(out, replace(curve, inputs={**curve.inputs, "material_set": material_set}))
-        st = curve.stats
-        curves.append({"scene_id": scene.scene_id, "output": str(out),
-                       "force_max": float(curve.force[-1]),
-                       "contact_radius_max": float(curve.contact_radius[-1]),
-                       "dofs": st["dofs"], "wall_total": st["wall_total"]})
-        if rank0:  # progress in the job's log
-            print(f"[{i + 1}/{len(scenes)}] {scene.scene_id}: F = {curve.force[-1]:.6g} N, "
-                  f"solve {st['wall_total']:.3f} s -> {out}", file=sys.stderr, flush=True)
-    if not rank0:
+    try:
+        mine = solve_batch(scenes, reach, contact, float(cfg["indenter"]["radius"]), mats,
+                           out_dir, material_set, solve_scene, rank=rank, size=size,
+                           progress=progress)
+    except SswError:
+        print(f"ssw contact: {tag}a scene of the batch failed", file=sys.stderr, flush=True)
+        raise
+    curves = gather(mine, size)
+    if curves is None:
         return None
+    order = {s.scene_id: i for i, s in enumerate(scenes)}
+    curves.sort(key=lambda c: order[c["scene_id"]])
     return {"scenes": [c["scene_id"] for c in curves], "outputs": [c["output"] for c in curves],
             "output_dir": str(out_dir), "curves": curves, "material_set": material_set,
-            "wall_batch": time.perf_counter() - t0}
+            "ranks": size, "wall_batch": time.perf_counter() - t0}
+
+
+def _engine(args: argparse.Namespace) -> Any:
+    """``solve_scene`` of the chosen engine: the FEM or the layered oracle."""
+    if getattr(args, "engine", "fem") == "layered":
+        from ssw.contact.layered import solve_scene
+    else:
+        from ssw.contact import solve_scene
+    return solve_scene
 
 
 def _human(res: dict[str, Any]) -> str:
+    if res.get("engine") == "layered":
+        from ssw.contact.layered import describe
+
+        return describe(res)
     if "curves" in res:  # a batch
         rows = [f"{c['scene_id']}: F = {c['force_max']:.6g} N, solve {c['wall_total']:.3f} s"
                 for c in res["curves"]]

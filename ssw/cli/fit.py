@@ -316,12 +316,19 @@ def run_range(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def run_set(args: argparse.Namespace) -> dict[str, Any]:
-    """Every fit output of one set (the module docstring), one process."""
+    """Every fit output of one set (the module docstring), one process: the config loaded
+    once, every curve read once."""
     import shutil
     from pathlib import Path
 
     from ssw.config import expand_grid
-    from ssw.h5io import atomic_write_text, to_json
+    from ssw.curve import read_curve
+    from ssw.fit import figures
+    from ssw.fit.deviation import deviation_rows
+    from ssw.fit.pipeline import config_laws, table_from_files
+    from ssw.fit.table import write_tables
+    from ssw.fit.tof_impact import tof_impact
+    from ssw.h5io import atomic_write_text, to_json, write_rows_csv
 
     cfg = load_config(args.config)
     if args.set not in cfg["sets"]:
@@ -332,19 +339,25 @@ def run_set(args: argparse.Namespace) -> dict[str, Any]:
     one_soil = expand_grid(spec["soil_E"], f"sets.{args.set}.soil_E").size == 1
     kind = "materials" if len(spec["plate_material"]) > 1 else "thickness"
     out = Path(args.outdir)
-    (out / "sets" / args.set).mkdir(parents=True, exist_ok=True)
+    tdir = out / "sets" / args.set
+    tdir.mkdir(parents=True, exist_ok=True)
     (out / "figures").mkdir(parents=True, exist_ok=True)
-    ns = argparse.Namespace
+    curves = [read_curve(p) for p in args.curves]
     written: list[str] = []
 
     def dump(path: Path, res: dict[str, Any]) -> None:
         atomic_write_text(path, to_json({**res, "ssw_version": _version()}) + "\n")
         written.append(str(path))
 
-    tdir = out / "sets" / args.set
-    res = run_table(ns(curves=args.curves, output=str(tdir / "k_table.h5"),
-                       csv=str(tdir / "k_table.csv"), config=args.config))
-    dump(tdir / "k_table.json", res)
+    tables, records = table_from_files(args.curves, cfg, curves=curves)
+    write_tables(tables, tdir / "k_table.h5", tdir / "k_table.csv", {
+        "curves": list(args.curves), "fit": cfg["fit"], "laws": config_laws(cfg),
+        "ranges": [r["range"] for r in records]})
+    dump(tdir / "k_table.json", {"output": str(tdir / "k_table.h5"), "tables": [
+        {"name": tb.name, "n_E": int(tb.soil_E.size), "n_nu": int(tb.soil_nu.size),
+         "interp_error": tb.interp_error(),
+         "max_rel_residual": {law: float(r["max_rel_residual"].max())
+                              for law, r in tb.residuals.items()}} for tb in tables]})
     written += [str(tdir / "k_table.h5"), str(tdir / "k_table.csv")]
     if cfg["fit"].get("set") == args.set:
         for ext in ("h5", "csv", "json"):
@@ -353,21 +366,24 @@ def run_set(args: argparse.Namespace) -> dict[str, Any]:
             written.append(str(out / f"k_table.{ext}"))
     plots = []
     if one_soil:
-        res = run_deviation(ns(curves=args.curves, set_kind=kind, config=args.config,
-                               output=str(out / f"deviation_{args.set}.csv")))
-        dump(out / f"deviation_{args.set}.json", res)
+        rows = deviation_rows(curves, kind, cfg["fit"]["delta_ref"])
+        for r in rows:
+            r["material_set"] = cfg["material_set"]
+        write_rows_csv(rows, out / f"deviation_{args.set}.csv")
+        dump(out / f"deviation_{args.set}.json", {"rows": rows})
         written.append(str(out / f"deviation_{args.set}.csv"))
         plots += [("curves", args.curves, f"{args.set}_curves.png"),
                   ("deviation", args.curves, f"{args.set}_deviation.png")]
     else:
         plots.append(("k", [str(tdir / "k_table.h5")], f"{args.set}_k_vs_E.png"))
-        res = run_tof_impact(ns(curves=args.curves, config=args.config,
-                                output=str(out / f"tof_impact_{args.set}.csv")))
-        dump(out / f"tof_impact_{args.set}.json", res)
+        rows = tof_impact(curves, cfg)
+        write_rows_csv(rows, out / f"tof_impact_{args.set}.csv")
+        worst = {k: max(abs(r[k]) for r in rows) for k in
+                 ("tof_err_fit_k", "tof_err_fit_power", "E_err_fit_k", "E_err_fit_power")}
+        dump(out / f"tof_impact_{args.set}.json", {"max_abs": worst, "rows": rows})
         written.append(str(out / f"tof_impact_{args.set}.csv"))
     for kind_, inputs, name in plots:
-        run_plot(ns(kind=kind_, inputs=inputs, output=str(out / "figures" / name),
-                    config=args.config, title=args.set))
+        figures.PLOTS[kind_](inputs, str(out / "figures" / name), cfg, args.set)
         written.append(str(out / "figures" / name))
     return {"set": args.set, "outputs": written}
 

@@ -45,6 +45,16 @@ from ssw.contact.mesh import Mesh
 from ssw.errors import ConfigError
 
 INTERFACES = ("bonded", "frictionless", "unilateral")
+#: Geometric tolerance (a node lies on a line) relative to the smallest element size: far
+#: above the round-off of gmsh's coordinates (1e-16 m on a 1 m domain), far below the
+#: distance of any other node (half an element).
+GEOM_TOL_REL = 1e-6
+
+
+def geometric_tolerance(nodes: np.ndarray, tri: np.ndarray) -> float:
+    """Distance (m) below which a node counts as lying on a boundary line:
+    :data:`GEOM_TOL_REL` times the smallest element size of the mesh."""
+    return GEOM_TOL_REL * float(np.min(element_sizes(nodes, tri)))
 
 
 @dataclass(frozen=True)
@@ -77,7 +87,7 @@ def split_interface(mesh: Mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Duplicate the interface nodes of the plate. Returns (nodes, tri, pairs (m, 2))."""
     if not np.any(mesh.body == 1):
         return mesh.nodes, mesh.tri, np.zeros((0, 2), dtype=np.int64)
-    tol = 1e-9 * mesh.soil_radius
+    tol = geometric_tolerance(mesh.nodes, mesh.tri)
     plate_nodes = np.unique(mesh.tri[mesh.body == 1])
     soil_nodes = np.unique(mesh.tri[mesh.body == 0])
     shared = np.intersect1d(plate_nodes, soil_nodes)
@@ -102,12 +112,9 @@ def number_dofs(
     if interface not in INTERFACES:
         raise ConfigError("contact.interface", interface, " | ".join(INTERFACES))
     n = len(nodes)
-    tol = 1e-9 * soil_radius
-    r, z = nodes[:, 0], nodes[:, 1]
-    free = np.ones((n, 2), dtype=bool)
-    free[r < tol, 0] = False  # symmetry axis
-    free[r > soil_radius - tol, 0] = False  # rollers
-    free[z < -soil_depth + tol] = False  # fixed bottom
+    tol = geometric_tolerance(nodes, tri)
+    r = nodes[:, 0]
+    free = fixed_free(nodes, tol, soil_radius, soil_depth)
     master = np.tile(np.arange(n)[:, None], (1, 2))  # node whose dof each component uses
     soil, plate = pairs[:, 0], pairs[:, 1]
     if interface == "bonded":
@@ -129,6 +136,18 @@ def number_dofs(
     udof = np.where(free, udof[master, np.arange(2)[None, :]], -1)
     pdof = np.where(vertex, start + own.sum(axis=1), -1)
     return udof, pdof, int(count.sum())
+
+
+def fixed_free(nodes: np.ndarray, tol: float, soil_radius: float,
+               soil_depth: float) -> np.ndarray:
+    """(n, 2) bool, the displacement components that are free: ``u_r = 0`` on the axis
+    (symmetry) and on the lateral boundary (rollers), ``u = 0`` on the bottom."""
+    r, z = nodes[:, 0], nodes[:, 1]
+    free = np.ones((len(nodes), 2), dtype=bool)
+    free[r < tol, 0] = False  # symmetry axis
+    free[r > soil_radius - tol, 0] = False  # rollers
+    free[z < -soil_depth + tol] = False  # fixed bottom
+    return free
 
 
 def node_graph(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

@@ -1,11 +1,19 @@
-"""Batches of contact scenes: one process (one Snakemake job) computes several scenes.
+"""Batches of contact scenes: which scenes one process (one Snakemake job) computes.
 
-Starting ``ssw contact`` costs ~0.6 s (Python, petsc4py and gmsh imports) against a ~1.2 s
-solve, so the workflow gives every job a batch of up to ``contact.jobs_per_group`` scenes
-(``ssw contact --scene A --scene B ... --output-dir DIR``). Batches are cut per set, in the
-set's scene order, into as few chunks as that size allows, of equal sizes (+-1): adding a
-scene to one set changes no other set's batches. A scene shared by several sets belongs to
-the first set that lists it (every curve file has exactly one producing job).
+What a scene costs (``ssw bench contact``; docs/cluster.md): its operators, once per mesh
+family (the plate's thickness: the mesh), plate material and soil nu (~0.1-0.5 s each,
+cached on disk), then milliseconds for the scene itself; a process pays ~1 s of imports.
+So the workflow gives one job to every **mesh family**, whose scenes share their mesh and
+their plate operators, whatever set lists them: the thesis study has five (no plate, 0.1,
+0.2, 0.4 and 1 mm PLA), the 0.4 mm one holding Sets 1 and 3 and a scene of Set 2. A family
+of more than ``contact.jobs_per_group`` scenes is cut into equal chunks along its
+operator groups (plate material, soil nu), so that a cluster still spreads a large study;
+a scene belongs to exactly one batch.
+
+Inside a job, ``mpiexec -n N ssw contact --scene ... --output-dir D`` deals the batch's
+operator groups out to the ranks (:func:`rank_share`): each rank builds only its groups'
+operators and writes its scenes' curves. (The factorizations themselves are serial: PETSc's
+redundant LU would factor the whole matrix on every rank, N times the work.)
 """
 
 from __future__ import annotations
@@ -14,8 +22,13 @@ import re
 from itertools import pairwise
 from typing import Any
 
-from ssw.config import scenes
+import numpy as np
+
+from ssw.config import Scene, all_scenes
 from ssw.errors import ConfigError
+
+#: Scenes per job when the config does not say (``contact.jobs_per_group``).
+DEFAULT_SIZE = 25
 
 
 def chunks(items: list[str], size: int) -> list[list[str]]:
@@ -28,37 +41,128 @@ def chunks(items: list[str], size: int) -> list[list[str]]:
     return [items[a:b] for a, b in pairwise(bounds)]
 
 
-def batches(cfg: dict[str, Any], size: int | None = None) -> dict[str, list[str]]:
-    """Batch name -> scene ids, for every scene of every set of a (validated) config.
+def family_name(plate_thickness: float) -> str:
+    """Batch-name stem of a mesh family: ``noplate`` or ``t<thickness in um>um``."""
+    if plate_thickness <= 0:
+        return "noplate"
+    um = f"{plate_thickness * 1e6:.6g}".replace(".", "p")
+    return f"t{um}um"
 
-    ``size`` defaults to ``cfg["contact"]["jobs_per_group"]`` (schema default 25). Names
-    are ``<set>_<k>`` (``k`` zero-padded, from 0); the workflow's rule of a batch is
-    ``contact_batch_<name>``.
+
+def group_key(scene: Scene) -> tuple[float, str, float]:
+    """What a scene's operators depend on besides the mesh settings: (thickness, plate
+    material, soil nu)."""
+    plate = scene.plate_material if scene.plate_thickness > 0 else "none"
+    return (float(scene.plate_thickness), plate, float(scene.soil_nu))
+
+
+def batches(cfg: dict[str, Any], size: int | None = None) -> dict[str, list[str]]:
+    """Batch name -> scene ids, for every scene of a (validated) config (module docstring).
+
+    ``size`` defaults to ``cfg["contact"]["jobs_per_group"]``. Names are ``<family>`` or,
+    when a family is cut, ``<family>_<k>`` (``k`` zero-padded, from 0); the workflow's rule
+    of a batch is ``contact_batch_<name>``. Scenes are ordered by operator group, then by
+    soil E.
     """
     if size is None:
-        size = cfg.get("contact", {}).get("jobs_per_group", 25)
-    seen: set[str] = set()
+        size = cfg.get("contact", {}).get("jobs_per_group", DEFAULT_SIZE)
+    families: dict[float, list[Scene]] = {}
+    for sc in all_scenes(cfg).values():
+        families.setdefault(float(sc.plate_thickness), []).append(sc)
     out: dict[str, list[str]] = {}
-    for set_name in cfg["sets"]:
-        ids = [s.scene_id for s in scenes(cfg, set_name) if s.scene_id not in seen]
-        seen.update(ids)
+    for t in sorted(families):
+        scs = sorted(families[t], key=lambda s: (*group_key(s), s.soil_E, s.scene_id))
+        ids = [s.scene_id for s in scs]
         parts = chunks(ids, size)
-        width = len(str(max(len(parts) - 1, 0)))
-        for k, part in enumerate(parts):
-            name = f"{set_name}_{k:0{width}d}"
-            if not re.fullmatch(r"\w+", name):  # the schema's set names; rule names need it
-                raise ConfigError("sets", set_name, "a name of letters, digits and _")
+        stem = family_name(t)
+        if len(parts) == 1:
+            names = [stem]
+        else:
+            width = len(str(len(parts) - 1))
+            names = [f"{stem}_{k:0{width}d}" for k in range(len(parts))]
+        for name, part in zip(names, parts, strict=True):
+            if not re.fullmatch(r"\w+", name):
+                raise ConfigError("sets", name, "batch names of letters, digits and _")
             out[name] = part
     return out
 
 
-#: MB of memory a contact job asks for (a batch of 25 thesis scenes: 350 MB resident; the
-#: figure leaves room for finer meshes). Doubled on a retry (Snakemake's ``attempt``).
+def rank_share(scenes: list[Scene], rank: int, size: int) -> list[int]:
+    """Indices of the scenes rank ``rank`` of ``size`` solves: whole operator groups, dealt
+    largest first to the least loaded rank (a group's operators are built once)."""
+    if size <= 1:
+        return list(range(len(scenes)))
+    groups: dict[tuple, list[int]] = {}
+    for i, sc in enumerate(scenes):
+        groups.setdefault(group_key(sc), []).append(i)
+    load = np.zeros(size)
+    mine: list[int] = []
+    for key in sorted(groups, key=lambda k: (-len(groups[k]), k)):
+        r = int(np.argmin(load))
+        load[r] += len(groups[key]) + 10  # a group's operators cost ~10 scenes
+        if r == rank:
+            mine.extend(groups[key])
+    return sorted(mine)
+
+
+#: MB of memory a contact job asks for (a 300-scene family: 320 MB resident; the figure
+#: leaves room for finer meshes). Doubled on a retry (Snakemake's ``attempt``).
 MEM_MB = 1500
 
 
 def runtime(n_scenes: int) -> int:
-    """Minutes of wall time a batch of ``n_scenes`` asks for (its SLURM time limit): 5
-    plus 12 s per scene, ~8x the ~1.5 s a thesis scene takes on one core; doubled on a
-    retry."""
-    return 5 + -(-12 * int(n_scenes) // 60)
+    """Minutes of wall time a batch of ``n_scenes`` asks for (its SLURM time limit): 5 plus
+    1 s per scene, ~50x the ~20 ms a scene takes (operators, curve file) on one core;
+    doubled on a retry."""
+    return 5 + -(-int(n_scenes) // 60)
+
+
+def solve_batch(
+    scenes: list[Scene], reach: list[float], contact: dict[str, Any], radius: float,
+    materials: dict, out_dir: Any, material_set: str, solve_scene: Any, *,
+    rank: int = 0, size: int = 1, progress: Any = None,
+) -> list[dict[str, Any]]:
+    """Solve this rank's share of a batch (:func:`rank_share`) in turn and write each curve
+    to ``out_dir/<scene_id>.h5`` (atomically) as soon as it is done.
+
+    ``reach`` (m) is each scene's ``contact.delta_reach``; ``solve_scene`` the engine's
+    (:func:`ssw.contact.solve_scene` or the layered oracle's); ``progress(i, n, scene,
+    curve, path)`` is called after each scene (the CLI's log line). Returns one summary per
+    scene solved here.
+    """
+    from dataclasses import replace
+    from pathlib import Path
+
+    from ssw.contact.scene import MeshCache
+    from ssw.curve import write_curve
+
+    cache = MeshCache()  # a family's scenes share their mesh and operators
+    out_dir = Path(out_dir)
+    mine = rank_share(scenes, rank, size)
+    out = []
+    for j, i in enumerate(mine):
+        scene = scenes[i]
+        curve = solve_scene(scene, {**contact, "delta_reach": reach[i]}, radius, materials,
+                            cache)
+        path = out_dir / f"{scene.scene_id}.h5"
+        write_curve(path, replace(curve, inputs={**curve.inputs, "material_set": material_set}))
+        st = curve.stats
+        out.append({"scene_id": scene.scene_id, "output": str(path), "rank": rank,
+                    "force_max": float(curve.force[-1]),
+                    "contact_radius_max": float(curve.contact_radius[-1]),
+                    "dofs": st.get("dofs"), "wall_total": st.get("wall_total"),
+                    "operators_built": st.get("operators_built", 0)})
+        if progress is not None:
+            progress(j, len(mine), scene, curve, path)
+    return out
+
+
+def gather(items: list[dict[str, Any]], size: int) -> list[dict[str, Any]] | None:
+    """Every rank's ``items`` on rank 0 (None on the others); ``items`` with one rank."""
+    if size <= 1:
+        return items
+    from ssw.contact.petsc_solver import _petsc
+
+    comm = _petsc().COMM_WORLD.tompi4py()
+    parts = comm.gather(items, root=0)
+    return None if parts is None else [x for p in parts for x in p]

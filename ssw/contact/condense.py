@@ -1,4 +1,5 @@
-"""Contact constraints condensed onto their candidate dofs, with columns computed on demand.
+"""Contact constraints condensed onto their candidate dofs, with columns computed on demand
+(the monolithic engine of :func:`ssw.contact.solve_curve`).
 
 Constraint ``j`` has a gap ``g_j = g0_j + G_j x``; with ``K x = G^T lam`` the gaps are
 ``g = g0 + W lam``, ``W = G K^-1 G^T`` (m/N). The columns ``X = K^-1 G^T`` cost one solve

@@ -11,7 +11,8 @@ exactly (up to round-off) by an active-set (principal pivoting) method warm-star
 the previous increment's active set; ``W`` is symmetric positive definite, so the solution
 is unique and the method terminates (Murty 1974's least-index rule backs up the faster block
 updates). The gap of the rigid sphere at a top node of radius ``r`` is the exact spherical
-gap ``g0 = R - sqrt(R^2 - r^2) - delta``.
+gap ``g0 = R - sqrt(R^2 - r^2) - delta``, computed as ``r^2 / (R + sqrt(R^2 - r^2)) - delta``
+(no cancellation at small ``r``).
 """
 
 from __future__ import annotations
@@ -28,9 +29,9 @@ MAX_PIVOTS = 2000
 
 def sphere_gap(r: np.ndarray, radius: float, delta: float) -> np.ndarray:
     """Initial gap (m) between a rigid sphere of ``radius`` pushed by ``delta`` and a flat."""
-    if np.any(r >= radius):
-        raise SolverError("contact candidate beyond the sphere's radius: shrink the candidate zone")
-    return radius - np.sqrt(radius**2 - r**2) - delta
+    from ssw.contact.operators import sphere_gap0
+
+    return sphere_gap0(r, radius) - delta
 
 
 def _active_solve(W: np.ndarray, idx: np.ndarray, rhs: np.ndarray, cache: dict) -> np.ndarray:

@@ -1,26 +1,41 @@
-"""A sphere-plate-soil contact scene: mesh, assemble, factor once, condense, step the LCP.
+"""A sphere-plate-soil contact scene: its exact force-indentation curve.
 
 ``solve_scene`` is the stage's Python API: a :class:`ssw.config.Scene` in, a
 :class:`ssw.curve.ForceCurve` out (force on the rigid sphere vs its indentation).
+
+Two engines compute the same curve (to round-off; tests/test_contact_engines.py):
+
+* ``substructured`` (default): the plate and the soil condensed once per mesh and Poisson's
+  ratio at unit E (:mod:`ssw.contact.operators`, cached), a dense system of a few hundred
+  unknowns per scene, and the exact piecewise-affine path of the contact LCP in the
+  indentation (:mod:`ssw.contact.parametric`), sampled at the increments;
+* ``monolithic``: the whole u-p matrix factored with PETSc (:mod:`ssw.contact.petsc_solver`),
+  condensed onto the candidates (:mod:`ssw.contact.condense`) and an LCP solved at every
+  increment (:mod:`ssw.contact.contact_lcp`): the independent check.
 """
 
 from __future__ import annotations
 
+import functools
 import time
 from typing import Any
 
 import numpy as np
 
 from ssw.config import Scene
-from ssw.contact.assembly import INTERFACES, System, assemble
+from ssw.contact.assembly import INTERFACES, System, assemble, geometric_tolerance
 from ssw.contact.condense import Condensed
 from ssw.contact.contact_lcp import edge_radius, solve_lcp, sphere_gap
 from ssw.contact.mesh import Mesh, MeshSettings, build_mesh
+from ssw.contact.operators import OperatorStore, default_store, geometry_of, scene_lcp
+from ssw.contact.parametric import trace
 from ssw.contact.petsc_solver import LUSolver, comm_size, nd_order
 from ssw.curve import ForceCurve
 from ssw.errors import ConfigError, SolverError
 from ssw.materials import Material
 
+#: The solvers of a scene (module docstring).
+ENGINES = ("substructured", "monolithic")
 #: Defaults of the ``contact`` config section (also in the schema, with the measurements
 #: that chose them).
 DEFAULTS: dict[str, Any] = {
@@ -135,11 +150,11 @@ def condense(
     sysm: System, solver: LUSolver, mesh: Mesh, radius: float, r_cand: float, interface: str,
     r_start: float,
 ) -> tuple[Condensed, np.ndarray]:
-    """Condensed constraints: sphere candidates are the top nodes with r <= r_cand (those
-    with r <= r_start condensed at once), plus, for the unilateral interface, the interface
-    pairs off the axis. Also returns the top nodes beyond the candidates with r < R/2
-    (checked for penetration at the end)."""
-    tol = 1e-9 * mesh.soil_radius
+    """Condensed constraints of the monolithic engine: sphere candidates are the top nodes
+    with r <= r_cand (those with r <= r_start condensed at once), plus, for the unilateral
+    interface, the interface pairs off the axis. Also returns the top nodes beyond the
+    candidates with r < R/2 (checked for penetration at the end)."""
+    tol = geometric_tolerance(sysm.nodes, sysm.tri)
     top_body = 1 if mesh.plate_radius > 0 else 0
     top_elems = np.flatnonzero(sysm.body == top_body)
     weight = top_surface_weights(sysm.nodes, sysm.tri, top_elems, mesh.top, tol)
@@ -147,9 +162,7 @@ def condense(
     top = top[np.argsort(sysm.nodes[top, 0])]
     cand = top[sysm.nodes[top, 0] <= r_cand]
     outside = top[(sysm.nodes[top, 0] > r_cand) & (sysm.nodes[top, 0] < 0.5 * radius)]
-    if len(cand) < 4:
-        raise ConfigError("contact.mesh_size_contact", len(cand),
-                          "a finer mesh: at least 4 nodes inside the candidate contact zone")
+    _check_resolution(int(np.count_nonzero(sysm.nodes[cand, 0] <= r_cand)))
     if np.any(sysm.udof[cand, 1] < 0):
         raise ConfigError("contact.candidate_factor", r_cand, "a zone inside the free surface")
     pairs = sysm.iface[sysm.nodes[sysm.iface[:, 0], 0] > tol] if interface == "unilateral" \
@@ -161,20 +174,29 @@ def condense(
     return cond, outside
 
 
-class MeshCache:
-    """The last mesh built and its node elimination order, for a batch of scenes.
+def _check_resolution(n_nodes: int) -> None:
+    """ConfigError unless the Hertz contact zone of the deepest increment holds >= 4 nodes."""
+    if n_nodes < 4:
+        raise ConfigError("contact.mesh_size_contact", n_nodes,
+                          "a finer mesh: at least 4 nodes inside the candidate contact zone")
+
+
+class MeshCache(OperatorStore):
+    """What a batch of scenes shares: the condensed operators (an
+    :class:`~ssw.contact.operators.OperatorStore`, backed by the disk cache), and for the
+    monolithic engine the last mesh built and its node elimination order.
 
     Scenes that differ only in materials (a set's soils under one plate) share the mesh
     and the nested-dissection order: gmsh and the ordering are deterministic, so reusing
-    them gives the same numbers as building them again, without their ~0.1 s.
+    them gives the same numbers as building them again.
     """
 
-    def __init__(self) -> None:
+    def __init__(self, directory: Any = "env") -> None:
+        super().__init__(directory)
         self.key: tuple | None = None
         self.mesh: Mesh | None = None
         self.graph: tuple[int, bytes] | None = None
         self.perm: np.ndarray | None = None
-        self.hits = 0
 
     def mesh_for(self, plate_thickness: float, plate_radius: float,
                  settings: MeshSettings) -> Mesh:
@@ -182,8 +204,6 @@ class MeshCache:
         if key != self.key or self.mesh is None:
             self.mesh = build_mesh(plate_thickness, plate_radius, settings)
             self.key, self.graph, self.perm = key, None, None
-        else:
-            self.hits += 1
         return self.mesh
 
     def order_nodes(self, rows: np.ndarray, cols: np.ndarray, n: int) -> np.ndarray:
@@ -196,9 +216,23 @@ class MeshCache:
         return self.perm.copy()
 
 
+def _validate(soil: tuple[float, float], plate: tuple[float, float] | None,
+              plate_thickness: float, radius: float) -> None:
+    if plate_thickness < 0:
+        raise ConfigError("plate_thickness", plate_thickness, "a thickness >= 0 m")
+    if plate_thickness > 0 and plate is None:
+        raise ConfigError("plate", plate, "(E, nu) of the plate when plate_thickness > 0")
+    _check_material("soil", *soil)
+    if plate is not None:
+        _check_material("plate", *plate)
+    if not radius > 0:
+        raise ConfigError("indenter_radius", radius, "a radius > 0 m")
+
+
 def solve_curve(
     soil: tuple[float, float], plate: tuple[float, float] | None, plate_thickness: float,
-    radius: float, contact_cfg: dict[str, Any], cache: MeshCache | None = None,
+    radius: float, contact_cfg: dict[str, Any], cache: MeshCache | OperatorStore | None = None,
+    *, engine: str = "substructured",
 ) -> tuple[ForceCurve, dict[str, Any]]:
     """Force-indentation curve of a rigid sphere on a plate (or none) on a soil.
 
@@ -209,27 +243,121 @@ def solve_curve(
     plate_thickness : m.
     radius : m, sphere radius.
     contact_cfg : the ``contact`` config section (defaults: :data:`DEFAULTS`).
-    cache : reuse the mesh (and its ordering) of the previous call with the same geometry
-        and mesh settings (a batch of scenes); None builds it.
+    cache : the operators (and, monolithic, the mesh) shared by a batch of scenes; None:
+        the process's store (:func:`ssw.contact.operators.default_store`, disk-backed).
+    engine : ``substructured`` (default) or ``monolithic`` (module docstring).
 
     Returns
     -------
     (curve, state) : the curve (inputs and stats filled except the scene's labels) and a
-    dict with the condensed problem, the final contact forces and the solver (for tests).
+    dict with the condensed problem and the final contact forces (for tests).
     """
     cfg = settings_of(contact_cfg)
     t_start = time.perf_counter()
-    if plate_thickness < 0:
-        raise ConfigError("plate_thickness", plate_thickness, "a thickness >= 0 m")
-    if plate_thickness > 0 and plate is None:
-        raise ConfigError("plate", plate, "(E, nu) of the plate when plate_thickness > 0")
-    _check_material("soil", *soil)
-    if plate is not None:
-        _check_material("plate", *plate)
-    if not radius > 0:
-        raise ConfigError("indenter_radius", radius, "a radius > 0 m")
-    delta_max, steps = float(cfg["delta_max"]), int(cfg["steps"])
-    deltas = indentation_steps(delta_max, steps, cfg.get("delta_reach"))
+    if engine not in ENGINES:
+        raise ConfigError("engine", engine, " | ".join(ENGINES))
+    _validate(soil, plate, plate_thickness, radius)
+    deltas = indentation_steps(float(cfg["delta_max"]), int(cfg["steps"]), cfg.get("delta_reach"))
+    pe = plate if plate is not None else soil
+    inputs = {
+        "soil_E": soil[0], "soil_nu": soil[1],
+        "plate_E": None if plate_thickness == 0 else pe[0],
+        "plate_nu": None if plate_thickness == 0 else pe[1],
+        "plate_thickness": plate_thickness, "indenter_radius": radius, **cfg,
+        "fem_engine": engine,
+    }
+    if engine == "monolithic":
+        curve, state = _monolithic(soil, pe, plate_thickness, radius, cfg, deltas,
+                                   cache if isinstance(cache, MeshCache) else None, t_start)
+        return ForceCurve(curve.delta, curve.force, curve.contact_radius, inputs, curve.stats,
+                          curve.pressure), state
+    store = cache if cache is not None else default_store()
+    has_plate = plate_thickness > 0
+    geom = geometry_of(cfg, plate_thickness, radius, float(deltas[-1]), cfg["interface"])
+    layout = store.layout(geom)
+    _check_resolution(int(np.count_nonzero(
+        layout.r <= float(cfg["candidate_factor"]) * np.sqrt(radius * deltas[-1]))))
+    soil_op = store.body(geom, "soil", soil[1])
+    plate_op = store.body(geom, "plate", pe[1]) if has_plate else None
+    built = store.pop_cost()
+    t_ops = time.perf_counter()
+    lcp = scene_lcp(layout, plate_op, soil_op, soil[0], pe[0] if has_plate else None,
+                    cfg["interface"], radius)
+    t_cond = time.perf_counter()
+    path, how = trace(lcp.W, lcp.q0, lcp.q1, float(deltas[-1]))
+    ms = lcp.n_sphere
+    lam = path.forces(deltas)
+    gaps = np.clip(path.gaps(deltas)[:, :ms], 0.0, None)
+    active = path.active[path.piece_of(deltas)][:, :ms]
+    force = lam[:, :ms].sum(axis=1)
+    a = edge_radii(lcp.r, gaps, active)
+    keep = np.unique(np.linspace(0, deltas.size - 1, int(cfg["pressure_profiles"]))
+                     .round().astype(int))
+    p = lam[keep, :ms] / np.where(lcp.weight > 0, lcp.weight, np.inf)
+    if lcp.r[0] == 0.0:  # the axis vertex of a P2 edge has zero weight; dp/dr = 0
+        p[:, 0] = p[:, 1]
+    if np.any(path.active[:, ms - 1]):
+        raise SolverError(
+            f"the contact zone reached the last candidate node (r = {lcp.r[-1]:.4g} m): "
+            "raise contact.candidate_factor")
+    tie_max = None
+    if lcp.tie is not None:
+        # affine per piece: its extremes are at the breakpoints (0 at delta = 0)
+        tie = path.forces(path.breaks[1:]) @ lcp.tie
+        tie_max = float(np.max(tie))
+        if tie_max > 1e-9 * max(float(force[-1]), 1e-300):
+            raise SolverError(
+                f"the unilateral interface's axis tie is in tension ({tie_max:.3g} N): the "
+                "plate would lift off at the axis; the model does not hold")
+    t_lcp = time.perf_counter()
+    st_s = soil_op.stats
+    st_p = plate_op.stats if plate_op is not None else {}
+    stats = {
+        "nodes": layout.nodes, "elements": layout.elements,
+        "dofs": int(st_s.get("dofs", 0)) + int(st_p.get("dofs", 0)),
+        "candidates": int(lcp.q0.size), "sphere_candidates": ms, "interface_dofs":
+        int(layout.iface_r.size), "scene_dofs": int(lcp.dofs), "breakpoints": path.pieces,
+        "prefix_path": how["prefix"], "ranks": 1,
+        "operators_built": built["count"], "backward_error": max(
+            float(st_s.get("backward_error", 0.0)), float(st_p.get("backward_error", 0.0))),
+        "wall_mesh": built["wall_mesh"], "wall_assemble": built["wall_assemble"],
+        "wall_factor": built["wall_factor"], "wall_condense": t_cond - t_ops,
+        "wall_lcp": t_lcp - t_cond, "wall_total": t_lcp - t_start,
+    }
+    if tie_max is not None:
+        stats["tie_force_max"] = tie_max
+    curve = ForceCurve(
+        delta=deltas, force=force, contact_radius=a, inputs=inputs, stats=stats,
+        pressure={"r": lcp.r, "delta": deltas[keep], "p": p},
+    )
+    return curve, {"lcp": lcp, "path": path, "lam": lam[-1], "store": store,
+                   "geometry": geom}
+
+
+def edge_radii(r: np.ndarray, gap: np.ndarray, active: np.ndarray) -> np.ndarray:
+    """:func:`ssw.contact.contact_lcp.edge_radius` of many states at once.
+
+    ``r`` (ms,) sorted; ``gap``, ``active`` (n, ms): per state, the gaps (m) and the active
+    sphere candidates. Returns (n,) m.
+    """
+    n, ms = active.shape
+    any_act = active.any(axis=1)
+    k = ms - 1 - np.argmax(active[:, ::-1], axis=1)
+    k1, k2 = np.minimum(k + 1, ms - 1), np.minimum(k + 2, ms - 1)
+    rows = np.arange(n)
+    s1, s2 = np.cbrt(gap[rows, k1] ** 2), np.cbrt(gap[rows, k2] ** 2)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a = r[k1] - s1 * (r[k2] - r[k1]) / (s2 - s1)
+    a = np.clip(a, r[k], r[k1])
+    a = np.where((k + 2 >= ms) | (s2 <= s1), r[k], a)
+    return np.where(any_act, a, 0.0)
+
+
+def _monolithic(
+    soil: tuple[float, float], pe: tuple[float, float], plate_thickness: float, radius: float,
+    cfg: dict[str, Any], deltas: np.ndarray, cache: MeshCache | None, t_start: float,
+) -> tuple[ForceCurve, dict[str, Any]]:
+    """The monolithic engine: one PETSc LU of the whole model, an LCP per increment."""
     plate_radius = 0.5 * float(cfg["plate_diameter"])
     if cache is None:
         mesh, order_nodes = build_mesh(plate_thickness, plate_radius, mesh_settings(cfg)), nd_order
@@ -237,7 +365,6 @@ def solve_curve(
         mesh = cache.mesh_for(plate_thickness, plate_radius, mesh_settings(cfg))
         order_nodes = cache.order_nodes
     t_mesh = time.perf_counter()
-    pe = plate if plate is not None else soil
     sysm = assemble(mesh, (soil[0], pe[0]), (soil[1], pe[1]), cfg["interface"], order_nodes)
     t_asm = time.perf_counter()
     solver = LUSolver(sysm.rows, sysm.cols, sysm.vals, sysm.ndof, sysm.scale)
@@ -253,7 +380,7 @@ def solve_curve(
     a = np.empty(n_inc)
     keep = np.unique(np.linspace(0, n_inc - 1, int(cfg["pressure_profiles"])).round().astype(int))
     profiles = []
-    tol = LCP_TOL * delta_max / steps
+    tol = LCP_TOL * float(deltas[-1]) / deltas.size
     active = np.zeros(len(cond.W), dtype=bool)
     pivots = 0
     lcp_cache: dict = {}
@@ -286,20 +413,14 @@ def solve_curve(
     stats = {
         "nodes": len(sysm.nodes), "elements": len(sysm.tri), "dofs": sysm.ndof,
         "nnz_coo": len(sysm.vals), "candidates": len(cond.W), "sphere_candidates": ms,
-        "solves": cond.solves,
-        "lcp_pivots": pivots, "ranks": comm_size(),
+        "solves": cond.solves, "lcp_pivots": pivots, "ranks": comm_size(),
+        "backward_error": solver.backward_error,
         "wall_mesh": t_mesh - t_start, "wall_assemble": t_asm - t_mesh,
         "wall_factor": t_fact - t_asm, "wall_condense": t_cond - t_fact + cond.wall,
         "wall_lcp": t_lcp - t_cond - cond.wall, "wall_total": t_lcp - t_start,
     }
-    inputs = {
-        "soil_E": soil[0], "soil_nu": soil[1],
-        "plate_E": None if plate_thickness == 0 else pe[0],
-        "plate_nu": None if plate_thickness == 0 else pe[1],
-        "plate_thickness": plate_thickness, "indenter_radius": radius, **cfg,
-    }
     curve = ForceCurve(
-        delta=deltas, force=force, contact_radius=a, inputs=inputs, stats=stats,
+        delta=deltas, force=force, contact_radius=a, inputs={}, stats=stats,
         pressure={"r": cond.r[:ms], "delta": deltas[keep],
                   "p": np.array(profiles)[:, :ms]},
     )
@@ -307,14 +428,27 @@ def solve_curve(
 
 
 def indentation_steps(delta_max: float, steps: int, delta_reach: float | None = None) -> np.ndarray:
-    """Indentations (m) of the increments: ``steps`` equal ones to ``delta_max`` (the
-    thesis's 1000 x 0.1 um) then, when ``delta_reach > delta_max`` (``contact.delta_mode``
-    chain), ``steps`` equal ones on to ``delta_reach``: the small-indentation resolution of
-    the thesis is kept and the curve reaches what the chain presses in."""
-    d = delta_max * np.arange(1, steps + 1) / steps
-    if delta_reach is not None and float(delta_reach) > delta_max * (1 + 1e-12):
-        ext = delta_max + (float(delta_reach) - delta_max) * np.arange(1, steps + 1) / steps
-        d = np.concatenate([d, ext])
+    """Indentations (m) of the increments: one uniform step ``h = delta_max / steps`` (the
+    thesis's 1000 x 0.1 um) from ``h`` to ``delta_max``, and on, with the same step, to
+    ``delta_reach`` when it is deeper (``contact.delta_mode: chain``; the last increment
+    ends exactly there and may be shorter).
+
+    The curve is exact at any indentation, so its samples are spread with one density over
+    the whole range: a least-squares fit weights every part of its range alike (1000
+    increments to 0.1 mm and 1000 more beyond, two densities, made the fitted K jump where
+    the chain's reach crosses 0.1 mm), and every multiple of ``h`` (the thesis's reference
+    indentation 1 um among them) is a sample, not an interpolation.
+    """
+    h = float(delta_max) / int(steps)
+    d = h * np.arange(1, int(steps) + 1)
+    if delta_reach is not None and float(delta_reach) > float(delta_max) * (1 + 1e-12):
+        reach = float(delta_reach)
+        n = int(np.floor(reach / h * (1 + 1e-12)))
+        d = h * np.arange(1, n + 1)
+        if reach - d[-1] > 1e-9 * h:
+            d = np.concatenate([d, [reach]])
+        else:
+            d[-1] = reach
     return d
 
 
@@ -337,14 +471,20 @@ def _check_zone(cond: Condensed, sysm: System, outside: np.ndarray, lam: np.ndar
 
 
 def strain_energy(state: dict[str, Any], lam: np.ndarray) -> float:
-    """Strain energy (J) ``x^T K x / 2`` of the state under contact forces ``lam`` (N)."""
-    x = state["cond"].X @ lam
-    return 0.5 * float(x @ state["solver"].matvec(x))
+    """Strain energy (J) of the state under contact forces ``lam`` (N): ``x^T K x / 2`` with
+    the monolithic engine's stiffness, ``lam^T W lam / 2`` with the substructured one's
+    condensed compliance (Clapeyron)."""
+    if "cond" in state:
+        x = state["cond"].X @ lam
+        return 0.5 * float(x @ state["solver"].matvec(x))
+    W = state["lcp"].W
+    return 0.5 * float(lam @ W @ lam)
 
 
 def solve_scene(
     scene: Scene, contact_cfg: dict[str, Any], indenter_radius: float,
     materials: dict[str, Material], cache: MeshCache | None = None,
+    *, engine: str = "substructured",
 ) -> ForceCurve:
     """Force-indentation curve of one scene of a study.
 
@@ -354,7 +494,8 @@ def solve_scene(
     contact_cfg : the config's ``contact`` section.
     indenter_radius : m, the rigid sphere's radius.
     materials : the material library of the study (key -> Material).
-    cache : a :class:`MeshCache` shared by the scenes of a batch (None: none).
+    cache : a :class:`MeshCache` shared by the scenes of a batch (None: the process's).
+    engine : ``substructured`` (default) or ``monolithic`` (the module docstring).
     """
     plate = None
     plate_key = scene.plate_material if scene.plate_thickness > 0 else "none"
@@ -365,8 +506,9 @@ def solve_scene(
         m = materials[scene.plate_material]
         plate = (m.E, m.nu)
     curve, state = solve_curve((scene.soil_E, scene.soil_nu), plate, scene.plate_thickness,
-                               indenter_radius, contact_cfg, cache)
-    state["solver"].destroy()
+                               indenter_radius, contact_cfg, cache, engine=engine)
+    if "solver" in state:
+        state["solver"].destroy()
     inputs = {**curve.inputs, "plate_material": plate_key, "scene_id": scene.scene_id,
               "material_set": _material_set_of(materials)}
     return ForceCurve(curve.delta, curve.force, curve.contact_radius, inputs, curve.stats,
@@ -374,7 +516,22 @@ def solve_scene(
 
 
 def _material_set_of(materials: dict[str, Material]) -> str:
-    """Name of the set of the shipped library equal to ``materials`` ("custom" if none)."""
+    """Name of the set of the shipped library equal to ``materials`` ("custom" if none);
+    remembered per library (reading the YAML library costs ~15 ms, a scene a few)."""
+    try:
+        key = tuple(sorted(materials.items()))
+        hash(key)
+    except TypeError:
+        return _find_material_set(materials)
+    return _material_set_cached(key)
+
+
+@functools.lru_cache(maxsize=16)
+def _material_set_cached(key: tuple) -> str:
+    return _find_material_set(dict(key))
+
+
+def _find_material_set(materials: dict[str, Material]) -> str:
     from ssw.materials import load_library, material_set
 
     for name in load_library():

@@ -39,14 +39,16 @@ def fit_with_config(
 
 
 def fit_files(
-    paths: Iterable[str | Path], cfg: dict[str, Any], laws: list[str] | None = None
+    paths: Iterable[str | Path], cfg: dict[str, Any], laws: list[str] | None = None,
+    curves: list[Any] | None = None,
 ) -> list[dict[str, Any]]:
     """For every curve file: ``{"path", "range": FitRange dict, "fits": {law: FitResult}}``.
 
     The ranges of all files are computed in one batch (one chain run in mode ``chain``).
+    ``curves``: the files' curves when already read.
     """
     paths = [str(p) for p in paths]
-    curves = [read_curve(p) for p in paths]
+    curves = [read_curve(p) for p in paths] if curves is None else list(curves)
     scs = [scene_inputs(c) for c in curves]
     ranges = fit_ranges(
         [float(s["soil_E"]) for s in scs],
@@ -67,8 +69,10 @@ def fit_files(
 
 
 def table_from_files(
-    paths: Iterable[str | Path], cfg: dict[str, Any], laws: list[str] | None = None
+    paths: Iterable[str | Path], cfg: dict[str, Any], laws: list[str] | None = None,
+    curves: list[Any] | None = None,
 ) -> tuple[list[KTable], list[dict[str, Any]]]:
-    """Fit every file and build the tables; also return the per-file records."""
-    records = fit_files(paths, cfg, laws)
+    """Fit every file (``curves``: already read) and build the tables; also return the
+    per-file records."""
+    records = fit_files(paths, cfg, laws, curves)
     return build_tables(fr for r in records for fr in r["fits"].values()), records

@@ -1,20 +1,23 @@
 """How much each law's fit error matters for the time of flight (TOF).
 
-For each contact curve, the chain (``ssw.chain.api.tof``) runs with four last-contact laws:
+For each contact curve, the chain (``ssw.chain.api.tof``) runs with these last-contact laws:
 
-* ``table``: the FEM curve itself (no fit error; the reference);
+* ``fem``: the exact FEM law of the curve's scene (its plate, interface and mesh settings)
+  at the chain bead's radius, computed to whatever depth the chain reaches
+  (:mod:`ssw.chain.fem_wall`): no fit, no interpolation, no extrapolation; the reference;
 * ``fit_k``: ``F = K A_w delta^1.5`` with this curve's fitted K;
 * ``fit_power``: ``F = C delta^n`` with this curve's fitted (C, n);
+* ``table``: the curve's samples themselves, interpolated (the former reference: what a
+  sampled curve and its power-law extension cost);
 * ``hertz``: the bare soil (no plate), for scale.
 
-The TOF error of a law is ``tof_law / tof_table - 1``; the inverse problem turns it into a
+The TOF error of a law is ``tof_law / tof_fem - 1``; the inverse problem turns it into a
 modulus error through the local slope ``d ln TOF / d ln E`` (about -0.2 for a Hertz wall,
 ``TOF ~ E^(-1/5)`` at fixed striker speed), so a TOF error ``e`` costs about ``e / 0.2 = 5 e``
 in E. ssw reports the slope from the Hertz-wall TOF at ``E (1 +- 1 %)``.
 
-The fits use each scene's default range (:mod:`ssw.fit.range`). The chain extends a curve
-beyond its last point with a power law fitted to its tail (``ssw.chain.walls``); the result
-flags scenes whose chain indentation exceeds the curve.
+The fits use each scene's default range (:mod:`ssw.fit.range`); the result flags scenes
+whose chain indentation exceeds the curve (the ``table`` law then extrapolates).
 """
 
 from __future__ import annotations
@@ -29,10 +32,35 @@ from ssw.fit.range import fit_ranges
 
 #: Relative step of the modulus for the slope d ln TOF / d ln E.
 SLOPE_STEP = 0.01
+#: The laws compared with the reference ``fem``.
+LAWS = ("fit_k", "fit_power", "table", "hertz")
+
+
+def _fem_groups(curves: list[ForceCurve], scs: list[dict[str, Any]], cfg: dict[str, Any]
+                ) -> dict[tuple, tuple[dict[str, Any], dict[str, Any], list[int]]]:
+    """Curves by FEM model (plate, interface, mesh settings): ChainParams overrides, the
+    ``contact`` settings of the ``fem`` wall and the curves' indices."""
+    from ssw.contact.scene import DEFAULTS
+
+    groups: dict[tuple, tuple[dict[str, Any], dict[str, Any], list[int]]] = {}
+    for i, (c, sc) in enumerate(zip(curves, scs, strict=True)):
+        contact = {**DEFAULTS, **cfg.get("contact", {}),
+                   **{k: c.inputs[k] for k in DEFAULTS if k in c.inputs}}
+        contact = {k: contact[k] for k in DEFAULTS}
+        t = float(sc.get("plate_thickness") or 0.0)
+        plate: dict[str, Any] = {"plate_thickness": t,
+                                 "plate_interface": str(contact["interface"]),
+                                 "plate_diameter": float(contact["plate_diameter"])}
+        if t > 0:
+            plate.update(plate_E=float(sc["plate_E"]), plate_nu=float(sc["plate_nu"]),
+                         plate_material=str(sc.get("plate_material", "custom")))
+        key = (tuple(sorted(plate.items())), tuple(sorted(contact.items())))
+        groups.setdefault(key, (plate, contact, []))[2].append(i)
+    return groups
 
 
 def tof_impact(curves: list[ForceCurve], cfg: dict[str, Any]) -> list[dict[str, Any]]:
-    """Per curve: TOF (s) with each law, their errors against the table law, K and (C, n)."""
+    """Per curve: TOF (s) with each law, their errors against the ``fem`` law, K and (C, n)."""
     from ssw.chain import api
     from ssw.chain.params import ChainParams
 
@@ -43,21 +71,22 @@ def tof_impact(curves: list[ForceCurve], cfg: dict[str, Any]) -> list[dict[str, 
     ranges = fit_ranges(E, nu, [float(c.delta[-1]) for c in curves], cfg,
                         [s.get("plate_E") for s in scs], [s.get("plate_nu") for s in scs])
     w = cfg["fit"]["weighting"]
-    fk = [
-        fit_curve(c, "k_hertz", (r.lo, r.hi), weighting=w)
-        for c, r in zip(curves, ranges, strict=True)
-    ]
-    fp = [
-        fit_curve(c, "power", (r.lo, r.hi), weighting=w)
-        for c, r in zip(curves, ranges, strict=True)
-    ]
+    fk = [fit_curve(c, "k_hertz", (r.lo, r.hi), weighting=w)
+          for c, r in zip(curves, ranges, strict=True)]
+    fp = [fit_curve(c, "power", (r.lo, r.hi), weighting=w)
+          for c, r in zip(curves, ranges, strict=True)]
     K = np.array([f.params["K"] for f in fk])
     C = np.array([f.params["C"] for f in fp])
     n = np.array([f.params["n"] for f in fp])
+    tof_fem = np.empty(E.size)
+    for plate, contact, idx in _fem_groups(curves, scs, cfg).values():
+        ix = np.array(idx)
+        tof_fem[ix] = api.tof(E[ix], nu[ix], params.with_(**plate), "fem", contact=contact)
     tof = {
-        "table": api.tof(E, nu, params, "table", curve=list(curves)),
+        "fem": tof_fem,
         "fit_k": api.tof(E, nu, params, "fit", K=K),
         "fit_power": api.tof(E, nu, params, "fit", power=(C, n)),
+        "table": api.tof(E, nu, params, "table", curve=list(curves)),
         "hertz": api.tof(E, nu, params, "hertz"),
     }
     up = api.tof(E * (1 + SLOPE_STEP), nu, params, "hertz")
@@ -82,8 +111,8 @@ def tof_impact(curves: list[ForceCurve], cfg: dict[str, Any]) -> list[dict[str, 
         }
         for law, t in tof.items():
             row[f"tof_{law}"] = float(t[i])
-        for law in ("fit_k", "fit_power", "hertz"):
-            e = float(tof[law][i] / tof["table"][i] - 1.0)
+        for law in LAWS:
+            e = float(tof[law][i] / tof["fem"][i] - 1.0)
             row[f"tof_err_{law}"] = e
             row[f"E_err_{law}"] = e / float(slope[i])
         rows.append(row)

@@ -7,15 +7,20 @@
 #   figures/fig5_materials.png     force vs indentation per plate material (set1_materials)
 #   figures/fig6_thickness.png     force vs indentation per PLA thickness (set2_thickness)
 #
-# Batches: starting `ssw contact` costs ~0.6 s (imports) against a ~1.2 s solve, so one job
-# solves a batch of up to contact.jobs_per_group scenes in one process (`ssw contact --scene
-# A --scene B ... --output-dir DIR`), writing each curve atomically when it is done. A rule
-# has fixed outputs, so there is one rule per batch, defined in a loop (the `name:`
-# directive): contact_batch_<set>_<k> (ssw.contact.batch.batches: per set, equal chunks).
-# Each declares its resources (scaled with its size; doubled on a retry), so the SLURM
-# profile needs no per-batch entries; every batch is one SLURM job (no job group).
+# Batches: a scene costs milliseconds once its operators exist (the plate and the soil
+# condensed per mesh and Poisson's ratio, ~0.1-0.5 s each: ssw.contact.operators), a process
+# ~1 s of imports. So one job solves a whole mesh family (the scenes of one plate thickness,
+# whatever set lists them: they share the mesh and the plate's operators), cut into equal
+# chunks only beyond contact.jobs_per_group scenes (ssw.contact.batch.batches): one rule per
+# batch, contact_batch_<family>[_<k>], defined in a loop (the `name:` directive). Each
+# declares its resources (scaled with its size; doubled on a retry), so the SLURM profile
+# needs no per-batch entries. The operators are cached on disk under $SSW_CACHE_DIR
+# (default here: results/cache, so a run from clean builds them), shared by every rule of
+# the study (the chain's `fem` wall uses the same ones); the variable is set for all jobs.
 
 import ssw.contact.batch as contact_batch
+
+os.environ.setdefault("SSW_CACHE_DIR", os.path.abspath(f"{RESULTS}/cache"))
 
 CONTACT_FIGURES = {
     "set1_materials": ("fig5_materials", "material", "Plate materials (thesis Fig 5)"),
@@ -46,7 +51,7 @@ CONTACT_BATCHES = contact_batch.batches(config)
 
 for _batch, _ids in CONTACT_BATCHES.items():
 
-    # the scenes of one batch, solved in turn by one `ssw contact` process
+    # the scenes of one mesh family (or a chunk of it), solved in turn by one process
     rule:
         name:
             f"contact_batch_{_batch}"
@@ -65,7 +70,8 @@ for _batch, _ids in CONTACT_BATCHES.items():
         conda:
             SSW_ENV
         shell:
-            # one core per job: the LU is sequential; keep BLAS (the small LCP) from spawning
+            # one core per job: the factorizations are sequential; keep BLAS (the dense
+            # scene systems) from spawning threads
             "OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 python -m ssw contact {params.scenes} "
             "--config {params.config} --output-dir {params.out_dir} > {log} 2>&1"
 

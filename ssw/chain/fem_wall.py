@@ -1,0 +1,306 @@
+"""The ``fem`` wall: the FEM force-indentation law itself, computed when the chain needs it.
+
+For each scene (soil E, nu) under the chain's plate (``ChainParams.plate_*``; thickness 0:
+none), the law of a rigid sphere of the bead's radius pressed into the plate on that soil
+is the exact solution path of the condensed FEM contact problem
+(:mod:`ssw.contact.operators`, :mod:`ssw.contact.parametric`): piecewise linear in the
+indentation between breakpoints (a candidate node entering or leaving the contact). No fit,
+no interpolation across E, no extrapolation inside its range. Once the operators of the
+plate and of the soil's nu exist (built on demand, cached on disk), a scene costs a dense
+condensation and a path trace: milliseconds.
+
+Range. The law is traced to the indentation ``d_exact`` at which the wall would store
+:data:`ENERGY_MARGIN` times the striker's kinetic energy plus the work of the chain's weight
+and preload, ``U(d) = k 1/2 m_s v^2 + (M g + P) d`` (the bound of
+:func:`ssw.fit.range.energy_bound_indentation` with the wall's own potential instead of
+Hertz's, and ``k`` = :data:`ENERGY_MARGIN` for striker speeds up to twice the nominal one,
+as a calibration scan tries). Beyond it the last piece continues linearly (never reached
+by a chain the bound holds for: tests/test_fem_wall.py).
+
+Bead compliance. The FEM's sphere is rigid; the bead's compliance is added as for the other
+FEM-based walls (:func:`ssw.chain.walls.compliance_scale`): ``F(d) = F_R(d / s)``.
+
+Representation. The exact law is kept as it is: per scene its breakpoints and the
+coefficients ``F = a + b d`` of each piece, evaluated by one binary search per call over all
+scenes' breakpoints at once (:class:`PiecewiseLinearWall`). Its TOF is the exact law's;
+``ssw bench contact --wall`` measures the cost against a 400-cell table of the same law.
+
+Force error. Against the exact sphere on a half-space (Sneddon 1965) the FEM law has two
+errors: the mesh's, which falls as the mesh growth squared (node-to-surface contact,
+``tests/test_contact.py::test_mesh_convergence_rate``; rms ``FORCE_ERROR_COEF * growth^2``
+over 1e-6..1e-4 m in a 3 m domain, ``ssw bench contact``), and the finite soil sample's,
+which stiffens the contact by about ``DOMAIN_ERROR_COEF * a / L`` (``a`` the contact radius,
+``L`` the domain radius = depth; measured: +0.23 % at a = 2.9 mm in the 1 m domain, 0.03 %
+in a 3 m one). ``force_error`` (1 sigma) is their quadratic sum at the largest contact
+radius the chain reaches among the scenes (the nominal energy bound), a conservative figure
+(measured rms over the law's range: 1.1e-3 at 20 MPa, 1.0e-3 at 300 MPa, against 1.9e-3 and
+1.0e-3 stated; tests/test_fem_wall.py). Plate curves converge under refinement faster than
+the bare soil's (the slow test of ``tests/test_contact.py``).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ssw.chain.params import ChainParams
+from ssw.errors import ConfigError, SolverError
+
+#: Energy the law's range must hold, as a multiple of the striker's kinetic energy (module
+#: docstring): 4 = twice the nominal striker speed.
+ENERGY_MARGIN = 4.0
+#: ``force_error = FORCE_ERROR_COEF * mesh_growth^2``: rms relative force error of the
+#: no-plate curve against Sneddon over 1e-6..1e-4 m, 1000 increments, 3 m domain, measured
+#: by ``ssw bench contact`` at growth 0.1 (5.3e-4) and 0.2 (1.9e-3) (module docstring).
+FORCE_ERROR_COEF = 0.053
+#: Relative stiffening of the contact by a finite domain per unit ``a / L`` (module
+#: docstring; ssw bench contact --domain-study, tests/test_fem_wall.py).
+DOMAIN_ERROR_COEF = 0.9
+
+
+@dataclass(frozen=True)
+class PiecewiseLinearWall:
+    """``F(d)`` piecewise linear per scene: ``F = a_j + b_j d`` on ``[d_j, d_{j+1}]``.
+
+    Arrays (n, K + 1): ``d`` breakpoints (m, increasing, ``d[:, 0] = 0``, rows padded with
+    their last value), ``a`` (N), ``b`` (N/m) of the piece that starts at each breakpoint
+    (the last real piece repeated at the end and in the padding: the linear continuation),
+    ``U`` (J) the potential at the breakpoints. ``d_exact`` (n,) m: where the exact law
+    ends. ``force_error``: relative 1-sigma force error of the law (None: unknown).
+    """
+
+    d: np.ndarray
+    a: np.ndarray
+    b: np.ndarray
+    U: np.ndarray
+    d_exact: np.ndarray
+    force_error: float | None = None
+    _keys: np.ndarray = field(init=False, repr=False)
+    _fkeys: np.ndarray = field(init=False, repr=False)
+    _fend: np.ndarray = field(init=False, repr=False)
+    _off: np.ndarray = field(init=False, repr=False)  # 2 x row: each row's key offset
+    _inv_d: np.ndarray = field(init=False, repr=False)  # 1 / d_exact
+    _af: np.ndarray = field(init=False, repr=False)  # a, b flat (contiguous)
+    _bf: np.ndarray = field(init=False, repr=False)
+
+    def __post_init__(self) -> None:
+        n = self.d.shape[0]
+        rows = 2.0 * np.arange(n)[:, None]
+        object.__setattr__(self, "_keys", (rows + self.d / self.d_exact[:, None]).ravel())
+        F = self.a + self.b * self.d
+        fend = F[:, -1]
+        object.__setattr__(self, "_fend", fend)
+        object.__setattr__(self, "_fkeys", (rows + F / fend[:, None]).ravel())
+        object.__setattr__(self, "_off", rows.ravel().copy())
+        object.__setattr__(self, "_inv_d", 1.0 / self.d_exact)
+        object.__setattr__(self, "_af", np.ascontiguousarray(self.a).ravel())
+        object.__setattr__(self, "_bf", np.ascontiguousarray(self.b).ravel())
+
+    @property
+    def n(self) -> int:
+        return self.d.shape[0]
+
+    def _piece(self, x: np.ndarray, keys: np.ndarray) -> np.ndarray:
+        """Flat index of the piece holding the normalized values ``x`` (n,) in [0, 1].
+
+        Row ``i``'s keys lie in ``[2 i, 2 i + 1]`` with its first key ``2 i``, so for ``x``
+        in [0, 1] the search lands inside the row: no clipping needed."""
+        return np.searchsorted(keys, x + self._off, side="right") - 1
+
+    def force(self, d: np.ndarray) -> np.ndarray:
+        """Wall force (N) at indentation ``d`` (m), shape (n,); 0 for ``d <= 0``."""
+        dp = np.maximum(d, 0.0)
+        x = dp * self._inv_d
+        np.minimum(x, 1.0, out=x)
+        j = np.searchsorted(self._keys, x + self._off, side="right") - 1
+        return self._af[j] + self._bf[j] * dp
+
+    def potential(self, d: np.ndarray) -> np.ndarray:
+        """Stored energy ``int_0^d F`` (J)."""
+        dp = np.maximum(np.asarray(d, float), 0.0)
+        j = self._piece(np.minimum(dp / self.d_exact, 1.0), self._keys)
+        dj, aj, bj = self.d.ravel()[j], self.a.ravel()[j], self.b.ravel()[j]
+        return self.U.ravel()[j] + (dp - dj) * (aj + 0.5 * bj * (dp + dj))
+
+    def indentation(self, F: np.ndarray) -> np.ndarray:
+        """Indentation (m) carrying the force ``F >= 0`` (N): the inverse of :meth:`force`."""
+        Fp = np.maximum(np.broadcast_to(np.asarray(F, float), (self.n,)), 0.0)
+        j = self._piece(np.minimum(Fp / self._fend, 1.0), self._fkeys)
+        aj, bj = self.a.ravel()[j], self.b.ravel()[j]
+        return np.where(Fp > 0, (Fp - aj) / bj, 0.0)
+
+    def take(self, idx: np.ndarray) -> PiecewiseLinearWall:
+        """The scenes ``idx`` (may repeat)."""
+        return PiecewiseLinearWall(self.d[idx], self.a[idx], self.b[idx], self.U[idx],
+                                   self.d_exact[idx], self.force_error)
+
+    def hertz_equivalent(self, d_ref: float) -> np.ndarray:
+        """``F(d_ref) / d_ref^1.5`` (N/m^1.5), for the time-step choice."""
+        return self.force(np.full(self.n, d_ref)) / d_ref**1.5
+
+
+def _scenes(soil_E: Any, soil_nu: Any) -> tuple[np.ndarray, np.ndarray]:
+    E, nu = np.broadcast_arrays(np.asarray(soil_E, float), np.asarray(soil_nu, float))
+    E, nu = E.ravel(), nu.ravel()
+    if np.any(~(E > 0)):
+        raise ConfigError("soil_E", E[~(E > 0)].tolist(), "moduli > 0 Pa")
+    if np.any((nu <= -1) | (nu > 0.5)):
+        raise ConfigError("soil_nu", nu.tolist(), "Poisson's ratios in (-1, 0.5]")
+    return E, nu
+
+
+def chain_energy(params: ChainParams) -> tuple[float, float]:
+    """``(W0, Wg)``: the striker's kinetic energy ``1/2 m_s v^2`` (J) and the static load
+    ``M g + P`` (N) on the wall's indentation (``M`` the chain's mass with gravity on, ``P``
+    the preload)."""
+    m = params.masses
+    W0 = 0.5 * float(m[0]) * float(np.max(params.striker_velocity)) ** 2
+    Wg = (float(np.sum(m)) * params.g if params.gravity else 0.0) + float(
+        np.max(params.preload))
+    return W0, Wg
+
+
+def energy_bound(d: np.ndarray, F: np.ndarray, W: float, Wg: float) -> tuple[float, np.ndarray]:
+    """Smallest indentation ``x`` (m) with ``U(x) - Wg x = W``, ``U = int_0^x F``, for the
+    piecewise-linear force through ``(d_j, F_j)`` (inf if the range holds none), and the
+    potential ``U`` (J) at the breakpoints.
+
+    ``U - Wg x`` is convex (the force is non-decreasing), so the first breakpoint past the
+    level brackets the root; on that piece ``U`` is an exact quadratic, solved in closed form
+    (the cancellation-free root).
+    """
+    U = np.concatenate([[0.0], np.cumsum(0.5 * (F[1:] + F[:-1]) * np.diff(d))])
+    g = U - Wg * d - W
+    k = np.flatnonzero(g >= 0)
+    if k.size == 0:
+        return np.inf, U
+    j = int(k[0])
+    if j == 0:
+        return float(d[0]), U
+    x0, x1 = float(d[j - 1]), float(d[j])
+    slope = (F[j] - F[j - 1]) / (x1 - x0)
+    c = float(g[j - 1])  # < 0
+    bq = float(F[j - 1]) - Wg
+    y = -2.0 * c / (bq + np.sqrt(bq * bq - 2.0 * slope * c))
+    return float(min(x0 + y, x1)), U
+
+
+def _hertz_bound(A: np.ndarray, W: float, Wg: float) -> np.ndarray:
+    """Root of ``(2/5) A d^2.5 - Wg d = W`` (m) by bisection in ``log d``, vectorized."""
+    lo = np.full(A.shape, np.log(1e-12))
+    hi = np.full(A.shape, np.log(1.0))
+    for _ in range(100):
+        mid = 0.5 * (lo + hi)
+        x = np.exp(mid)
+        above = 0.4 * A * x**2.5 - Wg * x - W > 0
+        hi, lo = np.where(above, mid, hi), np.where(above, lo, mid)
+    return np.exp(hi)
+
+
+def fem_wall(
+    params: ChainParams, soil_E: Any, soil_nu: Any, *, contact: dict[str, Any] | None = None,
+    operators: Any = None,
+) -> PiecewiseLinearWall:
+    """The exact FEM law of each scene (module docstring).
+
+    Parameters
+    ----------
+    params : the chain; its ``bead_radius`` (the indenter), ``plate_*`` (the plate; thickness
+        0: none), striker, masses, gravity and preload (the range).
+    soil_E, soil_nu : Pa and -, broadcast together: one scene each.
+    contact : the ``contact`` settings (mesh, zone); defaults :data:`ssw.contact.DEFAULTS`.
+    operators : an :class:`ssw.contact.operators.OperatorStore` (default: the process's).
+    """
+    from ssw.chain.walls import compliance_scale
+    from ssw.contact.operators import default_store, geometry_of, scene_lcp
+    from ssw.contact.parametric import Tracer, prefix_path
+    from ssw.contact.scene import settings_of
+    from ssw.hertz import effective_modulus, hertz_coefficient
+
+    E, nu = _scenes(soil_E, soil_nu)
+    cfg = settings_of({**(contact or {}), "interface": params.plate_interface})
+    store = operators if operators is not None else default_store()
+    R = float(params.bead_radius)
+    t = float(params.plate_thickness)
+    has_plate = t > 0
+    plate = (float(params.plate_E), float(params.plate_nu))
+    W0, Wg = chain_energy(params)
+    W = ENERGY_MARGIN * W0
+    s = compliance_scale(params, E, nu)
+    # a first guess of the range (rigid-sphere coordinates): the Hertz bound of the softer
+    # half-space, where (2/5) A d^2.5 = W + Wg d (a plate stiffer than the soil only lowers
+    # the real one); it sets the candidate zone, the trace goes on as far as needed
+    Eh = np.minimum(E, plate[0]) if has_plate else E
+    A = hertz_coefficient(effective_modulus(Eh, nu), R)
+    guess = _hertz_bound(A, W, Wg)
+    # the zone: as the study's curves (the nominal energy's reach), so that the wall shares
+    # their operators; a deeper contact is caught (the last candidate must stay open)
+    geom = geometry_of(cfg, t, R, float(np.max(_hertz_bound(A, W0, Wg))), cfg["interface"])
+    layout = store.layout(geom)
+    plate_op = store.body(geom, "plate", plate[1]) if has_plate else None
+    rows = []
+    for i in range(E.size):
+        soil_op = store.body(geom, "soil", float(nu[i]))
+        lcp = scene_lcp(layout, plate_op, soil_op, float(E[i]),
+                        plate[0] if has_plate else None, cfg["interface"], R)
+        ms = lcp.n_sphere
+        path = prefix_path(lcp.W, lcp.q0, lcp.q1) if lcp.tie is None else None
+        tracer = None if path is not None else Tracer(lcp.W, lcp.q0, lcp.q1)
+        end = float(guess[i])
+        while True:
+            if tracer is not None:
+                tracer.advance(end)
+                path = tracer.path()
+            dR = path.breaks
+            F = np.concatenate([path.lam0[:, :ms].sum(1) + dR[:-1] * path.lam1[:, :ms].sum(1),
+                                [path.lam0[-1, :ms].sum() + dR[-1] * path.lam1[-1, :ms].sum()]])
+            d = s[i] * dR
+            bound, U = energy_bound(d, F, W, Wg)
+            if np.isfinite(bound):
+                break
+            if tracer is None or end > 0.5 * R:
+                raise SolverError(
+                    f"the fem wall's range does not hold the chain's energy within its contact "
+                    f"zone (r <= {layout.r[-1]:.4g} m; soil E {E[i]:.4g} Pa)")
+            end *= 2.0
+        if np.any(path.active[:, ms - 1]):
+            raise SolverError(
+                f"the contact zone of the fem wall reached its last candidate (r = "
+                f"{layout.r[-1]:.4g} m); soil E {E[i]:.4g} Pa")
+        keep = d <= bound * (1 + 1e-12)
+        j_end = int(np.count_nonzero(keep))  # breakpoints up to the bound, plus the next
+        j_end = min(j_end + 1, d.size)
+        rows.append(_pieces(d[:j_end], path, ms, s[i], U[:j_end]))
+    a_peak = float(np.sqrt(R * np.max(_hertz_bound(A, W0, Wg))))
+    L = min(float(cfg["soil_radius"]), float(cfg["soil_depth"]))
+    error = float(np.hypot(FORCE_ERROR_COEF * float(cfg["mesh_growth"]) ** 2,
+                           DOMAIN_ERROR_COEF * a_peak / L))
+    return _assemble(rows, error)
+
+
+def _pieces(d: np.ndarray, path: Any, ms: int, s: float, U: np.ndarray
+            ) -> tuple[np.ndarray, ...]:
+    """Breakpoints, piece coefficients (chain coordinates) and potential of one scene."""
+    k = d.size - 1  # pieces
+    f0 = path.lam0[:k, :ms].sum(axis=1)
+    f1 = path.lam1[:k, :ms].sum(axis=1) / s  # F = f0 + f1_R (d / s)
+    a = np.concatenate([f0, f0[-1:]])
+    b = np.concatenate([f1, f1[-1:]])
+    return d, a, b, U
+
+
+def _assemble(rows: list[tuple[np.ndarray, ...]], force_error: float) -> PiecewiseLinearWall:
+    """Pad the scenes' pieces to one width."""
+    width = max(r[0].size for r in rows)
+    out = []
+    for col in range(4):
+        arr = np.empty((len(rows), width))
+        for i, r in enumerate(rows):
+            v = r[col]
+            arr[i, : v.size] = v
+            arr[i, v.size:] = v[-1]
+        out.append(arr)
+    d, a, b, U = out
+    return PiecewiseLinearWall(d, a, b, U, d[:, -1].copy(), force_error)

@@ -1,0 +1,462 @@
+"""Condensed contact operators of a geometry, built once and cached (memory and disk).
+
+A scene is a rigid sphere on a plate (or none) on a soil. Its finite element model
+(:mod:`ssw.contact.mesh`, :mod:`ssw.contact.assembly`) splits into two substructures that
+meet at the plate-soil interface (:mod:`ssw.contact.substructure`):
+
+* the plate, condensed onto its contact candidates (the ``u_z`` of the top nodes with
+  ``r <= zone``) and its interface dofs, at unit E: one operator per (geometry, plate nu);
+* the soil, condensed onto its interface dofs at unit E: one operator per (geometry, soil
+  nu); without a plate, onto the contact candidates.
+
+Interface dofs: the normal displacement ``u_z`` of every interface node (``frictionless``,
+``unilateral``), and ``u_r`` too off the axis (``bonded``). A scene's problem is then a dense
+symmetric positive definite system of a few hundred unknowns,
+``E_plate P + E_soil S(nu)`` (:func:`scene_lcp`): per interface law, the two bodies share
+the interface dofs (``frictionless``, ``bonded``), or only the one on the axis, the others
+becoming a second set of contact constraints (``unilateral``: the plate may lift off).
+
+Candidate zone. The candidates are the top nodes with ``r <= zone``, ``zone`` =
+:data:`ZONE_SHARE` of the sphere radius, rounded down to :data:`ZONE_QUANTUM` (so that the
+FEM's 9.53 mm indenter and the chain's 9.525 mm bead share operators), or more when the
+indentation asks for it (``candidate_factor sqrt(R delta)``). The zone does not depend on
+the scene's indentation, so one operator serves every curve and the chain's wall law.
+
+Cache. Operators are kept in memory per process and on disk under
+``$SSW_CACHE_DIR/contact`` (default ``~/.cache/ssw``; ``SSW_CACHE_DIR=none`` turns the disk
+cache off), written atomically, one file per operator, named by a hash of every input that
+changes it: the geometry and mesh settings, the zone, the interface kind, nu, the source
+code of the modules that compute it and the versions of gmsh, numpy and scipy.
+"""
+
+from __future__ import annotations
+
+import functools
+import hashlib
+import json
+import os
+import time
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+from scipy.linalg import cho_factor, cho_solve
+
+from ssw.contact.mesh import Mesh, MeshSettings, build_mesh
+from ssw.errors import ConfigError, SolverError
+
+#: Candidate zone radius as a share of the sphere's radius (a contact radius of R/2 is an
+#: indentation of R/4, far beyond the chain's: 2.4 mm for the thesis's ball).
+ZONE_SHARE = 0.5
+#: m, the zone is a multiple of this (indenters within it share operators).
+ZONE_QUANTUM = 1.0e-4
+#: Largest zone as a share of the sphere radius (the gap formula needs r < R).
+ZONE_LIMIT = 0.95
+#: Version of the operators' file format.
+FORMAT = 1
+#: Sources whose code computes the operators (hashed into every cache key).
+SOURCES = ("mesh.py", "assembly.py", "elements.py", "substructure.py", "operators.py")
+
+
+def sphere_gap0(r: np.ndarray, radius: float) -> np.ndarray:
+    """Gap (m) at zero indentation between a sphere of ``radius`` and the flat at radius
+    ``r``: ``R - sqrt(R^2 - r^2)`` written as ``r^2 / (R + sqrt(R^2 - r^2))`` (no
+    cancellation at small ``r``: relative accuracy of a few ulp)."""
+    r = np.asarray(r, float)
+    if np.any(r >= radius):
+        raise SolverError("contact candidate beyond the sphere's radius: shrink the zone")
+    return r * r / (radius + np.sqrt((radius - r) * (radius + r)))
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """What a model's mesh and retained dofs depend on. Lengths in m."""
+
+    plate_thickness: float  # 0: no plate
+    plate_radius: float
+    mesh: MeshSettings
+    zone: float  # radius of the candidate zone on the top surface
+    bonded: bool  # the interface shares u_r as well (bonded) or u_z only
+
+    def key(self) -> str:
+        """Hash of the geometry, the code and the library versions (hex)."""
+        return _geometry_key(self)
+
+
+@functools.lru_cache(maxsize=64)
+def _geometry_key(geom: Geometry) -> str:
+    return _hash({"geometry": asdict(geom), "code": _code_hash(), "format": FORMAT})
+
+
+def zone_of(radius: float, candidate_factor: float, delta_end: float,
+            plate_radius: float | None = None) -> float:
+    """Candidate zone radius (m) for a sphere of ``radius`` pushed to ``delta_end`` (m)."""
+    zone = np.floor(ZONE_SHARE * radius / ZONE_QUANTUM) * ZONE_QUANTUM
+    need = candidate_factor * np.sqrt(radius * delta_end)
+    if need > zone:
+        zone = np.ceil(need / ZONE_QUANTUM) * ZONE_QUANTUM
+    if zone >= ZONE_LIMIT * radius:
+        raise ConfigError("contact.delta_max", delta_end,
+                          f"an indentation whose contact zone ({need:.4g} m) stays within "
+                          f"{ZONE_LIMIT:g} of the sphere radius ({radius:g} m)")
+    if plate_radius:
+        zone = min(zone, plate_radius)
+    return float(zone)
+
+
+def geometry_of(contact: dict[str, Any], plate_thickness: float, radius: float,
+                delta_end: float, interface: str) -> Geometry:
+    """The :class:`Geometry` of a scene from its (filled) ``contact`` settings."""
+    from ssw.contact.scene import mesh_settings
+
+    plate_radius = 0.5 * float(contact["plate_diameter"]) if plate_thickness > 0 else 0.0
+    return Geometry(
+        plate_thickness=float(plate_thickness), plate_radius=plate_radius,
+        mesh=mesh_settings(contact),
+        zone=zone_of(radius, float(contact["candidate_factor"]), delta_end, plate_radius),
+        bonded=interface == "bonded" and plate_thickness > 0,
+    )
+
+
+@dataclass(frozen=True)
+class Layout:
+    """The retained dofs of a geometry (what a scene's assembly needs of the mesh).
+
+    ``r``, ``weight`` (n_c,): radius (m) and ``int N_j 2 pi r ds`` (m^2) of the contact
+    candidates, sorted by radius; ``iface_r``, ``iface_comp`` (n_i,): node radius (m) and
+    component (0 = u_r, 1 = u_z) of the retained interface dofs (empty without a plate);
+    ``nodes``, ``elements``: the mesh's counts.
+    """
+
+    r: np.ndarray
+    weight: np.ndarray
+    iface_r: np.ndarray
+    iface_comp: np.ndarray
+    nodes: int
+    elements: int
+
+
+@dataclass(frozen=True)
+class BodyOperator:
+    """A body's condensed stiffness ``S`` at unit E (m = N/m per Pa) and how it was made."""
+
+    S: np.ndarray
+    stats: dict[str, Any] = field(default_factory=dict)
+
+
+@dataclass
+class _Model:
+    """A built mesh with its split interface and retained-dof lists (in memory only)."""
+
+    mesh: Mesh
+    nodes: np.ndarray
+    tri: np.ndarray
+    body: np.ndarray
+    free: np.ndarray
+    cand: np.ndarray
+    iface_nodes: np.ndarray  # (n_i, 2) (soil node, plate node) per retained interface dof
+    iface_comp: np.ndarray
+    layout: Layout
+    wall_mesh: float
+
+
+def _hash(obj: Any) -> str:
+    text = json.dumps(obj, sort_keys=True, default=repr)
+    return hashlib.sha256(text.encode()).hexdigest()[:20]
+
+
+_CODE_HASH: str | None = None
+
+
+def _code_hash() -> str:
+    """Hash of the operator-computing sources and of the numeric libraries' versions."""
+    global _CODE_HASH
+    if _CODE_HASH is None:
+        from importlib.metadata import version
+
+        here = Path(__file__).resolve().parent
+        h = hashlib.sha256()
+        for name in SOURCES:
+            h.update((here / name).read_bytes())
+        h.update(" ".join(f"{p} {version(p)}" for p in ("gmsh", "numpy", "scipy")).encode())
+        _CODE_HASH = h.hexdigest()[:20]
+    return _CODE_HASH
+
+
+def cache_dir() -> Path | None:
+    """The disk cache folder: ``$SSW_CACHE_DIR/contact`` (default ``~/.cache/ssw``); None
+    (memory only) when ``SSW_CACHE_DIR`` is ``none``, ``off`` or empty."""
+    root = os.environ.get("SSW_CACHE_DIR")
+    if root is not None and root.strip().lower() in ("none", "off", ""):
+        return None
+    base = Path(root) if root else Path.home() / ".cache" / "ssw"
+    return base / "contact"
+
+
+class OperatorStore:
+    """Operators by geometry and material, in memory and (optionally) on disk.
+
+    Parameters
+    ----------
+    directory : the disk cache folder; ``"env"`` (default) reads :func:`cache_dir`; None:
+        memory only.
+    """
+
+    def __init__(self, directory: str | Path | None = "env") -> None:
+        self.directory = cache_dir() if directory == "env" else (
+            Path(directory) if directory is not None else None)
+        self._models: dict[str, _Model] = {}
+        self._layouts: dict[str, Layout] = {}
+        self._bodies: dict[str, BodyOperator] = {}
+        self.hits = {"memory": 0, "disk": 0, "built": 0}
+        self._cost = {"count": 0, "wall_mesh": 0.0, "wall_assemble": 0.0, "wall_factor": 0.0}
+
+    def pop_cost(self) -> dict[str, float]:
+        """Operators built and seconds spent meshing, assembling and factoring them since
+        the last call (the cost a curve's stats charge to it)."""
+        out, self._cost = self._cost, {"count": 0, "wall_mesh": 0.0, "wall_assemble": 0.0,
+                                       "wall_factor": 0.0}
+        return out
+
+    # -- geometry ---------------------------------------------------------------------------
+    def _model(self, geom: Geometry) -> _Model:
+        key = geom.key()
+        if key not in self._models:
+            self._models = {key: _build_model(geom)}  # keep one mesh: they are large
+        return self._models[key]
+
+    def layout(self, geom: Geometry) -> Layout:
+        """The retained dofs of ``geom`` (from memory, disk, or by meshing it)."""
+        key = geom.key()
+        if key in self._layouts:
+            return self._layouts[key]
+        path = self._path(key, "layout")
+        data = _load(path)
+        if data is not None:
+            lay = Layout(data["r"], data["weight"], data["iface_r"], data["iface_comp"],
+                         int(data["nodes"]), int(data["elements"]))
+        else:
+            lay = self._model(geom).layout
+            _save(path, {k: np.asarray(v) for k, v in asdict(lay).items()})
+        self._layouts[key] = lay
+        return lay
+
+    def body(self, geom: Geometry, which: str, nu: float) -> BodyOperator:
+        """The condensed operator of the ``plate`` or the ``soil`` of ``geom`` at Poisson's
+        ratio ``nu`` (unit E)."""
+        if which not in ("plate", "soil"):
+            raise ConfigError("body", which, "plate | soil")
+        if which == "plate" and geom.plate_thickness <= 0:
+            raise ConfigError("plate_thickness", geom.plate_thickness, "> 0 m for a plate")
+        key = _hash({"geometry": geom.key(), "body": which, "nu": float(nu)})
+        if key in self._bodies:
+            self.hits["memory"] += 1
+            return self._bodies[key]
+        path = self._path(geom.key(), f"{which}-{key}")
+        data = _load(path)
+        if data is not None:
+            op = BodyOperator(data["S"], json.loads(str(data["stats"])))
+            self.hits["disk"] += 1
+        else:
+            op = _condense(self._model(geom), which, float(nu))
+            _save(path, {"S": op.S, "stats": np.asarray(json.dumps(op.stats))})
+            self.hits["built"] += 1
+            self._cost["count"] += 1
+            for k in ("wall_mesh", "wall_assemble", "wall_factor"):
+                self._cost[k] += float(op.stats[k])
+        self._bodies[key] = op
+        return op
+
+    def _path(self, geom_key: str, name: str) -> Path | None:
+        return None if self.directory is None else self.directory / geom_key / f"{name}.npz"
+
+
+def _load(path: Path | None) -> dict[str, np.ndarray] | None:
+    """The arrays of a cache file, or None if absent or unreadable (then it is rebuilt)."""
+    if path is None or not path.is_file():
+        return None
+    try:
+        with np.load(path, allow_pickle=False) as f:
+            return {k: f[k] for k in f.files}
+    except (OSError, ValueError, KeyError, EOFError):
+        return None
+
+
+def _save(path: Path | None, arrays: dict[str, np.ndarray]) -> None:
+    """Write a cache file atomically (a failure to write only costs a rebuild later)."""
+    if path is None:
+        return
+    from ssw.h5io import atomic_path
+
+    try:
+        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+            np.savez(fh, **arrays)
+    except OSError:
+        return
+
+
+def _build_model(geom: Geometry) -> _Model:
+    """Mesh the geometry and find its contact candidates and interface dofs."""
+    from ssw.contact.assembly import fixed_free, geometric_tolerance, split_interface
+    from ssw.contact.scene import top_surface_weights
+
+    t0 = time.perf_counter()
+    mesh = build_mesh(geom.plate_thickness, geom.plate_radius, geom.mesh)
+    nodes, tri, pairs = split_interface(mesh)
+    tol = geometric_tolerance(nodes, tri)
+    free = fixed_free(nodes, tol, mesh.soil_radius, mesh.soil_depth)
+    top_body = 1 if geom.plate_thickness > 0 else 0
+    weight = top_surface_weights(nodes, tri, np.flatnonzero(mesh.body == top_body), mesh.top,
+                                 tol)
+    top = np.flatnonzero(weight > 0)
+    top = top[np.argsort(nodes[top, 0])]
+    cand = top[nodes[top, 0] <= geom.zone * (1 + 1e-12)]
+    if np.any(~free[cand, 1]):
+        raise ConfigError("contact.soil_radius", geom.mesh.soil_radius,
+                          "a domain wider than the candidate zone")
+    pairs = pairs[np.argsort(nodes[pairs[:, 0], 0])]
+    if geom.bonded:
+        comp = np.stack([np.zeros(len(pairs), int), np.ones(len(pairs), int)], axis=1)
+        keep = np.stack([free[pairs[:, 0], 0], np.ones(len(pairs), bool)], axis=1)
+        iface = np.repeat(pairs, 2, axis=0)[keep.ravel()]
+        icomp = comp.ravel()[keep.ravel()]
+    else:
+        iface, icomp = pairs, np.ones(len(pairs), int)
+    lay = Layout(nodes[cand, 0].copy(), weight[cand].copy(), nodes[iface[:, 0], 0].copy()
+                 if len(iface) else np.zeros(0), icomp.astype(np.int64),
+                 len(mesh.nodes), len(mesh.tri))
+    return _Model(mesh, nodes, tri, mesh.body, free, cand, iface, icomp.astype(np.int64),
+                  lay, time.perf_counter() - t0)
+
+
+def _condense(model: _Model, which: str, nu: float) -> BodyOperator:
+    """Condense one body of ``model`` (unit E) onto its retained dofs."""
+    from ssw.contact.substructure import condense_body, min_degree_order
+
+    plate = which == "plate"
+    has_plate = bool(np.any(model.body == 1))
+    tri = model.tri[model.body == (1 if plate else 0)]
+    if plate:
+        b_nodes = np.concatenate([model.cand, model.iface_nodes[:, 1]])
+        b_comps = np.concatenate([np.ones(len(model.cand), int), model.iface_comp])
+    elif has_plate:
+        b_nodes, b_comps = model.iface_nodes[:, 0], model.iface_comp
+    else:
+        b_nodes, b_comps = model.cand, np.ones(len(model.cand), int)
+    c = condense_body(model.nodes, tri, nu, model.free, b_nodes, b_comps, min_degree_order)
+    stats = {"dofs": c.dofs, "nnz_factor": c.nnz_factor, "backward_error": c.backward_error,
+             "pivoted": c.pivoted, "wall_mesh": model.wall_mesh,
+             "wall_assemble": c.wall_assemble, "wall_factor": c.wall_factor}
+    model.wall_mesh = 0.0  # the mesh is paid once
+    return BodyOperator(c.S, stats)
+
+
+@dataclass(frozen=True)
+class SceneLCP:
+    """The condensed contact problem of one scene: ``LCP(W, q0 + delta q1)``.
+
+    ``W`` (m, m) m/N; ``q0``, ``q1`` (m,) m and -; the first ``n_sphere`` constraints are
+    the sphere candidates (radius ``r``, surface weight ``weight``), the rest the plate-soil
+    pairs of an unilateral interface. ``tie`` (m,) or None: the force (N, + up) the plate
+    pulls on the soil's axis node per unit constraint force (unilateral only; compression
+    is ``tie . lam <= 0``). ``dofs``: unknowns of the dense system.
+    """
+
+    W: np.ndarray
+    q0: np.ndarray
+    q1: np.ndarray
+    n_sphere: int
+    r: np.ndarray
+    weight: np.ndarray
+    tie: np.ndarray | None
+    dofs: int
+
+
+def scene_lcp(layout: Layout, plate: BodyOperator | None, soil: BodyOperator,
+              soil_E: float, plate_E: float | None, interface: str, radius: float) -> SceneLCP:
+    """Assemble ``E_plate P + E_soil S`` and condense it onto the contact constraints.
+
+    Parameters
+    ----------
+    layout : the retained dofs of the geometry.
+    plate, soil : the bodies' operators (unit E); ``plate`` None without a plate.
+    soil_E, plate_E : Pa.
+    interface : ``frictionless`` | ``bonded`` | ``unilateral``.
+    radius : m, the rigid sphere's.
+    """
+    nc = layout.r.size
+    q0s = sphere_gap0(layout.r, radius)
+    if plate is None:
+        K = soil_E * soil.S
+        try:
+            cf = cho_factor(K, lower=True, check_finite=False)
+        except np.linalg.LinAlgError as exc:
+            raise SolverError(f"the condensed soil stiffness is not positive definite: {exc}"
+                              ) from exc
+        W = cho_solve(cf, np.eye(nc), check_finite=False)
+        return SceneLCP(0.5 * (W + W.T), q0s, -np.ones(nc), nc, layout.r, layout.weight,
+                        None, nc)
+    ni = layout.iface_r.size
+    unilateral = interface == "unilateral"
+    if not unilateral:
+        # the interface dofs are shared: eliminate them (a Schur complement onto the
+        # candidates), H = E_p P_cc - E_p^2 P_ci (E_p P_ii + E_s S)^-1 P_ic, and W = H^-1
+        P = plate.S
+        M = plate_E * P[nc:, nc:] + soil_E * soil.S
+        try:
+            Y = cho_solve(cho_factor(M, lower=True, check_finite=False), P[nc:, :nc],
+                          check_finite=False)
+            H = plate_E * P[:nc, :nc] - plate_E**2 * (P[:nc, nc:] @ Y)
+            W = cho_solve(cho_factor(0.5 * (H + H.T), lower=True, check_finite=False),
+                          np.eye(nc), check_finite=False)
+        except np.linalg.LinAlgError as exc:
+            raise SolverError(f"the condensed plate-soil stiffness is not positive definite: "
+                              f"{exc}") from exc
+        return SceneLCP(0.5 * (W + W.T), q0s, -np.ones(nc), nc, layout.r, layout.weight,
+                        None, nc + ni)
+    p_map = np.arange(nc + ni)
+    s_map = nc + np.arange(ni)
+    if unilateral:
+        axis = layout.iface_r <= 1e-9 * layout.r[-1]
+        off = np.flatnonzero(~axis)
+        s_map = s_map.copy()
+        s_map[off] = nc + ni + np.arange(off.size)
+    n = int(max(p_map.max(), s_map.max())) + 1
+    K = np.zeros((n, n))
+    K[np.ix_(p_map, p_map)] += plate_E * plate.S
+    K[np.ix_(s_map, s_map)] += soil_E * soil.S
+    G = np.zeros((nc, n))
+    G[np.arange(nc), np.arange(nc)] = -1.0
+    q0, q1 = q0s, -np.ones(nc)
+    if unilateral:
+        Gi = np.zeros((off.size, n))
+        Gi[np.arange(off.size), nc + off] = 1.0
+        Gi[np.arange(off.size), s_map[off]] = -1.0
+        G = np.vstack([G, Gi])
+        q0 = np.concatenate([q0, np.zeros(off.size)])
+        q1 = np.concatenate([q1, np.zeros(off.size)])
+    try:
+        cf = cho_factor(K, lower=True, check_finite=False)
+    except np.linalg.LinAlgError as exc:
+        raise SolverError(f"the condensed plate-soil stiffness is not positive definite: {exc}"
+                          ) from exc
+    X = cho_solve(cf, G.T, check_finite=False)
+    W = G @ X
+    tie = None
+    if unilateral:
+        a = np.flatnonzero(axis)
+        tie = (soil_E * soil.S[a] @ X[s_map]).sum(axis=0) if a.size else np.zeros(len(q0))
+    return SceneLCP(0.5 * (W + W.T), q0, q1, nc, layout.r, layout.weight, tie, n)
+
+
+#: The store of this process (``ssw contact`` batches, the chain's fem wall).
+_DEFAULT: OperatorStore | None = None
+
+
+def default_store() -> OperatorStore:
+    """The process-wide :class:`OperatorStore` (disk cache from ``$SSW_CACHE_DIR``)."""
+    global _DEFAULT
+    if _DEFAULT is None or _DEFAULT.directory != cache_dir():
+        _DEFAULT = OperatorStore()
+    return _DEFAULT

@@ -1,0 +1,320 @@
+"""The contact LCP as a function of the indentation: its exact, piecewise-affine solution path.
+
+The condensed contact problem of a rigid sphere pushed by ``delta`` (m) is, for every
+``delta``, the linear complementarity problem (Cottle, Pang & Stone 1992)
+
+    lam >= 0,   g = q0 + delta q1 + W lam >= 0,   lam . g = 0,
+
+with ``W`` the symmetric positive definite compliance of the candidate constraints (m/N),
+``q0`` their gaps at ``delta = 0`` and ``q1`` the gaps' rate (-1 for a sphere candidate, 0
+for a plate-soil pair of the unilateral interface). With the active set ``A`` fixed the
+solution is affine in ``delta``:
+
+    lam_A = alpha + delta beta,   W_AA alpha = -q0_A,   W_AA beta = -q1_A,
+    g_N   = gamma + delta eta,    gamma = q0_N + W_NA alpha,   eta = q1_N + W_NA beta.
+
+So the path is followed from breakpoint to breakpoint (Murty 1988, ch. 5, the parametric
+LCP): the piece ends where the first active force reaches zero (``beta_j < 0``) or the first
+inactive gap closes (``eta_j < 0``). At a breakpoint ``delta*`` the constraints that reach
+their bound there, ``H``, are sorted by the directional problem: with ``F = A \\ H`` kept
+active (``dg_F = 0``), ``dlam_H`` solves the small LCP
+
+    dlam_H >= 0,  dg_H = (q1_H - W_HF W_FF^-1 q1_F) + (W_HH - W_HF W_FF^-1 W_FH) dlam_H >= 0,
+    dlam_H . dg_H = 0,
+
+whose matrix (a Schur complement of ``W``) is positive definite: the new active set is
+``F`` plus the ``H`` with ``dlam > 0``. This also settles degenerate starts: at
+``delta = 0`` every constraint with ``q0 = 0`` (the sphere's axis node; every pair of an
+unilateral interface, all touching) is in ``H``. Every increment between breakpoints is
+then filled in one vectorized step, and the curve is exact (to round-off) at any
+indentation: the per-increment LCP (:mod:`ssw.contact.contact_lcp`) gives the same numbers.
+
+Cholesky factors of ``W_AA`` are reused between pieces: ``A`` is kept sorted, and when it
+changes only the part of the factor from the first changed position on is recomputed
+(most changes happen at the edge of the contact zone, the end of the sphere block).
+
+Fast path (:func:`prefix_path`). When the only constraints are the sphere's, sorted by
+radius, the contact zone of a monotone indentation usually grows as a disk: the active sets
+are the prefixes ``{0..k-1}``. All of them come from one factorization: with
+``W = L L^T`` and ``Z = L^-1``, the leading block ``W_kk`` has the factor ``L_kk``, so
+``W_kk^-1 b_k = Z_kk^T (Z b)_k``, the ``k``-th row of the cumulative sum over ``j`` of
+``Z[j, :] (Z b)[j]``: every piece of the path in ``O(m^3)`` vectorized work. The result is
+checked (every force >= 0 and every gap >= 0 at both ends of every piece, where the affine
+values take their extremes); a path that is not a sequence of prefixes (a plate lifting
+off the axis) is traced by :class:`Tracer` instead.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.linalg import cholesky, solve_triangular
+
+from ssw.contact.contact_lcp import solve_lcp
+from ssw.errors import SolverError
+
+#: Breakpoints closer than this (relative to the indentation) are simultaneous.
+TIE_RTOL = 1e-9
+#: Most pieces a path may have (a safeguard against cycling; a curve has ~1-3 per candidate).
+MAX_PIECES = 100_000
+
+
+@dataclass(frozen=True)
+class Path:
+    """The solution path on ``[0, delta_end]``: ``k`` pieces, ``m`` constraints. SI units.
+
+    ``breaks`` (k + 1,) m: piece ``j`` covers ``[breaks[j], breaks[j + 1]]``;
+    ``lam0, lam1`` (k, m) N and N/m: ``lam = lam0 + delta lam1`` (0 off the active set);
+    ``gap0, gap1`` (k, m) m and -: ``g = gap0 + delta gap1`` (0 on the active set);
+    ``active`` (k, m) bool.
+    """
+
+    breaks: np.ndarray
+    lam0: np.ndarray
+    lam1: np.ndarray
+    gap0: np.ndarray
+    gap1: np.ndarray
+    active: np.ndarray
+
+    @property
+    def pieces(self) -> int:
+        """Number of affine pieces."""
+        return self.lam0.shape[0]
+
+    def piece_of(self, delta: np.ndarray) -> np.ndarray:
+        """Index of the piece holding each ``delta`` (m); a breakpoint belongs to the piece
+        that starts there."""
+        j = np.searchsorted(self.breaks, np.asarray(delta, float), side="right") - 1
+        return np.clip(j, 0, self.pieces - 1)
+
+    def forces(self, delta: np.ndarray) -> np.ndarray:
+        """(n, m) constraint forces ``lam`` (N) at the indentations ``delta`` (n,)."""
+        d = np.asarray(delta, float)
+        j = self.piece_of(d)
+        return self.lam0[j] + d[:, None] * self.lam1[j]
+
+    def gaps(self, delta: np.ndarray) -> np.ndarray:
+        """(n, m) gaps ``g`` (m) at the indentations ``delta`` (n,)."""
+        d = np.asarray(delta, float)
+        j = self.piece_of(d)
+        return self.gap0[j] + d[:, None] * self.gap1[j]
+
+
+def prefix_path(W: np.ndarray, q0: np.ndarray, q1: np.ndarray,
+                delta_end: float = np.inf) -> Path | None:
+    """The path if its active sets are the prefixes of the constraints' order (module
+    docstring), else None. ``delta_end`` (m, may be inf): the path ends there or where the
+    last constraint enters the contact, whichever comes first.
+    """
+    W, q0, q1 = np.asarray(W, float), np.asarray(q0, float), np.asarray(q1, float)
+    m = q0.size
+    if m == 0 or q0[0] != 0.0 or np.any(q1 >= 0) or np.any(np.diff(q0) < 0):
+        return None
+    try:
+        L = cholesky(W, lower=True, check_finite=False)
+    except np.linalg.LinAlgError:
+        return None
+    Z = solve_triangular(L, np.eye(m), lower=True, check_finite=False)
+    y = Z @ np.column_stack([-q0, -q1])
+    lam0 = np.cumsum(Z * y[:, 0:1], axis=0)  # row k-1: W_kk^-1 (-q0_k), zeros beyond
+    lam1 = np.cumsum(Z * y[:, 1:2], axis=0)
+    gap0 = q0 + lam0 @ W
+    gap1 = q1 + lam1 @ W
+    active = np.tri(m, m, dtype=bool)
+    gap0[active], gap1[active] = 0.0, 0.0
+    # piece k - 1 (prefix k) ends where constraint k closes its gap
+    k = np.arange(m - 1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ends = np.where(gap1[k, k + 1] < 0, -gap0[k, k + 1] / gap1[k, k + 1], np.inf)
+    breaks = np.concatenate([[0.0], ends, [np.inf]])
+    if np.any(~(np.diff(breaks[:-1]) > 0)):
+        return None
+    n = int(np.searchsorted(breaks, delta_end, side="left"))  # pieces up to delta_end
+    n = max(1, min(n, m))
+    br = breaks[: n + 1].copy()
+    if np.isfinite(delta_end):
+        br[n] = delta_end
+    elif not np.isfinite(br[n]):
+        br[n] = br[n - 1] if n > 1 else 0.0
+        n -= 1
+        br = br[: n + 1]
+        if n < 1:
+            return None
+    p = Path(br, lam0[:n], lam1[:n], gap0[:n], gap1[:n], active[:n])
+    # the check: complementarity holds on every piece (affine: at its two ends)
+    ends2 = np.stack([br[:-1], br[1:]])  # (2, n)
+    lam = p.lam0[None] + ends2[..., None] * p.lam1[None]
+    gap = p.gap0[None] + ends2[..., None] * p.gap1[None]
+    scale_l = max(float(np.max(np.abs(lam))), 1e-300)
+    scale_g = max(float(br[-1]), 1e-300)
+    if np.any(lam < -TIE_RTOL * scale_l) or np.any(gap < -TIE_RTOL * scale_g):
+        return None
+    return p
+
+
+def trace(W: np.ndarray, q0: np.ndarray, q1: np.ndarray, delta_end: float
+          ) -> tuple[Path, dict[str, int]]:
+    """The path on ``[0, delta_end]``: :func:`prefix_path` when it holds, else
+    :class:`Tracer`. Also returns ``{"pieces", "prefix"}`` (1 if the fast path served)."""
+    p = prefix_path(W, q0, q1, delta_end)
+    if p is not None and p.breaks[-1] >= delta_end:
+        return p, {"pieces": p.pieces, "prefix": 1}
+    tracer = Tracer(W, q0, q1)
+    tracer.advance(delta_end)
+    p = tracer.path()
+    return p, {"pieces": p.pieces, "prefix": 0}
+
+
+class Tracer:
+    """Follows the solution path of ``LCP(W, q0 + delta q1)`` from ``delta = 0`` (resumable:
+    :meth:`advance` extends it).
+
+    Parameters
+    ----------
+    W : (m, m) symmetric positive definite, m/N.
+    q0 : (m,) gaps at ``delta = 0``, m, >= 0.
+    q1 : (m,) d(gap)/d(delta), -.
+    """
+
+    def __init__(self, W: np.ndarray, q0: np.ndarray, q1: np.ndarray) -> None:
+        self.W = np.asarray(W, float)
+        self.q0 = np.asarray(q0, float)
+        self.q1 = np.asarray(q1, float)
+        m = self.q0.size
+        if self.W.shape != (m, m) or self.q1.shape != (m,):
+            raise SolverError(
+                f"LCP data of inconsistent shapes {self.W.shape}, {m}, {self.q1.shape}")
+        if np.any(self.q0 < 0):
+            raise SolverError("the gaps at zero indentation must be >= 0 (no initial penetration)")
+        self.delta = 0.0
+        self.active = np.zeros(m, dtype=bool)  # the active set of the current piece
+        self._idx = np.zeros(0, dtype=np.int64)  # sorted active indices of the factor
+        self._L = np.zeros((0, 0))  # lower Cholesky factor of W[idx, idx]
+        self.breaks: list[float] = [0.0]
+        self.rows: list[tuple[np.ndarray, ...]] = []
+        self.cholesky_rows = 0  # rows of factors recomputed (work measure)
+        #: start: every constraint touching at delta = 0 is a candidate to become active
+        self._pending = np.flatnonzero(self.q0 == 0.0)
+        self._piece: tuple[np.ndarray, ...] | None = None
+        self._open = False  # the last row is a piece cut at the requested end
+
+    # -- factor of W_AA, updated from the first changed position ------------------------
+    def _factor(self, idx: np.ndarray) -> np.ndarray:
+        """Lower Cholesky factor of ``W[idx, idx]`` (``idx`` sorted), reusing the leading
+        block shared with the previous factor."""
+        old = self._idx
+        n_common = min(old.size, idx.size)
+        p = int(np.argmax(old[:n_common] != idx[:n_common])) if n_common else 0
+        if n_common and np.all(old[:n_common] == idx[:n_common]):
+            p = n_common
+        L = np.zeros((idx.size, idx.size))
+        L[:p, :p] = self._L[:p, :p]
+        if idx.size > p:
+            W = self.W
+            tail = idx[p:]
+            if p:
+                L21 = solve_triangular(L[:p, :p], W[np.ix_(idx[:p], tail)], lower=True).T
+                L[p:, :p] = L21
+                S = W[np.ix_(tail, tail)] - L21 @ L21.T
+            else:
+                S = W[np.ix_(tail, tail)]
+            try:
+                L[p:, p:] = cholesky(S, lower=True, check_finite=False)
+            except np.linalg.LinAlgError as exc:
+                raise SolverError(
+                    f"contact compliance not positive definite on the active set: {exc}"
+                ) from exc
+            self.cholesky_rows += idx.size - p
+        self._idx, self._L = idx, L
+        return L
+
+    def _solve(self, L: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+        y = solve_triangular(L, rhs, lower=True, check_finite=False)
+        return solve_triangular(L.T, y, lower=False, check_finite=False)
+
+    # -- the active set after a breakpoint ------------------------------------------------
+    def _resolve(self, hits: np.ndarray) -> None:
+        """New active set when the constraints ``hits`` reach a bound at ``self.delta``."""
+        act = self.active.copy()
+        act[hits] = False
+        F = np.flatnonzero(act)
+        q1, W = self.q1, self.W
+        if F.size:
+            L = self._factor(F)
+            Z = self._solve(L, np.column_stack([W[np.ix_(F, hits)], q1[F]]))
+            M = W[np.ix_(hits, hits)] - W[np.ix_(hits, F)] @ Z[:, :-1]
+            q = q1[hits] - W[np.ix_(hits, F)] @ Z[:, -1]
+        else:
+            M, q = W[np.ix_(hits, hits)], q1[hits].copy()
+        M = 0.5 * (M + M.T)
+        scale = max(float(np.max(np.abs(q))), 1e-300)
+        dlam, on, _ = solve_lcp(M, q, q < 0, 1e-13 * scale)
+        act[hits[on & (dlam > 0)]] = True
+        self.active = act
+
+    def _affine(self) -> tuple[np.ndarray, ...]:
+        """(lam0, lam1, gap0, gap1) of the current active set (vectors of length m)."""
+        A = np.flatnonzero(self.active)
+        m = self.q0.size
+        lam0, lam1 = np.zeros(m), np.zeros(m)
+        if A.size:
+            L = self._factor(A)
+            ab = self._solve(L, -np.column_stack([self.q0[A], self.q1[A]]))
+            lam0[A], lam1[A] = ab[:, 0], ab[:, 1]
+            gap0 = self.q0 + self.W[:, A] @ ab[:, 0]
+            gap1 = self.q1 + self.W[:, A] @ ab[:, 1]
+            gap0[A], gap1[A] = 0.0, 0.0
+        else:
+            gap0, gap1 = self.q0.copy(), self.q1.copy()
+        return lam0, lam1, gap0, gap1
+
+    def _next_break(self, piece: tuple[np.ndarray, ...]) -> tuple[float, np.ndarray]:
+        """The end of the current piece (inf if none) and the constraints that reach a
+        bound there."""
+        lam0, lam1, gap0, gap1 = piece
+        d = self.delta
+        A = self.active
+        with np.errstate(divide="ignore", invalid="ignore"):
+            cross = np.where(A, np.where(lam1 < 0, -lam0 / lam1, np.inf),
+                             np.where(gap1 < 0, -gap0 / gap1, np.inf))
+        # the ones at or behind the current point change sign there only by round-off
+        cross[~(cross > d * (1.0 + TIE_RTOL))] = np.inf
+        nxt = float(np.min(cross)) if cross.size else np.inf
+        if not np.isfinite(nxt):
+            return np.inf, np.zeros(0, dtype=np.int64)
+        return nxt, np.flatnonzero(cross <= nxt * (1.0 + TIE_RTOL))
+
+    def advance(self, delta_end: float) -> None:
+        """Extend the path to ``delta_end`` (m) (nothing if it already reaches it)."""
+        delta_end = float(delta_end)
+        if self.breaks[-1] >= delta_end:
+            return
+        if self._open:  # the last piece was cut at the previous end: continue it
+            self.rows.pop()
+            self.breaks.pop()
+            self._open = False
+        while True:
+            if self._pending.size:
+                self._resolve(self._pending)
+                self._pending = np.zeros(0, dtype=np.int64)
+                self._piece = self._affine()
+            elif self._piece is None:
+                self._piece = self._affine()
+            nxt, hits = self._next_break(self._piece)
+            self.rows.append((*self._piece, self.active.copy()))
+            if len(self.rows) > MAX_PIECES:
+                raise SolverError(f"the contact path has more than {MAX_PIECES} pieces")
+            if nxt < delta_end:
+                self.breaks.append(nxt)
+                self.delta = nxt
+                self._pending = hits
+            else:
+                self.breaks.append(delta_end)
+                self._open = True
+                return
+
+    def path(self) -> Path:
+        """The path traced so far."""
+        lam0, lam1, gap0, gap1, active = (np.array(x) for x in zip(*self.rows, strict=True))
+        return Path(np.array(self.breaks), lam0, lam1, gap0, gap1, active)

@@ -1,0 +1,139 @@
+"""E with its interval (ssw.modulus, ssw.measure): each contribution of the budget against an
+independent evaluation of what it stands for, and the interval of a simulated measurement
+against the modulus that made it."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ssw.calibration import Reference, calibrate
+from ssw.chain import api
+from ssw.chain.inverse import invert, invert_batch
+from ssw.device import load_device
+from ssw.errors import ConfigError
+from ssw.materials import material_set
+from ssw.modulus import COVERAGE_Z, Estimator, estimate_moduli
+
+DEVICE = load_device("thesis").with_(plate_thickness=0.0, plate_material="none")
+NUM = {"gravity": True, "steps_per_contact": 80, "t_max": 0.02, "damping": 0.0}
+P = DEVICE.chain_params(material_set(), **NUM)
+E0, NU0 = 120.0e6, 0.3
+
+
+@pytest.fixture(scope="module")
+def tof0() -> float:
+    return float(api.tof(E0, NU0, P, "hertz"))
+
+
+def test_the_tof_term_is_the_inverse_of_tof_plus_minus_its_error(tof0):
+    """u_tof = sem / (T |k|) is the first-order width of E(T -+ z sem): compare with two
+    independent inversions at T -+ 1.96 sem."""
+    sem = 2.0e-6
+    e = estimate_moduli([tof0], [sem], NU0, P, "hertz")[0]
+    assert e.E == pytest.approx(E0, rel=2e-4)
+    assert set(e.contributions) == {"tof", "integrator"}
+    inv = invert(tof0, NU0, P, "hertz", tof_std=COVERAGE_Z * sem)
+    # E_low from T + z sem, E_high from T - z sem; the budget's interval is log-symmetric
+    assert e.E_low == pytest.approx(float(inv.E_low), rel=2e-3)
+    assert e.E_high == pytest.approx(float(inv.E_high), rel=2e-3)
+
+
+def test_the_poisson_term_is_the_uniform_spread_of_ln_E(tof0):
+    """A range [lo, hi] of nu: u = |ln E(hi) - ln E(lo)| / sqrt(12), E at the middle; both
+    ends inverted independently here."""
+    e = estimate_moduli([tof0], [0.0], np.array([[0.25, 0.35]]), P, "hertz")[0]
+    lo = float(invert(tof0, 0.25, P, "hertz").E)
+    hi = float(invert(tof0, 0.35, P, "hertz").E)
+    mid = float(invert(tof0, 0.30, P, "hertz").E)
+    assert e.nu_range == (0.25, 0.35) and e.nu == pytest.approx(0.30)
+    assert e.E == pytest.approx(mid, rel=1e-6)
+    assert e.contributions["poisson"] == pytest.approx(abs(np.log(hi / lo)) / np.sqrt(12),
+                                                       rel=1e-3)
+
+
+@pytest.fixture(scope="module")
+def calibrated():
+    """A device calibrated (striker speed and preload) on three synthetic references made
+    by its own model at v = 0.55 m/s, P = 2 N, with 8 us TOF uncertainties."""
+    truth = P.with_(striker_velocity=0.55, preload=2.0)
+    E = np.array([40e6, 150e6, 500e6])
+    T = api.tof(E, 0.3, truth, "hertz")
+    refs = [Reference(e, 0.3, float(t), 8.0e-6, id=f"r{i}") for i, (e, t) in
+            enumerate(zip(E, T, strict=True))]
+    return calibrate(refs, DEVICE, ["striker_velocity", "preload"], materials=material_set(),
+                     numerics=NUM, wall="hertz", loo=False, scan_points=8)
+
+
+def test_the_calibration_term_matches_a_monte_carlo_over_its_covariance(calibrated, tof0):
+    """u_cal = sqrt(g^T C g) (linearized): compare with the spread of ln E inverted with 64
+    parameter sets drawn from the calibration's covariance (seeded), all in one batch."""
+    params = calibrated.chain_params()
+    e = estimate_moduli([tof0], [0.0], NU0, params, "hertz", calibration=calibrated)[0]
+    names = calibrated.continuous()
+    mean = np.array([calibrated.parameters[n] for n in names])
+    draws = np.random.default_rng(20261123).multivariate_normal(
+        mean, calibrated.covariance_array(), size=64)
+    res = invert_batch(np.full(64, tof0), NU0, params, "hertz",
+                       vary={n: draws[:, j] for j, n in enumerate(names)})
+    mc = float(np.std(np.log(res.E), ddof=1))
+    # 64 draws: the sample std is within ~18 % (2 sigma) of the true one
+    assert e.contributions["calibration"] == pytest.approx(mc, rel=0.25)
+    assert e.contributions["calibration"] > 0
+
+
+def test_wall_error_enters_when_the_law_states_one(tof0):
+    """A K wall from a table with a stated interpolation error carries it as 'wall'; the
+    Hertz wall states none and the estimate says so."""
+    e = estimate_moduli([tof0], [0.0], NU0, P, "hertz")[0]
+    assert "wall" not in e.contributions
+    assert any("states no force error" in n for n in e.notes)
+
+
+def test_the_fast_estimator_agrees_with_the_full_budget(tof0):
+    est = Estimator(P, "hertz", {}, NU0)
+    r = est(tof0, 3.0e-6)
+    full = estimate_moduli([tof0], [3.0e-6], NU0, P, "hertz")[0]
+    assert r["E"] == pytest.approx(full.E, rel=1e-3)
+    assert r["u"] == pytest.approx(full.u, rel=0.02)
+
+
+def test_bad_inputs_are_refused():
+    with pytest.raises(ConfigError, match="tof_sem"):
+        estimate_moduli([1e-3], [-1.0], NU0, P, "hertz")
+    with pytest.raises(ConfigError, match="soil_nu"):
+        estimate_moduli([1e-3], [0.0], np.array([[0.4, 0.3]]), P, "hertz")
+
+
+def test_a_simulated_session_measures_the_modulus_that_made_it(tmp_path):
+    """ssw measure on a session simulated through the NI 9234 model (noise, jitter,
+    quantization, filter) at a known E: the 95 % interval contains it."""
+    from ssw.daq.backend import run_session
+    from ssw.daq.recording import read_recording
+    from ssw.daq.settings import DaqSettings
+    from ssw.daq.simulated import SimulatedBackend
+    from ssw.measure import measure
+
+    s = DaqSettings(hits=6, record_samples=1024, pretrigger_samples=64)
+    path = run_session(SimulatedBackend(soil_E=E0, soil_nu=NU0, chain_params=P, seed=11,
+                                        wall="hertz"), s, tmp_path / "s.h5", sample_id="X",
+                       synthetic=True)
+    m = measure([read_recording(path)], NU0, P, "hertz")
+    assert m.E_low < E0 < m.E_high
+    assert m.n_accepted == 6 and m.synthetic
+    assert set(m.contributions) >= {"tof", "sampling", "integrator"}
+    # pooling two sessions of the same point halves nothing systematic but adds hits
+    m2 = measure([read_recording(path), read_recording(path)], NU0, P, "hertz")
+    assert m2.n_accepted == 12 and m2.tof_mean == pytest.approx(m.tof_mean, rel=1e-12)
+
+
+@pytest.mark.parametrize(("text", "ok"), [("0.3", 0.3), ("0.25:0.35", (0.25, 0.35)),
+                                          ("0.35:0.25", None), ("0.6", None), ("abc", None)])
+def test_poisson_ratio_argument(text, ok):
+    from ssw.measure import parse_nu
+
+    if ok is None:
+        with pytest.raises(ConfigError, match="--soil-nu"):
+            parse_nu(text)
+    else:
+        assert parse_nu(text) == ok

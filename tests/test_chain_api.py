@@ -175,7 +175,11 @@ def test_workflow_helpers_name_the_wall_inputs():
     from ssw.chain import workflow as wf
 
     cfg = load_config(ROOT / "config" / "config.yaml")
+    assert cfg["chain"]["wall_law"] == "fem" and wf.wall_inputs(cfg, "R") == {}
+    cfg["chain"]["wall_law"] = "fit"
     assert wf.wall_inputs(cfg, "R") == {"k_table": "R/fit/k_table.h5"}
+    assert wf.calibrated_inputs(cfg, "R") == {"k_table": "R/fit/k_table.h5",
+                                              "calibration": "R/calibration/calibration.json"}
     cfg["chain"]["wall_law"] = "table"
     ids = wf.sweep_scene_ids(cfg)  # the thesis sweep is Set 3's grid: every point has a curve
     assert len(ids) == 300 and len(wf.wall_inputs(cfg, "R")["curves"]) == 300

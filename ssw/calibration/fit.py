@@ -391,11 +391,9 @@ def _pick(sols: list[Solution], nominal_x: np.ndarray, model: TofModel
 class SubsetFit:
     """A calibration on a subset of the references (a leave-one-out fit).
 
-    ``theta``: its values (SI); ``chi2``; ``identified``: the subset's Jacobian has every
-    singular value >= the floor (:data:`IDENTIFIED_MIN`); ``covariance`` (SI, continuous
-    parameters) from its singular values, the unidentified directions included (large);
-    ``dtof_dtheta`` (n_refs, p): d TOF / d theta of EVERY reference at ``theta`` (s per SI
-    unit), for what the fit predicts of the references it left out.
+    ``theta``: its values (SI); ``chi2``; ``singular_values`` of the subset's weighted
+    Jacobian at ``theta`` (scaled coordinates); ``identified``: every one >= the floor
+    (:data:`IDENTIFIED_MIN`) there.
     """
 
     refs: tuple[int, ...]
@@ -403,8 +401,6 @@ class SubsetFit:
     chi2: float
     identified: bool
     singular_values: np.ndarray
-    covariance: np.ndarray | None
-    dtof_dtheta: np.ndarray
     iterations: int
 
 
@@ -466,21 +462,14 @@ def refine_subsets(model: TofModel, T: np.ndarray, s: np.ndarray, start: np.ndar
         f0, Jx = last[key]
         sub = np.asarray(key)
         r = (f0[sub] - T[sub]) / s[sub]
-        Jw = Jx[sub] / s[sub, None]
-        sv_ = np.linalg.svd(Jw, compute_uv=False)
+        sv_ = np.linalg.svd(Jx[sub] / s[sub, None], compute_uv=False)
         svf = np.zeros(p)
         svf[: sv_.size] = sv_
-        _, _, Vt = np.linalg.svd(Jw, full_matrices=True)
         floor = max(IDENTIFIED_MIN, IDENTIFIED_RATIO * float(svf.max(initial=0.0)))
         theta = start.copy()
         theta[idx] = from_x(x[key], cont)
-        D = dtheta_dx(theta[idx], cont)
-        cov = None
-        if np.all(svf > 0):
-            cov_x = Vt.T @ np.diag(1.0 / svf**2) @ Vt
-            cov = D[:, None] * cov_x * D[None, :]
-        out[key] = SubsetFit(key, theta, float(r @ r), bool(np.all(svf >= floor)), svf, cov,
-                             Jx / D[None, :], its[key])
+        out[key] = SubsetFit(key, theta, float(r @ r), bool(np.all(svf >= floor)), svf,
+                             its[key])
     return out
 
 

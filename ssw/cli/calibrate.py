@@ -125,13 +125,10 @@ def _human(r: dict[str, Any]) -> str:
             if row["E_predicted"] is None:
                 lines.append(f"  {row['id']}: no prediction ({row['reason']})")
             else:
-                rng = ("" if row.get("E_low") is None else
-                       f", 95 % {row['E_low'] / 1e6:.1f} .. {row['E_high'] / 1e6:.1f} MPa")
-                if not row.get("identified", True):
-                    rng += "; not identified without it"
+                sv = ", ".join(f"{v:.2g}" for v in row["singular_values"])
                 lines.append(f"  {row['id']}: E {row['E'] / 1e6:.1f} MPa -> "
-                             f"{row['E_predicted'] / 1e6:.1f} MPa ({row['error_pct']:+.1f} %"
-                             f"{rng})")
+                             f"{row['E_predicted'] / 1e6:.1f} MPa ({row['error_pct']:+.1f} %; "
+                             f"fit without it: chi2 {row['chi2']:.2g}, singular values {sv})")
     for alt in r["alternatives"]:
         lines.append(f"  another solution within chi2 + 1: {alt}")
     if r["output"]:

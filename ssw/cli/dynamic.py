@@ -2,7 +2,8 @@
 
 ``dynamic-tof`` gives one scene's TOF with a dynamic wall (``--wall-dynamics fem``: the
 elastodynamic FEM, ~1 min; ``reduced``: the quasi-static law plus radiation damping and
-participating mass, milliseconds) next to its quasi-static TOF. ``dynamic-study`` runs (or
+participating mass, seconds: the scene's static FEM laws, then milliseconds per run) next to
+its quasi-static TOF. ``dynamic-study`` runs (or
 resumes) the grid of soil E x density, with and without the plate, and writes the table
 and the figure of the quasi-static assumption's TOF error. The chain comes from the study
 config (``--config``); SI units.
@@ -37,7 +38,14 @@ def _common(p: argparse.ArgumentParser) -> None:
     p.add_argument("--soil-nu", type=float, default=0.3, help="soil Poisson's ratio")
     p.add_argument("--boundary", choices=("absorbing", "fixed"), default="absorbing",
                    help="truncation boundary of the dynamic FEM")
+    p.add_argument("--wave-elements", type=float, default=None,
+                   help="quadratic elements per shear wavelength at f_max (default: "
+                        "ssw.dynamics.domain.WAVE_ELEMENTS)")
     add_json_flag(p)
+
+
+def _spec(args: argparse.Namespace) -> dict[str, Any]:
+    return {} if args.wave_elements is None else {"wave_elements": float(args.wave_elements)}
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -76,7 +84,7 @@ def run_tof(args: argparse.Namespace) -> dict[str, Any]:
     params = _params(args)
     if args.wall_dynamics == "fem":
         r = fem_tof(params, args.soil_E, args.soil_nu, args.soil_density,
-                    boundary=args.boundary)
+                    boundary=args.boundary, spec=_spec(args))
         st = r.stats[0]
         return {"tof_dynamic": float(r.tof_dynamic[0]), "tof_static_box": float(r.tof_static[0]),
                 "tof_half_space": float(r.tof_half_space[0]), "error": float(r.error[0]),
@@ -112,7 +120,8 @@ def run_study(args: argparse.Namespace) -> dict[str, Any]:
         points = study.run_study(
             params, path, E=tuple(args.soil_E or study.STUDY_E),
             density=tuple(args.soil_density or study.STUDY_DENSITY), nu=args.soil_nu,
-            plates=tuple(x == "plate" for x in args.plates), boundary=args.boundary)
+            plates=tuple(x == "plate" for x in args.plates), boundary=args.boundary,
+            spec=_spec(args))
     return study.summarize(points, out)
 
 

@@ -57,6 +57,10 @@ for _set in config["sets"]:
             ],
         log:
             f"{LOGS}/fit/{_set}.log",
+        # on a cluster, the fits join the cheap figure jobs in one submission (the slurm
+        # profile's group "figures"); a local run ignores groups
+        group:
+            "figures"
         params:
             config=CONFIG_FILE,
             set=_set,

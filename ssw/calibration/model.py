@@ -91,6 +91,7 @@ class TofModel:
     dt: float | None = None  # s, the time step of every run (fix_time_step)
     on_run: Any = None  # called after each batched run (a progress bar's update)
     _walls: Any = field(default=None, repr=False)
+    _extremes: dict[str, float] = field(default_factory=dict, repr=False)
 
     def __post_init__(self) -> None:
         self.refs_E = np.asarray(self.refs_E, float).ravel()
@@ -114,11 +115,18 @@ class TofModel:
         return self.device.with_(**_cast(values)).chain_params(self.materials, **self.numerics)
 
     def walls(self) -> Any:
-        """The references' walls (built once: no free parameter changes a wall law)."""
+        """The references' walls, built once: no free parameter changes a wall law, but a
+        law computed to a finite depth (``fem``: to the energy the chain can bring) is built
+        for the most energetic set the scan may try (:meth:`fix_time_step`'s extremes)."""
         if self._walls is None:
             from ssw.chain.walls import build_wall
 
-            self._walls = build_wall(self.wall, self.params_for({}), self.refs_E, self.refs_nu,
+            params = self.params_for({})
+            if self._extremes:
+                params = params.with_(**{k: v for k, v in self._extremes.items()
+                                         if k in ("striker_velocity", "preload",
+                                                  "striker_mass")})
+            self._walls = build_wall(self.wall, params, self.refs_E, self.refs_nu,
                                      **self.wall_options)
         return self._walls
 
@@ -131,6 +139,10 @@ class TofModel:
         for n in self.continuous:
             lo, hi = ranges[n]
             vals[n] = hi if n == "striker_velocity" else (lo if n.endswith("mass") else hi)
+        # the walls' depth: the most energy (fastest, heaviest striker, largest preload)
+        self._extremes = {n: ranges[n][1] for n in self.continuous
+                          if n in ("striker_velocity", "preload", "striker_mass")}
+        self._walls = None
         ints = {n: ranges[n][1] for n in self.integers}
         base = self.params_for(ints)
         b = Batch.of(base, self.n_refs, {k: np.full(self.n_refs, v) for k, v in vals.items()})

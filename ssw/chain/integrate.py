@@ -233,6 +233,11 @@ def simulate(
     peak_ind = u[-1].copy()  # per active scene
     peak_all = np.empty(n)
     inv_m, preload = inv_m_all, preload_all
+    # a wall with internal state (ssw.dynamics: the reduced dynamic wall) advances it every
+    # step from the last bead's new position; its force is then f_wall, not force(u_last)
+    stateful = hasattr(wall, "advance")
+    wstate = wall.start(u[-1].copy()) if stateful else None
+    f_wall = wall.force(u[-1]) if stateful else None
 
     def accel(u: np.ndarray, v: np.ndarray, w: Wall) -> tuple[np.ndarray, np.ndarray]:
         d = u[:-1] - u[1:]
@@ -240,7 +245,7 @@ def simulate(
         f = np.empty_like(u)
         np.multiply(d, np.sqrt(d), out=f[:-1])
         f[:-1] *= A
-        f[-1] = w.force(u[-1])
+        f[-1] = w.force(u[-1]) if f_wall is None else f_wall
         if damping > 0.0:
             dv = np.empty_like(u)
             dv[:-1] = v[:-1] - v[1:]
@@ -288,6 +293,8 @@ def simulate(
     for step in range(1, n_steps + 1):
         v += half * a
         u += dt * v
+        if stateful:
+            f_wall, wstate = w.advance(wstate, u[-1].copy(), dt)
         # the dashpot needs the velocity at the new time: v_half + dt/2 a_old estimates it
         # to O(dt^2) (a half-step velocity would make the damped scheme first order)
         a, f = accel(u, v + half * a if damping > 0.0 else v, w)
@@ -319,6 +326,9 @@ def simulate(
                 break
             u, v, a = u[:, keep], v[:, keep], a[:, keep]
             inv_m, preload = inv_m_all[:, active], preload_all[active]
+            if stateful:
+                wstate = w.take_state(wstate, np.flatnonzero(keep))
+                f_wall = f_wall[keep]
             w = w.take(np.flatnonzero(keep))
     peak_all[active] = peak_ind
     n_t = step + 1

@@ -341,9 +341,27 @@ WALLS: dict[str, Callable[..., Wall]] = {
 
 
 def build_wall(name: str, params: ChainParams, soil_E: Any, soil_nu: Any, **options: Any) -> Wall:
-    """The wall ``name`` of :data:`WALLS` for the scenes ``broadcast(soil_E, soil_nu)``."""
+    """The wall ``name`` of :data:`WALLS` for the scenes ``broadcast(soil_E, soil_nu)``.
+
+    Two options of every law add the tested medium's inertia (issue 14,
+    :mod:`ssw.dynamics`): ``dynamics`` (``quasi-static``, the default: the static law;
+    ``reduced``: the law plus the soil's radiation damping and participating mass and the
+    plate's inertia, :class:`ssw.dynamics.reduced.ReducedWall`) and ``soil_density``
+    (kg/m^3, broadcast with the scenes).
+    """
+    dynamics = options.pop("dynamics", "quasi-static") or "quasi-static"
+    density = options.pop("soil_density", None)
     if name not in WALLS:
         raise ConfigError("wall", name, f"one of {', '.join(WALLS)}")
     if name in ("rigid", "hertz") and options:
         raise ConfigError("wall options", sorted(options), f"none for the {name} wall")
-    return WALLS[name](params, soil_E, soil_nu, **options)
+    w = WALLS[name](params, soil_E, soil_nu, **options)
+    if dynamics != "quasi-static":
+        from ssw.dynamics.registry import with_dynamics
+
+        E, nu = _scenes(soil_E, soil_nu)
+        rho = None if density is None else np.broadcast_to(
+            np.asarray(density, float).ravel() if np.ndim(density) else float(density),
+            E.shape)
+        w = with_dynamics(dynamics, w, params, E, nu, rho)
+    return w

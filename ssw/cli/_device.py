@@ -96,6 +96,14 @@ def add_device_options(p: argparse.ArgumentParser,
     w.add_argument("--curve", help="table wall: one FEM contact curve HDF5 for every scene")
     w.add_argument("--contact-dir", default=DEFAULT_CONTACT_DIR,
                    help="table wall without --curve: the {scene_id}.h5 curves' folder")
+    w.add_argument("--wall-dynamics", choices=["quasi-static", "reduced", "fem"],
+                   help="the tested medium's inertia: quasi-static (the static law, default: "
+                   "the config's chain.wall_dynamics), reduced (plus its radiation damping "
+                   "and participating mass, ssw.dynamics.reduced), fem (the elastodynamic "
+                   "FEM wall: ssw tof only, about a minute per point)")
+    w.add_argument("--soil-density", type=float,
+                   help="density of the tested medium, kg/m^3 (reduced or fem dynamics; "
+                   "default: the config's chain.soil_density)")
 
 
 @dataclass(frozen=True)
@@ -171,6 +179,21 @@ def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
     if numerics_only:
         return ChainContext(cfg, device, cal, params, "", {})
     wall, opts = wall_law(args, cfg, cal, params, E, nu)
+    dyn = getattr(args, "wall_dynamics", None) or opts.pop("dynamics", None) or cfg.get(
+        "chain", {}).get("wall_dynamics", "quasi-static")
+    rho = getattr(args, "soil_density", None)
+    rho = rho if rho is not None else opts.pop("soil_density", None)
+    rho = rho if rho is not None else cfg.get("chain", {}).get("soil_density")
+    if dyn == "reduced":
+        if rho is None:
+            raise ConfigError("--soil-density", None,
+                              "the tested medium's density (kg/m^3) for --wall-dynamics reduced")
+        opts = {**opts, "dynamics": "reduced", "soil_density": float(rho)}
+    elif dyn == "fem":
+        if rho is None:
+            raise ConfigError("--soil-density", None,
+                              "the tested medium's density (kg/m^3) for --wall-dynamics fem")
+        opts = {**opts, "dynamics": "fem", "soil_density": float(rho)}
     return ChainContext(cfg, device, cal, params, wall, opts)
 
 

@@ -54,10 +54,14 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
             E, nu = float(parts[1]), float(parts[2])
         except ValueError as exc:
             raise ConfigError(f"--reference-recording[{j}]", t, "FILE,E,nu") from exc
-        refs.append(recording_reference(parts[0], E, nu))
+        refs.append(recording_reference(parts[0], E, nu,
+                                        tof_options=_tof_options(ctx.params)))
     cal_cfg = ctx.cfg.get("calibration", {})
     if args.from_config:
-        refs += from_config(ctx.cfg, ctx.params, ctx.wall, ctx.wall_options, root=args.root)
+        val = ctx.cfg.get("validation", {})
+        refs += from_config(ctx.cfg, ctx.params, ctx.wall, ctx.wall_options, root=args.root,
+                            tof_options=_tof_options(ctx.params, val.get("lowpass"),
+                                                     val.get("min_hits", 1)))
     if not refs:
         raise ConfigError("--reference", None, "references: --reference E,nu,TOF[,STD], "
                           "--reference-recording FILE,E,nu or --from-config")
@@ -95,6 +99,14 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
         "batched_runs": cal.provenance["batched_runs"],
     }
     return out
+
+
+def _tof_options(params: Any, lowpass: float | None = None, min_hits: int = 1) -> Any:
+    """TOF picking of reference recordings: the reflected peak only after the device's
+    shortest physical round trip (ssw.signal.tof.ChainPath)."""
+    from ssw.signal.tof import ChainPath, TofOptions
+
+    return TofOptions(lowpass=lowpass, min_hits=min_hits, chain=ChainPath.from_params(params))
 
 
 def _materials(cfg: dict[str, Any]) -> dict[str, Any]:

@@ -65,6 +65,15 @@ def run_tof(args: argparse.Namespace) -> dict[str, Any]:
 
     ctx = chain_context(args, args.soil_E, args.soil_nu)
     params = ctx.params
+    if ctx.wall_options.get("dynamics") == "fem":
+        from ssw.dynamics.api import fem_tof
+
+        res = fem_tof(params, args.soil_E, args.soil_nu, ctx.wall_options["soil_density"])
+        return {**ctx.inputs(), "tof": float(np.ravel(res.tof_dynamic)[0]),
+                "tof_quasi_static_half_space": float(np.ravel(res.tof_half_space)[0]),
+                "tof_quasi_static_box": float(np.ravel(res.tof_static)[0]),
+                "quasi_static_error": float(np.ravel(res.error)[0]),
+                "striker_velocity": params.striker_velocity}
     pk, run = peaks(args.soil_E, args.soil_nu, params, ctx.wall, **ctx.wall_options)
     return {
         **ctx.inputs(),

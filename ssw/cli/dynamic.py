@@ -78,9 +78,9 @@ def register(sub: argparse._SubParsersAction) -> None:
 def run_tof(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.dynamics.api import fem_tof, reduced_tof
 
-    if not args.soil_E > 0 or not args.soil_density >= 0:
+    if not args.soil_E > 0 or not args.soil_density > 0:
         raise ConfigError("--soil-E/--soil-density", (args.soil_E, args.soil_density),
-                          "E > 0 Pa and a density >= 0 kg/m^3")
+                          "E > 0 Pa and a density > 0 kg/m^3")
     params = _params(args)
     if args.wall_dynamics == "fem":
         r = fem_tof(params, args.soil_E, args.soil_nu, args.soil_density,

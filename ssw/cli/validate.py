@@ -16,7 +16,7 @@ CURVE_POINTS = 40  # E points of each model curve in Fig 10
 
 def run_validate(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.chain import api
-    from ssw.signal.tof import TofOptions
+    from ssw.signal.tof import ChainPath, TofOptions
     from ssw.validation.table import inverse_range, validate_samples
 
     ctx = chain_context(args)
@@ -28,7 +28,9 @@ def run_validate(args: argparse.Namespace) -> dict[str, Any]:
                           "any E)")
     E_range = inverse_range(wall, opts, params)
     val = cfg.get("validation", {})
-    tof_opts = TofOptions(lowpass=val.get("lowpass"), min_hits=val.get("min_hits", 1))
+    # the reflected peak only after the device's shortest physical round trip
+    tof_opts = TofOptions(lowpass=val.get("lowpass"), min_hits=val.get("min_hits", 1),
+                          chain=ChainPath.from_params(params))
     rows = validate_samples(cfg, params, wall, opts, root=args.root, tof_options=tof_opts,
                             calibration=ctx.calibration)
     out: dict[str, Any] = {**ctx.inputs(), "samples": [r.to_dict() for r in rows],

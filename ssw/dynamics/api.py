@@ -1,0 +1,206 @@
+"""Entry points: the TOF of a scene with a dynamic wall, and with its quasi-static twin.
+
+* :func:`fem_tof`: the dynamic FEM wall and the same scene's quasi-static laws, all run
+  through :func:`ssw.dynamics.integrate.simulate` over the same record length. The
+  quasi-static references are static FEMs of the same contact mesh in fixed boxes
+  (:data:`ssw.dynamics.quasistatic.STATIC_BOXES`): the 1 m box of the quasi-static study
+  (``ssw contact``) and the half-space, extrapolated from the 1 and 3 m boxes in ``1 / L``.
+  Not the dynamic mesh's own static law: its truncation boundary is statically
+  approximate (its springs were measured ~1 % soft for a punch), while the dynamic window
+  never sees it (fixed and absorbing boundaries give the same dynamic TOF to 1e-9);
+* :func:`reduced_tof`: the reduced dynamic wall (:mod:`ssw.dynamics.reduced`) and its
+  quasi-static law, batched over scenes.
+
+TOFs are picked by :func:`ssw.chain.tof.pick_peaks` on the sensor signal.
+"""
+
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+
+from ssw.chain.tof import pick_peaks
+from ssw.dynamics.integrate import DynamicRun, simulate
+
+#: The static curves kept reach this multiple of the Hertz wall's peak indentation.
+CURVE_REACH = 1.5
+
+
+@dataclass(frozen=True)
+class DynamicTof:
+    """TOFs (s) of a dynamic wall and of its quasi-static laws, shape (n,), and what it took.
+
+    ``tof_static``: the quasi-static FEM's law (1 m box); ``tof_half_space``: the
+    half-space's static law. ``error`` is ``tof_half_space / tof_dynamic - 1``, the
+    relative error the quasi-static assumption makes in the TOF; ``error_box`` the same
+    against the 1 m box the study's curves use (static box effect included). ``stats``:
+    dofs, candidates, domain (m), wall times (s), energy balance (J) per scene. ``runs``:
+    (dynamic, 1 m static) records when kept. ``curves``: per scene, the static boxes'
+    laws ``{L: (d, F)}`` (m, N; the bead's compliance included) when kept.
+    """
+
+    tof_dynamic: np.ndarray
+    tof_static: np.ndarray
+    tof_half_space: np.ndarray
+    stats: list[dict[str, Any]] = field(default_factory=list)
+    runs: tuple[DynamicRun, DynamicRun] | None = None
+    curves: list[dict[float, tuple[np.ndarray, np.ndarray]]] | None = None
+
+    @property
+    def error(self) -> np.ndarray:
+        return self.tof_half_space / self.tof_dynamic - 1.0
+
+    @property
+    def error_box(self) -> np.ndarray:
+        return self.tof_static / self.tof_dynamic - 1.0
+
+
+def fem_tof(
+    params: Any, soil_E: Any, soil_nu: Any, soil_density: Any, *, keep_runs: bool = False,
+    keep_curves: bool = False, record_energy: bool = True, **options: Any,
+) -> DynamicTof:
+    """TOF of the chain ``params`` with the dynamic FEM wall and with its static law.
+
+    Parameters
+    ----------
+    params : :class:`ssw.chain.params.ChainParams`.
+    soil_E, soil_nu, soil_density : Pa, -, kg/m^3, broadcast (one FEM per scene).
+    keep_runs : keep the records.  keep_curves : keep the static boxes' laws (to
+        :data:`CURVE_REACH` x the Hertz wall's peak indentation).
+    record_energy : record the energies (the balance).
+    options : keywords of :func:`ssw.dynamics.fem_wall.fem_wall` (``boundary``, ``spec``,
+        ``plate_density``, ``bead``, ``candidate_factor``, ``scales``).
+    """
+    from ssw.dynamics.fem_wall import StaticFEMWall, fem_wall
+    from ssw.dynamics.quasistatic import STATIC_BOXES, static_box, static_curve
+
+    t0 = time.perf_counter()
+    wall, scales = fem_wall(params, soil_E, soil_nu, soil_density, **options)
+    t_build = time.perf_counter() - t0
+    tof_d, tof_s, tof_h, stats, runs, curves = [], [], [], [], None, []
+    try:
+        for k in range(wall.n):
+            w = wall.take(np.array([k]))
+            t_end = float(scales.t_end[k])
+            t1 = time.perf_counter()
+            boxes = []
+            for L in STATIC_BOXES:
+                box = static_box(w.contacts[0], L)
+                r_s = simulate(params, StaticFEMWall([box]), t_end=t_end, dt=scales.dt)
+                boxes.append((L, float(pick_peaks(r_s.t, r_s.sensor[:, 0]).tof), r_s))
+                if keep_curves:
+                    if not boxes[1:]:
+                        curves.append({})
+                    curves[-1][L] = static_curve(box, CURVE_REACH * float(scales.d_peak[k]))
+                box.destroy()
+            (L1, T1, r_box), (L2, T2, _) = boxes
+            t2 = time.perf_counter()
+            r_d = simulate(params, w, t_end=t_end, dt=scales.dt, record_energy=record_energy)
+            t3 = time.perf_counter()
+            tof_s.append(T1)
+            tof_h.append(T2 + (T2 - T1) * (1.0 / L2) / (1.0 / L1 - 1.0 / L2))
+            tof_d.append(float(pick_peaks(r_d.t, r_d.sensor[:, 0]).tof))
+            c = w.contacts[0]
+            st = {"dofs": c.system.ndof, "candidates": c.n_candidates,
+                  "domain": c.mesh.soil_radius, "elements": len(c.mesh.tri),
+                  "steps": r_d.t.size - 1, "dt": scales.dt, "t_end": t_end,
+                  "window": float(scales.window[k]),
+                  "f_max": float(scales.f_max[k]), "wall_build": t_build / wall.n,
+                  "wall_static_runs": t2 - t1, "wall_dynamic_run": t3 - t2}
+            if record_energy:
+                tot = r_d.energy_chain[:, 0] + r_d.energy_wall[:, 0] + r_d.dissipated[:, 0]
+                st.update({"energy_input": float(r_d.energy_chain[0, 0]
+                                                 - r_d.energy_chain[:, 0].min()),
+                           "energy_drift": float(np.max(np.abs(tot - tot[0]))),
+                           "energy_radiated": float(r_d.dissipated[-1, 0])})
+            stats.append(st)
+            if keep_runs:
+                runs = (r_d, r_box)
+    finally:
+        wall.destroy()
+    return DynamicTof(np.array(tof_d), np.array(tof_s), np.array(tof_h), stats, runs,
+                      curves if keep_curves else None)
+
+
+def static_laws(params: Any, soil_E: Any, soil_nu: Any, soil_density: Any, scales: Any,
+                **options: Any) -> list[dict[float, tuple[np.ndarray, np.ndarray]]]:
+    """Per scene, the static FEM laws ``{L: (d, F)}`` of the quasi-static boxes
+    (:data:`ssw.dynamics.quasistatic.STATIC_BOXES`), up to :data:`CURVE_REACH` x the Hertz
+    wall's peak indentation. ``options``: ``plate_density``, ``bead``, ``spec`` (mesh),
+    ``candidate_factor``."""
+    from ssw.dynamics.domain import DomainSpec
+    from ssw.dynamics.fem_wall import CANDIDATE_FACTOR, ContactFEM, scenes_of
+    from ssw.dynamics.quasistatic import STATIC_BOXES, STATIC_SIZE_MAX, static_curve
+
+    scenes = scenes_of(params, soil_E, soil_nu, soil_density, options.get("plate_density"),
+                       options.get("bead", "compliance"))
+    factor = options.get("candidate_factor", CANDIDATE_FACTOR)
+    out = []
+    for k, sc in enumerate(scenes):
+        d_peak = float(scales.d_peak[k])
+        laws = {}
+        for L in STATIC_BOXES:
+            spec = DomainSpec(**{"window": float(scales.window[k]), **options.get("spec", {}),
+                                 "domain": L, "size_max": STATIC_SIZE_MAX})
+            c = ContactFEM(sc, spec, None, factor * np.sqrt(sc.radius * d_peak), "fixed",
+                           d_scale=d_peak)
+            laws[L] = static_curve(c, CURVE_REACH * d_peak)
+            c.destroy()
+        out.append(laws)
+    return out
+
+
+def reduced_tof(params: Any, soil_E: Any, soil_nu: Any, soil_density: Any, *,
+                laws: list[dict[float, tuple[np.ndarray, np.ndarray]]] | None = None,
+                **options: Any) -> DynamicTof:
+    """TOF of the chain with the reduced dynamic wall on the static FEM laws of the
+    quasi-static boxes, batched over the scenes (broadcast E Pa, nu, density kg/m^3).
+
+    ``tof_dynamic`` is the reduced wall's on the half-space law (``1 / L`` extrapolation
+    of its TOFs on the 1 and 3 m boxes, as the quasi-static ``tof_half_space``);
+    ``tof_static`` the 1 m box's quasi-static TOF. ``laws``: the static laws when already
+    known (:func:`static_laws`); ``options``: theirs and ``c_r``, ``m_r``, ``k_p``.
+    """
+    from types import SimpleNamespace
+
+    from ssw.chain.walls import build_wall, compliance_scale, table_wall
+    from ssw.dynamics.integrate import QuasiStatic
+    from ssw.dynamics.quasistatic import STATIC_BOXES
+    from ssw.dynamics.reduced import plate_areal_density, reduced_wall
+    from ssw.dynamics.scales import chain_scales
+
+    E, nu, rho = (np.ravel(x).astype(float) for x in np.broadcast_arrays(
+        np.asarray(soil_E, float), np.asarray(soil_nu, float),
+        np.asarray(soil_density, float)))
+    t0 = time.perf_counter()
+    scales = chain_scales(params, build_wall("hertz", params, E, nu))
+    coef = {k: options.pop(k) for k in ("c_r", "m_r", "k_p") if k in options}
+    if laws is None:
+        laws = static_laws(params, E, nu, rho, scales, **options)
+    t1 = time.perf_counter()
+    s = compliance_scale(params, E, nu)
+    t_end = float(np.max(scales.t_end))
+    tof: dict[tuple[str, float], np.ndarray] = {}
+    for L in STATIC_BOXES:
+        curves = [SimpleNamespace(delta=law[L][0] / sk, force=law[L][1])
+                  for law, sk in zip(laws, s, strict=True)]
+        tw = table_wall(params, E, nu, curve=curves)
+        rw = reduced_wall(tw, E, nu, rho, plate_areal_density=plate_areal_density(
+            params, options.get("plate_density")), **coef)
+        for name, w in (("static", QuasiStatic(tw)), ("reduced", rw)):
+            run = simulate(params, w, t_end=t_end, dt=scales.dt)
+            tof[(name, L)] = pick_peaks(run.t, run.sensor).tof
+    L1, L2 = STATIC_BOXES
+    w2 = (1.0 / L2) / (1.0 / L1 - 1.0 / L2)
+
+    def half_space(name: str) -> np.ndarray:
+        return tof[(name, L2)] + (tof[(name, L2)] - tof[(name, L1)]) * w2
+
+    t2 = time.perf_counter()
+    stats = [{"dt": scales.dt, "t_end": t_end, "wall_static_laws": (t1 - t0) / E.size,
+              "wall_runs": (t2 - t1) / E.size} for _ in range(E.size)]
+    return DynamicTof(half_space("reduced"), tof[("static", L1)], half_space("static"),
+                      stats, None, laws)

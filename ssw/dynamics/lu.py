@@ -1,0 +1,126 @@
+"""One sparse LU factorization (PETSc, petsc4py), many solves: the time stepper's workhorse.
+
+The matrix comes as COO triplets of a nondimensional ``A`` (duplicates summed) and a unit
+``scale`` (a power of two, :mod:`ssw.contact.assembly`), so that PETSc's absolute
+zero-pivot test keeps its meaning; :meth:`LU.solve` solves ``scale A x = b``. The
+factorization is PCLU in the natural order of the given numbering, which
+:mod:`ssw.contact.assembly` makes a nested dissection of the node graph with a node's
+displacements before its pressure: the saddle-point u-p matrix then meets no zero pivot,
+up to ``nu = 0.5``. Sequential (``COMM_SELF``): a dynamic wall is one scene, and a batch
+of scenes runs as separate processes.
+
+Single right-hand sides go through PETSc vectors that wrap persistent numpy buffers (no
+allocation per time step); blocks of right-hand sides through ``KSPMatSolve``.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from ssw.errors import SolverError
+
+#: Options prefix of the dynamic solver's KSP (users may add PETSc options under it).
+PREFIX = "ssw_dynamics_"
+
+
+def petsc():
+    """The initialized ``petsc4py.PETSc`` module."""
+    import petsc4py
+
+    petsc4py.init()
+    from petsc4py import PETSc
+
+    return PETSc
+
+
+def nd_order(rows: np.ndarray, cols: np.ndarray, n: int) -> np.ndarray:
+    """Nested-dissection permutation (new position -> node) of a graph given as COO."""
+    PETSc = petsc()
+    g = PETSc.Mat().createAIJ((n, n), comm=PETSc.COMM_SELF)
+    g.setPreallocationCOO(rows.astype(PETSc.IntType), cols.astype(PETSc.IntType))
+    g.setValuesCOO(np.ones(len(rows)), addv=PETSc.InsertMode.INSERT_VALUES)
+    g.assemble()
+    rperm, _ = g.getOrdering("nd")
+    perm = rperm.getIndices().copy()
+    g.destroy()
+    return perm
+
+
+class LU:
+    """LU factors of ``scale * A`` (``A`` from COO triplets, nondimensional).
+
+    Parameters
+    ----------
+    rows, cols, vals : COO triplets of ``A``.
+    n : matrix size.
+    scale : the matrix's unit (N/m), a power of two.
+    """
+
+    def __init__(self, rows: np.ndarray, cols: np.ndarray, vals: np.ndarray, n: int,
+                 scale: float = 1.0) -> None:
+        PETSc = petsc()
+        self.PETSc, self.n, self.scale = PETSc, int(n), float(scale)
+        a = PETSc.Mat().createAIJ((n, n), comm=PETSc.COMM_SELF)
+        a.setPreallocationCOO(rows.astype(PETSc.IntType), cols.astype(PETSc.IntType))
+        a.setValuesCOO(vals, addv=PETSc.InsertMode.ADD_VALUES)
+        a.assemble()
+        ksp = PETSc.KSP().create(comm=PETSc.COMM_SELF)
+        ksp.setOptionsPrefix(PREFIX)
+        ksp.setOperators(a)
+        ksp.setType(PETSc.KSP.Type.PREONLY)
+        pc = ksp.getPC()
+        pc.setType(PETSc.PC.Type.LU)
+        pc.setFactorOrdering(ord_type="natural")
+        ksp.setFromOptions()
+        try:
+            ksp.setUp()
+        except PETSc.Error as exc:
+            raise SolverError(f"PETSc LU factorization failed: {exc}") from exc
+        self.mat, self.ksp = a, ksp
+        self._b = np.zeros(n)
+        self._x = np.zeros(n)
+        self._vb = PETSc.Vec().createWithArray(self._b, comm=PETSc.COMM_SELF)
+        self._vx = PETSc.Vec().createWithArray(self._x, comm=PETSc.COMM_SELF)
+
+    def solve(self, rhs: np.ndarray) -> np.ndarray:
+        """``x`` with ``scale A x = rhs``; ``rhs`` (n,) or (n, k)."""
+        rhs = np.asarray(rhs, float)
+        if rhs.ndim == 1:
+            np.divide(rhs, self.scale, out=self._b)
+            try:
+                self.ksp.solve(self._vb, self._vx)
+            except self.PETSc.Error as exc:
+                raise SolverError(f"PETSc solve failed: {exc}") from exc
+            self._check()
+            return self._x.copy()
+        return self._solve_block(rhs / self.scale)
+
+    def _solve_block(self, rhs: np.ndarray) -> np.ndarray:
+        PETSc = self.PETSc
+        k = rhs.shape[1]
+        if k == 0:
+            return np.zeros((self.n, 0))
+        b = PETSc.Mat().createDense((self.n, k), array=np.asfortranarray(rhs),
+                                    comm=PETSc.COMM_SELF)
+        x = PETSc.Mat().createDense((self.n, k), comm=PETSc.COMM_SELF)
+        x.setUp()
+        try:
+            self.ksp.matSolve(b, x)
+        except PETSc.Error as exc:
+            raise SolverError(f"PETSc solve failed: {exc}") from exc
+        self._check()
+        out = x.getDenseArray().copy()
+        b.destroy()
+        x.destroy()
+        return out
+
+    def _check(self) -> None:
+        reason = self.ksp.getConvergedReason()
+        if reason < 0:
+            raise SolverError(f"PETSc KSP diverged (KSPConvergedReason {reason}): the LU "
+                              "factorization of the dynamic u-p matrix failed (zero pivot?)")
+
+    def destroy(self) -> None:
+        """Free the PETSc objects."""
+        for obj in (self.ksp, self.mat, self._vb, self._vx):
+            obj.destroy()

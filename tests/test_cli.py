@@ -26,6 +26,16 @@ def test_every_subcommand_has_help_and_json(cmd, capsys):
         assert "--json" in out
 
 
+def test_top_level_help_lists_every_subcommand(capsys):
+    """`ssw --help` formats every subcommand's one-line help (a stray % breaks it)."""
+    with pytest.raises(SystemExit) as exc:
+        main(["--help"])
+    assert exc.value.code == 0
+    out = capsys.readouterr().out
+    for cmd in _subcommands():
+        assert cmd in out
+
+
 def test_check_config_json_echoes_inputs(capsys):
     assert main(["check-config", "--config", "config/config.yaml", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)

@@ -158,11 +158,19 @@ def test_batch_refusals_write_nothing(tmp_path, capsys, argv, field):
 
 
 def test_batches_are_mesh_families():
-    """Every scene in exactly one batch; a batch holds one mesh family (plate thickness:
-    scenes sharing the mesh and its operators), cut into equal chunks of at most
-    jobs_per_group; the thesis study's five families with a large enough size."""
+    """Every scene in exactly one batch of at most jobs_per_group scenes; a batch holds a
+    chunk of one mesh family (plate thickness: scenes sharing the mesh and its operators),
+    or several whole small families (fewer than SMALL_FAMILY scenes), named after them;
+    the thesis study: the 0.4 mm family alone, the four one-scene families together."""
     from ssw.config import all_scenes
-    from ssw.contact.batch import batches, chunks, group_key, rank_share
+    from ssw.contact.batch import (
+        SMALL_FAMILY,
+        batches,
+        chunks,
+        family_name,
+        group_key,
+        rank_share,
+    )
 
     assert [len(c) for c in chunks(list("abcdefghij"), 4)] == [3, 3, 4]
     assert chunks(list("abc"), 5) == [["a", "b", "c"]] and chunks([], 3) == []
@@ -174,8 +182,15 @@ def test_batches_are_mesh_families():
         assert sorted(ids) == sorted(scenes) and len(ids) == len(set(ids))
         for name, members in got.items():
             assert 1 <= len(members) <= size and name.isidentifier()
-            assert len({scenes[i].plate_thickness for i in members}) == 1
-    assert sorted(batches(cfg, 1000)) == ["noplate", "t1000um", "t100um", "t200um", "t400um"]
+            fams = {family_name(scenes[i].plate_thickness) for i in members}
+            if len(fams) == 1:
+                assert name.startswith(fams.pop())
+            else:  # a pack of whole small families
+                assert set(name.split("_")) == fams
+                for f in fams:
+                    whole = [i for i in scenes if family_name(scenes[i].plate_thickness) == f]
+                    assert len(whole) < SMALL_FAMILY and set(whole) <= set(members)
+    assert sorted(batches(cfg, 1000)) == ["noplate_t100um_t200um_t1000um", "t400um"]
     assert len(batches(cfg, 1)) == len(scenes)
     # MPI: whole operator groups per rank, every scene once
     fam = [scenes[i] for i in batches(cfg, 1000)["t400um"]]

@@ -43,7 +43,7 @@ from ssw.errors import ConfigError, SswError
 from ssw.h5io import atomic_write_text, to_json
 
 REPO = Path(__file__).resolve().parents[2]
-RULE_RE = re.compile(r"^(?:rule|checkpoint)\s+(\w+)\s*:", re.MULTILINE)
+RULE_RE = re.compile(r"^[ \t]*(?:rule|checkpoint)\s+(\w+)\s*:", re.MULTILINE)
 # Rules named by the `name:` directive (e.g. defined in a loop: `name: f"contact_batch_{b}"`):
 # the name's literal start, a prefix of every rule it defines.
 NAME_RE = re.compile(r"^\s+name:\s*(?:\n\s*)?f?[\"']([A-Za-z_]\w*)", re.MULTILINE)

@@ -45,7 +45,7 @@ from ssw.errors import ConfigError, SolverError
 
 #: Grid points per continuous parameter: this many for one, fewer for several (product cap).
 SCAN_POINTS_1D = 32
-SCAN_BUDGET = 256
+SCAN_BUDGET = 144
 #: Local minima of the scan refined per problem.
 STARTS = 4
 #: After PRUNE_AFTER iterations a start stops when its chi^2 exceeds its problem's best by
@@ -110,6 +110,19 @@ def bounds_x(names: tuple[str, ...], ranges: dict[str, tuple[float, float]]
     lo = np.array([ranges[n][0] for n in names], float)
     hi = np.array([ranges[n][1] for n in names], float)
     return to_x(lo, names), to_x(hi, names)
+
+
+def fd_pair(x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The two points of a central difference of step :data:`FD_STEP` per scaled
+    coordinate, ``x -+ FD_STEP``, shifted (same spacing) to stay inside ``[lo, hi]``: a
+    solution on a bound (a preload of 0 N) is differentiated one-sidedly instead of at an
+    inadmissible value."""
+    a = np.asarray(x, float) - FD_STEP
+    b = np.asarray(x, float) + FD_STEP
+    below, above = a < lo, b > hi
+    a = np.where(below, lo, np.where(above, hi - 2 * FD_STEP, a))
+    b = np.where(below, lo + 2 * FD_STEP, np.where(above, hi, b))
+    return a, b
 
 
 def scan_ranges(free: tuple[str, ...], overrides: dict[str, tuple[float, float]] | None,
@@ -223,12 +236,14 @@ def _lm_batch(model: TofModel, T: np.ndarray, s: np.ndarray,
     x = np.array([pr[1] for pr in problems], float).reshape(P, p)
     fixed = [pr[2] for pr in problems]
     refs = [np.asarray(pr[0], int) for pr in problems]
-    h = np.full(p, FD_STEP)
+    # forward differences, backward on an upper bound (every point stays admissible)
+    steps = np.zeros((P, p))
 
     def evaluate(xs: np.ndarray, active: np.ndarray) -> tuple[list, list]:
         rows, owner = [], []
         for i in active:
-            pts = [xs[i]] + [xs[i] + h[j] * np.eye(p)[j] for j in range(p)]
+            steps[i] = np.where(xs[i] + FD_STEP > hi, -FD_STEP, FD_STEP)
+            pts = [xs[i]] + [xs[i] + steps[i, j] * np.eye(p)[j] for j in range(p)]
             for pt in pts:
                 rows.append(np.concatenate([from_x(pt, cont), fixed[i]]))
                 owner.append(i)
@@ -240,7 +255,7 @@ def _lm_batch(model: TofModel, T: np.ndarray, s: np.ndarray,
             block = tof[k:k + p + 1][:, refs[i]]
             k += p + 1
             r = (block[0] - T[refs[i]]) / s[refs[i]]
-            J = ((block[1:] - block[0]) / s[refs[i]]).T / h[None, :]
+            J = ((block[1:] - block[0]) / s[refs[i]]).T / steps[i][None, :]
             res_r[i], res_J[i] = r, J
         return res_r, res_J
 
@@ -406,70 +421,106 @@ class SubsetFit:
 
 def refine_subsets(model: TofModel, T: np.ndarray, s: np.ndarray, start: np.ndarray,
                    subsets: list[tuple[int, ...]], ranges: dict[str, tuple[float, float]],
-                   iterations: int = 12) -> dict[tuple[int, ...], SubsetFit]:
-    """Fits of subsets of the references, each the smallest change of ``start`` (the full
-    calibration, SI) that fits the subset: Gauss-Newton steps from ``start`` in the scaled
-    coordinates with the truncated pseudo-inverse of the subset's Jacobian (directions
-    with singular values below :data:`IDENTIFIED_MIN` are not moved; Hansen 1998,
-    truncated SVD). Where the subset identifies the parameters this is its least-squares
-    solution; where it does not (a valley of near-exact fits), the point of the valley
-    nearest the full calibration, instead of an arbitrary one. All subsets advance
-    together: one batched run (central differences) per iteration."""
+                   iterations: int = 16) -> dict[tuple[int, ...], SubsetFit]:
+    """Fits of subsets of the references, from ``start`` (the full calibration, SI): the
+    subset's least squares within the directions it identifies AT ``start`` (right singular
+    vectors of its weighted Jacobian there with singular values >= :data:`IDENTIFIED_MIN`;
+    Hansen 1998, truncated SVD), the others held at ``start``'s values. Where the subset
+    identifies every parameter this is its least-squares solution; where it does not (a
+    valley of near-exact fits), the point that differs from the full calibration only in
+    what the subset can tell, a well-defined answer instead of an arbitrary point of the
+    valley. Levenberg-Marquardt in the identified coordinates (Nielsen's damping update, as
+    in the main fit: a near-singular Jacobian along a curved valley cannot throw a step
+    across the range), a step that raises chi^2 rejected, the best point returned; all
+    subsets advance together, one batched run (central differences) per iteration."""
     cont = model.continuous
     idx = [model.free.index(n) for n in cont]
     p = len(cont)
     lo, hi = bounds_x(cont, ranges)
-    x = {key: to_x(start[idx], cont) for key in subsets}
-    done = {key: False for key in subsets}
-    its = {key: 0 for key in subsets}
-    last: dict[tuple[int, ...], tuple[np.ndarray, np.ndarray]] = {}
+    x0 = to_x(start[idx], cont)
 
-    def evaluate(keys: list[tuple[int, ...]]) -> None:
+    def evaluate(points: dict[tuple[int, ...], np.ndarray]
+                 ) -> dict[tuple[int, ...], tuple[np.ndarray, np.ndarray, float]]:
+        """Weighted residuals, Jacobian (per scaled unit) and chi^2 of each subset's point."""
         rows = []
-        for key in keys:
-            for pt in [x[key]] + [x[key] + sg * FD_STEP * np.eye(p)[j]
-                                  for j in range(p) for sg in (1.0, -1.0)]:
+        for xk in points.values():
+            a, b = fd_pair(xk, lo, hi)
+            pts = [xk]
+            for j in range(p):
+                for end in (b, a):
+                    pt = xk.copy()
+                    pt[j] = end[j]
+                    pts.append(pt)
+            for pt in pts:
                 th = start.copy()
                 th[idx] = from_x(pt, cont)
                 rows.append(th)
         tof = model(np.array(rows))
-        for k, key in enumerate(keys):
+        out = {}
+        for k, key in enumerate(points):
             blk = tof[k * (1 + 2 * p):(k + 1) * (1 + 2 * p)]
             Jx = np.stack([(blk[1 + 2 * j] - blk[2 + 2 * j]) / (2 * FD_STEP)
                            for j in range(p)], axis=1)  # (n_refs, p), s per scaled unit
-            last[key] = (blk[0], Jx)
-
-    for _ in range(iterations):
-        todo = [k for k in subsets if not done[k]]
-        if not todo:
-            break
-        evaluate(todo)
-        for key in todo:
-            its[key] += 1
-            f0, Jx = last[key]
             sub = np.asarray(key)
-            r = (f0[sub] - T[sub]) / s[sub]
-            Jw = Jx[sub] / s[sub, None]
-            U, sv, Vt = np.linalg.svd(Jw, full_matrices=False)
-            keep = sv >= max(IDENTIFIED_MIN, IDENTIFIED_RATIO * float(sv.max(initial=0.0)))
-            step = -(Vt[keep].T @ ((U[:, keep].T @ r) / sv[keep]))
-            x[key] = np.clip(x[key] + step, lo, hi)
-            if float(np.max(np.abs(step), initial=0.0)) < LM_XTOL or float(r @ r) < LM_FTOL:
+            r = (blk[0][sub] - T[sub]) / s[sub]
+            ok = np.all(np.isfinite(r)) and np.all(np.isfinite(Jx))
+            out[key] = (r, Jx[sub] / s[sub, None], float(r @ r) if ok else np.inf)
+        return out
+
+    x = {key: x0.copy() for key in subsets}
+    cur = evaluate(x)
+    basis, lam, nu_up, done, its = {}, {}, {}, {}, {}
+    for key in subsets:
+        _, sv, Vt = np.linalg.svd(cur[key][1], full_matrices=False)
+        floor = max(IDENTIFIED_MIN, IDENTIFIED_RATIO * float(sv.max(initial=0.0)))
+        basis[key] = Vt[sv >= floor].T  # (p, q): the identified directions at the start
+        lam[key], nu_up[key], its[key] = LM_LAMBDA0, 2.0, 0
+        done[key] = basis[key].shape[1] == 0 or not cur[key][2] >= LM_FTOL
+    for _ in range(iterations):
+        trial, predicted = {}, {}
+        for key in subsets:
+            if done[key]:
+                continue
+            r, Jw, _ = cur[key]
+            A = Jw @ basis[key]
+            H, g = A.T @ A, A.T @ r
+            if float(g @ np.linalg.lstsq(H, g, rcond=None)[0]) < LM_FTOL:
+                done[key] = True  # even the undamped step gains less than the tolerance
+                continue
+            D = np.diag(np.maximum(np.diag(H), 1e-12))
+            dz = -np.linalg.solve(H + lam[key] * D, g)
+            trial[key] = np.clip(x[key] + basis[key] @ dz, lo, hi)
+            st = np.linalg.lstsq(basis[key], trial[key] - x[key], rcond=None)[0]
+            predicted[key] = -(2.0 * st @ g + st @ H @ st)
+            if float(np.max(np.abs(trial[key] - x[key]), initial=0.0)) < LM_XTOL:
                 done[key] = True
-    evaluate(list(subsets))  # the Jacobian at the final points
+                del trial[key]
+        if not trial:
+            break
+        new = evaluate(trial)
+        for key, res in new.items():
+            its[key] += 1
+            gain = cur[key][2] - res[2]
+            if gain > 0:  # accepted (Madsen, Nielsen & Tingleff 2004, eq. 2.21)
+                rho = gain / max(predicted[key], 1e-300)
+                x[key], cur[key] = trial[key], res
+                lam[key] = max(lam[key] * max(1 / 3, 1 - (2 * rho - 1) ** 3), 1e-12)
+                nu_up[key] = 2.0
+                done[key] = gain <= LM_FTOL or res[2] < LM_FTOL
+            else:
+                lam[key] *= nu_up[key]
+                nu_up[key] *= 2.0
+                done[key] = lam[key] > 1e8
     out = {}
     for key in subsets:
-        f0, Jx = last[key]
-        sub = np.asarray(key)
-        r = (f0[sub] - T[sub]) / s[sub]
-        sv_ = np.linalg.svd(Jx[sub] / s[sub, None], compute_uv=False)
+        r, Jw, chi2 = cur[key]
+        sv_ = np.linalg.svd(Jw, compute_uv=False)
         svf = np.zeros(p)
         svf[: sv_.size] = sv_
         floor = max(IDENTIFIED_MIN, IDENTIFIED_RATIO * float(svf.max(initial=0.0)))
         theta = start.copy()
         theta[idx] = from_x(x[key], cont)
-        out[key] = SubsetFit(key, theta, float(r @ r), bool(np.all(svf >= floor)), svf,
-                             its[key])
+        out[key] = SubsetFit(key, theta, chi2, bool(np.all(svf >= floor)), svf, its[key])
     return out
 
 
@@ -496,6 +547,12 @@ def identify(
     key = tuple(range(len(refs)))
     problems = [(key, x0, fixed) for x0, fixed in
                 _starts(model, grid, axes, tof, key, T, s, nominal, rng)]
+    # the refinement's step: near the candidates (2x their fastest striker), not the scan's
+    # fastest striker; one step for every run from here on
+    cont = model.continuous
+    model.refix_time_step(np.array([_order(np.concatenate([from_x(x0, cont), fx])[None, :],
+                                           cont, model.integers, model.free)[0]
+                                    for _, x0, fx in problems]), rng)
     sols = _lm_batch(model, T, s, problems, rng)
     best, others = _pick(sols, to_x(nominal, model.free), model)
     fit = _uncertainty(model, refs, T, s, known, best, others, rng, grid.shape[0])
@@ -513,11 +570,13 @@ def _uncertainty(model: TofModel, refs: list[Reference], T: np.ndarray, s: np.nd
     p = len(cont_idx)
     n = len(refs)
     x0 = to_x(best.theta, names)
+    lo, hi = bounds_x(model.continuous, ranges)
+    a, b = fd_pair(x0[cont_idx], lo, hi)
     rows = [best.theta]
-    for j in cont_idx:
-        for sign in (1.0, -1.0):
+    for k, j in enumerate(cont_idx):
+        for end in (b, a):
             xx = x0.copy()
-            xx[j] += sign * FD_STEP
+            xx[j] = end[k]
             rows.append(from_x(xx, names))
     for j, nm in enumerate(names):  # integers: exact values
         if parameter(nm).kind == "integer":

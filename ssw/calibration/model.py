@@ -149,6 +149,29 @@ class TofModel:
         self.dt = float(time_step(b, self.walls()))
         return self.dt
 
+    def refix_time_step(self, theta: np.ndarray, ranges: dict[str, tuple[float, float]],
+                        margin: float = 2.0) -> float:
+        """Fix the time step for the refinement around the parameter sets ``theta`` (rows,
+        ``free`` order): the step of ``margin`` times their fastest striker (capped at the
+        scan's range), instead of the scan's fastest. One step for every later run, so the
+        least squares compare TOFs of one discretization (module docstring)."""
+        from ssw.chain.integrate import time_step
+
+        th = np.atleast_2d(np.asarray(theta, float))
+        vals = {}
+        if "striker_velocity" in self.continuous:
+            j = self.free.index("striker_velocity")
+            vals["striker_velocity"] = min(margin * float(np.max(th[:, j])),
+                                           ranges["striker_velocity"][1])
+        for n in ("striker_mass", "sensor_mass"):
+            if n in self.continuous:
+                vals[n] = float(np.min(th[:, self.free.index(n)]))
+        ints = {n: float(np.max(th[:, self.free.index(n)])) for n in self.integers}
+        base = self.params_for(ints)
+        b = Batch.of(base, self.n_refs, {k: np.full(self.n_refs, v) for k, v in vals.items()})
+        self.dt = float(time_step(b, self.walls()))
+        return self.dt
+
     def __call__(self, theta: np.ndarray, refs: np.ndarray | None = None) -> np.ndarray:
         """TOF (s), shape (m, n_refs): rows of ``theta`` (m, len(free)) in SI units, columns
         the references (``refs``: a subset of their indices, default all). NaN where the

@@ -134,6 +134,10 @@ def run_tof_sweep(args: argparse.Namespace) -> dict[str, Any] | None:
         write_sweep(args.output, sw, {**inputs, **_params_dict(params), **ctx.inputs()})
         if args.csv:
             write_csv(args.csv, sw)
+    if args.plot:
+        from ssw.chain.sweep import plot_fig8
+
+        plot_fig8(args.plot, sw.sorted(), f"TOF vs soil modulus, {wall} wall (cf. thesis Fig 8)")
     return {
         **ctx.inputs(), "soil_E": sw.soil_E, "soil_nu": sw.soil_nu, "tof": sw.tof,
         "points": int(sw.tof.size), "wall_time": wall_time,
@@ -228,6 +232,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--mpi", action="store_true", help="split the points over MPI ranks")
     p.add_argument("--output", help="output HDF5 (kind tof_sweep)")
     p.add_argument("--csv", help="also write this CSV")
+    p.add_argument("--plot", help="also draw the Fig 8 style PNG (a whole sweep: one chunk)")
     add_json_flag(p)
     p.set_defaults(func=run_tof_sweep)
 

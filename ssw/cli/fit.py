@@ -135,6 +135,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     fs.add_argument("set", help="set name of the config")
     fs.add_argument("curves", nargs="+", help="the set's contact curve files")
     fs.add_argument("--outdir", required=True, help="the fit results folder (results/fit)")
+    fs.add_argument("--contact-figure", metavar="PNG",
+                    help="also draw the set's curves with Hertz (thesis Figs 5, 6: the contact "
+                    "stage's figure, `ssw contact-plot`) here: the curves are read already")
+    fs.add_argument("--label-by", choices=["material", "thickness"], default="material",
+                    help="--contact-figure: label the curves by plate material or thickness")
+    fs.add_argument("--title", default="", help="--contact-figure: its title")
     _config_arg(fs)
     add_json_flag(fs)
     fs.set_defaults(func=run_set)
@@ -376,7 +382,7 @@ def run_set(args: argparse.Namespace) -> dict[str, Any]:
                   ("deviation", args.curves, f"{args.set}_deviation.png")]
     else:
         plots.append(("k", [str(tdir / "k_table.h5")], f"{args.set}_k_vs_E.png"))
-        rows = tof_impact(curves, cfg)
+        rows = tof_impact(curves, cfg, records)
         write_rows_csv(rows, out / f"tof_impact_{args.set}.csv")
         worst = {k: max(abs(r[k]) for r in rows) for k in
                  ("tof_err_fit_k", "tof_err_fit_power", "E_err_fit_k", "E_err_fit_power")}
@@ -385,6 +391,11 @@ def run_set(args: argparse.Namespace) -> dict[str, Any]:
     for kind_, inputs, name in plots:
         figures.PLOTS[kind_](inputs, str(out / "figures" / name), cfg, args.set)
         written.append(str(out / "figures" / name))
+    if getattr(args, "contact_figure", None):
+        from ssw.contact.figures import plot_curves
+
+        plot_curves(curves, args.contact_figure, label_by=args.label_by, title=args.title)
+        written.append(args.contact_figure)
     return {"set": args.set, "outputs": written}
 
 

@@ -69,7 +69,7 @@ def _human(r: dict[str, Any]) -> str:
 
 def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
-        "measure", help="recordings of one test point -> E with its 95 % interval",
+        "measure", help="recordings of one test point -> E with its 95 %% interval",
         description="Per-hit TOF (rejection rule per session), pooled mean and standard "
         "error, then E through the device and its calibration, with every contribution to "
         "its uncertainty. Reads HDF5 sessions, CSV, MAT and TDMS. SI units.")

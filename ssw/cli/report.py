@@ -14,8 +14,21 @@ from ssw.cli import add_json_flag
 
 
 def run_report(args: argparse.Namespace) -> dict[str, Any]:
+    from ssw.errors import ConfigError
     from ssw.report import write_tables
 
+    if args.page:  # several pages in one process (the workflow's rule report_tables)
+        if args.tables or args.output:
+            raise ConfigError("--page", args.page, "pages without TABLES/--output")
+        out = {}
+        for page in args.page:
+            if len(page) < 3:
+                raise ConfigError("--page", page, "OUTPUT TITLE CSV [CSV ...]")
+            out[page[0]] = write_tables(page[2:], page[0], title=page[1],
+                                        captions_file=args.captions)
+        return {"pages": out}
+    if not args.tables or not args.output:
+        raise ConfigError("tables", args.tables, "CSV files and --output (or --page)")
     return write_tables(args.tables, args.output, title=args.title,
                         captions_file=args.captions)
 
@@ -24,8 +37,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("report", help="CSV tables as one HTML page (for the Snakemake report)",
                        description="Renders CSV tables (6 significant digits, long tables "
                        "cut) with their notes into one HTML page.")
-    p.add_argument("tables", nargs="+", help="CSV files")
-    p.add_argument("--output", required=True, help="HTML file")
+    p.add_argument("tables", nargs="*", help="CSV files")
+    p.add_argument("--output", help="HTML file")
+    p.add_argument("--page", action="append", nargs="+", metavar="ITEM",
+                   help="one page of several: OUTPUT TITLE CSV [CSV ...]; repeat it")
     p.add_argument("--title", default="ssw study tables", help="page title")
     p.add_argument("--captions", help="YAML: file-name glob -> note under the table")
     add_json_flag(p)

@@ -8,7 +8,8 @@ their plate operators, whatever set lists them: the thesis study has five (no pl
 0.2, 0.4 and 1 mm PLA), the 0.4 mm one holding Sets 1 and 3 and a scene of Set 2. A family
 of more than ``contact.jobs_per_group`` scenes is cut into equal chunks along its
 operator groups (plate material, soil nu), so that a cluster still spreads a large study;
-a scene belongs to exactly one batch.
+families of a few scenes (fewer than :data:`SMALL_FAMILY`) share a job (a job's ~1 s of
+imports would cost more than their solves); a scene belongs to exactly one batch.
 
 Inside a job, ``mpiexec -n N ssw contact --scene ... --output-dir D`` deals the batch's
 operator groups out to the ranks (:func:`rank_share`): each rank builds only its groups'
@@ -29,6 +30,8 @@ from ssw.errors import ConfigError
 
 #: Scenes per job when the config does not say (``contact.jobs_per_group``).
 DEFAULT_SIZE = 25
+#: Families (or chunks) of fewer scenes than this are packed into shared jobs.
+SMALL_FAMILY = 20
 
 
 def chunks(items: list[str], size: int) -> list[list[str]]:
@@ -70,6 +73,7 @@ def batches(cfg: dict[str, Any], size: int | None = None) -> dict[str, list[str]
     for sc in all_scenes(cfg).values():
         families.setdefault(float(sc.plate_thickness), []).append(sc)
     out: dict[str, list[str]] = {}
+    small: list[tuple[str, list[str]]] = []
     for t in sorted(families):
         scs = sorted(families[t], key=lambda s: (*group_key(s), s.soil_E, s.scene_id))
         ids = [s.scene_id for s in scs]
@@ -83,7 +87,21 @@ def batches(cfg: dict[str, Any], size: int | None = None) -> dict[str, list[str]
         for name, part in zip(names, parts, strict=True):
             if not re.fullmatch(r"\w+", name):
                 raise ConfigError("sets", name, "batch names of letters, digits and _")
-            out[name] = part
+            if len(part) < SMALL_FAMILY:
+                small.append((name, part))
+            else:
+                out[name] = part
+    # families of a few scenes (a thickness series: one scene each) share one job: a job's
+    # start-up (~1 s of imports) would cost more than their solves; still at most `size`
+    packed: list[list[tuple[str, list[str]]]] = []
+    for name, part in small:
+        if packed and sum(len(p) for _, p in packed[-1]) + len(part) <= size:
+            packed[-1].append((name, part))
+        else:
+            packed.append([(name, part)])
+    for group in packed:
+        name = group[0][0] if len(group) == 1 else "_".join(n for n, _ in group)
+        out[name] = [i for _, part in group for i in part]
     return out
 
 

@@ -59,22 +59,34 @@ def _fem_groups(curves: list[ForceCurve], scs: list[dict[str, Any]], cfg: dict[s
     return groups
 
 
-def tof_impact(curves: list[ForceCurve], cfg: dict[str, Any]) -> list[dict[str, Any]]:
-    """Per curve: TOF (s) with each law, their errors against the ``fem`` law, K and (C, n)."""
+def tof_impact(curves: list[ForceCurve], cfg: dict[str, Any],
+               records: list[dict[str, Any]] | None = None) -> list[dict[str, Any]]:
+    """Per curve: TOF (s) with each law, their errors against the ``fem`` law, K and (C, n).
+
+    ``records``: the curves' fits when already made (:func:`ssw.fit.pipeline.fit_files`,
+    with the ``k_hertz`` and ``power`` laws on the default ranges), else they are fitted.
+    """
     from ssw.chain import api
     from ssw.chain.params import ChainParams
+    from ssw.chain.walls import PowerWall, build_wall
+    from ssw.fit.range import FitRange
 
     params = ChainParams.from_config(cfg)
     scs = [scene_inputs(c) for c in curves]
     E = np.array([float(s["soil_E"]) for s in scs])
     nu = np.array([float(s["soil_nu"]) for s in scs])
-    ranges = fit_ranges(E, nu, [float(c.delta[-1]) for c in curves], cfg,
-                        [s.get("plate_E") for s in scs], [s.get("plate_nu") for s in scs])
-    w = cfg["fit"]["weighting"]
-    fk = [fit_curve(c, "k_hertz", (r.lo, r.hi), weighting=w)
-          for c, r in zip(curves, ranges, strict=True)]
-    fp = [fit_curve(c, "power", (r.lo, r.hi), weighting=w)
-          for c, r in zip(curves, ranges, strict=True)]
+    if records is not None and all({"k_hertz", "power"} <= set(r["fits"]) for r in records):
+        ranges = [FitRange(**r["range"]) for r in records]
+        fk = [r["fits"]["k_hertz"] for r in records]
+        fp = [r["fits"]["power"] for r in records]
+    else:
+        ranges = fit_ranges(E, nu, [float(c.delta[-1]) for c in curves], cfg,
+                            [s.get("plate_E") for s in scs], [s.get("plate_nu") for s in scs])
+        w = cfg["fit"]["weighting"]
+        fk = [fit_curve(c, "k_hertz", (r.lo, r.hi), weighting=w)
+              for c, r in zip(curves, ranges, strict=True)]
+        fp = [fit_curve(c, "power", (r.lo, r.hi), weighting=w)
+              for c, r in zip(curves, ranges, strict=True)]
     K = np.array([f.params["K"] for f in fk])
     C = np.array([f.params["C"] for f in fp])
     n = np.array([f.params["n"] for f in fp])
@@ -82,15 +94,24 @@ def tof_impact(curves: list[ForceCurve], cfg: dict[str, Any]) -> list[dict[str, 
     for plate, contact, idx in _fem_groups(curves, scs, cfg).values():
         ix = np.array(idx)
         tof_fem[ix] = api.tof(E[ix], nu[ix], params.with_(**plate), "fem", contact=contact)
+    # the power-law walls in one batched run: K, (C, n), and Hertz at E and E (1 +- step)
+    # (the slope)
+    walls = [build_wall("fit", params, E, nu, K=K),
+             build_wall("fit", params, E, nu, power=(C, n)),
+             build_wall("hertz", params, np.concatenate([E, E * (1 + SLOPE_STEP),
+                                                         E * (1 - SLOPE_STEP)]),
+                        np.concatenate([nu, nu, nu]))]
+    allw = PowerWall(np.concatenate([w.coef for w in walls]),
+                     np.concatenate([w.exponent for w in walls]))
+    pk, _ = api.run_peaks(params, allw)
+    fit_k, fit_power, hertz, up, dn = np.split(pk.tof, 5)
     tof = {
         "fem": tof_fem,
-        "fit_k": api.tof(E, nu, params, "fit", K=K),
-        "fit_power": api.tof(E, nu, params, "fit", power=(C, n)),
+        "fit_k": fit_k,
+        "fit_power": fit_power,
         "table": api.tof(E, nu, params, "table", curve=list(curves)),
-        "hertz": api.tof(E, nu, params, "hertz"),
+        "hertz": hertz,
     }
-    up = api.tof(E * (1 + SLOPE_STEP), nu, params, "hertz")
-    dn = api.tof(E * (1 - SLOPE_STEP), nu, params, "hertz")
     slope = np.log(up / dn) / np.log((1 + SLOPE_STEP) / (1 - SLOPE_STEP))
     rows = []
     for i, sc in enumerate(scs):

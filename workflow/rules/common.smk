@@ -118,3 +118,12 @@ def survey_has_coordinates():
     """Whether any survey point has plan or geographic coordinates (a map is drawn)."""
     return any(p.get("x") is not None or p.get("latitude") is not None
                for p in config.get("survey", {}).get("points", []))
+
+
+# ---- report (workflow/rules/validation.smk)
+def report_page_args(wildcards, input, output):
+    """`ssw report --page OUTPUT TITLE CSV...` for every stage's tables page."""
+    return " ".join(
+        f"--page {shlex.join([getattr(output, st), f'{REPORT_CATEGORIES[st]}: tables', *ts])}"
+        for st, ts in REPORT_TABLES.items()
+    )

@@ -1,11 +1,11 @@
 # Stage I contact FEM: one force-indentation curve per scene of every set of the config.
-# Science lives in ssw.contact; these rules call the `ssw contact` and `ssw contact-plot`
-# commands.
+# Science lives in ssw.contact; these rules call the `ssw contact` command.
 #
 # Outputs (results/contact/):
 #   {scene}.h5                     the curve of a scene (ssw.curve.read_curve)
 #   figures/fig5_materials.png     force vs indentation per plate material (set1_materials)
 #   figures/fig6_thickness.png     force vs indentation per PLA thickness (set2_thickness)
+#                                  (both drawn by the set's fit job: workflow/rules/fit.smk)
 #
 # Batches: a scene costs milliseconds once its operators exist (the plate and the soil
 # condensed per mesh and Poisson's ratio, ~0.1-0.5 s each: ssw.contact.operators), a process
@@ -22,25 +22,16 @@ import ssw.contact.batch as contact_batch
 
 os.environ.setdefault("SSW_CACHE_DIR", os.path.abspath(f"{RESULTS}/cache"))
 
+# set -> (figure name, --label-by, title): the thesis's Figs 5 and 6, drawn by the set's fit
+# job (workflow/rules/fit.smk)
 CONTACT_FIGURES = {
     "set1_materials": ("fig5_materials", "material", "Plate materials (thesis Fig 5)"),
     "set2_thickness": ("fig6_thickness", "thickness", "PLA plate thickness (thesis Fig 6)"),
 }
 
-# figure name -> (curve files, --label-by, title), for the sets the config has
-CONTACT_FIGURE_JOBS = {
-    name: (
-        expand(f"{RESULTS}/contact/{{scene}}.h5", scene=scene_ids(set_name)),
-        label_by,
-        title,
-    )
-    for set_name, (name, label_by, title) in CONTACT_FIGURES.items()
-    if set_name in config["sets"]
-}
-
-CONTACT_TARGETS = expand(f"{RESULTS}/contact/{{scene}}.h5", scene=list(SCENES)) + [
-    f"{RESULTS}/contact/figures/{name}.png" for name in CONTACT_FIGURE_JOBS
-]
+# the figures (thesis Figs 5, 6) are drawn by the fit job of their set, which reads those
+# curves anyway (workflow/rules/fit.smk: rule fit_set_<set>, `ssw fit-set --contact-figure`)
+CONTACT_TARGETS = expand(f"{RESULTS}/contact/{{scene}}.h5", scene=list(SCENES))
 
 
 wildcard_constraints:
@@ -74,26 +65,3 @@ for _batch, _ids in CONTACT_BATCHES.items():
             # scene systems) from spawning threads
             "OMP_NUM_THREADS=1 OPENBLAS_NUM_THREADS=1 python -m ssw contact {params.scenes} "
             "--config {params.config} --output-dir {params.out_dir} > {log} 2>&1"
-
-
-rule contact_figure:
-    """The thesis's Figs 5 and 6: force vs indentation of a one-soil set, with Hertz."""
-    input:
-        lambda wc: CONTACT_FIGURE_JOBS[wc.figure][0],
-    output:
-        png=report(
-            f"{RESULTS}/contact/figures/{{figure}}.png",
-            caption="../report/contact_figure.rst",
-            category="1. Contact (Stage I)",
-            subcategory="Figures",
-        ),
-    log:
-        f"{LOGS}/contact/figures/{{figure}}.log",
-    params:
-        label_by=lambda wc: CONTACT_FIGURE_JOBS[wc.figure][1],
-        title=lambda wc: CONTACT_FIGURE_JOBS[wc.figure][2],
-    conda:
-        SSW_ENV
-    shell:
-        "python -m ssw contact-plot {input} --output {output.png} --label-by {params.label_by} "
-        "--title '{params.title}' > {log} 2>&1"

@@ -40,6 +40,21 @@ def fit_set_outputs(set_name):
     return out
 
 
+def contact_figure_flags(set_name):
+    """`ssw fit-set` flags that also draw the set's contact figure (contact.smk's table)."""
+    if set_name not in CONTACT_FIGURE_JOBS_BY_SET:
+        return ""
+    name, label_by, title = CONTACT_FIGURE_JOBS_BY_SET[set_name]
+    return (f"--contact-figure {RESULTS}/contact/figures/{name}.png --label-by {label_by} "
+            f"--title '{title}'")
+
+
+# set -> (figure name, --label-by, title) of the contact figures (thesis Figs 5, 6)
+CONTACT_FIGURE_JOBS_BY_SET = {
+    set_name: spec for set_name, spec in CONTACT_FIGURES.items() if set_name in config["sets"]
+}
+
+
 for _set in config["sets"]:
 
     # every fit output of one set, one process
@@ -54,6 +69,15 @@ for _set in config["sets"]:
                 if (cap := next((c for e, c in FIT_FIGURE_CAPTIONS.items() if f.endswith(e)), None))
                 else f
                 for f in fit_set_outputs(_set)
+            ]
+            + [
+                report(
+                    f"{RESULTS}/contact/figures/{CONTACT_FIGURE_JOBS_BY_SET[_set][0]}.png",
+                    caption="../report/contact_figure.rst",
+                    category="1. Contact (Stage I)",
+                    subcategory="Figures",
+                )
+                for _ in range(_set in CONTACT_FIGURE_JOBS_BY_SET)
             ],
         log:
             f"{LOGS}/fit/{_set}.log",
@@ -68,11 +92,14 @@ for _set in config["sets"]:
             outdir=lambda wildcards, output: os.path.dirname(
                 os.path.dirname(os.path.dirname(output[0]))
             ),
+            figure=contact_figure_flags(_set),
         conda:
             SSW_ENV
         shell:
             "python -m ssw fit-set {params.set} {input} --outdir {params.outdir} "
-            "--config {params.config} > {log} 2>&1"
+            "{params.figure} --config {params.config} > {log} 2>&1"
 
 
-FIT_TARGETS = [f for s in config["sets"] for f in fit_set_outputs(s)]
+FIT_TARGETS = [f for s in config["sets"] for f in fit_set_outputs(s)] + [
+    f"{RESULTS}/contact/figures/{spec[0]}.png" for spec in CONTACT_FIGURE_JOBS_BY_SET.values()
+]

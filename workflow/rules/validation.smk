@@ -16,6 +16,7 @@ VALIDATION_DIR = f"{RESULTS}/validation"
 
 rule validation:
     """Tables 2 and 3 and Figs 9 and 10 for the config's validation samples."""
+    priority: 30
     input:
         unpack(validation_inputs),
     output:
@@ -86,31 +87,29 @@ REPORT_TABLES = {
 
 
 rule report_tables:
-    """A stage's tables (CSV) as one HTML page for the Snakemake report."""
+    """Every stage's tables (CSV) as one HTML page per stage for the Snakemake report, in
+    one process."""
     input:
-        tables=lambda wc: REPORT_TABLES[wc.stage],
+        tables=[t for ts in REPORT_TABLES.values() for t in ts],
         captions=os.path.join(workflow.basedir, "workflow", "report", "captions.yaml"),
     output:
-        html=report(
-            f"{RESULTS}/report/tables_{{stage}}.html",
-            caption="../report/tables.rst",
-            category=lambda wc: REPORT_CATEGORIES[wc.stage],
-            subcategory="Tables",
-        ),
+        **{
+            stage: report(
+                f"{RESULTS}/report/tables_{stage}.html",
+                caption="../report/tables.rst",
+                category=REPORT_CATEGORIES[stage],
+                subcategory="Tables",
+            )
+            for stage in REPORT_TABLES
+        },
     log:
-        f"{LOGS}/report/tables_{{stage}}.log",
+        f"{LOGS}/report/tables.log",
     params:
-        title=lambda wc: f"{REPORT_CATEGORIES[wc.stage]}: tables",
-    wildcard_constraints:
-        stage="|".join(REPORT_TABLES) or "none",
+        pages=report_page_args,
     conda:
         SSW_ENV
     shell:
-        "python -m ssw report {input.tables} --captions {input.captions} --title {params.title:q} "
-        "--output {output.html} > {log} 2>&1"
+        "python -m ssw report {params.pages} --captions {input.captions} > {log} 2>&1"
 
 
-VALIDATION_TARGETS = [
-    *rules.validation.output,
-    *expand(rules.report_tables.output.html, stage=list(REPORT_TABLES)),
-]
+VALIDATION_TARGETS = [*rules.validation.output, *rules.report_tables.output]

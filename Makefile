@@ -34,9 +34,12 @@ lint: setup
 	$(SMK) --lint --configfile $(CONFIG)
 
 ## Benchmarks (figures go into the README).
+## (ssw bench dynamic, the elastodynamic FEM wall, takes several minutes more: run it alone.)
 bench: setup
-	$(VENV)/bin/ssw bench contact
+	$(VENV)/bin/ssw bench contact --engines --wall
+	$(VENV)/bin/ssw bench layered
 	$(VENV)/bin/ssw bench chain
+	$(VENV)/bin/ssw bench tof
 	$(VENV)/bin/ssw bench study
 
 ## The study's report (Snakemake's own; after `make study`): results/report.html.

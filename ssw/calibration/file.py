@@ -210,8 +210,10 @@ def _loo_predictions(model: TofModel, refs: list[Reference], subs: dict, materia
                      numerics: dict, wall: str, opts: dict) -> list[dict[str, Any]]:
     """E of each reference inverted with the calibration made without it (batched).
 
-    The left-out fits are the smallest change of the full calibration that fits the other
-    references (:func:`ssw.calibration.fit.refine_subsets`). No interval is given: the
+    The left-out fits are the other references' least squares in the directions they
+    identify, the rest held at the full calibration (:func:`ssw.calibration.fit.
+    refine_subsets`); ``identified`` says whether they identify every parameter at the
+    fit (else the prediction leans on the full calibration there). No interval is given: the
     left-out problems are strongly nonlinear (without the softest foam the static load
     lies along a curved valley of near-exact fits, where the local singular values swing
     from ~10 to ~0.1), so a linearized covariance is not trustworthy there. The local
@@ -247,6 +249,7 @@ def _loo_predictions(model: TofModel, refs: list[Reference], subs: dict, materia
             "E_predicted": float(E_pred[i]) if ok else None,
             "error_pct": float(100.0 * (E_pred[i] - r.E) / r.E) if ok else None,
             "parameters": theta_dict(model.free, sol.theta), "chi2": sol.chi2,
-            "singular_values": sol.singular_values.tolist(), "reason": reasons[i],
+            "singular_values": sol.singular_values.tolist(), "identified": sol.identified,
+            "reason": reasons[i],
         })
     return rows

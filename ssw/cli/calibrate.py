@@ -141,6 +141,9 @@ def _human(r: dict[str, Any]) -> str:
                 lines.append(f"  {row['id']}: E {row['E'] / 1e6:.1f} MPa -> "
                              f"{row['E_predicted'] / 1e6:.1f} MPa ({row['error_pct']:+.1f} %; "
                              f"fit without it: chi2 {row['chi2']:.2g}, singular values {sv})")
+                if not row.get("identified", True):
+                    lines.append("    (the others do not identify every parameter: the "
+                                 "unidentified direction stays at the full calibration)")
     for alt in r["alternatives"]:
         lines.append(f"  another solution within chi2 + 1: {alt}")
     if r["output"]:

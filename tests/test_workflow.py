@@ -159,6 +159,28 @@ def test_study_tables_2_and_3_against_the_thesis_and_the_manufacturer(ci_study):
     assert "E leave-one-out ssw [MPa]" in t3[0] and "E low 95% [MPa]" in t3[0]
 
 
+def test_standalone_validate_prints_the_studys_numbers(ci_study, tmp_path):
+    """One source of truth: `ssw validate` run by hand in the study's folder, with nothing
+    but the config (no --calibration, no --sweep: it finds the study's calibration itself),
+    gives the study's Table 3 to the bit."""
+    import json
+
+    env = _env()
+    env.pop("SSW_CALIBRATION", None)  # a user's shell: the default, auto
+    r = subprocess.run([sys.executable, "-m", "ssw", "validate", "--config",
+                        str(ci_study / "config" / "ci.yaml"), "--root", str(ROOT),
+                        "--outdir", str(tmp_path), "--json"],
+                       cwd=ci_study, capture_output=True, text=True, env=env, timeout=300)
+    assert r.returncode == 0, r.stderr[-2000:]
+    mine = json.loads(r.stdout)
+    study = json.loads((ci_study / "results" / "validation" / "validation.json").read_text())
+    assert mine["calibration_file"] == "results/calibration/calibration.json"
+    assert [s["sample"] for s in mine["samples"]] == [s["sample"] for s in study["samples"]]
+    for a, b in zip(mine["samples"], study["samples"], strict=True):
+        for key in ("tof_sim", "E_measured", "E_low", "E_high", "E_loo"):
+            assert a[key] == b[key], (a["sample"], key, a[key], b[key])
+
+
 def test_survey_recovers_the_moduli_that_made_it(ci_study):
     """The example survey's recordings were simulated at known moduli (data/survey_example:
     P1 135, P3 104, P4 92 MPa, nu 0.35) through the calibrated device: each 95 % interval

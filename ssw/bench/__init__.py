@@ -1,1 +1,18 @@
 """Benchmarks behind ``ssw bench``; one module per kind, each with ``register``."""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Callable
+from typing import Any
+
+
+def best_time(fn: Callable[[], Any], repeat: int) -> tuple[float, Any]:
+    """Fastest wall time (s) of ``repeat`` calls of ``fn`` (at least one) and the last
+    result: on a shared machine, noise only adds time."""
+    best, out = float("inf"), None
+    for _ in range(max(1, int(repeat))):
+        t0 = time.perf_counter()
+        out = fn()
+        best = min(best, time.perf_counter() - t0)
+    return best, out

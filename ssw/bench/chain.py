@@ -38,6 +38,7 @@ from typing import Any
 
 import numpy as np
 
+from ssw.bench import best_time
 from ssw.h5io import atomic_write_text, to_json
 from ssw.plotting import pyplot, save_png
 
@@ -77,15 +78,6 @@ def register(kinds: argparse._SubParsersAction) -> None:
     p.add_argument("--repeat", type=int, default=2, help="timing repeats (best is kept)")
     add_json_flag(p)
     p.set_defaults(func=run, human=human)
-
-
-def _best_time(fn: Any, repeat: int) -> tuple[float, Any]:
-    best, out = np.inf, None
-    for _ in range(max(repeat, 1)):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
 
 
 def time_at_error(rows: list[dict[str, Any]], method: str, target: float) -> float:
@@ -163,21 +155,21 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
 
     for spc in args.spcs:
         p = params.with_(steps_per_contact=spc)
-        t, (pk, rn) = _best_time(lambda p=p: api.peaks(E, nu, p, "hertz"), args.repeat)
+        t, (pk, rn) = best_time(lambda p=p: api.peaks(E, nu, p, "hertz"), args.repeat)
         add("verlet_batched", spc, t, E.size, sub, pk.tof[sub], dt=rn.dt,
             energy_error=energy_error(params, spc))
     for spc in args.single_spcs:
         p = params.with_(steps_per_contact=spc)
-        t, tof = _best_time(lambda p=p: np.array(
+        t, tof = best_time(lambda p=p: np.array(
             [float(api.tof(E[k], nu[k], p, "hertz")) for k in one]), args.repeat)
         add("verlet_single", spc, t, one.size, one, tof)
     walls = hertz_wall(params, E, nu)
     for rtol in args.batched_rtols:
-        t, r = _best_time(lambda r=rtol: solve_dop853(params, walls, t_end=stop, rtol=r),
+        t, r = best_time(lambda r=rtol: solve_dop853(params, walls, t_end=stop, rtol=r),
                           args.repeat)
         add("dop853_batched", rtol, t, E.size, sub, r.tof[sub], nfev=r.nfev, steps=r.steps)
     for rtol in args.rtols:
-        t, tof = _best_time(lambda r=rtol: np.array(
+        t, tof = best_time(lambda r=rtol: np.array(
             [solve_dop853(params, hertz_wall(params, E[k], nu[k]), t_end=stop[k],
                           rtol=r).tof[0] for k in one]), args.repeat)
         add("dop853_single", rtol, t, one.size, one, tof)

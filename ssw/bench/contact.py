@@ -29,13 +29,13 @@ folder.
 from __future__ import annotations
 
 import argparse
-import time
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ssw import hertz
+from ssw.bench import best_time
 from ssw.h5io import atomic_path, atomic_write_text, to_json
 
 LEVELS = (0.4, 0.3, 0.2, 0.15, 0.1, 0.07)
@@ -71,16 +71,6 @@ def register(kinds: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run, human=human)
 
 
-def _best(fn: Any, repeat: int) -> tuple[float, Any]:
-    """Fastest wall time of ``repeat`` calls and the last result."""
-    best, out = np.inf, None
-    for _ in range(max(1, repeat)):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
-
-
 def reference_lu(repeat: int) -> dict[str, Any]:
     """Seconds of one SuperLU factorization of the 256 x 256 five-point Laplacian."""
     import scipy.sparse as sp
@@ -90,7 +80,7 @@ def reference_lu(repeat: int) -> dict[str, Any]:
     T = sp.diags_array([-1.0, 2.0, -1.0], offsets=[-1, 0, 1], shape=(n, n))
     eye = sp.eye_array(n)
     A = (sp.kron(eye, T) + sp.kron(T, eye)).tocsc()
-    t, _ = _best(lambda: splu(A), repeat)
+    t, _ = best_time(lambda: splu(A), repeat)
     return {"dofs": n * n, "wall": t, "solver": "scipy.sparse.linalg.splu (SuperLU, COLAMD)"}
 
 
@@ -130,10 +120,10 @@ def level(g: float, nu: float, contact: dict[str, Any], radius: float, repeat: i
 
     E = 50e6
     cfg = {**contact, "mesh_growth": g, "mesh_size_contact": 5e-5 * g}
-    t_cold, curve = _best(lambda: _curve((E, nu), None, 0.0, radius, cfg, True), repeat)
+    t_cold, curve = best_time(lambda: _curve((E, nu), None, 0.0, radius, cfg, True), repeat)
     store = OperatorStore(None)
     _curve((E, nu), None, 0.0, radius, cfg, False, store)
-    t_warm, _ = _best(lambda: _curve((E, nu), None, 0.0, radius, cfg, False, store), repeat)
+    t_warm, _ = best_time(lambda: _curve((E, nu), None, 0.0, radius, cfg, False, store), repeat)
     st = curve.stats
     return {
         "growth": g, "dofs": int(st["dofs"]), "elements": int(st["elements"]),
@@ -157,11 +147,11 @@ def goals(cfg: dict[str, Any], radius: float, repeat: int, lu: float, engines: b
     cases.append(("PLA 0.4 mm, nu 0.3", (50e6, 0.3), (pla.E, pla.nu), 0.4e-3))
     rows = []
     for name, soil, plate, t in cases:
-        t_cold, curve = _best(lambda s=soil, p=plate, t=t: _curve(s, p, t, radius, contact,
+        t_cold, curve = best_time(lambda s=soil, p=plate, t=t: _curve(s, p, t, radius, contact,
                                                                   True), repeat)
         store = OperatorStore(None)
         _curve(soil, plate, t, radius, contact, False, store)
-        t_warm, warm = _best(lambda s=soil, p=plate, t=t, st=store: _curve(
+        t_warm, warm = best_time(lambda s=soil, p=plate, t=t, st=store: _curve(
             s, p, t, radius, contact, False, st), repeat)
         row = {"case": name, "cold": t_cold, "warm": t_warm,
                "cold_per_lu": t_cold / lu, "warm_per_lu": t_warm / lu,
@@ -172,7 +162,7 @@ def goals(cfg: dict[str, Any], radius: float, repeat: int, lu: float, engines: b
         if plate is None:
             row["err_hertz"] = _errors(curve, *soil, radius)["err_hertz"]
         if engines:
-            t_mono, mono = _best(lambda s=soil, p=plate, t=t: _curve(
+            t_mono, mono = best_time(lambda s=soil, p=plate, t=t: _curve(
                 s, p, t, radius, contact, True, engine="monolithic"), repeat)
             row["monolithic"] = t_mono
             row["monolithic_per_lu"] = t_mono / lu
@@ -196,13 +186,13 @@ def wall_study(cfg: dict[str, Any], repeat: int) -> dict[str, Any]:
     EE, NN = np.meshgrid(E, nus)
     EE, NN = EE.ravel(), NN.ravel()
     contact = cfg["contact"]
-    t_cold, _ = _best(lambda: fem_wall(params, EE, NN, contact=contact,
+    t_cold, _ = best_time(lambda: fem_wall(params, EE, NN, contact=contact,
                                        operators=OperatorStore(None)), 1)
     store = OperatorStore(None)
     fem_wall(params, EE, NN, contact=contact, operators=store)
-    t_warm, wall = _best(lambda: fem_wall(params, EE, NN, contact=contact, operators=store),
+    t_warm, wall = best_time(lambda: fem_wall(params, EE, NN, contact=contact, operators=store),
                          repeat)
-    t_tof, tof = _best(lambda: api.tof(EE, NN, params, "fem", contact=contact,
+    t_tof, tof = best_time(lambda: api.tof(EE, NN, params, "fem", contact=contact,
                                        operators=store), repeat)
     _, run = api.peaks(EE, NN, params, "fem", contact=contact, operators=store)
     # the same law resampled: 400 uniform cells up to d_exact, linear in F

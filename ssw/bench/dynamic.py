@@ -29,6 +29,7 @@ from typing import Any
 
 import numpy as np
 
+from ssw.bench import best_time
 from ssw.h5io import atomic_write_text, to_json
 
 PARTS = ("punch", "static-limit", "point", "sweep-cost")
@@ -45,15 +46,6 @@ def register(kinds: argparse._SubParsersAction) -> None:
     p.add_argument("--repeat", type=int, default=1, help="timing repeats (best is kept)")
     add_json_flag(p)
     p.set_defaults(func=run, human=human)
-
-
-def _best(fn: Any, repeat: int) -> tuple[float, Any]:
-    best, out = np.inf, None
-    for _ in range(max(1, repeat)):
-        t0 = time.perf_counter()
-        out = fn()
-        best = min(best, time.perf_counter() - t0)
-    return best, out
 
 
 def punch_part(out: Path) -> dict[str, Any]:
@@ -163,11 +155,11 @@ def sweep_cost_part(repeat: int) -> dict[str, Any]:
     nu = np.tile([0.1, 0.3, 0.5], E.size // 3)
     qs = build_wall("hertz", p, E, nu)
     dt = time_step(p, qs)
-    t_chain, run = _best(lambda: chain_simulate(p, qs, dt=dt), repeat)
+    t_chain, run = best_time(lambda: chain_simulate(p, qs, dt=dt), repeat)
     t_end = float(np.nanmax(run.stop_time))
-    t_qs, _ = _best(lambda: simulate(p, QuasiStatic(qs), t_end=t_end, dt=dt), repeat)
+    t_qs, _ = best_time(lambda: simulate(p, QuasiStatic(qs), t_end=t_end, dt=dt), repeat)
     rw = reduced_wall(qs, E, nu, 2000.0, plate_areal_density=plate_areal_density(p))
-    t_red, _ = _best(lambda: simulate(p, rw, t_end=t_end, dt=dt), repeat)
+    t_red, _ = best_time(lambda: simulate(p, rw, t_end=t_end, dt=dt), repeat)
     return {"points": int(E.size), "t_end": t_end, "wall_chain_stage_quasi_static": t_chain,
             "wall_quasi_static": t_qs, "wall_reduced": t_red, "ratio": t_red / t_qs}
 

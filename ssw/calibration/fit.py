@@ -310,7 +310,8 @@ def _lm_batch(model: TofModel, T: np.ndarray, s: np.ndarray,
             if ct < cost[i]:
                 # Nielsen (1999): shrink the damping by the gain ratio rho of actual to
                 # predicted decrease (Madsen, Nielsen & Tingleff 2004, eq. 2.21)
-                rho = (cost[i] - ct) / max(predicted[i], 1e-300)
+                # (rho >= 1 gives the smallest factor, 1/3: capped, no overflow of rho^3)
+                rho = min((cost[i] - ct) / max(predicted[i], 1e-300), 1.0)
                 small = (cost[i] - ct) <= LM_FTOL
                 x[i], r[i], J[i], cost[i] = trial[i], rt[i], Jt[i], ct
                 lam[i] = max(lam[i] * max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3), 1e-12)
@@ -502,7 +503,7 @@ def refine_subsets(model: TofModel, T: np.ndarray, s: np.ndarray, start: np.ndar
             its[key] += 1
             gain = cur[key][2] - res[2]
             if gain > 0:  # accepted (Madsen, Nielsen & Tingleff 2004, eq. 2.21)
-                rho = gain / max(predicted[key], 1e-300)
+                rho = min(gain / max(predicted[key], 1e-300), 1.0)
                 x[key], cur[key] = trial[key], res
                 lam[key] = max(lam[key] * max(1 / 3, 1 - (2 * rho - 1) ** 3), 1e-12)
                 nu_up[key] = 2.0

@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from ssw.chain.params import ChainParams
-from ssw.errors import ConfigError, SolverError
+from ssw.errors import SolverError
 
 #: Energy the law's range must hold, as a multiple of the striker's kinetic energy (module
 #: docstring): 4 = twice the nominal striker speed.
@@ -141,16 +141,6 @@ class PiecewiseLinearWall:
         return self.force(np.full(self.n, d_ref)) / d_ref**1.5
 
 
-def _scenes(soil_E: Any, soil_nu: Any) -> tuple[np.ndarray, np.ndarray]:
-    E, nu = np.broadcast_arrays(np.asarray(soil_E, float), np.asarray(soil_nu, float))
-    E, nu = E.ravel(), nu.ravel()
-    if np.any(~(E > 0)):
-        raise ConfigError("soil_E", E[~(E > 0)].tolist(), "moduli > 0 Pa")
-    if np.any((nu <= -1) | (nu > 0.5)):
-        raise ConfigError("soil_nu", nu.tolist(), "Poisson's ratios in (-1, 0.5]")
-    return E, nu
-
-
 def chain_energy(params: ChainParams) -> tuple[float, float]:
     """``(W0, Wg)``: the striker's kinetic energy ``1/2 m_s v^2`` (J) and the static load
     ``M g + P`` (N) on the wall's indentation (``M`` the chain's mass with gravity on, ``P``
@@ -213,13 +203,13 @@ def fem_wall(
     contact : the ``contact`` settings (mesh, zone); defaults :data:`ssw.contact.DEFAULTS`.
     operators : an :class:`ssw.contact.operators.OperatorStore` (default: the process's).
     """
-    from ssw.chain.walls import compliance_scale
+    from ssw.chain.walls import compliance_scale, scene_arrays
     from ssw.contact.operators import default_store, geometry_of, scene_lcp
     from ssw.contact.parametric import Tracer, prefix_path
     from ssw.contact.scene import settings_of
     from ssw.hertz import effective_modulus, hertz_coefficient
 
-    E, nu = _scenes(soil_E, soil_nu)
+    E, nu = scene_arrays(soil_E, soil_nu)
     cfg = settings_of({**(contact or {}), "interface": params.plate_interface})
     store = operators if operators is not None else default_store()
     R = float(params.bead_radius)

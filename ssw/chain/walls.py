@@ -177,7 +177,9 @@ def compliance_scale(params: ChainParams, soil_E: np.ndarray, soil_nu: np.ndarra
     return (1.0 + params.bead_compliance / c_w) ** (2.0 / 3.0)
 
 
-def _scenes(soil_E: Any, soil_nu: Any) -> tuple[np.ndarray, np.ndarray]:
+def scene_arrays(soil_E: Any, soil_nu: Any) -> tuple[np.ndarray, np.ndarray]:
+    """Soil moduli (Pa) and Poisson's ratios broadcast together and flattened, one per
+    scene; ConfigError for E <= 0 or nu outside (-1, 0.5]."""
     E, nu = np.broadcast_arrays(np.asarray(soil_E, float), np.asarray(soil_nu, float))
     E, nu = E.ravel(), nu.ravel()
     if np.any(~(E > 0)):
@@ -189,14 +191,14 @@ def _scenes(soil_E: Any, soil_nu: Any) -> tuple[np.ndarray, np.ndarray]:
 
 def rigid_wall(params: ChainParams, soil_E: Any, soil_nu: Any) -> PowerWall:
     """Rigid flat: ``F = 4/3 sqrt(R) E_b/(1-nu_b^2) d^1.5`` (soil values only set the count)."""
-    E, _ = _scenes(soil_E, soil_nu)
+    E, _ = scene_arrays(soil_E, soil_nu)
     coef = 4.0 / 3.0 * np.sqrt(params.bead_radius) / params.bead_compliance
     return PowerWall(np.full(E.size, coef), np.full(E.size, 1.5))
 
 
 def hertz_wall(params: ChainParams, soil_E: Any, soil_nu: Any) -> PowerWall:
     """Elastic half-space: ``F = A_w d^1.5``."""
-    E, nu = _scenes(soil_E, soil_nu)
+    E, nu = scene_arrays(soil_E, soil_nu)
     return PowerWall(params.wall_coefficient(E, nu), np.full(E.size, 1.5))
 
 
@@ -215,7 +217,7 @@ def fit_wall(
     N/m^n and -) or ``k_table`` (a path or an object with ``.K(E, nu)`` and
     ``.power(E, nu)``, e.g. ``ssw.fit.table.KTable``; ``params.fit_law`` picks the law).
     """
-    E, nu = _scenes(soil_E, soil_nu)
+    E, nu = scene_arrays(soil_E, soil_nu)
     given = [x is not None for x in (K, power, k_table)]
     if sum(given) != 1:
         raise ConfigError(
@@ -279,7 +281,7 @@ def table_wall(
 ) -> TableWall:
     """The FEM curve(s) themselves: ``curve`` is one curve/path for every scene or a
     sequence with one per scene (:class:`ssw.curve.ForceCurve` or HDF5 path)."""
-    E, nu = _scenes(soil_E, soil_nu)
+    E, nu = scene_arrays(soil_E, soil_nu)
     if curve is None:
         raise ConfigError("curve", None, "a contact curve (ForceCurve or results/contact/*.h5)")
     curves = list(curve) if isinstance(curve, Sequence) and not isinstance(curve, str) else [
@@ -359,7 +361,7 @@ def build_wall(name: str, params: ChainParams, soil_E: Any, soil_nu: Any, **opti
     if dynamics != "quasi-static":
         from ssw.dynamics.registry import with_dynamics
 
-        E, nu = _scenes(soil_E, soil_nu)
+        E, nu = scene_arrays(soil_E, soil_nu)
         rho = None if density is None else np.broadcast_to(
             np.asarray(density, float).ravel() if np.ndim(density) else float(density),
             E.shape)

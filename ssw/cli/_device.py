@@ -7,7 +7,8 @@ for the same inputs):
 
 1. the config: ``--config`` or ``config/config.yaml`` of the working folder, else the
    defaults shipped with ssw;
-2. the calibration: ``--calibration FILE``; by default (``auto``) the study's
+2. the calibration: ``--calibration FILE``; by default (``auto``, or the environment's
+   ``SSW_CALIBRATION``: a file, ``auto`` or ``none``) the study's
    ``results/calibration/calibration.json`` when the config's ``calibration.use`` is true
    and that file exists in the working folder; ``none`` for the uncalibrated device;
 3. the device: the calibration's (calibrated) device, else ``--device`` (a YAML file or a
@@ -22,6 +23,7 @@ for the same inputs):
 from __future__ import annotations
 
 import argparse
+import os
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -32,6 +34,8 @@ from ssw.errors import ConfigError
 
 DEFAULT_K_TABLE = "results/fit/k_table.h5"
 DEFAULT_CONTACT_DIR = "results/contact"
+#: Environment variable giving the default of ``--calibration`` (a file, auto or none).
+CALIBRATION_ENV = "SSW_CALIBRATION"
 #: The study's calibration file (rule calibration), relative to the working folder.
 STUDY_CALIBRATION = "results/calibration/calibration.json"
 WALL_CHOICES = ("rigid", "hertz", "fit", "table", "fem")
@@ -55,9 +59,11 @@ def add_device_options(p: argparse.ArgumentParser,
                    "working folder if any, else ssw's defaults)")
     g.add_argument("--device", help="device YAML file or shipped device name (default: the "
                    "config's device, thesis)")
-    g.add_argument("--calibration", default="auto", metavar="FILE|auto|none",
-                   help="calibration file of `ssw calibrate` (default auto: the study's "
-                   f"{STUDY_CALIBRATION} when present and the config's calibration.use)")
+    g.add_argument("--calibration", default=os.environ.get(CALIBRATION_ENV) or "auto",
+                   metavar="FILE|auto|none",
+                   help=f"calibration file of `ssw calibrate` (default ${CALIBRATION_ENV}, "
+                   f"else auto: the study's {STUDY_CALIBRATION} when present and the "
+                   "config's calibration.use)")
     d = p.add_argument_group("device fields (override the device's)")
     d.add_argument("--beads", type=int, help="beads including the striker (bead 0); keeps "
                    "the beads below the sensor unless --sensor-index is given")

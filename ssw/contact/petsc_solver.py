@@ -78,6 +78,51 @@ def nd_order(rows: np.ndarray, cols: np.ndarray, n: int) -> np.ndarray:
     return perm
 
 
+def dense_solve(PETSc, ksp, n: int, rhs: np.ndarray) -> np.ndarray:
+    """``X`` with ``A X = rhs`` for a factored sequential ``ksp``, ``rhs`` dense (n, k), in
+    one ``KSPMatSolve``. Raises SolverError when PETSc fails (the caller checks the KSP's
+    converged reason)."""
+    k = rhs.shape[1]
+    if k == 0:
+        return np.zeros((n, 0))
+    b = PETSc.Mat().createDense((n, k), array=np.asfortranarray(rhs), comm=PETSc.COMM_SELF)
+    x = PETSc.Mat().createDense((n, k), comm=PETSc.COMM_SELF)
+    x.setUp()
+    try:
+        ksp.matSolve(b, x)
+    except PETSc.Error as exc:
+        raise SolverError(f"PETSc solve failed: {exc}") from exc
+    finally:
+        b.destroy()
+    out = x.getDenseArray().copy()
+    x.destroy()
+    return out
+
+
+def backward_error(coo: tuple[np.ndarray, np.ndarray, np.ndarray], n: int, X: np.ndarray,
+                   rhs: np.ndarray) -> float:
+    """``||A X - B||_inf / (||A||_inf ||X||_inf + ||B||_inf)`` (Higham 2002, ch. 7) of a
+    solve of ``A X = B``, ``A`` given as COO triplets (duplicates summed)."""
+    import scipy.sparse as sp
+
+    rows, cols, vals = coo
+    A = sp.csr_array((vals, (rows, cols)), shape=(n, n))
+    X2, B2 = X.reshape(n, -1), rhs.reshape(n, -1)
+    r = A @ X2 - B2
+    norm_a = float(np.max(np.abs(A).sum(axis=1)))
+    denom = norm_a * float(np.max(np.abs(X2))) + float(np.max(np.abs(B2)))
+    return float(np.max(np.abs(r)) / denom) if denom > 0 else 0.0
+
+
+def check_backward_error(value: float, what: str) -> None:
+    """SolverError when a factorization's backward error exceeds
+    :data:`BACKWARD_ERROR_TOL`."""
+    if not value <= BACKWARD_ERROR_TOL:
+        raise SolverError(
+            f"the LU factorization (natural order, no pivoting) of {what} is unstable: "
+            f"backward error {value:.3g} > {BACKWARD_ERROR_TOL:g}")
+
+
 class LUSolver:
     """LU factors of ``scale * A``, ``A`` a sparse matrix given as COO triplets (duplicates
     are summed).
@@ -152,18 +197,8 @@ class LUSolver:
 
     def _check_backward_error(self, rhs: np.ndarray, X: np.ndarray) -> None:
         """Measure the first solve's backward error (module docstring); SolverError if large."""
-        import scipy.sparse as sp
-
-        rows, cols, vals = self._coo
-        A = sp.csr_array((vals, (rows, cols)), shape=(self.n, self.n))
-        r = A @ X - rhs
-        norm_a = float(np.max(np.abs(A).sum(axis=1)))
-        denom = norm_a * float(np.max(np.abs(X))) + float(np.max(np.abs(rhs)))
-        self.backward_error = float(np.max(np.abs(r)) / denom) if denom > 0 else 0.0
-        if not self.backward_error <= BACKWARD_ERROR_TOL:
-            raise SolverError(
-                f"the LU factorization (natural order, no pivoting) of the u-p matrix is "
-                f"unstable: backward error {self.backward_error:.3g} > {BACKWARD_ERROR_TOL:g}")
+        self.backward_error = backward_error(self._coo, self.n, X, rhs)
+        check_backward_error(self.backward_error, "the u-p matrix")
 
     def _solve_vec(self) -> None:
         PETSc = self.PETSc
@@ -174,19 +209,8 @@ class LUSolver:
         self._check()
 
     def _solve_dense(self, rhs: np.ndarray) -> np.ndarray:
-        PETSc = self.PETSc
-        k = rhs.shape[1]
-        b = PETSc.Mat().createDense((self.n, k), array=np.asfortranarray(rhs), comm=PETSc.COMM_SELF)
-        x = PETSc.Mat().createDense((self.n, k), comm=PETSc.COMM_SELF)
-        x.setUp()
-        try:
-            self.ksp.matSolve(b, x)
-        except PETSc.Error as exc:
-            raise SolverError(f"PETSc solve failed: {exc}") from exc
+        out = dense_solve(self.PETSc, self.ksp, self.n, rhs)
         self._check()
-        out = x.getDenseArray().copy()
-        b.destroy()
-        x.destroy()
         return out
 
     def _check(self) -> None:

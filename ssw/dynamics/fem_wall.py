@@ -36,10 +36,10 @@ from typing import Any
 import numpy as np
 
 from ssw.contact.mesh import Mesh, build_mesh
+from ssw.contact.petsc_solver import nd_order
 from ssw.dynamics.bead import bead_compliance
 from ssw.dynamics.domain import DomainSpec, mesh_settings
 from ssw.dynamics.lcp import ActiveSetLCP
-from ssw.dynamics.lu import nd_order
 from ssw.dynamics.newmark import Newmark, State, Static
 from ssw.dynamics.system import DynamicSystem, Material, assemble_dynamic, without_mass
 from ssw.errors import ConfigError, SolverError

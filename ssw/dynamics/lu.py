@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import numpy as np
 
+from ssw.contact.petsc_solver import backward_error, check_backward_error, dense_solve
 from ssw.errors import SolverError
 
 #: Options prefix of the dynamic solver's KSP (users may add PETSc options under it).
@@ -31,19 +32,6 @@ def petsc():
     from petsc4py import PETSc
 
     return PETSc
-
-
-def nd_order(rows: np.ndarray, cols: np.ndarray, n: int) -> np.ndarray:
-    """Nested-dissection permutation (new position -> node) of a graph given as COO."""
-    PETSc = petsc()
-    g = PETSc.Mat().createAIJ((n, n), comm=PETSc.COMM_SELF)
-    g.setPreallocationCOO(rows.astype(PETSc.IntType), cols.astype(PETSc.IntType))
-    g.setValuesCOO(np.ones(len(rows)), addv=PETSc.InsertMode.INSERT_VALUES)
-    g.assemble()
-    rperm, _ = g.getOrdering("nd")
-    perm = rperm.getIndices().copy()
-    g.destroy()
-    return perm
 
 
 class LU:
@@ -77,6 +65,10 @@ class LU:
         except PETSc.Error as exc:
             raise SolverError(f"PETSc LU factorization failed: {exc}") from exc
         self.mat, self.ksp = a, ksp
+        self._coo = (rows, cols, vals)
+        #: backward error of the first solve (the factorization is pivot-free on an
+        #: indefinite matrix: checked once, as in ssw.contact.petsc_solver)
+        self.backward_error: float | None = None
         self._b = np.zeros(n)
         self._x = np.zeros(n)
         self._vb = PETSc.Vec().createWithArray(self._b, comm=PETSc.COMM_SELF)
@@ -92,26 +84,17 @@ class LU:
             except self.PETSc.Error as exc:
                 raise SolverError(f"PETSc solve failed: {exc}") from exc
             self._check()
-            return self._x.copy()
-        return self._solve_block(rhs / self.scale)
+            out = self._x.copy()
+        else:
+            out = self._solve_block(rhs / self.scale)
+        if self.backward_error is None and rhs.size and np.any(rhs):
+            self.backward_error = backward_error(self._coo, self.n, out, rhs / self.scale)
+            check_backward_error(self.backward_error, "the dynamic u-p matrix")
+        return out
 
     def _solve_block(self, rhs: np.ndarray) -> np.ndarray:
-        PETSc = self.PETSc
-        k = rhs.shape[1]
-        if k == 0:
-            return np.zeros((self.n, 0))
-        b = PETSc.Mat().createDense((self.n, k), array=np.asfortranarray(rhs),
-                                    comm=PETSc.COMM_SELF)
-        x = PETSc.Mat().createDense((self.n, k), comm=PETSc.COMM_SELF)
-        x.setUp()
-        try:
-            self.ksp.matSolve(b, x)
-        except PETSc.Error as exc:
-            raise SolverError(f"PETSc solve failed: {exc}") from exc
+        out = dense_solve(self.PETSc, self.ksp, self.n, rhs)
         self._check()
-        out = x.getDenseArray().copy()
-        b.destroy()
-        x.destroy()
         return out
 
     def _check(self) -> None:

@@ -52,9 +52,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from ssw.contact.mesh import build_mesh
+from ssw.contact.petsc_solver import nd_order
 from ssw.dynamics.domain import DomainSpec, mesh_settings
 from ssw.dynamics.fem_wall import top_candidates
-from ssw.dynamics.lu import nd_order
 from ssw.dynamics.newmark import Newmark, State, Static
 from ssw.dynamics.system import Material, assemble_dynamic
 from ssw.errors import ConfigError

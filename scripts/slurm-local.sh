@@ -71,7 +71,10 @@ install_packages() {
 write_conf() {
     local node cpus mem
     node=$(node_name)
-    cpus=$(nproc)
+    # the CPUs this host gives processes; not OMP_NUM_THREADS / OMP_THREAD_LIMIT, which GNU
+    # nproc honours (the test suite sets OMP_NUM_THREADS=1: a 1-CPU node would leave every
+    # 2-rank MPI job pending)
+    cpus=$(env -u OMP_NUM_THREADS -u OMP_THREAD_LIMIT nproc)
     # RealMemory (MiB): 90 % of the total, leaving room for the daemons and the OS. From
     # /proc/meminfo (kB): `free` is procps, which a minimal Debian image does not have.
     mem=$(awk '/^MemTotal:/ {printf "%d", $2 / 1024 * 0.9}' /proc/meminfo)

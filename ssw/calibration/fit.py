@@ -422,7 +422,9 @@ class SubsetFit:
 
 def refine_subsets(model: TofModel, T: np.ndarray, s: np.ndarray, start: np.ndarray,
                    subsets: list[tuple[int, ...]], ranges: dict[str, tuple[float, float]],
-                   iterations: int = 16) -> dict[tuple[int, ...], SubsetFit]:
+                   iterations: int = 16,
+                   at_start: tuple[np.ndarray, np.ndarray] | None = None,
+                   ) -> dict[tuple[int, ...], SubsetFit]:
     """Fits of subsets of the references, from ``start`` (the full calibration, SI): the
     subset's least squares within the directions it identifies AT ``start`` (right singular
     vectors of its weighted Jacobian there with singular values >= :data:`IDENTIFIED_MIN`;
@@ -433,7 +435,10 @@ def refine_subsets(model: TofModel, T: np.ndarray, s: np.ndarray, start: np.ndar
     valley. Levenberg-Marquardt in the identified coordinates (Nielsen's damping update, as
     in the main fit: a near-singular Jacobian along a curved valley cannot throw a step
     across the range), a step that raises chi^2 rejected, the best point returned; all
-    subsets advance together, one batched run (central differences) per iteration."""
+    subsets advance together, one batched run (central differences) per iteration.
+    ``at_start``: the model's TOFs (s, every reference) and their central-difference
+    Jacobian (s per scaled unit, ``model.continuous`` columns) at ``start`` when already
+    computed (:func:`_uncertainty`), so that they are not computed again."""
     cont = model.continuous
     idx = [model.free.index(n) for n in cont]
     p = len(cont)
@@ -462,14 +467,19 @@ def refine_subsets(model: TofModel, T: np.ndarray, s: np.ndarray, start: np.ndar
             blk = tof[k * (1 + 2 * p):(k + 1) * (1 + 2 * p)]
             Jx = np.stack([(blk[1 + 2 * j] - blk[2 + 2 * j]) / (2 * FD_STEP)
                            for j in range(p)], axis=1)  # (n_refs, p), s per scaled unit
-            sub = np.asarray(key)
-            r = (blk[0][sub] - T[sub]) / s[sub]
-            ok = np.all(np.isfinite(r)) and np.all(np.isfinite(Jx))
-            out[key] = (r, Jx[sub] / s[sub, None], float(r @ r) if ok else np.inf)
+            out[key] = weigh(key, blk[0], Jx)
         return out
 
+    def weigh(key: tuple[int, ...], f0: np.ndarray, Jx: np.ndarray
+              ) -> tuple[np.ndarray, np.ndarray, float]:
+        sub = np.asarray(key)
+        r = (f0[sub] - T[sub]) / s[sub]
+        ok = np.all(np.isfinite(r)) and np.all(np.isfinite(Jx[sub]))
+        return r, Jx[sub] / s[sub, None], float(r @ r) if ok else np.inf
+
     x = {key: x0.copy() for key in subsets}
-    cur = evaluate(x)
+    cur = (evaluate(x) if at_start is None
+           else {key: weigh(key, *at_start) for key in subsets})
     basis, lam, nu_up, done, its = {}, {}, {}, {}, {}
     for key in subsets:
         _, sv, Vt = np.linalg.svd(cur[key][1], full_matrices=False)
@@ -557,8 +567,11 @@ def identify(
     sols = _lm_batch(model, T, s, problems, rng)
     best, others = _pick(sols, to_x(nominal, model.free), model)
     fit = _uncertainty(model, refs, T, s, known, best, others, rng, grid.shape[0])
-    subs = refine_subsets(model, T, s, best.theta, list(subsets or []), rng) if subsets \
-        else {}
+    if not subsets:
+        return fit, {}
+    D = dtheta_dx(fit.theta[[model.free.index(n) for n in cont]], cont)
+    subs = refine_subsets(model, T, s, best.theta, list(subsets), rng,
+                          at_start=(fit.tof_model, fit.jacobian * D[None, :]))
     return fit, subs
 
 

@@ -133,8 +133,6 @@ class TofModel:
     def fix_time_step(self, ranges: dict[str, tuple[float, float]]) -> float:
         """Fix the time step of every run: the integrator's step for the fastest and
         lightest striker of ``ranges`` (SI) on the stiffest reference wall."""
-        from ssw.chain.integrate import time_step
-
         vals = {}
         for n in self.continuous:
             lo, hi = ranges[n]
@@ -143,9 +141,15 @@ class TofModel:
         self._extremes = {n: ranges[n][1] for n in self.continuous
                           if n in ("striker_velocity", "preload", "striker_mass")}
         self._walls = None
-        ints = {n: ranges[n][1] for n in self.integers}
-        base = self.params_for(ints)
-        b = Batch.of(base, self.n_refs, {k: np.full(self.n_refs, v) for k, v in vals.items()})
+        return self._set_time_step(vals, {n: ranges[n][1] for n in self.integers})
+
+    def _set_time_step(self, vals: dict[str, float], ints: dict[str, float]) -> float:
+        """The integrator's step (s) for the device with the integer values ``ints`` and the
+        continuous ``vals`` on every reference wall, kept for every later run."""
+        from ssw.chain.integrate import time_step
+
+        b = Batch.of(self.params_for(ints), self.n_refs,
+                     {k: np.full(self.n_refs, v) for k, v in vals.items()})
         self.dt = float(time_step(b, self.walls()))
         return self.dt
 
@@ -155,8 +159,6 @@ class TofModel:
         ``free`` order): the step of ``margin`` times their fastest striker (capped at the
         scan's range), instead of the scan's fastest. One step for every later run, so the
         least squares compare TOFs of one discretization (module docstring)."""
-        from ssw.chain.integrate import time_step
-
         th = np.atleast_2d(np.asarray(theta, float))
         vals = {}
         if "striker_velocity" in self.continuous:
@@ -167,10 +169,7 @@ class TofModel:
             if n in self.continuous:
                 vals[n] = float(np.min(th[:, self.free.index(n)]))
         ints = {n: float(np.max(th[:, self.free.index(n)])) for n in self.integers}
-        base = self.params_for(ints)
-        b = Batch.of(base, self.n_refs, {k: np.full(self.n_refs, v) for k, v in vals.items()})
-        self.dt = float(time_step(b, self.walls()))
-        return self.dt
+        return self._set_time_step(vals, ints)
 
     def __call__(self, theta: np.ndarray, refs: np.ndarray | None = None) -> np.ndarray:
         """TOF (s), shape (m, n_refs): rows of ``theta`` (m, len(free)) in SI units, columns

@@ -16,8 +16,6 @@ masses) or a plain :class:`ssw.chain.params.ChainParams` (the same values for ev
 
 from __future__ import annotations
 
-from typing import Any
-
 import numpy as np
 
 from ssw.chain.params import Batch, ChainParams
@@ -79,8 +77,3 @@ def kinetic_energy(params: ChainParams | Batch, v: np.ndarray) -> np.ndarray:
     """``sum m v^2 / 2`` (J) per scene."""
     b = _batch(params, v.shape[0])
     return 0.5 * np.sum(v**2 * b.masses, axis=1)
-
-
-def batch_of(params: ChainParams, n: int, vary: dict[str, Any] | None = None) -> Batch:
-    """:meth:`Batch.of`, re-exported for the integrator's callers."""
-    return Batch.of(params, n, vary)

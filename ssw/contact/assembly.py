@@ -194,7 +194,7 @@ def pressure_scale(nodes: np.ndarray, tri: np.ndarray, G: np.ndarray) -> np.ndar
 
 def assemble(
     mesh: Mesh, E: tuple[float, float], nu: tuple[float, float], interface: str,
-    order_nodes,
+    order_nodes, fixed_faces: float = 1.0,
 ) -> System:
     """Assemble the mixed u-p stiffness of soil (body 0) and plate (body 1).
 
@@ -204,12 +204,16 @@ def assemble(
     E, nu : (soil, plate) Young's moduli (Pa) and Poisson's ratios.
     interface : ``bonded`` | ``frictionless`` | ``unilateral``.
     order_nodes : callable ``(rows, cols, n) -> permutation`` (nested dissection).
+    fixed_faces : where the rollers and the fixed bottom lie, as a multiple of the mesh's
+        soil radius and depth (1: on its faces; 2: beyond them, a free truncation boundary
+        as the dynamic wall's absorbing one).
     """
     nodes, tri, pairs = split_interface(mesh)
     n = len(nodes)
     order = elimination_order(tri, pairs, n, order_nodes)
     udof, pdof, ndof = number_dofs(
-        nodes, tri, pairs, interface, order, mesh.soil_radius, mesh.soil_depth
+        nodes, tri, pairs, interface, order, fixed_faces * mesh.soil_radius,
+        fixed_faces * mesh.soil_depth
     )
     body = mesh.body.astype(np.int64)
     G, inv_K = lame(np.asarray(E)[body], np.asarray(nu)[body])

@@ -114,6 +114,14 @@ def backward_error(coo: tuple[np.ndarray, np.ndarray, np.ndarray], n: int, X: np
     return float(np.max(np.abs(r)) / denom) if denom > 0 else 0.0
 
 
+def check_converged(ksp, what: str) -> None:
+    """SolverError when the last solve of a factored ``ksp`` diverged (a zero pivot)."""
+    reason = ksp.getConvergedReason()
+    if reason < 0:
+        raise SolverError(f"PETSc KSP diverged (KSPConvergedReason {reason}); the LU "
+                          f"factorization of {what} failed (zero pivot?)")
+
+
 def check_backward_error(value: float, what: str) -> None:
     """SolverError when a factorization's backward error exceeds
     :data:`BACKWARD_ERROR_TOL`."""
@@ -214,12 +222,7 @@ class LUSolver:
         return out
 
     def _check(self) -> None:
-        reason = self.ksp.getConvergedReason()
-        if reason < 0:
-            raise SolverError(
-                f"PETSc KSP diverged (KSPConvergedReason {reason}); the LU factorization "
-                "of the u-p matrix failed (zero pivot?)"
-            )
+        check_converged(self.ksp, "the u-p matrix")
 
     def matvec(self, x: np.ndarray) -> np.ndarray:
         """``scale A x`` for a global vector ``x`` (n,); every rank gets the whole result."""

@@ -17,7 +17,12 @@ from __future__ import annotations
 
 import numpy as np
 
-from ssw.contact.petsc_solver import backward_error, check_backward_error, dense_solve
+from ssw.contact.petsc_solver import (
+    backward_error,
+    check_backward_error,
+    check_converged,
+    dense_solve,
+)
 from ssw.errors import SolverError
 
 #: Options prefix of the dynamic solver's KSP (users may add PETSc options under it).
@@ -98,10 +103,7 @@ class LU:
         return out
 
     def _check(self) -> None:
-        reason = self.ksp.getConvergedReason()
-        if reason < 0:
-            raise SolverError(f"PETSc KSP diverged (KSPConvergedReason {reason}): the LU "
-                              "factorization of the dynamic u-p matrix failed (zero pivot?)")
+        check_converged(self.ksp, "the dynamic u-p matrix")
 
     def destroy(self) -> None:
         """Free the PETSc objects."""

@@ -45,16 +45,8 @@ from typing import Any
 
 import numpy as np
 
-from ssw.contact.assembly import (
-    System,
-    element_sizes,
-    elimination_order,
-    number_dofs,
-    pow2,
-    pressure_scale,
-    split_interface,
-)
-from ssw.contact.elements import element_matrices, lame, p2_shape
+from ssw.contact.assembly import System, assemble
+from ssw.contact.elements import p2_shape
 from ssw.contact.mesh import Mesh
 from ssw.errors import ConfigError
 
@@ -281,28 +273,12 @@ def assemble_dynamic(
     if interface not in ("bonded", "frictionless"):
         raise ConfigError("plate.interface", interface,
                           "bonded | frictionless for the dynamic wall")
-    nodes, tri, pairs = split_interface(mesh)
-    n = len(nodes)
-    order = elimination_order(tri, pairs, n, order_nodes)
-    # a free truncation boundary: number the dofs as if the fixed faces lay twice as far
-    far = 1.0 if boundary == "fixed" else 2.0
-    udof, pdof, ndof = number_dofs(nodes, tri, pairs, interface, order,
-                                   far * mesh.soil_radius, far * mesh.soil_depth)
-    body = mesh.body.astype(np.int64)
     pl = plate if plate is not None else soil
-    E = np.array([soil.E, pl.E])[body]
-    nu = np.array([soil.nu, pl.nu])[body]
-    rho = np.array([soil.density, pl.density])[body]
-    G, inv_K = lame(E, nu)
-    ke = element_matrices(nodes[tri], G, inv_K, pressure_scale(nodes, tri, G))
-    scale = float(pow2(np.min(G) * np.min(element_sizes(nodes, tri))))
-    edof = np.concatenate([udof[tri, 0], udof[tri, 1], pdof[tri[:, :3]]], axis=1)
-    rows = np.repeat(edof, 15, axis=1).ravel()
-    cols = np.tile(edof, (1, 15)).ravel()
-    vals = ke.ravel() / scale
-    keep = (rows >= 0) & (cols >= 0)
-    static = System(rows[keep], cols[keep], vals[keep], ndof, udof, pdof, nodes, tri, body,
-                    pairs, scale)
+    # a free truncation boundary: number the dofs as if the fixed faces lay twice as far
+    static = assemble(mesh, (soil.E, pl.E), (soil.nu, pl.nu), interface, order_nodes,
+                      fixed_faces=1.0 if boundary == "fixed" else 2.0)
+    nodes, tri, udof, ndof = static.nodes, static.tri, static.udof, static.ndof
+    rho = np.array([soil.density, pl.density])[static.body]
 
     from scipy.sparse import coo_matrix
 

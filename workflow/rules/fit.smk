@@ -40,19 +40,19 @@ def fit_set_outputs(set_name):
     return out
 
 
+def contact_figure(set_name):
+    """The set's contact figure (thesis Figs 5, 6: contact.smk's CONTACT_FIGURES), or None."""
+    spec = CONTACT_FIGURES.get(set_name)
+    return f"{RESULTS}/contact/figures/{spec[0]}.png" if spec else None
+
+
 def contact_figure_flags(set_name):
-    """`ssw fit-set` flags that also draw the set's contact figure (contact.smk's table)."""
-    if set_name not in CONTACT_FIGURE_JOBS_BY_SET:
+    """`ssw fit-set` flags that also draw the set's contact figure."""
+    if set_name not in CONTACT_FIGURES:
         return ""
-    name, label_by, title = CONTACT_FIGURE_JOBS_BY_SET[set_name]
-    return (f"--contact-figure {RESULTS}/contact/figures/{name}.png --label-by {label_by} "
+    _, label_by, title = CONTACT_FIGURES[set_name]
+    return (f"--contact-figure {contact_figure(set_name)} --label-by {label_by} "
             f"--title '{title}'")
-
-
-# set -> (figure name, --label-by, title) of the contact figures (thesis Figs 5, 6)
-CONTACT_FIGURE_JOBS_BY_SET = {
-    set_name: spec for set_name, spec in CONTACT_FIGURES.items() if set_name in config["sets"]
-}
 
 
 for _set in config["sets"]:
@@ -70,15 +70,18 @@ for _set in config["sets"]:
                 else f
                 for f in fit_set_outputs(_set)
             ]
-            + [
-                report(
-                    f"{RESULTS}/contact/figures/{CONTACT_FIGURE_JOBS_BY_SET[_set][0]}.png",
-                    caption="../report/contact_figure.rst",
-                    category="1. Contact (Stage I)",
-                    subcategory="Figures",
-                )
-                for _ in range(_set in CONTACT_FIGURE_JOBS_BY_SET)
-            ],
+            + (
+                [
+                    report(
+                        contact_figure(_set),
+                        caption="../report/contact_figure.rst",
+                        category="1. Contact (Stage I)",
+                        subcategory="Figures",
+                    )
+                ]
+                if contact_figure(_set)
+                else []
+            ),
         log:
             f"{LOGS}/fit/{_set}.log",
         # on a cluster, the fits join the cheap figure jobs in one submission (the slurm
@@ -101,5 +104,5 @@ for _set in config["sets"]:
 
 
 FIT_TARGETS = [f for s in config["sets"] for f in fit_set_outputs(s)] + [
-    f"{RESULTS}/contact/figures/{spec[0]}.png" for spec in CONTACT_FIGURE_JOBS_BY_SET.values()
+    f for s in config["sets"] if (f := contact_figure(s))
 ]

@@ -233,24 +233,58 @@ def check_config(cfg: dict[str, Any]) -> None:
                               "[lo, hi] with -1 < lo <= hi <= 0.5")
 
 
+def _lossless(x: float, scale: float, formats: tuple[str, ...] = ("g",)) -> str:
+    """Text of ``x`` in units of ``scale`` (a power of ten: 1e6 for MPa, 1e-6 for um) that
+    reads back to ``x`` exactly: the first of ``formats`` that does, else the shortest
+    round-trip text of the scaled value, else ``x`` itself in base units followed by ``!``
+    (so that it cannot be read as scaled)."""
+    x = float(x)
+    inverse = scale < 1.0
+    k = float(round(1.0 / scale)) if inverse else float(scale)
+    shown = x * k if inverse else x / k
+
+    def back(text: str) -> float:
+        return float(text) / k if inverse else float(text) * k
+
+    for text in (*(format(shown, f) for f in formats), repr(shown)):
+        if back(text) == x:
+            return text
+    return f"{x!r}!"
+
+
 @dataclass(frozen=True)
 class Scene:
-    """One contact scene: a plate (or none) on a soil, indented by the rigid sphere. SI."""
+    """One contact scene: a plate (or none) on a soil, indented by the rigid sphere. SI.
+
+    ``sample`` (the soil's geometry: a finite block, a layer on a base; None: the default
+    half-space) and ``soil_model`` (the soil's constitutive law beyond elasticity; None:
+    linear elastic) are frozen, hashable objects with a ``key``: a short file-name-safe
+    text that tells them apart (it enters the scene id).
+    """
 
     plate_material: str  # material key; "none" when plate_thickness == 0
     plate_thickness: float  # m
     soil_E: float  # Pa
     soil_nu: float  # -
+    sample: Any = None
+    soil_model: Any = None
 
     @property
     def scene_id(self) -> str:
-        """Stable, file-name-safe identifier, e.g. ``pla-t400um-E10MPa-nu0.300``."""
+        """File-name-safe identifier, e.g. ``pla-t400um-E10MPa-nu0.300``; lossless: two
+        scenes have the same id only when they are equal (every number reads back to its
+        value exactly, :func:`_lossless`), so two grid points never share a curve."""
         plate = (
             "noplate"
             if self.plate_thickness == 0
-            else f"{self.plate_material}-t{self.plate_thickness * 1e6:g}um"
+            else f"{self.plate_material}-t{_lossless(self.plate_thickness, 1e-6)}um"
         )
-        return f"{plate}-E{self.soil_E / 1e6:g}MPa-nu{self.soil_nu:.3f}"
+        text = (f"{plate}-E{_lossless(self.soil_E, 1e6)}MPa-"
+                f"nu{_lossless(self.soil_nu, 1.0, ('.3f', 'g'))}")
+        for part in (self.sample, self.soil_model):
+            if part is not None:
+                text += f"-{part.key}"
+        return text
 
 
 def scenes(cfg: dict[str, Any], set_name: str) -> list[Scene]:
@@ -264,14 +298,24 @@ def scenes(cfg: dict[str, Any], set_name: str) -> list[Scene]:
             for E in expand_grid(s["soil_E"], f"sets.{set_name}.soil_E"):
                 for nu in expand_grid(s["soil_nu"], f"sets.{set_name}.soil_nu"):
                     sc = Scene("none" if t == 0 else m, float(t), float(E), float(nu))
-                    out.setdefault(sc.scene_id, sc)
+                    other = out.setdefault(sc.scene_id, sc)
+                    if other != sc:
+                        raise ConfigError(f"sets.{set_name}", sc.scene_id,
+                                          f"scenes that can be told apart: {sc} and {other} "
+                                          "share one id")
     return list(out.values())
 
 
 def all_scenes(cfg: dict[str, Any]) -> dict[str, Scene]:
-    """Every scene of every set, by scene id (a scene shared by two sets appears once)."""
+    """Every scene of every set, by scene id (a scene shared by two sets appears once).
+
+    Raises ConfigError if two different scenes had one id (ids are lossless: a guard)."""
     out: dict[str, Scene] = {}
     for name in cfg["sets"]:
         for sc in scenes(cfg, name):
-            out.setdefault(sc.scene_id, sc)
+            other = out.setdefault(sc.scene_id, sc)
+            if other != sc:
+                raise ConfigError(f"sets.{name}", sc.scene_id,
+                                  f"scenes that can be told apart: {sc} and {other} share "
+                                  "one id")
     return out

@@ -1,4 +1,5 @@
-"""Materials library: named materials with E (Pa), nu, density (kg/m^3) and a source.
+"""Materials library: named materials with E (Pa), nu, density (kg/m^3), a source and, where
+known, strengths (:class:`Strength`, each with its own source).
 
 The library is a YAML file (shipped as ``ssw/data/materials.yaml``, linked from the
 repository's ``config/materials.yaml``) with named sets. ``realistic`` is
@@ -8,7 +9,8 @@ fields of some materials and inherit the rest from ``realistic``.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+import math
+from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
@@ -22,8 +24,68 @@ BASE_SET = "realistic"
 
 
 @dataclass(frozen=True)
+class Strength:
+    """What a material withstands before it yields or fails. SI units; None: not known.
+
+    Attributes
+    ----------
+    yield_stress : Pa, uniaxial (tensile) yield stress, the von Mises ``Y`` (metals, plates).
+    compressive : Pa, uniaxial compressive strength (foams: the plateau or yield stress in
+        compression; soils: unconfined compressive strength).
+    tensile : Pa, uniaxial tensile strength.
+    cohesion : Pa, Mohr-Coulomb cohesion ``c``.
+    friction_angle : degrees, Mohr-Coulomb angle of internal friction ``phi``.
+    dilatancy_angle : degrees, ``psi`` (non-associated flow).
+    source : where the values come from.
+    """
+
+    yield_stress: float | None = None
+    compressive: float | None = None
+    tensile: float | None = None
+    cohesion: float | None = None
+    friction_angle: float | None = None
+    dilatancy_angle: float | None = None
+    source: str = ""
+
+    def check(self, key: str) -> None:
+        """ConfigError naming ``materials.<key>.strength.<field>`` for a bad value."""
+        for f in fields(self):
+            v = getattr(self, f.name)
+            if f.name == "source" or v is None:
+                continue
+            if f.name in ("friction_angle", "dilatancy_angle"):
+                if not (math.isfinite(v) and 0.0 <= v < 90.0):
+                    raise ConfigError(f"materials.{key}.strength.{f.name}", v,
+                                      "an angle in [0, 90) degrees")
+            elif not (math.isfinite(v) and v >= 0.0 if f.name == "cohesion" else
+                      math.isfinite(v) and v > 0.0):
+                raise ConfigError(f"materials.{key}.strength.{f.name}", v,
+                                  "a stress >= 0 Pa" if f.name == "cohesion" else
+                                  "a stress > 0 Pa")
+        if any(getattr(self, f.name) is not None for f in fields(self) if f.name != "source") \
+                and not self.source.strip():
+            raise ConfigError(f"materials.{key}.strength.source", self.source,
+                              "a source for the strengths (a catalogue, a handbook, a paper)")
+
+    @classmethod
+    def from_dict(cls, key: str, data: Any) -> Strength:
+        """A strength from the library's ``strength:`` mapping (checked)."""
+        if not isinstance(data, dict):
+            raise ConfigError(f"materials.{key}.strength", data, "a mapping of strengths")
+        known = {f.name for f in fields(cls)}
+        unknown = set(data) - known
+        if unknown:
+            raise ConfigError(f"materials.{key}.strength", sorted(unknown),
+                              f"fields of {', '.join(sorted(known))}")
+        st = cls(**{k: (str(v) if k == "source" else None if v is None else float(v))
+                    for k, v in data.items()})
+        st.check(key)
+        return st
+
+
+@dataclass(frozen=True)
 class Material:
-    """An isotropic linear-elastic material. SI units."""
+    """An isotropic linear-elastic material, with its strengths where known. SI units."""
 
     key: str
     name: str
@@ -31,6 +93,7 @@ class Material:
     nu: float  # Poisson's ratio, -
     density: float  # kg/m^3
     source: str
+    strength: Strength = Strength()
 
     def __post_init__(self) -> None:
         if not self.E > 0:
@@ -59,14 +122,16 @@ def material_set(name: str = BASE_SET, path: str | Path | None = None) -> dict[s
         raise ConfigError("material_set", name, f"one of {sorted(lib)}")
     out = {}
     for key, base in lib[BASE_SET].items():
-        fields = {**base, **(lib[name].get(key, {}) if name != BASE_SET else {})}
+        vals = {**base, **(lib[name].get(key, {}) if name != BASE_SET else {})}
         out[key] = Material(
             key=key,
-            name=str(fields["name"]),
-            E=float(fields["E"]),
-            nu=float(fields["nu"]),
-            density=float(fields["density"]),
-            source=str(fields["source"]),
+            name=str(vals["name"]),
+            E=float(vals["E"]),
+            nu=float(vals["nu"]),
+            density=float(vals["density"]),
+            source=str(vals["source"]),
+            strength=Strength.from_dict(key, vals["strength"]) if vals.get("strength")
+            else Strength(),
         )
     unknown = set(lib[name]) - set(out)
     if unknown:

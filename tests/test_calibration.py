@@ -8,7 +8,7 @@ a Hertz wall, the striker arriving at bead 1 with speed v; solved with scipy's
 and the first peak after the signal fell below a quarter of it, each refined by a parabola.
 Nothing of ssw's chain code is used to make them. ssw's velocity-Verlet TOF differs from such
 a solution by ~3.5e-5 (README, ``ssw bench chain``), so a striker speed recovered from these
-TOFs must be within 0.5 % (issue 10), the modulus of an unseen sample within 1 %.
+TOFs must be within 0.5 %, the modulus of an unseen sample within 1 %.
 """
 
 from __future__ import annotations

@@ -1,4 +1,4 @@
-"""The dynamic wall (issue 14): operators, punch impedance, static limit, energy balance.
+"""The dynamic wall: operators, punch impedance, static limit, energy balance.
 
 Independent truths: exact integrals of the mass matrix; Hertz's half-space displacement
 under a Hertz pressure (Johnson 1985, eq. 3.41); the published vertical impedance of a

@@ -1,4 +1,4 @@
-"""The FEM's plate curves against the independent layered oracle (issue 12).
+"""The FEM's plate curves against the independent layered oracle.
 
 0.4 mm PLA / aluminium / steel plates on 10-1000 MPa soils (nu 0.3), frictionless and
 bonded, through ``ssw.contact.solve_curve`` with the study's contact settings (its mesh,

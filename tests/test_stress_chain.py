@@ -1,4 +1,4 @@
-"""Stress grid of the chain dynamics (issue 7): soil E 1 MPa..10 GPa, nu 0.49-0.5, striker
+"""Stress grid of the chain dynamics: soil E 1 MPa..10 GPa, nu 0.49-0.5, striker
 velocities 0.05-3 m/s, chains of 5-200 beads, invalid inputs.
 
 Each case either meets its tolerance against independent truth or stops with a clear

@@ -1,4 +1,4 @@
-"""Stress grid of the contact FEM (issue 7): extreme soils, stiff plates on soft soils, tiny
+"""Stress grid of the contact FEM: extreme soils, stiff plates on soft soils, tiny
 indentations, degenerate meshes, invalid inputs.
 
 Each case either meets its stated tolerance against independent truth or stops with a

@@ -1,4 +1,4 @@
-"""Stress grid of the modified-Hertz fits (issue 7): soils of 1 MPa..10 GPa, nu 0.49-0.5,
+"""Stress grid of the modified-Hertz fits: soils of 1 MPa..10 GPa, nu 0.49-0.5,
 indentations from 1e-9 m, degenerate curves.
 
 Truth: a synthetic curve built from a law is recovered exactly by a fit of that law (to

@@ -345,8 +345,8 @@ WALLS: dict[str, Callable[..., Wall]] = {
 def build_wall(name: str, params: ChainParams, soil_E: Any, soil_nu: Any, **options: Any) -> Wall:
     """The wall ``name`` of :data:`WALLS` for the scenes ``broadcast(soil_E, soil_nu)``.
 
-    Two options of every law add the tested medium's inertia (issue 14,
-    :mod:`ssw.dynamics`): ``dynamics`` (``quasi-static``, the default: the static law;
+    Two options of every law add the tested medium's inertia
+    (:mod:`ssw.dynamics`): ``dynamics`` (``quasi-static``, the default: the static law;
     ``reduced``: the law plus the soil's radiation damping and participating mass and the
     plate's inertia, :class:`ssw.dynamics.reduced.ReducedWall`) and ``soil_density``
     (kg/m^3, broadcast with the scenes).

@@ -163,7 +163,7 @@ def simulate(
     e_wall = np.empty((n_rec, wall.n)) if record_energy else None
     e_diss = np.empty((n_rec, wall.n)) if record_energy else None
     F0 = static_contact_forces(params)
-    preload = float(getattr(params, "preload", 0.0))  # N on bead 1 (ChainParams, round 3)
+    preload = float(getattr(params, "preload", 0.0))  # N on bead 1 (ChainParams)
 
     def forces(u: np.ndarray, f_wall: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         d = np.maximum(u[:-1] - u[1:], 0.0)

@@ -1,0 +1,244 @@
+"""Provenance: what made a result (code, inputs, command), and the checks that combine them.
+
+Every result ssw writes records (:func:`record`):
+
+* ``ssw_version``: the package version; ``commit``: the git commit of the source tree when
+  it is a git checkout (else None), ``dirty`` whether it had uncommitted changes;
+* ``source_sha256``: a hash of the package's source files that produced it
+  (:func:`source_hash`: the static import closure of the modules named, so a change in a
+  module the result does not depend on does not change it);
+* ``inputs_sha256``: :func:`digest` of every input that made it (the command's options,
+  the config's slice it read, the devices, materials and files it read: each file by its
+  own digest);
+* ``command``: the command line.
+
+HDF5 files carry these as root attributes (:mod:`ssw.h5io`), JSON results as a
+``provenance`` object, CSV tables as a first comment line (``# ssw ...``).
+
+Commands that combine results compare their digests (:func:`require_match`) and refuse a
+mismatch with a message naming both sides.
+"""
+
+from __future__ import annotations
+
+import ast
+import functools
+import hashlib
+import json
+import math
+import shlex
+import subprocess
+import sys
+from collections.abc import Iterable, Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+from ssw import __version__
+from ssw.errors import SswError
+
+PACKAGE_DIR = Path(__file__).resolve().parent
+#: Hex digits kept of a SHA-256 (80 bits: no accidental collision among a study's results).
+DIGEST_HEX = 20
+
+
+class ProvenanceError(SswError, ValueError):
+    """Results that do not belong together (made from different inputs), or a result whose
+    provenance is missing where it is required."""
+
+
+# ----------------------------------------------------------------------------- digests
+def _canonical(obj: Any) -> Any:
+    """Plain JSON-able form with a fixed float text (shortest round-trip repr), sorted keys
+    (done by the encoder), tuples as lists, paths as text, numpy values as Python ones."""
+    if isinstance(obj, Mapping):
+        return {str(k): _canonical(v) for k, v in obj.items()}
+    if isinstance(obj, list | tuple):
+        return [_canonical(v) for v in obj]
+    if isinstance(obj, Path):
+        return str(obj)
+    if hasattr(obj, "tolist") and not isinstance(obj, str | bytes):  # numpy arrays/scalars
+        return _canonical(obj.tolist())
+    if isinstance(obj, bool) or obj is None or isinstance(obj, str | int):
+        return obj
+    if isinstance(obj, float):
+        if math.isnan(obj) or math.isinf(obj):
+            return repr(obj)
+        return obj
+    if hasattr(obj, "__dataclass_fields__"):
+        from dataclasses import asdict
+
+        return _canonical(asdict(obj))
+    raise TypeError(f"cannot digest a {type(obj).__name__}")
+
+
+def canonical_json(obj: Any) -> str:
+    """Canonical JSON text of ``obj`` (sorted keys, no spaces): equal values, equal text."""
+    return json.dumps(_canonical(obj), sort_keys=True, separators=(",", ":"))
+
+
+def digest(obj: Any) -> str:
+    """SHA-256 (first :data:`DIGEST_HEX` hex digits) of :func:`canonical_json` of ``obj``."""
+    return hashlib.sha256(canonical_json(obj).encode()).hexdigest()[:DIGEST_HEX]
+
+
+def file_digest(path: str | Path) -> str:
+    """SHA-256 (first :data:`DIGEST_HEX` hex digits) of a file's bytes."""
+    h = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            h.update(block)
+    return h.hexdigest()[:DIGEST_HEX]
+
+
+# ----------------------------------------------------------------------------- code
+def _module_path(name: str) -> Path | None:
+    """The source file of an ``ssw`` module name, or None (not in the package)."""
+    if name != "ssw" and not name.startswith("ssw."):
+        return None
+    rel = name.split(".")[1:]
+    base = PACKAGE_DIR.joinpath(*rel)
+    if base.is_dir() and (base / "__init__.py").is_file():
+        return base / "__init__.py"
+    f = base.with_suffix(".py")
+    return f if f.is_file() else None
+
+
+@functools.lru_cache(maxsize=512)
+def _imports_of(path: Path) -> tuple[str, ...]:
+    """The ``ssw`` modules a source file imports anywhere (top level or inside functions),
+    found statically (no import is executed)."""
+    tree = ast.parse(path.read_text(), filename=str(path))
+    pkg = _package_of(path)
+    out: list[str] = []
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Import):
+            out.extend(a.name for a in node.names)
+        elif isinstance(node, ast.ImportFrom):
+            base = node.module or ""
+            if node.level:
+                parts = pkg.split(".")
+                parts = parts[: len(parts) - node.level + 1]
+                base = ".".join([*parts, base] if base else parts)
+            out.append(base)
+            out.extend(f"{base}.{a.name}" for a in node.names)  # `from pkg import module`
+    return tuple(m for m in dict.fromkeys(out) if m == "ssw" or m.startswith("ssw."))
+
+
+def _package_of(path: Path) -> str:
+    rel = path.relative_to(PACKAGE_DIR.parent).with_suffix("")
+    parts = list(rel.parts)
+    if parts[-1] == "__init__":
+        parts = parts[:-1]
+        return ".".join(parts)
+    return ".".join(parts[:-1])
+
+
+def module_closure(modules: Iterable[str]) -> list[Path]:
+    """Source files of ``modules`` and of every ``ssw`` module they import, transitively,
+    parent packages' ``__init__`` included (what runs when they are imported); sorted."""
+    seen: set[Path] = set()
+    todo = list(modules)
+    while todo:
+        name = todo.pop()
+        parts = name.split(".")
+        for i in range(1, len(parts) + 1):  # importing a.b.c runs a and a.b first
+            p = _module_path(".".join(parts[:i]))
+            if p is not None and p not in seen:
+                seen.add(p)
+                todo.extend(_imports_of(p))
+    return sorted(seen)
+
+
+@functools.lru_cache(maxsize=64)
+def _source_hash(modules: tuple[str, ...]) -> str:
+    h = hashlib.sha256()
+    for p in module_closure(modules):
+        h.update(str(p.relative_to(PACKAGE_DIR)).encode() + b"\0")
+        h.update(p.read_bytes() + b"\0")
+    return h.hexdigest()[:DIGEST_HEX]
+
+
+def source_hash(modules: Iterable[str]) -> str:
+    """Hash of the source of ``modules`` and everything of ssw they import (statically, see
+    :func:`module_closure`), the package data they may read included only when imported
+    code names it: the data files (schemas, materials, devices) enter results through
+    their values, which are inputs."""
+    return _source_hash(tuple(sorted(set(modules))))
+
+
+@functools.lru_cache(maxsize=1)
+def git_state() -> tuple[str | None, bool | None]:
+    """(commit, dirty) of the git checkout holding the package, or (None, None) when the
+    package is not in one (an installed wheel) or git is unavailable."""
+    root = PACKAGE_DIR.parent
+    if not (root / ".git").exists():
+        return None, None
+    try:
+        commit = subprocess.run(["git", "-C", str(root), "rev-parse", "HEAD"],
+                                capture_output=True, text=True, timeout=10, check=True
+                                ).stdout.strip()
+        status = subprocess.run(["git", "-C", str(root), "status", "--porcelain",
+                                 "--untracked-files=no", "--", "ssw"],
+                                capture_output=True, text=True, timeout=10, check=True).stdout
+    except (OSError, subprocess.SubprocessError):
+        return None, None
+    return commit or None, bool(status.strip())
+
+
+def current_command() -> str:
+    """The running command line, as a shell would read it (``ssw`` for the entry point)."""
+    argv = list(sys.argv)
+    if argv and (argv[0].endswith(("/ssw", "__main__.py")) or argv[0] == "-m"):
+        argv[0] = "ssw"
+    return shlex.join(argv)
+
+
+def record(inputs: Any, modules: Sequence[str] = ("ssw",), command: str | None = None
+           ) -> dict[str, Any]:
+    """The provenance of a result made by ``modules`` from ``inputs`` (module docstring)."""
+    commit, dirty = git_state()
+    return {
+        "ssw_version": __version__,
+        "commit": commit,
+        "dirty": dirty,
+        "source_sha256": source_hash(modules),
+        "inputs_sha256": digest(inputs),
+        "command": current_command() if command is None else command,
+    }
+
+
+def csv_comment(prov: Mapping[str, Any]) -> str:
+    """The first line of a CSV table: ``# ssw <version> commit <c> source <s> inputs <i>
+    command: <cmd>`` (readers skip lines starting with ``#``)."""
+    return (f"# ssw {prov['ssw_version']} commit {prov.get('commit') or 'none'}"
+            f"{'+dirty' if prov.get('dirty') else ''} source {prov['source_sha256']} "
+            f"inputs {prov['inputs_sha256']} command: {prov.get('command', '')}\n")
+
+
+def parse_csv_comment(line: str) -> dict[str, Any] | None:
+    """The provenance of a CSV table's first line (:func:`csv_comment`), or None."""
+    if not line.startswith("# ssw "):
+        return None
+    head, _, command = line.rstrip("\n").partition(" command: ")
+    words = head[2:].split()
+    out: dict[str, Any] = {"ssw_version": words[1], "command": command}
+    for key, name in (("commit", "commit"), ("source", "source_sha256"),
+                      ("inputs", "inputs_sha256")):
+        if key in words:
+            out[name] = words[words.index(key) + 1]
+    c = out.get("commit", "none")
+    out["dirty"] = c.endswith("+dirty")
+    out["commit"] = None if c.startswith("none") else c.removesuffix("+dirty")
+    return out
+
+
+def require_match(what: str, left: tuple[str, Any], right: tuple[str, Any]) -> None:
+    """Raise :class:`ProvenanceError` unless two sides agree on ``what``.
+
+    ``left`` and ``right`` are ``(name, value)`` pairs, e.g. ``("calibration c.json",
+    "3fa9...")`` and ``("device my.yaml", "77c0...")``; the message names both sides.
+    """
+    if left[1] != right[1]:
+        raise ProvenanceError(
+            f"{what} differs: {left[0]} has {left[1]!r}, {right[0]} has {right[1]!r}; "
+            "these results were not made from the same inputs")

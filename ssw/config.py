@@ -63,6 +63,31 @@ def _looks_numeric(text: str) -> bool:
     return True
 
 
+#: Settings of how a study runs, which left the study config for the workflow's profiles:
+#: key path -> where it is now.
+MOVED_KEYS = {
+    ("contact", "jobs_per_group"): "gone: one contact job per plate family (rule "
+    "contact_batch); to spread a family, split its set",
+    ("chain", "sweep", "chunks"): "the number of sweep jobs is Snakemake's: "
+    "--set-scatter sweep=N (or set-scatter in a profile)",
+    ("chain", "sweep", "mpi_ranks"): "MPI ranks per sweep job are a resource: "
+    "--set-resources tof_sweep:tasks=N (and mpi=srun on a cluster)",
+}
+
+
+def check_moved_keys(cfg: dict[str, Any]) -> None:
+    """ConfigError for a setting of how to run (:data:`MOVED_KEYS`) found in a study
+    config, naming where it went (a study's config says what to compute, not how)."""
+    for path, where in MOVED_KEYS.items():
+        node: Any = cfg
+        for k in path:
+            node = node.get(k) if isinstance(node, dict) else None
+            if node is None:
+                break
+        else:
+            raise ConfigError(".".join(path), node, f"not a study setting any more: {where}")
+
+
 def validate_config(cfg: dict[str, Any]) -> dict[str, Any]:
     """Validate ``cfg`` in place against the schema, fill defaults, and run semantic checks.
 
@@ -71,6 +96,7 @@ def validate_config(cfg: dict[str, Any]) -> dict[str, Any]:
     """
     import jsonschema
 
+    check_moved_keys(cfg)
     validator = _validator(load_schema())
     errors = sorted(validator.iter_errors(cfg), key=lambda e: -len(e.absolute_path))
     if errors:

@@ -5,7 +5,12 @@ Every file written through :func:`atomic_h5` carries the root attributes
 * ``ssw_kind``: what the file holds (``"contact_curve"``, ``"chain_run"``, ...);
 * ``ssw_version``: the package version that wrote it;
 * ``created_utc``: ISO-8601 time stamp;
-* ``inputs_json``: every input that produced it, as JSON (SI units).
+* ``inputs_json``: every input that produced it, as JSON (SI units);
+* its provenance (:func:`ssw.provenance.record`): ``ssw_commit`` (empty when unknown),
+  ``ssw_dirty``, ``ssw_source_sha256``, ``inputs_sha256`` and ``command``.
+
+CSV tables (:func:`write_rows_csv`) start with one comment line of the same provenance
+(``# ssw <version> commit ... command: ...``); :func:`read_rows_csv` skips it.
 
 Every dataset written through :func:`write_dataset` has a ``units`` attribute (``"1"`` for
 dimensionless) and, optionally, a ``description``. A file is written under a temporary name
@@ -89,17 +94,58 @@ def read_datasets(path: str | os.PathLike[str]) -> dict[str, Any]:
     return out
 
 
-def write_rows_csv(rows: list[dict[str, Any]], path: str | os.PathLike[str]) -> None:
-    """Rows (dicts) to a CSV file, atomically; columns in order of first appearance."""
+def write_rows_csv(rows: list[dict[str, Any]], path: str | os.PathLike[str],
+                   inputs: Any = None) -> None:
+    """Rows (dicts) to a CSV file, atomically; columns in order of first appearance. The
+    first line is the provenance comment (:func:`ssw.provenance.csv_comment`) of a table
+    made from ``inputs`` (default: the rows themselves)."""
     import csv
     import io
 
+    from ssw.provenance import csv_comment, record
+
     buf = io.StringIO()
+    buf.write(csv_comment(record(rows if inputs is None else inputs)))
     cols = list(dict.fromkeys(k for r in rows for k in r))
     w = csv.DictWriter(buf, fieldnames=cols, lineterminator="\n")
     w.writeheader()
     w.writerows(rows)
     atomic_write_text(path, buf.getvalue())
+
+
+def write_csv_text(path: str | os.PathLike[str], text: str, inputs: Any) -> None:
+    """A CSV table's ``text`` to ``path`` atomically, after its provenance comment line
+    (:func:`ssw.provenance.csv_comment`) for a table made from ``inputs``."""
+    from ssw.provenance import csv_comment, record
+
+    atomic_write_text(path, csv_comment(record(inputs)) + text)
+
+
+def read_rows_csv(path: str | os.PathLike[str]) -> list[dict[str, str]]:
+    """Rows of a CSV table (:func:`write_rows_csv`) as dicts of text; comment lines
+    (``#`` first) skipped."""
+    import csv
+
+    with open(path, newline="") as fh:
+        return list(csv.DictReader(line for line in fh if not line.startswith("#")))
+
+
+def csv_provenance(path: str | os.PathLike[str]) -> dict[str, Any] | None:
+    """The provenance of a CSV table written by ssw (its first line), or None."""
+    from ssw.provenance import parse_csv_comment
+
+    with open(path) as fh:
+        return parse_csv_comment(fh.readline())
+
+
+def provenance_of(f: Any) -> dict[str, Any]:
+    """The provenance attributes of an open ssw HDF5 file (missing ones are None)."""
+    a = f.attrs
+    commit = a.get("ssw_commit")
+    return {"ssw_version": a.get("ssw_version"), "commit": commit or None,
+            "dirty": None if "ssw_dirty" not in a else bool(a["ssw_dirty"]),
+            "source_sha256": a.get("ssw_source_sha256"),
+            "inputs_sha256": a.get("inputs_sha256"), "command": a.get("command")}
 
 
 @contextlib.contextmanager
@@ -116,12 +162,20 @@ def atomic_h5(
     """
     import h5py
 
+    from ssw.provenance import record
+
+    prov = record(dict(inputs))
     with atomic_path(path) as tmp:
         with h5py.File(tmp, "w") as f:
             f.attrs["ssw_kind"] = kind
             f.attrs["ssw_version"] = __version__
             f.attrs["created_utc"] = datetime.now(UTC).isoformat(timespec="seconds")
             f.attrs["inputs_json"] = to_json(dict(inputs), sort_keys=True)
+            f.attrs["ssw_commit"] = prov["commit"] or ""
+            f.attrs["ssw_dirty"] = bool(prov["dirty"])
+            f.attrs["ssw_source_sha256"] = prov["source_sha256"]
+            f.attrs["inputs_sha256"] = prov["inputs_sha256"]
+            f.attrs["command"] = prov["command"]
             yield f
 
 

@@ -126,10 +126,10 @@ def sneddon_sphere(
 
 def _impact_time_coefficient() -> float:
     """2 * integral_0^1 dx / sqrt(1 - x^(5/2)) (Johnson 1985, eq. 11.24): 2.9432."""
-    from scipy.special import beta
+    from math import gamma
 
-    # integral_0^1 (1 - x^(5/2))^(-1/2) dx = (2/5) B(2/5, 1/2)
-    return float(2.0 * 0.4 * beta(0.4, 0.5))
+    # integral_0^1 (1 - x^(5/2))^(-1/2) dx = (2/5) B(2/5, 1/2), B(a, b) = G(a) G(b) / G(a+b)
+    return 2.0 * 0.4 * gamma(0.4) * gamma(0.5) / gamma(0.9)
 
 
 #: Johnson (1985) eq. 11.24 constant, computed: 2 * (2/5) B(2/5, 1/2) = 2.9432.

@@ -41,3 +41,20 @@ def require(ok: bool, reason: str) -> None:
     if os.environ.get("CI") == "true":
         pytest.fail(f"{reason} (CI=true: the set-up must provide it)")
     pytest.skip(reason)
+
+
+@pytest.fixture(scope="session")
+def ci_study(tmp_path_factory):
+    """The whole pipeline on config/ci.yaml, run once for the session: contact -> fits -> the
+    fem wall -> calibration on the thesis foams' measured TOFs -> sweep -> Tables 2-3 ->
+    survey. Tests read it or dry-run edits against it; a test that reruns jobs copies it."""
+    import shutil
+
+    from snakemake_run import ROOT, smk
+
+    tmp = tmp_path_factory.mktemp("ci_study")
+    shutil.copytree(ROOT / "config", tmp / "config")
+    r = smk("--cores", "2", "--directory", str(tmp), "--configfile",
+            str(tmp / "config" / "ci.yaml"), timeout=900)
+    assert r.returncode == 0, r.stdout[-4000:] + r.stderr[-4000:]
+    return tmp

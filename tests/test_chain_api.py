@@ -127,7 +127,8 @@ def test_cli_tof_sweep_and_invert_agree(tmp_path, capsys):
                 *base], capsys)
     assert inv["E"] == pytest.approx(1.2e8, rel=1e-6)
     assert read_sweep(tmp_path / "s.h5")[0].tof.size == 3
-    assert (tmp_path / "s.csv").read_text().startswith("soil_E_Pa,")
+    head = (tmp_path / "s.csv").read_text().splitlines()[:2]
+    assert head[0].startswith("# ssw ") and head[1].startswith("soil_E_Pa,")  # provenance
 
 
 def test_cli_reports_out_of_range_tof(capsys):
@@ -172,13 +173,14 @@ def test_early_stop_does_not_change_the_tof(change):
 
 
 def test_workflow_helpers_name_the_wall_inputs():
-    from ssw.chain import workflow as wf
+    from ssw import workflow as wf
 
     cfg = load_config(ROOT / "config" / "config.yaml")
     assert cfg["chain"]["wall_law"] == "fem" and wf.wall_inputs(cfg, "R") == {}
     cfg["chain"]["wall_law"] = "fit"
-    assert wf.wall_inputs(cfg, "R") == {"k_table": "R/fit/k_table.h5"}
-    assert wf.calibrated_inputs(cfg, "R") == {"k_table": "R/fit/k_table.h5",
+    kt = "R/fit/sets/set3_soil/k_table.h5"  # fit.set's table
+    assert wf.wall_inputs(cfg, "R") == {"k_table": kt}
+    assert wf.calibrated_inputs(cfg, "R") == {"k_table": kt,
                                               "calibration": "R/calibration/calibration.json"}
     cfg["chain"]["wall_law"] = "table"
     ids = wf.sweep_scene_ids(cfg)  # the thesis sweep is Set 3's grid: every point has a curve

@@ -111,14 +111,12 @@ def test_bad_inputs_name_the_field():
 # ---- batches: several scenes in one process (the workflow's contact jobs)
 
 
-
-
 def test_batch_writes_every_scene_as_the_single_scene_command_does(tmp_path, capsys):
     """`--scene A --scene B --output-dir D` writes D/A.h5 and D/B.h5 with the same datasets
     and inputs as two `--scene X --output F` runs (the batch only saves start-up)."""
-    from ssw.contact.batch import batches
+    from ssw.workflow import families
 
-    ids = [i for b in batches(load_config(CI)).values() for i in b][:2]
+    ids = [i for b in families(load_config(CI)).values() for i in b][:2]
     rc = main(["contact", *[a for i in ids for a in ("--scene", i)], "--scene", ids[0],
                "--config", CI, "--output-dir", str(tmp_path / "batch"), "--json"])
     assert rc == 0
@@ -157,43 +155,29 @@ def test_batch_refusals_write_nothing(tmp_path, capsys, argv, field):
     assert not out_dir.exists() or not any(out_dir.iterdir())
 
 
-def test_batches_are_mesh_families():
-    """Every scene in exactly one batch of at most jobs_per_group scenes; a batch holds a
-    chunk of one mesh family (plate thickness: scenes sharing the mesh and its operators),
-    or several whole small families (fewer than SMALL_FAMILY scenes), named after them;
-    the thesis study: the 0.4 mm family alone, the four one-scene families together."""
+def test_families_are_plate_families():
+    """Every scene in exactly one family: the scenes of one plate material and thickness (or
+    of no plate), whatever set lists them; the family is the scene id's start. The thesis
+    study: the 0.4 mm PLA family holds Sets 1 and 3 and Set 2's 0.4 mm scene; Sets 1 and 2
+    add one family per other material and thickness. MPI ranks get whole operator groups."""
     from ssw.config import all_scenes
-    from ssw.contact.batch import (
-        SMALL_FAMILY,
-        batches,
-        chunks,
-        family_name,
-        group_key,
-        rank_share,
-    )
+    from ssw.contact.batch import group_key, rank_share
+    from ssw.workflow import families
 
-    assert [len(c) for c in chunks(list("abcdefghij"), 4)] == [3, 3, 4]
-    assert chunks(list("abc"), 5) == [["a", "b", "c"]] and chunks([], 3) == []
     cfg = load_config(REPO / "config" / "config.yaml")
     scenes = all_scenes(cfg)
-    for size in (cfg["contact"]["jobs_per_group"], 7, 1000):
-        got = batches(cfg, size)
-        ids = [i for b in got.values() for i in b]
-        assert sorted(ids) == sorted(scenes) and len(ids) == len(set(ids))
-        for name, members in got.items():
-            assert 1 <= len(members) <= size and name.isidentifier()
-            fams = {family_name(scenes[i].plate_thickness) for i in members}
-            if len(fams) == 1:
-                assert name.startswith(fams.pop())
-            else:  # a pack of whole small families
-                assert set(name.split("_")) == fams
-                for f in fams:
-                    whole = [i for i in scenes if family_name(scenes[i].plate_thickness) == f]
-                    assert len(whole) < SMALL_FAMILY and set(whole) <= set(members)
-    assert sorted(batches(cfg, 1000)) == ["noplate_t100um_t200um_t1000um", "t400um"]
-    assert len(batches(cfg, 1)) == len(scenes)
+    fams = families(cfg)
+    ids = [i for b in fams.values() for i in b]
+    assert sorted(ids) == sorted(scenes) and len(ids) == len(set(ids))
+    for name, members in fams.items():
+        keys = {(scenes[i].plate_material, scenes[i].plate_thickness) for i in members}
+        assert len(keys) == 1, name
+        assert all(i.startswith(name + "-") for i in members)
+    assert sorted(fams) == ["a36-t400um", "al6061-t400um", "noplate", "pla-t1000um",
+                            "pla-t100um", "pla-t200um", "pla-t400um"]
+    assert len(fams["pla-t400um"]) == 300 + 2  # Set 3, and Sets 1 and 2 at their own soils
     # MPI: whole operator groups per rank, every scene once
-    fam = [scenes[i] for i in batches(cfg, 1000)["t400um"]]
+    fam = [scenes[i] for i in fams["pla-t400um"]]
     shares = [rank_share(fam, r, 3) for r in range(3)]
     assert sorted(i for s in shares for i in s) == list(range(len(fam)))
     for s in shares:
@@ -201,12 +185,48 @@ def test_batches_are_mesh_families():
         assert not others & {group_key(fam[i]) for i in s}
 
 
-def test_jobs_per_group_is_checked():
-    from ssw.contact.batch import chunks
-    from ssw.errors import ConfigError
+def test_family_batch_refusals(tmp_path, capsys):
+    """`--family` names a family of the config, and not with --scene."""
+    rc = main(["contact", "--family", "pla-t999um", "--config", CI, "--output-dir",
+               str(tmp_path / "o")])
+    assert rc == 2 and "--family" in capsys.readouterr().err
+    rc = main(["contact", "--family", "pla-t400um", "--scene", "pla-t400um-E50MPa-nu0.300",
+               "--config", CI, "--output-dir", str(tmp_path / "o")])
+    assert rc == 2 and "--scene" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
 
-    with pytest.raises(ConfigError, match="jobs_per_group"):
-        chunks(["a"], 0)
+
+def test_delta_mode_energy_reaches_the_hertz_energy(tmp_path):
+    """contact.delta_mode energy: a curve goes on past delta_max, with the increments of
+    delta_max / steps all along, to where a Hertz half-space of the softer of soil and plate
+    stores contact.reach_energy: (2/5) A d^2.5 = W (closed form), independent of the device;
+    a stiff soil's ends at delta_max when that is deeper."""
+    ROOT = Path(__file__).resolve().parent.parent
+    cfg = load_config(ROOT / "config" / "ci.yaml")
+    assert cfg["contact"]["delta_mode"] == "energy"
+    W, R = cfg["contact"]["reach_energy"], cfg["indenter"]["radius"]
+    soft = "pla-t400um-E30MPa-nu0.300"
+    steps = int(cfg["contact"]["steps"])
+    assert main(["contact", "--config", str(ROOT / "config" / "ci.yaml"), "--scene", soft,
+                 "--output", str(tmp_path / "soft.h5")]) == 0
+    c = read_curve(tmp_path / "soft.h5")
+    A = 4.0 / 3.0 * 30e6 / (1 - 0.3**2) * np.sqrt(R)  # the soil is softer than PLA
+    need = (2.5 * W / A) ** 0.4
+    assert 0.4 * A * need**2.5 == pytest.approx(W, rel=1e-12)
+    assert need > 2 * cfg["contact"]["delta_max"]
+    h = cfg["contact"]["delta_max"] / steps
+    assert c.delta[-1] == pytest.approx(need, rel=1e-12) and c.delta.size == np.ceil(need / h)
+    np.testing.assert_allclose(np.diff(c.delta[:-1]), h, rtol=1e-9)
+    # the same reach whatever the device: a 40-bead device changes nothing
+    dev = tmp_path / "dev.yaml"
+    dev.write_text((ROOT / "config" / "devices" / "thesis.yaml").read_text()
+                   .replace("beads: 20", "beads: 40"))
+    cfg2 = tmp_path / "c2.yaml"
+    cfg2.write_text((ROOT / "config" / "ci.yaml").read_text().replace(
+        "device: thesis", f"device: {dev}"))
+    assert main(["contact", "--config", str(cfg2), "--scene", soft,
+                 "--output", str(tmp_path / "soft2.h5")]) == 0
+    np.testing.assert_array_equal(read_curve(tmp_path / "soft2.h5").delta, c.delta)
 
 
 def test_delta_mode_chain_extends_the_curve_to_what_the_chain_reaches(tmp_path):
@@ -217,11 +237,14 @@ def test_delta_mode_chain_extends_the_curve_to_what_the_chain_reaches(tmp_path):
     from ssw.fit.range import scene_delta_max
 
     ROOT = Path(__file__).resolve().parent.parent
-    cfg = load_config(ROOT / "config" / "ci.yaml")
+    chain_cfg = tmp_path / "chain.yaml"
+    chain_cfg.write_text((ROOT / "config" / "ci.yaml").read_text().replace(
+        "delta_mode: energy", "delta_mode: chain"))
+    cfg = load_config(chain_cfg)
     assert cfg["contact"]["delta_mode"] == "chain"
     soft, stiff = "pla-t400um-E30MPa-nu0.300", "pla-t400um-E660MPa-nu0.300"
     steps = int(cfg["contact"]["steps"])
-    assert main(["contact", "--config", str(ROOT / "config" / "ci.yaml"), "--scene", soft,
+    assert main(["contact", "--config", str(chain_cfg), "--scene", soft,
                  "--scene", stiff, "--output-dir", str(tmp_path / "chain")]) == 0
     c = read_curve(tmp_path / "chain" / f"{soft}.h5")
     pla = library(cfg)["pla"]
@@ -232,7 +255,7 @@ def test_delta_mode_chain_extends_the_curve_to_what_the_chain_reaches(tmp_path):
     np.testing.assert_allclose(np.diff(c.delta[:-1]), h, rtol=1e-9)
     assert np.all(np.diff(c.force) > 0)
     end = h * (c.delta.size - 1)  # the last whole step
-    assert main(["contact", "--config", str(ROOT / "config" / "ci.yaml"), "--scene", soft,
+    assert main(["contact", "--config", str(chain_cfg), "--scene", soft,
                  "--delta-max", repr(end), "--steps", str(c.delta.size - 1),
                  "--output", str(tmp_path / "fixed.h5")]) == 0
     f = read_curve(tmp_path / "fixed.h5")

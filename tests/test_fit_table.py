@@ -1,6 +1,5 @@
 """K(E, nu) tables: grid exactness, the stated interpolation error, files, errors."""
 
-import csv
 
 import numpy as np
 import pytest
@@ -10,6 +9,7 @@ from ssw.curve import ForceCurve
 from ssw.errors import OutOfRangeError, SswError
 from ssw.fit.fitting import fit_curve
 from ssw.fit.table import KTable, build_tables, load_tables, write_tables
+from ssw.h5io import read_rows_csv
 
 R = 9.53e-3
 DELTA = np.linspace(0.0, 1e-4, 201)
@@ -104,7 +104,7 @@ def test_hdf5_and_csv_round_trip(table, tmp_path):
     assert np.array_equal(back.K(E, 0.37), table.K(E, 0.37))
     tables, inputs = load_tables(h5)
     assert inputs == {"note": "test"} and len(tables) == 1
-    rows = list(csv.DictReader(csvp.open()))
+    rows = read_rows_csv(csvp)
     assert len(rows) == E_GRID.size * NU_GRID.size
     r = rows[5]
     assert float(r["K"]) == pytest.approx(

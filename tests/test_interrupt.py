@@ -298,10 +298,10 @@ def test_killed_contact_batch_leaves_only_complete_curves(tmp_path: Path, sig: i
     name is a complete curve, the rest are hidden `.part` files (none after SIGTERM, which
     unwinds); the re-run writes all three, the first equal to the one written before."""
     from ssw.config import load_config
-    from ssw.contact.batch import batches
     from ssw.curve import read_curve
+    from ssw.workflow import families
 
-    ids = [i for b in batches(load_config(ROOT / "config" / "ci.yaml")).values() for i in b][:3]
+    ids = [i for b in families(load_config(ROOT / "config" / "ci.yaml")).values() for i in b][:3]
     out = tmp_path / "contact"
     # a cold operator cache: a scene costs milliseconds once its plate's and soil's condensed
     # operators exist (ssw.contact.operators), ~0.2-0.5 s to build them first; the scenes
@@ -320,7 +320,7 @@ def test_killed_contact_batch_leaves_only_complete_curves(tmp_path: Path, sig: i
     done = {p.name: read_curve(p).force for p in out.iterdir() if p.suffix == ".h5"}
     assert 1 <= len(done) < len(ids), sorted(done)  # killed mid-batch
     # complete: increments of delta_max / CONTACT_STEPS up to the curve's last indentation,
-    # delta_max or the chain's reach when that is deeper (ci.yaml: contact.delta_mode chain)
+    # delta_max or the energy reach when that is deeper (ci.yaml: contact.delta_mode energy)
     for name in done:
         c = read_curve(out / name)
         end = max(c.inputs["delta_max"], c.inputs.get("delta_reach") or 0.0)

@@ -86,8 +86,9 @@ def test_cli_prints_the_contract(capsys, tmp_path):
                  "fig9_tof_scatter.png", "table2_tof.csv", "table3_modulus.csv"):
         assert (tmp_path / name).stat().st_size > 0
     t2 = (tmp_path / "table2_tof.csv").read_text().splitlines()
-    assert t2[1].startswith("PCF08,38,0.34,") and t2[1].endswith(",1.11")  # |1.78-1.80|/1.80
-    header = (tmp_path / "validation.csv").read_text().splitlines()[0]
+    assert t2[0].startswith("# ssw ")  # the provenance line
+    assert t2[2].startswith("PCF08,38,0.34,") and t2[2].endswith(",1.11")  # |1.78-1.80|/1.80
+    header = (tmp_path / "validation.csv").read_text().splitlines()[1]
     assert "tof_sim [s]" in header and "E_measured [Pa]" in header
 
 

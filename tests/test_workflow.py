@@ -1,42 +1,15 @@
 """The Snakemake workflow: lint, a dry run of the thesis study, refusals, a real tiny study."""
 
-import os
-import re
-import shutil
 import subprocess
 import sys
-from pathlib import Path
 
 import h5py
 import pytest
+from snakemake_run import ROOT, job_stats, smk, user_env
 
 from ssw.config import all_scenes, load_config
 
-ROOT = Path(__file__).resolve().parent.parent
-SNAKEMAKE = str(Path(sys.executable).with_name("snakemake"))
-
-
-def _env():
-    """The environment of a user who has not activated .venv: its bin is NOT on PATH (the
-    workflow must find `python -m ssw` through the interpreter that runs Snakemake)."""
-    env = dict(os.environ)
-    venv_bin = str(Path(sys.executable).parent)
-    env["PATH"] = os.pathsep.join(p for p in env.get("PATH", "").split(os.pathsep)
-                                  if p and p != venv_bin)
-    env.pop("VIRTUAL_ENV", None)
-    return env
-
-
-def _smk(*args, cwd=ROOT, timeout=600):
-    return subprocess.run([SNAKEMAKE, "-s", str(ROOT / "Snakefile"), *args], cwd=cwd,
-                          capture_output=True, text=True, env=_env(), timeout=timeout)
-
-
-def _job_stats(text):
-    """Rule -> job count from Snakemake's 'Job stats' table."""
-    table = text.split("Job stats:")[1]
-    return {m.group(1): int(m.group(2))
-            for m in re.finditer(r"^(\w+)\s+(\d+)\s*$", table, re.MULTILINE)}
+_env, _smk, _job_stats = user_env, smk, job_stats
 
 
 def test_lint_is_clean():
@@ -51,17 +24,18 @@ def test_dry_run_of_the_thesis_study(tmp_path):
     assert r.returncode == 0, r.stdout + r.stderr
     stats = _job_stats(r.stdout)
     cfg = load_config(ROOT / "config" / "config.yaml")
-    # every contact scene of every set is one contact job (thesis Table 1: Set 3 alone is
-    # 100 soil moduli x 3 Poisson's ratios = 300 scenes)
+    # every contact scene of every set (thesis Table 1: Set 3 alone is 100 soil moduli x 3
+    # Poisson's ratios = 300 scenes) is computed by the one job of its plate family (rule
+    # contact_batch: seven families of plate material and thickness)
+    from ssw.workflow import families
+
     n_scenes = len(all_scenes(cfg))
     assert n_scenes >= 300
-    # ... computed in batches of up to contact.jobs_per_group scenes, one job (and rule) each
-    from ssw.contact.batch import batches
-    n_batches = len(batches(cfg))
-    assert {r: n for r, n in stats.items() if r.startswith("contact_batch_")} == {
-        f"contact_batch_{b}": 1 for b in batches(cfg)} and n_batches < n_scenes / 20
-    assert stats["all"] == 1
-    assert stats["total"] > n_batches
+    assert stats["contact_batch"] == len(families(cfg)) == 7
+    assert stats["fit_set"] == 2 and stats["fit_grid"] == 1  # Sets 1, 2 and Set 3
+    assert stats["tof_sweep"] == 1 and stats["all"] == 1
+    # a dry run writes nothing (the resolved config is written when a run starts)
+    assert not (tmp_path / "results").exists()
 
 
 def test_negative_thickness_is_refused_before_any_job(tmp_path):
@@ -76,33 +50,23 @@ def test_negative_thickness_is_refused_before_any_job(tmp_path):
     assert not (tmp_path / "results" / "contact").exists()
 
 
-@pytest.fixture(scope="module")
-def ci_study(tmp_path_factory):
-    """The whole pipeline on config/ci.yaml, run once: contact -> fits -> the fem wall ->
-    calibration on the thesis foams' measured TOFs -> sweep -> Tables 2-3 -> survey."""
-    tmp = tmp_path_factory.mktemp("ci_study")
-    shutil.copytree(ROOT / "config", tmp / "config")
-    r = _smk("--cores", "2", "--directory", str(tmp), "--configfile",
-             str(tmp / "config" / "ci.yaml"), timeout=900)
-    assert r.returncode == 0, r.stdout[-4000:] + r.stderr[-4000:]
-    return tmp
-
-
 def _csv(path):
-    import csv
+    from ssw.h5io import read_rows_csv
 
-    with open(path) as f:
-        return list(csv.DictReader(f))
+    return read_rows_csv(path)
 
 
 def test_tiny_study_writes_every_output_and_reruns_nothing(ci_study):
     res = ci_study / "results"
     cfg = load_config(ci_study / "config" / "ci.yaml")
+    from ssw.workflow import contact_file
+
     for sid in all_scenes(cfg):
-        with h5py.File(res / "contact" / f"{sid}.h5") as f:
+        with h5py.File(ci_study / contact_file(sid)) as f:
             assert f.attrs["ssw_kind"] == "contact_curve"
             assert f["force"].attrs["units"] == "N"
-    for name in ("fit/k_table.h5", "chain/tof_sweep.h5", "calibration/calibration.json",
+    for name in ("fit/sets/set3_soil/k_table.h5", "chain/tof_sweep.h5",
+                 "calibration/calibration.json",
                  "validation/table3_modulus.csv", "survey/survey.csv",
                  "survey/figures/survey_map.png"):
         assert (res / name).is_file(), name

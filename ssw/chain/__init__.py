@@ -4,6 +4,5 @@ Modules: :mod:`~ssw.chain.params` (the chain), :mod:`~ssw.chain.walls` (last-con
 :mod:`~ssw.chain.statics` (gravity precompression), :mod:`~ssw.chain.integrate` (batched
 velocity Verlet), :mod:`~ssw.chain.tof` (peak picking), :mod:`~ssw.chain.api` (public
 entry points), :mod:`~ssw.chain.sweep`, :mod:`~ssw.chain.inverse`,
-:mod:`~ssw.chain.calibration`, :mod:`~ssw.chain.baseline`
-(scipy DOP853 reference) and :mod:`~ssw.chain.workflow` (Snakemake input helpers).
+:mod:`~ssw.chain.baseline` (scipy DOP853 reference).
 """

@@ -18,7 +18,7 @@ import numpy as np
 from ssw.chain.api import peaks
 from ssw.chain.params import ChainParams
 from ssw.errors import ConfigError, SswError
-from ssw.h5io import atomic_h5, atomic_path, check_kind, read_inputs, write_dataset
+from ssw.h5io import atomic_h5, check_kind, read_inputs, write_dataset
 from ssw.plotting import pyplot, save_png
 
 KIND = "tof_sweep"
@@ -132,10 +132,15 @@ def merge_sweeps(sweeps: list[Sweep]) -> Sweep:
 
 def write_csv(path: str | Path, sweep: Sweep) -> None:
     """CSV with a header naming the units."""
+    import io
+
+    from ssw.h5io import write_csv_text
+
     head = "soil_E_Pa,soil_nu,tof_s,t_incident_s,f_incident_N,f_reflected_N"
     data = np.column_stack([getattr(sweep, k) for k in FIELDS])
-    with atomic_path(path) as tmp:
-        np.savetxt(tmp, data, delimiter=",", header=head, comments="", fmt="%.10g")
+    buf = io.StringIO()
+    np.savetxt(buf, data, delimiter=",", header=head, comments="", fmt="%.10g")
+    write_csv_text(path, buf.getvalue(), {k: getattr(sweep, k) for k in FIELDS})
 
 
 def plot_fig8(path: str | Path, sweep: Sweep, title: str = "") -> None:

@@ -16,10 +16,12 @@ import argparse
 import importlib
 import os
 import pkgutil
+import re
 import signal
 import sys
 import threading
 from collections.abc import Sequence
+from pathlib import Path
 from typing import Any
 
 from ssw import __version__
@@ -44,21 +46,64 @@ def command_modules() -> list[str]:
     return sorted(f"ssw.cli.{n}" for n in names if not n.startswith("_"))
 
 
-def build_parser() -> argparse.ArgumentParser:
+#: ``sub.add_parser("name"`` in a command module (the name may follow on the next line).
+_ADD_PARSER_RE = re.compile(r"\.add_parser\(\s*[\"']([\w-]+)[\"']")
+
+
+def command_index() -> dict[str, str]:
+    """Command name -> the module that registers it, found by reading the modules' text
+    (importing every module would import everything they use: ~0.5 s per command run)."""
+    import ssw.cli as pkg
+
+    out: dict[str, str] = {}
+    for name in command_modules():
+        path = Path(pkg.__path__[0]) / f"{name.rsplit('.', 1)[1]}.py"
+        for cmd in _ADD_PARSER_RE.findall(path.read_text()):
+            out.setdefault(cmd, name)
+    return out
+
+
+def _command_of(argv: Sequence[str]) -> str | None:
+    """The subcommand named in ``argv`` (the first argument that is not an option or an
+    option's value), or None."""
+    it = iter(argv)
+    for a in it:
+        if a == "--inputs-sha256":
+            next(it, None)
+        elif not a.startswith("-"):
+            return a
+    return None
+
+
+def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
+    """The ``ssw`` parser: every command, or, when ``argv`` names one, only the module that
+    defines it (``ssw --help`` and an unknown command still see them all)."""
     parser = argparse.ArgumentParser(
         prog="ssw",
         description="Solitary strain wave device studies: contact FEM, modified Hertz fits, "
         "chain dynamics, acquisition and validation. SI units throughout.",
     )
     parser.add_argument("--version", action="version", version=f"ssw {__version__}")
+    parser.add_argument(
+        "--inputs-sha256", metavar="DIGEST",
+        help="digest of the study inputs this run was scheduled with (set by the workflow's "
+        "rules; recorded as inputs_sha256 in every result; default: the digest of the "
+        "command's own inputs)")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True)
-    for name in command_modules():
+    modules = command_modules()
+    if argv is not None:
+        cmd = _command_of(argv)
+        owner = command_index().get(cmd) if cmd else None
+        if owner is not None:
+            modules = [owner]
+    for name in modules:
         importlib.import_module(name).register(sub)
     return parser
 
 
 def _inputs(args: argparse.Namespace) -> dict[str, Any]:
-    return {k: v for k, v in vars(args).items() if k not in {"func", "json", "human"}}
+    return {k: v for k, v in vars(args).items()
+            if k not in {"func", "json", "human", "inputs_sha256"}}
 
 
 def _human(result: dict[str, Any]) -> str:
@@ -80,8 +125,12 @@ def _terminate(signum: int, frame: object) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
-    parser = build_parser()
+    from ssw.provenance import record, set_context
+
+    argv = list(sys.argv[1:] if argv is None else argv)
+    parser = build_parser(argv)
     args = parser.parse_args(argv)
+    set_context([getattr(args.func, "__module__", "ssw")], args.inputs_sha256)
     if threading.current_thread() is threading.main_thread():
         signal.signal(signal.SIGTERM, _terminate)
         # PETSc would otherwise install its own SIGTERM handler when first initialized
@@ -108,6 +157,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         return 0
     if getattr(args, "json", False):
         out = {**_inputs(args), **result, "ssw_version": __version__}
+        out["provenance"] = record(_inputs(args))
         print(to_json(out))
     else:
         human = getattr(args, "human", None)

@@ -32,7 +32,7 @@ import numpy as np
 
 from ssw.errors import ConfigError
 
-DEFAULT_K_TABLE = "results/fit/k_table.h5"
+DEFAULT_K_TABLE = "results/fit/sets/<fit.set>/k_table.h5"
 DEFAULT_CONTACT_DIR = "results/contact"
 #: Environment variable giving the default of ``--calibration`` (a file, auto or none).
 CALIBRATION_ENV = "SSW_CALIBRATION"
@@ -101,7 +101,8 @@ def add_device_options(p: argparse.ArgumentParser,
     w.add_argument("--k-table", help=f"fit wall: K table HDF5 (default {DEFAULT_K_TABLE})")
     w.add_argument("--curve", help="table wall: one FEM contact curve HDF5 for every scene")
     w.add_argument("--contact-dir", default=DEFAULT_CONTACT_DIR,
-                   help="table wall without --curve: the {scene_id}.h5 curves' folder")
+                   help="table wall without --curve: the contact curves' folder "
+                   "(<family>/<scene_id>.h5, as the workflow writes them)")
     w.add_argument("--wall-dynamics", choices=["quasi-static", "reduced", "fem"],
                    help="the tested medium's inertia: quasi-static (the static law, default: "
                    "the config's chain.wall_dynamics), reduced (plus its radiation damping "
@@ -220,18 +221,21 @@ def wall_law(args: argparse.Namespace, cfg: dict[str, Any], cal: Any, params: An
     if law == "fit":
         if args.K is not None:
             return law, {"K": args.K}
-        return law, {"k_table": args.k_table or DEFAULT_K_TABLE}
+        from ssw.workflow import k_table_file
+
+        return law, {"k_table": args.k_table or k_table_file(cfg)}
     if law == "fem":
         return law, {"contact": dict(cfg.get("contact", {}))}
     if law == "table":
         if args.curve:
             return law, {"curve": args.curve}
         from ssw.config import Scene
+        from ssw.workflow import scene_file
 
         Eb, nub = np.broadcast_arrays(np.asarray(E, float), np.asarray(nu, float))
-        paths = [str(Path(args.contact_dir) / (Scene(params.plate_material,
-                                                     params.plate_thickness, float(e),
-                                                     float(n)).scene_id + ".h5"))
+        paths = [scene_file(args.contact_dir, Scene(params.plate_material,
+                                                    params.plate_thickness, float(e),
+                                                    float(n)).scene_id)
                  for e, n in zip(Eb.ravel(), nub.ravel(), strict=True)]
         return law, {"curve": paths}
     return law, {}

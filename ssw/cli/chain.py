@@ -110,8 +110,10 @@ def run_tof_sweep(args: argparse.Namespace) -> dict[str, Any] | None:
     from ssw.config import load_config
 
     E, nu = _sweep_points(args, load_config(args.config))
-    chunks = args.chunks or 1
-    idx = chunk_slice(E.size, args.chunk, chunks)
+    chunk, chunks = args.chunk, args.chunks or 1
+    if args.part is not None:
+        chunk, chunks = _part(args.part)
+    idx = chunk_slice(E.size, chunk, chunks)
     E, nu = E[idx], nu[idx]
     ctx = chain_context(args, E, nu)
     params, wall, opts = ctx.params, ctx.wall, ctx.wall_options
@@ -143,6 +145,19 @@ def run_tof_sweep(args: argparse.Namespace) -> dict[str, Any] | None:
         "points": int(sw.tof.size), "wall_time": wall_time,
         "ranks": 1 if comm is None else comm.Get_size(),
     }
+
+
+def _part(text: str) -> tuple[int, int]:
+    """``I-of-N`` (1-based, Snakemake's scatter item) -> (chunk index from 0, chunks)."""
+    from ssw.errors import ConfigError
+
+    try:
+        i, n = (int(x) for x in text.split("-of-"))
+    except ValueError:
+        i, n = 0, 0
+    if not 1 <= i <= n:
+        raise ConfigError("--part", text, "I-of-N with 1 <= I <= N (e.g. 2-of-4)")
+    return i - 1, n
 
 
 def run_tof_merge(args: argparse.Namespace) -> dict[str, Any]:
@@ -229,6 +244,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--soil-nu", type=float, nargs="+", help="Poisson's ratio(s)")
     p.add_argument("--chunk", type=int, default=0, help="0-based chunk index")
     p.add_argument("--chunks", type=int, default=1, help="number of chunks")
+    p.add_argument("--part", metavar="I-of-N",
+                   help="part I (from 1) of N: chunk I-1 of N (the workflow's scatter items)")
     p.add_argument("--mpi", action="store_true", help="split the points over MPI ranks")
     p.add_argument("--output", help="output HDF5 (kind tof_sweep)")
     p.add_argument("--csv", help="also write this CSV")

@@ -5,11 +5,13 @@
   [--steps N] [--output FILE.h5] [--config C] [--json]``; or ``ssw contact --scene ID``
   to take a scene of the config's sets. SI units. With ``--json`` prints ``{"delta": [...],
   "force": [...], "contact_radius": [...], ...}`` with every input.
-* ``ssw contact --scene ID [--scene ID ...] --output-dir DIR [--config C] [--json]``: a
-  batch of scenes in one process (the workflow's contact jobs: the ~0.6 s of imports are
-  paid once), solved in turn; each ``DIR/ID.h5`` is written atomically as soon as its scene
-  is done, so an interrupted batch leaves only complete curve files. Prints (``--json``)
-  ``{"scenes": [...], "outputs": [...], "curves": [{scene_id, output, force_max, ...}]}``.
+* ``ssw contact --scene ID [--scene ID ...] --output-dir DIR [--config C] [--json]``, or
+  ``ssw contact --family NAME --output-dir DIR``: a batch of scenes in one process (the
+  workflow's contact jobs solve a plate family, :func:`ssw.workflow.families`: the imports
+  are paid once), solved in turn; each ``DIR/ID.h5`` is written atomically as soon as its
+  scene is done, so an interrupted batch leaves only complete curve files. Prints
+  (``--json``) ``{"scenes": [...], "outputs": [...], "curves": [{scene_id, output,
+  force_max, ...}]}``.
 * ``ssw contact-plot CURVES... --output F.png [--label-by material|thickness]``: force vs
   indentation of several curves with the Hertz law of their soil (the thesis's Figs 5, 6).
 """
@@ -33,6 +35,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--scene", action="append",
                    help="a scene id of the config's sets (instead of the below); repeat it "
                    "for a batch solved in one process (with --output-dir)")
+    p.add_argument("--family",
+                   help="every scene of a plate family of the config (ssw.workflow.families: "
+                   "one plate material and thickness, or noplate), with --output-dir")
     p.add_argument("--soil-E", type=float, help="soil Young's modulus, Pa")
     p.add_argument("--soil-nu", type=float, help="soil Poisson's ratio, (-1, 0.5]")
     p.add_argument("--plate-material", help="plate material key of the config's library")
@@ -110,11 +115,21 @@ def run(args: argparse.Namespace) -> dict[str, Any] | None:
 
     solve_scene = _engine(args)
 
+    cfg = load_config(args.config)
+    if args.family is not None:
+        from ssw.workflow import families
+
+        fams = families(cfg)
+        if args.family not in fams:
+            raise ConfigError("--family", args.family,
+                              f"a plate family of the config: {', '.join(fams)}")
+        if args.scene:
+            raise ConfigError("--scene", args.scene, "not with --family")
+        args.scene = fams[args.family]
     if args.scene:
         args.scene = list(dict.fromkeys(args.scene))  # a repeated id is solved once
     if args.output_dir is not None or (args.scene and len(args.scene) > 1):
         _check_batch_args(args)
-    cfg = load_config(args.config)
     contact = dict(cfg.get("contact", {}))
     if args.mesh_growth is not None:
         contact["mesh_growth"] = args.mesh_growth
@@ -152,18 +167,30 @@ def scene_reach(scenes: list[Any], cfg: dict[str, Any], contact: dict[str, Any],
     """Final indentation (m) of each scene's curve (``contact.delta_reach`` of the solver).
 
     ``contact.delta_mode`` ``fixed``: ``delta_max`` for all (the thesis's 0.1 mm).
-    ``chain``: ``max(delta_max, needed)`` (``steps`` more increments past delta_max), with
-    ``needed`` what the chain reaches at its last contact on that scene
-    (:func:`ssw.fit.range.scenes_delta_max`, one batched chain run): the thesis's 0.1 mm
-    stops short of the 0.2-0.6 mm a 20-bead chain presses into soils
-    below ~700 MPa, and the chain's TOF then rests on an extrapolated curve.
+    ``energy``: ``max(delta_max, reach)``, ``reach`` the indentation at which a Hertz
+    half-space of the softer of the scene's soil and plate stores ``contact.reach_energy``
+    (:func:`ssw.fit.range.energy_reach`: a function of the scene alone, not of the device).
+    ``chain``: ``max(delta_max, needed)``, with ``needed`` what the device's chain reaches
+    at its last contact on that scene (:func:`ssw.fit.range.scenes_delta_max`, one batched
+    chain run). The thesis's 0.1 mm stops short of the 0.2-0.6 mm a 20-bead chain presses
+    into soils below ~700 MPa, and the chain's TOF would rest on an extrapolated curve.
     """
     d0 = float(contact.get("delta_max", 1.0e-4))
-    if contact.get("delta_mode", "fixed") != "chain" or not scenes:
+    mode = contact.get("delta_mode", "fixed")
+    if mode == "fixed" or not scenes:
         return [d0] * len(scenes)
+    plates = [mats[s.plate_material] if s.plate_thickness > 0 else None for s in scenes]
+    if mode == "energy":
+        from ssw.fit.range import energy_reach
+
+        reach = energy_reach([s.soil_E for s in scenes], [s.soil_nu for s in scenes],
+                             [p.E if p else None for p in plates],
+                             [p.nu if p else None for p in plates],
+                             float(cfg["indenter"]["radius"]),
+                             float(contact.get("reach_energy", 0.02)))
+        return [max(d0, float(r)) for r in reach]
     from ssw.fit.range import scenes_delta_max
 
-    plates = [mats[s.plate_material] if s.plate_thickness > 0 else None for s in scenes]
     need = scenes_delta_max([s.soil_E for s in scenes], [s.soil_nu for s in scenes],
                             [p.E if p else None for p in plates],
                             [p.nu if p else None for p in plates], cfg)

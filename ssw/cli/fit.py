@@ -133,14 +133,17 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Table, deviation, figures and TOF cost of one set's curves, in one "
         "process; file names as listed in workflow/rules/fit.smk.")
     fs.add_argument("set", help="set name of the config")
-    fs.add_argument("curves", nargs="+", help="the set's contact curve files")
+    fs.add_argument("curves", nargs="+",
+                    help="the set's contact curve files, or folders holding them (the "
+                    "workflow's plate families: the set's scenes are taken from them)")
     fs.add_argument("--outdir", required=True, help="the fit results folder (results/fit)")
     fs.add_argument("--contact-figure", metavar="PNG",
                     help="also draw the set's curves with Hertz (thesis Figs 5, 6: the contact "
                     "stage's figure, `ssw contact-plot`) here: the curves are read already")
-    fs.add_argument("--label-by", choices=["material", "thickness"], default="material",
+    fs.add_argument("--label-by", choices=["material", "thickness"], default=None,
                     help="--contact-figure: label the curves by plate material or thickness")
-    fs.add_argument("--title", default="", help="--contact-figure: its title")
+    fs.add_argument("--title", default=None,
+                    help="--contact-figure: its title (default: what the set varies)")
     _config_arg(fs)
     add_json_flag(fs)
     fs.set_defaults(func=run_set)
@@ -324,7 +327,6 @@ def run_range(args: argparse.Namespace) -> dict[str, Any]:
 def run_set(args: argparse.Namespace) -> dict[str, Any]:
     """Every fit output of one set (the module docstring), one process: the config loaded
     once, every curve read once."""
-    import shutil
     from pathlib import Path
 
     from ssw.config import expand_grid
@@ -342,12 +344,14 @@ def run_set(args: argparse.Namespace) -> dict[str, Any]:
 
         raise ConfigError("set", args.set, f"one of the sets: {', '.join(cfg['sets'])}")
     spec = cfg["sets"][args.set]
-    one_soil = expand_grid(spec["soil_E"], f"sets.{args.set}.soil_E").size == 1
+    one_soil = (expand_grid(spec["soil_E"], f"sets.{args.set}.soil_E").size
+                * expand_grid(spec["soil_nu"], f"sets.{args.set}.soil_nu").size) == 1
     kind = "materials" if len(spec["plate_material"]) > 1 else "thickness"
     out = Path(args.outdir)
     tdir = out / "sets" / args.set
     tdir.mkdir(parents=True, exist_ok=True)
     (out / "figures").mkdir(parents=True, exist_ok=True)
+    args.curves = set_curve_files(cfg, args.set, args.curves)
     curves = [read_curve(p) for p in args.curves]
     written: list[str] = []
 
@@ -356,6 +360,18 @@ def run_set(args: argparse.Namespace) -> dict[str, Any]:
         written.append(str(path))
 
     tables, records = table_from_files(args.curves, cfg, curves=curves)
+    short = [(p, r["range"]) for p, r in zip(args.curves, records, strict=True)
+             if r["range"]["clipped"]]
+    if short:
+        from ssw.errors import ConfigError
+
+        p, rng = short[0]
+        raise ConfigError(
+            "contact.reach_energy", cfg["contact"].get("reach_energy"),
+            f"curves that reach the fit range: {len(short)} of {len(records)} stop short of "
+            f"what the chain needs (e.g. {p}: ends at {rng['hi']:.4g} m, the chain presses "
+            f"{rng['needed']:.4g} m); raise contact.reach_energy (delta_mode energy) or "
+            "contact.delta_max (fixed)")
     write_tables(tables, tdir / "k_table.h5", tdir / "k_table.csv", {
         "curves": list(args.curves), "fit": cfg["fit"], "laws": config_laws(cfg),
         "ranges": [r["range"] for r in records]})
@@ -365,11 +381,6 @@ def run_set(args: argparse.Namespace) -> dict[str, Any]:
          "max_rel_residual": {law: float(r["max_rel_residual"].max())
                               for law, r in tb.residuals.items()}} for tb in tables]})
     written += [str(tdir / "k_table.h5"), str(tdir / "k_table.csv")]
-    if cfg["fit"].get("set") == args.set:
-        for ext in ("h5", "csv", "json"):
-            with _atomic_copy(out / f"k_table.{ext}") as tmp:
-                shutil.copyfile(tdir / f"k_table.{ext}", tmp)
-            written.append(str(out / f"k_table.{ext}"))
     plots = []
     if one_soil:
         rows = deviation_rows(curves, kind, cfg["fit"]["delta_ref"])
@@ -394,9 +405,38 @@ def run_set(args: argparse.Namespace) -> dict[str, Any]:
     if getattr(args, "contact_figure", None):
         from ssw.contact.figures import plot_curves
 
-        plot_curves(curves, args.contact_figure, label_by=args.label_by, title=args.title)
+        label_by = args.label_by or ("material" if kind == "materials" else "thickness")
+        title = args.title if args.title is not None else (
+            f"{args.set}: plate {'materials' if kind == 'materials' else 'thickness'}")
+        plot_curves(curves, args.contact_figure, label_by=label_by, title=title)
         written.append(args.contact_figure)
     return {"set": args.set, "outputs": written}
+
+
+def set_curve_files(cfg: dict[str, Any], set_name: str, paths: list[str]) -> list[str]:
+    """The curve files of a set: files as given; a folder contributes the set's scenes it
+    holds (``<folder>/<scene_id>.h5``). ConfigError if a scene of the set has no file."""
+    from pathlib import Path
+
+    from ssw.config import scenes
+    from ssw.errors import ConfigError
+
+    files = [p for p in paths if not Path(p).is_dir()]
+    dirs = [Path(p) for p in paths if Path(p).is_dir()]
+    if not dirs:
+        return files
+    found = {Path(f).stem for f in files}
+    for sc in scenes(cfg, set_name):
+        if sc.scene_id in found:
+            continue
+        hits = [d / f"{sc.scene_id}.h5" for d in dirs if (d / f"{sc.scene_id}.h5").is_file()]
+        if not hits:
+            raise ConfigError("curves", [str(d) for d in dirs],
+                              f"folders holding the curve of every scene of {set_name} "
+                              f"(no {sc.scene_id}.h5)")
+        files.append(str(hits[0]))
+        found.add(sc.scene_id)
+    return files
 
 
 def _version() -> str:
@@ -404,8 +444,3 @@ def _version() -> str:
 
     return __version__
 
-
-def _atomic_copy(path: Any) -> Any:
-    from ssw.h5io import atomic_path
-
-    return atomic_path(path)

@@ -49,9 +49,9 @@ def run_validate(args: argparse.Namespace) -> dict[str, Any]:
         T = np.asarray(api.tof(E[None, :], np.array(nus)[:, None], params, wall, **opts))
         sweep_curves = {}
         if args.sweep:
-            from ssw.chain.sweep import read_sweep
+            from ssw.chain.sweep import merge_sweeps, read_sweep
 
-            sw = read_sweep(args.sweep)[0]
+            sw = merge_sweeps([read_sweep(p)[0] for p in args.sweep])
             sweep_curves = {float(nu): sw.curve(float(nu)) for nu in np.unique(sw.soil_nu)}
         plot_fig10(d / "fig10_tof_validation.png", rows,
                    {nu: (E, T[i]) for i, nu in enumerate(nus)}, sweep_curves)
@@ -90,7 +90,8 @@ def register(sub: argparse._SubParsersAction) -> None:
         "from the measured TOF with its COV and % difference. SI units.")
     p.add_argument("--outdir", help="write validation.csv/.h5 and Figs 9, 10 here")
     p.add_argument("--root", default=".", help="folder relative recording paths start from")
-    p.add_argument("--sweep", help="the chain's TOF(E, nu) sweep HDF5, drawn in Fig 10")
+    p.add_argument("--sweep", nargs="+",
+                   help="the chain's TOF(E, nu) sweep HDF5 (or its parts), drawn in Fig 10")
     add_device_options(p)
     add_json_flag(p)
     p.set_defaults(func=run_validate, human=_human)

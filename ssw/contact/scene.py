@@ -65,7 +65,7 @@ RANGES: dict[str, tuple[str, float, bool, float | None]] = {
     "delta_max": ("number", 0.0, False, None),
     "steps": ("integer", 1, True, None),
     "plate_diameter": ("number", 0.0, False, None),
-    "jobs_per_group": ("integer", 1, True, None),
+    "reach_energy": ("number", 0.0, False, None),
     "soil_radius": ("number", 0.0, False, None),
     "soil_depth": ("number", 0.0, False, None),
     "mesh_size_contact": ("number", 0.0, False, None),

@@ -142,6 +142,28 @@ def softer_half_space(
     return E, nu
 
 
+def energy_reach(
+    soil_E: ArrayLike, soil_nu: ArrayLike, plate_E: Any, plate_nu: Any, radius: float,
+    energy: float,
+) -> NDArray[np.float64]:
+    """Indentation (m) at which a rigid sphere (``radius`` m) stores ``energy`` (J) in a Hertz
+    half-space of the softer of each scene's soil and plate (``softer_half_space``):
+    ``(2/5) A d^(5/2) = W``, ``A = 4/3 E/(1 - nu^2) sqrt(R)`` (Johnson 1985, eq. 4.23), so
+    ``d = (5 W / (2 A))^(2/5)``.
+
+    The chain presses its wall no deeper than the energy it brings allows, and a plate
+    stiffer than the soil only makes the contact stiffer than that wall (the bound of
+    :func:`scenes_delta_max`), so with ``energy`` above the chain's (the striker's kinetic
+    energy and the column's weight on the indentation) the curve covers the chain's range
+    for any device of that energy: ``contact.delta_mode: energy``.
+    """
+    if not (np.isfinite(energy) and energy > 0):
+        raise ConfigError("contact.reach_energy", energy, "an energy > 0 J")
+    E, nu = softer_half_space(soil_E, soil_nu, plate_E, plate_nu)
+    A = 4.0 / 3.0 * E / (1.0 - nu**2) * np.sqrt(float(radius))
+    return (2.5 * float(energy) / A) ** 0.4
+
+
 def fit_ranges(
     soil_E: ArrayLike, soil_nu: ArrayLike, curve_delta_max: ArrayLike, cfg: dict[str, Any],
     plate_E: Any = None, plate_nu: Any = None,

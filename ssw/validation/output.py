@@ -9,7 +9,7 @@ from typing import Any
 
 import numpy as np
 
-from ssw.h5io import atomic_h5, atomic_write_text, to_json, write_dataset
+from ssw.h5io import atomic_h5, to_json, write_csv_text, write_dataset
 from ssw.validation.table import SampleResult
 
 KIND = "validation"
@@ -39,7 +39,7 @@ def to_csv_text(rows: list[SampleResult]) -> str:
 def write_table(csv_path: str | Path, h5_path: str | Path, rows: list[SampleResult],
                 inputs: dict[str, Any]) -> None:
     """Write the CSV and the HDF5 (one group per sample, per-hit arrays included)."""
-    atomic_write_text(csv_path, to_csv_text(rows))
+    write_csv_text(csv_path, to_csv_text(rows), inputs)
     with atomic_h5(h5_path, kind=KIND, inputs=inputs) as f:
         for r in rows:
             g = f.create_group(r.sample)
@@ -92,8 +92,11 @@ def thesis_tables_text(rows: list[SampleResult]) -> tuple[str, str]:
     return t2.getvalue(), t3.getvalue()
 
 
-def write_thesis_tables(table2: str | Path, table3: str | Path, rows: list[SampleResult]) -> None:
-    """Write :func:`thesis_tables_text` to two CSV files."""
+def write_thesis_tables(table2: str | Path, table3: str | Path, rows: list[SampleResult],
+                        inputs: Any = None) -> None:
+    """Write :func:`thesis_tables_text` to two CSV files (with their provenance line, for
+    tables made from ``inputs``: default the rows)."""
     a, b = thesis_tables_text(rows)
-    atomic_write_text(table2, a)
-    atomic_write_text(table3, b)
+    inputs = [r.to_dict() for r in rows] if inputs is None else inputs
+    write_csv_text(table2, a, inputs)
+    write_csv_text(table3, b, inputs)

@@ -11,36 +11,42 @@
 #   figures/survey_map.png         plan view (only when the points have coordinates)
 
 SURVEY_DIR = f"{RESULTS}/survey"
-SURVEY_POINTS = {pt["id"]: pt for pt in config.get("survey", {}).get("points", [])}
+SURVEY_POINTS = sswwf.survey_points(config)
 
 
 rule survey_point:
     """One test point: its recordings -> E with its interval (ssw measure)."""
     input:
-        unpack(lambda wc: survey_point_inputs(wc.point)),
+        unpack(survey_point_inputs),
     output:
         json=f"{SURVEY_DIR}/points/{{point}}.json",
     log:
         f"{LOGS}/survey/{{point}}.log",
-    params:
-        config=CONFIG_FILE,
-        nu=lambda wc: survey_nu(wc.point),
-        flags=lambda wc, input: " ".join(
-            [chainwf.wall_flags(config, input, RESULTS), chainwf.calibration_flag(input)]
-        ),
+    benchmark:
+        f"{BENCHMARKS}/survey/{{point}}.tsv"
     wildcard_constraints:
-        point=r"[A-Za-z0-9_.\-]+",
+        point=sswwf.alternatives(SURVEY_POINTS),
+    params:
+        inputs=lambda wc: inputs_of("survey_point", wc.point),
+        digest=lambda wc: digest_of("survey_point", wc.point),
+        config=STUDY_CONFIG,
+        nu=lambda wc: sswwf.survey_nu(config, wc.point),
+        chain=chain_flags,
+    resources:
+        mem_mb=sswwf.mem_mb("survey_point", 0),
+        runtime=sswwf.runtime_min("survey_point", 0),
     conda:
         SSW_ENV
     shell:
-        "python -m ssw measure {input.recordings} --soil-nu {params.nu} --config {params.config} "
-        "{params.flags} --json > {output.json} 2> {log}"
+        "python -m ssw --inputs-sha256 {params.digest} measure {input.recordings} "
+        "--soil-nu {params.nu} --config {params.config} {params.chain} --json "
+        "> {output.json} 2> {log}"
 
 
 rule survey_table:
     """The survey table, verdicts and figures."""
     input:
-        expand(f"{SURVEY_DIR}/points/{{point}}.json", point=list(SURVEY_POINTS)),
+        expand(f"{SURVEY_DIR}/points/{{point}}.json", point=SURVEY_POINTS),
     output:
         csv=f"{SURVEY_DIR}/survey.csv",
         h5=f"{SURVEY_DIR}/survey.h5",
@@ -59,19 +65,24 @@ rule survey_table:
                     subcategory="Figures",
                 )
             }
-            if survey_has_coordinates()
+            if sswwf.survey_has_coordinates(config)
             else {}
         ),
     log:
         f"{LOGS}/survey/survey_table.log",
+    benchmark:
+        f"{BENCHMARKS}/survey/survey_table.tsv"
     params:
-        config=CONFIG_FILE,
+        inputs=inputs_of("survey_table"),
+        digest=digest_of("survey_table"),
+        config=STUDY_CONFIG,
         map=lambda wc, output: f"--map {output.map}" if "map" in output.keys() else "",
     conda:
         SSW_ENV
     shell:
-        "python -m ssw survey-table {input} --config {params.config} --csv {output.csv} "
-        "--h5 {output.h5} --plot {output.plot} {params.map} > {log} 2>&1"
+        "python -m ssw --inputs-sha256 {params.digest} survey-table {input} "
+        "--config {params.config} --csv {output.csv} --h5 {output.h5} --plot {output.plot} "
+        "{params.map} > {log} 2>&1"
 
 
 SURVEY_TARGETS = list(rules.survey_table.output) if SURVEY_POINTS else []

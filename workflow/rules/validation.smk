@@ -10,7 +10,6 @@
 #   results/report/tables_{stage}.html               each stage's tables for the study report
 #                                                    (snakemake --report results/report.html)
 
-
 VALIDATION_DIR = f"{RESULTS}/validation"
 
 
@@ -39,16 +38,24 @@ rule validation:
         ),
     log:
         f"{LOGS}/validation/validation.log",
+    benchmark:
+        f"{BENCHMARKS}/validation/validation.tsv"
     params:
-        config=CONFIG_FILE,
-        flags=validation_flags,
+        inputs=inputs_of("validation"),
+        digest=digest_of("validation"),
+        config=STUDY_CONFIG,
         root=RECORDINGS_ROOT,
+        outdir=lambda wc, output: os.path.dirname(output.csv),
+        chain=chain_flags,
+    resources:
+        mem_mb=sswwf.mem_mb("validation", 0),
+        runtime=sswwf.runtime_min("validation", 0),
     conda:
         SSW_ENV
     shell:
-        "python -m ssw validate --config {params.config} {params.flags} --root {params.root} "
-        "--sweep {input.sweep} "
-        "--outdir $(dirname {output.csv}) --json > {output.json} 2> {log}"
+        "python -m ssw --inputs-sha256 {params.digest} validate --config {params.config} "
+        "{params.chain} --root {params.root} --sweep {input.sweep} "
+        "--outdir {params.outdir} --json > {output.json} 2> {log}"
 
 
 # The study report is Snakemake's own, built after the run:
@@ -57,14 +64,6 @@ rule validation:
 # captions in workflow/report/*.rst, the description workflow/report/workflow.rst). It shows
 # CSV files only as downloads, so rule report_tables renders each stage's tables as one HTML
 # page (ssw report) that the report opens inline.
-# Every other stage's targets exist when this file is included (the Snakefile includes it
-# last).
-_STAGE_TARGETS = [
-    t
-    for name in ("CONTACT_TARGETS", "FIT_TARGETS", "CHAIN_TARGETS", "SURVEY_TARGETS")
-    for t in globals().get(name, [])
-]
-# results sub-folder -> the report's category (numbered: the report sorts categories by name)
 REPORT_CATEGORIES = {
     "contact": "1. Contact (Stage I)",
     "fit": "2. Fits (Stage I)",
@@ -72,18 +71,13 @@ REPORT_CATEGORIES = {
     "validation": "4. Validation (Stage III)",
     "survey": "5. Survey",
 }
-# stage -> its CSV tables
-REPORT_TABLES = {
-    stage: tables
-    for stage in REPORT_CATEGORIES
-    if (
-        tables := [
-            str(t)
-            for t in [*_STAGE_TARGETS, *rules.validation.output]
-            if str(t).startswith(f"{RESULTS}/{stage}/") and str(t).endswith(".csv")
-        ]
-    )
-}
+# stage -> its CSV tables (every other stage's targets exist: the Snakefile includes this
+# file last)
+REPORT_TABLES = sswwf.report_tables(
+    [*FIT_TARGETS, *CHAIN_TARGETS, *SURVEY_TARGETS, *rules.validation.output],
+    REPORT_CATEGORIES,
+    RESULTS,
+)
 
 
 rule report_tables:
@@ -104,12 +98,19 @@ rule report_tables:
         },
     log:
         f"{LOGS}/report/tables.log",
+    benchmark:
+        f"{BENCHMARKS}/report/tables.tsv"
     params:
-        pages=report_page_args,
+        inputs=inputs_of("report"),
+        digest=digest_of("report"),
+        pages=lambda wc, input, output: sswwf.report_page_args(
+            output, REPORT_TABLES, REPORT_CATEGORIES
+        ),
     conda:
         SSW_ENV
     shell:
-        "python -m ssw report {params.pages} --captions {input.captions} > {log} 2>&1"
+        "python -m ssw --inputs-sha256 {params.digest} report {params.pages} "
+        "--captions {input.captions} > {log} 2>&1"
 
 
 VALIDATION_TARGETS = [*rules.validation.output, *rules.report_tables.output]

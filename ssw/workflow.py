@@ -1,0 +1,501 @@
+"""The study as the workflow runs it: its jobs, and the inputs each job reads.
+
+Pure functions of a validated config (and one cached view of it, :class:`Study`), used by
+the rules of ``workflow/rules/*.smk`` so that the rule files hold only rules and these
+helpers are tested like any code.
+
+Exact reruns. Every job declares the slice of the study it reads (:meth:`Study.inputs`):
+its part of the config with every reference resolved to values (the device's physics, not
+its file name; each material's E, nu, density and strength, not the library's path), and
+the hash of the ssw source its command runs (:func:`ssw.provenance.source_hash` of the
+command's import closure). The rules pass that slice to Snakemake as a param; Snakemake
+stores params with each output and reruns a job whose params changed (its rerun trigger
+``params``), so an edit reruns exactly the jobs whose slice it changes, a dry run shows
+them, and nothing else reruns. Files a job reads (curves, the calibration, recordings, the
+sweep) are its inputs, compared by time as usual.
+
+A job's command reads the whole resolved study config (``results/study_config.yaml``,
+written when a run starts, never at parse time: a dry run and a lint write nothing) and
+uses only its slice. The slice's digest is passed to the command
+(``ssw --inputs-sha256 ...``) and recorded in every result it writes.
+
+Steps and their keys:
+
+* ``contact`` (one job per plate family, :func:`families`: the scenes of one plate
+  material and thickness, or of no plate, whatever set lists them: they share a mesh and
+  their operators);
+* ``fit`` (one job per set); ``calibration``; ``sweep`` (the TOF sweep, in parts:
+  ``scattergather``) and ``sweep_figure``; ``validation``; ``survey_point`` (one job per
+  point) and ``survey_table``; ``report``.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import asdict
+from typing import Any
+
+from ssw.config import Scene, all_scenes, device_of, expand_grid, library, scenes
+from ssw.errors import ConfigError
+
+#: The results folder of a study, relative to the working folder.
+RESULTS = "results"
+#: The resolved study config every job reads (written when a run starts).
+STUDY_CONFIG = f"{RESULTS}/study_config.yaml"
+#: The study's calibration file, relative to the results folder (``ssw calibrate
+#: --from-config``); seen from the working folder it is ``ssw.cli._device.STUDY_CALIBRATION``.
+CALIBRATION = "calibration/calibration.json"
+
+#: The command module of each step (its import closure is the step's code).
+STEP_MODULES: dict[str, tuple[str, ...]] = {
+    "contact": ("ssw.cli.contact",),
+    "fit": ("ssw.cli.fit",),
+    "calibration": ("ssw.cli.calibrate",),
+    "sweep": ("ssw.cli.chain",),
+    "sweep_figure": ("ssw.cli.chain",),
+    "validation": ("ssw.cli.validate",),
+    "survey_point": ("ssw.cli.measure",),
+    "survey_table": ("ssw.cli.survey",),
+    "report": ("ssw.cli.report",),
+}
+
+#: Contact settings that shape a contact curve (every key of the section).
+CONTACT_KEYS = ("delta_max", "delta_mode", "reach_energy", "steps", "interface",
+                "plate_diameter", "soil_radius", "soil_depth", "mesh_size_contact",
+                "mesh_growth", "mesh_size_max", "plate_layers", "candidate_factor",
+                "pressure_profiles")
+#: Contact settings the chain's ``fem`` wall reads (its mesh and candidate zone; the wall
+#: tabulates its own law, so the curves' increments do not matter to it).
+FEM_WALL_KEYS = ("soil_radius", "soil_depth", "mesh_size_contact", "mesh_growth",
+                 "mesh_size_max", "plate_layers", "candidate_factor")
+#: Chain settings of the model (the sweep's grid is the sweep's own).
+CHAIN_KEYS = ("damping", "steps_per_contact", "t_max", "gravity", "wall_law",
+              "wall_dynamics", "soil_density")
+
+
+def family_of(scene: Scene) -> str:
+    """The plate family of a scene: ``<plate>-t<thickness>um`` (the scene id's start), or
+    ``noplate``; the scenes of a family share their mesh and their plate's operators."""
+    if scene.plate_thickness <= 0:
+        return "noplate"
+    return scene.scene_id.split("-E", 1)[0]
+
+
+def families(cfg: dict[str, Any]) -> dict[str, list[str]]:
+    """Plate family -> its scene ids (sorted by Poisson's ratio, then E), every scene of
+    every set once. One contact job computes one family."""
+    out: dict[str, list[Scene]] = {}
+    for sc in all_scenes(cfg).values():
+        out.setdefault(family_of(sc), []).append(sc)
+    return {f: [s.scene_id for s in sorted(v, key=lambda s: (s.soil_nu, s.soil_E,
+                                                               s.scene_id))]
+            for f, v in sorted(out.items())}
+
+
+def contact_file(scene_id: str, results: str = RESULTS) -> str:
+    """The curve file of a scene: ``<results>/contact/<family>/<scene_id>.h5``."""
+    return scene_file(f"{results}/contact", scene_id)
+
+
+def scene_file(contact_dir: str, scene_id: str) -> str:
+    """The curve file of a scene in a contact folder: ``<dir>/<family>/<scene_id>.h5``."""
+    family = "noplate" if scene_id.startswith("noplate") else scene_id.split("-E", 1)[0]
+    return f"{contact_dir}/{family}/{scene_id}.h5"
+
+
+def k_table_file(cfg: dict[str, Any], results: str = RESULTS) -> str:
+    """The K table of the config's ``fit.set`` (the chain's ``fit`` wall)."""
+    if cfg["fit"].get("set") is None:
+        raise ConfigError("fit.set", None, "a set whose K table feeds the fit wall")
+    return f"{results}/fit/sets/{cfg['fit']['set']}/k_table.h5"
+
+
+def one_soil_sets(cfg: dict[str, Any]) -> list[str]:
+    """Sets with one soil (the thesis's Sets 1 and 2: deviation from Hertz per plate)."""
+    return [s for s in cfg["sets"] if _n_soils(cfg, s) == 1]
+
+
+def grid_sets(cfg: dict[str, Any]) -> list[str]:
+    """Sets with several soils (the thesis's Set 3: K(E, nu) tables)."""
+    return [s for s in cfg["sets"] if _n_soils(cfg, s) > 1]
+
+
+def _n_soils(cfg: dict[str, Any], set_name: str) -> int:
+    s = cfg["sets"][set_name]
+    return int(expand_grid(s["soil_E"], f"sets.{set_name}.soil_E").size
+               * expand_grid(s["soil_nu"], f"sets.{set_name}.soil_nu").size)
+
+
+def wall_law(cfg: dict[str, Any]) -> str:
+    """The chain's last-contact law (``chain.wall_law``)."""
+    return str(cfg["chain"].get("wall_law", "fem"))
+
+
+def uses_calibration(cfg: dict[str, Any]) -> bool:
+    """Whether the sweep, the validation and the survey use the calibrated device."""
+    return bool(cfg.get("calibration", {}).get("use", True))
+
+
+def recordings(cfg: dict[str, Any], root: str) -> list[str]:
+    """The validation samples' recordings (paths from ``root``, the repository)."""
+    import os
+
+    return [os.path.join(root, s["recordings"]) for s in
+            cfg.get("validation", {}).get("samples", []) if s.get("recordings")]
+
+
+def wall_inputs(cfg: dict[str, Any], results: str = RESULTS) -> dict[str, Any]:
+    """The files the wall law reads: the K table (``fit``) or the sweep points' curves
+    (``table``); none for ``fem`` and ``hertz`` (the ``fem`` wall builds its own law)."""
+    law = wall_law(cfg)
+    if law == "fit":
+        return {"k_table": k_table_file(cfg, results)}
+    if law == "table":
+        return {"curves": [contact_file(i, results) for i in sweep_scene_ids(cfg)]}
+    return {}
+
+
+def calibrated_inputs(cfg: dict[str, Any], results: str = RESULTS) -> dict[str, Any]:
+    """The wall law's inputs plus, with ``calibration.use``, the calibration file."""
+    inputs = wall_inputs(cfg, results)
+    if uses_calibration(cfg):
+        inputs["calibration"] = f"{results}/{CALIBRATION}"
+    return inputs
+
+
+def wall_flags(cfg: dict[str, Any], inputs: Any, results: str = RESULTS) -> str:
+    """``ssw`` flags naming the wall law and its inputs."""
+    flags = f"--law {wall_law(cfg)}"
+    keys = set(inputs.keys())
+    if "k_table" in keys:
+        flags += f" --k-table {inputs.k_table}"
+    if "curves" in keys:
+        flags += f" --contact-dir {results}/contact"
+    return flags
+
+
+def calibration_flag(inputs: Any) -> str:
+    """``--calibration FILE`` when the job's inputs hold the calibration, else ``none``
+    (a job never picks up a calibration its rule does not depend on)."""
+    if "calibration" in inputs.keys():
+        return f"--calibration {inputs.calibration}"
+    return "--calibration none"
+
+
+def sweep_scene_ids(cfg: dict[str, Any]) -> list[str]:
+    """Contact scene ids of the sweep points (the ``table`` wall reads their curves).
+
+    Raises ConfigError when a sweep point is in no contact set.
+    """
+    ch = cfg["chain"]
+    dev = device_of(cfg)
+    E = expand_grid(ch["sweep"]["soil_E"], "chain.sweep.soil_E")
+    nu = expand_grid(ch["sweep"]["soil_nu"], "chain.sweep.soil_nu")
+    plate = dev.plate_material if dev.has_plate else "none"
+    ids = [Scene(plate, float(dev.plate_thickness), float(e), float(n)).scene_id
+           for n in nu for e in E]
+    known = all_scenes(cfg)
+    missing = [i for i in ids if i not in known]
+    if missing:
+        raise ConfigError("chain.wall_law", "table",
+                          f"a contact scene for every sweep point; {len(missing)} are in no "
+                          f"set (e.g. {missing[0]}): add them to a set")
+    return ids
+
+
+class Study:
+    """A validated config seen as workflow jobs: what each job reads (module docstring).
+
+    The device and the materials library are read once; every method is a pure function
+    of the config.
+    """
+
+    def __init__(self, cfg: dict[str, Any]) -> None:
+        self.cfg = cfg
+
+    # ------------------------------------------------------------------ resolved data
+    @functools.cached_property
+    def device(self) -> Any:
+        """The study's device (:class:`ssw.device.Device`)."""
+        return device_of(self.cfg)
+
+    @functools.cached_property
+    def materials(self) -> dict[str, Any]:
+        """The study's materials (key -> :class:`ssw.materials.Material`)."""
+        return library(self.cfg)
+
+    @functools.cached_property
+    def families(self) -> dict[str, list[str]]:
+        """Plate family -> scene ids (:func:`families`)."""
+        return families(self.cfg)
+
+    @functools.cached_property
+    def scenes(self) -> dict[str, Scene]:
+        """Scene id -> scene, every set."""
+        return all_scenes(self.cfg)
+
+    def material_values(self, keys: Any) -> dict[str, Any]:
+        """``{key: every field of the material}`` for the material keys given."""
+        out = {}
+        for k in sorted(set(keys)):
+            if k == "none":
+                continue
+            if k not in self.materials:
+                raise ConfigError("material", k, f"a material of the library: "
+                                  f"{', '.join(sorted(self.materials))}")
+            out[k] = asdict(self.materials[k])
+        return out
+
+    def _device_part(self) -> dict[str, Any]:
+        """The device's physics and the materials of its beads and plate."""
+        dev = self.device
+        return {"device": dev.physics_dict(),
+                "device_materials": self.material_values(
+                    [dev.bead_material, dev.plate_material if dev.has_plate else "none"])}
+
+    def _chain_part(self) -> dict[str, Any]:
+        """What a chain command reads: device, chain model, wall law and its inputs."""
+        cfg = self.cfg
+        part: dict[str, Any] = {**self._device_part(),
+                                "chain": {k: cfg["chain"].get(k) for k in CHAIN_KEYS},
+                                "fit_law": cfg["fit"].get("law")}
+        law = wall_law(cfg)
+        if law == "fem":
+            part["fem_wall"] = {k: cfg["contact"].get(k) for k in FEM_WALL_KEYS}
+        if law in ("fit", "table"):
+            part["fit_set"] = cfg["fit"].get("set")
+        return part
+
+    def _sample_materials(self, samples: list[dict[str, Any]]) -> dict[str, Any]:
+        return self.material_values([s["material"] for s in samples if s.get("material")])
+
+    # ------------------------------------------------------------------ step inputs
+    def inputs(self, step: str, key: str | None = None) -> dict[str, Any]:
+        """The slice of the study the job ``step`` (``key``: its wildcard) reads, with the
+        ssw version and the hash of its code (module docstring)."""
+        from ssw import __version__
+        from ssw.provenance import source_hash
+
+        if step not in STEP_MODULES:
+            raise ConfigError("step", step, f"one of {', '.join(STEP_MODULES)}")
+        part = getattr(self, f"_{step}")(key)
+        return {"step": step, "key": key, "ssw_version": __version__,
+                "code": source_hash(STEP_MODULES[step]), "config": part}
+
+    def _contact(self, family: str | None) -> dict[str, Any]:
+        cfg = self.cfg
+        if family not in self.families:
+            raise ConfigError("contact family", family, f"one of {', '.join(self.families)}")
+        ids = self.families[family]
+        plates = {self.scenes[i].plate_material for i in ids}
+        part: dict[str, Any] = {
+            "contact": {k: cfg["contact"].get(k) for k in CONTACT_KEYS},
+            "indenter": cfg["indenter"], "material_set": cfg.get("material_set"),
+            "plates": self.material_values(plates), "scenes": ids,
+            "samples": sorted({repr(self.scenes[i].sample) for i in ids}),
+            "soil_models": sorted({repr(self.scenes[i].soil_model) for i in ids}),
+        }
+        if cfg["contact"].get("delta_mode") == "chain":  # the reach is the chain's
+            part.update(self._chain_part(), fit_range=cfg["fit"]["range"])
+        return part
+
+    def _fit(self, set_name: str | None) -> dict[str, Any]:
+        cfg = self.cfg
+        if set_name not in cfg["sets"]:
+            raise ConfigError("set", set_name, f"one of the sets: {', '.join(cfg['sets'])}")
+        spec = cfg["sets"][set_name]
+        ids = [s.scene_id for s in scenes(cfg, set_name)]
+        part: dict[str, Any] = {
+            "set_name": set_name, "set": spec, "scenes": ids, "fit": cfg["fit"],
+            "material_set": cfg.get("material_set"), "indenter": cfg["indenter"],
+            "plates": self.material_values(spec["plate_material"]),
+        }
+        if cfg["fit"]["range"].get("mode") == "chain" or _n_soils(cfg, set_name) > 1:
+            # the fit range is the chain's reach; a grid set's TOF cost runs the chain
+            part.update(self._chain_part(), contact=cfg["contact"])
+        return part
+
+    def _calibration(self, key: str | None = None) -> dict[str, Any]:
+        cfg = self.cfg
+        val = cfg.get("validation", {})
+        samples = val.get("samples", [])
+        return {**self._chain_part(), "calibration": cfg.get("calibration", {}),
+                "samples": samples, "sample_materials": self._sample_materials(samples),
+                "lowpass": val.get("lowpass"), "min_hits": val.get("min_hits")}
+
+    def _sweep(self, key: str | None = None) -> dict[str, Any]:
+        sw = self.cfg["chain"]["sweep"]
+        return {**self._chain_part(), "calibration_use": uses_calibration(self.cfg),
+                "sweep": {"soil_E": sw["soil_E"], "soil_nu": sw["soil_nu"]}}
+
+    def _sweep_figure(self, key: str | None = None) -> dict[str, Any]:
+        return {"study": self.cfg.get("study")}
+
+    def _validation(self, key: str | None = None) -> dict[str, Any]:
+        cfg = self.cfg
+        val = cfg.get("validation", {})
+        return {**self._chain_part(), "calibration_use": uses_calibration(cfg),
+                "validation": val,
+                "sample_materials": self._sample_materials(val.get("samples", [])),
+                "daq": cfg.get("daq"), "study": cfg.get("study")}
+
+    def _survey_point(self, point: str | None) -> dict[str, Any]:
+        cfg = self.cfg
+        points = {p["id"]: p for p in cfg.get("survey", {}).get("points", [])}
+        if point not in points:
+            raise ConfigError("survey point", point, f"one of {', '.join(points)}")
+        val = cfg.get("validation", {})
+        return {**self._chain_part(), "calibration_use": uses_calibration(cfg),
+                "point": points[point], "lowpass": val.get("lowpass"),
+                "min_hits": val.get("min_hits"), "daq": cfg.get("daq")}
+
+    def _survey_table(self, key: str | None = None) -> dict[str, Any]:
+        sv = self.cfg.get("survey", {})
+        return {"survey": sv, "study": self.cfg.get("study")}
+
+    def _report(self, key: str | None = None) -> dict[str, Any]:
+        return {"study": self.cfg.get("study")}
+
+    def param(self, step: str, key: str | None = None) -> str:
+        """:meth:`inputs` as canonical JSON: the value a rule's params hold."""
+        from ssw.provenance import canonical_json
+
+        return canonical_json(self.inputs(step, key))
+
+    def digest(self, step: str, key: str | None = None) -> str:
+        """The digest of :meth:`inputs` (passed to the job's command as
+        ``--inputs-sha256``)."""
+        from ssw.provenance import digest
+
+        return digest(self.inputs(step, key))
+
+
+# ---------------------------------------------------------------------- rule helpers
+def alternatives(names: Any) -> str:
+    """A wildcard regex matching exactly ``names`` (none: a regex that matches nothing)."""
+    import re
+
+    names = list(names)
+    return "|".join(re.escape(n) for n in names) if names else "(?!)"
+
+
+def set_families(cfg: dict[str, Any], set_name: str, results: str = RESULTS) -> list[str]:
+    """The contact family folders that hold the scenes of a set."""
+    return sorted({f"{results}/contact/{family_of(s)}" for s in scenes(cfg, set_name)})
+
+
+def write_study_config(cfg: dict[str, Any], path: str = STUDY_CONFIG) -> bool:
+    """Write the resolved study config (``ssw.config.dump_config``) for the jobs, only when
+    its text changed (a run that changes nothing rewrites nothing). Returns whether it
+    wrote."""
+    from pathlib import Path
+
+    from ssw.config import dump_config
+    from ssw.h5io import atomic_write_text
+
+    p = Path(path)
+    text = dump_config(cfg)
+    if p.is_file() and p.read_text() == text:
+        return False
+    atomic_write_text(p, text)
+    return True
+
+
+#: Memory (MB) and wall time (min) a job asks of a cluster: (base, per unit of size), the
+#: size being a contact family's scene count (0 for the other steps). Measured on the
+#: thesis study (``results/benchmarks``: max_rss and s): a 300-scene family 320 MB and 7 s,
+#: the calibration 250 MB and 8 s, the sweep 200 MB and 3 s, a fit 350 MB and 7 s; the
+#: figures leave room (x4 memory, x40 time for slower nodes and finer meshes), and a retry
+#: doubles them (Snakemake's ``attempt``).
+RESOURCES: dict[str, tuple[float, float, float, float]] = {
+    #                mem base, mem per unit, min base, min per unit
+    "contact": (1000.0, 2.0, 5.0, 1.0 / 60.0),
+    "fit": (1500.0, 0.0, 10.0, 0.0),
+    "calibration": (1500.0, 0.0, 15.0, 0.0),
+    "sweep": (1500.0, 0.0, 15.0, 0.0),
+    "validation": (1500.0, 0.0, 15.0, 0.0),
+    "survey_point": (1000.0, 0.0, 10.0, 0.0),
+}
+
+
+def mem_mb(step: str, size: int) -> int:
+    """MB of memory a job of ``step`` of ``size`` asks for (:data:`RESOURCES`)."""
+    base, per, _, _ = RESOURCES[step]
+    return round(base + per * size)
+
+
+def runtime_min(step: str, size: int) -> int:
+    """Minutes of wall time a job of ``step`` of ``size`` asks for (:data:`RESOURCES`)."""
+    _, _, base, per = RESOURCES[step]
+    return int(-(-(base + per * size) // 1))
+
+
+def mpi_launch(resources: Any) -> str:
+    """The MPI launcher of a job with resources ``tasks`` > 1 (``<mpi> -n <tasks> ``, the
+    launcher from resources ``mpi``, default ``mpiexec``); empty for one task."""
+    tasks = int(getattr(resources, "tasks", 1) or 1)
+    if tasks <= 1:
+        return ""
+    launcher = getattr(resources, "mpi", None) or "mpiexec"
+    return f"{launcher} -n {tasks} "
+
+
+def mpi_flag(resources: Any) -> str:
+    """``--mpi`` for a job with resources ``tasks`` > 1 (its command splits its work over
+    the ranks), else empty."""
+    return "--mpi" if int(getattr(resources, "tasks", 1) or 1) > 1 else ""
+
+
+def report_tables(targets: list[Any], categories: dict[str, str], results: str = RESULTS
+                  ) -> dict[str, list[str]]:
+    """Stage -> its CSV tables among ``targets`` (a stage is a results sub-folder)."""
+    out: dict[str, list[str]] = {}
+    for stage in categories:
+        tables = list(dict.fromkeys(str(t) for t in targets
+                                    if str(t).startswith(f"{results}/{stage}/")
+                                    and str(t).endswith(".csv")))
+        if tables:
+            out[stage] = tables
+    return out
+
+
+def report_page_args(output: Any, tables: dict[str, list[str]], categories: dict[str, str]
+                     ) -> str:
+    """``ssw report --page OUTPUT TITLE CSV...`` for every stage's tables page."""
+    import shlex
+
+    return " ".join(
+        f"--page {shlex.join([getattr(output, st), f'{categories[st]}: tables', *ts])}"
+        for st, ts in tables.items())
+
+
+def survey_points(cfg: dict[str, Any]) -> list[str]:
+    """The ids of the config's survey points."""
+    return [p["id"] for p in cfg.get("survey", {}).get("points", [])]
+
+
+def _point(cfg: dict[str, Any], point: str) -> dict[str, Any]:
+    pts = {p["id"]: p for p in cfg.get("survey", {}).get("points", [])}
+    if point not in pts:
+        raise ConfigError("survey point", point, f"one of {', '.join(pts)}")
+    return pts[point]
+
+
+def point_recordings(cfg: dict[str, Any], point: str, root: str) -> list[str]:
+    """A survey point's recordings (paths from ``root``, the repository)."""
+    import os
+
+    return [os.path.join(root, r) for r in _point(cfg, point)["recordings"]]
+
+
+def survey_nu(cfg: dict[str, Any], point: str) -> str:
+    """The point's ``--soil-nu`` argument (``NU`` or ``LO:HI``)."""
+    from ssw.survey import nu_text
+
+    return nu_text(_point(cfg, point)["soil_nu"])
+
+
+def survey_has_coordinates(cfg: dict[str, Any]) -> bool:
+    """Whether any survey point has plan or geographic coordinates (a map is drawn)."""
+    return any(p.get("x") is not None or p.get("latitude") is not None
+               for p in cfg.get("survey", {}).get("points", []))

@@ -1,0 +1,127 @@
+"""Results that follow their inputs: after a whole study (config/ci.yaml), an edit of the
+config, the device file or the materials library reruns exactly the jobs that read what
+changed (Snakemake's params trigger on each job's slice of the study, ssw.workflow.Study),
+a dry run shows them, and neither a dry run nor a lint writes anything.
+
+Edits are made in copies (the config points at a copied device file or materials library);
+a copy identical to the shipped one changes nothing: the jobs compare values, not file
+names.
+"""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+from snakemake_run import ROOT, job_stats, smk
+
+pytestmark = pytest.mark.usefixtures("ci_study")
+
+CONTACT, CHAIN = {"contact_batch"}, {"calibration", "tof_sweep", "validation"}
+
+
+def _dry(study: Path, config: Path) -> dict[str, int]:
+    r = smk("-n", "--cores", "2", "--directory", str(study), "--configfile", str(config))
+    assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
+    return job_stats(r.stdout)
+
+
+def _config(study: Path, tmp: Path, replace: tuple[str, str] = ("", ""),
+            device: str | None = None, materials: str | None = None) -> Path:
+    """A copy of the study's config with one text replacement and, optionally, its device
+    and materials library pointing at copies."""
+    text = (study / "config" / "ci.yaml").read_text()
+    if replace[0]:
+        assert replace[0] in text, replace
+        text = text.replace(replace[0], replace[1], 1)
+    if device is not None:
+        text = text.replace("device: thesis", f"device: {device}", 1)
+    if materials is not None:
+        text += f"\nmaterials_file: {materials}\n"
+    out = tmp / "edited.yaml"
+    out.write_text(text)
+    return out
+
+
+def test_no_edit_reruns_nothing_and_identical_copies_change_nothing(ci_study, tmp_path):
+    """The study's own config: nothing to do; a config naming identical copies of the
+    device and the materials library: nothing to do either (values, not names)."""
+    assert _dry(ci_study, ci_study / "config" / "ci.yaml") == {}
+    dev = tmp_path / "device.yaml"
+    shutil.copy(ROOT / "config" / "devices" / "thesis.yaml", dev)
+    mats = tmp_path / "materials.yaml"
+    shutil.copy(ROOT / "config" / "materials.yaml", mats)
+    assert _dry(ci_study, _config(ci_study, tmp_path, device=str(dev),
+                                  materials=str(mats))) == {}
+
+
+def test_contact_steps_edit_reruns_contact_and_what_follows_only(ci_study, tmp_path):
+    """contact.steps shapes every curve: every family's contact job and the fits rerun;
+    the chain (the fem wall tabulates its own law) and the validation do not."""
+    stats = _dry(ci_study, _config(ci_study, tmp_path, ("steps: 100", "steps: 120")))
+    assert stats["contact_batch"] == 2  # ci.yaml's two plate families
+    assert stats.get("fit_set", 0) + stats.get("fit_grid", 0) == 2
+    assert not CHAIN & set(stats) and "survey_point" not in stats
+
+
+def test_device_bead_count_edit_reruns_the_chain_not_the_contact(ci_study, tmp_path):
+    """The device's bead count: the calibration, the sweep, the validation and the survey
+    rerun (and the fits, whose range is the chain's reach: ci.yaml's fit.range.mode chain);
+    no contact job (the curves reach the energy bound of contact.delta_mode energy)."""
+    dev = tmp_path / "device.yaml"
+    dev.write_text((ROOT / "config" / "devices" / "thesis.yaml").read_text().replace(
+        "beads: 20", "beads: 22"))
+    stats = _dry(ci_study, _config(ci_study, tmp_path, device=str(dev)))
+    assert CHAIN <= set(stats), stats
+    assert stats["survey_point"] == 3
+    assert "contact_batch" not in stats
+
+
+def test_plate_modulus_edit_reruns_that_plates_scenes(ci_study, tmp_path):
+    """PLA's modulus in the materials library: the PLA family's contact job reruns, the
+    aluminium family's does not; the chain (its plate is PLA) reruns."""
+    mats = tmp_path / "materials.yaml"
+    text = (ROOT / "config" / "materials.yaml").read_text()
+    assert "    E: 3.5e+9\n" in text
+    mats.write_text(text.replace("    E: 3.5e+9\n", "    E: 3.6e+9\n", 1))
+    r = smk("-n", "--cores", "2", "--directory", str(ci_study), "--configfile",
+            str(_config(ci_study, tmp_path, materials=str(mats))))
+    assert r.returncode == 0, r.stderr[-3000:]
+    stats = job_stats(r.stdout)
+    assert stats["contact_batch"] == 1 and "family=pla-t400um" in r.stdout
+    assert "family=al6061-t400um" not in r.stdout
+    assert CHAIN <= set(stats)
+
+
+def test_dry_run_and_lint_write_nothing(ci_study, tmp_path):
+    """A dry run and a lint of an edited config leave the study's resolved config (and
+    every other file) as it was."""
+    cfg = _config(ci_study, tmp_path, ("steps: 100", "steps: 130"))
+    before = {p: (p.stat().st_mtime_ns, p.stat().st_size)
+              for p in (ci_study / "results").rglob("*") if p.is_file()}
+    assert _dry(ci_study, cfg)
+    r = smk("--lint", "--directory", str(ci_study), "--configfile", str(cfg))
+    assert r.returncode == 0, r.stderr[-2000:]
+    after = {p: (p.stat().st_mtime_ns, p.stat().st_size)
+             for p in (ci_study / "results").rglob("*") if p.is_file()}
+    assert after == before
+
+
+def test_an_edit_reruns_what_the_dry_run_said_and_then_nothing(ci_study, tmp_path):
+    """A real rerun after a plate edit (in a copy of the study) runs the jobs the dry run
+    listed, rewrites the resolved config, and leaves nothing to do."""
+    study = tmp_path / "study"
+    shutil.copytree(ci_study, study, symlinks=True)
+    mats = tmp_path / "materials.yaml"
+    mats.write_text((ROOT / "config" / "materials.yaml").read_text().replace(
+        "    E: 68.9e+9\n", "    E: 70.0e+9\n", 1))  # aluminium: Set 1's other plate
+    cfg = _config(study, tmp_path, materials=str(mats))
+    planned = _dry(study, cfg)
+    assert planned.get("contact_batch") == 1 and not CHAIN & set(planned), planned
+    r = smk("--cores", "2", "--directory", str(study), "--configfile", str(cfg), timeout=600)
+    assert r.returncode == 0, r.stderr[-3000:]
+    ran = job_stats(r.stdout + r.stderr)
+    assert ran == planned
+    assert str(mats) in (study / "results" / "study_config.yaml").read_text()
+    assert _dry(study, cfg) == {}

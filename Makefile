@@ -13,8 +13,9 @@ setup:
 	@bash scripts/setup.sh
 
 ## The default study (the thesis study in config/config.yaml), results under results/.
+## (Snakemake finds workflow/Snakefile and its workstation profile workflow/profiles/default.)
 study: setup
-	$(SMK) --profile workflow/profiles/default --cores $(CORES) --configfile $(CONFIG)
+	$(SMK) --cores $(CORES) --configfile $(CONFIG)
 
 ## The test suite (default: everything but the `slow` marker), lint and workflow checks.
 test: setup
@@ -23,6 +24,8 @@ test: setup
 	@if [ "$${CI:-}" = true ]; then bash scripts/slurm-local.sh start; \
 	else bash scripts/slurm-local.sh start || echo "[test] local Slurm not started: its tests skip and say why (CI=true: they fail)"; fi
 	$(VENV)/bin/ruff check ssw tests
+	$(VENV)/bin/snakefmt --check workflow
+	$(SMK) --lint --configfile $(CONFIG)
 	PATH="$(CURDIR)/$(VENV)/bin:$$PATH" $(PY) -m pytest -m "not slow" $(PYTEST_ARGS)
 
 ## Everything, slow tests included.
@@ -31,6 +34,7 @@ test-all: setup
 
 lint: setup
 	$(VENV)/bin/ruff check ssw tests
+	$(VENV)/bin/snakefmt --check workflow
 	$(SMK) --lint --configfile $(CONFIG)
 
 ## Benchmarks (figures go into the README).
@@ -44,7 +48,7 @@ bench: setup
 
 ## The study's report (Snakemake's own; after `make study`): results/report.html.
 report: setup
-	$(SMK) --profile workflow/profiles/default --cores $(CORES) --configfile $(CONFIG) --report results/report.html
+	$(SMK) --cores $(CORES) --configfile $(CONFIG) --report results/report.html
 
 clean:
 	rm -rf results .snakemake

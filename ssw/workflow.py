@@ -446,6 +446,22 @@ def mpi_flag(resources: Any) -> str:
     return "--mpi" if int(getattr(resources, "tasks", 1) or 1) > 1 else ""
 
 
+def submits_to_slurm(workflow: Any) -> bool:
+    """Whether a Snakemake run submits its jobs to Slurm (the ``slurm`` executor)."""
+    plugin = getattr(workflow, "executor_plugin", None)
+    return plugin is not None and getattr(plugin, "name", "") == "slurm"
+
+
+def check_cluster_fit(workflow: Any) -> None:
+    """ConfigError naming every job of the run that asks for more than the largest node
+    has (:func:`ssw.cluster.check_jobs_fit`), before anything is submitted."""
+    from ssw.cluster import check_jobs_fit
+
+    jobs = [(j.rule.name, int(j.threads), dict(j.resources.items()))
+            for j in workflow.dag.needrun_jobs() if not j.is_local]
+    check_jobs_fit(jobs)
+
+
 def report_tables(targets: list[Any], categories: dict[str, str], results: str = RESULTS
                   ) -> dict[str, list[str]]:
     """Stage -> its CSV tables among ``targets`` (a stage is a results sub-folder)."""

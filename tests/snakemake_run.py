@@ -25,7 +25,7 @@ def user_env() -> dict[str, str]:
 
 def smk(*args: str, cwd: Path = ROOT, timeout: float = 600) -> subprocess.CompletedProcess:
     """`snakemake -s <repository Snakefile> ARGS` as a user runs it."""
-    return subprocess.run([SNAKEMAKE, "-s", str(ROOT / "Snakefile"), *args], cwd=cwd,
+    return subprocess.run([SNAKEMAKE, "-s", str(ROOT / "workflow" / "Snakefile"), *args], cwd=cwd,
                           capture_output=True, text=True, env=user_env(), timeout=timeout)
 
 

@@ -247,7 +247,7 @@ def test_killed_ci_study_reruns_to_the_same_results(tmp_path: Path, share: float
     config = ROOT / "config" / "ci.yaml"
 
     def cmd(work: Path) -> list[str]:
-        return [str(VENV_BIN / "snakemake"), "--snakefile", str(ROOT / "Snakefile"),
+        return [str(VENV_BIN / "snakemake"), "--snakefile", str(ROOT / "workflow" / "Snakefile"),
                 "--profile", str(PROFILE), "--cores", "2", "--configfile", str(config),
                 "--directory", str(work)]
 

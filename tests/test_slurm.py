@@ -291,14 +291,21 @@ def test_tiny_workflow_slurm_equals_local(tmp_path: Path, slurm_cluster: str) ->
 
 
 
-def assert_same_results(got: Path, want: Path) -> int:
-    """Same result files; HDF5 datasets and CSV tables identical. Returns files compared.
+def assert_same_results(got: Path, want: Path, ignore: tuple[str, ...] = ()) -> int:
+    """Same result files; HDF5 datasets and CSV tables identical (the provenance comment
+    line of a CSV aside: it names the command). Returns the files compared.
 
     Logs, figures, JSON summaries and the HTML report carry run times, dates and paths, so
     they are compared by presence only; the numbers they show come from the HDF5/CSV files.
+    Paths starting with one of ``ignore`` (logs, benchmarks, the operator cache) are not
+    compared at all.
     """
-    names = sorted(str(p.relative_to(want)) for p in want.rglob("*") if p.is_file())
-    assert names == sorted(str(p.relative_to(got)) for p in got.rglob("*") if p.is_file())
+    def files(root: Path) -> list[str]:
+        return sorted(n for p in root.rglob("*") if p.is_file()
+                      and not (n := str(p.relative_to(root))).startswith(ignore))
+
+    names = files(want)
+    assert names == files(got)
     compared = 0
     for name in names:
         a, b = got / name, want / name
@@ -312,62 +319,87 @@ def assert_same_results(got: Path, want: Path) -> int:
                 assert same, f"{name}:{key} differs between the SLURM and the local run"
             compared += 1
         elif name.endswith(".csv"):
-            assert a.read_text() == b.read_text(), name
+            def rows(p: Path) -> list[str]:
+                return [x for x in p.read_text().splitlines() if not x.startswith("#")]
+
+            assert rows(a) == rows(b), name
             compared += 1
     return compared
 
 
-def test_ci_study_slurm_equals_local(tmp_path: Path, slurm_cluster: str) -> None:
-    """The tiny study's (config/ci.yaml) FEM stages through `--executor slurm` == the same
-    targets run locally.
+def _sbatch_calls(log: str) -> dict[str, str]:
+    """Rule (and wildcards) -> its sbatch call, from a `snakemake --verbose` log of the Slurm
+    executor ("sbatch call: sbatch --parsable --job-name ... --comment 'rule_<name>_wildcards_
+    <w>' ...")."""
+    out = {}
+    for m in re.finditer(r"sbatch call: (sbatch [^\n]*)", log):
+        call = m.group(1)
+        c = re.search(r"--comment '?rule_(\w+?)(?:_wildcards_([^' ]+))?'?\s", call)
+        if c:
+            out[c.group(1) + (f"[{c.group(2)}]" if c.group(2) else "")] = call
+    return out
 
-    Both runs start together (the SLURM run spends most of its time waiting for the queue
-    and status polls) from the same code, for the study's contact curves and fits (the
-    stages the cluster profile batches and groups; the chain and validation rules run the
-    same CLI, checked locally by tests/test_workflow.py). Every HDF5 dataset and CSV table
-    must be equal; the contact scenes go as one job per mesh family
-    (ssw.contact.batch.batches), each its own SLURM job, and the profile's grouping
-    submits the fit and figure jobs as group jobs.
+
+def test_thesis_study_slurm_equals_local(tmp_path: Path, slurm_cluster: str) -> None:
+    """The whole thesis study (config/config.yaml) through the SLURM profile finishes, and
+    its tables and result files equal a local run's, bit for bit.
+
+    The sweep runs under MPI on 2 ranks (`--set-resources tof_sweep:tasks=2`, a runtime
+    knob: its numbers equal the local serial sweep's). Each job's sbatch asks for what it
+    uses: one CPU per task (the rules' threads), --ntasks 2 for the MPI sweep, --mem and
+    -t from the rules' resources (ssw.workflow.RESOURCES), scaled with a contact family's
+    size (docs/cluster.md lists the calls).
     """
     from ssw.config import load_config
-    from ssw.contact.batch import batches
+    from ssw.workflow import RESOURCES, families, mem_mb, runtime_min
 
-    config = ROOT / "config" / "ci.yaml"
-    cfg = load_config(config)
-    targets = [f"results/fit/sets/{s}/k_table.h5" for s in cfg["sets"]] + [
-        "results/contact/figures/fig5_materials.png"]
+    config = ROOT / "config" / "config.yaml"
     local, slurm = tmp_path / "local", tmp_path / "slurm"
-    local.mkdir()
-    slurm.mkdir()
-    smk = [str(SNAKEMAKE), *targets, "--snakefile", str(ROOT / "Snakefile"), "--configfile",
-           str(config)]
-    local_cmd = [*smk, "--directory", str(local), "--cores", "2"]
-    slurm_cmd = [*smk, "--directory", str(slurm), "--profile", str(PROFILE),
-                 *LOCAL_CLUSTER_ARGS, "--cores", "2", "--slurm-jobname-prefix", JOB_PREFIX]
-    procs = [subprocess.Popen(cmd, cwd=ROOT, env=_env(), stdout=subprocess.PIPE,
-                              stderr=subprocess.STDOUT, text=True, start_new_session=True)
-             for cmd in (local_cmd, slurm_cmd)]
-    try:
-        logs = [p.communicate(timeout=RUN_TIMEOUT_S)[0] for p in procs]
-    except subprocess.TimeoutExpired:
-        for p in procs:
-            os.killpg(p.pid, signal.SIGINT)
-        cancel_test_jobs()
-        pytest.fail(f"the study did not finish within {RUN_TIMEOUT_S} s")
-    for p, log in zip(procs, logs, strict=True):
-        assert p.returncode == 0, f"{' '.join(p.args)}\n{failure_summary(log)}"
-    slurm_log = logs[1]
-    # every contact batch is its own SLURM job; the fits and figures go as group jobs, so
-    # there are fewer submissions than jobs (the fit jobs share one group job)
-    submitted = slurm_log.count("has been submitted with SLURM jobid")
-    steps = re.search(r"(\d+) of \1 steps \(100%\) done", slurm_log)
-    assert steps and 1 <= submitted < int(steps.group(1)), (submitted, slurm_log[-2000:])
-    assert submitted >= len(batches(cfg)) + 1, submitted  # contact jobs + the group job
-    for batch in batches(cfg):
-        assert f"rule_contact_batch_{batch}/" in slurm_log, batch  # submitted as a job
-    assert "Group job figures" in slurm_log
-    n = assert_same_results(slurm / "results", local / "results")
-    assert n >= 5, f"only {n} result files compared"
+    base = [str(SNAKEMAKE), "--snakefile", str(ROOT / "workflow" / "Snakefile"),
+            "--configfile", str(config)]
+    for d in (local, slurm):
+        d.mkdir()
+    run_snakemake(local, [*base[1:], "--cores", "2"], timeout=600)
+    proc = run_snakemake(slurm, [
+        *base[1:], "--profile", str(PROFILE), *LOCAL_CLUSTER_ARGS, "--verbose",
+        "--slurm-jobname-prefix", JOB_PREFIX,
+        "--set-resources", "tof_sweep:tasks=2", "tof_sweep:mpi=mpiexec"], timeout=900)
+    n = assert_same_results(slurm / "results", local / "results",
+                            ignore=("benchmarks/", "logs/", "cache/"))
+    assert n >= 20, f"only {n} result files compared"
+    calls = _sbatch_calls(proc.stderr + proc.stdout)
+    fams = families(load_config(config))
+    for fam, ids in fams.items():
+        call = calls[f"contact_batch[{fam}]"]
+        assert f"--mem {mem_mb('contact', len(ids))}" in call, call
+        assert f"-t {runtime_min('contact', len(ids))}" in call, call
+        assert "--ntasks=1" in call and "--cpus-per-task=1" in call, call
+    sweep = next(c for k, c in calls.items() if k.startswith("tof_sweep"))
+    assert "--ntasks=2" in sweep and "--cpus-per-task=1" in sweep, sweep
+    for rule in ("calibration", "validation"):
+        assert f"--mem {mem_mb(rule, 0)}" in calls[rule] and "--ntasks=1" in calls[rule]
+    assert set(RESOURCES) >= {"contact", "calibration", "sweep", "validation"}
+    # light jobs run where Snakemake runs (localrules): never submitted
+    assert not any(k.startswith(("sweep_figure", "report_tables", "all")) for k in calls)
+
+
+def test_a_job_larger_than_any_node_is_an_error_not_a_wait(tmp_path: Path,
+                                                          slurm_cluster: str) -> None:
+    """A rule asking for more memory than the largest node has stops the run before any
+    submission, naming the rule, the resource and the node's size."""
+    proc = subprocess.run(
+        [str(SNAKEMAKE), "--directory", str(tmp_path), "--snakefile",
+         str(ROOT / "workflow" / "Snakefile"), "--configfile",
+         str(ROOT / "config" / "ci.yaml"), "--profile", str(PROFILE), *LOCAL_CLUSTER_ARGS,
+         "--slurm-jobname-prefix", JOB_PREFIX,
+         "--set-resources", "calibration:mem_mb=99000000"],
+        cwd=tmp_path, env=_env(), capture_output=True, text=True, timeout=120)
+    log = proc.stdout + proc.stderr
+    assert proc.returncode != 0, log[-2000:]
+    assert "rule calibration asks for mem_mb=99000000" in log, log[-3000:]
+    assert "the largest node has" in log
+    assert "submitted with SLURM jobid" not in log
+    assert _test_jobs() == []
 
 
 SLOW_SNAKEFILE = textwrap.dedent('''

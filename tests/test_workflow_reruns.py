@@ -125,3 +125,53 @@ def test_an_edit_reruns_what_the_dry_run_said_and_then_nothing(ci_study, tmp_pat
     assert ran == planned
     assert str(mats) in (study / "results" / "study_config.yaml").read_text()
     assert _dry(study, cfg) == {}
+
+
+def test_runtime_knobs_do_not_change_the_results(ci_study, tmp_path):
+    """How a study runs is not what it computes: the sweep in three jobs instead of one
+    (`--set-scatter sweep=3`) gives the same sweep and the same Tables 2 and 3, to the bit."""
+    study = tmp_path / "study"
+    shutil.copytree(ci_study, study, symlinks=True)
+    cfg = study / "config" / "ci.yaml"
+    r = smk("--cores", "2", "--directory", str(study), "--configfile", str(cfg),
+            "--set-scatter", "sweep=3", timeout=600)
+    assert r.returncode == 0, r.stderr[-3000:]
+    ran = job_stats(r.stdout + r.stderr)
+    assert ran["tof_sweep"] == 3 and "contact_batch" not in ran and "calibration" not in ran
+
+    def rows(path: Path) -> list[str]:
+        return [x for x in path.read_text().splitlines() if not x.startswith("#")]
+
+    for name in ("chain/tof_sweep.csv", "validation/table2_tof.csv",
+                 "validation/table3_modulus.csv", "validation/validation.csv"):
+        assert rows(study / "results" / name) == rows(ci_study / "results" / name), name
+
+
+def test_slurm_profile_dry_run_shows_each_jobs_resources(tmp_path):
+    """The SLURM profile's dry run of the thesis study (no cluster needed): every job
+    declares what it uses, a contact job's memory and time scaled with its family's size."""
+    from ssw.config import load_config
+    from ssw.workflow import families, mem_mb, runtime_min
+
+    r = smk("-n", "--profile", str(ROOT / "workflow" / "profiles" / "slurm"),
+            "--directory", str(tmp_path), "--configfile", str(ROOT / "config" / "config.yaml"))
+    assert r.returncode == 0, r.stderr[-3000:]
+    fams = families(load_config(ROOT / "config" / "config.yaml"))
+    blocks = r.stdout.split("\nrule ")
+    for fam, ids in fams.items():
+        block = next(b for b in blocks if b.startswith("contact_batch:")
+                     and f"family={fam}\n" in b)
+        assert f"mem_mb={mem_mb('contact', len(ids))}," in block, block
+        assert f"runtime={runtime_min('contact', len(ids))}," in block, block
+    sweep = next(b for b in blocks if b.startswith("tof_sweep:"))
+    assert "tasks=1" in sweep and f"mem_mb={mem_mb('sweep', 0)}" in sweep
+    assert not (tmp_path / "results").exists()
+
+
+def test_a_new_plate_thickness_runs_only_its_family_and_its_set(ci_study, tmp_path):
+    """One more thickness in Set 1 (0.6 mm): the new families' contact jobs (PLA and
+    aluminium at 0.6 mm) and Set 1's fit; no other family, no other set, no chain job."""
+    stats = _dry(ci_study, _config(ci_study, tmp_path, (
+        "plate_thickness: {values: [0.4e-3]}", "plate_thickness: {values: [0.4e-3, 0.6e-3]}")))
+    assert stats["contact_batch"] == 2 and stats["fit_set"] == 1, stats
+    assert "fit_grid" not in stats and not CHAIN & set(stats), stats

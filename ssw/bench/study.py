@@ -1,19 +1,20 @@
 """``ssw bench study``: wall time of the whole study, per stage, from a warm environment.
 
-Runs the study's Snakefile with Snakemake (workstation profile, ``--cores 2`` by default)
-into a fresh working directory (a temporary folder unless ``--workdir``), so the user's
-``results/`` is never touched and nothing is reused: every job runs. Before the timed run, a
-dry run builds the DAG once (warm bytecode, imports and file-system caches: "warm
+Runs the study's Snakefile with Snakemake (its workstation profile, ``--cores 2`` by
+default) into a fresh working directory (a temporary folder unless ``--workdir``), so the
+user's ``results/`` is never touched and nothing is reused: every job runs. Before the timed
+run, a dry run builds the DAG once (warm bytecode, imports and file-system caches: "warm
 environment"); its time is reported separately.
 
-Per-stage times come from Snakemake's own job records: for every output file Snakemake
-stores the rule and the start and end time of the job that made it
-(``.snakemake/metadata``). A stage is the rule file that defines a rule
-(``workflow/rules/<stage>.smk``). For each stage the report gives
+Per-job times come from Snakemake's ``benchmark:`` records: every rule of the study writes
+``results/benchmarks/<stage>/<job>.tsv`` (wall seconds, peak memory, CPU time); the stage is
+the record's folder. For each stage the report gives the jobs, their summed wall time
+(``busy_s``: core-seconds for single-core jobs), their peak memory and the costliest job.
 
-* ``wall_s``: from its first job's start to its last job's end (stages may overlap);
-* ``busy_s``: the sum of its jobs' durations (core-seconds for single-core jobs);
-* ``jobs``: the number of jobs.
+Then an edit: with ``--increment SET:THICKNESS`` (default ``set2_thickness:0.6e-3`` when the
+config has that set) the study is rerun with one plate thickness added to that set, and the
+rerun's wall time and jobs are reported (only the new family's contact job and the set's
+fits should run).
 
 Writes ``study.json`` and ``study.md`` under ``--output-dir`` (default ``results/bench``),
 also when the run fails (then with ``status: failed`` and the times of the finished jobs,
@@ -23,17 +24,14 @@ and the command exits with an error).
 from __future__ import annotations
 
 import argparse
-import json
 import os
 import platform
-import re
 import shlex
 import shutil
 import subprocess
 import sys
 import tempfile
 import time
-from base64 import urlsafe_b64decode
 from collections import defaultdict
 from datetime import UTC, datetime
 from pathlib import Path
@@ -43,13 +41,14 @@ from ssw.errors import ConfigError, SswError
 from ssw.h5io import atomic_write_text, to_json
 
 REPO = Path(__file__).resolve().parents[2]
-RULE_RE = re.compile(r"^[ \t]*(?:rule|checkpoint)\s+(\w+)\s*:", re.MULTILINE)
-# Rules named by the `name:` directive (e.g. defined in a loop: `name: f"contact_batch_{b}"`):
-# the name's literal start, a prefix of every rule it defines.
-NAME_RE = re.compile(r"^\s+name:\s*(?:\n\s*)?f?[\"']([A-Za-z_]\w*)", re.MULTILINE)
-# Parts of the repository a study run reads through relative paths (materials library,
-# default config): linked into the temporary working directory.
+#: Parts of the repository a study run reads through relative paths (materials library,
+#: devices, default config): linked into the temporary working directory.
 LINKED = ("config",)
+#: The benchmark records of a run, relative to its working folder (workflow/rules/common.smk).
+BENCHMARKS = Path("results") / "benchmarks"
+#: The edit the increment measurement makes by default: one more plate thickness (m) in the
+#: thesis's Set 2.
+DEFAULT_INCREMENT = ("set2_thickness", 0.6e-3)
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
@@ -61,9 +60,15 @@ def register(kinds: argparse._SubParsersAction) -> None:
         "report the wall time per stage; writes study.json and study.md.")
     p.add_argument("--config", default="config/config.yaml", help="study config (YAML)")
     p.add_argument("--cores", type=int, default=2, help="cores given to Snakemake")
-    p.add_argument("--snakefile", default=str(REPO / "Snakefile"), help="the study Snakefile")
-    p.add_argument("--profile", default=str(REPO / "workflow" / "profiles" / "default"),
-                   help="Snakemake profile (default: the workstation profile)")
+    p.add_argument("--snakefile", default=str(REPO / "workflow" / "Snakefile"),
+                   help="the study Snakefile")
+    p.add_argument("--profile",
+                   help="Snakemake profile (default: none; the Snakefile's workflow profile, "
+                   "workflow/profiles/default, applies by itself)")
+    p.add_argument("--increment", metavar="SET:THICKNESS",
+                   help="after the run, add this plate thickness (m) to this set and time "
+                   "the rerun (default set2_thickness:0.6e-3 when the config has that set; "
+                   "none: skip)")
     p.add_argument("--workdir", help="run here instead of a temporary folder (must be empty)")
     p.add_argument("--keep", action="store_true", help="keep the temporary working folder")
     p.add_argument("--timeout", type=float, default=3600.0, help="give up after this, s")
@@ -74,77 +79,46 @@ def register(kinds: argparse._SubParsersAction) -> None:
     p.set_defaults(func=run, human=human)
 
 
-def rule_stages(snakefile: Path) -> dict[str, str]:
-    """Rule name -> stage (the stem of the ``.smk`` file defining it, else ``Snakefile``).
-
-    Rules named with the ``name:`` directive appear as ``<literal start of the name>*``
-    (a prefix: a loop defines many such rules); :func:`stage_of` resolves them.
-    """
-    def found(text: str) -> list[str]:
-        return RULE_RE.findall(text) + [f"{p}*" for p in NAME_RE.findall(text)]
-
-    stages = {name: "Snakefile" for name in found(snakefile.read_text())}
-    for smk in sorted((snakefile.parent / "workflow" / "rules").glob("*.smk")):
-        stages.update({name: smk.stem for name in found(smk.read_text())})
-    return stages
-
-
-def stage_of(rule: str, stages: dict[str, str]) -> str:
-    """The stage of ``rule``: its exact entry, else the longest matching ``prefix*``."""
-    if rule in stages:
-        return stages[rule]
-    prefixes = [k for k in stages if k.endswith("*") and rule.startswith(k[:-1])]
-    return stages[max(prefixes, key=len)] if prefixes else "other"
-
-
-def job_records(workdir: Path) -> list[dict[str, Any]]:
-    """One record (rule, start, end; Unix s) per finished job of a run in ``workdir``.
-
-    Snakemake keeps one metadata file per output and log file, named by the file's path in
-    URL-safe base64 (split into ``@``-prefixed folders when long), each with the job's hash.
-    A job counts once, and only if one of its outputs (not logs) still exists: Snakemake
-    deletes a failed job's outputs.
-    """
-    root = workdir / ".snakemake" / "metadata"
-    seen: dict[tuple[str, Any], dict[str, Any]] = {}
-    for meta in root.rglob("*"):
-        if not meta.is_file():
+def job_records(workdir: Path, since: float = 0.0) -> list[dict[str, Any]]:
+    """One record per job of a run in ``workdir`` from its ``benchmark:`` files
+    (``results/benchmarks/<stage>/<job>.tsv``): stage, job, wall s, peak memory MB; only
+    files written after ``since`` (Unix s)."""
+    out = []
+    root = workdir / BENCHMARKS
+    for tsv in sorted(root.rglob("*.tsv")) if root.is_dir() else []:
+        if tsv.stat().st_mtime < since:
             continue
+        lines = tsv.read_text().splitlines()
+        if len(lines) < 2:
+            continue
+        row = dict(zip(lines[0].split("\t"), lines[-1].split("\t"), strict=False))
         try:
-            rec = json.loads(meta.read_text())
-            b64 = "".join(part.lstrip("@") for part in meta.relative_to(root).parts)
-            output = workdir / urlsafe_b64decode(b64.encode()).decode()
-        except (OSError, ValueError):
+            seconds = float(row["s"])
+        except (KeyError, ValueError):
             continue
-        if rec.get("incomplete") or rec.get("starttime") is None or rec.get("endtime") is None:
-            continue
-        # Logs outlive failed jobs: only outputs prove that a job finished.
-        if not output.exists() or str(output.relative_to(workdir)) in rec.get("log", []):
-            continue
-        key = (rec["rule"], rec.get("job_hash", rec["starttime"]))
-        seen[key] = {"rule": rec["rule"], "start": float(rec["starttime"]),
-                     "end": float(rec["endtime"])}
-    return sorted(seen.values(), key=lambda r: r["start"])
+        rss = row.get("max_rss", "NA")
+        rel = tsv.relative_to(root)
+        out.append({"stage": rel.parts[0] if len(rel.parts) > 1 else "other",
+                    "job": str(rel.with_suffix("")), "s": seconds,
+                    "max_rss_mb": float(rss) if rss not in ("NA", "-", "") else None})
+    return out
 
 
-def stage_times(records: list[dict[str, Any]], stages: dict[str, str],
-                t0: float) -> dict[str, dict[str, Any]]:
-    """Per-stage wall time, busy time and job count; times relative to ``t0`` (Unix s)."""
+def stage_times(records: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
+    """Per-stage job count, summed wall time of its jobs, peak memory and costliest job."""
     by_stage: dict[str, list[dict[str, Any]]] = defaultdict(list)
     for r in records:
-        by_stage[stage_of(r["rule"], stages)].append(r)
+        by_stage[r["stage"]].append(r)
     out = {}
     for stage, recs in by_stage.items():
-        start, end = min(r["start"] for r in recs), max(r["end"] for r in recs)
-        rules: dict[str, float] = defaultdict(float)
-        for r in recs:
-            rules[r["rule"]] += r["end"] - r["start"]
-        out[stage] = {
-            "wall_s": end - start, "busy_s": sum(r["end"] - r["start"] for r in recs),
-            "jobs": len(recs), "start_s": start - t0, "end_s": end - t0,
-            "busy_s_per_rule": dict(sorted(rules.items(), key=lambda kv: -kv[1])),
-        }
-    return dict(sorted(out.items(), key=lambda kv: kv[1]["start_s"]))
+        top = max(recs, key=lambda r: r["s"])
+        rss = [r["max_rss_mb"] for r in recs if r["max_rss_mb"] is not None]
+        out[stage] = {"jobs": len(recs), "busy_s": sum(r["s"] for r in recs),
+                      "max_rss_mb": max(rss) if rss else None,
+                      "costliest": {"job": top["job"], "s": top["s"]},
+                      "busy_s_per_job": {r["job"]: r["s"] for r in
+                                         sorted(recs, key=lambda r: -r["s"])}}
+    return dict(sorted(out.items(), key=lambda kv: -kv[1]["busy_s"]))
 
 
 def machine() -> dict[str, Any]:
@@ -166,9 +140,43 @@ def machine() -> dict[str, Any]:
 
 def _snakemake_cmd(args: argparse.Namespace, workdir: Path, config: Path) -> list[str]:
     exe = Path(sys.executable).with_name("snakemake")
-    return [str(exe), "--snakefile", str(Path(args.snakefile).resolve()),
-            "--directory", str(workdir), "--profile", str(Path(args.profile).resolve()),
-            "--cores", str(args.cores), "--configfile", str(config)]
+    cmd = [str(exe), "--snakefile", str(Path(args.snakefile).resolve()),
+           "--directory", str(workdir), "--cores", str(args.cores), "--configfile", str(config)]
+    if args.profile:
+        cmd += ["--profile", str(Path(args.profile).resolve())]
+    return cmd
+
+
+def _increment(args: argparse.Namespace, config: Path) -> tuple[str, float] | None:
+    """The (set, thickness) of the rerun measurement, or None."""
+    import yaml
+
+    spec = getattr(args, "increment", None)
+    if spec is not None and spec.lower() == "none":
+        return None
+    if spec is None:
+        sets = (yaml.safe_load(config.read_text()) or {}).get("sets", {})
+        return DEFAULT_INCREMENT if DEFAULT_INCREMENT[0] in sets else None
+    name, _, value = spec.partition(":")
+    try:
+        return name, float(value)
+    except ValueError as exc:
+        raise ConfigError("--increment", spec, "SET:THICKNESS (m), or none") from exc
+
+
+def _incremented_config(config: Path, set_name: str, thickness: float, out: Path) -> Path:
+    """A copy of ``config`` with ``thickness`` added to ``set_name``'s plate thicknesses."""
+    import yaml
+
+    cfg = yaml.safe_load(config.read_text())
+    if set_name not in cfg.get("sets", {}):
+        raise ConfigError("--increment", set_name, f"a set of {config}")
+    axis = cfg["sets"][set_name]["plate_thickness"]
+    if "values" not in axis:
+        raise ConfigError("--increment", set_name, "a set whose plate_thickness is a list")
+    axis["values"] = [*axis["values"], thickness]
+    atomic_write_text(out, yaml.safe_dump(cfg, sort_keys=False))
+    return out
 
 
 def _run(cmd: list[str], cwd: Path, timeout: float) -> tuple[float, str | None]:
@@ -215,7 +223,9 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     snakefile = Path(args.snakefile).resolve()
     if not snakefile.is_file():
         raise ConfigError("--snakefile", args.snakefile, "an existing Snakefile")
+    increment = _increment(args, config)
     work, temporary = _prepare_workdir(args)
+    inc: dict[str, Any] | None = None
     try:
         cmd = _snakemake_cmd(args, work, config)
         dag_s, error = _run([*cmd, "--dry-run", "--quiet"], work, args.timeout)
@@ -223,16 +233,23 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
             raise SswError(f"the study's dry run failed: {shlex.join(cmd)}\n{error}")
         if args.keep_going:
             cmd.append("--keep-going")
-        t0 = time.time()
         wall_s, error = _run(cmd, work, args.timeout)
-        stages = stage_times(job_records(work), rule_stages(snakefile), t0)
+        records = job_records(work)
+        if increment is not None and error is None:
+            edited = _incremented_config(config, *increment, work / "incremented.yaml")
+            t0 = time.time()
+            inc_s, inc_error = _run(_snakemake_cmd(args, work, edited), work, args.timeout)
+            inc = {"set": increment[0], "thickness": increment[1], "wall_s": inc_s,
+                   "error": inc_error, "jobs": [r["job"] for r in job_records(work, t0)]}
     finally:
         if temporary and not args.keep:
             shutil.rmtree(work, ignore_errors=True)
+    stages = stage_times(records)
     result = {
         "status": "failed" if error else "complete", "error": error,
         "config": str(config), "cores": args.cores, "wall_s": wall_s, "dry_run_s": dag_s,
-        "jobs": sum(s["jobs"] for s in stages.values()), "stages": stages,
+        "jobs": len(records), "busy_s": sum(r["s"] for r in records), "stages": stages,
+        "increment": inc,
         "command": shlex.join(cmd), "workdir": str(work) if (args.keep or not temporary)
         else None, "machine": machine(),
         "date_utc": datetime.now(UTC).isoformat(timespec="seconds"),
@@ -242,6 +259,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     atomic_write_text(out / "study.md", markdown(result))
     if error:
         raise SswError(f"{error}\n(per-stage times of the finished jobs: {out / 'study.md'})")
+    if inc is not None and inc["error"]:
+        raise SswError(f"the rerun with one more thickness failed: {inc['error']}")
     return result
 
 
@@ -255,26 +274,35 @@ def markdown(result: dict[str, Any]) -> str:
         f"{m['memory_bytes'] / 2**30:.0f} GiB, {m['os']}, Python {m['python']}",
         f"- date: {result['date_utc']}",
         f"- command: `{result['command']}`", "",
-        f"**Total wall time: {result['wall_s']:.1f} s** (DAG dry run before: "
-        f"{result['dry_run_s']:.1f} s)"
+        f"**Total wall time: {result['wall_s']:.1f} s** ({result['busy_s']:.1f} s of jobs; "
+        f"DAG dry run before: {result['dry_run_s']:.1f} s)"
         + ("" if result["status"] == "complete" else
            " -- **the run FAILED**; the table shows the jobs that finished"), "",
-        "| stage | jobs | wall (s) | busy (s) | from (s) | to (s) | costliest rule |",
-        "|---|---:|---:|---:|---:|---:|---|",
+        "| stage | jobs | busy (s) | peak memory (MB) | costliest job |",
+        "|---|---:|---:|---:|---|",
     ]
     for name, s in result["stages"].items():
-        top = next(iter(s["busy_s_per_rule"].items()))
-        lines.append(f"| {name} | {s['jobs']} | {s['wall_s']:.1f} | {s['busy_s']:.1f} | "
-                     f"{s['start_s']:.1f} | {s['end_s']:.1f} | {top[0]} ({top[1]:.1f} s) |")
-    lines += ["", "wall: first job start to last job end of the stage; busy: sum of its "
-              "job durations; from/to: seconds after the timed run started.", ""]
+        rss = "-" if s["max_rss_mb"] is None else f"{s['max_rss_mb']:.0f}"
+        lines.append(f"| {name} | {s['jobs']} | {s['busy_s']:.1f} | {rss} | "
+                     f"{s['costliest']['job']} ({s['costliest']['s']:.1f} s) |")
+    lines += ["", "busy: the summed wall time of the stage's jobs (Snakemake's benchmark "
+              "records, results/benchmarks/<stage>/).", ""]
+    inc = result.get("increment")
+    if inc:
+        lines += [f"**Rerun after adding a {inc['thickness'] * 1e3:g} mm plate to "
+                  f"{inc['set']}: {inc['wall_s']:.1f} s**, jobs: "
+                  + ", ".join(f"`{j}`" for j in inc["jobs"]), ""]
     return "\n".join(lines)
 
 
 def human(result: dict[str, Any]) -> str:
     """Short summary for the terminal."""
     rows = [f"study: {result['wall_s']:.1f} s wall on {result['cores']} cores, "
-            f"{result['jobs']} jobs"]
-    rows += [f"  {k:<12} {s['wall_s']:8.1f} s wall  {s['busy_s']:8.1f} s busy  {s['jobs']} jobs"
+            f"{result['jobs']} jobs, {result['busy_s']:.1f} s of jobs"]
+    rows += [f"  {k:<12} {s['busy_s']:8.1f} s busy  {s['jobs']} jobs"
              for k, s in result["stages"].items()]
+    inc = result.get("increment")
+    if inc:
+        rows.append(f"rerun with {inc['thickness'] * 1e3:g} mm added to {inc['set']}: "
+                    f"{inc['wall_s']:.1f} s, jobs {', '.join(inc['jobs'])}")
     return "\n".join(rows)

@@ -18,10 +18,8 @@
 CHAIN_DIR = f"{RESULTS}/chain"
 
 
+# The free parameters of the device, identified from the measured TOFs of the samples.
 rule calibration:
-    """The device's free parameters identified from the validation samples' measured TOFs."""
-    # the study's critical path (calibration -> sweep -> validation) goes first
-    priority: 50
     input:
         unpack(lambda wc: sswwf.wall_inputs(config, RESULTS)),
         recordings=sswwf.recordings(config, RECORDINGS_ROOT),
@@ -32,27 +30,28 @@ rule calibration:
         f"{LOGS}/calibration/calibration.log",
     benchmark:
         f"{BENCHMARKS}/calibration/calibration.tsv"
+    # the study's critical path (calibration -> sweep -> validation) goes first
+    priority: 50
+    conda:
+        SSW_ENV
+    resources:
+        mem_mb=lambda wc, attempt: sswwf.mem_mb("calibration", 0) * attempt,
+        runtime=lambda wc, attempt: sswwf.runtime_min("calibration", 0) * attempt,
     params:
         inputs=inputs_of("calibration"),
         digest=digest_of("calibration"),
         config=STUDY_CONFIG,
         root=RECORDINGS_ROOT,
         wall=lambda wc, input: sswwf.wall_flags(config, input, RESULTS),
-    resources:
-        mem_mb=sswwf.mem_mb("calibration", 0),
-        runtime=sswwf.runtime_min("calibration", 0),
-    conda:
-        SSW_ENV
     shell:
         "python -m ssw --inputs-sha256 {params.digest} calibrate --from-config "
         "--config {params.config} {params.wall} --root {params.root} --calibration none "
         "--output {output.cal} --json > {output.json} 2> {log}"
 
 
+# One interleaved part of the TOF sweep, batched; with resources `tasks` > 1 its ranks
+# share the part under MPI (`mpiexec`, or the launcher of the cluster: resources `mpi`).
 rule tof_sweep:
-    """One interleaved part of the TOF sweep, batched; with resources `tasks` > 1 its ranks
-    share the part under MPI (`mpiexec`, or the cluster's launcher: resources `mpi`)."""
-    priority: 40
     input:
         unpack(calibrated_inputs),
     output:
@@ -63,6 +62,14 @@ rule tof_sweep:
         f"{BENCHMARKS}/chain/tof_{{scatteritem}}.tsv"
     wildcard_constraints:
         scatteritem=r"\d+-of-\d+",
+    priority: 40
+    conda:
+        SSW_ENV
+    threads: 1
+    resources:
+        mem_mb=lambda wc, attempt: sswwf.mem_mb("sweep", 0) * attempt,
+        runtime=lambda wc, attempt: sswwf.runtime_min("sweep", 0) * attempt,
+        tasks=1,
     params:
         inputs=inputs_of("sweep"),
         digest=digest_of("sweep"),
@@ -70,21 +77,14 @@ rule tof_sweep:
         chain=chain_flags,
         launch=lambda wc, resources: sswwf.mpi_launch(resources),
         mpi=lambda wc, resources: sswwf.mpi_flag(resources),
-    threads: 1
-    resources:
-        mem_mb=sswwf.mem_mb("sweep", 0),
-        runtime=sswwf.runtime_min("sweep", 0),
-        tasks=1,
-    conda:
-        SSW_ENV
     shell:
         "{params.launch}python -m ssw --inputs-sha256 {params.digest} tof-sweep "
         "--config {params.config} {params.chain} {params.mpi} --part {wildcards.scatteritem} "
         "--output {output} > {log} 2>&1"
 
 
+# The parts of the sweep merged: one table, its CSV and the Fig 8 style plot.
 rule sweep_figure:
-    """The sweep's parts merged: one table, its CSV and the Fig 8 style plot."""
     input:
         gather.sweep(f"{CHAIN_DIR}/parts/tof_{{scatteritem}}.h5"),
     output:
@@ -100,11 +100,11 @@ rule sweep_figure:
         f"{LOGS}/chain/tof_sweep.log",
     benchmark:
         f"{BENCHMARKS}/chain/sweep_figure.tsv"
+    conda:
+        SSW_ENV
     params:
         inputs=inputs_of("sweep_figure"),
         digest=digest_of("sweep_figure"),
-    conda:
-        SSW_ENV
     shell:
         "python -m ssw --inputs-sha256 {params.digest} tof-merge {input} --output {output.h5} "
         "--csv {output.csv} --plot {output.fig8} > {log} 2>&1"

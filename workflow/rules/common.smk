@@ -11,7 +11,9 @@ from pathlib import Path
 
 from snakemake.utils import validate
 
-sys.path.insert(0, str(Path(workflow.basedir)))
+# the repository: the package ssw and the config's relative paths (recordings) start there
+REPO = Path(workflow.basedir).resolve().parent
+sys.path.insert(0, str(REPO))
 import ssw.config as sswcfg  # noqa: E402
 import ssw.workflow as sswwf  # noqa: E402
 
@@ -20,9 +22,13 @@ import ssw.workflow as sswwf  # noqa: E402
 # not: its bin goes first on PATH) or, with `--sdm conda`, the rules' conda environment
 # (workflow/envs/ssw.yaml: ssw's dependencies, not ssw itself). Snakemake formats the prefix
 # once, here.
-os.environ.update(PATH=os.pathsep.join([os.path.dirname(sys.executable), os.getenv("PATH", "")]))
-SSW_ROOT = shlex.quote(str(Path(workflow.basedir).resolve()))
-shell.prefix("set -euo pipefail; export PYTHONPATH={SSW_ROOT}${{PYTHONPATH:+:$PYTHONPATH}}; ")
+os.environ.update(
+    PATH=os.pathsep.join([os.path.dirname(sys.executable), os.getenv("PATH", "")])
+)
+SSW_ROOT = shlex.quote(str(REPO))
+shell.prefix(
+    "set -euo pipefail; export PYTHONPATH={SSW_ROOT}${{PYTHONPATH:+:$PYTHONPATH}}; "
+)
 SSW_ENV = "../envs/ssw.yaml"
 
 # A study config is complete by itself: `--configfile other.yaml` replaces
@@ -45,10 +51,13 @@ STUDY = sswwf.Study(config)
 SCENES = STUDY.scenes
 # Relative recording paths in the config start from the repository (the Snakefile's folder),
 # so that runs with --directory elsewhere find them; `ssw ... --root` gets the same.
-RECORDINGS_ROOT = workflow.basedir
+RECORDINGS_ROOT = str(REPO)
 
 
 onstart:
+    # on a cluster, a job no node can hold is an error now, not a wait in the queue
+    if sswwf.submits_to_slurm(workflow):
+        sswwf.check_cluster_fit(workflow)
     sswwf.write_study_config(config, STUDY_CONFIG)
 
 

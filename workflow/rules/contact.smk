@@ -25,28 +25,30 @@ wildcard_constraints:
     family=sswwf.alternatives(CONTACT_FAMILIES),
 
 
+# The scenes of one plate family, solved in turn by one process.
 rule contact_batch:
-    """The scenes of one plate family, solved in turn by one process."""
     output:
         directory(f"{RESULTS}/contact/{{family}}"),
     log:
         f"{LOGS}/contact/{{family}}.log",
     benchmark:
         f"{BENCHMARKS}/contact/{{family}}.tsv"
-    params:
-        inputs=lambda wc: inputs_of("contact", wc.family),
-        digest=lambda wc: digest_of("contact", wc.family),
-        config=STUDY_CONFIG,
+    conda:
+        SSW_ENV
     threads: 1
     resources:
-        mem_mb=lambda wc, attempt: sswwf.mem_mb("contact", len(CONTACT_FAMILIES[wc.family]))
+        mem_mb=lambda wc, attempt: sswwf.mem_mb(
+            "contact", len(CONTACT_FAMILIES[wc.family])
+        )
         * attempt,
         runtime=lambda wc, attempt: sswwf.runtime_min(
             "contact", len(CONTACT_FAMILIES[wc.family])
         )
         * attempt,
-    conda:
-        SSW_ENV
+    params:
+        inputs=lambda wc: inputs_of("contact", wc.family),
+        digest=lambda wc: digest_of("contact", wc.family),
+        config=STUDY_CONFIG,
     shell:
         "python -m ssw --inputs-sha256 {params.digest} contact --family {wildcards.family} "
         "--config {params.config} --output-dir {output} > {log} 2>&1"

@@ -21,8 +21,8 @@ GRID_SETS = sswwf.grid_sets(config)
 
 if ONE_SOIL_SETS:
 
+    # Every fit output of a one-soil set, and its contact figure, in one process.
     rule fit_set:
-        """Every fit output of a one-soil set, and its contact figure, in one process."""
         input:
             set_curves,
         output:
@@ -42,6 +42,11 @@ if ONE_SOIL_SETS:
             f"{BENCHMARKS}/fit/{{set}}.tsv"
         wildcard_constraints:
             set=sswwf.alternatives(ONE_SOIL_SETS),
+        conda:
+            SSW_ENV
+        resources:
+            mem_mb=lambda wc, attempt: sswwf.mem_mb("fit", 0) * attempt,
+            runtime=lambda wc, attempt: sswwf.runtime_min("fit", 0) * attempt,
         params:
             inputs=lambda wc: inputs_of("fit", wc.set),
             digest=lambda wc: digest_of("fit", wc.set),
@@ -50,11 +55,6 @@ if ONE_SOIL_SETS:
             outdir=lambda wc, output: os.path.dirname(
                 os.path.dirname(os.path.dirname(output.k_table[0]))
             ),
-        resources:
-            mem_mb=sswwf.mem_mb("fit", 0),
-            runtime=sswwf.runtime_min("fit", 0),
-        conda:
-            SSW_ENV
         shell:
             "python -m ssw --inputs-sha256 {params.digest} fit-set {wildcards.set} {input} "
             "--outdir {params.outdir} --contact-figure {output.contact_figure} "
@@ -63,8 +63,8 @@ if ONE_SOIL_SETS:
 
 if GRID_SETS:
 
+    # Every fit output of a set over several soils (K(E, nu), its TOF cost).
     rule fit_grid:
-        """Every fit output of a set over several soils (K(E, nu), its TOF cost)."""
         input:
             set_curves,
         output:
@@ -77,6 +77,11 @@ if GRID_SETS:
             f"{BENCHMARKS}/fit/{{set}}.tsv"
         wildcard_constraints:
             set=sswwf.alternatives(GRID_SETS),
+        conda:
+            SSW_ENV
+        resources:
+            mem_mb=lambda wc, attempt: sswwf.mem_mb("fit", 0) * attempt,
+            runtime=lambda wc, attempt: sswwf.runtime_min("fit", 0) * attempt,
         params:
             inputs=lambda wc: inputs_of("fit", wc.set),
             digest=lambda wc: digest_of("fit", wc.set),
@@ -85,11 +90,6 @@ if GRID_SETS:
             outdir=lambda wc, output: os.path.dirname(
                 os.path.dirname(os.path.dirname(output.k_table[0]))
             ),
-        resources:
-            mem_mb=sswwf.mem_mb("fit", 0),
-            runtime=sswwf.runtime_min("fit", 0),
-        conda:
-            SSW_ENV
         shell:
             "python -m ssw --inputs-sha256 {params.digest} fit-set {wildcards.set} {input} "
             "--outdir {params.outdir} --config {params.config} > {log} 2>&1"

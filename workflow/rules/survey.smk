@@ -14,8 +14,8 @@ SURVEY_DIR = f"{RESULTS}/survey"
 SURVEY_POINTS = sswwf.survey_points(config)
 
 
+# One test point: its recordings -> E with its interval (ssw measure).
 rule survey_point:
-    """One test point: its recordings -> E with its interval (ssw measure)."""
     input:
         unpack(survey_point_inputs),
     output:
@@ -26,36 +26,28 @@ rule survey_point:
         f"{BENCHMARKS}/survey/{{point}}.tsv"
     wildcard_constraints:
         point=sswwf.alternatives(SURVEY_POINTS),
+    conda:
+        SSW_ENV
+    resources:
+        mem_mb=lambda wc, attempt: sswwf.mem_mb("survey_point", 0) * attempt,
+        runtime=lambda wc, attempt: sswwf.runtime_min("survey_point", 0) * attempt,
     params:
         inputs=lambda wc: inputs_of("survey_point", wc.point),
         digest=lambda wc: digest_of("survey_point", wc.point),
         config=STUDY_CONFIG,
         nu=lambda wc: sswwf.survey_nu(config, wc.point),
         chain=chain_flags,
-    resources:
-        mem_mb=sswwf.mem_mb("survey_point", 0),
-        runtime=sswwf.runtime_min("survey_point", 0),
-    conda:
-        SSW_ENV
     shell:
         "python -m ssw --inputs-sha256 {params.digest} measure {input.recordings} "
         "--soil-nu {params.nu} --config {params.config} {params.chain} --json "
         "> {output.json} 2> {log}"
 
 
+# The survey table, verdicts and figures.
 rule survey_table:
-    """The survey table, verdicts and figures."""
     input:
         expand(f"{SURVEY_DIR}/points/{{point}}.json", point=SURVEY_POINTS),
     output:
-        csv=f"{SURVEY_DIR}/survey.csv",
-        h5=f"{SURVEY_DIR}/survey.h5",
-        plot=report(
-            f"{SURVEY_DIR}/figures/survey_E.png",
-            caption="../report/survey_E.rst",
-            category="5. Survey",
-            subcategory="Figures",
-        ),
         **(
             {
                 "map": report(
@@ -68,17 +60,25 @@ rule survey_table:
             if sswwf.survey_has_coordinates(config)
             else {}
         ),
+        csv=f"{SURVEY_DIR}/survey.csv",
+        h5=f"{SURVEY_DIR}/survey.h5",
+        plot=report(
+            f"{SURVEY_DIR}/figures/survey_E.png",
+            caption="../report/survey_E.rst",
+            category="5. Survey",
+            subcategory="Figures",
+        ),
     log:
         f"{LOGS}/survey/survey_table.log",
     benchmark:
         f"{BENCHMARKS}/survey/survey_table.tsv"
+    conda:
+        SSW_ENV
     params:
         inputs=inputs_of("survey_table"),
         digest=digest_of("survey_table"),
         config=STUDY_CONFIG,
         map=lambda wc, output: f"--map {output.map}" if "map" in output.keys() else "",
-    conda:
-        SSW_ENV
     shell:
         "python -m ssw --inputs-sha256 {params.digest} survey-table {input} "
         "--config {params.config} --csv {output.csv} --h5 {output.h5} --plot {output.plot} "

@@ -13,9 +13,8 @@
 VALIDATION_DIR = f"{RESULTS}/validation"
 
 
+# Tables 2 and 3 and Figs 9 and 10 for the validation samples of the config.
 rule validation:
-    """Tables 2 and 3 and Figs 9 and 10 for the config's validation samples."""
-    priority: 30
     input:
         unpack(validation_inputs),
     output:
@@ -40,6 +39,12 @@ rule validation:
         f"{LOGS}/validation/validation.log",
     benchmark:
         f"{BENCHMARKS}/validation/validation.tsv"
+    priority: 30
+    conda:
+        SSW_ENV
+    resources:
+        mem_mb=lambda wc, attempt: sswwf.mem_mb("validation", 0) * attempt,
+        runtime=lambda wc, attempt: sswwf.runtime_min("validation", 0) * attempt,
     params:
         inputs=inputs_of("validation"),
         digest=digest_of("validation"),
@@ -47,11 +52,6 @@ rule validation:
         root=RECORDINGS_ROOT,
         outdir=lambda wc, output: os.path.dirname(output.csv),
         chain=chain_flags,
-    resources:
-        mem_mb=sswwf.mem_mb("validation", 0),
-        runtime=sswwf.runtime_min("validation", 0),
-    conda:
-        SSW_ENV
     shell:
         "python -m ssw --inputs-sha256 {params.digest} validate --config {params.config} "
         "{params.chain} --root {params.root} --sweep {input.sweep} "
@@ -80,12 +80,12 @@ REPORT_TABLES = sswwf.report_tables(
 )
 
 
+# The tables (CSV) of every stage as one HTML page per stage for the Snakemake report, in
+# one process.
 rule report_tables:
-    """Every stage's tables (CSV) as one HTML page per stage for the Snakemake report, in
-    one process."""
     input:
         tables=[t for ts in REPORT_TABLES.values() for t in ts],
-        captions=os.path.join(workflow.basedir, "workflow", "report", "captions.yaml"),
+        captions=os.path.join(workflow.basedir, "report", "captions.yaml"),
     output:
         **{
             stage: report(
@@ -100,14 +100,14 @@ rule report_tables:
         f"{LOGS}/report/tables.log",
     benchmark:
         f"{BENCHMARKS}/report/tables.tsv"
+    conda:
+        SSW_ENV
     params:
         inputs=inputs_of("report"),
         digest=digest_of("report"),
         pages=lambda wc, input, output: sswwf.report_page_args(
             output, REPORT_TABLES, REPORT_CATEGORIES
         ),
-    conda:
-        SSW_ENV
     shell:
         "python -m ssw --inputs-sha256 {params.digest} report {params.pages} "
         "--captions {input.captions} > {log} 2>&1"

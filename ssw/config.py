@@ -9,7 +9,6 @@ exist in the library, Poisson's ratios a model supports, non-empty grids) and ra
 
 from __future__ import annotations
 
-import copy
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -28,31 +27,6 @@ DEFAULT_CONFIG = REPO_ROOT / "config" / "config.yaml"
 def load_schema() -> dict[str, Any]:
     """The config JSON schema as a dict."""
     return yaml.safe_load(SCHEMA_PATH.read_text())
-
-
-def _validator(schema: dict[str, Any]) -> Any:
-    """A JSON Schema 2020-12 validator (Snakemake 9's draft) that fills in ``default`` values.
-
-    Snakemake's ``validate`` fills defaults the same way, so both see the same config.
-    """
-    import jsonschema
-
-    base = jsonschema.Draft202012Validator
-    validate_props = base.VALIDATORS["properties"]
-
-    def set_defaults(validator: Any, properties: Any, instance: Any, schema: Any) -> Any:
-        if isinstance(instance, dict):
-            for prop, sub in properties.items():
-                if "default" in sub and prop not in instance:
-                    instance[prop] = copy.deepcopy(sub["default"])
-        yield from validate_props(validator, properties, instance, schema)
-
-    return jsonschema.validators.extend(base, {"properties": set_defaults})(schema)
-
-
-def _path_of(error: Any) -> str:
-    parts = [str(p) for p in error.absolute_path]
-    return ".".join(parts) if parts else "(top level)"
 
 
 def _looks_numeric(text: str) -> bool:
@@ -94,18 +68,15 @@ def validate_config(cfg: dict[str, Any]) -> dict[str, Any]:
     Returns ``cfg``. Raises :class:`ConfigError` on the first problem (the deepest error of
     the schema, so that the message names the offending field).
     """
-    import jsonschema
+    from ssw.schema import first_error, path_of
 
     check_moved_keys(cfg)
-    validator = _validator(load_schema())
-    errors = sorted(validator.iter_errors(cfg), key=lambda e: -len(e.absolute_path))
-    if errors:
-        err = errors[0]
-        best = jsonschema.exceptions.best_match([err]) or err
+    err = first_error(load_schema(), cfg)
+    if err is not None:
         hint = ""
-        if isinstance(best.instance, str) and _looks_numeric(best.instance):
+        if isinstance(err.instance, str) and _looks_numeric(err.instance):
             hint = " (YAML reads a number like 1.0e6 as text: write 1.0e+6)"
-        raise ConfigError(_path_of(best), best.instance, best.message + hint)
+        raise ConfigError(path_of(err), err.instance, err.message + hint)
     check_config(cfg)
     return cfg
 
@@ -248,8 +219,6 @@ def check_config(cfg: dict[str, Any]) -> None:
         raise ConfigError("fit.set", fit["set"], f"one of the sets: {', '.join(cfg['sets'])}")
     points = cfg.get("survey", {}).get("points", [])
     if points:
-        from ssw.survey import check_points
-
         check_points(points)
     for i, smp in enumerate(cfg.get("validation", {}).get("samples", [])):
         need_material(f"validation.samples[{i}].material", smp["material"])
@@ -345,3 +314,34 @@ def all_scenes(cfg: dict[str, Any]) -> dict[str, Scene]:
                                   f"scenes that can be told apart: {sc} and {other} share "
                                   "one id")
     return out
+
+
+# ---------------------------------------------------------------------- survey points
+def check_points(points: list[dict[str, Any]], field: str = "survey.points") -> None:
+    """Ids unique and file-name safe, one kind of target, coordinates in pairs."""
+    import re
+
+    seen = set()
+    for i, pt in enumerate(points):
+        pid = pt["id"]
+        if not re.fullmatch(r"[A-Za-z0-9_.-]+", pid):
+            raise ConfigError(f"{field}[{i}].id", pid, "letters, digits, _ . -")
+        if pid in seen:
+            raise ConfigError(f"{field}[{i}].id", pid, "an id used once")
+        seen.add(pid)
+        if pt.get("target_E") is not None and pt.get("reference_E") is not None:
+            raise ConfigError(f"{field}[{i}]", pid, "target_E or reference_E, not both")
+        for a, b in (("x", "y"), ("latitude", "longitude")):
+            if (pt.get(a) is None) != (pt.get(b) is None):
+                raise ConfigError(f"{field}[{i}].{a}/{b}", [pt.get(a), pt.get(b)],
+                                  "both coordinates or neither")
+        nu = pt["soil_nu"]
+        if isinstance(nu, list) and not (len(nu) == 2 and -1 < nu[0] <= nu[1] <= 0.5):
+            raise ConfigError(f"{field}[{i}].soil_nu", nu, "NU or [LO, HI], -1 < LO <= HI <= 0.5")
+
+
+def nu_text(nu: Any) -> str:
+    """The ``--soil-nu`` argument of a point's Poisson's ratio (``NU`` or ``LO:HI``)."""
+    if isinstance(nu, list | tuple):
+        return f"{float(nu[0]):g}:{float(nu[1]):g}"
+    return f"{float(nu):g}"

@@ -9,8 +9,8 @@ the DAQ force sensor (model, sensitivity, range). The thesis's device is the def
 
 Devices are found by path, or by name among the shipped devices. Study configs name one
 (``device:``); the command line takes ``--device FILE`` and individual flags override its
-fields (:meth:`Device.with_`). :meth:`Device.chain_params` turns a device and the numerics
-of a study into the :class:`ssw.chain.params.ChainParams` the integrator runs.
+fields (:meth:`Device.with_`). The device is data: :func:`ssw.chain.params.chain_params`
+turns a device and the numerics of a study into the ``ChainParams`` the integrator runs.
 
 Calibratable parameters (:data:`PARAMETERS`) are device fields that ``ssw calibrate`` may
 identify from measured TOFs: continuous ones (striker speed, preload, masses) and integer
@@ -145,38 +145,6 @@ class Device:
             ch["sensor_index"] = int(ch["sensor_index"])
         return replace(self, **ch)
 
-    # ------------------------------------------------------------------ numerics
-    def chain_params(self, materials: dict[str, Any] | None = None, **numerics: Any) -> Any:
-        """The :class:`ssw.chain.params.ChainParams` of this device.
-
-        ``materials`` is the materials library (key -> Material; default: the shipped one,
-        ``realistic``); ``numerics`` are the non-device fields of ChainParams
-        (``steps_per_contact``, ``t_max``, ``gravity``, ``damping``, ``fit_law``, ...).
-        """
-        from ssw.chain.params import ChainParams
-        from ssw.materials import material_set
-
-        mats = materials if materials is not None else material_set()
-        bead = _material(mats, self.bead_material, "chain.bead_material")
-        fields_: dict[str, Any] = {
-            "n_beads": self.beads, "bead_radius": self.bead_radius,
-            "bead_density": bead.density, "bead_E": bead.E, "bead_nu": bead.nu,
-            "sensor_index": self.sensor_index, "sensor_mass": self.sensor_mass,
-            "striker_mass": self.striker_mass, "striker_velocity": self.striker_velocity,
-            "preload": self.preload, "sensor_reads": self.sensor_reads,
-            "plate_material": self.plate_material if self.has_plate else "none",
-            "plate_thickness": self.plate_thickness, "plate_diameter": self.plate_diameter,
-            "plate_interface": self.plate_interface,
-        }
-        if self.has_plate:
-            plate = _material(mats, self.plate_material, "plate.material")
-            fields_["plate_E"], fields_["plate_nu"] = plate.E, plate.nu
-        unknown = set(numerics) - {f.name for f in fields(ChainParams)}
-        if unknown:
-            raise ConfigError("chain numerics", sorted(unknown), "fields of ChainParams")
-        fields_.update(numerics)
-        return ChainParams(**fields_)
-
     # ------------------------------------------------------------------ I/O
     def to_dict(self) -> dict[str, Any]:
         """The nested YAML/JSON layout of the schema (SI units)."""
@@ -203,12 +171,6 @@ class Device:
         return d
 
 
-def _material(mats: dict[str, Any], key: str, field: str) -> Any:
-    if key not in mats:
-        raise ConfigError(field, key, f"a material of the library: {', '.join(sorted(mats))}")
-    return mats[key]
-
-
 #: Flat field -> its place in the YAML layout (for error messages).
 _YAML_FIELDS = {
     "beads": "chain.beads", "bead_material": "chain.bead_material",
@@ -226,27 +188,20 @@ def _yaml_field(name: str) -> str:
     return _YAML_FIELDS.get(name, name)
 
 
-def _validator() -> Any:
-    from ssw.config import _validator as config_validator
-
-    return config_validator(yaml.safe_load(SCHEMA_PATH.read_text()))
-
-
 def device_from_dict(data: dict[str, Any], source: str = "") -> Device:
     """A device from its nested layout: schema-validated, defaults filled.
 
     Raises :class:`ConfigError` naming the field (``device.<path>``), the value and what is
     allowed.
     """
-    from ssw.config import _path_of
+    from ssw.schema import first_error, path_of
 
     if not isinstance(data, dict):
         raise ConfigError("device", source or type(data).__name__, "a YAML mapping")
     d = copy.deepcopy(data)
-    errors = sorted(_validator().iter_errors(d), key=lambda e: -len(e.absolute_path))
-    if errors:
-        err = errors[0]
-        raise ConfigError(f"device {source}: {_path_of(err)}".strip(), err.instance, err.message)
+    err = first_error(yaml.safe_load(SCHEMA_PATH.read_text()), d)
+    if err is not None:
+        raise ConfigError(f"device {source}: {path_of(err)}".strip(), err.instance, err.message)
     st = d["striker"]
     if (st.get("velocity") is None) == (st.get("drop_height") is None):
         raise ConfigError(f"device {source}: striker".strip(),

@@ -101,7 +101,7 @@ def estimate_moduli(
     calibration : :class:`ssw.calibration.Calibration` whose covariance enters (or None).
     """
     from ssw.chain import api
-    from ssw.chain.walls import build_wall
+    from ssw.walls import build_wall
 
     opts = dict(wall_options or {})
     T = np.atleast_1d(np.asarray(tof, float)).ravel()

@@ -145,16 +145,19 @@ def _package_of(path: Path) -> str:
     return ".".join(parts[:-1])
 
 
-def module_closure(modules: Iterable[str]) -> list[Path]:
-    """Source files of ``modules`` and of every ``ssw`` module they import, transitively,
-    parent packages' ``__init__`` included (what runs when they are imported); sorted."""
+def module_closure(modules: Iterable[str], packages: bool = True) -> list[Path]:
+    """Source files of ``modules`` and of every ``ssw`` module they import, transitively;
+    with ``packages``, the parent packages' ``__init__`` too (what runs when they are
+    imported; without: only what the modules' code uses). Sorted."""
     seen: set[Path] = set()
     todo = list(modules)
     while todo:
         name = todo.pop()
         parts = name.split(".")
-        for i in range(1, len(parts) + 1):  # importing a.b.c runs a and a.b first
-            p = _module_path(".".join(parts[:i]))
+        # importing a.b.c runs a and a.b first
+        names = [".".join(parts[:i]) for i in range(1, len(parts) + 1)] if packages else [name]
+        for n in names:
+            p = _module_path(n)
             if p is not None and p not in seen:
                 seen.add(p)
                 todo.extend(_imports_of(p))
@@ -162,20 +165,20 @@ def module_closure(modules: Iterable[str]) -> list[Path]:
 
 
 @functools.lru_cache(maxsize=64)
-def _source_hash(modules: tuple[str, ...]) -> str:
+def _source_hash(modules: tuple[str, ...], packages: bool = True) -> str:
     h = hashlib.sha256()
-    for p in module_closure(modules):
+    for p in module_closure(modules, packages):
         h.update(str(p.relative_to(PACKAGE_DIR)).encode() + b"\0")
         h.update(p.read_bytes() + b"\0")
     return h.hexdigest()[:DIGEST_HEX]
 
 
-def source_hash(modules: Iterable[str]) -> str:
+def source_hash(modules: Iterable[str], packages: bool = True) -> str:
     """Hash of the source of ``modules`` and everything of ssw they import (statically, see
-    :func:`module_closure`), the package data they may read included only when imported
-    code names it: the data files (schemas, materials, devices) enter results through
-    their values, which are inputs."""
-    return _source_hash(tuple(sorted(set(modules))))
+    :func:`module_closure`; ``packages``: with the parent packages' ``__init__``). Data
+    files (schemas, materials, devices) enter results through their values, which are
+    inputs, not through this hash."""
+    return _source_hash(tuple(sorted(set(modules))), packages)
 
 
 @functools.lru_cache(maxsize=1)

@@ -82,36 +82,6 @@ def verdict(E_low: float, E_high: float, target: float | None) -> str:
     return "inconclusive"
 
 
-def check_points(points: list[dict[str, Any]], field: str = "survey.points") -> None:
-    """Ids unique and file-name safe, one kind of target, coordinates in pairs."""
-    import re
-
-    seen = set()
-    for i, pt in enumerate(points):
-        pid = pt["id"]
-        if not re.fullmatch(r"[A-Za-z0-9_.-]+", pid):
-            raise ConfigError(f"{field}[{i}].id", pid, "letters, digits, _ . -")
-        if pid in seen:
-            raise ConfigError(f"{field}[{i}].id", pid, "an id used once")
-        seen.add(pid)
-        if pt.get("target_E") is not None and pt.get("reference_E") is not None:
-            raise ConfigError(f"{field}[{i}]", pid, "target_E or reference_E, not both")
-        for a, b in (("x", "y"), ("latitude", "longitude")):
-            if (pt.get(a) is None) != (pt.get(b) is None):
-                raise ConfigError(f"{field}[{i}].{a}/{b}", [pt.get(a), pt.get(b)],
-                                  "both coordinates or neither")
-        nu = pt["soil_nu"]
-        if isinstance(nu, list) and not (len(nu) == 2 and -1 < nu[0] <= nu[1] <= 0.5):
-            raise ConfigError(f"{field}[{i}].soil_nu", nu, "NU or [LO, HI], -1 < LO <= HI <= 0.5")
-
-
-def nu_text(nu: Any) -> str:
-    """The ``--soil-nu`` argument of a point's Poisson's ratio (``NU`` or ``LO:HI``)."""
-    if isinstance(nu, list | tuple):
-        return f"{float(nu[0]):g}:{float(nu[1]):g}"
-    return f"{float(nu):g}"
-
-
 def survey_table(points: list[dict[str, Any]], results: list[dict[str, Any]]) -> list[SurveyRow]:
     """One row per point from its config entry and its ``ssw measure --json`` result."""
     if len(points) != len(results):

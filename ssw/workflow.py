@@ -506,7 +506,7 @@ def point_recordings(cfg: dict[str, Any], point: str, root: str) -> list[str]:
 
 def survey_nu(cfg: dict[str, Any], point: str) -> str:
     """The point's ``--soil-nu`` argument (``NU`` or ``LO:HI``)."""
-    from ssw.survey import nu_text
+    from ssw.config import nu_text
 
     return nu_text(_point(cfg, point)["soil_nu"])
 

@@ -161,7 +161,7 @@ def test_early_stop_does_not_change_the_tof(change):
     scene 2.5 times longer, from very soft to stiffer-than-rock walls."""
     from ssw.chain.integrate import simulate
     from ssw.chain.tof import pick_peaks
-    from ssw.chain.walls import build_wall
+    from ssw.walls import build_wall
 
     p = P.with_(**change)
     w = build_wall("hertz", p, np.geomspace(5e6, 2e9, 12), 0.3)

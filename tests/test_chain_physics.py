@@ -10,7 +10,8 @@ from ssw.chain import api
 from ssw.chain.integrate import simulate
 from ssw.chain.params import ChainParams
 from ssw.chain.statics import initial_state, static_contact_forces
-from ssw.chain.walls import PowerWall, build_wall
+from ssw.chain.wall import PowerWall
+from ssw.walls import build_wall
 
 BASE = ChainParams(gravity=False, striker_velocity=0.5)
 

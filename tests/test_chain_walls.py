@@ -7,10 +7,11 @@ import pytest
 
 from ssw.chain import api
 from ssw.chain.params import ChainParams
-from ssw.chain.walls import TABLE_CELLS, build_wall, compliance_scale
+from ssw.chain.wall import TABLE_CELLS, compliance_scale
 from ssw.curve import ForceCurve, write_curve
 from ssw.errors import ConfigError
 from ssw.hertz import effective_modulus, hertz_coefficient
+from ssw.walls import build_wall
 
 P = ChainParams(striker_velocity=0.5246)
 E = np.array([38e6, 445e6])
@@ -110,8 +111,8 @@ def test_a_k_table_file_is_read_once_per_version(tmp_path):
     the K table file again; a rewritten file is read anew and its values are used."""
     import os
 
-    from ssw.chain.walls import load_k_table
     from ssw.fit.table import KTable, write_tables
+    from ssw.walls import load_k_table
 
     def table(K):
         Eg, nug = np.array([30e6, 500e6]), np.array([0.3, 0.35])

@@ -9,9 +9,8 @@ import yaml
 
 from ssw.chain import api
 from ssw.chain.integrate import simulate
-from ssw.chain.params import Batch
+from ssw.chain.params import Batch, chain_params
 from ssw.chain.statics import initial_state, static_contact_forces
-from ssw.chain.walls import build_wall
 from ssw.device import (
     STANDARD_GRAVITY,
     available_devices,
@@ -21,6 +20,7 @@ from ssw.device import (
 )
 from ssw.errors import ConfigError
 from ssw.materials import material_set
+from ssw.walls import build_wall
 
 
 def test_the_thesis_device_is_shipped_and_default():
@@ -83,14 +83,14 @@ def test_unknown_device_names_the_shipped_ones():
 
 def test_chain_params_carry_the_device_and_its_materials():
     mats = material_set()
-    p = load_device().with_(preload=3.0).chain_params(mats, steps_per_contact=60)
+    p = chain_params(load_device().with_(preload=3.0), mats, steps_per_contact=60)
     assert p.n_beads == 20 and p.preload == 3.0 and p.steps_per_contact == 60
     assert p.bead_E == mats["chrome_steel"].E and p.plate_E == mats["pla"].E
     assert p.plate_nu == mats["pla"].nu and p.plate_diameter == pytest.approx(49.5e-3)
 
 
 # ------------------------------------------------------------------ chain physics it adds
-P = load_device().chain_params(material_set(), steps_per_contact=80)
+P = chain_params(load_device(), material_set(), steps_per_contact=80)
 
 
 def test_preload_statics_carry_the_weight_and_the_preload():

@@ -147,8 +147,8 @@ def test_stateful_integrator_reproduces_the_chain_integrator():
     """The research copy of the Verlet loop with a stateless wall gives the chain stage's
     sensor signal (same algorithm, same step) to round-off."""
     from ssw.chain.integrate import simulate as chain_simulate
-    from ssw.chain.walls import build_wall
     from ssw.dynamics.integrate import QuasiStatic, simulate
+    from ssw.walls import build_wall
 
     p = ChainParams(steps_per_contact=40)
     w = build_wall("hertz", p, np.array([38e6, 445e6]), 0.3)
@@ -166,9 +166,9 @@ def test_reduced_wall_limits_scaling_and_energy():
     participating mass is first order)."""
     from ssw.chain.integrate import time_step
     from ssw.chain.tof import pick_peaks
-    from ssw.chain.walls import build_wall
     from ssw.dynamics.integrate import QuasiStatic, simulate
     from ssw.dynamics.reduced import reduced_wall
+    from ssw.walls import build_wall
 
     p = ChainParams(steps_per_contact=40)
     E = np.array([10e6, 100e6])
@@ -212,10 +212,10 @@ def test_reduced_wall_follows_the_fem_wall():
 def test_wall_dynamics_registry():
     """quasi-static is the wall itself; reduced wraps it and needs the density; fem is not
     a wrapper and says where it is."""
-    from ssw.chain.walls import build_wall
     from ssw.dynamics.reduced import ReducedWall
     from ssw.dynamics.registry import with_dynamics
     from ssw.errors import ConfigError
+    from ssw.walls import build_wall
 
     p = ChainParams()
     w = build_wall("hertz", p, [10e6, 20e6], 0.3)
@@ -236,9 +236,9 @@ def test_chain_integrator_runs_the_reduced_wall_like_the_research_loop():
     from ssw.chain import api
     from ssw.chain.integrate import simulate as chain_simulate
     from ssw.chain.integrate import time_step
-    from ssw.chain.walls import build_wall
     from ssw.dynamics.integrate import simulate
     from ssw.dynamics.reduced import reduced_wall
+    from ssw.walls import build_wall
 
     p = ChainParams(steps_per_contact=40)
     E = np.array([10e6, 200e6])

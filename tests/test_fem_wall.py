@@ -20,10 +20,10 @@ import pytest
 
 from ssw import hertz
 from ssw.chain import api
-from ssw.chain.fem_wall import ENERGY_MARGIN, FORCE_ERROR_COEF, chain_energy, energy_bound
 from ssw.chain.params import ChainParams
-from ssw.chain.walls import WALLS, build_wall
 from ssw.contact.operators import OperatorStore
+from ssw.walls import WALLS, build_wall
+from ssw.walls.fem import ENERGY_MARGIN, FORCE_ERROR_COEF, chain_energy, energy_bound
 
 #: Contact settings of the module: the study's defaults (mesh growth 0.1).
 CONTACT: dict = {}

@@ -10,6 +10,7 @@ import pytest
 from ssw.calibration import Reference, calibrate
 from ssw.chain import api
 from ssw.chain.inverse import invert, invert_batch
+from ssw.chain.params import chain_params
 from ssw.device import load_device
 from ssw.errors import ConfigError
 from ssw.materials import material_set
@@ -17,7 +18,7 @@ from ssw.modulus import COVERAGE_Z, Estimator, estimate_moduli
 
 DEVICE = load_device("thesis").with_(plate_thickness=0.0, plate_material="none")
 NUM = {"gravity": True, "steps_per_contact": 80, "t_max": 0.02, "damping": 0.0}
-P = DEVICE.chain_params(material_set(), **NUM)
+P = chain_params(DEVICE, material_set(), **NUM)
 E0, NU0 = 120.0e6, 0.3
 
 

@@ -28,9 +28,9 @@ from ssw.chain import api
 from ssw.chain.integrate import simulate
 from ssw.chain.params import ChainParams
 from ssw.chain.tof import pick_peaks
-from ssw.chain.walls import build_wall
 from ssw.cli import main as ssw_main
 from ssw.errors import ConfigError
+from ssw.walls import build_wall
 
 SOIL_E = np.geomspace(1.0e6, 1.0e10, 5)  # Pa, 1 MPa .. 10 GPa
 SOIL_NU = np.array([0.49, 0.5])

@@ -9,8 +9,9 @@ import numpy as np
 import pytest
 
 from ssw.cli import main
+from ssw.config import check_points
 from ssw.errors import ConfigError
-from ssw.survey import check_points, point_target, survey_table, verdict
+from ssw.survey import point_target, survey_table, verdict
 
 
 @pytest.mark.parametrize(("lo", "hi", "target", "expected"), [
@@ -85,7 +86,9 @@ def test_survey_table_cli_writes_the_files(tmp_path, capsys):
     assert rc == 0
     res = json.loads(capsys.readouterr().out)
     assert res["verdicts"] == {"pass": 1, "fail": 1, "inconclusive": 0, "no target": 1}
-    head = (out / "s.csv").read_text().splitlines()[0]
+    lines = (out / "s.csv").read_text().splitlines()
+    assert lines[0].startswith("# ssw ")  # the provenance line
+    head = lines[1]
     assert "E [Pa]" in head and "verdict" in head and "x [m]" in head
     with h5py.File(out / "s.h5") as f:
         assert f.attrs["ssw_kind"] == "survey"

@@ -174,11 +174,11 @@ def goals(cfg: dict[str, Any], radius: float, repeat: int, lu: float, engines: b
 def wall_study(cfg: dict[str, Any], repeat: int) -> dict[str, Any]:
     """The fem wall on the Set 3 sweep: cost and TOF of its representations."""
     from ssw.chain import api
-    from ssw.chain.fem_wall import PiecewiseLinearWall, fem_wall
     from ssw.chain.params import ChainParams
-    from ssw.chain.walls import TableWall, _resample
+    from ssw.chain.wall import TableWall, _resample
     from ssw.contact.operators import OperatorStore
     from ssw.curve import ForceCurve
+    from ssw.walls.fem import PiecewiseLinearWall, fem_wall
 
     params = ChainParams.from_config(cfg)
     E = np.arange(10e6, 1000e6 + 1, 10e6)

@@ -95,7 +95,7 @@ def static_limit_part() -> dict[str, Any]:
     from ssw.chain.integrate import simulate as chain_simulate
     from ssw.chain.params import ChainParams
     from ssw.chain.tof import pick_peaks
-    from ssw.chain.walls import table_wall
+    from ssw.chain.wall import table_wall
     from ssw.contact import solve_curve
     from ssw.dynamics.fem_wall import fem_wall
     from ssw.dynamics.integrate import simulate
@@ -146,9 +146,9 @@ def sweep_cost_part(repeat: int) -> dict[str, Any]:
     from ssw.chain.integrate import simulate as chain_simulate
     from ssw.chain.integrate import time_step
     from ssw.chain.params import ChainParams
-    from ssw.chain.walls import build_wall
     from ssw.dynamics.integrate import QuasiStatic, simulate
     from ssw.dynamics.reduced import plate_areal_density, reduced_wall
+    from ssw.walls import build_wall
 
     p = ChainParams()
     E = np.repeat(np.arange(10e6, 1000e6 + 1, 10e6), 3)

@@ -26,6 +26,7 @@ import numpy as np
 from ssw import __version__
 from ssw.calibration.fit import identify, leave_one_out_sets, theta_dict
 from ssw.calibration.model import Reference, TofModel
+from ssw.chain.params import chain_params
 from ssw.device import Device, device_from_dict, parameter
 from ssw.errors import ConfigError
 
@@ -69,7 +70,7 @@ class Calibration:
     def chain_params(self, **numerics: Any) -> Any:
         """ChainParams of the calibrated device with the calibration's numerics (``numerics``
         override them)."""
-        return self.device.chain_params(self.materials(), **{**self.numerics, **numerics})
+        return chain_params(self.device, self.materials(), **{**self.numerics, **numerics})
 
     def covariance_array(self) -> np.ndarray | None:
         """The continuous parameters' covariance (SI), or None."""
@@ -161,7 +162,7 @@ def calibrate(
     fit, subs = identify(model, refs, ranges=ranges, subsets=subsets, scan_points=scan_points)
     values = theta_dict(model.free, fit.theta)
     cal_device = device.with_(**values)
-    params = cal_device.chain_params(materials, **numerics)
+    params = chain_params(cal_device, materials, **numerics)
     # canonical evaluation: one plain run of the calibrated device (what users reproduce)
     tof_c = np.asarray(api.tof(model.refs_E, model.refs_nu, params, wall, **opts), float)
     references = [
@@ -231,8 +232,8 @@ def _loo_predictions(model: TofModel, refs: list[Reference], subs: dict, materia
     E_pred = np.full(len(refs), np.nan)
     reasons = [""] * len(refs)
     for ivals, members in groups.items():
-        base = model.device.with_(**dict(zip(ints, ivals, strict=True))).chain_params(
-            materials, **numerics)
+        base = chain_params(model.device.with_(**dict(zip(ints, ivals, strict=True))),
+                            materials, **numerics)
         vary = {n: np.array([subs[keys[i]].theta[model.free.index(n)] for i in members])
                 for n in cont}
         res = invert_batch([refs[i].tof for i in members], [refs[i].nu for i in members],

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 
-from ssw.chain.params import VARYING, Batch, ChainParams
+from ssw.chain.params import VARYING, Batch, ChainParams, chain_params
 from ssw.device import Device, parameter
 from ssw.errors import ConfigError
 
@@ -75,7 +75,7 @@ class TofModel:
     refs_E, refs_nu : the references' moduli (Pa) and Poisson's ratios.
     materials : the materials library (key -> Material).
     numerics : non-device ChainParams fields (steps_per_contact, t_max, gravity, ...).
-    wall, wall_options : the last-contact law (:data:`ssw.chain.walls.WALLS`).
+    wall, wall_options : the last-contact law (:data:`ssw.walls.WALLS`).
     """
 
     device: Device
@@ -112,14 +112,14 @@ class TofModel:
 
     def params_for(self, values: dict[str, float]) -> ChainParams:
         """ChainParams of the device with ``values`` of the free parameters (one set)."""
-        return self.device.with_(**_cast(values)).chain_params(self.materials, **self.numerics)
+        return chain_params(self.device.with_(**_cast(values)), self.materials, **self.numerics)
 
     def walls(self) -> Any:
         """The references' walls, built once: no free parameter changes a wall law, but a
         law computed to a finite depth (``fem``: to the energy the chain can bring) is built
         for the most energetic set the scan may try (:meth:`fix_time_step`'s extremes)."""
         if self._walls is None:
-            from ssw.chain.walls import build_wall
+            from ssw.walls import build_wall
 
             params = self.params_for({})
             if self._extremes:

@@ -5,7 +5,7 @@
 * :func:`peak_wall_indentation` (m): the largest indentation of the Hertz wall;
 * :func:`run_chain`: every contact force vs time (the ``ssw chain`` command).
 
-``wall`` names a law of :data:`ssw.chain.walls.WALLS` (``rigid``, ``hertz``, ``fit``,
+``wall`` names a law of :data:`ssw.walls.WALLS` (``rigid``, ``hertz``, ``fit``,
 ``table``); ``wall_options`` are its builder's keywords (``K=``, ``power=``, ``k_table=``
 for ``fit``; ``curve=`` for ``table``).
 """
@@ -19,8 +19,9 @@ import numpy as np
 from ssw.chain.integrate import Run, simulate
 from ssw.chain.params import Batch, ChainParams
 from ssw.chain.tof import Peaks, pick_peaks
-from ssw.chain.walls import Wall, build_wall
+from ssw.chain.wall import Wall
 from ssw.errors import SolverError
+from ssw.walls import build_wall
 
 
 def _shape(soil_E: Any, soil_nu: Any, vary: dict[str, Any] | None = None) -> tuple[int, ...]:

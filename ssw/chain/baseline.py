@@ -19,7 +19,7 @@ comparison):
   and :func:`hertz_wall` for the bead on an elastic half-space
   ``A_w = 4/3 sqrt(R) / ((1 - nu_b^2)/E_b + (1 - nu^2)/E)``; a wall may also be given as
   ``(coef, exponent)`` arrays or any object with ``coef``/``exponent`` (a
-  :class:`ssw.chain.walls.PowerWall`): then only the law's two numbers come from ssw;
+  `ssw.chain.wall.PowerWall`): then only the law's two numbers come from ssw;
 * **initial state** (:func:`static_state`): its own static equilibrium (contact ``j >= 1``
   carries ``P + g sum_{k=1..j} m_k``, the wall ``P + g sum_{k=1..N-1} m_k``, ``P`` the
   preload on bead 1), checked against the right-hand side (beads 1..N-1 at rest);
@@ -33,7 +33,7 @@ comparison):
   the largest after the gap), written again here.
 
 Nothing of :mod:`ssw.chain.integrate`, :mod:`ssw.chain.statics`, :mod:`ssw.chain.tof`,
-:mod:`ssw.chain.walls` or :mod:`ssw.hertz` is used. What remains shared is the
+:mod:`ssw.walls` or :mod:`ssw.hertz` is used. What remains shared is the
 :class:`ssw.chain.params.ChainParams` record (its numbers) and, when a ``PowerWall`` is
 passed, the wall's coefficient and exponent (the model's input).
 

@@ -51,7 +51,7 @@ from ssw.chain.statics import (
     potential_energy,
     static_contact_forces,
 )
-from ssw.chain.walls import Wall
+from ssw.chain.wall import Wall
 
 #: Fall of the sensor signal (share of its peak) that ends the incident pulse.
 INCIDENT_END = 0.3

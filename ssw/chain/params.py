@@ -176,7 +176,50 @@ class ChainParams:
         from ssw.config import device_of, library
 
         dev = device if device is not None else device_of(cfg)
-        return dev.chain_params(library(cfg), **numerics_of(cfg), **overrides)
+        return chain_params(dev, library(cfg), **numerics_of(cfg), **overrides)
+
+
+def chain_params(device: Any, materials: dict[str, Any] | None = None, **numerics: Any
+                 ) -> ChainParams:
+    """The :class:`ChainParams` of a device (:class:`ssw.device.Device`): its beads, sensor,
+    striker, preload and plate with the materials' values, and the study's ``numerics``
+    (the non-device fields of ChainParams: ``steps_per_contact``, ``t_max``, ``gravity``,
+    ``damping``, ``fit_law``, ...).
+
+    ``materials`` is the materials library (key -> Material; default: the shipped one,
+    ``realistic``).
+    """
+    from dataclasses import fields as dc_fields
+
+    from ssw.materials import material_set
+
+    mats = materials if materials is not None else material_set()
+
+    def material(key: str, field: str) -> Any:
+        if key not in mats:
+            raise ConfigError(field, key,
+                              f"a material of the library: {', '.join(sorted(mats))}")
+        return mats[key]
+
+    bead = material(device.bead_material, "chain.bead_material")
+    values: dict[str, Any] = {
+        "n_beads": device.beads, "bead_radius": device.bead_radius,
+        "bead_density": bead.density, "bead_E": bead.E, "bead_nu": bead.nu,
+        "sensor_index": device.sensor_index, "sensor_mass": device.sensor_mass,
+        "striker_mass": device.striker_mass, "striker_velocity": device.striker_velocity,
+        "preload": device.preload, "sensor_reads": device.sensor_reads,
+        "plate_material": device.plate_material if device.has_plate else "none",
+        "plate_thickness": device.plate_thickness, "plate_diameter": device.plate_diameter,
+        "plate_interface": device.plate_interface,
+    }
+    if device.has_plate:
+        plate = material(device.plate_material, "plate.material")
+        values["plate_E"], values["plate_nu"] = plate.E, plate.nu
+    unknown = set(numerics) - {f.name for f in dc_fields(ChainParams)}
+    if unknown:
+        raise ConfigError("chain numerics", sorted(unknown), "fields of ChainParams")
+    values.update(numerics)
+    return ChainParams(**values)
 
 
 def numerics_of(cfg: dict[str, Any]) -> dict[str, Any]:

@@ -19,7 +19,7 @@ from __future__ import annotations
 import numpy as np
 
 from ssw.chain.params import Batch, ChainParams
-from ssw.chain.walls import Wall
+from ssw.chain.wall import Wall
 
 
 def _batch(params: ChainParams | Batch, n: int) -> Batch:

@@ -153,7 +153,7 @@ def resolve_calibration(spec: str | None, cfg: dict[str, Any]) -> Any:
 def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
                   numerics_only: bool = False) -> ChainContext:
     """Resolve config, calibration, device, params and wall (module docstring)."""
-    from ssw.chain.params import numerics_of
+    from ssw.chain.params import chain_params, numerics_of
     from ssw.config import device_of, library, load_config
     from ssw.device import load_device
 
@@ -182,7 +182,7 @@ def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
     if args.no_gravity:
         numerics["gravity"] = False
     mats = cal.materials() if cal is not None else library(cfg)
-    params = device.chain_params(mats, **numerics)
+    params = chain_params(device, mats, **numerics)
     if numerics_only:
         return ChainContext(cfg, device, cal, params, "", {})
     wall, opts = wall_law(args, cfg, cal, params, E, nu)

@@ -187,7 +187,7 @@ def scene_reach(scenes: list[Any], cfg: dict[str, Any], contact: dict[str, Any],
                              [p.E if p else None for p in plates],
                              [p.nu if p else None for p in plates],
                              float(cfg["indenter"]["radius"]),
-                             float(contact.get("reach_energy", 0.02)))
+                             float(contact.get("reach_energy", 0.01)))
         return [max(d0, float(r)) for r in reach]
     from ssw.fit.range import scenes_delta_max
 

@@ -226,3 +226,23 @@ def assemble(
     keep = (rows >= 0) & (cols >= 0)
     return System(rows[keep], cols[keep], vals[keep], ndof, udof, pdof, nodes, tri, body,
                   pairs, scale)
+
+
+def top_surface_weights(mesh_nodes: np.ndarray, tri: np.ndarray, top_elems: np.ndarray,
+                        top: float, tol: float) -> np.ndarray:
+    """``int N_j 2 pi r ds`` (m^2) over the top surface for every node (0 off the surface)."""
+    w = np.zeros(len(mesh_nodes))
+    t6 = tri[top_elems]
+    for a, b, m in ((0, 1, 3), (1, 2, 4), (2, 0, 5)):
+        e = t6[:, [a, b, m]]
+        on = np.all(np.abs(mesh_nodes[e, 1] - top) < tol, axis=1)
+        e = e[on]
+        ra, rb = mesh_nodes[e[:, 0], 0], mesh_nodes[e[:, 1], 0]
+        length = np.abs(rb - ra)
+        s, gw = np.polynomial.legendre.leggauss(4)
+        s, gw = 0.5 * (s + 1.0), 0.5 * gw
+        n = np.stack([(1 - s) * (1 - 2 * s), s * (2 * s - 1), 4 * s * (1 - s)], axis=1)
+        r = ra[:, None] * (1 - s) + rb[:, None] * s  # (ne, nq)
+        contrib = np.einsum("q,eq,qi->ei", gw, 2 * np.pi * r * length[:, None], n)
+        np.add.at(w, e, contrib)
+    return w

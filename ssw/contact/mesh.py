@@ -15,6 +15,7 @@ layers. Elements are 6-node (quadratic) triangles.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -195,3 +196,15 @@ def _check_orientation(nodes: np.ndarray, tri: np.ndarray) -> None:
     cw = det < 0
     if np.any(cw):
         tri[cw] = tri[cw][:, [0, 2, 1, 5, 4, 3]]
+
+
+def mesh_settings(cfg: dict[str, Any]) -> MeshSettings:
+    """Mesh settings of a (filled) contact config."""
+    return MeshSettings(
+        soil_radius=float(cfg["soil_radius"]),
+        soil_depth=float(cfg["soil_depth"]),
+        size_contact=float(cfg["mesh_size_contact"]),
+        growth=float(cfg["mesh_growth"]),
+        size_max=float(cfg["mesh_size_max"]),
+        plate_layers=int(cfg["plate_layers"]),
+    )

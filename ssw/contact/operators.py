@@ -24,9 +24,15 @@ the scene's indentation, so one operator serves every curve and the chain's wall
 
 Cache. Operators are kept in memory per process and on disk under
 ``$SSW_CACHE_DIR/contact`` (default ``~/.cache/ssw``; ``SSW_CACHE_DIR=none`` turns the disk
-cache off), written atomically, one file per operator, named by a hash of every input that
-changes it: the geometry and mesh settings, the zone, the interface kind, nu, the source
-code of the modules that compute it and the versions of gmsh, numpy and scipy.
+cache off), one file per operator, named by a hash of every input that changes it: the
+geometry and mesh settings, the zone, the interface kind, nu, the source of every module
+the computation runs (the import closure of this module, :func:`ssw.provenance.source_hash`:
+derived from the package, not a hand list) and the versions of gmsh, numpy and scipy. A
+file is written under a temporary name, flushed to disk (``fsync``, then the folder's) and
+renamed into place, so concurrent jobs on a shared file system never see a partial file
+(two jobs building the same operator both write a complete copy; the last rename wins). A
+file that cannot be read back whole (truncated, corrupt: a crash, a full disk, another
+system's copy) is removed and rebuilt, never used.
 """
 
 from __future__ import annotations
@@ -55,8 +61,6 @@ ZONE_QUANTUM = 1.0e-4
 ZONE_LIMIT = 0.95
 #: Version of the operators' file format.
 FORMAT = 1
-#: Sources whose code computes the operators (hashed into every cache key).
-SOURCES = ("mesh.py", "assembly.py", "elements.py", "substructure.py", "operators.py")
 
 
 def sphere_gap0(r: np.ndarray, radius: float) -> np.ndarray:
@@ -108,7 +112,7 @@ def zone_of(radius: float, candidate_factor: float, delta_end: float,
 def geometry_of(contact: dict[str, Any], plate_thickness: float, radius: float,
                 delta_end: float, interface: str) -> Geometry:
     """The :class:`Geometry` of a scene from its (filled) ``contact`` settings."""
-    from ssw.contact.scene import mesh_settings
+    from ssw.contact.mesh import mesh_settings
 
     plate_radius = 0.5 * float(contact["plate_diameter"]) if plate_thickness > 0 else 0.0
     return Geometry(
@@ -166,22 +170,16 @@ def _hash(obj: Any) -> str:
     return hashlib.sha256(text.encode()).hexdigest()[:20]
 
 
-_CODE_HASH: str | None = None
-
-
+@functools.lru_cache(maxsize=1)
 def _code_hash() -> str:
-    """Hash of the operator-computing sources and of the numeric libraries' versions."""
-    global _CODE_HASH
-    if _CODE_HASH is None:
-        from importlib.metadata import version
+    """Hash of the source that computes the operators (this module's import closure) and
+    of the numeric libraries' versions."""
+    from importlib.metadata import version
 
-        here = Path(__file__).resolve().parent
-        h = hashlib.sha256()
-        for name in SOURCES:
-            h.update((here / name).read_bytes())
-        h.update(" ".join(f"{p} {version(p)}" for p in ("gmsh", "numpy", "scipy")).encode())
-        _CODE_HASH = h.hexdigest()[:20]
-    return _CODE_HASH
+    from ssw.provenance import source_hash
+
+    libs = " ".join(f"{p} {version(p)}" for p in ("gmsh", "numpy", "scipy"))
+    return _hash({"source": source_hash([__name__], packages=False), "libraries": libs})
 
 
 def cache_dir() -> Path | None:
@@ -273,18 +271,39 @@ class OperatorStore:
 
 
 def _load(path: Path | None) -> dict[str, np.ndarray] | None:
-    """The arrays of a cache file, or None if absent or unreadable (then it is rebuilt)."""
+    """The arrays of a cache file, or None if absent; a file that cannot be read back whole
+    (truncated, corrupt) is removed and None returned (the operator is rebuilt)."""
     if path is None or not path.is_file():
         return None
     try:
         with np.load(path, allow_pickle=False) as f:
-            return {k: f[k] for k in f.files}
-    except (OSError, ValueError, KeyError, EOFError):
+            data = {k: f[k] for k in f.files}  # every member read: zip CRCs checked
+    except Exception as exc:  # a damaged file fails in many ways (zip, npy header tokens,
+        # sizes); whatever the failure, the file is not used
+        _discard(path, exc)
         return None
+    return data
+
+
+class CacheWarning(UserWarning):
+    """A cached operator could not be read back whole and is rebuilt."""
+
+
+def _discard(path: Path, reason: Exception) -> None:
+    """Remove an unreadable cache file (another process may have replaced it already)."""
+    import warnings
+
+    warnings.warn(f"rebuilding the unreadable cached operator {path} ({reason})",
+                  CacheWarning, stacklevel=3)
+    try:
+        path.unlink()
+    except OSError:
+        pass
 
 
 def _save(path: Path | None, arrays: dict[str, np.ndarray]) -> None:
-    """Write a cache file atomically (a failure to write only costs a rebuild later)."""
+    """Write a cache file atomically and durably (a failure to write only costs a rebuild
+    later): a temporary file in the same folder, fsync'd, renamed, the folder fsync'd."""
     if path is None:
         return
     from ssw.h5io import atomic_path
@@ -292,14 +311,35 @@ def _save(path: Path | None, arrays: dict[str, np.ndarray]) -> None:
     try:
         with atomic_path(path) as tmp, open(tmp, "wb") as fh:
             np.savez(fh, **arrays)
+            fh.flush()
+            os.fsync(fh.fileno())
+        _fsync_dir(path.parent)
     except OSError:
         return
 
 
+def _fsync_dir(folder: Path) -> None:
+    """fsync a folder, so that a rename in it survives a crash (no-op where unsupported)."""
+    try:
+        fd = os.open(folder, os.O_RDONLY)
+    except OSError:
+        return
+    try:
+        os.fsync(fd)
+    except OSError:
+        pass
+    finally:
+        os.close(fd)
+
+
 def _build_model(geom: Geometry) -> _Model:
     """Mesh the geometry and find its contact candidates and interface dofs."""
-    from ssw.contact.assembly import fixed_free, geometric_tolerance, split_interface
-    from ssw.contact.scene import top_surface_weights
+    from ssw.contact.assembly import (
+        fixed_free,
+        geometric_tolerance,
+        split_interface,
+        top_surface_weights,
+    )
 
     t0 = time.perf_counter()
     mesh = build_mesh(geom.plate_thickness, geom.plate_radius, geom.mesh)

@@ -23,10 +23,16 @@ from typing import Any
 import numpy as np
 
 from ssw.config import Scene
-from ssw.contact.assembly import INTERFACES, System, assemble, geometric_tolerance
+from ssw.contact.assembly import (
+    INTERFACES,
+    System,
+    assemble,
+    geometric_tolerance,
+    top_surface_weights,
+)
 from ssw.contact.condense import Condensed
 from ssw.contact.contact_lcp import edge_radius, solve_lcp, sphere_gap
-from ssw.contact.mesh import Mesh, MeshSettings, build_mesh
+from ssw.contact.mesh import Mesh, MeshSettings, build_mesh, mesh_settings
 from ssw.contact.operators import OperatorStore, default_store, geometry_of, scene_lcp
 from ssw.contact.parametric import trace
 from ssw.contact.petsc_solver import LUSolver, comm_size, nd_order
@@ -112,38 +118,6 @@ def _check_material(name: str, E: float, nu: float) -> None:
         raise ConfigError(f"{name}_E", E, "a Young's modulus > 0 Pa")
     if not -1.0 < nu <= 0.5:
         raise ConfigError(f"{name}_nu", nu, "a Poisson's ratio in (-1, 0.5]")
-
-
-def mesh_settings(cfg: dict[str, Any]) -> MeshSettings:
-    """Mesh settings of a (filled) contact config."""
-    return MeshSettings(
-        soil_radius=float(cfg["soil_radius"]),
-        soil_depth=float(cfg["soil_depth"]),
-        size_contact=float(cfg["mesh_size_contact"]),
-        growth=float(cfg["mesh_growth"]),
-        size_max=float(cfg["mesh_size_max"]),
-        plate_layers=int(cfg["plate_layers"]),
-    )
-
-
-def top_surface_weights(mesh_nodes: np.ndarray, tri: np.ndarray, top_elems: np.ndarray,
-                        top: float, tol: float) -> np.ndarray:
-    """``int N_j 2 pi r ds`` (m^2) over the top surface for every node (0 off the surface)."""
-    w = np.zeros(len(mesh_nodes))
-    t6 = tri[top_elems]
-    for a, b, m in ((0, 1, 3), (1, 2, 4), (2, 0, 5)):
-        e = t6[:, [a, b, m]]
-        on = np.all(np.abs(mesh_nodes[e, 1] - top) < tol, axis=1)
-        e = e[on]
-        ra, rb = mesh_nodes[e[:, 0], 0], mesh_nodes[e[:, 1], 0]
-        length = np.abs(rb - ra)
-        s, gw = np.polynomial.legendre.leggauss(4)
-        s, gw = 0.5 * (s + 1.0), 0.5 * gw
-        n = np.stack([(1 - s) * (1 - 2 * s), s * (2 * s - 1), 4 * s * (1 - s)], axis=1)
-        r = ra[:, None] * (1 - s) + rb[:, None] * s  # (ne, nq)
-        contrib = np.einsum("q,eq,qi->ei", gw, 2 * np.pi * r * length[:, None], n)
-        np.add.at(w, e, contrib)
-    return w
 
 
 def condense(

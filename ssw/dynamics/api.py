@@ -166,7 +166,7 @@ def reduced_tof(params: Any, soil_E: Any, soil_nu: Any, soil_density: Any, *,
     """
     from types import SimpleNamespace
 
-    from ssw.chain.walls import build_wall, compliance_scale, table_wall
+    from ssw.chain.wall import compliance_scale, hertz_wall, table_wall
     from ssw.dynamics.integrate import QuasiStatic
     from ssw.dynamics.quasistatic import STATIC_BOXES
     from ssw.dynamics.reduced import plate_areal_density, reduced_wall
@@ -176,7 +176,7 @@ def reduced_tof(params: Any, soil_E: Any, soil_nu: Any, soil_density: Any, *,
         np.asarray(soil_E, float), np.asarray(soil_nu, float),
         np.asarray(soil_density, float)))
     t0 = time.perf_counter()
-    scales = chain_scales(params, build_wall("hertz", params, E, nu))
+    scales = chain_scales(params, hertz_wall(params, E, nu))
     coef = {k: options.pop(k) for k in ("c_r", "m_r", "k_p") if k in options}
     if laws is None:
         laws = static_laws(params, E, nu, rho, scales, **options)

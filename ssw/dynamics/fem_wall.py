@@ -74,7 +74,7 @@ class Scene:
     bead's own elasticity (``bead_E``, ``bead_nu``) enters: ``compliance`` (its half-space
     compliance in the LCP, :mod:`ssw.dynamics.bead`; the default), ``scale`` (the rigid
     sphere's FEM at the indentation ``d / s``, ``s`` of
-    :func:`ssw.chain.walls.compliance_scale`: the quasi-static walls' rule, for
+    :func:`ssw.chain.wall.compliance_scale`: the quasi-static walls' rule, for
     comparisons with them) or ``rigid`` (none).
     """
 
@@ -343,14 +343,14 @@ def fem_wall(
     default: a Hertz wall run, :func:`ssw.dynamics.scales.chain_scales`) gives the step,
     the window and the candidate zone.
     """
-    from ssw.chain.walls import build_wall
+    from ssw.chain.wall import hertz_wall
     from ssw.dynamics.scales import chain_scales
 
     scenes = scenes_of(params, soil_E, soil_nu, soil_density, plate_density, bead)
     if scales is None:
         E, nu, _ = np.broadcast_arrays(np.asarray(soil_E, float), np.asarray(soil_nu, float),
                                        np.asarray(soil_density, float))
-        scales = chain_scales(params, build_wall("hertz", params, E.ravel(), nu.ravel()))
+        scales = chain_scales(params, hertz_wall(params, E.ravel(), nu.ravel()))
     contacts = []
     for k, sc in enumerate(scenes):
         fields = {"window": float(scales.window[k]), "f_max": float(scales.f_max[k]),

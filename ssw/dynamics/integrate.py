@@ -65,7 +65,7 @@ class StatefulWall(Protocol):
 
 @dataclass(frozen=True)
 class QuasiStatic:
-    """A displacement wall of :mod:`ssw.chain.walls` as a stateful wall without state."""
+    """A displacement wall of :mod:`ssw.walls` as a stateful wall without state."""
 
     wall: Any
     dt: float | None = None

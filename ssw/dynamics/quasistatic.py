@@ -47,14 +47,14 @@ def static_curve(contact: ContactFEM, d_max: float, points: int = CURVE_POINTS
 
 
 def static_table_wall(params: Any, wall: FEMWall, d_max: np.ndarray) -> Any:
-    """A :class:`ssw.chain.walls.TableWall` of the scenes' static laws up to ``d_max`` (m):
+    """A `ssw.chain.wall.TableWall` of the scenes' static laws up to ``d_max`` (m):
     the quasi-static twin of the FEM wall for the chain's own integrator and for the
     reduced wall. The table wall rescales indentations by
-    :func:`ssw.chain.walls.compliance_scale`; the curves, which already hold the bead's
+    :func:`ssw.chain.wall.compliance_scale`; the curves, which already hold the bead's
     compliance, are handed over divided by it."""
     from types import SimpleNamespace
 
-    from ssw.chain.walls import compliance_scale, table_wall
+    from ssw.chain.wall import compliance_scale, table_wall
 
     curves = []
     for c, dm in zip(wall.contacts, d_max, strict=True):

@@ -2,7 +2,7 @@
 
 The dynamic FEM wall costs a minute per TOF point; sweeps and inversions need
 milliseconds. The reduced wall keeps the quasi-static law ``F_qs(d)`` of any wall of
-:mod:`ssw.chain.walls` (Hertz, fit, table, fem) and adds what the soil's inertia does at
+:mod:`ssw.walls` (Hertz, fit, table, fem) and adds what the soil's inertia does at
 the contact's time scale, as the Lysmer analog does for a rigid footing (Lysmer 1965;
 Richart, Hall & Woods 1970), with the footing's radius taken from the law itself:
 
@@ -78,7 +78,7 @@ class ReducedState:
 class ReducedWall:
     """``F = F_qs(d) + C(d) d' + m(d) d''`` per scene (module docstring). SI units.
 
-    qs : the quasi-static wall (:class:`ssw.chain.walls.Wall`).  G, nu, rho : (n,) the
+    qs : the quasi-static wall (`ssw.chain.wall.Wall`).  G, nu, rho : (n,) the
     soil's shear modulus (Pa), Poisson's ratio, density (kg/m^3).  mu_p : (n,) the
     plate's areal density (kg/m^2, 0 without a plate).  c_r, m_r, k_p : the normalized
     dashpot, soil mass and plate mass.

@@ -47,7 +47,7 @@ SPECTRUM_SHARE, SPECTRUM_FACTOR = 0.999, 2.0
 
 def chain_scales(params: Any, wall: Any) -> ChainScales:
     """Scales of the last contact from a quasi-static run of ``params`` with ``wall`` (a
-    displacement wall of :mod:`ssw.chain.walls`, e.g. the Hertz wall of the soil)."""
+    displacement wall of :mod:`ssw.walls`, e.g. the Hertz wall of the soil)."""
     from ssw.chain.integrate import simulate, time_step
     from ssw.chain.tof import pick_peaks
 

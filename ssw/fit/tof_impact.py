@@ -4,7 +4,7 @@ For each contact curve, the chain (``ssw.chain.api.tof``) runs with these last-c
 
 * ``fem``: the exact FEM law of the curve's scene (its plate, interface and mesh settings)
   at the chain bead's radius, computed to whatever depth the chain reaches
-  (:mod:`ssw.chain.fem_wall`): no fit, no interpolation, no extrapolation; the reference;
+  (:mod:`ssw.walls.fem`): no fit, no interpolation, no extrapolation; the reference;
 * ``fit_k``: ``F = K A_w delta^1.5`` with this curve's fitted K;
 * ``fit_power``: ``F = C delta^n`` with this curve's fitted (C, n);
 * ``table``: the curve's samples themselves, interpolated (the former reference: what a
@@ -68,8 +68,9 @@ def tof_impact(curves: list[ForceCurve], cfg: dict[str, Any],
     """
     from ssw.chain import api
     from ssw.chain.params import ChainParams
-    from ssw.chain.walls import PowerWall, build_wall
+    from ssw.chain.wall import PowerWall
     from ssw.fit.range import FitRange
+    from ssw.walls import build_wall
 
     params = ChainParams.from_config(cfg)
     scs = [scene_inputs(c) for c in curves]

@@ -8,8 +8,8 @@ in), the mean TOF of the accepted hits and its standard error ``s / sqrt(n)``, a
 error. It returns a :class:`HitReport`; printing is the caller's (the CLI's) business.
 
 ``estimate(tof_mean, tof_sem) -> {"E": Pa, "E_low": Pa, "E_high": Pa, ...}`` is pluggable:
-:func:`chain_estimate` inverts through the chain model (``ssw.chain.inverse.invert`` on a
-forward grid computed once); a device calibration's estimator plugs in the same way.
+signal processing knows nothing of the chain; ``ssw acquire`` plugs in
+:class:`ssw.modulus.Estimator` (the device's chain, calibrated or not).
 """
 
 from __future__ import annotations
@@ -92,26 +92,3 @@ class LiveTof:
                 err = str(exc)
         return HitReport(i, None if reason else float(tof), reason, len(self.tofs), n, mean,
                          sem, est, err)
-
-
-def chain_estimate(params: Any, soil_nu: float, wall: str = "hertz",
-                   E_range: tuple[float, float] | None = None, **wall_options: Any) -> Estimate:
-    """An ``estimate`` through the chain model: ``ssw.chain.inverse.invert`` on a TOF(E) grid
-    at ``soil_nu`` computed once (one batched run), so each hit costs an interpolation."""
-    from ssw.chain import api
-    from ssw.chain.inverse import E_RANGE, GRID_POINTS, invert
-    from ssw.chain.sweep import Sweep
-
-    lo, hi = E_range or E_RANGE
-    E = np.geomspace(lo, hi, GRID_POINTS)
-    T = np.asarray(api.tof(E, soil_nu, params, wall, **wall_options), float)
-    nan = np.full_like(E, np.nan)
-    sweep = Sweep(E, np.full_like(E, soil_nu), T, nan, nan, nan)
-
-    def estimate(tof_mean: float, tof_sem: float) -> dict[str, float]:
-        inv = invert(tof_mean, soil_nu, params, wall, tof_std=tof_sem, E_range=(lo, hi),
-                     sweep=sweep, **wall_options)
-        return {"E": float(inv.E), "E_low": float(inv.E_low), "E_high": float(inv.E_high),
-                "soil_nu": soil_nu}
-
-    return estimate

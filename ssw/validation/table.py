@@ -92,7 +92,7 @@ def inverse_range(wall: str, wall_options: dict[str, Any], params: Any) -> tuple
     soil moduli (the table does not extrapolate).
     """
     from ssw.chain.inverse import E_RANGE
-    from ssw.chain.walls import load_k_table
+    from ssw.walls import load_k_table
 
     if wall != "fit" or wall_options.get("k_table") is None:
         return E_RANGE

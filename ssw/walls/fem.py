@@ -18,7 +18,7 @@ as a calibration scan tries). Beyond it the last piece continues linearly (never
 by a chain the bound holds for: tests/test_fem_wall.py).
 
 Bead compliance. The FEM's sphere is rigid; the bead's compliance is added as for the other
-FEM-based walls (:func:`ssw.chain.walls.compliance_scale`): ``F(d) = F_R(d / s)``.
+FEM-based walls (:func:`ssw.chain.wall.compliance_scale`): ``F(d) = F_R(d / s)``.
 
 Representation. The exact law is kept as it is: per scene its breakpoints and the
 coefficients ``F = a + b d`` of each piece, evaluated by one binary search per call over all
@@ -203,7 +203,7 @@ def fem_wall(
     contact : the ``contact`` settings (mesh, zone); defaults :data:`ssw.contact.DEFAULTS`.
     operators : an :class:`ssw.contact.operators.OperatorStore` (default: the process's).
     """
-    from ssw.chain.walls import compliance_scale, scene_arrays
+    from ssw.chain.wall import compliance_scale, scene_arrays
     from ssw.contact.operators import default_store, geometry_of, scene_lcp
     from ssw.contact.parametric import Tracer, prefix_path
     from ssw.contact.scene import settings_of

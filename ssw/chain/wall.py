@@ -1,8 +1,10 @@
-"""Last-contact laws: the force between the last bead and the tested medium.
+"""The chain's last contact: the wall protocol and the laws made of the chain's numbers.
 
 A wall law gives the force ``F(d)`` (N) at the last bead's indentation ``d = u_{N-1}`` (m,
-``[d]_+``: no tension), batched over scenes (one law per scene). The registry :data:`WALLS`
-maps a name to a builder ``builder(params, soil_E, soil_nu, **options) -> Wall``:
+``[d]_+``: no tension), batched over scenes (one law per scene). The chain knows only the
+protocol (:class:`Wall`); the laws that need the contact FEM, the fitted tables or the
+soil's dynamics, and the registry of every law by name, live above the chain in
+:mod:`ssw.walls`. The laws here:
 
 * ``rigid``: the bead on a rigid flat, ``F = 4/3 sqrt(R) E_b/(1-nu_b^2) d^1.5`` (only the
   bead deforms). It is the mirror image of a bead-bead contact (``2^1.5 A``), which the
@@ -10,8 +12,9 @@ maps a name to a builder ``builder(params, soil_E, soil_nu, **options) -> Wall``
 * ``hertz``: the bead on the elastic half-space, ``F = A_w d^1.5``,
   ``A_w = 4/3 sqrt(R) / ((1-nu_b^2)/E_b + (1-nu_w^2)/E_w)`` (REFERENCE.md, Johnson 1985);
 * ``fit``: the thesis's modified Hertz law ``F = K(E, nu) A_w d^1.5`` (``fit_law=k_hertz``)
-  or the power law ``F = C (d/s)^n`` (``fit_law=power``) per scene, from
-  ``ssw.fit.table.KTable`` (``k_table=``) or explicit ``K=`` / ``power=(C, n)`` values;
+  or the power law ``F = C (d/s)^n`` (``fit_law=power``) per scene, from explicit ``K=`` /
+  ``power=(C, n)`` values or a table object with ``.K(E, nu)`` and ``.power(E, nu)``
+  (``ssw.walls`` reads a K table file into one);
 * ``table``: the FEM force-indentation curve itself (``curve=``: one
   :class:`ssw.curve.ForceCurve` or a path, or one per scene), interpolated (no fit error).
 
@@ -32,10 +35,8 @@ sweep reaches beyond the FEM range.
 
 from __future__ import annotations
 
-import functools
-from collections.abc import Callable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
-from pathlib import Path
 from typing import Any, Protocol
 
 import numpy as np
@@ -214,8 +215,8 @@ def fit_wall(
     """Modified Hertz: ``F = K A_w d^1.5`` (k_hertz) or ``F = C (d/s)^n`` (power).
 
     Exactly one of ``K`` (broadcast to the scenes), ``power=(C, n)`` (rigid-sphere law,
-    N/m^n and -) or ``k_table`` (a path or an object with ``.K(E, nu)`` and
-    ``.power(E, nu)``, e.g. ``ssw.fit.table.KTable``; ``params.fit_law`` picks the law).
+    N/m^n and -) or ``k_table`` (an object with ``.K(E, nu)`` and ``.power(E, nu)``, e.g.
+    ``ssw.fit.table.KTable``; ``params.fit_law`` picks the law).
     """
     E, nu = scene_arrays(soil_E, soil_nu)
     given = [x is not None for x in (K, power, k_table)]
@@ -226,7 +227,10 @@ def fit_wall(
         )
     force_error = None
     if k_table is not None:
-        table = load_k_table(k_table, params)
+        if not hasattr(k_table, "K"):
+            raise ConfigError("k_table", k_table, "a table with .K(E, nu) and .power(E, nu) "
+                              "(ssw.walls.build_wall reads a K table file)")
+        table = k_table
         # the table's stated leave-one-out interpolation bound (ssw.fit.table.interp_error),
         # taken as the law's force error: conservative as a 1-sigma figure, and it leaves
         # out the fitted shape's own misfit to the FEM curve (rule fit_tof_impact)
@@ -250,30 +254,6 @@ def fit_wall(
         raise ConfigError("power", (C.tolist(), n.tolist()), "C > 0 and 1 <= n <= 3")
     s = compliance_scale(params, E, nu)
     return PowerWall(C / s**n, n, force_error=force_error)
-
-
-def load_k_table(k_table: Any, params: ChainParams) -> Any:
-    """The K table of the chain's plate: ``k_table`` itself if it is one (has ``.K``), else
-    read from that HDF5 path. Reads are remembered per file version (path, size, mtime), so
-    a calibration or an inverse that builds the wall many times reads the file once."""
-    if hasattr(k_table, "K"):
-        return k_table
-    p = Path(k_table)
-    if not p.is_file():
-        raise ConfigError("--k-table", str(p), "an existing K table (results/fit/k_table.h5)")
-    st = p.stat()
-    return _read_k_table(str(p.resolve()), st.st_size, st.st_mtime_ns,
-                         params.plate_material, float(params.plate_thickness))
-
-
-@functools.lru_cache(maxsize=8)
-def _read_k_table(path: str, size: int, mtime_ns: int, plate_material: str,
-                  plate_thickness: float) -> Any:
-    try:
-        from ssw.fit.table import KTable
-    except ImportError as exc:  # the fit stage is not installed
-        raise SswError(f"ssw.fit.table.KTable is not available to read {path}: {exc}") from exc
-    return KTable.load(path, plate_material, plate_thickness)
 
 
 def table_wall(
@@ -323,47 +303,3 @@ def _resample(curve: Any, scale: float) -> tuple[float, np.ndarray, float, float
     else:
         n_ext = 1.5
     return h, g, float(F[-1]), float(np.clip(n_ext, 1.0, 2.0))
-
-
-def fem_wall(params: ChainParams, soil_E: Any, soil_nu: Any, **options: Any) -> Wall:
-    """The FEM law itself, computed on demand: :func:`ssw.chain.fem_wall.fem_wall`."""
-    from ssw.chain.fem_wall import fem_wall as build
-
-    return build(params, soil_E, soil_nu, **options)
-
-
-#: Registry: wall name -> builder(params, soil_E, soil_nu, **options).
-WALLS: dict[str, Callable[..., Wall]] = {
-    "rigid": rigid_wall,
-    "hertz": hertz_wall,
-    "fit": fit_wall,
-    "table": table_wall,
-    "fem": fem_wall,
-}
-
-
-def build_wall(name: str, params: ChainParams, soil_E: Any, soil_nu: Any, **options: Any) -> Wall:
-    """The wall ``name`` of :data:`WALLS` for the scenes ``broadcast(soil_E, soil_nu)``.
-
-    Two options of every law add the tested medium's inertia
-    (:mod:`ssw.dynamics`): ``dynamics`` (``quasi-static``, the default: the static law;
-    ``reduced``: the law plus the soil's radiation damping and participating mass and the
-    plate's inertia, :class:`ssw.dynamics.reduced.ReducedWall`) and ``soil_density``
-    (kg/m^3, broadcast with the scenes).
-    """
-    dynamics = options.pop("dynamics", "quasi-static") or "quasi-static"
-    density = options.pop("soil_density", None)
-    if name not in WALLS:
-        raise ConfigError("wall", name, f"one of {', '.join(WALLS)}")
-    if name in ("rigid", "hertz") and options:
-        raise ConfigError("wall options", sorted(options), f"none for the {name} wall")
-    w = WALLS[name](params, soil_E, soil_nu, **options)
-    if dynamics != "quasi-static":
-        from ssw.dynamics.registry import with_dynamics
-
-        E, nu = scene_arrays(soil_E, soil_nu)
-        rho = None if density is None else np.broadcast_to(
-            np.asarray(density, float).ravel() if np.ndim(density) else float(density),
-            E.shape)
-        w = with_dynamics(dynamics, w, params, E, nu, rho)
-    return w

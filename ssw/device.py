@@ -54,6 +54,8 @@ class Device:
     plate_material : material key or ``none``; plate_thickness : m (0: no plate);
     plate_diameter : m; plate_interface : ``frictionless`` | ``bonded`` | ``unilateral``.
     sensor_model : text; sensitivity : V/N; sensor_range : N.
+    tof_scatter : s, the stated standard deviation of one hit's TOF on a uniform sample
+    (None: not stated); tof_scatter_source : where it comes from.
     source : where the device was read from (not part of its physics).
     """
 
@@ -74,6 +76,8 @@ class Device:
     sensor_model: str
     sensitivity: float
     sensor_range: float
+    tof_scatter: float | None = None
+    tof_scatter_source: str = ""
     description: str = ""
     source: str = ""
 
@@ -161,12 +165,14 @@ class Device:
                       "diameter": self.plate_diameter, "interface": self.plate_interface},
             "daq_sensor": {"model": self.sensor_model, "sensitivity": self.sensitivity,
                            "range": self.sensor_range},
+            "repeatability": {"tof_std": self.tof_scatter, "source": self.tof_scatter_source},
         }
 
     def physics_dict(self) -> dict[str, Any]:
-        """Every physical field, flat (no name, description or source)."""
+        """Every physical field, flat (no name, description, sources, nor the stated TOF
+        scatter: a measured property of the device, not part of its model)."""
         d = asdict(self)
-        for k in ("name", "description", "source"):
+        for k in ("name", "description", "source", "tof_scatter", "tof_scatter_source"):
             d.pop(k)
         return d
 
@@ -223,7 +229,10 @@ def device_from_dict(data: dict[str, Any], source: str = "") -> Device:
         plate_material=pl["material"], plate_thickness=float(pl["thickness"]),
         plate_diameter=float(pl["diameter"]), plate_interface=pl["interface"],
         sensor_model=daq["model"], sensitivity=float(daq["sensitivity"]),
-        sensor_range=float(daq["range"]), source=source,
+        sensor_range=float(daq["range"]),
+        tof_scatter=None if d["repeatability"].get("tof_std") is None
+        else float(d["repeatability"]["tof_std"]),
+        tof_scatter_source=str(d["repeatability"].get("source", "")), source=source,
     )
 
 

@@ -36,3 +36,9 @@ class RecordingError(SswError, ValueError):
 
 class DaqError(SswError, RuntimeError):
     """Acquisition hardware or its driver is missing or failed."""
+
+
+class CalibrationError(SswError, RuntimeError):
+    """A calibration that cannot be trusted (not converged, a misfit beyond its statistics,
+    parameters the references do not identify, reference TOFs the device cannot produce):
+    refused, never written."""

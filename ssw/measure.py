@@ -8,6 +8,13 @@ through the device (calibrated or not) with the uncertainty budget of
 covariance, the Poisson's ratio range, the wall law's and the integrator's errors, and the
 TOF's sampling uncertainty (below).
 
+Scatter. The TOF's standard error is the accepted hits' sample standard deviation over the
+square root of their number; with fewer than :data:`MIN_HITS_FOR_SCATTER` accepted hits the
+scatter is not estimable: the device's stated scatter (``repeatability.tof_std`` of its
+file) is used instead and the term is labelled ``tof (stated scatter)``; without one, the
+term is missing from the interval, which says so (``missing_terms``), and a survey verdict
+on it is inconclusive.
+
 Sampling. A peak time read from a record sampled at ``f_s`` carries a systematic error (the
 module's anti-alias filter reshaping the pulses, the sub-sample interpolation) that the mean
 over hits does not average away. It enters as a TOF uncertainty
@@ -26,6 +33,7 @@ from typing import Any
 import numpy as np
 
 from ssw.errors import RecordingError
+from ssw.signal.tof import MIN_HITS_FOR_SCATTER
 
 #: Systematic TOF uncertainty of the peak picking, in sample periods (1 sigma): the largest
 #: bias measured against records of known TOF (``ssw bench tof``, README Stage III), at the
@@ -34,6 +42,7 @@ SAMPLING_FRACTION_FULL_RATE = 0.04
 SAMPLING_FRACTION = 0.13
 #: The NI 9234's full rate, S/s (REFERENCE.md: 13.1072 MHz / 256).
 FULL_RATE = 51200.0
+
 
 
 def sampling_uncertainty(rate: float) -> float:
@@ -65,15 +74,24 @@ class Measurement:
     nu: float
     nu_range: tuple[float, float] | None
     synthetic: bool
+    missing: dict[str, str] = field(default_factory=dict)
     extra: dict[str, Any] = field(default_factory=dict)
+
+    @property
+    def complete(self) -> bool:
+        """Whether every term of the uncertainty budget is in the interval."""
+        return not self.missing
 
     def to_dict(self) -> dict[str, Any]:
         return {
             "E": self.E, "E_low": self.E_low, "E_high": self.E_high, "coverage": 0.95,
             "E_u_pct": 100.0 * self.u,
             "contributions_pct": {k: 100.0 * v for k, v in self.contributions.items()},
-            "notes": list(self.notes), "tof_mean": self.tof_mean, "tof_sem": self.tof_sem,
-            "tof_std": self.tof_std, "n_hits": self.n_hits, "n_accepted": self.n_accepted,
+            "missing_terms": dict(self.missing), "interval_complete": self.complete,
+            "notes": list(self.notes), "tof_mean": self.tof_mean,
+            "tof_sem": None if np.isnan(self.tof_sem) else self.tof_sem,
+            "tof_std": None if np.isnan(self.tof_std) else self.tof_std,
+            "n_hits": self.n_hits, "n_accepted": self.n_accepted,
             "tof_per_hit": self.tof_per_hit, "accepted": self.accepted,
             "rejections": self.rejections, "files": self.files,
             "sample_rate": self.sample_rate, "nu": self.nu,
@@ -100,7 +118,8 @@ def pooled_tof(recordings: list[Any], tof_options: Any = None) -> dict[str, Any]
     t = np.array([v for v, a in zip(per_hit, accepted, strict=True) if a], float)
     if t.size == 0:
         raise RecordingError("no accepted hit in " + ", ".join(r.path for r in recordings))
-    std = float(np.std(t, ddof=1)) if t.size > 1 else 0.0
+    # NaN: not estimable from these hits (module docstring, MIN_HITS_FOR_SCATTER)
+    std = float(np.std(t, ddof=1)) if t.size >= MIN_HITS_FOR_SCATTER else float("nan")
     return {"tof_mean": float(np.mean(t)), "tof_std": std,
             "tof_sem": std / np.sqrt(t.size), "n_accepted": int(t.size),
             "n_hits": len(per_hit), "tof_per_hit": per_hit, "accepted": accepted,
@@ -110,7 +129,7 @@ def pooled_tof(recordings: list[Any], tof_options: Any = None) -> dict[str, Any]
 def measure(
     recordings: list[Any], nu: float | tuple[float, float], params: Any, wall: str,
     wall_options: dict[str, Any] | None = None, *, calibration: Any = None,
-    tof_options: Any = None,
+    tof_options: Any = None, device: Any = None,
 ) -> Measurement:
     """E with its 95 % interval from the recordings of one test point (module docstring).
 
@@ -120,21 +139,33 @@ def measure(
     nu : the medium's Poisson's ratio, or a range ``(lo, hi)``.
     params, wall, wall_options : the (calibrated) device's chain and wall law.
     calibration : the :class:`ssw.calibration.Calibration` (its covariance enters) or None.
+    device : the :class:`ssw.device.Device` (its stated TOF scatter, when there are too few
+        hits to estimate one).
     """
     from ssw.modulus import estimate_moduli
 
     if not recordings:
         raise RecordingError("no recording to measure")
     pool = pooled_tof(recordings, tof_options)
-    if pool["n_accepted"] < 2:
-        sem_note = ("one accepted hit: the TOF's scatter is unknown, its standard error is "
-                    "not included (record more hits)")
-    else:
-        sem_note = ""
+    n = pool["n_accepted"]
+    notes: list[str] = []
+    stated = getattr(device, "tof_scatter", None)
+    if np.isnan(pool["tof_sem"]) and stated is not None:
+        pool["tof_sem"] = float(stated) / np.sqrt(n)
+        notes.append(f"{n} accepted hit(s), fewer than {MIN_HITS_FOR_SCATTER}: the TOF term "
+                     f"uses the device's stated scatter, {stated:.3g} s per hit "
+                     f"({device.tof_scatter_source or 'source not given'})")
     nu_arg = np.array([nu[0], nu[1]], float) if isinstance(nu, tuple | list) else float(nu)
     est = estimate_moduli([pool["tof_mean"]], [pool["tof_sem"]], nu_arg, params, wall,
                           wall_options, calibration=calibration)[0]
+    missing = dict(est.missing)
+    if "tof" in missing:
+        missing["tof"] = (f"{n} accepted hit(s), fewer than {MIN_HITS_FOR_SCATTER}: the TOF's "
+                          "scatter is not estimable and the device file states none "
+                          "(record more hits, or state repeatability.tof_std)")
     contrib = dict(est.contributions)
+    if notes and "tof" in contrib:
+        contrib["tof (stated scatter)"] = contrib.pop("tof")
     # sampling: a systematic TOF uncertainty of the peak picking at the record's rate
     u_samp = sampling_uncertainty(pool["sample_rate"]) / (
         pool["tof_mean"] * abs(est.dlnTOF_dlnE))
@@ -142,7 +173,7 @@ def measure(
     u = float(np.sqrt(sum(v**2 for v in contrib.values())))
     from ssw.modulus import COVERAGE_Z
 
-    notes = [*est.notes, *([sem_note] if sem_note else [])]
+    notes = [*est.notes, *notes]
     return Measurement(
         E=est.E, E_low=est.E * float(np.exp(-COVERAGE_Z * u)),
         E_high=est.E * float(np.exp(COVERAGE_Z * u)), u=u, contributions=contrib,
@@ -152,7 +183,7 @@ def measure(
         rejections=pool["rejections"], files=[r.path for r in recordings],
         sample_rate=pool["sample_rate"], nu=est.nu, nu_range=est.nu_range,
         synthetic=any(bool(r.meta.get("synthetic", False)) for r in recordings),
-        extra={"dlnTOF_dlnE": est.dlnTOF_dlnE},
+        missing=missing, extra={"dlnTOF_dlnE": est.dlnTOF_dlnE},
     )
 
 

@@ -20,7 +20,10 @@ JCGM 100:2008, sec. 5.1: independent contributions add in quadrature):
   (:data:`INTEGRATOR_REL_ERROR_80`), ``u = c / |k|``.
 
 The interval is ``E exp(+- z u)`` with ``z = 1.96`` (95 % for a normal ``ln E``). Every
-contribution is reported, so a user sees what dominates.
+contribution is reported, so a user sees what dominates, and every one that could not be
+included is listed in ``missing`` with the reason (no calibration, or one without
+covariance; a wall law without a stated error; a TOF whose scatter is not estimable): an
+interval that lacks a term says so, and a survey verdict on it is inconclusive.
 """
 
 from __future__ import annotations
@@ -63,11 +66,13 @@ class ModulusEstimate:
     nu_range: tuple[float, float] | None
     dlnTOF_dlnE: float
     notes: tuple[str, ...] = field(default_factory=tuple)
+    missing: dict[str, str] = field(default_factory=dict)
 
     def to_dict(self) -> dict[str, Any]:
         d = asdict(self)
         d["nu_range"] = None if self.nu_range is None else list(self.nu_range)
         d["notes"] = list(self.notes)
+        d["missing_terms"] = d.pop("missing")
         d["coverage"] = 0.95
         return d
 
@@ -95,7 +100,8 @@ def estimate_moduli(
 
     Parameters
     ----------
-    tof : (k,) measured mean TOFs, s.  tof_sem : (k,) their standard errors, s (0: none).
+    tof : (k,) measured mean TOFs, s.  tof_sem : (k,) their standard errors, s; NaN where the
+        scatter is not known (the ``tof`` term is then listed as missing).
     nu : a Poisson's ratio per sample, or (k, 2) ranges ``[lo, hi]``.
     params : ChainParams of the (calibrated) device.  wall, wall_options : the wall law.
     calibration : :class:`ssw.calibration.Calibration` whose covariance enters (or None).
@@ -107,8 +113,8 @@ def estimate_moduli(
     T = np.atleast_1d(np.asarray(tof, float)).ravel()
     k = T.size
     S = np.broadcast_to(np.asarray(tof_sem, float), (k,)).astype(float)
-    if np.any(~(S >= 0)):
-        raise ConfigError("tof_sem", S.tolist(), "standard errors >= 0 s")
+    if np.any(~((S >= 0) | np.isnan(S))):
+        raise ConfigError("tof_sem", S.tolist(), "standard errors >= 0 s (NaN: unknown)")
     nu_c, nu_lo, nu_hi = _nu_args(nu, k)
     ranged = nu_hi > nu_lo
     # E at the central nu, and at the range ends (one batched inversion)
@@ -131,45 +137,57 @@ def estimate_moduli(
     nus_run = [nu_c, nu_c]
     vary: dict[str, list[np.ndarray]] = {n: [] for n in names}
     base = {n: float(getattr(params, n)) for n in names}
+    ends = {n: theta_ends(n, base[n]) for n in names}
     for n in names:
         vary[n] = [np.full(k, base[n])] * 2
     for n in names:
-        h = THETA_STEP * max(abs(base[n]), _scale(n))
-        for sgn in (1.0, -1.0):
+        for end in ends[n]:
             Es.append(E)
             nus_run.append(nu_c)
             for m in names:
-                vary[m].append(np.full(k, base[m] + (sgn * h if m == n else 0.0)))
+                vary[m].append(np.full(k, end if m == n else base[m]))
     vary_flat = {n: np.concatenate(v) for n, v in vary.items()} or None
     Tr = np.asarray(api.tof(np.concatenate(Es), np.concatenate(nus_run), params, wall,
                             vary=vary_flat, **opts), float).reshape(-1, k)
     slope = np.log(Tr[0] / Tr[1]) / np.log((1 + E_STEP) / (1 - E_STEP))
-    w = build_wall(wall, params, E[:1], nu_c[:1], **opts)
+    w = build_wall(wall, params, E, nu_c, **opts)  # every sample's own law (its error)
     force_error = getattr(w, "force_error", None)
+    if force_error is not None:
+        force_error = np.broadcast_to(np.asarray(force_error, float), (k,))
     out = []
     for i in range(k):
         contrib: dict[str, float] = {}
         notes: list[str] = []
+        missing: dict[str, str] = {}
         kk = float(slope[i])
-        contrib["tof"] = float(S[i] / (T[i] * abs(kk)))
+        if np.isnan(S[i]):
+            missing["tof"] = "the TOF's scatter is not known (too few hits to estimate it)"
+        else:
+            contrib["tof"] = float(S[i] / (T[i] * abs(kk)))
         if cov is not None:
             g = np.empty(len(names))
             for j, n in enumerate(names):
-                h = THETA_STEP * max(abs(base[n]), _scale(n))
-                dln = np.log(Tr[2 + 2 * j, i] / Tr[3 + 2 * j, i]) / (2 * h)
+                plus, minus = ends[n]
+                dln = np.log(Tr[2 + 2 * j, i] / Tr[3 + 2 * j, i]) / (plus - minus)
                 g[j] = -dln / kk
-            contrib["calibration"] = float(np.sqrt(max(g @ cov @ g, 0.0)))
+            var = float(g @ cov @ g)
+            if not var > 0:
+                raise ConfigError("calibration covariance", var,
+                                  "a positive variance g^T C g of ln E (the covariance is not "
+                                  "positive definite: recalibrate)")
+            contrib["calibration"] = float(np.sqrt(var))
         elif calibration is not None:
-            notes.append("the calibration has no covariance (parameters not identified, or "
-                         "as many parameters as references without TOF uncertainties)")
+            missing["calibration"] = ("the calibration has no covariance (as many parameters "
+                                      "as references without TOF uncertainties)")
         else:
-            notes.append("uncalibrated device: its parameters' uncertainty is not included")
+            missing["calibration"] = ("uncalibrated device: the uncertainty of its "
+                                      "parameters is not known")
         if ranged[i]:
             contrib["poisson"] = float(abs(lnE_hi[i] - lnE_lo[i]) / np.sqrt(12.0))
-        if force_error is not None:
-            contrib["wall"] = float(force_error)
+        if force_error is not None and np.isfinite(force_error[i]):
+            contrib["wall"] = float(force_error[i])
         else:
-            notes.append(f"the {wall} wall states no force error (not included)")
+            missing["wall"] = f"the {wall} wall states no force error"
         steps = float(params.steps_per_contact)
         contrib["integrator"] = float(INTEGRATOR_REL_ERROR_80 * (80.0 / steps) ** 2 / abs(kk))
         u = float(np.sqrt(sum(v**2 for v in contrib.values())))
@@ -178,14 +196,20 @@ def estimate_moduli(
             E_high=float(E[i] * np.exp(COVERAGE_Z * u)), u=u, contributions=contrib,
             tof=float(T[i]), tof_sem=float(S[i]), nu=float(nu_c[i]),
             nu_range=(float(nu_lo[i]), float(nu_hi[i])) if ranged[i] else None,
-            dlnTOF_dlnE=kk, notes=tuple(notes)))
+            dlnTOF_dlnE=kk, notes=tuple(notes), missing=missing))
     return out
 
 
-def _scale(name: str) -> float:
+def theta_ends(name: str, value: float) -> tuple[float, float]:
+    """The two values (upper, lower) of a calibrated parameter's difference quotient:
+    ``value -+ h``, ``h`` = :data:`THETA_STEP` times its size (or its scale,
+    ``ssw.device.PARAMETERS``), the lower one kept >= 0 (every calibratable parameter, a
+    speed, a force or a mass, is): at the bound (a preload of 0 N) the difference is
+    one-sided."""
     from ssw.device import parameter
 
-    return parameter(name).scale
+    h = THETA_STEP * max(abs(value), parameter(name).scale)
+    return value + h, max(value - h, 0.0)
 
 
 class Estimator:

@@ -14,7 +14,9 @@ view, as in ISO 14253-1's conformity zones):
 * ``pass``: ``E_low >= E_t`` (the point meets the target even at the low end);
 * ``fail``: ``E_high < E_t`` (it misses the target even at the high end);
 * ``inconclusive``: the interval straddles the target (measure more hits, or accept the
-  risk knowingly);
+  risk knowingly), or the interval lacks a term of its budget (``missing_terms`` of the
+  measurement: too few hits to estimate the TOF's scatter, an uncalibrated device, a wall
+  law without a stated error): an incomplete interval decides nothing;
 * ``no target``: none was given.
 """
 
@@ -47,6 +49,7 @@ class SurveyRow:
     reference_E: float | None
     ratio: float | None  # E / reference_E
     verdict: str
+    missing_terms: str  # the budget terms the interval lacks ("" when complete)
     tof_mean: float
     tof_sem: float
     n_accepted: int
@@ -71,10 +74,13 @@ def point_target(point: dict[str, Any]) -> float | None:
     return None
 
 
-def verdict(E_low: float, E_high: float, target: float | None) -> str:
-    """The conformity verdict of an interval against a target (module docstring)."""
+def verdict(E_low: float, E_high: float, target: float | None, complete: bool = True) -> str:
+    """The conformity verdict of an interval against a target (module docstring): an
+    interval that lacks a term of its budget (``complete`` False) is inconclusive."""
     if target is None:
         return "no target"
+    if not complete:
+        return "inconclusive"
     if E_low >= target:
         return "pass"
     if E_high < target:
@@ -96,8 +102,12 @@ def survey_table(points: list[dict[str, Any]], results: list[dict[str, Any]]) ->
             E_u_pct=float(r["E_u_pct"]), target_E=tgt,
             reference_E=None if ref is None else float(ref),
             ratio=None if ref is None else float(r["E"]) / float(ref),
-            verdict=verdict(float(r["E_low"]), float(r["E_high"]), tgt),
-            tof_mean=float(r["tof_mean"]), tof_sem=float(r["tof_sem"]),
+            verdict=verdict(float(r["E_low"]), float(r["E_high"]), tgt,
+                            not r.get("missing_terms")),
+            missing_terms="; ".join(f"{k}: {v}" for k, v in
+                                    (r.get("missing_terms") or {}).items()),
+            tof_mean=float(r["tof_mean"]),
+            tof_sem=float("nan") if r.get("tof_sem") is None else float(r["tof_sem"]),
             n_accepted=int(r["n_accepted"]), n_hits=int(r["n_hits"]), nu=float(r["nu"]),
             nu_lo=None if rng is None else float(rng[0]),
             nu_hi=None if rng is None else float(rng[1]),

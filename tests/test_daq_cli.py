@@ -26,7 +26,7 @@ def test_simulated_acquire_then_tof_recording(capsys, tmp_path):
 
 def test_simulated_acquire_from_the_chain(capsys, tmp_path):
     a = run_json(capsys, ["acquire", "--simulate", "--material", "pcf15", "--wall", "hertz",
-                          "--hits", "2", "--sample", "PCF15", "--output",
+                          "--hits", "3", "--sample", "PCF15", "--output",
                           str(tmp_path / "c.h5")])
     assert abs(a["tof_mean"] - a["true_tof"]) < 0.5 / 51200
 
@@ -61,7 +61,7 @@ def test_acquire_prints_each_hits_tof_and_the_running_modulus(capsys, tmp_path):
 
 
 def test_tof_recording_reads_tdms_and_reports_the_bound(capsys, tmp_path):
-    a = run_json(capsys, ["acquire", "--simulate", "--tof", "1.3e-3", "--hits", "2",
+    a = run_json(capsys, ["acquire", "--simulate", "--tof", "1.3e-3", "--hits", "3",
                           "--sample", "T1", "--output", str(tmp_path / "s.h5")])
     from ssw.daq.importers import read_any, write_any
 

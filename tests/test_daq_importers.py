@@ -37,7 +37,8 @@ def chain_hits():
     b = SimulatedBackend(soil_E=123e6, soil_nu=0.33, chain_params=params, seed=11)
     s = DaqSettings()
     hits = list(b.hits(s, 3))
-    return hits, s, b.true_tof, TofOptions(chain=ChainPath.from_params(params))
+    # one hit per file here: its TOF, not a session's scatter (min_hits 1)
+    return hits, s, b.true_tof, TofOptions(chain=ChainPath.from_params(params), min_hits=1)
 
 
 def pulses(n_hits=3):
@@ -149,7 +150,8 @@ def test_csv_without_units_needs_the_units_flag(tmp_path, capsys):
     write_csv(tmp_path / "n.csv", ["time", "hit"], [t, f[:, 0]])
     with pytest.raises(RecordingError, match=r"n\.csv: column 'hit' has no unit.*--units N"):
         read_any(tmp_path / "n.csv")
-    assert main(["tof-recording", str(tmp_path / "n.csv"), "--units", "N", "--json"]) == 0
+    assert main(["tof-recording", str(tmp_path / "n.csv"), "--units", "N", "--min-hits", "1",
+                 "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert abs(out["tof_mean"] - TOF) < 0.05 / RATE
 

@@ -42,7 +42,9 @@ def test_registered():
 
 def test_no_plate_is_the_exact_sphere(store):
     """F(d) of a rigid sphere on a half-space (Sneddon): within 0.5 % over 1 um .. the end of
-    the exact range, and an rms error within the stated force_error (1.9e-3 here)."""
+    the exact range, and each scene's rms error within its stated force_error (the mesh's
+    share and the finite domain's at that scene's contact radius: larger on the softer
+    soil)."""
     p = ChainParams(**RIGID, plate_thickness=0.0)
     E, nu = np.array([20e6, 300e6]), np.array([0.3, 0.45])
     w = build_wall("fem", p, E, nu, contact=CONTACT, operators=store)
@@ -54,11 +56,12 @@ def test_no_plate_is_the_exact_sphere(store):
         d = np.geomspace(1e-6, w.d_exact[i], 400)
         f = w.take(np.full(d.size, i)).force(d)
         rel.append(f / np.interp(d, d_ref, f_ref) - 1)
-    rel = np.concatenate(rel)
-    assert np.max(np.abs(rel)) < 5e-3
-    rms = float(np.sqrt(np.mean(rel**2)))
-    assert w.force_error > FORCE_ERROR_COEF * 0.1**2  # the mesh's share and the domain's
-    assert 0.3 * w.force_error < rms < w.force_error  # stated 1.9e-3, measured 1.1e-3
+    assert np.max(np.abs(np.concatenate(rel))) < 5e-3
+    rms = np.array([float(np.sqrt(np.mean(r**2))) for r in rel])
+    err = np.asarray(w.force_error)
+    assert err.shape == (2,) and np.all(err > FORCE_ERROR_COEF * 0.1**2)
+    assert err[0] > err[1]  # the soft soil's wider contact feels the domain more
+    assert np.all(rms < err) and np.all(rms > 0.2 * err), (rms, err)  # stated, not padded
 
 
 def test_no_plate_steel_bead_is_the_hertz_wall(store):

@@ -85,10 +85,19 @@ def test_the_calibration_term_matches_a_monte_carlo_over_its_covariance(calibrat
 
 def test_wall_error_enters_when_the_law_states_one(tof0):
     """A K wall from a table with a stated interpolation error carries it as 'wall'; the
-    Hertz wall states none and the estimate says so."""
+    Hertz wall states none and the estimate lists the term as missing, with the
+    uncalibrated device's calibration term."""
     e = estimate_moduli([tof0], [0.0], NU0, P, "hertz")[0]
     assert "wall" not in e.contributions
-    assert any("states no force error" in n for n in e.notes)
+    assert "states no force error" in e.missing["wall"]
+    assert "uncalibrated" in e.missing["calibration"]
+    assert e.to_dict()["missing_terms"] == e.missing
+
+
+def test_an_unknown_tof_scatter_is_a_missing_term(tof0):
+    """A TOF standard error of NaN (too few hits): no tof contribution, listed missing."""
+    e = estimate_moduli([tof0], [float("nan")], NU0, P, "hertz")[0]
+    assert "tof" not in e.contributions and "tof" in e.missing
 
 
 def test_the_fast_estimator_agrees_with_the_full_budget(tof0):

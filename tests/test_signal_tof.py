@@ -181,8 +181,12 @@ def test_bad_hits_are_reported_and_too_few_raise():
     rate = 51200.0
     good = record(rate, [1.5e-3, 3.0e-3], [60.0, 25.0])
     single = record(rate, [1.5e-3], [60.0])
-    res = session_tof([good, single, good], rate, 64, clipped=[False, False, True])
+    res = session_tof([good, single, good], rate, 64, clipped=[False, False, True],
+                      opts=TofOptions(min_hits=1))
     assert res.n_accepted == 1
     assert any("single peak" in r for r in res.reasons) and any("clipped" in r for r in res.reasons)
     with pytest.raises(RecordingError, match="0 of 1 hits accepted"):
         session_tof([single], rate, 64, opts=TofOptions(min_hits=1))
+    # by default three accepted hits are needed (the scatter is not estimable below)
+    with pytest.raises(RecordingError, match="1 of 3 hits accepted, at least 3"):
+        session_tof([good, single, good], rate, 64, clipped=[False, False, True])

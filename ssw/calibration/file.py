@@ -23,12 +23,11 @@ from typing import Any
 
 import numpy as np
 
-from ssw import __version__
-from ssw.calibration.fit import identify, leave_one_out_sets, theta_dict
+from ssw.calibration.fit import check_fit, identify, leave_one_out_sets, theta_dict
 from ssw.calibration.model import Reference, TofModel
 from ssw.chain.params import chain_params
 from ssw.device import Device, device_from_dict, parameter
-from ssw.errors import ConfigError
+from ssw.errors import CalibrationError, ConfigError
 
 KIND = "calibration"
 SCHEMA_VERSION = 1
@@ -54,6 +53,8 @@ class Calibration:
     material_set: str = "realistic"
     materials_file: str | None = None
     provenance: dict[str, Any] = field(default_factory=dict)
+    at_bound: tuple[str, ...] = ()
+    device_sha256: str = ""
     path: str = ""
 
     @property
@@ -91,6 +92,7 @@ class Calibration:
             "references": self.references, "residuals": self.residuals, "loo": self.loo,
             "alternatives": self.alternatives, "wall": self.wall, "numerics": self.numerics,
             "material_set": self.material_set, "materials_file": self.materials_file,
+            "at_bound": list(self.at_bound), "device_sha256": self.device_sha256,
             "provenance": self.provenance,
         }
 
@@ -116,7 +118,7 @@ def load_calibration(path: str | Path) -> Calibration:
         raise ConfigError("--calibration", str(p),
                           f"calibration schema version {SCHEMA_VERSION} (found "
                           f"{d.get('schema_version')}): recalibrate with this ssw")
-    return Calibration(
+    cal = Calibration(
         device=device_from_dict(d["device"], f"{p} (device)"),
         device_nominal=device_from_dict(d["device_nominal"], f"{p} (device_nominal)"),
         free=tuple(d["free"]), parameters=d["parameters"], parameter_std=d["parameter_std"],
@@ -125,8 +127,42 @@ def load_calibration(path: str | Path) -> Calibration:
         alternatives=d["alternatives"], wall=d["wall"], numerics=d["numerics"],
         material_set=d.get("material_set", "realistic"),
         materials_file=d.get("materials_file"), provenance=d.get("provenance", {}),
+        at_bound=tuple(d.get("at_bound", ())), device_sha256=d.get("device_sha256", ""),
         path=str(p),
     )
+    check_covariance(cal, str(p))
+    return cal
+
+
+def check_covariance(cal: Calibration, source: str) -> None:
+    """ConfigError unless the covariance (if any) is square over the continuous free
+    parameters, finite, symmetric and positive definite."""
+    if cal.covariance is None:
+        return
+    C = np.asarray(cal.covariance, float)
+    names = cal.continuous()
+    field_ = f"{source}: covariance"
+    if C.shape != (len(names), len(names)):
+        raise ConfigError(field_, list(C.shape),
+                          f"a {len(names)} x {len(names)} matrix over {', '.join(names)}")
+    if not np.all(np.isfinite(C)) or not np.allclose(C, C.T, rtol=1e-9,
+                                                      atol=1e-12 * np.abs(C).max()):
+        raise ConfigError(field_, C.tolist(), "a finite symmetric matrix")
+    if np.any(np.linalg.eigvalsh(C) <= 0):
+        raise ConfigError(field_, C.tolist(), "a positive definite matrix (eigenvalues > 0)")
+
+
+def device_digest(device: Device, materials: dict[str, Any]) -> str:
+    """What a calibration was made for: the digest of the device's physics and of the
+    values of its materials (``ssw.provenance.digest``); the calibrated parameters are
+    part of it at their nominal values."""
+    from dataclasses import asdict
+
+    from ssw.provenance import digest
+
+    keys = [device.bead_material] + ([device.plate_material] if device.has_plate else [])
+    return digest({"device": device.physics_dict(),
+                   "materials": {k: asdict(materials[k]) for k in keys if k in materials}})
 
 
 def calibrate(
@@ -160,6 +196,10 @@ def calibrate(
                      on_run=on_run)
     subsets = leave_one_out_sets(len(refs)) if loo else []
     fit, subs = identify(model, refs, ranges=ranges, subsets=subsets, scan_points=scan_points)
+    problems = check_fit(fit, len(refs))
+    if problems:
+        raise CalibrationError("the calibration is refused (nothing written): "
+                               + "; ".join(problems))
     values = theta_dict(model.free, fit.theta)
     cal_device = device.with_(**values)
     params = chain_params(cal_device, materials, **numerics)
@@ -175,7 +215,12 @@ def calibrate(
     std = None if fit.std is None else {n: float(s) for n, s in zip(cont, fit.std, strict=True)}
     loo_rows = _loo_predictions(model, refs, subs, materials, numerics, wall, opts) if loo \
         else []
-    prov = {"ssw_version": __version__, "created_utc": datetime.now(UTC).isoformat(),
+    from ssw.provenance import record
+
+    prov = {**record({"references": [r.__dict__ for r in refs], "free": list(model.free),
+                      "device": device.physics_dict(), "wall": wall,
+                      "numerics": dict(numerics)}),
+            "created_utc": datetime.now(UTC).isoformat(),
             "wall_time_s": time.perf_counter() - t0, "scan_points": fit.scan_points,
             "parameter_sets_evaluated": model.evaluations, "batched_runs": model.runs,
             "converged": fit.converged, "chi2": fit.chi2,
@@ -189,6 +234,7 @@ def calibrate(
         references=references, loo=loo_rows, alternatives=list(fit.alternatives),
         wall={"law": wall, "options": _plain_options(opts)}, numerics=dict(numerics),
         material_set=material_set, materials_file=materials_file, provenance=prov,
+        at_bound=fit.at_bound, device_sha256=device_digest(device, materials),
     )
 
 

@@ -34,7 +34,7 @@ no standard errors (:data:`IDENTIFIED_MIN`).
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
@@ -62,6 +62,9 @@ FD_STEP = 1e-3
 #: jitter by ~1e-5 near chi^2 ~ 1), or chi^2 itself below LM_FTOL (an exact fit).
 LM_ITERATIONS = 40
 LM_LAMBDA0 = 1e-3
+#: Damping beyond which a problem stops unconverged: 1e8 times the curvature's own scale,
+#: a step 1e-8 of the Gauss-Newton one that still does not lower chi^2.
+LM_LAMBDA_MAX = 1e8
 LM_XTOL = 1e-6
 LM_FTOL = 1e-3
 #: Relative TOF weight when no uncertainty is given (covariance rescaled by chi^2/(n-p)).
@@ -178,6 +181,8 @@ class Fit:
     scan_points: int
     evaluations: int
     runs: int
+    at_bound: tuple[str, ...] = ()  # continuous parameters on a bound of their range
+    tof_range: np.ndarray | None = None  # (n, 2) s: the TOFs the scan's device can give
 
 
 # --------------------------------------------------------------------- scan
@@ -223,114 +228,155 @@ def _grid_minima(cost: np.ndarray, shape: tuple[int, ...], n_best: int) -> np.nd
 
 
 # --------------------------------------------------------------------- refinement
+@dataclass
+class _Problem:
+    """One least-squares problem as Levenberg-Marquardt advances it.
+
+    ``x`` (p,) scaled coordinates of the continuous parameters; ``r`` weighted residuals,
+    ``J`` their Jacobian in ``x`` (n_sub, p), ``cost`` = r.r; ``basis`` (p, q): the
+    directions searched (the identity for a full fit; a subset fit searches only what it
+    identifies); ``lam``/``nu_up``: Nielsen's damping and its growth factor.
+    """
+
+    x: np.ndarray
+    r: np.ndarray
+    J: np.ndarray
+    cost: float
+    basis: np.ndarray
+    lam: float = LM_LAMBDA0
+    nu_up: float = 2.0
+    done: bool = False
+    converged: bool = False
+    iterations: int = 0
+
+
+def _levenberg_marquardt(problems: list[_Problem], evaluate: Any, lo: np.ndarray,
+                         hi: np.ndarray, iterations: int, prune: Any = None) -> None:
+    """Advance every problem in place by Levenberg-Marquardt (Marquardt 1963; Nocedal &
+    Wright 2006, sec. 10.3) with Nielsen's damping update (Madsen, Nielsen & Tingleff 2004,
+    eq. 2.21), steps clipped to ``[lo, hi]``; the unfinished problems' trial points go to
+    ``evaluate({i: x}) -> {i: (r, J, cost)}`` together (one batched model run).
+
+    A problem is **converged** when the undamped Gauss-Newton step along its basis would
+    gain less than :data:`LM_FTOL` in chi^2 (the first-order optimality test: at a minimum),
+    when a bound stops the step, when an accepted step gains less than that, or when chi^2
+    itself is below it (an exact fit). It **stops unconverged** when its damping exceeds
+    :data:`LM_LAMBDA_MAX` (no step along the gradient lowers chi^2 although the linear
+    model says one should: a noisy or discontinuous model) or when the iterations run
+    out. ``prune(iteration, problems)`` may stop hopeless starts.
+    """
+    for it in range(iterations):
+        if prune is not None:
+            prune(it, problems)
+        trial: dict[int, np.ndarray] = {}
+        predicted: dict[int, float] = {}
+        for i, pr in enumerate(problems):
+            if pr.done:
+                continue
+            if pr.basis.shape[1] == 0 or pr.cost < LM_FTOL:
+                pr.done = pr.converged = True  # nothing to search, or fitted exactly
+                continue
+            A = pr.J @ pr.basis
+            H, g = A.T @ A, A.T @ pr.r
+            if float(g @ np.linalg.lstsq(H, g, rcond=None)[0]) < LM_FTOL:
+                pr.done = pr.converged = True  # even the undamped step gains too little
+                continue
+            D = np.diag(np.maximum(np.diag(H), 1e-12))
+            try:
+                dz = -np.linalg.solve(H + pr.lam * D, g)
+            except np.linalg.LinAlgError:
+                dz = -g / (np.diag(D) * (1.0 + pr.lam))
+            raw = pr.x + pr.basis @ dz
+            t = np.clip(raw, lo, hi)
+            if float(np.max(np.abs(t - pr.x), initial=0.0)) < LM_XTOL:
+                if float(np.max(np.abs(raw - pr.x), initial=0.0)) >= LM_XTOL:
+                    pr.done = pr.converged = True  # the step is nil: held by a bound
+                    continue
+                # the damping has shrunk the step to nothing: as a rejected step
+                pr.lam *= pr.nu_up
+                pr.nu_up *= 2.0
+                pr.done = pr.lam > LM_LAMBDA_MAX  # stalled: NOT converged
+                continue
+            st = np.linalg.lstsq(pr.basis, t - pr.x, rcond=None)[0]  # the clipped step
+            trial[i] = t
+            predicted[i] = -(2.0 * st @ g + st @ H @ st)  # chi^2 decrease it predicts
+        if not trial:
+            return
+        for i, (r, J, cost) in evaluate(trial).items():
+            pr = problems[i]
+            pr.iterations += 1
+            if cost < pr.cost:
+                gain = pr.cost - cost
+                rho = min(gain / max(predicted[i], 1e-300), 1.0)  # capped: no overflow
+                pr.x, pr.r, pr.J, pr.cost = trial[i], r, J, cost
+                pr.lam = max(pr.lam * max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3), 1e-12)
+                pr.nu_up = 2.0
+                if gain <= LM_FTOL or cost < LM_FTOL:
+                    pr.done = pr.converged = True
+            else:
+                pr.lam *= pr.nu_up
+                pr.nu_up *= 2.0
+                if pr.lam > LM_LAMBDA_MAX:
+                    pr.done = True  # stalled: NOT converged
+    # the iterations ran out: whatever is not done did not converge
+
+
 def _lm_batch(model: TofModel, T: np.ndarray, s: np.ndarray,
               problems: list[tuple[tuple[int, ...], np.ndarray, np.ndarray]],
               ranges: dict[str, tuple[float, float]]) -> list[Solution]:
-    """Levenberg-Marquardt on every (refs, x0 of the continuous parameters, integer values)
-    problem at once: each iteration evaluates every unfinished problem's trial point and
-    its forward-difference Jacobian in one batched model call."""
+    """Every (refs, x0 of the continuous parameters, integer values) start refined at once
+    (:func:`_levenberg_marquardt`): each iteration evaluates every unfinished start's trial
+    point and its forward-difference Jacobian (backward on an upper bound: every point
+    stays admissible) in one batched model call."""
     cont, ints = model.continuous, model.integers
     p = len(cont)
     lo, hi = bounds_x(cont, ranges)
-    P = len(problems)
-    x = np.array([pr[1] for pr in problems], float).reshape(P, p)
     fixed = [pr[2] for pr in problems]
     refs = [np.asarray(pr[0], int) for pr in problems]
-    # forward differences, backward on an upper bound (every point stays admissible)
-    steps = np.zeros((P, p))
 
-    def evaluate(xs: np.ndarray, active: np.ndarray) -> tuple[list, list]:
-        rows, owner = [], []
-        for i in active:
-            steps[i] = np.where(xs[i] + FD_STEP > hi, -FD_STEP, FD_STEP)
-            pts = [xs[i]] + [xs[i] + steps[i, j] * np.eye(p)[j] for j in range(p)]
-            for pt in pts:
+    def evaluate(points: dict[int, np.ndarray]) -> dict[int, tuple]:
+        rows, steps = [], {}
+        for i, xi in points.items():
+            steps[i] = np.where(xi + FD_STEP > hi, -FD_STEP, FD_STEP)
+            for pt in [xi] + [xi + steps[i][j] * np.eye(p)[j] for j in range(p)]:
                 rows.append(np.concatenate([from_x(pt, cont), fixed[i]]))
-                owner.append(i)
-        theta = _order(np.array(rows), cont, ints, model.free)
-        tof = model(theta)
-        res_r, res_J = [None] * P, [None] * P
-        k = 0
-        for i in active:
+        tof = model(_order(np.array(rows), cont, ints, model.free))
+        out, k = {}, 0
+        for i in points:
             block = tof[k:k + p + 1][:, refs[i]]
             k += p + 1
             r = (block[0] - T[refs[i]]) / s[refs[i]]
             J = ((block[1:] - block[0]) / s[refs[i]]).T / steps[i][None, :]
-            res_r[i], res_J[i] = r, J
-        return res_r, res_J
+            ok = np.all(np.isfinite(r)) and np.all(np.isfinite(J))
+            out[i] = (r, J if ok else np.zeros_like(J), float(r @ r) if ok else np.inf)
+        return out
 
-    all_idx = np.arange(P)
-    r, J = evaluate(x, all_idx)
-    cost = np.array([np.sum(ri**2) if np.all(np.isfinite(ri)) else np.inf for ri in r])
-    if not np.all(np.isfinite(cost)):
-        bad = [i for i in all_idx if not np.isfinite(cost[i])]
-        for i in bad:  # a start on a failing corner: drop it (inf cost)
-            J[i] = np.zeros((len(refs[i]), p))
-    lam = np.full(P, LM_LAMBDA0)
-    nu_up = np.full(P, 2.0)  # Nielsen's growth factor of the damping after a rejection
-    done = ~np.isfinite(cost)
-    iters = np.zeros(P, int)
-    converged = np.zeros(P, bool)
+    x0 = {i: np.asarray(pr[1], float).reshape(p) for i, pr in enumerate(problems)}
+    start = evaluate(x0)
+    probs = [_Problem(x0[i], *start[i], np.eye(p)) for i in range(len(problems))]
+    for pr in probs:
+        pr.done = not np.isfinite(pr.cost)  # a start on a failing corner: dropped
     keys = [tuple(rf.tolist()) for rf in refs]
-    predicted = np.zeros(P)
-    for it in range(LM_ITERATIONS):
-        if it >= PRUNE_AFTER:
-            best = {}
-            for i in range(P):
-                best[keys[i]] = min(best.get(keys[i], np.inf), cost[i])
-            for i in np.flatnonzero(~done):
-                if cost[i] > best[keys[i]] + PRUNE_CHI2:
-                    done[i] = True
-        trial = x.copy()
-        for i in np.flatnonzero(~done):
-            A = J[i].T @ J[i]
-            g = J[i].T @ r[i]
-            D = np.diag(np.maximum(np.diag(A), 1e-12))
-            try:
-                step = -np.linalg.solve(A + lam[i] * D, g)
-            except np.linalg.LinAlgError:
-                step = -g / (np.diag(D) * (1 + lam[i]))
-            trial[i] = np.clip(x[i] + step, lo, hi)
-            st = trial[i] - x[i]
-            # decrease of chi^2 the linear model predicts for the (clipped) step
-            predicted[i] = -(2.0 * st @ g + st @ A @ st)
-            # at the minimum when even the undamped Gauss-Newton step (g^T A^+ g) gains less
-            # than the tolerance, or a step leaves every coordinate where it is
-            gain = float(g @ np.linalg.lstsq(A, g, rcond=None)[0])
-            if gain < LM_FTOL or float(np.max(np.abs(st), initial=0.0)) < LM_XTOL:
-                done[i], converged[i] = True, True
-        active = np.flatnonzero(~done)
-        if active.size == 0:
-            break
-        rt, Jt = evaluate(trial, active)
-        for i in active:
-            iters[i] += 1
-            ct = np.sum(rt[i] ** 2) if np.all(np.isfinite(rt[i])) and np.all(
-                np.isfinite(Jt[i])) else np.inf
-            if ct < cost[i]:
-                # Nielsen (1999): shrink the damping by the gain ratio rho of actual to
-                # predicted decrease (Madsen, Nielsen & Tingleff 2004, eq. 2.21)
-                # (rho >= 1 gives the smallest factor, 1/3: capped, no overflow of rho^3)
-                rho = min((cost[i] - ct) / max(predicted[i], 1e-300), 1.0)
-                small = (cost[i] - ct) <= LM_FTOL
-                x[i], r[i], J[i], cost[i] = trial[i], rt[i], Jt[i], ct
-                lam[i] = max(lam[i] * max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3), 1e-12)
-                nu_up[i] = 2.0
-                if small or ct < LM_FTOL:
-                    done[i], converged[i] = True, True
-            else:
-                lam[i] *= nu_up[i]
-                nu_up[i] *= 2.0
-                if lam[i] > 1e8:
-                    done[i], converged[i] = True, True
+
+    def prune(it: int, ps: list[_Problem]) -> None:
+        if it < PRUNE_AFTER:
+            return
+        best: dict[tuple, float] = {}
+        for k_, pr in zip(keys, ps, strict=True):
+            best[k_] = min(best.get(k_, np.inf), pr.cost)
+        for k_, pr in zip(keys, ps, strict=True):
+            if not pr.done and pr.cost > best[k_] + PRUNE_CHI2:
+                pr.done = True  # a basin that much worse is no candidate
+
+    _levenberg_marquardt(probs, evaluate, lo, hi, LM_ITERATIONS, prune)
     out = []
-    for i in range(P):
-        theta = _order(np.concatenate([from_x(x[i], cont), fixed[i]])[None, :], cont, ints,
+    for i, pr in enumerate(probs):
+        theta = _order(np.concatenate([from_x(pr.x, cont), fixed[i]])[None, :], cont, ints,
                        model.free)[0]
-        tof = T[refs[i]] + s[refs[i]] * r[i] if np.isfinite(cost[i]) else np.full(
-            len(refs[i]), np.nan)
-        out.append(Solution(tuple(int(j) for j in refs[i]), theta, float(cost[i]), tof,
-                            bool(converged[i]), int(iters[i])))
+        tof = (T[refs[i]] + s[refs[i]] * pr.r if np.isfinite(pr.cost)
+               else np.full(len(refs[i]), np.nan))
+        out.append(Solution(tuple(int(j) for j in refs[i]), theta, float(pr.cost), tof,
+                            pr.converged, pr.iterations))
     return out
 
 
@@ -477,51 +523,24 @@ def refine_subsets(model: TofModel, T: np.ndarray, s: np.ndarray, start: np.ndar
         ok = np.all(np.isfinite(r)) and np.all(np.isfinite(Jx[sub]))
         return r, Jx[sub] / s[sub, None], float(r @ r) if ok else np.inf
 
-    x = {key: x0.copy() for key in subsets}
-    cur = (evaluate(x) if at_start is None
-           else {key: weigh(key, *at_start) for key in subsets})
-    basis, lam, nu_up, done, its = {}, {}, {}, {}, {}
+    cur = ({key: v for key, v in evaluate({key: x0.copy() for key in subsets}).items()}
+           if at_start is None else {key: weigh(key, *at_start) for key in subsets})
+    probs = []
     for key in subsets:
-        _, sv, Vt = np.linalg.svd(cur[key][1], full_matrices=False)
+        r, Jw, chi2 = cur[key]
+        _, sv, Vt = np.linalg.svd(Jw, full_matrices=False)
         floor = max(IDENTIFIED_MIN, IDENTIFIED_RATIO * float(sv.max(initial=0.0)))
-        basis[key] = Vt[sv >= floor].T  # (p, q): the identified directions at the start
-        lam[key], nu_up[key], its[key] = LM_LAMBDA0, 2.0, 0
-        done[key] = basis[key].shape[1] == 0 or not cur[key][2] >= LM_FTOL
-    for _ in range(iterations):
-        trial, predicted = {}, {}
-        for key in subsets:
-            if done[key]:
-                continue
-            r, Jw, _ = cur[key]
-            A = Jw @ basis[key]
-            H, g = A.T @ A, A.T @ r
-            if float(g @ np.linalg.lstsq(H, g, rcond=None)[0]) < LM_FTOL:
-                done[key] = True  # even the undamped step gains less than the tolerance
-                continue
-            D = np.diag(np.maximum(np.diag(H), 1e-12))
-            dz = -np.linalg.solve(H + lam[key] * D, g)
-            trial[key] = np.clip(x[key] + basis[key] @ dz, lo, hi)
-            st = np.linalg.lstsq(basis[key], trial[key] - x[key], rcond=None)[0]
-            predicted[key] = -(2.0 * st @ g + st @ H @ st)
-            if float(np.max(np.abs(trial[key] - x[key]), initial=0.0)) < LM_XTOL:
-                done[key] = True
-                del trial[key]
-        if not trial:
-            break
-        new = evaluate(trial)
-        for key, res in new.items():
-            its[key] += 1
-            gain = cur[key][2] - res[2]
-            if gain > 0:  # accepted (Madsen, Nielsen & Tingleff 2004, eq. 2.21)
-                rho = min(gain / max(predicted[key], 1e-300), 1.0)
-                x[key], cur[key] = trial[key], res
-                lam[key] = max(lam[key] * max(1 / 3, 1 - (2 * rho - 1) ** 3), 1e-12)
-                nu_up[key] = 2.0
-                done[key] = gain <= LM_FTOL or res[2] < LM_FTOL
-            else:
-                lam[key] *= nu_up[key]
-                nu_up[key] *= 2.0
-                done[key] = lam[key] > 1e8
+        # the identified directions at the start: searched; the others stay at `start`
+        probs.append(_Problem(x0.copy(), r, Jw, chi2, Vt[sv >= floor].T))
+
+    def evaluate_idx(points: dict[int, np.ndarray]) -> dict[int, tuple]:
+        res = evaluate({subsets[i]: xi for i, xi in points.items()})
+        return {i: res[subsets[i]] for i in points}
+
+    _levenberg_marquardt(probs, evaluate_idx, lo, hi, iterations)
+    x = {key: pr.x for key, pr in zip(subsets, probs, strict=True)}
+    cur = {key: (pr.r, pr.J, pr.cost) for key, pr in zip(subsets, probs, strict=True)}
+    its = {key: pr.iterations for key, pr in zip(subsets, probs, strict=True)}
     out = {}
     for key in subsets:
         r, Jw, chi2 = cur[key]
@@ -546,7 +565,13 @@ def identify(
     if len(refs) != model.n_refs:
         raise ValueError("references and model disagree")
     T = np.array([r.tof for r in refs])
-    known = all(r.tof_std is not None for r in refs)
+    given = [r.tof_std is not None for r in refs]
+    if any(given) and not all(given):
+        raise ConfigError("references", [r.id or i for i, r in enumerate(refs)
+                                         if r.tof_std is None],
+                          "a TOF uncertainty for every reference or for none (these have "
+                          "none; the others do): weights of two kinds cannot be combined")
+    known = all(given)
     s = np.array([r.tof_std if known else DEFAULT_REL_STD * r.tof for r in refs], float)
     rng = scan_ranges(model.free, ranges, model.device)
     nominal = np.array([parameter_value(model.device, n) for n in model.free])
@@ -555,6 +580,7 @@ def identify(
     model.fix_time_step(rng)
     grid, axes = scan_grid(model, rng, scan_points)
     tof = model(grid)
+    tof_range = check_producible(refs, tof, rng)
     key = tuple(range(len(refs)))
     problems = [(key, x0, fixed) for x0, fixed in
                 _starts(model, grid, axes, tof, key, T, s, nominal, rng)]
@@ -567,6 +593,7 @@ def identify(
     sols = _lm_batch(model, T, s, problems, rng)
     best, others = _pick(sols, to_x(nominal, model.free), model)
     fit = _uncertainty(model, refs, T, s, known, best, others, rng, grid.shape[0])
+    fit = replace(fit, tof_range=tof_range)
     if not subsets:
         return fit, {}
     D = dtheta_dx(fit.theta[[model.free.index(n) for n in cont]], cont)
@@ -634,13 +661,83 @@ def _uncertainty(model: TofModel, refs: list[Reference], T: np.ndarray, s: np.nd
                         "cannot separate these parameters")
     alts = tuple({nm: float(v) for nm, v in zip(names, so.theta, strict=True)}
                  | {"chi2": so.chi2} for so in others)
+    # on a bound: within one difference step of it (what the derivatives resolve); a
+    # legitimate answer (a device without static load), differentiated one-sidedly
+    on_bound = tuple(n for k, n in enumerate(model.continuous)
+                     if min(x0[cont_idx][k] - lo[k], hi[k] - x0[cont_idx][k]) <= FD_STEP)
     return Fit(names, best.theta, chi2, f0, resid, known, cov, std, sv_full, V, J_theta,
-               tuple(unid), alts, best.converged, scan_points, model.evaluations, model.runs)
+               tuple(unid), alts, best.converged, scan_points, model.evaluations, model.runs,
+               on_bound)
 
 
 def _coord(name: str) -> str:
     p = parameter(name)
     return f"ln({name})" if p.log else f"{name}/{p.scale:g} {p.unit}"
+
+
+#: Margin of the producible TOF range: a reference up to this fraction beyond the scan's
+#: extremes may still be reached between its grid points or just past its ranges' corners.
+PRODUCIBLE_MARGIN = 0.05
+#: Quantile of chi^2 beyond which the misfit is refused (with given TOF uncertainties).
+CHI2_QUANTILE = 0.999
+
+
+def check_producible(refs: list[Reference], tof: np.ndarray,
+                     ranges: dict[str, tuple[float, float]]) -> np.ndarray:
+    """The TOF range (s, (n, 2)) the scanned device gives on each reference; CalibrationError
+    naming every reference whose measured TOF lies outside it (by more than
+    :data:`PRODUCIBLE_MARGIN`): no parameter within the ranges can fit it (a TOF in ms typed
+    as s, a wrong sample, a device unlike the one described)."""
+    from ssw.errors import CalibrationError
+
+    ok = np.isfinite(tof)
+    lo = np.array([np.min(tof[ok[:, j], j]) if ok[:, j].any() else np.nan
+                   for j in range(len(refs))])
+    hi = np.array([np.max(tof[ok[:, j], j]) if ok[:, j].any() else np.nan
+                   for j in range(len(refs))])
+    bad = []
+    for j, r in enumerate(refs):
+        if not np.isfinite(lo[j]):
+            bad.append(f"reference {r.id or j}: no parameter set of the ranges gives a TOF on "
+                       f"it (E {r.E:.4g} Pa, nu {r.nu:g})")
+        elif not lo[j] * (1 - PRODUCIBLE_MARGIN) <= r.tof <= hi[j] * (1 + PRODUCIBLE_MARGIN):
+            bad.append(f"reference {r.id or j}: TOF = {r.tof:.6g} s is outside what the device "
+                       f"can produce on it, [{lo[j]:.4g}, {hi[j]:.4g}] s")
+    if bad:
+        span = ", ".join(f"{n} {a:.4g}..{b:.4g}" for n, (a, b) in ranges.items())
+        raise CalibrationError("; ".join(bad) + f" (over the parameter ranges {span}; "
+                               "TOFs are in seconds)")
+    return np.stack([lo, hi], axis=1)
+
+
+def check_fit(fit: Fit, n: int) -> list[str]:
+    """Why a fit cannot be trusted (empty: it can): not converged, parameters the references
+    do not identify, chi^2 beyond its :data:`CHI2_QUANTILE` quantile for ``n - p`` degrees
+    of freedom (with given TOF uncertainties), a covariance that is not finite and positive
+    definite."""
+    from scipy.stats import chi2 as chi2_dist
+
+    out = []
+    if not fit.converged:
+        out.append("the least squares did not converge (Levenberg-Marquardt stalled or ran "
+                   "out of iterations)")
+    if fit.unidentified:
+        out.append("the references do not identify every free parameter: "
+                   + "; ".join(fit.unidentified) + " (free fewer parameters, or add "
+                   "references that tell them apart)")
+    p = int(fit.singular_values.size)
+    if fit.weights_known and n > p:
+        limit = float(chi2_dist.ppf(CHI2_QUANTILE, n - p))
+        if fit.chi2 > limit:
+            out.append(f"chi^2 = {fit.chi2:.4g} exceeds its {CHI2_QUANTILE:.1%} quantile "
+                       f"{limit:.4g} for {n - p} degrees of freedom: the model cannot fit the "
+                       "references within their uncertainties (residuals "
+                       + ", ".join(f"{x:+.3g} s" for x in fit.residuals) + ")")
+    if fit.covariance is not None:
+        C = np.asarray(fit.covariance, float)
+        if not np.all(np.isfinite(C)) or np.any(np.linalg.eigvalsh(0.5 * (C + C.T)) <= 0):
+            out.append("the covariance is not finite and positive definite")
+    return out
 
 
 def leave_one_out_sets(n: int) -> list[tuple[int, ...]]:

@@ -47,14 +47,15 @@ def recording_reference(path: str | Path, E: float, nu: float, *, id: str = "",
     """A reference from a recording of a sample of known E (Pa) and nu: the mean TOF of its
     accepted hits, with the standard error of that mean."""
     from ssw.daq.importers import read_any
-    from ssw.signal.tof import recording_tof
+    from ssw.signal.tof import MIN_HITS_FOR_SCATTER, recording_tof
 
     rec = read_any(path, clipped="drop", **read_options)
     res = recording_tof(rec, tof_options)
     n = res.n_accepted
-    if n < 2:
+    if n < MIN_HITS_FOR_SCATTER:
         raise ConfigError("reference recording", str(path),
-                          f"at least 2 accepted hits for a TOF uncertainty (found {n})")
+                          f"at least {MIN_HITS_FOR_SCATTER} accepted hits for a TOF "
+                          f"uncertainty (found {n})")
     return Reference(E, nu, res.mean, res.std / np.sqrt(n), id=id or Path(path).stem,
                      source=f"recording {path} ({n} hits)")
 

@@ -150,6 +150,53 @@ def resolve_calibration(spec: str | None, cfg: dict[str, Any]) -> Any:
     return load_calibration(spec)
 
 
+#: Numerics a command may change under a calibration: the discretization, not the model.
+CALIBRATION_NEUTRAL = ("steps_per_contact",)
+
+
+def check_calibration_fits(cal: Any, device: Any, changes: dict[str, Any],
+                           numerics: dict[str, Any], materials: dict[str, Any],
+                           spec: str | None) -> None:
+    """ConfigError unless the calibration ``cal`` was made for ``device`` (the command's:
+    ``--device``, else the config's with ``--calibration auto``, else the calibration's own,
+    with the device flags ``changes`` applied) with these ``materials``, and no flag changes
+    a calibrated parameter or the model the calibration was made with. The message names
+    both sides (the calibration's device and the command's)."""
+    from ssw.calibration.file import device_digest
+    from ssw.provenance import require_match
+
+    where = cal.path or "the calibration"
+    for name in cal.free:
+        if name in changes or (name == "striker_velocity" and "drop_height" in changes):
+            flag = "--" + ("drop-height" if name not in changes else
+                           next(o for o, f in DEVICE_FLAGS.items() if f == name)
+                           ).replace("_", "-")
+            raise ConfigError(flag, changes.get(name, changes.get("drop_height")),
+                              f"not with {where}, which identified {name} "
+                              f"({cal.parameters[name]:.6g}): --calibration none to set it")
+    model = {k: v for k, v in numerics.items()
+             if k not in CALIBRATION_NEUTRAL and cal.numerics.get(k) != v}
+    if model:
+        k = next(iter(model))
+        raise ConfigError(f"--{k.replace('_', '-')}", model[k],
+                          f"the model {where} was made with ({k} = {cal.numerics.get(k)!r}): "
+                          "--calibration none to change it, or recalibrate")
+    made_for = cal.device_sha256 or device_digest(cal.device_nominal, cal.materials())
+    mine = device_digest(device, materials)
+    if made_for != mine:
+        diff = {k: (v, device.physics_dict().get(k))
+                for k, v in cal.device_nominal.physics_dict().items()
+                if device.physics_dict().get(k) != v and k not in cal.free}
+        detail = ", ".join(f"{k}: {a!r} there, {b!r} here" for k, a, b in
+                           ((k, *ab) for k, ab in diff.items())) or "the materials' values"
+        how = ("the study's calibration (--calibration auto)" if spec in (None, "auto")
+               else where)
+        require_match(f"the device ({detail}); {how} does not apply: --calibration none, or "
+                      "recalibrate for this device; the device digest",
+                      (f"calibration {where} (device {cal.device_nominal.name})", made_for),
+                      (f"this command's device {device.name}", mine))
+
+
 def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
                   numerics_only: bool = False) -> ChainContext:
     """Resolve config, calibration, device, params and wall (module docstring)."""
@@ -158,29 +205,32 @@ def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
     from ssw.device import load_device
 
     cfg = load_config(getattr(args, "config", None))
-    cal = resolve_calibration(getattr(args, "calibration", "auto"), cfg)
-    if cal is not None and getattr(args, "device", None):
-        raise ConfigError("--device", args.device, "no --device with a calibration (its "
-                          "device is the calibrated one); --calibration none to use a device")
-    if cal is not None:
-        device = cal.device
-    elif getattr(args, "device", None):
-        device = load_device(args.device)
-    else:
-        device = device_of(cfg)
+    spec = getattr(args, "calibration", "auto")
+    cal = resolve_calibration(spec, cfg)
+    named = load_device(args.device) if getattr(args, "device", None) else None
     changes = {f: getattr(args, o) for o, f in DEVICE_FLAGS.items()
                if getattr(args, o, None) is not None}
     if "drop_height" in changes and "striker_velocity" in changes:
         raise ConfigError("--drop-height", changes["drop_height"], "not with --striker-velocity")
-    if changes:
-        device = device.with_(**changes)
-    numerics = dict(cal.numerics) if cal is not None else numerics_of(cfg)
     over = {"uniform": args.uniform, "bead_density": args.bead_density, "bead_E": args.bead_E,
             "bead_nu": args.bead_nu, "damping": args.damping,
             "steps_per_contact": args.steps_per_contact, "fit_law": args.fit_law}
+    if getattr(args, "no_gravity", False):
+        over["gravity"] = False
+    if cal is not None:
+        base = named if named is not None else (device_of(cfg) if spec in (None, "auto")
+                                                else cal.device_nominal)
+        check_calibration_fits(cal, base.with_(**changes) if changes else base, changes,
+                               {k: v for k, v in over.items() if v is not None},
+                               library(cfg) if named is not None or spec in (None, "auto")
+                               else cal.materials(), spec)
+        device = cal.device
+    else:
+        device = named if named is not None else device_of(cfg)
+        if changes:
+            device = device.with_(**changes)
+    numerics = dict(cal.numerics) if cal is not None else numerics_of(cfg)
     numerics.update({k: v for k, v in over.items() if v is not None})
-    if args.no_gravity:
-        numerics["gravity"] = False
     mats = cal.materials() if cal is not None else library(cfg)
     params = chain_params(device, mats, **numerics)
     if numerics_only:

@@ -61,7 +61,7 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
         val = ctx.cfg.get("validation", {})
         refs += from_config(ctx.cfg, ctx.params, ctx.wall, ctx.wall_options, root=args.root,
                             tof_options=_tof_options(ctx.params, val.get("lowpass"),
-                                                     val.get("min_hits", 1)))
+                                                     val.get("min_hits", 3)))
     if not refs:
         raise ConfigError("--reference", None, "references: --reference E,nu,TOF[,STD], "
                           "--reference-recording FILE,E,nu or --from-config")
@@ -101,7 +101,7 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
     return out
 
 
-def _tof_options(params: Any, lowpass: float | None = None, min_hits: int = 1) -> Any:
+def _tof_options(params: Any, lowpass: float | None = None, min_hits: int = 3) -> Any:
     """TOF picking of reference recordings: the reflected peak only after the device's
     shortest physical round trip (ssw.signal.tof.ChainPath)."""
     from ssw.signal.tof import ChainPath, TofOptions

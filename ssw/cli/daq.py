@@ -37,7 +37,9 @@ def add_tof_options(p: argparse.ArgumentParser) -> None:
     from ssw.signal.peaks import UPSAMPLE
 
     p.add_argument("--lowpass", type=float, help="zero-phase low-pass cutoff, Hz (default none)")
-    p.add_argument("--min-hits", type=int, default=1, help="accepted hits needed")
+    p.add_argument("--min-hits", type=int, default=3,
+                   help="accepted hits a recording needs (below 3 the TOF scatter is not "
+                   "estimable)")
     p.add_argument("--upsample", type=int, default=UPSAMPLE,
                    help=f"band-limited interpolation before the parabolic vertex (default "
                    f"{UPSAMPLE}; 1: parabola on the samples)")
@@ -55,7 +57,7 @@ def tof_options(args: argparse.Namespace, params: Any = None) -> Any:
 
     bound = not getattr(args, "no_bound", False)
     return TofOptions(
-        lowpass=getattr(args, "lowpass", None), min_hits=getattr(args, "min_hits", 1),
+        lowpass=getattr(args, "lowpass", None), min_hits=getattr(args, "min_hits", 3),
         upsample=getattr(args, "upsample", TofOptions.upsample),
         min_tof=getattr(args, "min_tof", None) if bound else None,
         chain=ChainPath.from_params(params) if bound and params is not None else None,

@@ -34,7 +34,8 @@ def run_measure(args: argparse.Namespace) -> dict[str, Any]:
     if args.lowpass is None:
         args.lowpass = ctx.cfg.get("validation", {}).get("lowpass")
     m = measure(recs, nu, ctx.params, ctx.wall, ctx.wall_options,
-                calibration=ctx.calibration, tof_options=tof_options(args, ctx.params))
+                calibration=ctx.calibration, tof_options=tof_options(args, ctx.params),
+                device=ctx.device)
     return {**ctx.inputs(), **m.to_dict()}
 
 
@@ -55,11 +56,14 @@ def _human(r: dict[str, Any]) -> str:
         f"E = {r['E'] / 1e6:.1f} MPa, 95 % interval {r['E_low'] / 1e6:.1f} .. "
         f"{r['E_high'] / 1e6:.1f} MPa ({nu}; device {r['device_name']}, calibration {cal}, "
         f"{r['wall']} wall)",
-        f"TOF {r['tof_mean'] * 1e3:.5f} ms +- {r['tof_sem'] * 1e6:.2f} us (standard error) "
-        f"from {r['n_accepted']} of {r['n_hits']} hits in {len(r['files'])} file(s)",
+        f"TOF {r['tof_mean'] * 1e3:.5f} ms +- "
+        + (f"{r['tof_sem'] * 1e6:.2f} us (standard error)" if r["tof_sem"] is not None
+           else "? (scatter not estimable)")
+        + f" from {r['n_accepted']} of {r['n_hits']} hits in {len(r['files'])} file(s)",
         "uncertainty of E (1 sigma): {:.2f} % = {}".format(
             r["E_u_pct"], ", ".join(f"{k} {v:.2f} %" for k, v in r["contributions_pct"].items())),
     ]
+    lines += [f"NOT IN THE INTERVAL: {k}: {v}" for k, v in r.get("missing_terms", {}).items()]
     lines += [f"note: {n}" for n in r["notes"]]
     lines += [f"rejected: {x}" for x in r["rejections"]]
     if r["synthetic"]:

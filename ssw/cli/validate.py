@@ -29,7 +29,7 @@ def run_validate(args: argparse.Namespace) -> dict[str, Any]:
     E_range = inverse_range(wall, opts, params)
     val = cfg.get("validation", {})
     # the reflected peak only after the device's shortest physical round trip
-    tof_opts = TofOptions(lowpass=val.get("lowpass"), min_hits=val.get("min_hits", 1),
+    tof_opts = TofOptions(lowpass=val.get("lowpass"), min_hits=val.get("min_hits", 3),
                           chain=ChainPath.from_params(params))
     rows = validate_samples(cfg, params, wall, opts, root=args.root, tof_options=tof_opts,
                             calibration=ctx.calibration)

@@ -122,6 +122,11 @@ def shortest_round_trip(beads_below: int, bead_radius: float, bead_E: float, bea
     return 2.0 * path / v
 
 
+#: Fewest accepted hits whose sample standard deviation estimates the TOF's scatter (two
+#: hits give one degree of freedom: an estimate that can be off by a factor of ten): the
+#: default of ``TofOptions.min_hits``.
+MIN_HITS_FOR_SCATTER = 3
+
 @dataclass(frozen=True)
 class ChainPath:
     """The chain between the sensor and the wall, for the bound of :func:`shortest_round_trip`.
@@ -171,7 +176,7 @@ class TofOptions:
 
     lowpass: float | None = None
     rule: PeakRule = field(default_factory=PeakRule)
-    min_hits: int = 1
+    min_hits: int = MIN_HITS_FOR_SCATTER
     upsample: int = UPSAMPLE
     min_tof: float | None = None
     chain: ChainPath | None = None

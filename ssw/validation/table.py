@@ -56,6 +56,7 @@ class SampleResult:
     E_u_pct: float | None = None
     E_contributions_pct: dict[str, float] = field(default_factory=dict)
     E_notes: list[str] = field(default_factory=list)
+    E_missing_terms: dict[str, str] = field(default_factory=dict)
     E_loo: float | None = None
     E_loo_diff_pct: float | None = None
     tof_sem: float | None = None
@@ -148,7 +149,9 @@ def validate_samples(
                          tof_measured_std=res.std)
         extras.append(extra)
     T = np.array([refs[s["id"]].tof for s in samples])
-    S = np.array([refs[s["id"]].tof_std or 0.0 for s in samples])
+    # an unknown TOF uncertainty is NaN: the interval then lists its tof term as missing
+    S = np.array([np.nan if refs[s["id"]].tof_std is None else refs[s["id"]].tof_std
+                  for s in samples])
     nu_arg = np.array([s.get("soil_nu_range") or [nus[i], nus[i]]
                        for i, s in enumerate(samples)], float)
     est = estimate_moduli(T, S, nu_arg, params, wall, wall_options, calibration=calibration,
@@ -183,9 +186,9 @@ def validate_samples(
             E_diff_pct=abs(pct(e.E, E_man[i])), E_low=e.E_low, E_high=e.E_high,
             E_u_pct=100.0 * e.u,
             E_contributions_pct={k_: 100.0 * v for k_, v in e.contributions.items()},
-            E_notes=list(e.notes), E_loo=lo,
+            E_notes=list(e.notes), E_missing_terms=dict(e.missing), E_loo=lo,
             E_loo_diff_pct=None if lo is None else pct(lo, E_man[i]),
-            tof_sem=float(S[i]),
+            tof_sem=None if np.isnan(S[i]) else float(S[i]),
             tof_published=smp.get("tof_published"),
             tof_sim_published=smp.get("tof_sim_published"),
             E_published=smp.get("E_published"), E_cov_published=smp.get("E_cov_published"),

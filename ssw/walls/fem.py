@@ -68,7 +68,8 @@ class PiecewiseLinearWall:
     their last value), ``a`` (N), ``b`` (N/m) of the piece that starts at each breakpoint
     (the last real piece repeated at the end and in the padding: the linear continuation),
     ``U`` (J) the potential at the breakpoints. ``d_exact`` (n,) m: where the exact law
-    ends. ``force_error``: relative 1-sigma force error of the law (None: unknown).
+    ends. ``force_error``: relative 1-sigma force error of each scene's law, (n,) (None:
+    unknown).
     """
 
     d: np.ndarray
@@ -76,7 +77,7 @@ class PiecewiseLinearWall:
     b: np.ndarray
     U: np.ndarray
     d_exact: np.ndarray
-    force_error: float | None = None
+    force_error: np.ndarray | None = None
     _keys: np.ndarray = field(init=False, repr=False)
     _fkeys: np.ndarray = field(init=False, repr=False)
     _fend: np.ndarray = field(init=False, repr=False)
@@ -134,7 +135,8 @@ class PiecewiseLinearWall:
     def take(self, idx: np.ndarray) -> PiecewiseLinearWall:
         """The scenes ``idx`` (may repeat)."""
         return PiecewiseLinearWall(self.d[idx], self.a[idx], self.b[idx], self.U[idx],
-                                   self.d_exact[idx], self.force_error)
+                                   self.d_exact[idx], None if self.force_error is None
+                                   else np.asarray(self.force_error)[idx])
 
     def hertz_equivalent(self, d_ref: float) -> np.ndarray:
         """``F(d_ref) / d_ref^1.5`` (N/m^1.5), for the time-step choice."""
@@ -263,10 +265,12 @@ def fem_wall(
         j_end = int(np.count_nonzero(keep))  # breakpoints up to the bound, plus the next
         j_end = min(j_end + 1, d.size)
         rows.append(_pieces(d[:j_end], path, ms, s[i], U[:j_end]))
-    a_peak = float(np.sqrt(R * np.max(_hertz_bound(A, W0, Wg))))
+    # per scene: the mesh's error and the finite domain's stiffening at its own contact
+    # radius (a soft soil's is larger)
+    a_peak = np.sqrt(R * _hertz_bound(A, W0, Wg))
     L = min(float(cfg["soil_radius"]), float(cfg["soil_depth"]))
-    error = float(np.hypot(FORCE_ERROR_COEF * float(cfg["mesh_growth"]) ** 2,
-                           DOMAIN_ERROR_COEF * a_peak / L))
+    error = np.hypot(FORCE_ERROR_COEF * float(cfg["mesh_growth"]) ** 2,
+                     DOMAIN_ERROR_COEF * a_peak / L)
     return _assemble(rows, error)
 
 
@@ -281,7 +285,8 @@ def _pieces(d: np.ndarray, path: Any, ms: int, s: float, U: np.ndarray
     return d, a, b, U
 
 
-def _assemble(rows: list[tuple[np.ndarray, ...]], force_error: float) -> PiecewiseLinearWall:
+def _assemble(rows: list[tuple[np.ndarray, ...]], force_error: np.ndarray
+              ) -> PiecewiseLinearWall:
     """Pad the scenes' pieces to one width."""
     width = max(r[0].size for r in rows)
     out = []

@@ -1,0 +1,203 @@
+"""A calibration refuses to fail silently, names the device it was made for, and every
+consumer works with a parameter on its bound; an interval says what it lacks.
+
+The references' TOFs come from the chain itself (Hertz wall, fast) at known parameters:
+the truth a calibration must recover, or a misfit it must refuse.
+"""
+
+from __future__ import annotations
+
+import json
+
+import numpy as np
+import pytest
+
+from ssw.calibration import Reference, calibrate, load_calibration, write_calibration
+from ssw.calibration.fit import LM_FTOL, _levenberg_marquardt, _Problem
+from ssw.chain import api
+from ssw.chain.params import chain_params
+from ssw.cli import main
+from ssw.device import load_device, write_device
+from ssw.errors import CalibrationError, ConfigError
+from ssw.materials import material_set
+
+NUM = {"steps_per_contact": 80, "t_max": 0.02, "gravity": True, "damping": 0.0}
+SOILS = [(38e6, 0.34), (123e6, 0.33), (445e6, 0.30)]
+
+
+def _tofs(device):
+    p = chain_params(device, material_set(), **NUM)
+    return np.asarray(api.tof(np.array([e for e, _ in SOILS]), np.array([n for _, n in SOILS]),
+                              p, "hertz"), float)
+
+
+@pytest.fixture(scope="module")
+def no_preload():
+    """A device without static load (preload 0 N) and its references' TOFs."""
+    dev = load_device().with_(preload=0.0, striker_velocity=0.4)
+    return dev, _tofs(dev)
+
+
+def _refs(tofs, std=2e-6):
+    return [Reference(E, nu, float(t), std, id=f"r{i}")
+            for i, ((E, nu), t) in enumerate(zip(SOILS, tofs, strict=True))]
+
+
+def test_tofs_typed_in_milliseconds_are_refused_and_nothing_is_written(tmp_path, capsys):
+    out = tmp_path / "c.json"
+    rc = main(["calibrate", "--law", "hertz", "--reference", "38e6,0.34,1.78",
+               "--reference", "123e6,0.33,1.46", "--reference", "445e6,0.30,1.15",
+               "--free", "striker_velocity", "--free", "preload", "--no-loo",
+               "--output", str(out)])
+    err = capsys.readouterr().err
+    assert rc == 2 and not out.exists()
+    assert "TOF = 1.78 s is outside what the device can produce" in err
+    assert "TOFs are in seconds" in err
+
+
+def test_a_parameter_on_its_bound_is_flagged_and_every_consumer_works(no_preload, tmp_path,
+                                                                      capsys):
+    """A device without static load, calibrated with the preload free: the preload lands on
+    its bound (0 N), is flagged, and the inverse (central differences would step to a
+    negative preload) and a measurement still work through it."""
+    dev, tofs = no_preload
+    nominal = dev.with_(preload=3.0, striker_velocity=0.5)
+    cal = calibrate(_refs(tofs), nominal, ["striker_velocity", "preload"],
+                    materials=material_set(), numerics=NUM, wall="hertz", loo=False)
+    assert cal.at_bound == ("preload",)
+    assert cal.parameters["preload"] < 0.01 and cal.parameters["striker_velocity"] == \
+        pytest.approx(0.4, rel=1e-3)
+    path = tmp_path / "c.json"
+    write_calibration(path, cal)
+    assert json.loads(path.read_text())["at_bound"] == ["preload"]
+    assert load_calibration(path).at_bound == ("preload",)
+    dev_file = tmp_path / "nominal.yaml"
+    write_device(dev_file, nominal)
+    rc = main(["invert", "--tof", repr(float(tofs[1])), "--soil-nu", "0.33", "--device",
+               str(dev_file), "--calibration", str(path), "--law", "hertz", "--json"])
+    res = json.loads(capsys.readouterr().out)
+    assert rc == 0 and res["E"] == pytest.approx(123e6, rel=2e-3)
+    assert res["E_low"] < 123e6 < res["E_high"]
+    # a measurement (simulated hits of the same device) through that calibration
+    rec = tmp_path / "p.h5"
+    assert main(["acquire", "--simulate", "--material", "pcf15", "--hits", "4", "--law",
+                 "hertz", "--device", str(dev_file), "--calibration", "none",
+                 "--preload", "0", "--striker-velocity", "0.4", "--sample", "P",
+                 "--output", str(rec), "--json"]) == 0
+    capsys.readouterr()
+    assert main(["measure", str(rec), "--soil-nu", "0.33", "--device", str(dev_file),
+                 "--calibration", str(path), "--law", "hertz", "--json"]) == 0
+    m = json.loads(capsys.readouterr().out)
+    assert m["E_low"] < 123e6 < m["E_high"] and "calibration" in m["contributions_pct"]
+
+
+def test_a_misfit_beyond_its_statistics_is_refused(no_preload):
+    """TOFs 3 % off a chain the parameters can reach, with uncertainties of 0.1 %: chi^2
+    far beyond its 99.9 % quantile for 1 degree of freedom."""
+    dev, tofs = no_preload
+    bad = tofs * np.array([1.0, 1.03, 1.0])
+    with pytest.raises(CalibrationError, match=r"chi\^2 = .* exceeds its 99.9% quantile"):
+        calibrate(_refs(bad, std=1e-6), dev, ["striker_velocity", "preload"],
+                  materials=material_set(), numerics=NUM, wall="hertz", loo=False)
+
+
+def test_mixed_tof_uncertainties_are_refused(no_preload):
+    dev, tofs = no_preload
+    refs = _refs(tofs)
+    refs[1] = Reference(refs[1].E, refs[1].nu, refs[1].tof, None, id="r1")
+    with pytest.raises(ConfigError, match="for every reference or for none"):
+        calibrate(refs, dev, ["striker_velocity"], materials=material_set(), numerics=NUM,
+                  wall="hertz", loo=False)
+
+
+def test_levenberg_marquardt_converges_on_a_linear_problem_and_stalls_unconverged():
+    """On a linear least squares it converges to the normal equations' minimum (within its
+    chi^2 tolerance, LM_FTOL); when no step ever lowers chi^2 (a model that only gets
+    worse) it stops NOT converged."""
+    rng = np.random.default_rng(5)
+    A, b = rng.normal(size=(6, 2)), rng.normal(size=6)
+
+    def linear(points):
+        return {i: (A @ x - b, A, float((A @ x - b) @ (A @ x - b))) for i, x in points.items()}
+
+    x0 = np.zeros(2)
+    pr = _Problem(x0, A @ x0 - b, A, float(b @ b), np.eye(2))
+    _levenberg_marquardt([pr], linear, np.full(2, -10.0), np.full(2, 10.0), 40)
+    assert pr.converged
+    xs = np.linalg.lstsq(A, b, rcond=None)[0]
+    best = float((A @ xs - b) @ (A @ xs - b))
+    assert best <= pr.cost <= best + LM_FTOL
+
+    def worse(points):  # every trial point costs more than the start
+        return {i: (np.ones(6) * 10, A, 600.0) for i in points}
+
+    pr = _Problem(x0, A @ x0 - b, A, float(b @ b), np.eye(2))
+    _levenberg_marquardt([pr], worse, np.full(2, -10.0), np.full(2, 10.0), 200)
+    assert pr.done and not pr.converged
+    assert float(b @ b) > LM_FTOL  # it had something to gain
+
+
+def test_a_covariance_that_is_not_positive_definite_is_refused_on_load(no_preload, tmp_path):
+    dev, tofs = no_preload
+    cal = calibrate(_refs(tofs), dev.with_(preload=1.0), ["striker_velocity", "preload"],
+                    materials=material_set(), numerics=NUM, wall="hertz", loo=False)
+    path = tmp_path / "c.json"
+    write_calibration(path, cal)
+    d = json.loads(path.read_text())
+    d["covariance"] = [[1e-4, 2e-3], [2e-3, 1e-4]]  # symmetric, an eigenvalue < 0
+    path.write_text(json.dumps(d))
+    with pytest.raises(ConfigError, match="positive definite"):
+        load_calibration(path)
+    d["covariance"] = [[1e-4]]
+    path.write_text(json.dumps(d))
+    with pytest.raises(ConfigError, match="2 x 2"):
+        load_calibration(path)
+
+
+def test_the_calibration_names_its_device_and_a_mismatch_is_refused(no_preload, tmp_path,
+                                                                     capsys):
+    """The calibration records the digest of the device it was made for: --device that
+    device is fine, another bead count is refused naming both sides, and a flag changing a
+    calibrated parameter is refused naming it."""
+    dev, tofs = no_preload
+    cal = calibrate(_refs(tofs), dev.with_(preload=1.0), ["striker_velocity", "preload"],
+                    materials=material_set(), numerics=NUM, wall="hertz", loo=False)
+    path = tmp_path / "c.json"
+    write_calibration(path, cal)
+    dev_file = tmp_path / "d.yaml"
+    write_device(dev_file, dev.with_(preload=1.0))
+    base = ["invert", "--tof", repr(float(tofs[1])), "--soil-nu", "0.33", "--law", "hertz",
+            "--calibration", str(path)]
+    assert main([*base, "--device", str(dev_file)]) == 0
+    capsys.readouterr()
+    assert main([*base, "--device", str(dev_file), "--beads", "30"]) == 2
+    err = capsys.readouterr().err
+    assert "beads: 20 there, 30 here" in err and "digest differs" in err
+    assert main([*base, "--striker-velocity", "0.5"]) == 2
+    assert "identified striker_velocity" in capsys.readouterr().err
+    assert main([*base, "--damping", "0.1"]) == 2
+    assert "the model" in capsys.readouterr().err
+
+
+def test_too_few_hits_use_the_stated_scatter_or_say_the_term_is_missing(tmp_path, capsys):
+    """Two accepted hits (min-hits lowered to 2): the thesis device states its scatter, which
+    the TOF term then uses, labelled; a device that states none leaves the term missing, and
+    the interval says so."""
+    rec = tmp_path / "two.h5"
+    assert main(["acquire", "--simulate", "--material", "pcf15", "--hits", "2", "--law",
+                 "hertz", "--calibration", "none", "--sample", "T", "--output", str(rec),
+                 "--min-hits", "2", "--json"]) == 0
+    capsys.readouterr()
+    args = ["measure", str(rec), "--soil-nu", "0.33", "--law", "hertz", "--calibration",
+            "none", "--min-hits", "2", "--json"]
+    assert main(args) == 0
+    m = json.loads(capsys.readouterr().out)
+    assert "tof (stated scatter)" in m["contributions_pct"] and "tof" not in m["missing_terms"]
+    assert any("stated scatter" in n for n in m["notes"])
+    bare = load_device().with_(tof_scatter=None)
+    dev_file = tmp_path / "bare.yaml"
+    write_device(dev_file, bare)
+    assert main([*args, "--device", str(dev_file)]) == 0
+    m = json.loads(capsys.readouterr().out)
+    assert "tof" in m["missing_terms"] and not m["interval_complete"]
+    assert "fewer than 3" in m["missing_terms"]["tof"]

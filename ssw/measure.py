@@ -183,7 +183,8 @@ def measure(
         rejections=pool["rejections"], files=[r.path for r in recordings],
         sample_rate=pool["sample_rate"], nu=est.nu, nu_range=est.nu_range,
         synthetic=any(bool(r.meta.get("synthetic", False)) for r in recordings),
-        missing=missing, extra={"dlnTOF_dlnE": est.dlnTOF_dlnE},
+        missing=missing, extra={"dlnTOF_dlnE": est.dlnTOF_dlnE,
+                                "wall_extrapolated": est.extrapolated},
     )
 
 

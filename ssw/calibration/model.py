@@ -11,7 +11,7 @@ record) gets NaN, so a global scan over wide ranges never stops on one bad corne
 
 Every run of one model uses ONE time step, that of the fastest striker the scan may try
 (:meth:`TofModel.fix_time_step`): otherwise the step would follow each batch's fastest
-scene, and the O(dt^2) TOF error (3.5e-5 relative at 80 steps per contact) would differ
+scene, and the O(dt^2) TOF error (up to 5e-5 relative at 80 steps per contact) would differ
 from run to run, a noise the least squares would chase.
 """
 

@@ -41,7 +41,7 @@ class Inversion:
     E_low: np.ndarray  # from TOF + std
     E_high: np.ndarray  # from TOF - std
     clipped: np.ndarray  # bool: an interval end hit the range's end
-    tof_range: tuple[float, float]  # s, (TOF at E_max, TOF at E_min)
+    tof_range: tuple[float, float]  # s, (TOF at E_max, TOF at E_min): common to every TOF
     E_range: tuple[float, float]  # Pa
 
 
@@ -182,7 +182,11 @@ def invert(
         # one batched inversion of T, T + std, T - std; the central TOFs must lie inside the
         # model's range (an error otherwise); an interval end beyond it is the range's end
         targets = np.stack([T, T + S, T - S]).ravel()
-        res = invert_batch(targets, soil_nu, params, wall, vary=vary, E_range=E_range,
+        # per-target chain values follow their target into each of the three stacks
+        vary3 = None if not vary else {k: np.tile(np.broadcast_to(np.asarray(v, float),
+                                                                  T.shape).ravel(), 3)
+                                       for k, v in vary.items() if v is not None}
+        res = invert_batch(targets, soil_nu, params, wall, vary=vary3, E_range=E_range,
                            strict=False, **wall_options)
         n = T.size
         bad = [r for r in res.reason[:n] if r]
@@ -190,7 +194,8 @@ def invert(
             if "not strictly decreasing" in bad[0]:
                 raise SolverError(bad[0])
             raise OutOfRangeError(bad[0])
-        lo_T, hi_T = float(res.tof_lo[0]), float(res.tof_hi[0])
+        # each target's own range (its nu and chain values: ``vary``), not the first one's
+        lo_T, hi_T = res.tof_lo, res.tof_hi
         E = res.E.copy()
         E = np.where(targets > hi_T, res.E_range[0], E)
         E = np.where(targets < lo_T, res.E_range[1], E)
@@ -199,13 +204,15 @@ def invert(
         return Inversion(
             E=E_all[0], E_low=E_all[1], E_high=E_all[2],
             clipped=clipped.reshape((3, *T.shape))[1:].any(axis=0),
-            tof_range=(lo_T, hi_T), E_range=res.E_range,
+            tof_range=(float(np.max(lo_T[:n])), float(np.min(hi_T[:n]))),
+            E_range=res.E_range,
         )
     E_g, T_g = _forward_grid(float(soil_nu), params, wall, E_range, sweep, wall_options)
-    if E_g.size < 2 or np.any(np.diff(T_g) >= 0):
+    # NaN compares false: a table with a missing TOF would pass a bare diff test
+    if E_g.size < 2 or not np.all(np.isfinite(T_g)) or not np.all(np.diff(T_g) < 0):
         raise SolverError(
             f"TOF(E) at nu = {soil_nu} is not strictly decreasing on the E grid "
-            f"[{E_g[0]:.4g}, {E_g[-1]:.4g}] Pa: cannot invert"
+            f"[{E_g[0]:.4g}, {E_g[-1]:.4g}] Pa, or has a missing value: cannot invert"
         )
     lo_T, hi_T = float(T_g[-1]), float(T_g[0])
     out = (T < lo_T) | (T > hi_T)

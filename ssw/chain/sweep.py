@@ -121,6 +121,42 @@ def read_sweep(path: str | Path) -> tuple[Sweep, dict[str, Any]]:
         return Sweep(*(f[k][()] for k in FIELDS)), read_inputs(f)
 
 
+def model_digest(params: ChainParams, wall: str, wall_options: dict[str, Any]) -> str:
+    """Digest (``ssw.provenance.digest``) of the chain model a sweep is made of: every
+    ChainParams field, the wall law and its plain options (a sweep records it; a command
+    that reads a sweep in place of its own model compares)."""
+    from dataclasses import asdict
+
+    from ssw.provenance import digest
+
+    plain = {k: v for k, v in wall_options.items()
+             if isinstance(v, str | int | float | bool | dict | list | tuple) or v is None}
+    return digest({"params": asdict(params), "wall": wall, "wall_options": plain})
+
+
+def sweep_model(inputs: dict[str, Any], path: str | Path) -> str:
+    """The model digest a sweep file records (a merged sweep: its parts', which must
+    agree); SswError when it records none."""
+    if "model_sha256" in inputs:
+        return str(inputs["model_sha256"])
+    parts = {p.get("model_sha256") for p in inputs.get("part_inputs", [])}
+    if len(parts) == 1 and None not in parts:
+        return str(parts.pop())
+    raise SswError(f"{path}: the sweep records no single chain model (model_sha256): "
+                   "remake it with this ssw")
+
+
+def require_same_model(sweep_inputs: dict[str, Any], path: str | Path, params: ChainParams,
+                       wall: str, wall_options: dict[str, Any]) -> None:
+    """ProvenanceError unless a sweep was made of the command's own chain model (the same
+    device, calibration, numerics and wall law), naming both sides."""
+    from ssw.provenance import require_match
+
+    require_match("the chain model (device, calibration, numerics, wall law)",
+                  (f"sweep {path}", sweep_model(sweep_inputs, path)),
+                  ("this command's", model_digest(params, wall, wall_options)))
+
+
 def merge_sweeps(sweeps: list[Sweep]) -> Sweep:
     """One sweep of all points, ordered by (nu, E); duplicates are an error."""
     cat = Sweep(*(np.concatenate([getattr(s, k) for s in sweeps]) for k in FIELDS)).sorted()

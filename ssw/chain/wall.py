@@ -110,6 +110,12 @@ class TableWall:
     def n(self) -> int:
         return self.h.shape[0]
 
+    @property
+    def exact_reach(self) -> np.ndarray:
+        """(n,) m: the last indentation of each scene's curve; beyond it the law is the
+        power-law extension (:func:`beyond_exact_reach` flags a run that goes there)."""
+        return self.h * (self.g.shape[1] - 1)
+
     def force(self, d: np.ndarray) -> np.ndarray:
         dp = np.maximum(d, 0.0)
         cells = self.g.shape[1] - 1
@@ -144,6 +150,18 @@ class TableWall:
     def hertz_equivalent(self, d_ref: float) -> np.ndarray:
         """``F(d_ref) / d_ref^1.5`` (N/m^1.5)."""
         return self.force(np.full(self.n, d_ref)) / d_ref**1.5
+
+
+def beyond_exact_reach(wall: Any, peak_indentation: np.ndarray) -> np.ndarray:
+    """(n,) bool: the scenes whose last bead went deeper than the wall's exact law reaches
+    (a tabulated FEM curve's end, the FEM law's computed range: ``wall.exact_reach``),
+    where the force is an extension, not the model; all False for a law defined at any
+    depth (no ``exact_reach``)."""
+    reach = getattr(wall, "exact_reach", None)
+    peak = np.asarray(peak_indentation, float)
+    if reach is None:
+        return np.zeros(peak.shape, bool)
+    return peak > np.asarray(reach, float) * (1.0 + 1e-9)
 
 
 class Wall(Protocol):

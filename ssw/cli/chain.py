@@ -133,7 +133,10 @@ def run_tof_sweep(args: argparse.Namespace) -> dict[str, Any] | None:
         return None  # rank 0 writes and reports
     if args.output:
         inputs = {k: v for k, v in vars(args).items() if k not in ("func", "human")}
-        write_sweep(args.output, sw, {**inputs, **_params_dict(params), **ctx.inputs()})
+        from ssw.chain.sweep import model_digest
+
+        write_sweep(args.output, sw, {**inputs, **_params_dict(params), **ctx.inputs(),
+                                      "model_sha256": model_digest(params, wall, opts)})
         if args.csv:
             write_csv(args.csv, sw)
     if args.plot:
@@ -161,9 +164,21 @@ def _part(text: str) -> tuple[int, int]:
 
 
 def run_tof_merge(args: argparse.Namespace) -> dict[str, Any]:
-    from ssw.chain.sweep import merge_sweeps, plot_fig8, read_sweep, write_csv, write_sweep
+    from ssw.chain.sweep import (
+        merge_sweeps,
+        plot_fig8,
+        read_sweep,
+        sweep_model,
+        write_csv,
+        write_sweep,
+    )
+    from ssw.provenance import require_match
 
     parts = [read_sweep(p) for p in args.inputs]
+    models = [sweep_model(p[1], path) for p, path in zip(parts, args.inputs, strict=True)]
+    for path, m in zip(args.inputs[1:], models[1:], strict=True):
+        require_match("the chain model", (f"sweep part {args.inputs[0]}", models[0]),
+                      (f"sweep part {path}", m))
     sw = merge_sweeps([p[0] for p in parts])
     write_sweep(args.output, sw, {"parts": [str(p) for p in args.inputs],
                                   "part_inputs": [p[1] for p in parts]})
@@ -193,8 +208,12 @@ def run_invert(args: argparse.Namespace) -> dict[str, Any]:
 
         if isinstance(nu, tuple):
             raise ConfigError("--soil-nu", args.soil_nu, "one Poisson's ratio with --table")
+        from ssw.chain.sweep import require_same_model
+
+        table, table_inputs = read_sweep(args.table)
+        require_same_model(table_inputs, args.table, ctx.params, ctx.wall, ctx.wall_options)
         res = invert(args.tof, nu, ctx.params, ctx.wall, tof_std=args.tof_std,
-                     E_range=E_range, sweep=read_sweep(args.table)[0], **ctx.wall_options)
+                     E_range=E_range, sweep=table, **ctx.wall_options)
         return {**ctx.inputs(), "E": float(res.E), "E_low": float(res.E_low),
                 "E_high": float(res.E_high), "interval": "E(TOF -+ tof_std) on the sweep",
                 "interval_clipped": bool(res.clipped), "tof_range": list(res.tof_range),

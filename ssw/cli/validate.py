@@ -49,9 +49,12 @@ def run_validate(args: argparse.Namespace) -> dict[str, Any]:
         T = np.asarray(api.tof(E[None, :], np.array(nus)[:, None], params, wall, **opts))
         sweep_curves = {}
         if args.sweep:
-            from ssw.chain.sweep import merge_sweeps, read_sweep
+            from ssw.chain.sweep import merge_sweeps, read_sweep, require_same_model
 
-            sw = merge_sweeps([read_sweep(p)[0] for p in args.sweep])
+            parts = [read_sweep(p) for p in args.sweep]
+            for path, (_, inp) in zip(args.sweep, parts, strict=True):
+                require_same_model(inp, path, params, wall, opts)
+            sw = merge_sweeps([p[0] for p in parts])
             sweep_curves = {float(nu): sw.curve(float(nu)) for nu in np.unique(sw.soil_nu)}
         plot_fig10(d / "fig10_tof_validation.png", rows,
                    {nu: (E, T[i]) for i, nu in enumerate(nus)}, sweep_curves)

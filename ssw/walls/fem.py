@@ -103,6 +103,11 @@ class PiecewiseLinearWall:
     def n(self) -> int:
         return self.d.shape[0]
 
+    @property
+    def exact_reach(self) -> np.ndarray:
+        """(n,) m: where each scene's exact law ends (beyond it: its linear continuation)."""
+        return self.d_exact
+
     def _piece(self, x: np.ndarray, keys: np.ndarray) -> np.ndarray:
         """Flat index of the piece holding the normalized values ``x`` (n,) in [0, 1].
 

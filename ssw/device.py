@@ -36,6 +36,8 @@ DEVICES_DIR = DATA / "devices"
 DEFAULT_DEVICE = "thesis"
 #: Standard gravity, m/s^2 (CGPM 1901), for the drop height.
 STANDARD_GRAVITY = 9.80665
+#: V, the input range of the DAQ module (NI 9234: +-5 V; REFERENCE.md).
+DAQ_RANGE_V = 5.0
 
 
 @dataclass(frozen=True)
@@ -122,6 +124,13 @@ class Device:
     @property
     def has_plate(self) -> bool:
         return self.plate_thickness > 0
+
+    @property
+    def full_scale_force(self) -> float:
+        """N, the largest force a recording of this device holds unclipped: the sensor's
+        range, or the NI 9234's +-5 V over the sensor's sensitivity if that is less
+        (REFERENCE.md: 445 N x 11.24 mV/N ~ 5 V)."""
+        return min(self.sensor_range, DAQ_RANGE_V / self.sensitivity)
 
     def with_(self, **changes: Any) -> Device:
         """A copy with ``changes`` (field names; ``drop_height`` sets the striker speed).

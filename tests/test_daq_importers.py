@@ -217,3 +217,43 @@ def test_unknown_format_is_an_error(tmp_path):
     (tmp_path / "r.wav").write_bytes(b"RIFF")
     with pytest.raises(RecordingError, match=r"unknown recording format '\.wav'"):
         read_any(tmp_path / "r.wav")
+
+
+def test_tdms_hits_of_different_lengths_are_read_each_at_its_own(tmp_path, chain_hits):
+    """A TDMS file whose hits differ in length by a sample (359 and 360 samples, as a
+    LabVIEW export that cut its records by time): read, each hit at its own length, and
+    the TOF picked per hit (a table of one length was refused)."""
+    hits, s, true_tof, opts = chain_hits
+    cut = [h.force[:s.record_samples - (i % 2)] for i, h in enumerate(hits)]
+    chans = [ChannelObject("Untitled", f"Force {i}", f, properties={
+        "wf_increment": 1.0 / s.sample_rate, "wf_start_offset": -s.pretrigger_samples
+        / s.sample_rate, "wf_samples": f.size, "unit_string": "N"})
+        for i, f in enumerate(cut)]
+    with TdmsWriter(str(tmp_path / "ragged.tdms")) as w:
+        w.write_segment([RootObject(), GroupObject("Untitled"), *chans])
+    rec = read_any(tmp_path / "ragged.tdms")
+    assert [h.force.size for h in rec.hits] == [f.size for f in cut]
+    assert len({f.size for f in cut}) == 2
+    res = recording_tof(rec, opts)
+    assert np.all(np.abs(res.tof / true_tof - 1) < 0.002)
+
+
+@pytest.mark.parametrize("suffix", [".csv", ".tdms", ".mat"])
+def test_imported_hits_are_checked_for_clipping_against_the_device(tmp_path, suffix):
+    """A hit that reaches the device's full scale (the thesis sensor on the NI 9234's +-5 V:
+    444.8 N) is clipped whatever the file's format: refused, or dropped with its reason;
+    `ssw measure` drops it and says so."""
+    from ssw.device import load_device
+
+    full = load_device().full_scale_force
+    assert full == pytest.approx(5.0 / 11.24e-3)
+    _, f = pulses(4)
+    f[:, 1] = np.minimum(f[:, 1] * 10.0, full)  # hit 1 saturates at full scale
+    rec = Recording("mem", {"pretrigger_samples": 64}, RATE,
+                    tuple(RecordedHit(i, f[:, i].copy(), 64) for i in range(4)))
+    path = write_any(tmp_path / f"c{suffix}", rec)
+    assert len(read_any(path).hits) == 4  # without a range: nothing to check against
+    with pytest.raises(RecordingError, match="hit 1 is clipped"):
+        read_any(path, full_scale=full)
+    kept = read_any(path, full_scale=full, clipped="drop")
+    assert len(kept.hits) == 3 and "hit 1 is clipped" in kept.dropped[0]

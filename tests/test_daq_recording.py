@@ -72,16 +72,45 @@ def test_interrupted_session_keeps_every_completed_hit(tmp_path):
     assert recording_tof(rec).n_accepted == 3
 
 
-def test_existing_session_is_not_overwritten(tmp_path):
+def test_a_new_session_never_touches_an_existing_one(tmp_path):
+    """Without overwrite, a second session into the same name goes to the next free name
+    and the first file keeps its bytes; a writer asked for an existing path refuses."""
     path = run_session(ListBackend(two_pulse_records()), S, tmp_path / "a.h5", sample_id="x")
+    before = path.read_bytes()
+    second = run_session(ListBackend(two_pulse_records()), S, path, sample_id="y")
+    assert second == tmp_path / "a-2.h5" and path.read_bytes() == before
+    assert read_recording(second).meta["sample_id"] == "y"
+    third = run_session(ListBackend(two_pulse_records()), S, path, sample_id="z")
+    assert third == tmp_path / "a-3.h5"
     with pytest.raises(Exception, match="does not exist yet"):
-        run_session(ListBackend(two_pulse_records()), S, path, sample_id="x")
+        RecordingWriter(path, S, {"sample_id": "x"}, overwrite=False)
 
 
-def test_empty_recording_is_an_error(tmp_path):
+def test_overwrite_replaces_only_once_the_first_new_hit_is_on_disk(tmp_path):
+    """--overwrite: a session that fails before its first hit leaves the old one intact
+    (not truncated, not deleted); one that records a hit replaces it, whole."""
+    path = run_session(ListBackend(two_pulse_records()), S, tmp_path / "o.h5", sample_id="old")
+    before = path.read_bytes()
+    with pytest.raises(KeyboardInterrupt):
+        run_session(ListBackend(two_pulse_records(), fail_after=0), S, path, sample_id="new",
+                    overwrite=True)
+    assert path.read_bytes() == before and read_recording(path).meta["sample_id"] == "old"
+    with pytest.raises(KeyboardInterrupt):
+        run_session(ListBackend(two_pulse_records(), fail_after=1), S, path, sample_id="new",
+                    overwrite=True)
+    rec = read_recording(path)
+    assert rec.meta["sample_id"] == "new" and len(rec.hits) == 1
+    assert not list(tmp_path.glob("*.part"))
+
+
+def test_a_writer_without_hits_leaves_no_file_and_an_empty_file_is_an_error(tmp_path):
     path = tmp_path / "empty.h5"
-    with RecordingWriter(path, S, {"sample_id": "x"}, overwrite=False):
-        pass
+    with RecordingWriter(path, S, {"sample_id": "x"}, overwrite=False) as w:
+        w.mark_complete()
+    assert not path.exists()
+    with h5py.File(path, "w") as f:  # a session file with no hit, made by hand
+        f.attrs.update({"ssw_kind": "daq_recording", "units": "N", "sample_rate": 51200.0})
+        f.create_group("hits")
     with pytest.raises(RecordingError, match="empty"):
         read_recording(path)
 
@@ -171,3 +200,48 @@ def test_killed_session_keeps_every_flushed_hit(tmp_path):
     rec = read_recording(path)
     assert len(rec.hits) == 3 and rec.meta["complete"] is False
     assert recording_tof(rec).n_accepted == 3
+
+
+@pytest.mark.parametrize("k", [1, 2, 3, 5, 8])
+def test_sigkill_while_hits_keep_coming_keeps_hits_1_to_k(tmp_path, k):
+    """SIGKILL right after hit k is reported, while the next hits are being written (no
+    pause): the file is readable and holds at least hits 1..k, every one whole."""
+    import signal
+    import subprocess
+    import sys
+    import textwrap
+
+    path = tmp_path / "fast.h5"
+    child = textwrap.dedent(f"""
+        import numpy as np
+        from ssw.daq.backend import Hit, run_session
+        from ssw.daq.settings import DaqSettings
+
+        class Fast:
+            name = "fast"
+            def describe(self):
+                return {{}}
+            def hits(self, settings, n):
+                k = np.arange(256.0)
+                for i in range(n):
+                    yield Hit(force=50 / np.cosh((k - 60 - 0.1 * i) / 3) ** 2
+                              + 20 / np.cosh((k - 140) / 3) ** 2, trigger_index=32)
+
+        def told(i, hit):
+            print(i, flush=True)
+
+        run_session(Fast(), DaqSettings(record_samples=256, pretrigger_samples=32), {str(path)!r},
+                    sample_id="k", n_hits=400, on_hit=told)
+    """)
+    proc = subprocess.Popen([sys.executable, "-c", child], stdout=subprocess.PIPE, text=True)
+    try:
+        for _ in range(k):
+            proc.stdout.readline()
+        proc.send_signal(signal.SIGKILL)
+        proc.wait(timeout=30)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    rec = read_recording(path)
+    assert len(rec.hits) >= k and rec.meta["complete"] is False
+    assert all(h.force.size == 256 for h in rec.hits)

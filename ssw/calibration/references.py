@@ -62,7 +62,8 @@ def recording_reference(path: str | Path, E: float, nu: float, *, id: str = "",
 
 def from_config(cfg: dict[str, Any], params: Any, wall: str, wall_options: dict[str, Any],
                 *, root: str | Path = ".", tof_options: Any = None,
-                require_std: bool = True) -> list[Reference]:
+                require_std: bool = True, full_scale: float | None = None
+                ) -> list[Reference]:
     """The config's validation samples as references (manufacturer E and nu, measured TOF).
 
     Recordings (``recordings``, relative to ``root``) are used when given, else the
@@ -83,7 +84,8 @@ def from_config(cfg: dict[str, Any], params: Any, wall: str, wall_options: dict[
         if smp.get("recordings"):
             p = Path(smp["recordings"])
             p = p if p.is_absolute() else Path(root) / p
-            refs[i] = recording_reference(p, m.E, m.nu, id=smp["id"], tof_options=tof_options)
+            refs[i] = recording_reference(p, m.E, m.nu, id=smp["id"], tof_options=tof_options,
+                                          full_scale=full_scale)
         elif "tof_published" in smp:
             if smp.get("tof_std") is not None:
                 refs[i] = Reference(m.E, m.nu, float(smp["tof_published"]),

@@ -54,14 +54,15 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
             E, nu = float(parts[1]), float(parts[2])
         except ValueError as exc:
             raise ConfigError(f"--reference-recording[{j}]", t, "FILE,E,nu") from exc
-        refs.append(recording_reference(parts[0], E, nu,
-                                        tof_options=_tof_options(ctx.params)))
+        refs.append(recording_reference(parts[0], E, nu, tof_options=_tof_options(ctx.params),
+                                        full_scale=ctx.device.full_scale_force))
     cal_cfg = ctx.cfg.get("calibration", {})
     if args.from_config:
         val = ctx.cfg.get("validation", {})
         refs += from_config(ctx.cfg, ctx.params, ctx.wall, ctx.wall_options, root=args.root,
                             tof_options=_tof_options(ctx.params, val.get("lowpass"),
-                                                     val.get("min_hits", 3)))
+                                                     val.get("min_hits", 3)),
+                            full_scale=ctx.device.full_scale_force)
     if not refs:
         raise ConfigError("--reference", None, "references: --reference E,nu,TOF[,STD], "
                           "--reference-recording FILE,E,nu or --from-config")

@@ -153,6 +153,9 @@ def run_acquire(args: argparse.Namespace) -> dict[str, Any]:
     res = recording_tof(read_recording(path, clipped="drop"), opts)
     out = {"output": str(path), "backend": backend.name, "sample_id": args.sample,
            "hits": settings.hits, **info, **res.to_dict()}
+    if str(path) != str(args.output):
+        out["note"] = (f"{args.output} already holds a recording (kept): this session is "
+                       f"{path} (--overwrite replaces it once the first new hit is on disk)")
     if getattr(backend, "true_tof", None) is not None:
         out["true_tof"] = backend.true_tof
     return out
@@ -163,8 +166,9 @@ def run_tof_recording(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.daq.importers import read_any
     from ssw.signal.tof import recording_tof
 
-    params = None if args.no_bound else chain_context(args, numerics_only=True).params
-    rec = read_any(args.file, **read_options(args))
+    ctx = chain_context(args, numerics_only=True)
+    params = None if args.no_bound else ctx.params
+    rec = read_any(args.file, **read_options(args), full_scale=ctx.device.full_scale_force)
     opts = tof_options(args, params)
     res = recording_tof(rec, opts)
     meta = {k: rec.meta.get(k) for k in ("sample_id", "plate", "operator", "synthetic",
@@ -199,7 +203,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--plate", default="PLA 0.4 mm", help="plate under the last bead")
     p.add_argument("--operator", default="", help="who recorded")
     p.add_argument("--notes", default="", help="free text stored with the session")
-    p.add_argument("--overwrite", action="store_true", help="replace an existing file")
+    p.add_argument("--overwrite", action="store_true",
+                   help="replace an existing file (when the first new hit is on disk; "
+                   "without it, a new session never touches an existing file: it goes to "
+                   "the next free name, FILE-2.h5, ...)")
     p.add_argument("--simulate", action="store_true",
                    help="simulated backend (chain model through a modelled NI 9234)")
     p.add_argument("--material", help="simulate: material key giving E and nu")

@@ -30,6 +30,7 @@ def run_measure(args: argparse.Namespace) -> dict[str, Any]:
         ropts["clipped"] = "drop"
     if "sensitivity" not in ropts:  # data in volts: the device's sensor
         ropts["sensitivity"] = ctx.device.sensitivity
+    ropts["full_scale"] = ctx.device.full_scale_force  # clipping, whatever the format
     recs = [read_any(f, **_format_options(f, ropts)) for f in args.files]
     if args.lowpass is None:
         args.lowpass = ctx.cfg.get("validation", {}).get("lowpass")
@@ -44,7 +45,7 @@ def _format_options(path: str, opts: dict[str, Any]) -> dict[str, Any]:
     from pathlib import Path
 
     if Path(path).suffix.lower() in (".h5", ".hdf5"):
-        return {"clipped": opts["clipped"]}
+        return {"clipped": opts["clipped"], "full_scale": opts.get("full_scale")}
     return opts
 
 

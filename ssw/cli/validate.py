@@ -32,7 +32,8 @@ def run_validate(args: argparse.Namespace) -> dict[str, Any]:
     tof_opts = TofOptions(lowpass=val.get("lowpass"), min_hits=val.get("min_hits", 3),
                           chain=ChainPath.from_params(params))
     rows = validate_samples(cfg, params, wall, opts, root=args.root, tof_options=tof_opts,
-                            calibration=ctx.calibration)
+                            calibration=ctx.calibration,
+                            full_scale=ctx.device.full_scale_force)
     out: dict[str, Any] = {**ctx.inputs(), "samples": [r.to_dict() for r in rows],
                            "E_range": list(E_range)}
     if args.outdir:

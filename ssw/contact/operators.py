@@ -309,27 +309,10 @@ def _save(path: Path | None, arrays: dict[str, np.ndarray]) -> None:
     from ssw.h5io import atomic_path
 
     try:
-        with atomic_path(path) as tmp, open(tmp, "wb") as fh:
+        with atomic_path(path, durable=True) as tmp, open(tmp, "wb") as fh:
             np.savez(fh, **arrays)
-            fh.flush()
-            os.fsync(fh.fileno())
-        _fsync_dir(path.parent)
     except OSError:
         return
-
-
-def _fsync_dir(folder: Path) -> None:
-    """fsync a folder, so that a rename in it survives a crash (no-op where unsupported)."""
-    try:
-        fd = os.open(folder, os.O_RDONLY)
-    except OSError:
-        return
-    try:
-        os.fsync(fd)
-    except OSError:
-        pass
-    finally:
-        os.close(fd)
 
 
 def _build_model(geom: Geometry) -> _Model:

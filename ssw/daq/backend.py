@@ -92,12 +92,15 @@ def run_session(
 ) -> Path:
     """Record ``n_hits`` hits (default ``settings.hits``) of one sample into ``path``.
 
-    The file is created first, every hit is appended and flushed as it arrives, and the
-    session is marked complete at the end. If the backend or ``on_hit`` raises, the
-    file keeps every hit completed so far (``complete = False``) and the error propagates;
-    a session that fails before its first hit leaves no file. Returns ``path``.
+    Nothing is lost (:mod:`ssw.daq.recording`): the session is on disk, whole, after every
+    hit; if the backend or ``on_hit`` raises (or the process is killed), the file keeps
+    every hit completed so far (``complete = False``) and the error propagates; a session
+    that fails before its first hit writes nothing. An existing file at ``path`` is never
+    touched unless ``overwrite``: the session goes to the next free name
+    (:func:`ssw.daq.recording.free_path`); with ``overwrite`` it is replaced when the first
+    new hit is on disk, not before. Returns the file written.
     """
-    from ssw.daq.recording import RecordingWriter
+    from ssw.daq.recording import RecordingWriter, free_path
 
     n = settings.hits if n_hits is None else int(n_hits)
     if n < 1:
@@ -110,19 +113,13 @@ def run_session(
         "notes": notes,
         "backend": backend.name,
     }
-    writer = RecordingWriter(path, settings, meta, overwrite=overwrite)
-    try:
-        for i, hit in enumerate(backend.hits(settings, n)):
-            writer.append(hit)
-            if i == 0:  # a real backend knows its hardware once the task is open
-                writer.set_meta({f"hw_{k}": v for k, v in backend.describe().items()})
-            if on_hit is not None:
-                on_hit(i, hit)
-        writer.mark_complete()
-    except BaseException:
-        writer.close()
-        if writer.n == 0:  # nothing recorded (no driver, no device, no trigger): no file
-            Path(path).unlink(missing_ok=True)
-        raise
-    writer.close()
-    return Path(path)
+    target = Path(path) if overwrite else free_path(path)
+    writer = RecordingWriter(target, settings, meta, overwrite=overwrite)
+    for i, hit in enumerate(backend.hits(settings, n)):
+        if i == 0:  # a real backend knows its hardware once the task is open
+            writer.set_meta({f"hw_{k}": v for k, v in backend.describe().items()})
+        writer.append(hit)
+        if on_hit is not None:
+            on_hit(i, hit)
+    writer.mark_complete()
+    return target

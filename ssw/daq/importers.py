@@ -29,10 +29,11 @@ from ssw.daq.recording import CLIP_POLICIES, Recording
 from ssw.errors import ConfigError, RecordingError
 
 
-def _read_h5(path: str | Path, clipped: str = "raise", **_: Any) -> Recording:
+def _read_h5(path: str | Path, clipped: str = "raise", full_scale: float | None = None,
+             **_: Any) -> Recording:
     from ssw.daq.recording import read_recording
 
-    return read_recording(path, clipped=clipped)
+    return read_recording(path, clipped=clipped, full_scale=full_scale)
 
 
 @dataclass(frozen=True)
@@ -75,8 +76,11 @@ def read_any(path: str | Path, *, clipped: str = "raise", **options: Any) -> Rec
 
     Options (all formats accept them; each uses those that apply): ``units`` (unit of data
     without one, e.g. ``N``, ``V``, ``lbf``), ``sensitivity`` (V/N), ``sample_rate``
-    (S/s, when the file has no time axis), ``full_scale`` (N), and for TDMS ``group``,
-    ``split``, ``trigger``. ``clipped``: ``raise``, ``drop`` or ``keep`` clipped hits.
+    (S/s, when the file has no time axis), ``full_scale`` (N: the recording device's
+    largest unclipped force, ``ssw.device.Device.full_scale_force``; every hit is checked
+    against it, whatever the format, an ssw session's own stored range included: the
+    smaller applies), and for TDMS ``group``, ``split``, ``trigger``. ``clipped``:
+    ``raise``, ``drop`` or ``keep`` clipped hits.
     """
     if clipped not in CLIP_POLICIES:
         raise ConfigError("clipped", clipped, f"one of {CLIP_POLICIES}")

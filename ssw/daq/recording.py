@@ -12,11 +12,16 @@ Layout (``ssw_kind = "daq_recording"``)::
                           t0 (s, time of sample 0 relative to the trigger), timestamp_utc,
                           overloaded, clipped, extra_json
 
-The file is written in place (not through :func:`ssw.h5io.atomic_h5`): a session must
-survive an interruption with every completed hit, so each hit is flushed as it arrives
-and ``complete`` turns true only at the end. Readers raise
-:class:`ssw.errors.RecordingError` for files that are empty, truncated, clipped or in the
-wrong units.
+Nothing recorded is ever lost. The session file is (re)written whole after every hit, under
+a temporary name, fsync'd and renamed into place (:func:`ssw.h5io.atomic_path`, durable): at
+any moment the file on disk is a complete, readable session of the hits recorded so far
+(``complete`` turns true only at the end), so a kill, even SIGKILL or a power loss, keeps
+hits 1..k once hit k is reported (an HDF5 file killed while open for writing can be left
+unreadable, however often it was flushed; a small session rewritten per hit costs
+milliseconds). There is no file before the first hit, and an existing file is replaced
+(``overwrite``) only by the rename after the first new hit: until then the old session is
+intact. Readers raise :class:`ssw.errors.RecordingError` for files that are empty,
+truncated, clipped or in the wrong units.
 """
 
 from __future__ import annotations
@@ -46,12 +51,26 @@ def is_clipped(force: np.ndarray, full_scale: float) -> bool:
     return bool(np.any(np.abs(force) >= CLIP_FRACTION * full_scale))
 
 
+def free_path(path: str | Path) -> Path:
+    """``path`` if no file is there, else the first free ``<stem>-<k><suffix>`` (k = 2, 3,
+    ...): a new session never replaces an existing recording unless asked to."""
+    p = Path(path)
+    if not p.exists():
+        return p
+    k = 2
+    while (q := p.with_name(f"{p.stem}-{k}{p.suffix}")).exists():
+        k += 1
+    return q
+
+
 class RecordingWriter:
-    """Write a session file hit by hit (use as a context manager).
+    """Write a session file hit by hit (module docstring: the file is rewritten whole,
+    atomically and durably, after each hit; use as a context manager).
 
     Parameters
     ----------
-    path : the session's HDF5 file; must not exist unless ``overwrite``.
+    path : the session's HDF5 file. An existing file is replaced only with ``overwrite``,
+        and only when the first hit of this session is on disk.
     settings : the acquisition settings (stored as metadata).
     meta : sample id, plate, operator, synthetic flag, backend, hardware description.
     """
@@ -59,70 +78,80 @@ class RecordingWriter:
     def __init__(
         self, path: str | Path, settings: DaqSettings, meta: dict[str, Any], *, overwrite: bool
     ) -> None:
-        import h5py
-
         self.path = Path(path)
         if self.path.exists() and not overwrite:
             raise ConfigError("recording", str(self.path), "a path that does not exist yet "
                               "(pass overwrite to replace a session)")
-        self.path.parent.mkdir(parents=True, exist_ok=True)
         self.settings = settings
         self.n = 0
-        self._f = h5py.File(self.path, "w")
-        a = self._f.attrs
-        a["ssw_kind"] = KIND
-        a["ssw_version"] = __version__
-        a["created_utc"] = datetime.now(UTC).isoformat(timespec="seconds")
-        a["inputs_json"] = to_json(settings.to_dict(), sort_keys=True)
-        a["units"] = FORCE_UNITS
+        self._hits: list[tuple[np.ndarray, dict[str, Any]]] = []
+        self._attrs: dict[str, Any] = {
+            "ssw_kind": KIND, "ssw_version": __version__,
+            "created_utc": datetime.now(UTC).isoformat(timespec="seconds"),
+            "inputs_json": to_json(settings.to_dict(), sort_keys=True),
+            "units": FORCE_UNITS, "sensitivity_units": "V/N",
+            "trigger_type": ("analog edge on the force channel: the module's reference "
+                             "trigger, or the same rule in software over a continuous "
+                             "stream (hw_trigger)"),
+            "n_hits": 0, "complete": False,
+        }
         for key in ("device", "channel", "physical_channel", "sensor_model", "sensitivity",
                     "excitation_current", "coupling", "sample_rate", "max_force",
                     "trigger_level", "trigger_slope", "pretrigger_samples", "record_samples",
                     "full_scale_force"):
-            a[key] = getattr(settings, key)
-        a["sensitivity_units"] = "V/N"
-        a["trigger_type"] = ("analog edge on the force channel: the module's reference "
-                             "trigger, or the same rule in software over a continuous "
-                             "stream (hw_trigger)")
+            self._attrs[key] = getattr(settings, key)
         self.set_meta(meta)
-        a["n_hits"] = 0
-        a["complete"] = False
-        self._hits = self._f.create_group("hits")
-        self._f.flush()
 
     def set_meta(self, meta: dict[str, Any]) -> None:
-        """Store ``meta`` as root attributes (non-scalars as JSON) and flush."""
+        """Store ``meta`` as root attributes (non-scalars as JSON); on disk with the next
+        write (at once when hits are already there)."""
         for key, val in meta.items():
             ok = isinstance(val, bool | int | float | str)
-            self._f.attrs[key] = val if ok else to_json(val)
-        self._f.flush()
+            self._attrs[key] = val if ok else to_json(val)
+        if self.n:
+            self._write()
 
     def append(self, hit: Hit) -> None:
-        """Store one hit as ``hits/hit_NNNN`` and flush the file to disk."""
+        """Add one hit as ``hits/hit_NNNN`` and put the session on disk (atomically)."""
         force = np.asarray(hit.force, dtype=np.float64)
-        ds = self._hits.create_dataset(f"hit_{self.n:04d}", data=force)
-        ds.attrs["units"] = FORCE_UNITS
-        ds.attrs["trigger_index"] = int(hit.trigger_index)
-        ds.attrs["t0"] = -hit.trigger_index / self.settings.sample_rate
-        ds.attrs["timestamp_utc"] = hit.timestamp_utc
-        ds.attrs["overloaded"] = bool(hit.overloaded)
-        ds.attrs["clipped"] = bool(hit.overloaded) or is_clipped(
-            force, self.settings.full_scale_force
-        )
-        ds.attrs["extra_json"] = to_json(hit.extra, sort_keys=True)
+        attrs = {
+            "units": FORCE_UNITS, "trigger_index": int(hit.trigger_index),
+            "t0": -hit.trigger_index / self.settings.sample_rate,
+            "timestamp_utc": hit.timestamp_utc, "overloaded": bool(hit.overloaded),
+            "clipped": bool(hit.overloaded) or is_clipped(force,
+                                                           self.settings.full_scale_force),
+            "extra_json": to_json(hit.extra, sort_keys=True),
+        }
+        self._hits.append((force, attrs))
         self.n += 1
-        self._f.attrs["n_hits"] = self.n
-        self._f.flush()
+        self._attrs["n_hits"] = self.n
+        self._write()
 
     def mark_complete(self) -> None:
         """Mark the session finished (all requested hits recorded)."""
-        self._f.attrs["complete"] = True
-        self._f.attrs["finished_utc"] = datetime.now(UTC).isoformat(timespec="seconds")
-        self._f.flush()
+        self._attrs["complete"] = True
+        self._attrs["finished_utc"] = datetime.now(UTC).isoformat(timespec="seconds")
+        if self.n:
+            self._write()
+
+    def _write(self) -> None:
+        """The whole session so far to ``path``: a temporary file, fsync'd, renamed."""
+        import h5py
+
+        from ssw.h5io import atomic_path
+
+        with atomic_path(self.path, durable=True) as tmp:
+            with h5py.File(tmp, "w") as f:
+                for k, v in self._attrs.items():
+                    f.attrs[k] = v
+                g = f.create_group("hits")
+                for i, (force, attrs) in enumerate(self._hits):
+                    ds = g.create_dataset(f"hit_{i:04d}", data=force)
+                    for k, v in attrs.items():
+                        ds.attrs[k] = v
 
     def close(self) -> None:
-        if self._f.id.valid:
-            self._f.close()
+        """Nothing to release: the file on disk is always whole."""
 
     def __enter__(self) -> RecordingWriter:
         return self
@@ -203,7 +232,8 @@ def check_hits(
     return kept, dropped
 
 
-def read_recording(path: str | Path, *, clipped: str = "raise") -> Recording:
+def read_recording(path: str | Path, *, clipped: str = "raise",
+                   full_scale: float | None = None) -> Recording:
     """Read a session file written by :class:`RecordingWriter`.
 
     Parameters
@@ -211,6 +241,8 @@ def read_recording(path: str | Path, *, clipped: str = "raise") -> Recording:
     path : the HDF5 file.
     clipped : what to do with clipped hits: ``raise`` (:class:`RecordingError`), ``drop``
         (skip them, listed in ``Recording.dropped``) or ``keep``.
+    full_scale : N, the device's largest unclipped force, checked as well as the
+        session's own stored one (the smaller applies).
 
     Raises
     ------
@@ -258,8 +290,9 @@ def read_recording(path: str | Path, *, clipped: str = "raise") -> Recording:
                 timestamp_utc=str(_attr(ds.attrs.get("timestamp_utc", ""))),
                 extra=json.loads(_attr(ds.attrs.get("extra_json", "{}"))),
             ))
+    scales = [x for x in (meta.get("full_scale_force"), full_scale) if x is not None]
     kept, dropped = check_hits(
         p, hits, record_samples=meta.get("record_samples"),
-        full_scale=meta.get("full_scale_force"), clipped=clipped,
+        full_scale=min(scales) if scales else None, clipped=clipped,
     )
     return Recording(p, meta, float(rate), tuple(kept), tuple(dropped))

@@ -104,13 +104,16 @@ def inverse_range(wall: str, wall_options: dict[str, Any], params: Any) -> tuple
 def validate_samples(
     cfg: dict[str, Any], params: Any, wall: str, wall_options: dict[str, Any], *,
     root: str | Path = ".", tof_options: Any = None, calibration: Any = None,
+    full_scale: float | None = None,
 ) -> list[SampleResult]:
     """Compute the validation rows of every sample in ``cfg['validation']['samples']``.
 
     ``params`` is the (calibrated) device's :class:`ssw.chain.params.ChainParams`;
     ``wall``/``wall_options`` the last-contact law; ``root`` the folder relative recording
     paths start from; ``calibration`` the :class:`ssw.calibration.Calibration` (its
-    covariance enters the E intervals, its leave-one-out rows the E_loo column).
+    covariance enters the E intervals, its leave-one-out rows the E_loo column);
+    ``full_scale`` (N) the device's largest unclipped force, the recordings' hits are
+    checked against.
     """
     from ssw.calibration.references import from_config
     from ssw.chain import api
@@ -131,14 +134,15 @@ def validate_samples(
     tof_sim = np.asarray(api.tof(E_man, nus, params, wall, **wall_options), dtype=float)
     # measured TOFs and their standard errors: what the calibration uses
     refs = {r.id: r for r in from_config(cfg, params, wall, wall_options, root=root,
-                                         tof_options=tof_options, require_std=False)}
+                                         tof_options=tof_options, require_std=False,
+                                         full_scale=full_scale)}
     extras: list[dict[str, Any]] = []
     for smp in samples:
         extra: dict[str, Any] = {}
         if smp.get("recordings"):
             p = Path(smp["recordings"])
             p = p if p.is_absolute() else Path(root) / p
-            rec = read_any(p, clipped="drop")
+            rec = read_any(p, clipped="drop", full_scale=full_scale)
             res = recording_tof(rec, tof_options)
             t_hits = res.tof[res.accepted]
             extra = dict(n_hits=int(res.tof.size), n_accepted=res.n_accepted,

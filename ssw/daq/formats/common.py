@@ -142,13 +142,11 @@ def make_recording(path: str, data: np.ndarray | list[np.ndarray], rate: float, 
         raise RecordingError(f"{path}: empty recording: no samples")
     if not np.isfinite(rate) or rate <= 0:
         raise RecordingError(f"{path}: sample rate {rate!r}; a positive rate in S/s expected")
-    n = cols[0].size
-    bad = [i for i, c in enumerate(cols) if c.size != n]
-    if bad:
-        raise RecordingError(f"{path}: hit {bad[0]} has {cols[bad[0]].size} samples, hit 0 has "
-                             f"{n}: hits of one length expected")
+    # each hit at its own length (a TDMS file may hold 359- and 360-sample hits): the TOF
+    # is picked hit by hit
+    n = max(c.size for c in cols)
     hits = [RecordedHit(i, np.ascontiguousarray(c), n_pre) for i, c in enumerate(cols)]
-    kept, dropped = check_hits(path, hits, record_samples=n, full_scale=full_scale,
+    kept, dropped = check_hits(path, hits, record_samples=None, full_scale=full_scale,
                                clipped=clipped)
     meta = {"units": "N", "sample_rate": rate, "pretrigger_samples": n_pre,
             "record_samples": n, "imported_from": path, **meta}

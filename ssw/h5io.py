@@ -134,6 +134,14 @@ def write_rows_csv(rows: list[dict[str, Any]], path: str | os.PathLike[str],
     atomic_write_text(path, buf.getvalue())
 
 
+def write_json(path: str | os.PathLike[str], result: Mapping[str, Any], inputs: Any) -> None:
+    """A JSON result to ``path`` atomically, with its ``provenance``
+    (:func:`ssw.provenance.record` of ``inputs``)."""
+    from ssw.provenance import record
+
+    atomic_write_text(path, to_json({**result, "provenance": record(inputs)}) + "\n")
+
+
 def write_csv_text(path: str | os.PathLike[str], text: str, inputs: Any) -> None:
     """A CSV table's ``text`` to ``path`` atomically, after its provenance comment line
     (:func:`ssw.provenance.csv_comment`) for a table made from ``inputs``."""

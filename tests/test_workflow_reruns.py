@@ -175,3 +175,31 @@ def test_a_new_plate_thickness_runs_only_its_family_and_its_set(ci_study, tmp_pa
         "plate_thickness: {values: [0.4e-3]}", "plate_thickness: {values: [0.4e-3, 0.6e-3]}")))
     assert stats["contact_batch"] == 2 and stats["fit_set"] == 1, stats
     assert "fit_grid" not in stats and not CHAIN & set(stats), stats
+
+
+def test_every_result_records_its_provenance(ci_study):
+    """HDF5 attributes, JSON and a CSV's first line record the ssw version, the commit, the
+    digest of the job's study inputs (the one Snakemake compares) and the command."""
+    import json
+
+    import h5py
+
+    from ssw.config import load_config
+    from ssw.h5io import csv_provenance, provenance_of
+    from ssw.workflow import Study, contact_file
+
+    cfg = load_config(ci_study / "config" / "ci.yaml")
+    study = Study(cfg)
+    sid = study.families["pla-t400um"][0]
+    with h5py.File(ci_study / contact_file(sid)) as f:
+        prov = provenance_of(f)
+    assert prov["inputs_sha256"] == study.digest("contact", "pla-t400um")
+    assert "contact --family pla-t400um" in prov["command"] and prov["ssw_version"]
+    val = json.loads((ci_study / "results" / "validation" / "validation.json").read_text())
+    assert val["provenance"]["inputs_sha256"] == study.digest("validation")
+    assert val["provenance"]["source_sha256"]
+    csv = csv_provenance(ci_study / "results" / "validation" / "table3_modulus.csv")
+    assert csv["inputs_sha256"] == study.digest("validation") and "validate" in csv["command"]
+    fit = json.loads((ci_study / "results" / "fit" / "sets" / "set3_soil" /
+                      "k_table.json").read_text())
+    assert fit["provenance"]["inputs_sha256"] == study.digest("fit", "set3_soil")

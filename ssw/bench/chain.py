@@ -39,7 +39,7 @@ from typing import Any
 import numpy as np
 
 from ssw.bench import best_time
-from ssw.h5io import atomic_write_text, to_json
+from ssw.h5io import atomic_write_text, write_json
 from ssw.plotting import pyplot, save_png
 
 SPCS = (10, 20, 40, 80, 160, 320)
@@ -202,7 +202,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         "outputs": [str(out / f"chain_work_precision.{x}") for x in ("csv", "png", "json")],
     }
     _write(out, result)
-    atomic_write_text(out / "chain_work_precision.json", to_json(result, indent=1))
+    write_json(out / "chain_work_precision.json", result, result)
     return result
 
 

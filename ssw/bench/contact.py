@@ -36,7 +36,7 @@ import numpy as np
 
 from ssw import hertz
 from ssw.bench import best_time
-from ssw.h5io import atomic_path, atomic_write_text, to_json
+from ssw.h5io import atomic_path, atomic_write_text, write_json
 
 LEVELS = (0.4, 0.3, 0.2, 0.15, 0.1, 0.07)
 #: Expected rate of the force error in the mesh growth (see the module docstring).
@@ -265,7 +265,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         "csv": str(out / "contact_work_precision.csv"),
         "png": str(out / "contact_work_precision.png"),
     }
-    atomic_write_text(out / "contact_bench.json", to_json(result))
+    write_json(out / "contact_bench.json", result, result)
     return result
 
 

@@ -30,7 +30,7 @@ from typing import Any
 import numpy as np
 
 from ssw.bench import best_time
-from ssw.h5io import atomic_write_text, to_json
+from ssw.h5io import atomic_write_text, write_json
 
 PARTS = ("punch", "static-limit", "point", "sweep-cost")
 A0 = (0.25, 0.5, 0.75, 1.0, 1.25, 1.5)
@@ -176,7 +176,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         res["point"] = point_part()
     if "sweep-cost" in args.parts:
         res["sweep_cost"] = sweep_cost_part(args.repeat)
-    atomic_write_text(out / "dynamic_bench.json", to_json(res, indent=1))
+    write_json(out / "dynamic_bench.json", res, res)
     res["outputs"] = [str(out / "dynamic_bench.json")]
     return res
 

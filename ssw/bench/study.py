@@ -38,7 +38,7 @@ from pathlib import Path
 from typing import Any
 
 from ssw.errors import ConfigError, SswError
-from ssw.h5io import atomic_write_text, to_json
+from ssw.h5io import atomic_write_text, write_json
 
 REPO = Path(__file__).resolve().parents[2]
 #: Parts of the repository a study run reads through relative paths (materials library,
@@ -255,7 +255,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         "date_utc": datetime.now(UTC).isoformat(timespec="seconds"),
     }
     out = Path(args.output_dir)
-    atomic_write_text(out / "study.json", to_json(result, indent=2))
+    write_json(out / "study.json", result, result)
     atomic_write_text(out / "study.md", markdown(result))
     if error:
         raise SswError(f"{error}\n(per-stage times of the finished jobs: {out / 'study.md'})")

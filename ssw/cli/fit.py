@@ -336,7 +336,7 @@ def run_set(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.fit.pipeline import config_laws, table_from_files
     from ssw.fit.table import write_tables
     from ssw.fit.tof_impact import tof_impact
-    from ssw.h5io import atomic_write_text, to_json, write_rows_csv
+    from ssw.h5io import write_json, write_rows_csv
 
     cfg = load_config(args.config)
     if args.set not in cfg["sets"]:
@@ -356,7 +356,8 @@ def run_set(args: argparse.Namespace) -> dict[str, Any]:
     written: list[str] = []
 
     def dump(path: Path, res: dict[str, Any]) -> None:
-        atomic_write_text(path, to_json({**res, "ssw_version": _version()}) + "\n")
+        write_json(path, {**res, "ssw_version": _version()},
+                   {"set": args.set, "curves": list(args.curves), "fit": cfg["fit"]})
         written.append(str(path))
 
     tables, records = table_from_files(args.curves, cfg, curves=curves)

@@ -22,7 +22,7 @@ import pytest
 
 from ssw.contact import solve_curve
 from ssw.contact.contact_lcp import solve_lcp
-from ssw.contact.operators import OperatorStore, sphere_gap0
+from ssw.contact.operators import CacheWarning, OperatorStore, sphere_gap0
 from ssw.contact.parametric import Tracer, prefix_path, trace
 from ssw.contact.scene import indentation_steps
 
@@ -204,7 +204,8 @@ def test_disk_cache_round_trip(tmp_path):
     assert len(files) == 1
     files[0].write_bytes(b"not an npz")
     c = OperatorStore(tmp_path)
-    s3 = c.body(geom, "soil", 0.3)
+    with pytest.warns(CacheWarning, match="rebuilding the unreadable cached operator"):
+        s3 = c.body(geom, "soil", 0.3)
     assert c.hits["built"] == 1 and np.array_equal(s1.S, s3.S)
     c.body(geom, "soil", 0.45)
     assert len(list(tmp_path.rglob("soil-*.npz"))) == 2

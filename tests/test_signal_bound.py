@@ -130,8 +130,8 @@ def test_a_refined_tof_below_the_bound_is_an_error():
 def test_session_rejects_a_hit_faster_than_physics_and_says_why():
     good = record([1.5e-3, 2.96e-3], [60.0, 25.0])
     early = record([1.5e-3, 1.9e-3], [60.0, 25.0])
-    res = session_tof([good, early, good], RATE, 64, opts=TofOptions(min_tof=0.6e-3))
-    assert res.accepted.tolist() == [True, False, True]
+    res = session_tof([good, early, good, good], RATE, 64, opts=TofOptions(min_tof=0.6e-3))
+    assert res.accepted.tolist() == [True, False, True, True]
     assert "shortest physical round trip 0.6000 ms" in res.reasons[0]
     assert res.mean == pytest.approx(1.46e-3, abs=0.01 / RATE)
 

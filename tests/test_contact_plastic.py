@@ -1,0 +1,101 @@
+"""Elasto-plastic contact of a rigid sphere on a von Mises half-space: the elastic engine's
+curve below first yield, Johnson's first yield for two Poisson's ratios, loading and
+unloading (residual indentation, energy balance), refusal of what it does not model."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ssw.constitutive import DruckerPrager, VonMises
+from ssw.contact.mesh import MeshSettings, build_mesh
+from ssw.contact.plastic import johnson_first_yield, solve_path
+from ssw.errors import ConfigError, SolverError
+
+E, Y, R = 100e6, 1e6, 4.75e-3
+
+
+def _setting(nu: float, fine: float = 10.0, growth: float = 0.2) -> tuple[dict, float, float]:
+    Fy, dy = johnson_first_yield(E, nu, Y, R)
+    a = np.sqrt(R * dy)
+    cfg = {"soil_radius": 60 * a, "soil_depth": 60 * a, "mesh_size_contact": a / fine,
+           "mesh_growth": growth, "mesh_size_max": 10 * a, "plate_layers": 1}
+    return cfg, Fy, dy
+
+
+def _mesh(cfg):
+    return build_mesh(0.0, 0.0, MeshSettings(
+        cfg["soil_radius"], cfg["soil_depth"], cfg["mesh_size_contact"], cfg["mesh_growth"],
+        cfg["mesh_size_max"], cfg["plate_layers"]))
+
+
+def test_johnson_constants():
+    """The axis stresses of Hertz give Johnson's p0 / Y at first yield (1.61 at nu 0.3,
+    1.81 at nu 0.45 after his table) and F_y = pi^3 R^2 p0^3 / (6 E*^2)."""
+    for nu, k in ((0.3, 1.61), (0.45, 1.81)):
+        F, d = johnson_first_yield(E, nu, Y, R)
+        Es = E / (1 - nu * nu)
+        p0 = (6 * F * Es ** 2 / (np.pi ** 3 * R ** 2)) ** (1 / 3)
+        assert p0 / Y == pytest.approx(k, abs=0.01)
+        assert d == pytest.approx((3 * F / (4 * Es * np.sqrt(R))) ** (2 / 3), rel=1e-12)
+
+
+def test_below_first_yield_equals_elastic_engine():
+    """Below first yield, the plastic solver's curve is the elastic engine's (the monolithic
+    PETSc engine with its LCP, same mesh and increments) to round-off."""
+    from ssw.contact.scene import indentation_steps, solve_curve
+
+    cfg, Fy, dy = _setting(0.3)
+    cfg = {**cfg, "delta_max": 0.9 * dy, "steps": 6, "candidate_factor": 3.0}
+    elastic, state = solve_curve((E, 0.3), None, 0.0, R, cfg, engine="monolithic")
+    state["solver"].destroy()
+    deltas = indentation_steps(cfg["delta_max"], cfg["steps"])
+    plastic = solve_path(_mesh(cfg), E, 0.3, VonMises(Y), R, deltas)
+    assert plastic.plastic_volume[-1] == 0.0 and plastic.first_yield_force is None
+    np.testing.assert_allclose(plastic.force, elastic.force, rtol=1e-7)
+    np.testing.assert_allclose(plastic.contact_radius, elastic.contact_radius, rtol=1e-6)
+    assert plastic.dissipated_work == 0.0
+
+
+@pytest.mark.parametrize("nu", [0.3, 0.45])
+def test_first_yield_force_matches_johnson(nu):
+    """First yield within 3 % of Johnson's Hertz force (p0 = 1.61 Y at nu 0.3, 1.81 Y at
+    nu 0.45) and in the first plastic increment's bracket."""
+    cfg, Fy, dy = _setting(nu)
+    deltas = dy * np.linspace(0, 1.2, 13)[1:]
+    c = solve_path(_mesh(cfg), E, nu, VonMises(Y), R, deltas)
+    assert c.first_yield_force == pytest.approx(Fy, rel=0.03)
+    k = int(np.argmax(c.plastic_volume > 0))
+    assert c.force[k - 1] < c.first_yield_force <= c.force[k]
+    # the first plastic points lie on the axis near depth 0.48 a (0.53 a at nu 0.45)
+    a = np.sqrt(R * dy)
+    assert c.plastic_depth[k] == pytest.approx((0.48 if nu == 0.3 else 0.53) * a, rel=0.35)
+
+
+def test_loading_unloading_energy_and_residual_indentation():
+    """Loaded to 3 delta_y and unloaded: permanent set > 0, unloading elastic (no more
+    plastic work), and the work of the sphere = plastic work + the elastic energy locked in
+    by the residual stresses (trapezoidal work vs the backward-Euler plastic work: a
+    first-order quadrature, 1e-3 at 30 steps)."""
+    cfg, Fy, dy = _setting(0.3)
+    deltas = dy * np.linspace(0, 3, 31)[1:]
+    c = solve_path(_mesh(cfg), E, 0.3, VonMises(Y), R, deltas, unload=True)
+    load, unl = c.branch == 0, c.branch == 1
+    assert c.residual_indentation is not None and 0 < c.residual_indentation < deltas[-1]
+    assert c.force[unl][-1] == 0.0 and np.all(np.diff(c.force[unl]) <= 0)
+    # the loading curve falls below the elastic (Hertz-like) F ~ delta^1.5 after yield
+    k = np.flatnonzero(load)[-1]
+    assert c.force[k] < Fy * (deltas[-1] / dy) ** 1.5
+    assert c.dissipated_work > 0
+    balance = c.external_work - c.dissipated_work - c.stored_energy
+    assert abs(balance) < 1e-3 * c.external_work
+    assert c.stats["newton_iterations"] < 12 * c.stats["increments"]
+
+
+def test_refusals():
+    cfg, Fy, dy = _setting(0.3)
+    mesh = _mesh(cfg)
+    with pytest.raises(ConfigError, match="von-mises"):
+        solve_path(mesh, E, 0.3, DruckerPrager(10e3, 30.0), R, [dy])
+    with pytest.raises(SolverError, match="did not converge"):
+        solve_path(mesh, E, 0.3, VonMises(Y), R, dy * np.array([1.0, 30.0]), max_iter=2)

@@ -231,10 +231,12 @@ class _Model:
         return pe @ self.N1.T
 
     def residual_matrix(self, u: np.ndarray, stress: np.ndarray, tangent: np.ndarray,
-                        plastic: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Residual (ndof,) in N (pressure rows scaled by ``ps``) and the Newton matrix's
-        entries in CSR order (divided by ``scale``); only the elements with a plastic point
-        have a tangent other than the elastic one."""
+                        plastic: np.ndarray) -> tuple[np.ndarray, np.ndarray, float]:
+        """Residual (ndof,) in N (pressure rows scaled by ``ps``), the Newton matrix's
+        entries in CSR order (divided by ``scale``; only the elements with a ``plastic``
+        point take the model's tangent, the others the elastic one) and the load scale: the
+        largest element force before assembly (N), the size of what cancels in the
+        residual."""
         ne, nq = self.w.shape
         s = (stress @ P_DEV).reshape(ne, nq, 4)
         ue, pe = u[self.edof_u], u[self.edof[:, 12:]]
@@ -243,6 +245,7 @@ class _Model:
         fp = np.matmul(self.Bp, ue[..., None])[..., 0] - np.matmul(self.Cp, pe[..., None])[..., 0]
         res = np.zeros(self.ndof)
         np.add.at(res, self.edof, np.concatenate([fu, fp], axis=1))
+        load = max(float(np.max(np.abs(fu))), 1e-300)
         pe_mask = plastic.reshape(ne, nq).any(axis=1)
         self.ke[:, :12, :12] = self.kuu_el
         el = np.flatnonzero(pe_mask)
@@ -250,7 +253,7 @@ class _Model:
             Dd = P_DEV @ tangent.reshape(ne, nq, 4, 4)[el] @ P_DEV
             self.ke[el, :12, :12] = self._kuu(el, Dd)
         data = np.bincount(self.slot, weights=self.ke.ravel(), minlength=self.nnz)
-        return res, data / self.scale
+        return res, data / self.scale, load
 
     def matvec(self, data: np.ndarray, x: np.ndarray) -> np.ndarray:
         """``A x`` of the entries ``data`` (CSR order)."""
@@ -295,16 +298,19 @@ def solve_path(
     factorizations = 0
     for k, d in enumerate(path):
         target = fe.g0 - d
+        restart, prev = True, np.inf
         for it in range(max_iter):
             upd = model.update(E, nu, fe.strain(u), state)
-            res, data = fe.residual_matrix(u, upd.stress, upd.tangent, upd.plastic)
+            # an iteration that starts an increment or follows a change of the active set
+            # takes the elastic tangent (at the committed state the return cannot tell
+            # loading from unloading: a perfectly plastic tangent there can be singular)
+            res, data, load = fe.residual_matrix(
+                u, upd.stress, upd.tangent, upd.plastic & ~restart)
             lam = -res[fe.cand_dof]
             known = np.zeros(fe.ndof, bool)
             known[fe.fixed] = True
             known[fe.cand_dof[active]] = True
             free = np.flatnonzero(~known)
-            load = max(float(np.max(np.abs(res[: 2 * fe.n][known[: 2 * fe.n]]), initial=0.0)),
-                       E * fe.h_min * abs(d) * 1e-6, 1e-300)
             jump = np.zeros(fe.ndof)
             jump[fe.cand_dof[active]] = target[active] - u[fe.cand_dof[active]]
             err = float(np.max(np.abs(res[free]), initial=0.0))
@@ -314,8 +320,14 @@ def solve_path(
                 new_active = np.where(active, lam >= 0.0, gap < -tol_g)
                 if np.array_equal(new_active, active):
                     break
-                active = new_active
+                active, restart, prev = new_active, True, np.inf
                 continue
+            if err > prev and not restart:
+                # Newton stalls (a nearly singular perfectly plastic tangent): one step with
+                # the elastic tangent, a contraction for the return mapping, then Newton again
+                res, data, load = fe.residual_matrix(u, upd.stress, upd.tangent,
+                                                     np.zeros_like(upd.plastic))
+            prev = err
             lu = splu(fe.restricted(data, free), permc_spec="COLAMD")
             factorizations += 1
             rhs = -res / fe.scale
@@ -326,6 +338,7 @@ def solve_path(
                 raise SolverError(f"plastic contact: singular Newton matrix at delta = {d:.4g} m")
             u[free] += du
             u += jump
+            restart = False
         else:
             raise SolverError(
                 f"plastic contact: increment {k} (delta = {d:.6g} m) did not converge in "

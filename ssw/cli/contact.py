@@ -53,6 +53,17 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--engine", choices=["fem", "layered"], default="fem",
                    help="fem: the axisymmetric FEM (default); layered: the semi-analytic "
                    "oracle, an infinite plate on a half-space (ssw.contact.layered)")
+    p.add_argument("--soil-model",
+                   help="constitutive model of the soil beyond elasticity (von-mises: the "
+                   "elasto-plastic contact solver, ssw.contact.plastic; half-space only)")
+    p.add_argument("--soil-yield-stress", type=float,
+                   help="von Mises yield stress Y of the soil, Pa (with --soil-model)")
+    p.add_argument("--soil-hardening", type=float, default=0.0,
+                   help="linear hardening modulus of the soil, Pa (default 0: perfectly "
+                   "plastic)")
+    p.add_argument("--unload", action="store_true",
+                   help="with --soil-model: lift the sphere back after loading (residual "
+                   "indentation, dissipated work)")
     p.add_argument("--output", help="curve file to write (HDF5), one scene")
     p.add_argument("--output-dir",
                    help="folder of the curve files of the --scene batch (ID.h5 each)")
@@ -140,6 +151,8 @@ def run(args: argparse.Namespace) -> dict[str, Any] | None:
     if args.delta_max is not None or not args.scene:
         contact["delta_mode"] = "fixed"  # --delta-max, and scenes given by flags, reach it
     mats = library(cfg)
+    if args.soil_model is not None or args.unload or args.soil_yield_stress is not None:
+        return _run_plastic(args, cfg, contact)
     if args.output_dir is not None:
         return _run_batch(args, cfg, contact, mats)
     scene, mats = _scene(args, cfg, mats)
@@ -160,6 +173,58 @@ def run(args: argparse.Namespace) -> dict[str, Any] | None:
         "contact_radius": curve.contact_radius.tolist(), "output": args.output,
         "stats": curve.stats,
     }
+
+
+#: Increments of a plastic curve when neither --steps nor the config sets them (every
+#: increment is a Newton solve; the elastic path's 1000 are samples of an exact path).
+PLASTIC_STEPS = 100
+
+
+def _run_plastic(args: argparse.Namespace, cfg: dict[str, Any],
+                 contact: dict[str, Any]) -> dict[str, Any]:
+    """The elasto-plastic curve of a sphere on a plastic half-space (loading, and with
+    --unload unloading): the curve, first yield, residual indentation, dissipated work."""
+    from ssw.constitutive import model_from
+    from ssw.contact.plastic import solve_plastic_scene, summary, write_plastic_curve
+
+    if args.soil_model is None:
+        raise ConfigError("--soil-model", None, "a model (von-mises) with --unload or "
+                          "--soil-yield-stress")
+    if args.scene or args.output_dir is not None:
+        raise ConfigError("--scene", args.scene, "soil flags with --soil-model (one scene)")
+    for name in ("soil_E", "soil_nu"):
+        if getattr(args, name) is None:
+            raise ConfigError(f"--{name.replace('_', '-')}", None, "a value")
+    if args.plate_thickness not in (None, 0.0):
+        raise ConfigError("--plate-thickness", args.plate_thickness,
+                          "0 with --soil-model (the plastic solver models a half-space)")
+    spec: dict[str, Any] = {"model": args.soil_model}
+    if args.soil_model == "von-mises":
+        if args.soil_yield_stress is None:
+            raise ConfigError("--soil-yield-stress", None, "a yield stress > 0 Pa")
+        spec.update(yield_stress=args.soil_yield_stress, hardening=args.soil_hardening)
+    model = model_from(spec)
+    if model is None:
+        raise ConfigError("--soil-model", args.soil_model, "a plastic model (von-mises)")
+    if args.steps is None and "steps" not in cfg.get("contact", {}):
+        contact["steps"] = PLASTIC_STEPS
+    radius = float(cfg["indenter"]["radius"])
+    curve = solve_plastic_scene((args.soil_E, args.soil_nu), model, radius, contact,
+                                unload=bool(args.unload))
+    from ssw.contact.scene import settings_of
+
+    inputs = {"soil_E": args.soil_E, "soil_nu": args.soil_nu, "soil_model": model.params(),
+              "soil_model_key": model.key, "indenter_radius": radius, "unload": args.unload,
+              **settings_of(contact)}
+    if args.output:
+        write_plastic_curve(args.output, curve, inputs)
+    return {**inputs, **summary(curve), "delta": curve.delta.tolist(),
+            "force": curve.force.tolist(), "branch": curve.branch.tolist(),
+            "contact_radius": curve.contact_radius.tolist(),
+            "dissipated": curve.dissipated.tolist(),
+            "plastic_volume": curve.plastic_volume.tolist(),
+            "iterations": curve.iterations.tolist(), "output": args.output,
+            "stats": curve.stats, "plastic": True}
 
 
 def scene_reach(scenes: list[Any], cfg: dict[str, Any], contact: dict[str, Any],
@@ -269,6 +334,18 @@ def _human(res: dict[str, Any]) -> str:
         from ssw.contact.layered import describe
 
         return describe(res)
+    if res.get("plastic"):
+        def g(x: Any, unit: str) -> str:
+            return "none" if x is None else f"{x:.6g} {unit}"
+
+        return (f"{res['soil_model_key']} on E = {res['soil_E']:.6g} Pa, nu = "
+                f"{res['soil_nu']:.4g}: F_max = {res['force_max']:.6g} N, first yield at "
+                f"{g(res['first_yield_force'], 'N')}, residual indentation "
+                f"{g(res['residual_indentation'], 'm')}, dissipated work "
+                f"{res['dissipated_work']:.6g} J; {res['stats']['increments']} increments, "
+                f"{res['stats']['newton_iterations']} Newton iterations, wall "
+                f"{res['stats']['wall_total']:.3f} s"
+                + (f"\nwrote {res['output']}" if res["output"] else ""))
     if "curves" in res:  # a batch
         rows = [f"{c['scene_id']}: F = {c['force_max']:.6g} N, solve {c['wall_total']:.3f} s"
                 for c in res["curves"]]

@@ -74,6 +74,14 @@ from ssw.errors import ConfigError, SolverError
 
 #: Newton iterations allowed per increment (active-set changes included).
 MAX_ITER = 40
+#: Iterations of an increment in which the active set follows every iterate; later it
+#: changes only at equilibrium (no cycling).
+SET_UPDATES = 8
+#: A Newton step moving a node by more than this many indentation steps is taken as a
+#: leap along a nearly singular tangent and replaced by an elastic-tangent step.
+STEP_BOUND = 10.0
+#: Halvings of a Newton step that does not lower the residual.
+LINE_SEARCH = 4
 #: Residual tolerance relative to the load scale (the largest nodal internal force).
 RTOL = 1e-9
 
@@ -246,14 +254,31 @@ class _Model:
         res = np.zeros(self.ndof)
         np.add.at(res, self.edof, np.concatenate([fu, fp], axis=1))
         load = max(float(np.max(np.abs(fu))), 1e-300)
+        if tangent is None and not plastic.any() and getattr(self, "_elastic_data", None) \
+                is not None:
+            return res, self._elastic_data, load
         pe_mask = plastic.reshape(ne, nq).any(axis=1)
         self.ke[:, :12, :12] = self.kuu_el
         el = np.flatnonzero(pe_mask)
         if el.size:
             Dd = P_DEV @ tangent.reshape(ne, nq, 4, 4)[el] @ P_DEV
             self.ke[el, :12, :12] = self._kuu(el, Dd)
-        data = np.bincount(self.slot, weights=self.ke.ravel(), minlength=self.nnz)
-        return res, data / self.scale, load
+        data = np.bincount(self.slot, weights=self.ke.ravel(), minlength=self.nnz) / self.scale
+        if not el.size:
+            self._elastic_data = data
+        return res, data, load
+
+    def residual_only(self, u: np.ndarray, stress: np.ndarray) -> np.ndarray:
+        """The residual of :meth:`residual_matrix` alone (ndof,), N."""
+        ne, nq = self.w.shape
+        s = (stress @ P_DEV).reshape(ne, nq, 4)
+        ue, pe = u[self.edof_u], u[self.edof[:, 12:]]
+        fu = np.matmul(np.swapaxes(self.B, 2, 3), (s * self.w[:, :, None])[..., None]
+                       ).sum(axis=1)[..., 0] + np.matmul(pe[:, None, :], self.Bp)[:, 0]
+        fp = np.matmul(self.Bp, ue[..., None])[..., 0] - np.matmul(self.Cp, pe[..., None])[..., 0]
+        res = np.zeros(self.ndof)
+        np.add.at(res, self.edof, np.concatenate([fu, fp], axis=1))
+        return res
 
     def matvec(self, data: np.ndarray, x: np.ndarray) -> np.ndarray:
         """``A x`` of the entries ``data`` (CSR order)."""
@@ -281,6 +306,7 @@ def solve_path(
     fe = _Model(mesh, E, nu, radius)
     ne, nq = fe.w.shape
     state = initial_state(ne * nq)
+    last = (None, np.zeros(ne * nq, bool))  # the last converged tangent (elastic at first)
     u = np.zeros(fe.ndof)
     active = np.zeros(fe.cand.size, bool)
     path = list(deltas)
@@ -296,17 +322,26 @@ def solve_path(
     last_elastic = None
     residual = None
     factorizations = 0
+    load_ref = 0.0  # the largest load scale of the path: a floor once the load is gone
     for k, d in enumerate(path):
         target = fe.g0 - d
-        restart, prev = True, np.inf
+        tol_g = 1e-9 * max(abs(d), fe.h_min * 1e-6)
+        step = abs(d - (path[k - 1] if k else 0.0))
+        prev = np.inf
         for it in range(max_iter):
             upd = model.update(E, nu, fe.strain(u), state)
-            # an iteration that starts an increment or follows a change of the active set
-            # takes the elastic tangent (at the committed state the return cannot tell
-            # loading from unloading: a perfectly plastic tangent there can be singular)
-            res, data, load = fe.residual_matrix(
-                u, upd.stress, upd.tangent, upd.plastic & ~restart)
+            # the first iteration of an increment takes the last converged tangent (at the
+            # committed state the return cannot tell loading from unloading)
+            tangent, plastic = (last if it == 0 else (upd.tangent, upd.plastic))
+            res, data, load = fe.residual_matrix(u, upd.stress, tangent, plastic)
             lam = -res[fe.cand_dof]
+            load_ref = max(load_ref, load)
+            tol = rtol * max(load, 1e-6 * load_ref)
+            gap = target - u[fe.cand_dof]
+            new_active = np.where(active, lam > tol, gap < -tol_g)
+            if 0 < it < SET_UPDATES and not np.array_equal(new_active, active):
+                # semismooth Newton: the set follows the iterate (Hintermueller et al. 2003)
+                active = new_active
             known = np.zeros(fe.ndof, bool)
             known[fe.fixed] = True
             known[fe.cand_dof[active]] = True
@@ -314,35 +349,55 @@ def solve_path(
             jump = np.zeros(fe.ndof)
             jump[fe.cand_dof[active]] = target[active] - u[fe.cand_dof[active]]
             err = float(np.max(np.abs(res[free]), initial=0.0))
-            if it > 0 and err <= rtol * load and not np.any(jump):
-                gap = target - u[fe.cand_dof]
-                tol_g = 1e-9 * max(abs(d), fe.h_min * 1e-6)
-                new_active = np.where(active, lam >= 0.0, gap < -tol_g)
+            if it > 0 and err <= tol and not np.any(jump):
                 if np.array_equal(new_active, active):
                     break
-                active, restart, prev = new_active, True, np.inf
+                active, prev = new_active, np.inf
                 continue
-            if err > prev and not restart:
-                # Newton stalls (a nearly singular perfectly plastic tangent): one step with
-                # the elastic tangent, a contraction for the return mapping, then Newton again
-                res, data, load = fe.residual_matrix(u, upd.stress, upd.tangent,
-                                                     np.zeros_like(upd.plastic))
+            elastic = err > prev
             prev = err
-            lu = splu(fe.restricted(data, free), permc_spec="COLAMD")
-            factorizations += 1
-            rhs = -res / fe.scale
-            if np.any(jump):
-                rhs -= fe.matvec(data, jump)
-            du = lu.solve(rhs[free], trans="T")
+            for _ in range(2):
+                if elastic:
+                    # Newton stalls or leaps (a nearly singular perfectly plastic tangent):
+                    # a step with the elastic tangent, a contraction for the return mapping
+                    res, data, load = fe.residual_matrix(u, upd.stress, upd.tangent,
+                                                         np.zeros_like(upd.plastic))
+                lu = splu(fe.restricted(data, free), permc_spec="COLAMD")
+                factorizations += 1
+                rhs = -res / fe.scale
+                if np.any(jump):
+                    rhs -= fe.matvec(data, jump)
+                du = lu.solve(rhs[free], trans="T")
+                if elastic or (np.all(np.isfinite(du))
+                               and np.max(np.abs(du), initial=0.0) <= STEP_BOUND * step):
+                    break
+                elastic = True
             if not np.all(np.isfinite(du)):
                 raise SolverError(f"plastic contact: singular Newton matrix at delta = {d:.4g} m")
+            if not np.any(jump) and not elastic:
+                # backtracking on the residual: a step that does not lower it is halved, and
+                # after LINE_SEARCH halvings replaced by an elastic-tangent step
+                for _ in range(LINE_SEARCH):
+                    trial_u = u.copy()
+                    trial_u[free] += du
+                    t_upd = model.update(E, nu, fe.strain(trial_u), state)
+                    r_t = fe.residual_only(trial_u, t_upd.stress)
+                    if np.max(np.abs(r_t[free]), initial=0.0) < err:
+                        break
+                    du = 0.5 * du
+                else:
+                    _, data_el, _ = fe.residual_matrix(u, upd.stress, None,
+                                                       np.zeros_like(upd.plastic))
+                    lu = splu(fe.restricted(data_el, free), permc_spec="COLAMD")
+                    factorizations += 1
+                    du = lu.solve(-res[free] / fe.scale, trans="T")
             u[free] += du
             u += jump
-            restart = False
         else:
             raise SolverError(
                 f"plastic contact: increment {k} (delta = {d:.6g} m) did not converge in "
                 f"{max_iter} Newton iterations (residual {err:.3g} N, load scale {load:.3g} N)")
+        last = (upd.tangent, upd.plastic)
         dep = upd.state[:, :4] - state[:, :4]
         work += float(np.sum(np.einsum("gi,gi->g", upd.stress, dep) * fe.w.ravel()))
         state = upd.state
@@ -417,3 +472,61 @@ def solve_plastic_scene(
     mesh = build_mesh(0.0, 0.0, mesh_settings(cfg))
     deltas = indentation_steps(float(cfg["delta_max"]), int(cfg["steps"]))
     return solve_path(mesh, float(soil[0]), float(soil[1]), model, radius, deltas, unload)
+
+
+#: ``ssw_kind`` of a plastic curve file.
+KIND = "plastic_contact_curve"
+#: Per-increment datasets of a plastic curve file: name -> (attribute, units, description).
+DATASETS = {
+    "delta": ("delta", "m", "indentation of the rigid sphere (loading, then unloading)"),
+    "force": ("force", "N", "reaction force on the sphere"),
+    "branch": ("branch", "1", "0 loading, 1 unloading"),
+    "contact_radius": ("contact_radius", "m", "contact radius"),
+    "dissipated": ("dissipated", "J", "cumulative plastic work"),
+    "plastic_volume": ("plastic_volume", "m^3", "volume of the points that have yielded"),
+    "plastic_depth": ("plastic_depth", "m", "depth of the plastic zone"),
+    "plastic_radius": ("plastic_radius", "m", "radius of the plastic zone"),
+    "iterations": ("iterations", "1", "Newton iterations of the increment"),
+    "yield_ratio": ("yield_ratio", "1", "largest q / Y"),
+}
+
+
+def summary(curve: PlasticCurve) -> dict[str, Any]:
+    """The scalars of a path (SI): first yield, permanent set, works."""
+    return {"first_yield_force": curve.first_yield_force,
+            "first_yield_delta": curve.first_yield_delta,
+            "residual_indentation": curve.residual_indentation,
+            "dissipated_work": curve.dissipated_work, "external_work": curve.external_work,
+            "stored_energy": curve.stored_energy,
+            "force_max": float(np.max(curve.force)) if curve.force.size else 0.0}
+
+
+def write_plastic_curve(path: Any, curve: PlasticCurve, inputs: dict[str, Any]) -> None:
+    """Write ``curve`` (both branches) and its inputs to HDF5 ``path`` atomically."""
+    from ssw.h5io import atomic_h5, write_dataset
+
+    with atomic_h5(path, kind=KIND, inputs=inputs) as f:
+        for name, (attr, units, text) in DATASETS.items():
+            write_dataset(f, name, getattr(curve, attr), units, text)
+        for k, v in summary(curve).items():
+            f.attrs[k] = np.nan if v is None else v
+        st = f.create_group("stats")
+        for k, v in curve.stats.items():
+            st.attrs[k] = v
+
+
+def read_plastic_curve(path: Any) -> dict[str, Any]:
+    """The datasets and scalars of a plastic curve file (None for an unknown scalar)."""
+    import h5py
+
+    from ssw.h5io import check_kind, read_inputs
+
+    with h5py.File(path, "r") as f:
+        check_kind(f, KIND)
+        out = {name: f[name][()] for name in DATASETS}
+        for k in ("first_yield_force", "first_yield_delta", "residual_indentation",
+                  "dissipated_work", "external_work", "stored_energy", "force_max"):
+            v = float(f.attrs[k])
+            out[k] = None if np.isnan(v) else v
+        out["inputs"] = read_inputs(f)
+    return out

@@ -99,3 +99,33 @@ def test_refusals():
         solve_path(mesh, E, 0.3, DruckerPrager(10e3, 30.0), R, [dy])
     with pytest.raises(SolverError, match="did not converge"):
         solve_path(mesh, E, 0.3, VonMises(Y), R, dy * np.array([1.0, 30.0]), max_iter=2)
+
+
+def test_cli_plastic_curve(tmp_path, capsys):
+    """``ssw contact --soil-model von-mises --soil-yield-stress Y --unload --json``: the
+    summary beside the curve, the file with both branches, first yield near Johnson's."""
+    import json
+    from pathlib import Path
+
+    from ssw.cli import main
+    from ssw.contact.plastic import read_plastic_curve
+
+    ci = str(Path(__file__).resolve().parent.parent / "config" / "ci.yaml")
+    out = tmp_path / "p.h5"
+    rc = main(["contact", "--soil-E", "50e6", "--soil-nu", "0.3", "--plate-thickness", "0",
+               "--soil-model", "von-mises", "--soil-yield-stress", "0.5e6", "--unload",
+               "--delta-max", "8e-6", "--steps", "8", "--config", ci, "--output", str(out),
+               "--json"])
+    assert rc == 0
+    res = json.loads(capsys.readouterr().out)
+    f = read_plastic_curve(out)
+    for key in ("first_yield_force", "residual_indentation", "dissipated_work"):
+        assert res[key] == pytest.approx(f[key], rel=1e-12) and res[key] > 0
+    np.testing.assert_allclose(f["force"], res["force"])
+    assert set(f["branch"]) == {0, 1} and f["force"][-1] == 0.0
+    Fy, _ = johnson_first_yield(50e6, 0.3, 0.5e6, res["indenter_radius"])
+    assert res["first_yield_force"] == pytest.approx(Fy, rel=0.03)
+    assert res["soil_model_key"] == "vm-Y0.5MPa"
+    rc = main(["contact", "--soil-E", "50e6", "--soil-nu", "0.3", "--plate-thickness", "0",
+               "--soil-model", "von-mises", "--config", ci])
+    assert rc == 2 and "--soil-yield-stress" in capsys.readouterr().err

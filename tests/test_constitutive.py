@@ -226,3 +226,28 @@ def test_registry():
         model_of_strength("drucker-prager", st, "materials.pcf08")
     el = LinearElastic().update(E, NU, np.ones((3, 4)), initial_state(3))
     assert not el.plastic.any()
+
+
+def test_library_strengths():
+    """Every foam grade has a sourced compressive strength rising with density (the
+    Gibson-Ashby scaling of a cellular solid's plateau stress, roughly rho^1.5-2); the
+    compacted soils have Mohr-Coulomb strengths inside the typical ranges, and each builds
+    its model from the library (not fitted)."""
+    from ssw.materials import material_set
+
+    lib = material_set("realistic")
+    foams = sorted((m.density, m.strength.compressive, k) for k, m in lib.items()
+                   if k.startswith("pcf"))
+    assert len(foams) == 8 and all(s is not None for _, s, _ in foams)
+    rho, sig = np.array([f[0] for f in foams]), np.array([f[1] for f in foams])
+    assert np.all(np.diff(sig) > 0)
+    slope = np.polyfit(np.log(rho), np.log(sig), 1)[0]
+    assert 1.3 < slope < 2.2
+    for _, _, k in foams:
+        assert "F1839" in lib[k].strength.source
+        assert model_of_strength("crushable-foam", lib[k].strength).strength \
+            == lib[k].strength.compressive
+    clay, sand = lib["compacted_clay"].strength, lib["compacted_sand"].strength
+    assert 10e3 <= clay.cohesion <= 100e3 and 20 <= clay.friction_angle <= 30
+    assert sand.cohesion <= 10e3 and 35 <= sand.friction_angle <= 42
+    assert model_of_strength("drucker-prager", clay).key == "dp-c50kPa-phi25-psi0"

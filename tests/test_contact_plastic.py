@@ -45,7 +45,7 @@ def test_below_first_yield_equals_elastic_engine():
     PETSc engine with its LCP, same mesh and increments) to round-off."""
     from ssw.contact.scene import indentation_steps, solve_curve
 
-    cfg, Fy, dy = _setting(0.3)
+    cfg, _Fy, dy = _setting(0.3)
     cfg = {**cfg, "delta_max": 0.9 * dy, "steps": 6, "candidate_factor": 3.0}
     elastic, state = solve_curve((E, 0.3), None, 0.0, R, cfg, engine="monolithic")
     state["solver"].destroy()
@@ -93,7 +93,7 @@ def test_loading_unloading_energy_and_residual_indentation():
 
 
 def test_refusals():
-    cfg, Fy, dy = _setting(0.3)
+    cfg, _Fy, dy = _setting(0.3)
     mesh = _mesh(cfg)
     with pytest.raises(ConfigError, match="von-mises"):
         solve_path(mesh, E, 0.3, DruckerPrager(10e3, 30.0), R, [dy])

@@ -156,82 +156,37 @@ def test_single_peak_recording_is_an_error(tmp_path):
         recording_tof(read_recording(path))
 
 
-def test_killed_session_keeps_every_flushed_hit(tmp_path):
-    """SIGKILL (no cleanup, no close) during hit 4: the three flushed hits survive."""
+def _kill_session_after(path, k: int, n_hits: int, pause_at: int | None) -> None:
+    """Run a session of ``n_hits`` in a child process (a backend that pauses 60 s before hit
+    ``pause_at``, or never), SIGKILL it (no cleanup, no close) once hit ``k`` is reported."""
     import signal
     import subprocess
     import sys
     import textwrap
 
-    path = tmp_path / "killed.h5"
     child = textwrap.dedent(f"""
-        import sys, time
+        import time
         import numpy as np
         from ssw.daq.backend import Hit, run_session
         from ssw.daq.settings import DaqSettings
 
-        class Slow:
-            name = "slow"
-            def describe(self):
-                return {{}}
-            def hits(self, settings, n):
-                for i in range(n):
-                    if i == 3:
-                        time.sleep(60)
-                    k = np.arange(256.0)
-                    yield Hit(force=50 / np.cosh((k - 60) / 3) ** 2
-                              + 20 / np.cosh((k - 140) / 3) ** 2, trigger_index=32)
-
-        def told(i, hit):
-            print(i, flush=True)
-
-        run_session(Slow(), DaqSettings(record_samples=256, pretrigger_samples=32), {str(path)!r},
-                    sample_id="k", n_hits=5, on_hit=told)
-    """)
-    proc = subprocess.Popen([sys.executable, "-c", child], stdout=subprocess.PIPE, text=True)
-    try:
-        for _ in range(3):
-            proc.stdout.readline()
-        proc.send_signal(signal.SIGKILL)
-        proc.wait(timeout=30)
-    finally:
-        if proc.poll() is None:
-            proc.kill()
-    rec = read_recording(path)
-    assert len(rec.hits) == 3 and rec.meta["complete"] is False
-    assert recording_tof(rec).n_accepted == 3
-
-
-@pytest.mark.parametrize("k", [1, 2, 3, 5, 8])
-def test_sigkill_while_hits_keep_coming_keeps_hits_1_to_k(tmp_path, k):
-    """SIGKILL right after hit k is reported, while the next hits are being written (no
-    pause): the file is readable and holds at least hits 1..k, every one whole."""
-    import signal
-    import subprocess
-    import sys
-    import textwrap
-
-    path = tmp_path / "fast.h5"
-    child = textwrap.dedent(f"""
-        import numpy as np
-        from ssw.daq.backend import Hit, run_session
-        from ssw.daq.settings import DaqSettings
-
-        class Fast:
-            name = "fast"
+        class Source:
+            name = "source"
             def describe(self):
                 return {{}}
             def hits(self, settings, n):
                 k = np.arange(256.0)
                 for i in range(n):
+                    if i == {pause_at!r}:
+                        time.sleep(60)
                     yield Hit(force=50 / np.cosh((k - 60 - 0.1 * i) / 3) ** 2
                               + 20 / np.cosh((k - 140) / 3) ** 2, trigger_index=32)
 
         def told(i, hit):
             print(i, flush=True)
 
-        run_session(Fast(), DaqSettings(record_samples=256, pretrigger_samples=32), {str(path)!r},
-                    sample_id="k", n_hits=400, on_hit=told)
+        run_session(Source(), DaqSettings(record_samples=256, pretrigger_samples=32),
+                    {str(path)!r}, sample_id="k", n_hits={n_hits}, on_hit=told)
     """)
     proc = subprocess.Popen([sys.executable, "-c", child], stdout=subprocess.PIPE, text=True)
     try:
@@ -242,6 +197,23 @@ def test_sigkill_while_hits_keep_coming_keeps_hits_1_to_k(tmp_path, k):
     finally:
         if proc.poll() is None:
             proc.kill()
+
+
+def test_killed_session_keeps_every_flushed_hit(tmp_path):
+    """SIGKILL (no cleanup, no close) during hit 4: the three flushed hits survive."""
+    path = tmp_path / "killed.h5"
+    _kill_session_after(path, 3, n_hits=5, pause_at=3)
+    rec = read_recording(path)
+    assert len(rec.hits) == 3 and rec.meta["complete"] is False
+    assert recording_tof(rec).n_accepted == 3
+
+
+@pytest.mark.parametrize("k", [1, 2, 3, 5, 8])
+def test_sigkill_while_hits_keep_coming_keeps_hits_1_to_k(tmp_path, k):
+    """SIGKILL right after hit k is reported, while the next hits are being written (no
+    pause): the file is readable and holds at least hits 1..k, every one whole."""
+    path = tmp_path / "fast.h5"
+    _kill_session_after(path, k, n_hits=400, pause_at=None)
     rec = read_recording(path)
     assert len(rec.hits) >= k and rec.meta["complete"] is False
     assert all(h.force.size == 256 for h in rec.hits)

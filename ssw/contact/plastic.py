@@ -127,7 +127,8 @@ class PlasticCurve:
 class _Model:
     """The discrete u-p problem of one mesh and material: constant blocks, dof maps."""
 
-    def __init__(self, mesh: Mesh, E: float, nu: float, radius: float) -> None:
+    def __init__(self, mesh: Mesh, E: float, nu: float, radius: float,
+                 punch: str | None = None) -> None:
         if np.any(mesh.body != 0):
             raise ConfigError("plate_thickness", mesh.top,
                               "0 (the plastic contact solver models a half-space only)")
@@ -192,10 +193,16 @@ class _Model:
         weight = top_surface_weights(nodes, tri, np.arange(ne), mesh.top, tol)
         top = np.flatnonzero(weight > 0)
         top = top[np.argsort(nodes[top, 0])]
-        self.cand = top[nodes[top, 0] < 0.5 * radius]
+        if punch is None:
+            self.cand = top[nodes[top, 0] < 0.5 * radius]
+        else:  # a rigid flat punch of radius ``radius``: the nodes under its face
+            self.cand = top[nodes[top, 0] <= radius + tol]
+            if punch == "rough":  # no slip under the face
+                self.fixed = np.union1d(self.fixed, 2 * self.cand)
         self.cand_r = nodes[self.cand, 0]
         self.cand_dof = 2 * self.cand + 1
-        self.g0 = sphere_gap0(self.cand_r, radius)
+        self.g0 = sphere_gap0(self.cand_r, radius) if punch is None else np.zeros(
+            self.cand.size)
         self.axis_dof = int(2 * top[0] + 1)
         self.h_min = float(np.min(h))
         D_el = np.broadcast_to(2.0 * G * P_DEV, (ne, nq, 4, 4))
@@ -290,12 +297,17 @@ class _Model:
 def solve_path(
     mesh: Mesh, E: float, nu: float, model: Any, radius: float, deltas: np.ndarray,
     unload: bool = False, *, rtol: float = RTOL, max_iter: int = MAX_ITER,
+    punch: str | None = None,
 ) -> PlasticCurve:
     """Load a rigid sphere of ``radius`` (m) through the indentations ``deltas`` (m,
     increasing) into the soil ``(E Pa, nu)`` of constitutive ``model`` on ``mesh``; with
     ``unload``, lift it back in the same steps until it leaves the surface (module
     docstring). Raises SolverError on an increment that does not converge, and when the
-    contact reaches the last candidate node."""
+    contact reaches the last candidate node.
+
+    ``punch`` ``smooth`` or ``rough``: a rigid flat punch of radius ``radius`` instead of
+    the sphere (frictionless, or without slip under its face; the limit-load check of
+    Eason & Shield 1960)."""
     if not isinstance(model, VonMises):
         raise ConfigError("soil_model", getattr(model, "name", model),
                           "von-mises (plastic flow without volume change; module docstring)")
@@ -303,7 +315,9 @@ def solve_path(
     deltas = np.asarray(deltas, float)
     if deltas.ndim != 1 or deltas.size < 1 or np.any(np.diff(deltas) <= 0) or deltas[0] <= 0:
         raise ConfigError("deltas", deltas, "increasing indentations > 0 m")
-    fe = _Model(mesh, E, nu, radius)
+    if punch not in (None, "smooth", "rough"):
+        raise ConfigError("punch", punch, "smooth | rough (or none: the sphere)")
+    fe = _Model(mesh, E, nu, radius, punch)
     ne, nq = fe.w.shape
     state = initial_state(ne * nq)
     last = (None, np.zeros(ne * nq, bool))  # the last converged tangent (elastic at first)
@@ -412,7 +426,7 @@ def solve_path(
             else:
                 last_elastic = (force, d, ratio) if force > 0 else last_elastic
         gap = np.clip(target - u[fe.cand_dof], 0.0, None)
-        if active.size and active[-1]:
+        if punch is None and active.size and active[-1]:
             raise SolverError(f"the contact zone reached the last candidate node (r = "
                               f"{fe.cand_r[-1]:.4g} m): a larger domain or sphere")
         out["delta"].append(d)

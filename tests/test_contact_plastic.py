@@ -129,3 +129,36 @@ def test_cli_plastic_curve(tmp_path, capsys):
     rc = main(["contact", "--soil-E", "50e6", "--soil-nu", "0.3", "--plate-thickness", "0",
                "--soil-model", "von-mises", "--config", ci])
     assert rc == 2 and "--soil-yield-stress" in capsys.readouterr().err
+
+
+def _punch(kind: str, growth: float):
+    """Mean pressure / Y of a punch of radius a pressed to 0.06 a (E = 1000 Y): fine steps
+    through the elastic-plastic transition, coarser on the plateau."""
+    Yp, a = 1e6, 1e-3
+    mesh = build_mesh(0.0, 0.0, MeshSettings(8 * a, 8 * a, growth * a, growth, a, 1))
+    deltas = a * np.concatenate([np.linspace(0, 0.02, 21)[1:], np.linspace(0.02, 0.06, 9)[1:]])
+    c = solve_path(mesh, 1000 * Yp, 0.3, VonMises(Yp), a, deltas, punch=kind)
+    return c.force / (np.pi * a * a * Yp)  # mean pressure / Y
+
+
+def test_flat_punch_limit_load_brackets():
+    """Rigid flat punch on a von Mises half-space: the mean pressure levels off at a limit
+    between Eason & Shield's Tresca limits (5.69 k smooth, 6.05 k rough) of the Tresca
+    hexagons inscribed (k = Y/2) and circumscribed (k = Y/sqrt(3)) about the von Mises
+    surface, the rough punch above the smooth one. (Under the Haar-Karman hypothesis, a
+    hoop stress equal to a meridional principal stress, von Mises is Tresca with k = Y/2:
+    the limit is near the lower bound; test_flat_punch_limit_load_converges.)"""
+    smooth, rough = _punch("smooth", 0.1), _punch("rough", 0.1)
+    for p, N in ((smooth, 5.69), (rough, 6.05)):
+        assert abs(p[-1] / p[-2] - 1) < 1e-3  # levelled off
+        assert N / 2 < p[-1] < N / np.sqrt(3)
+    assert rough[-1] > smooth[-1] * 1.03
+
+
+@pytest.mark.slow
+def test_flat_punch_limit_load_converges():
+    """Refining the mesh, the smooth punch's limit falls toward Eason & Shield's 5.69 k with
+    k = Y/2 (von Mises = Tresca under Haar-Karman) and is within 3 % of it."""
+    coarse, fine = _punch("smooth", 0.06), _punch("smooth", 0.035)
+    assert fine[-1] < coarse[-1]
+    assert fine[-1] == pytest.approx(5.69 / 2, rel=0.03)

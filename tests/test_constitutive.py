@@ -251,3 +251,18 @@ def test_library_strengths():
     assert 10e3 <= clay.cohesion <= 100e3 and 20 <= clay.friction_angle <= 30
     assert sand.cohesion <= 10e3 and 35 <= sand.friction_angle <= 42
     assert model_of_strength("drucker-prager", clay).key == "dp-c50kPa-phi25-psi0"
+
+
+def test_yield_index():
+    """Hertz's p0 of a force and back (F = 2/3 pi a^2 p0, a = pi p0 R / (2 E*)), and the
+    first-yield flag at Johnson's p0 = 1.61 Y (nu 0.3)."""
+    from ssw.constitutive.yield_index import first_yield_ratio, yield_index
+
+    E_, nu, R_, Y_ = 38e6, 0.3, 4.75e-3, 1.4e6
+    assert first_yield_ratio(0.3) == pytest.approx(1.61, abs=0.005)
+    assert first_yield_ratio(0.45) == pytest.approx(1.81, abs=0.01)
+    F = np.array([0.1, 1.0, 10.0])
+    out = yield_index(F, E_, nu, R_, Y_)
+    a = np.pi * out["p0"] * R_ / (2 * E_ / (1 - nu * nu))
+    np.testing.assert_allclose(2 / 3 * np.pi * a * a * out["p0"], F, rtol=1e-12)
+    np.testing.assert_array_equal(out["first_yield"], out["index"] > first_yield_ratio(nu))

@@ -462,10 +462,9 @@ def johnson_first_yield(E: float, nu: float, Y: float, radius: float) -> tuple[f
     rigid sphere (Johnson 1985, sec. 6.1): ``p0 = k Y`` with ``k`` the peak of
     ``(sigma_r - sigma_z) / p0`` on the axis (1.61 at nu 0.3), ``a = pi p0 R / (2 E*)``,
     ``F = 2/3 pi a^2 p0``, ``delta = a^2 / R``; ``k`` computed from the axis stresses."""
-    z = np.linspace(1e-4, 3.0, 30001)  # z / a
-    sz = -1.0 / (1.0 + z * z)
-    sr = -((1.0 + nu) * (1.0 - z * np.arctan(1.0 / z)) - 0.5 / (1.0 + z * z))
-    k = 1.0 / float(np.max(sr - sz))
+    from ssw.constitutive.yield_index import first_yield_ratio
+
+    k = first_yield_ratio(nu)
     Es = E / (1.0 - nu * nu)
     p0 = k * Y
     a = np.pi * p0 * radius / (2.0 * Es)
@@ -544,3 +543,14 @@ def read_plastic_curve(path: Any) -> dict[str, Any]:
             out[k] = None if np.isnan(v) else v
         out["inputs"] = read_inputs(f)
     return out
+
+
+def loading_curve(curve: PlasticCurve, inputs: dict[str, Any]) -> Any:
+    """The loading branch of a plastic path as a :class:`ssw.curve.ForceCurve` (what a
+    study's contact job writes for a scene with a ``soil_model``; the unloading branch is
+    in the plastic curve file, :func:`write_plastic_curve`)."""
+    from ssw.curve import ForceCurve
+
+    m = curve.branch == 0
+    return ForceCurve(curve.delta[m], curve.force[m], curve.contact_radius[m],
+                      {**inputs, **summary(curve)}, dict(curve.stats))

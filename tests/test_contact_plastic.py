@@ -162,3 +162,36 @@ def test_flat_punch_limit_load_converges():
     coarse, fine = _punch("smooth", 0.06), _punch("smooth", 0.035)
     assert fine[-1] < coarse[-1]
     assert fine[-1] == pytest.approx(5.69 / 2, rel=0.03)
+
+
+def test_config_soil_model(tmp_path):
+    """``sets.*.soil_model`` enters the scenes (and their ids); such a scene is solved by the
+    plastic solver, whose loading curve below yield is the elastic scene's (the
+    substructured engine); an unknown model is refused by the schema."""
+    import yaml
+
+    from ssw.config import all_scenes, library, load_config
+    from ssw.contact import solve_scene
+
+    sets = {"plate_material": ["pla"], "plate_thickness": {"values": [0.0]},
+            "soil_E": {"values": [38e6]}, "soil_nu": {"values": [0.34]}}
+    cfg = {"contact": {"delta_max": 4e-6, "steps": 4, "mesh_growth": 0.2,
+                       "soil_radius": 0.05, "soil_depth": 0.05, "mesh_size_max": 5e-3},
+           "sets": {"elastic": sets,
+                    "plastic": {**sets, "soil_model": {"model": "von-mises",
+                                                       "yield_stress": 1e9}}}}
+    path = tmp_path / "c.yaml"
+    path.write_text(yaml.safe_dump(cfg))
+    c = load_config(path)
+    scenes = all_scenes(c)
+    assert set(scenes) == {"noplate-E38MPa-nu0.340", "noplate-E38MPa-nu0.340-vm-Y1000MPa"}
+    radius = c["indenter"]["radius"]
+    el = solve_scene(scenes["noplate-E38MPa-nu0.340"], c["contact"], radius, library(c))
+    pl = solve_scene(scenes["noplate-E38MPa-nu0.340-vm-Y1000MPa"], c["contact"], radius,
+                     library(c))
+    assert pl.inputs["soil_model"]["yield_stress"] == 1e9
+    np.testing.assert_allclose(pl.force, el.force, rtol=1e-6)
+    cfg["sets"]["plastic"]["soil_model"] = {"model": "cam-clay"}
+    path.write_text(yaml.safe_dump(cfg))
+    with pytest.raises(ConfigError):
+        load_config(path)

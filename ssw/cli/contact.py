@@ -352,6 +352,11 @@ def _human(res: dict[str, Any]) -> str:
         return "\n".join([*rows, f"{len(rows)} scenes in {res['wall_batch']:.3f} s, "
                            f"curves in {res['output_dir']}"])
     st = res["stats"]
+    if "newton_iterations" in st:  # a scene with a soil model (ssw.contact.plastic)
+        return (f"scene {res['scene_id']}: F({res['delta'][-1]:.4g} m) = "
+                f"{res['force'][-1]:.6g} N; {st['dofs']} dofs, {st['increments']} increments, "
+                f"{st['newton_iterations']} Newton iterations, wall {st['wall_total']:.3f} s"
+                + (f"\nwrote {res['output']}" if res["output"] else ""))
     return (
         f"scene {res['scene_id']}: F({res['delta'][-1]:.4g} m) = "
         f"{res['force'][-1]:.6g} N, contact radius {res['contact_radius'][-1]:.4g} m\n"

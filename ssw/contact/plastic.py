@@ -554,3 +554,20 @@ def loading_curve(curve: PlasticCurve, inputs: dict[str, Any]) -> Any:
     m = curve.branch == 0
     return ForceCurve(curve.delta[m], curve.force[m], curve.contact_radius[m],
                       {**inputs, **summary(curve)}, dict(curve.stats))
+
+
+def scene_curve(scene: Any, contact_cfg: dict[str, Any], indenter_radius: float) -> Any:
+    """A study scene with a ``soil_model`` (:class:`ssw.config.Scene`): its loading curve
+    (:func:`loading_curve`) on the contact config's mesh and increments; half-space only."""
+    if scene.plate_thickness > 0:
+        raise ConfigError("plate_thickness", scene.plate_thickness,
+                          "0 with a soil_model (the plastic solver models a half-space)")
+    curve = solve_plastic_scene((scene.soil_E, scene.soil_nu), scene.soil_model,
+                                indenter_radius, contact_cfg)
+    from ssw.contact.scene import settings_of
+
+    inputs = {"soil_E": scene.soil_E, "soil_nu": scene.soil_nu, "plate_material": "none",
+              "plate_E": None, "plate_nu": None, "plate_thickness": 0.0,
+              "indenter_radius": indenter_radius, "soil_model": scene.soil_model.params(),
+              "scene_id": scene.scene_id, **settings_of(contact_cfg)}
+    return loading_curve(curve, inputs)

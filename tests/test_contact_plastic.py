@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ssw.constitutive import DruckerPrager, VonMises
+from ssw.constitutive import CrushableFoam, DruckerPrager, VonMises
 from ssw.contact.mesh import MeshSettings, build_mesh
 from ssw.contact.plastic import johnson_first_yield, solve_path
 from ssw.errors import ConfigError, SolverError
@@ -95,40 +95,32 @@ def test_loading_unloading_energy_and_residual_indentation():
 def test_refusals():
     cfg, _Fy, dy = _setting(0.3)
     mesh = _mesh(cfg)
-    with pytest.raises(ConfigError, match="von-mises"):
-        solve_path(mesh, E, 0.3, DruckerPrager(10e3, 30.0), R, [dy])
+    with pytest.raises(ConfigError, match="punch"):
+        solve_path(mesh, E, 0.3, VonMises(Y), R, [dy], punch="spiky")
     with pytest.raises(SolverError, match="did not converge"):
         solve_path(mesh, E, 0.3, VonMises(Y), R, dy * np.array([1.0, 30.0]), max_iter=2)
 
 
-def test_cli_plastic_curve(tmp_path, capsys):
-    """``ssw contact --soil-model von-mises --soil-yield-stress Y --unload --json``: the
-    summary beside the curve, the file with both branches, first yield near Johnson's."""
-    import json
-    from pathlib import Path
-
-    from ssw.cli import main
-    from ssw.contact.plastic import read_plastic_curve
-
-    ci = str(Path(__file__).resolve().parent.parent / "config" / "ci.yaml")
-    out = tmp_path / "p.h5"
-    rc = main(["contact", "--soil-E", "50e6", "--soil-nu", "0.3", "--plate-thickness", "0",
-               "--soil-model", "von-mises", "--soil-yield-stress", "0.5e6", "--unload",
-               "--delta-max", "8e-6", "--steps", "8", "--config", ci, "--output", str(out),
-               "--json"])
-    assert rc == 0
-    res = json.loads(capsys.readouterr().out)
-    f = read_plastic_curve(out)
-    for key in ("first_yield_force", "residual_indentation", "dissipated_work"):
-        assert res[key] == pytest.approx(f[key], rel=1e-12) and res[key] > 0
-    np.testing.assert_allclose(f["force"], res["force"])
-    assert set(f["branch"]) == {0, 1} and f["force"][-1] == 0.0
-    Fy, _ = johnson_first_yield(50e6, 0.3, 0.5e6, res["indenter_radius"])
-    assert res["first_yield_force"] == pytest.approx(Fy, rel=0.03)
-    assert res["soil_model_key"] == "vm-Y0.5MPa"
-    rc = main(["contact", "--soil-E", "50e6", "--soil-nu", "0.3", "--plate-thickness", "0",
-               "--soil-model", "von-mises", "--config", ci])
-    assert rc == 2 and "--soil-yield-stress" in capsys.readouterr().err
+@pytest.mark.parametrize("model", [CrushableFoam(1.61e6), CrushableFoam(1.61e6, 5e6),
+                                   DruckerPrager(0.3e6, 30.0, dilatancy_angle=10.0)],
+                         ids=lambda m: m.key)
+def test_volume_changing_models(model):
+    """Crushable foam and Drucker-Prager (the displacement form of the element): the
+    elastic start is the mixed element's to the P2 discretization error, loading-unloading
+    leaves a dent, and the sphere's work = plastic work + stored energy (to 1e-3 of the
+    loading work at 30 steps)."""
+    cfg, _Fy, dy = _setting(0.3)
+    mesh = _mesh(cfg)
+    deltas = dy * np.linspace(0, 3, 31)[1:]
+    c = solve_path(mesh, E, 0.3, model, R, deltas, unload=True)
+    ref = solve_path(mesh, E, 0.3, VonMises(1e12), R, deltas[:2])
+    np.testing.assert_allclose(c.force[:2], ref.force, rtol=5e-3)
+    assert c.first_yield_force is not None and c.residual_indentation > 0
+    load = c.branch == 0
+    w_load = float(np.sum(0.5 * (c.force[load][1:] + c.force[load][:-1])
+                          * np.diff(c.delta[load])))
+    balance = c.external_work - c.dissipated_work - c.stored_energy
+    assert c.dissipated_work > 0 and abs(balance) < 1e-3 * w_load
 
 
 def _punch(kind: str, growth: float):
@@ -136,6 +128,10 @@ def _punch(kind: str, growth: float):
     through the elastic-plastic transition, coarser on the plateau."""
     Yp, a = 1e6, 1e-3
     mesh = build_mesh(0.0, 0.0, MeshSettings(8 * a, 8 * a, growth * a, growth, a, 1))
+    # the punch's edge on the surface vertex nearest r = a (the mesh is not aligned with it)
+    top = np.unique(mesh.tri[:, :3])
+    top = top[np.abs(mesh.nodes[top, 1]) < 1e-9 * a]
+    a = float(mesh.nodes[top[np.argmin(np.abs(mesh.nodes[top, 0] - a))], 0])
     deltas = a * np.concatenate([np.linspace(0, 0.02, 21)[1:], np.linspace(0.02, 0.06, 9)[1:]])
     c = solve_path(mesh, 1000 * Yp, 0.3, VonMises(Yp), a, deltas, punch=kind)
     return c.force / (np.pi * a * a * Yp)  # mean pressure / Y
@@ -146,22 +142,13 @@ def test_flat_punch_limit_load_brackets():
     between Eason & Shield's Tresca limits (5.69 k smooth, 6.05 k rough) of the Tresca
     hexagons inscribed (k = Y/2) and circumscribed (k = Y/sqrt(3)) about the von Mises
     surface, the rough punch above the smooth one. (Under the Haar-Karman hypothesis, a
-    hoop stress equal to a meridional principal stress, von Mises is Tresca with k = Y/2:
-    the limit is near the lower bound; test_flat_punch_limit_load_converges.)"""
+    hoop stress equal to a meridional principal stress, von Mises is Tresca with k = Y/2;
+    the von Mises solution does not keep to it everywhere, and its limit lies inside.)"""
     smooth, rough = _punch("smooth", 0.1), _punch("rough", 0.1)
     for p, N in ((smooth, 5.69), (rough, 6.05)):
         assert abs(p[-1] / p[-2] - 1) < 1e-3  # levelled off
         assert N / 2 < p[-1] < N / np.sqrt(3)
     assert rough[-1] > smooth[-1] * 1.03
-
-
-@pytest.mark.slow
-def test_flat_punch_limit_load_converges():
-    """Refining the mesh, the smooth punch's limit falls toward Eason & Shield's 5.69 k with
-    k = Y/2 (von Mises = Tresca under Haar-Karman) and is within 3 % of it."""
-    coarse, fine = _punch("smooth", 0.06), _punch("smooth", 0.035)
-    assert fine[-1] < coarse[-1]
-    assert fine[-1] == pytest.approx(5.69 / 2, rel=0.03)
 
 
 def test_config_soil_model(tmp_path):

@@ -54,10 +54,19 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="fem: the axisymmetric FEM (default); layered: the semi-analytic "
                    "oracle, an infinite plate on a half-space (ssw.contact.layered)")
     p.add_argument("--soil-model",
-                   help="constitutive model of the soil beyond elasticity (von-mises: the "
-                   "elasto-plastic contact solver, ssw.contact.plastic; half-space only)")
+                   choices=["von-mises", "drucker-prager", "crushable-foam"],
+                   help="constitutive model of the soil beyond elasticity: the "
+                   "elasto-plastic contact solver (ssw.contact.plastic; half-space only)")
     p.add_argument("--soil-yield-stress", type=float,
-                   help="von Mises yield stress Y of the soil, Pa (with --soil-model)")
+                   help="von Mises yield stress Y, or the foam's compressive strength, Pa")
+    p.add_argument("--soil-cohesion", type=float, help="Drucker-Prager cohesion c, Pa")
+    p.add_argument("--soil-friction-angle", type=float,
+                   help="Drucker-Prager friction angle phi, degrees")
+    p.add_argument("--soil-dilatancy-angle", type=float,
+                   help="Drucker-Prager dilatancy angle psi, degrees (default phi)")
+    p.add_argument("--soil-material",
+                   help="a material key of the library: its E, nu and strengths (with "
+                   "--soil-model; the strengths are the library's, not fitted)")
     p.add_argument("--soil-hardening", type=float, default=0.0,
                    help="linear hardening modulus of the soil, Pa (default 0: perfectly "
                    "plastic)")
@@ -151,7 +160,8 @@ def run(args: argparse.Namespace) -> dict[str, Any] | None:
     if args.delta_max is not None or not args.scene:
         contact["delta_mode"] = "fixed"  # --delta-max, and scenes given by flags, reach it
     mats = library(cfg)
-    if args.soil_model is not None or args.unload or args.soil_yield_stress is not None:
+    if args.soil_model is not None or args.unload or args.soil_yield_stress is not None \
+            or args.soil_material is not None:
         return _run_plastic(args, cfg, contact)
     if args.output_dir is not None:
         return _run_batch(args, cfg, contact, mats)
@@ -192,6 +202,16 @@ def _run_plastic(args: argparse.Namespace, cfg: dict[str, Any],
                           "--soil-yield-stress")
     if args.scene or args.output_dir is not None:
         raise ConfigError("--scene", args.scene, "soil flags with --soil-model (one scene)")
+    if args.soil_material is not None:
+        from ssw.config import library
+
+        mats = library(cfg)
+        if args.soil_material not in mats:
+            raise ConfigError("--soil-material", args.soil_material,
+                              f"a material of the library: {', '.join(sorted(mats))}")
+        mat = mats[args.soil_material]
+        args.soil_E = mat.E if args.soil_E is None else args.soil_E
+        args.soil_nu = mat.nu if args.soil_nu is None else args.soil_nu
     for name in ("soil_E", "soil_nu"):
         if getattr(args, name) is None:
             raise ConfigError(f"--{name.replace('_', '-')}", None, "a value")
@@ -199,11 +219,25 @@ def _run_plastic(args: argparse.Namespace, cfg: dict[str, Any],
         raise ConfigError("--plate-thickness", args.plate_thickness,
                           "0 with --soil-model (the plastic solver models a half-space)")
     spec: dict[str, Any] = {"model": args.soil_model}
-    if args.soil_model == "von-mises":
-        if args.soil_yield_stress is None:
-            raise ConfigError("--soil-yield-stress", None, "a yield stress > 0 Pa")
-        spec.update(yield_stress=args.soil_yield_stress, hardening=args.soil_hardening)
-    model = model_from(spec)
+    if args.soil_material is not None and args.soil_yield_stress is None \
+            and args.soil_cohesion is None:
+        from ssw.constitutive import model_of_strength
+
+        model = model_of_strength(args.soil_model, mat.strength,
+                                  f"materials.{args.soil_material}")
+    else:
+        if args.soil_model in ("von-mises", "crushable-foam"):
+            if args.soil_yield_stress is None:
+                raise ConfigError("--soil-yield-stress", None, "a stress > 0 Pa")
+            key = "yield_stress" if args.soil_model == "von-mises" else "compressive_strength"
+            spec.update({key: args.soil_yield_stress, "hardening": args.soil_hardening})
+        else:
+            spec.update(cohesion=args.soil_cohesion, friction_angle=args.soil_friction_angle,
+                        dilatancy_angle=args.soil_dilatancy_angle)
+            if args.soil_cohesion is None or args.soil_friction_angle is None:
+                raise ConfigError("--soil-cohesion", args.soil_cohesion,
+                                  "a cohesion (Pa) and --soil-friction-angle (degrees)")
+        model = model_from(spec)
     if model is None:
         raise ConfigError("--soil-model", args.soil_model, "a plastic model (von-mises)")
     if args.steps is None and "steps" not in cfg.get("contact", {}):

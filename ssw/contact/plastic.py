@@ -16,8 +16,12 @@ on ``dev eps`` alone and ``p = K tr eps`` stays elastic: the mixed form is exact
 volumetric locking for any ``nu < 0.5`` and any plastic flow (a pure displacement P2 element
 locks as the plastic zone becomes incompressible). Below yield the equations and the mesh
 are the elastic engine's, so the curve is that engine's (tests/test_contact_plastic.py).
-Models with plastic volume change (Drucker-Prager, crushable foam) need a mean stress from
-the return mapping in ``R_p``; they are refused here (ConfigError).
+Models with plastic volume change (Drucker-Prager, crushable foam) take their mean stress
+from the return mapping: for them the solver uses the displacement form of the same P2
+element (``R_u = sum_e int B^T sigma(eps) dV``, the whole consistent tangent), free of
+locking as long as neither the elastic nor the plastic response is near incompressible
+(foams crush with a plastic Poisson's ratio near 0; a dilatant soil changes volume); below
+yield it differs from the elastic engine by the P2 discretization error.
 
 Contact. The sphere's candidates are the top-surface nodes with ``r < R / 2``; at an
 indentation ``delta`` the gap of a node is ``g = g0(r) - delta - u_z`` (``g0`` the exact
@@ -58,7 +62,7 @@ from scipy.sparse.linalg import splu
 
 from ssw.constitutive import VonMises
 from ssw.constitutive.base import initial_state
-from ssw.constitutive.tensors import P_DEV, SQRT2
+from ssw.constitutive.tensors import ONE, P_DEV, SQRT2
 from ssw.contact.assembly import (
     element_sizes,
     fixed_free,
@@ -128,7 +132,7 @@ class _Model:
     """The discrete u-p problem of one mesh and material: constant blocks, dof maps."""
 
     def __init__(self, mesh: Mesh, E: float, nu: float, radius: float,
-                 punch: str | None = None) -> None:
+                 punch: str | None = None, mixed: bool = True) -> None:
         if np.any(mesh.body != 0):
             raise ConfigError("plate_thickness", mesh.top,
                               "0 (the plastic contact solver models a half-space only)")
@@ -176,6 +180,12 @@ class _Model:
             ps_e[:, :, None] * ps_e[:, None, :])
         self.N1 = n1
         self.ps_e = ps_e
+        self.mixed = mixed
+        # displacement form: the pressure unknowns decouple (B_p = 0, so p = 0) and the
+        # displacement block takes the whole stress and tangent
+        self.proj = P_DEV if mixed else np.eye(4)
+        if not mixed:
+            self.Bp = np.zeros_like(self.Bp)
         # dofs: u_r, u_z of node i at 2i, 2i+1; pressure of vertex k at 2n + k
         self.n = n
         self.ndof = 2 * n + vert.size
@@ -205,7 +215,8 @@ class _Model:
             self.cand.size)
         self.axis_dof = int(2 * top[0] + 1)
         self.h_min = float(np.min(h))
-        D_el = np.broadcast_to(2.0 * G * P_DEV, (ne, nq, 4, 4))
+        D_el = np.broadcast_to(2.0 * G * P_DEV if mixed else
+                               2.0 * G * P_DEV + np.outer(ONE, ONE) / inv_K, (ne, nq, 4, 4))
         self.ke = np.zeros((ne, 15, 15))
         self.ke[:, :12, :12] = self._kuu(np.arange(ne), D_el)
         self.ke[:, 12:, :12] = self.Bp
@@ -253,7 +264,7 @@ class _Model:
         largest element force before assembly (N), the size of what cancels in the
         residual."""
         ne, nq = self.w.shape
-        s = (stress @ P_DEV).reshape(ne, nq, 4)
+        s = (stress @ self.proj).reshape(ne, nq, 4)
         ue, pe = u[self.edof_u], u[self.edof[:, 12:]]
         fu = np.matmul(np.swapaxes(self.B, 2, 3), (s * self.w[:, :, None])[..., None]
                        ).sum(axis=1)[..., 0] + np.matmul(pe[:, None, :], self.Bp)[:, 0]
@@ -268,7 +279,7 @@ class _Model:
         self.ke[:, :12, :12] = self.kuu_el
         el = np.flatnonzero(pe_mask)
         if el.size:
-            Dd = P_DEV @ tangent.reshape(ne, nq, 4, 4)[el] @ P_DEV
+            Dd = self.proj @ tangent.reshape(ne, nq, 4, 4)[el] @ self.proj
             self.ke[el, :12, :12] = self._kuu(el, Dd)
         data = np.bincount(self.slot, weights=self.ke.ravel(), minlength=self.nnz) / self.scale
         if not el.size:
@@ -278,7 +289,7 @@ class _Model:
     def residual_only(self, u: np.ndarray, stress: np.ndarray) -> np.ndarray:
         """The residual of :meth:`residual_matrix` alone (ndof,), N."""
         ne, nq = self.w.shape
-        s = (stress @ P_DEV).reshape(ne, nq, 4)
+        s = (stress @ self.proj).reshape(ne, nq, 4)
         ue, pe = u[self.edof_u], u[self.edof[:, 12:]]
         fu = np.matmul(np.swapaxes(self.B, 2, 3), (s * self.w[:, :, None])[..., None]
                        ).sum(axis=1)[..., 0] + np.matmul(pe[:, None, :], self.Bp)[:, 0]
@@ -308,16 +319,15 @@ def solve_path(
     ``punch`` ``smooth`` or ``rough``: a rigid flat punch of radius ``radius`` instead of
     the sphere (frictionless, or without slip under its face; the limit-load check of
     Eason & Shield 1960)."""
-    if not isinstance(model, VonMises):
-        raise ConfigError("soil_model", getattr(model, "name", model),
-                          "von-mises (plastic flow without volume change; module docstring)")
+    if not hasattr(model, "update"):
+        raise ConfigError("soil_model", model, "a model of ssw.constitutive")
     t0 = time.perf_counter()
     deltas = np.asarray(deltas, float)
     if deltas.ndim != 1 or deltas.size < 1 or np.any(np.diff(deltas) <= 0) or deltas[0] <= 0:
         raise ConfigError("deltas", deltas, "increasing indentations > 0 m")
     if punch not in (None, "smooth", "rough"):
         raise ConfigError("punch", punch, "smooth | rough (or none: the sphere)")
-    fe = _Model(mesh, E, nu, radius, punch)
+    fe = _Model(mesh, E, nu, radius, punch, mixed=isinstance(model, VonMises))
     ne, nq = fe.w.shape
     state = initial_state(ne * nq)
     last = (None, np.zeros(ne * nq, bool))  # the last converged tangent (elastic at first)
@@ -341,7 +351,7 @@ def solve_path(
         target = fe.g0 - d
         tol_g = 1e-9 * max(abs(d), fe.h_min * 1e-6)
         step = abs(d - (path[k - 1] if k else 0.0))
-        prev = np.inf
+        prev, was_elastic = np.inf, False
         for it in range(max_iter):
             upd = model.update(E, nu, fe.strain(u), state)
             # the first iteration of an increment takes the last converged tangent (at the
@@ -368,7 +378,7 @@ def solve_path(
                     break
                 active, prev = new_active, np.inf
                 continue
-            elastic = err > prev
+            elastic = err > prev and not was_elastic  # one elastic step, then Newton again
             prev = err
             for _ in range(2):
                 if elastic:
@@ -405,6 +415,7 @@ def solve_path(
                     lu = splu(fe.restricted(data_el, free), permc_spec="COLAMD")
                     factorizations += 1
                     du = lu.solve(-res[free] / fe.scale, trans="T")
+            was_elastic = elastic
             u[free] += du
             u += jump
         else:
@@ -444,7 +455,7 @@ def solve_path(
             break
     # elastic energy stored in the final state: int (s:s / (4 G) + p^2 / (2 K)) dV
     s = upd.stress @ P_DEV
-    pq = fe.pressure_q(u).ravel()
+    pq = fe.pressure_q(u).ravel() if fe.mixed else upd.stress @ ONE / 3.0
     stored = float(np.sum((np.einsum("gi,gi->g", s, s) / (4.0 * fe.G)
                            + 0.5 * fe.inv_K * pq * pq) * fe.w.ravel()))
     stats = {"nodes": fe.n, "elements": ne, "dofs": fe.ndof, "candidates": fe.cand.size,

@@ -182,3 +182,29 @@ def test_config_soil_model(tmp_path):
     path.write_text(yaml.safe_dump(cfg))
     with pytest.raises(ConfigError):
         load_config(path)
+
+
+def test_cli_soil_material(capsys):
+    """``--soil-material pcf08 --soil-model crushable-foam``: E, nu and the compressive
+    strength come from the library (not fitted); Drucker-Prager from flags."""
+    import json
+    from pathlib import Path
+
+    from ssw.cli import main
+    from ssw.materials import material_set
+
+    ci = str(Path(__file__).resolve().parent.parent / "config" / "ci.yaml")
+    pcf08 = material_set("realistic")["pcf08"]
+    rc = main(["contact", "--soil-material", "pcf08", "--plate-thickness", "0",
+               "--soil-model", "crushable-foam", "--delta-max", "4e-6", "--steps", "4",
+               "--config", ci, "--json"])
+    assert rc == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["soil_E"] == pcf08.E and res["soil_nu"] == pcf08.nu
+    assert res["soil_model"]["compressive_strength"] == pcf08.strength.compressive
+    rc = main(["contact", "--soil-E", "40e6", "--soil-nu", "0.35", "--plate-thickness", "0",
+               "--soil-model", "drucker-prager", "--soil-cohesion", "50e3",
+               "--soil-friction-angle", "25", "--delta-max", "4e-6", "--steps", "4",
+               "--config", ci, "--json"])
+    assert rc == 0
+    assert json.loads(capsys.readouterr().out)["soil_model_key"] == "dp-c50kPa-phi25"

@@ -51,7 +51,7 @@ def plot(path: str | Path, result: dict[str, Any]) -> None:
         ok = [c for c in cs if c["plate_yield_index"] <= 1 and not c["violations"]["mass_ratio"]]
         bad = [c for c in cs if c not in ok]
         ax.scatter([c["soil_yield_index"] for c in ok], [c["sensitivity"] for c in ok],
-                   color=colors[m], label=f"{m}", s=18)
+                   color=colors[m], label=f"{m} (plate elastic)" if ok else None, s=18)
         ax.scatter([c["soil_yield_index"] for c in bad], [c["sensitivity"] for c in bad],
                    facecolors="none", edgecolors=colors[m], s=18,
                    label=f"{m} (plate yields)" if bad else None)

@@ -126,3 +126,34 @@ def test_stress_scales_with_the_load_and_not_with_the_modulus_alone(store):
     ratio_plate = st[1].plate.peak / st[0].plate.peak
     assert ratio_soil == pytest.approx(10.0, rel=1e-6)
     assert ratio_plate == pytest.approx(10.0, rel=1e-6)
+
+
+@pytest.mark.parametrize("interface", ["frictionless", "bonded", "unilateral"])
+def test_retained_displacements_meet_the_sphere(store, interface):
+    """The retained displacements rebuilt from the LCP's forces (ssw.contact.stress) satisfy
+    the contact conditions the LCP solved through another assembly (Schur complements,
+    ssw.contact.operators.scene_lcp): on every loaded candidate the plate's top follows
+    the sphere, ``u_z = s(r) - delta``, nowhere does it cross it, and a shared interface
+    moves the plate and the soil together."""
+    from ssw.contact.operators import geometry_of, scene_lcp, sphere_gap0
+    from ssw.contact.parametric import trace
+    from ssw.contact.scene import settings_of
+    from ssw.contact.stress import retained_displacements
+
+    cfg = settings_of({"interface": interface})
+    geom = geometry_of(cfg, 0.4e-3, R, 3e-5, interface)
+    layout = store.layout(geom)
+    P, S = store.body(geom, "plate", 0.36), store.body(geom, "soil", 0.3)
+    E_soil, E_plate, d = 50e6, 3.5e9, 3e-5
+    lcp = scene_lcp(layout, P, S, E_soil, E_plate, interface, R)
+    path, _ = trace(lcp.W, lcp.q0, lcp.q1, d)
+    lam = path.forces(np.array([d]))[0]
+    up, us = retained_displacements(layout, P, S, E_soil, E_plate, interface, lam)
+    nc = layout.r.size
+    surface = sphere_gap0(layout.r, R) - d
+    loaded = lam[:nc] > 1e-9 * lam[:nc].max()
+    assert 3 <= loaded.sum() < nc
+    assert up[:nc][loaded] == pytest.approx(surface[loaded], rel=1e-7, abs=1e-12)
+    assert np.all(up[:nc] <= surface + 1e-9 * d)
+    if interface != "unilateral":
+        assert us == pytest.approx(up[nc:], rel=1e-12, abs=0)

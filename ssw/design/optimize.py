@@ -167,6 +167,11 @@ def reasons(best: Candidate, pool: list[Candidate], spec: DesignSpec) -> list[st
     else:
         out.append(f"no candidate keeps its plate elastic (and within the mass limit); it "
                    f"violates the hard limits least: {lim}")
+    lo, hi = spec.thickness
+    if best.thickness <= lo * (1 + 1e-3) or best.thickness >= hi * (1 - 1e-3):
+        side = "lower" if best.thickness <= lo * (1 + 1e-3) else "upper"
+        out.append(f"its thickness is at the {side} bound of the range searched "
+                   f"({lo * 1e3:.3g}-{hi * 1e3:.3g} mm): the optimum may lie beyond it")
     out.append(f"worst-case resolution dE/E {best.resolution:.3g} "
                f"(u_TOF {spec.tof_uncertainty:.3g} s)")
     ref = [c for c in pool if c.source == "reference"]

@@ -12,6 +12,12 @@ design over ``--materials`` (default PLA, Al 6061-T6, A36) x continuous thicknes
 Reports the wall time of each, the candidates evaluated, the seconds per candidate, and the
 recommended plate. Writes ``design_bench.csv`` and ``design_bench.json`` under the output
 folder.
+
+Measured (2 cores, 43 candidates a range): 38-45 s a range with the operators cached on a
+quiet machine (``ssw design --soil-range soft|stiff --jobs 2``), 43-66 s cold or warm with
+the cores shared (load 2), 55-86 s at load 3.3. A candidate costs 1-1.4 s: the chain's 60
+scenes on the fem wall, a mesh of the new plate and the factorization of its two bodies for
+the stresses; cached operators save the condensation only (0.3 s).
 """
 
 from __future__ import annotations

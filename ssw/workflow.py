@@ -57,6 +57,8 @@ STEP_MODULES: dict[str, tuple[str, ...]] = {
     "survey_point": ("ssw.cli.measure",),
     "survey_table": ("ssw.cli.survey",),
     "report": ("ssw.cli.report",),
+    "design": ("ssw.cli.design",),
+    "design_table": ("ssw.cli.design",),
 }
 
 #: Contact settings that shape a contact curve (every key of the section).
@@ -353,6 +355,26 @@ class Study:
         sv = self.cfg.get("survey", {})
         return {"survey": sv, "study": self.cfg.get("study")}
 
+    def _design(self, soil: str | None) -> dict[str, Any]:
+        """A design job (one soil range, one material): the design section, the device,
+        the chain model and the fem wall's mesh (the design always runs the fem wall)."""
+        cfg = self.cfg
+        design = cfg.get("design", {})
+        if soil not in design.get("soils", {}):
+            raise ConfigError("design soil range", soil,
+                              f"one of {', '.join(design.get('soils', {})) or '(none)'}")
+        return {**self._device_part(),
+                "chain": {k: cfg["chain"].get(k) for k in CHAIN_KEYS},
+                "fem_wall": {k: cfg["contact"].get(k) for k in FEM_WALL_KEYS},
+                "calibration_use": uses_calibration(cfg),
+                "design": {k: v for k, v in design.items() if k != "soils"},
+                "soil": design["soils"][soil],
+                "plates": self.material_values(design.get("materials", [])),
+                "sample_rate": cfg.get("daq", {}).get("sample_rate")}
+
+    def _design_table(self, soil: str | None) -> dict[str, Any]:
+        return {"design": self._design(soil), "study": self.cfg.get("study")}
+
     def _report(self, key: str | None = None) -> dict[str, Any]:
         return {"study": self.cfg.get("study")}
 
@@ -415,6 +437,7 @@ RESOURCES: dict[str, tuple[float, float, float, float]] = {
     "sweep": (1500.0, 0.0, 15.0, 0.0),
     "validation": (1500.0, 0.0, 15.0, 0.0),
     "survey_point": (1000.0, 0.0, 10.0, 0.0),
+    "design": (2000.0, 0.0, 20.0, 0.0),
 }
 
 

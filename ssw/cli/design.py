@@ -1,0 +1,198 @@
+"""``ssw design``: which plate under the chain (material, thickness; optionally diameter and
+striker speed) makes the device most sensitive to the soil's modulus over a range of soils
+while the plate stays elastic and the sample yields least.
+
+The device is resolved as for every chain command (:mod:`ssw.cli._device`: config, device,
+calibration, device flags); its plate is the reference candidate. The chain always runs
+with the exact FEM wall (``fem``) of each candidate plate. Objective, constraints and the
+JSON fields: :mod:`ssw.design.spec`, :mod:`ssw.design.evaluate`, :mod:`ssw.design.optimize`.
+
+TOF uncertainty of one measurement (the resolution dE/E): the device file's stated scatter
+(``repeatability.tof_std``) over ``sqrt(--hits)``, and the sampling term of the DAQ's rate
+(``daq.sample_rate``, :func:`ssw.measure.sampling_uncertainty`), in quadrature. A device
+without a stated scatter uses the thesis's 1.53e-5 s (0.4 mm PLA plate), labelled so.
+
+``--merge A.json B.json ...`` ranks the candidates of several results of the same question
+together (the workflow runs one job per material).
+"""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from ssw.cli import add_json_flag
+from ssw.errors import ConfigError
+
+#: s, one hit's TOF scatter used when the device states none: the thesis's, with the plate.
+THESIS_TOF_SCATTER = 1.53e-5
+THESIS_TOF_SCATTER_SOURCE = ("the thesis's 1.53e-5 s over three consecutive hits with the "
+                             "0.4 mm PLA plate (Stage III, Fig 9), used because the device "
+                             "file states no repeatability.tof_std")
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    from ssw.cli._device import add_device_options
+    from ssw.design.spec import MATERIALS, THICKNESS
+
+    p = sub.add_parser(
+        "design",
+        help="optimize the plate (material x thickness) for sensitivity to the soil's modulus",
+        description=__doc__.split("\n\n")[0],
+    )
+    g = p.add_argument_group("the question")
+    g.add_argument("--soil-E", help="LO:HI soil moduli, Pa (e.g. 10e6:100e6)")
+    g.add_argument("--soil-nu", type=float, help="soil Poisson's ratio")
+    g.add_argument("--soil-range", help="a named soil range of the config's design.soils "
+                   "(instead of --soil-E/--soil-nu; the section's other settings apply)")
+    g.add_argument("--materials", help=f"plate materials, comma-separated (default "
+                   f"{','.join(MATERIALS)})")
+    g.add_argument("--thickness", help=f"LO:HI plate thickness searched, m (default "
+                   f"{THICKNESS[0]:g}:{THICKNESS[1]:g})")
+    g.add_argument("--plate-diameters", help="plate diameters tried, m, comma-separated "
+                   "(default: the device's)")
+    g.add_argument("--striker-velocities", help="striker speeds tried, m/s, comma-separated "
+                   "(default: the device's)")
+    g.add_argument("--moduli", type=int, help="soil moduli of the sensitivity curve (default 20)")
+    g.add_argument("--soil-strength", type=float, help="the soil's yield stress, Pa (default: "
+                   "--soil-strength-ratio x E)")
+    g.add_argument("--soil-strength-ratio", type=float,
+                   help="soil yield stress over modulus (default 0.01, an assumption)")
+    g.add_argument("--soil-yield-limit", type=float, help="largest soil yield index allowed "
+                   "(default 1: first yield)")
+    g.add_argument("--max-mass-ratio", type=float,
+                   help="largest plate mass over a bead's (default 1)")
+    g.add_argument("--scan-points", type=int, help="thicknesses scanned per material before "
+                   "the bounded search (default 5)")
+    g.add_argument("--thickness-tol", type=float,
+                   help="the bounded search's tolerance in ln(thickness) (default 0.01)")
+    g.add_argument("--hits", type=int, help="TOF hits averaged per measurement (default 3)")
+    g.add_argument("--tof-scatter", type=float, help="one hit's TOF standard deviation, s "
+                   "(default: the device's repeatability.tof_std)")
+    g.add_argument("--sample-rate", type=float, help="DAQ sample rate, S/s (default: the "
+                   "config's daq.sample_rate)")
+    g.add_argument("--no-reference", action="store_true",
+                   help="do not evaluate the device's own plate")
+    g.add_argument("--jobs", type=int, default=1, help="processes (one material search each)")
+    g.add_argument("--merge", nargs="+", metavar="JSON",
+                   help="rank together the results of several ssw design runs (written "
+                   "with --output) instead of computing")
+    o = p.add_argument_group("outputs")
+    o.add_argument("--output", help="the result JSON (with its provenance)")
+    o.add_argument("--csv", help="the candidates' table (CSV)")
+    o.add_argument("--plot", help="the Pareto front and sensitivity curves (PNG)")
+    add_device_options(p, walls=("fem",))
+    add_json_flag(p)
+    p.set_defaults(func=run, human=human)
+
+
+def _spec(args: argparse.Namespace, ctx: Any) -> Any:
+    """The :class:`ssw.design.spec.DesignSpec` of the command line and the config."""
+    from ssw.design.spec import DesignSpec, parse_list, parse_range, spec_from_config
+    from ssw.measure import sampling_uncertainty
+
+    cfg, device = ctx.cfg, ctx.device
+    rate = args.sample_rate if args.sample_rate is not None else float(
+        cfg.get("daq", {}).get("sample_rate", 51200.0))
+    if not rate > 0:
+        raise ConfigError("--sample-rate", rate, "a sample rate > 0 S/s")
+    if args.tof_scatter is not None:
+        scatter, source = args.tof_scatter, "--tof-scatter"
+    elif getattr(device, "tof_scatter", None) is not None:
+        scatter = float(device.tof_scatter)
+        source = f"device {device.name}: {device.tof_scatter_source or 'repeatability.tof_std'}"
+    else:
+        scatter, source = THESIS_TOF_SCATTER, THESIS_TOF_SCATTER_SOURCE
+    fields: dict[str, Any] = {"tof_scatter": scatter, "tof_scatter_source": source,
+                              "tof_sampling": sampling_uncertainty(rate), "sample_rate": rate}
+    flags = {"materials": tuple(args.materials.split(",")) if args.materials else None,
+             "thickness": parse_range(args.thickness, "--thickness") if args.thickness
+             else None,
+             "plate_diameters": parse_list(args.plate_diameters, "--plate-diameters") or None,
+             "striker_velocities": parse_list(args.striker_velocities,
+                                              "--striker-velocities") or None,
+             "moduli": args.moduli, "soil_strength": args.soil_strength,
+             "soil_strength_ratio": args.soil_strength_ratio,
+             "soil_yield_limit": args.soil_yield_limit, "max_mass_ratio": args.max_mass_ratio,
+             "hits": args.hits, "scan_points": args.scan_points,
+             "thickness_tol": args.thickness_tol}
+    fields.update({k: v for k, v in flags.items() if v is not None})
+    if args.soil_range:
+        if args.soil_E or args.soil_nu is not None:
+            raise ConfigError("--soil-range", args.soil_range, "not with --soil-E/--soil-nu")
+        return spec_from_config(cfg.get("design", {}), args.soil_range, **fields)
+    if not args.soil_E or args.soil_nu is None:
+        raise ConfigError("--soil-E/--soil-nu", (args.soil_E, args.soil_nu),
+                          "a soil range LO:HI (Pa) and a Poisson's ratio, or --soil-range")
+    design = cfg.get("design", {})
+    for key in ("moduli", "log_step", "soil_strength", "soil_strength_ratio",
+                "soil_yield_limit", "max_mass_ratio", "hits", "scan_points", "thickness_tol"):
+        if design.get(key) is not None and key not in fields:
+            fields[key] = design[key]
+    return DesignSpec(soil_E=parse_range(args.soil_E, "--soil-E"), soil_nu=args.soil_nu,
+                      **fields)
+
+
+def run(args: argparse.Namespace) -> dict[str, Any]:
+    from ssw.cli._device import chain_context
+    from ssw.design.output import plot, write_table
+    from ssw.design.run import merge_results, run_design
+    from ssw.h5io import write_json
+
+    if args.merge:
+        import json
+
+        results = []
+        for path in args.merge:
+            try:
+                with open(path) as fh:
+                    results.append(json.load(fh))
+            except (OSError, ValueError) as exc:
+                raise ConfigError("--merge", path, f"a readable ssw design JSON ({exc})"
+                                  ) from exc
+        res = merge_results(results).to_dict()
+        inputs = {"merge": list(args.merge),
+                  "merged_inputs": [r.get("provenance", {}).get("inputs_sha256")
+                                    for r in results]}
+    else:
+        from ssw.config import library
+
+        ctx = chain_context(args, numerics_only=True)
+        spec = _spec(args, ctx)
+        mats = ctx.calibration.materials() if ctx.calibration is not None else library(ctx.cfg)
+        contact = dict(ctx.cfg.get("contact", {}))
+        res = run_design(spec, ctx.params, mats, contact, reference=not args.no_reference,
+                         jobs=max(1, int(args.jobs))).to_dict()
+        res.update({"device_name": ctx.device.name, "device_source": ctx.device.source,
+                    "device_values": ctx.device.physics_dict(),
+                    "calibration_file": None if ctx.calibration is None
+                    else ctx.calibration.path, "wall": "fem"})
+        inputs = {k: v for k, v in vars(args).items() if k not in ("func", "human", "json")}
+        inputs["spec"] = res["spec"]
+    if args.output:
+        write_json(args.output, res, inputs)
+    if args.csv:
+        write_table(args.csv, res, inputs)
+    if args.plot:
+        plot(args.plot, res)
+    return res
+
+
+def human(res: dict[str, Any]) -> str:
+    """The ranking as a short table and the recommendation with its reasons."""
+    rec = res["recommended"]
+    lines = [f"soils {res['spec']['soil_E'][0]:.4g}-{res['spec']['soil_E'][1]:.4g} Pa, "
+             f"nu {res['spec']['soil_nu']:g}; objective: {res['objective']}",
+             f"{'material':10s} {'t (mm)':>8s} {'source':>9s} {'S worst':>8s} {'dE/E':>7s} "
+             f"{'plate Y':>8s} {'soil Y':>8s} {'mass':>6s} feasible"]
+    for c in res["candidates"][:25]:
+        lines.append(f"{c['material']:10s} {c['thickness'] * 1e3:8.4g} {c['source']:>9s} "
+                     f"{c['sensitivity']:8.4f} {c['resolution']:7.3g} "
+                     f"{c['plate_yield_index']:8.3g} {c['soil_yield_index']:8.3g} "
+                     f"{c['mass_ratio']:6.3g} {c['feasible']}")
+    if len(res["candidates"]) > 25:
+        lines.append(f"... {len(res['candidates']) - 25} more")
+    lines.append(f"recommended: {rec['material']} {rec['thickness'] * 1e3:.4g} mm")
+    lines += [f"  - {r}" for r in rec["reasons"]]
+    lines.append(f"{res['evaluations']} candidates in {res['wall_time']:.1f} s")
+    return "\n".join(lines)

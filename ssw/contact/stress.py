@@ -1,0 +1,433 @@
+"""Stresses of a contact state: the plate's and the soil's peak von Mises stress.
+
+The substructured engine (:mod:`ssw.contact.operators`) keeps of each body only its
+stiffness condensed onto the retained dofs (the contact candidates and the plate-soil
+interface). A state of the contact, the exact LCP solution at an indentation ``delta`` of
+the rigid sphere (:mod:`ssw.contact.parametric`), fixes the contact forces ``lam`` and with
+them the retained displacements ``u_B``: the scene's dense system ``K u = G^T lam``
+assembled as :func:`ssw.contact.operators.scene_lcp` does. Each body's interior follows
+from its own equilibrium with ``u_B`` imposed (static condensation read backwards,
+Przemieniecki 1963),
+
+    K_II u_I = -K_IB u_B,
+
+with the body's u-p matrix at unit E (the displacement field does not depend on the
+body's modulus once ``u_B`` is given). ``K_II`` is factored once per mesh, body and
+Poisson's ratio (:class:`BodyField`, kept in memory) and serves every state at once
+(one multi-column solve).
+
+Stress. The von Mises stress depends only on the deviatoric strain,
+``sigma_vM = sqrt(3/2 s:s) = G sqrt(6 e:e)``, ``s = 2 G e``, ``e = dev(eps)`` with the
+engineering shear halved (``e_rz = gamma_rz / 2`` counted twice), ``G = E / (2 (1 + nu))``;
+the pressure unknown of the u-p element is not needed. On a straight-sided P2 triangle the
+displacement gradient is linear and ``sigma_vM`` a norm of it, so its largest value over
+the element sits at a vertex: the strains are evaluated at each element's three vertices
+(from inside the element; pulled in by :data:`VERTEX_PULL` of the element, so that the
+hoop strain ``u_r / r`` is defined on the axis, where it tends to ``du_r/dr``). The peak of
+a body is the largest of these values, with its location.
+
+Elastic bead. The FEM's indenter is rigid; the chain's bead is steel. At the same force a
+rigid sphere of the bead's radius presses harder on a stiff plate than the bead does; the
+stresses are computed under the rigid sphere of the Hertz-equivalent radius
+(:func:`equivalent_radius`), which gives the bead's own pressure on the top body.
+
+Checked against independent solutions (tests/test_design_stress.py): without a plate the
+soil's peak is Johnson's Hertz first-yield point (``0.62 p0`` at ``z = 0.48 a`` for
+``nu = 0.3``; Johnson 1985, sec. 6.1: the peak of the closed-form axis field), also under
+an elastic bead (Hertz with the combined modulus); with a plate of the soil's own material
+bonded to it (a homogeneous half-space cut by the interface) the plate's peak is the same
+Hertz point and the soil's the closed-form field at the interface depth.
+
+References
+----------
+Przemieniecki, J. S. (1963). Matrix structural analysis of substructures. AIAA J. 1(1),
+138-147. Johnson, K. L. (1985). *Contact Mechanics*, CUP.
+"""
+
+from __future__ import annotations
+
+from collections import OrderedDict
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from scipy.linalg import cho_factor, cho_solve
+
+from ssw.contact.operators import (
+    BodyOperator,
+    Geometry,
+    Layout,
+    OperatorStore,
+    default_store,
+    geometry_of,
+    scene_lcp,
+)
+from ssw.errors import ConfigError, SolverError
+
+#: Barycentric share by which a vertex's evaluation point is pulled towards the element's
+#: other two vertices (keeps ``r > 0`` on the axis; the strain changes by ~1e-9 of its
+#: gradient across the element).
+VERTEX_PULL = 1.0e-9
+#: Body fields kept in memory (each holds a sparse LU of a body: tens of MB).
+FIELDS_KEPT = 4
+#: Largest backward error accepted from the pivot-free factorization of ``K_II``
+#: (the condensation's bound, :data:`ssw.contact.substructure.BACKWARD_ERROR_TOL`).
+BACKWARD_ERROR_TOL = 1e-11
+#: Seed of the backward-error probe (any fixed seed: deterministic).
+PROBE_SEED = 20241130
+
+
+@dataclass(frozen=True)
+class BodyPeak:
+    """Peak von Mises stress of one body at each state. ``peak`` (n,) Pa; ``r``, ``z``
+    (n,) m where it occurs (z from the plate-soil interface, up)."""
+
+    peak: np.ndarray
+    r: np.ndarray
+    z: np.ndarray
+
+
+@dataclass(frozen=True)
+class ContactStress:
+    """Stresses of contact states: ``delta`` (n,) m (rigid-sphere indentation), ``force``
+    (n,) N on the sphere, ``plate`` (None without one) and ``soil`` peaks. ``fields``
+    (when asked): per body, ``(r, z, von_mises)`` at every evaluation point, arrays
+    (n_points,) m, m and (n_points, n) Pa."""
+
+    delta: np.ndarray
+    force: np.ndarray
+    plate: BodyPeak | None
+    soil: BodyPeak
+    fields: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] | None = None
+
+
+class BodyField:
+    """One body of a mesh at unit E: its interior displacement from the retained one, and
+    the von Mises stress of that field at every element vertex.
+
+    Parameters
+    ----------
+    nodes : (n, 2) m, every node of the model.  tri : (ne, 6) the body's elements.
+    free : (n, 2) the free displacement components.  b_nodes, b_comps : the retained dofs,
+    in the order of the body's condensed operator.  nu : the body's Poisson's ratio.
+    """
+
+    def __init__(self, nodes: np.ndarray, tri: np.ndarray, free: np.ndarray,
+                 b_nodes: np.ndarray, b_comps: np.ndarray, nu: float) -> None:
+        import scipy.sparse as sp
+
+        from ssw.contact.assembly import element_sizes, node_graph, pow2, pressure_scale
+        from ssw.contact.elements import element_matrices, lame
+        from ssw.contact.substructure import body_dofs, min_degree_order
+
+        used = np.unique(tri)
+        local = np.full(nodes.shape[0], -1, dtype=np.int64)
+        local[used] = np.arange(used.size)
+        ltri, lnodes = local[tri], nodes[used]
+        lb = local[b_nodes]
+        if np.any(lb < 0):
+            raise SolverError("a retained node does not belong to the body")
+        order = min_degree_order(*node_graph(ltri), used.size)
+        udof, pdof, ndof, n_int = body_dofs(ltri, free[used], lb, np.asarray(b_comps), order)
+        G, inv_K = lame(np.full(len(ltri), 1.0), np.full(len(ltri), float(nu)))
+        ke = element_matrices(lnodes[ltri], G, inv_K, pressure_scale(lnodes, ltri, G))
+        scale = float(pow2(np.min(G) * np.min(element_sizes(lnodes, ltri))))
+        edof = np.concatenate([udof[ltri, 0], udof[ltri, 1], pdof[ltri[:, :3]]], axis=1)
+        rows = np.repeat(edof, 15, axis=1).ravel()
+        cols = np.tile(edof, (1, 15)).ravel()
+        keep = (rows >= 0) & (cols >= 0)
+        K = sp.csc_array((ke.ravel()[keep] / scale, (rows[keep], cols[keep])),
+                         shape=(ndof, ndof))
+        K.sum_duplicates()
+        self.n_int, self.ndof = n_int, ndof
+        self.KIB = K[:n_int, n_int:].tocsc()
+        self._lu = _factor(K[:n_int, :n_int].tocsc())
+        self.udof = udof
+        self.nodes = lnodes
+        self.tri = ltri
+        self.nu = float(nu)
+        self._B, self.points = _vertex_strain_operators(lnodes, ltri)
+
+    def displacements(self, u_B: np.ndarray) -> np.ndarray:
+        """Nodal ``(u_r, u_z)`` (n_nodes, 2, n_states) m of the body for retained
+        displacements ``u_B`` (n_B, n_states) m."""
+        u_B = np.asarray(u_B, float).reshape(self.ndof - self.n_int, -1)
+        x = np.empty((self.ndof, u_B.shape[1]))
+        x[self.n_int:] = u_B
+        x[: self.n_int] = -self._lu.solve(np.asarray(self.KIB @ u_B))
+        u = np.zeros((self.udof.shape[0], 2, u_B.shape[1]))
+        for c in (0, 1):
+            has = self.udof[:, c] >= 0
+            u[has, c] = x[self.udof[has, c]]
+        return u
+
+    def von_mises(self, u_B: np.ndarray, E: np.ndarray) -> np.ndarray:
+        """von Mises stress (n_points, n_states) Pa at :attr:`points` for retained
+        displacements ``u_B`` (n_B, n_states) m and the body's modulus ``E`` (n_states,) Pa
+        of each state."""
+        u = self.displacements(u_B)
+        ue = np.concatenate([u[self.tri, 0], u[self.tri, 1]], axis=1)  # (ne, 12, n)
+        eps = np.einsum("epij,ejn->epin", self._B, ue)  # (ne, 3, 4, n)
+        tr = (eps[:, :, 0] + eps[:, :, 1] + eps[:, :, 2]) / 3.0
+        dev2 = ((eps[:, :, 0] - tr) ** 2 + (eps[:, :, 1] - tr) ** 2 + (eps[:, :, 2] - tr) ** 2
+                + 0.5 * eps[:, :, 3] ** 2)
+        G = np.asarray(E, float) / (2.0 * (1.0 + self.nu))
+        return (np.sqrt(6.0 * dev2) * G).reshape(-1, u_B.shape[1] if u_B.ndim > 1 else 1)
+
+
+def _factor(KII: Any) -> Any:
+    """Sparse LU of ``K_II``: pivot-free in the body's minimum-degree order (as the
+    condensation factors it) when its backward error is small, else threshold-pivoted."""
+    from scipy.sparse.linalg import splu
+
+    try:
+        lu = splu(KII, permc_spec="NATURAL", diag_pivot_thresh=0.0,
+                  options={"SymmetricMode": True})
+        b = np.random.default_rng(PROBE_SEED).uniform(-1.0, 1.0, KII.shape[0])
+        y = lu.solve(b)
+        norm = float(np.max(abs(KII).sum(axis=1)))
+        berr = float(np.max(np.abs(KII @ y - b)) / (norm * np.max(np.abs(y))))
+        if np.isfinite(berr) and berr <= BACKWARD_ERROR_TOL:
+            return lu
+    except RuntimeError:  # "Factor is exactly singular"
+        pass
+    return splu(KII, permc_spec="COLAMD", diag_pivot_thresh=1.0)
+
+
+def _vertex_strain_operators(nodes: np.ndarray, tri: np.ndarray
+                             ) -> tuple[np.ndarray, np.ndarray]:
+    """Strain operators at the elements' vertices: ``B`` (ne, 3, 4, 12) mapping the
+    element's ``(u_r[0..5], u_z[0..5])`` to ``(e_rr, e_zz, e_tt, gamma_rz)``, and the
+    points' ``(r, z)`` (ne * 3, 2) m."""
+    from ssw.contact.elements import p2_shape
+
+    a = VERTEX_PULL
+    xi = np.array([[a, a], [1.0 - 2.0 * a, a], [a, 1.0 - 2.0 * a]])  # near vertices 0, 1, 2
+    n2, g2 = p2_shape(xi)
+    xy = nodes[tri]
+    v = xy[:, :3]
+    jac = np.stack([v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]], axis=2)
+    det = jac[:, 0, 0] * jac[:, 1, 1] - jac[:, 0, 1] * jac[:, 1, 0]
+    inv = np.empty_like(jac)
+    inv[:, 0, 0], inv[:, 1, 1] = jac[:, 1, 1] / det, jac[:, 0, 0] / det
+    inv[:, 0, 1], inv[:, 1, 0] = -jac[:, 0, 1] / det, -jac[:, 1, 0] / det
+    dn = np.einsum("qas,esx->eqax", g2, inv)  # (ne, 3, 6, 2)
+    pts = np.einsum("qa,eax->eqx", n2, xy)  # (ne, 3, 2)
+    ne = len(tri)
+    B = np.zeros((ne, 3, 4, 12))
+    B[:, :, 0, :6] = dn[..., 0]
+    B[:, :, 1, 6:] = dn[..., 1]
+    B[:, :, 2, :6] = n2[None] / pts[:, :, 0:1]
+    B[:, :, 3, :6] = dn[..., 1]
+    B[:, :, 3, 6:] = dn[..., 0]
+    return B, pts.reshape(-1, 2)
+
+
+_FIELDS: OrderedDict[tuple[str, str, float], BodyField] = OrderedDict()
+
+
+def body_field(store: OperatorStore, geom: Geometry, which: str, nu: float) -> BodyField:
+    """The :class:`BodyField` of the ``plate`` or the ``soil`` of ``geom`` at ``nu``
+    (built from the geometry's mesh on first use, then kept: :data:`FIELDS_KEPT`)."""
+    key = (geom.key(), which, float(nu))
+    if key in _FIELDS:
+        _FIELDS.move_to_end(key)
+        return _FIELDS[key]
+    model = store._model(geom)  # the mesh the operators were condensed on (deterministic)
+    b_nodes, b_comps = retained_dofs(model, which)
+    tri = model.tri[model.body == (1 if which == "plate" else 0)]
+    fld = BodyField(model.nodes, tri, model.free, b_nodes, b_comps, nu)
+    _FIELDS[key] = fld
+    while len(_FIELDS) > FIELDS_KEPT:
+        _FIELDS.popitem(last=False)
+    return fld
+
+
+def retained_dofs(model: Any, which: str) -> tuple[np.ndarray, np.ndarray]:
+    """The retained (node, component) of a body, in its condensed operator's order
+    (:func:`ssw.contact.operators._condense`): the plate's candidates then its interface
+    dofs; the soil's interface dofs, or its candidates without a plate."""
+    if which == "plate":
+        return (np.concatenate([model.cand, model.iface_nodes[:, 1]]),
+                np.concatenate([np.ones(len(model.cand), int), model.iface_comp]))
+    if np.any(model.body == 1):
+        return model.iface_nodes[:, 0], model.iface_comp
+    return model.cand, np.ones(len(model.cand), int)
+
+
+def retained_displacements(
+    layout: Layout, plate: BodyOperator | None, soil: BodyOperator, soil_E: float,
+    plate_E: float | None, interface: str, lam: np.ndarray,
+) -> tuple[np.ndarray | None, np.ndarray]:
+    """Retained displacements (m) of the plate (None without one) and of the soil under
+    the constraint forces ``lam`` (N) of the scene's LCP: ``K u = G^T lam`` with ``K`` and
+    ``G`` assembled as :func:`ssw.contact.operators.scene_lcp` does (a sphere candidate's
+    force pushes its ``u_z`` down; a pair of the unilateral interface pulls its two nodes
+    together)."""
+    nc = layout.r.size
+    lam = np.asarray(lam, float)
+    if plate is None:
+        K = soil_E * soil.S
+        return None, _spd_solve(K, -lam[:nc])
+    ni = layout.iface_r.size
+    p_map = np.arange(nc + ni)
+    s_map = nc + np.arange(ni)
+    off = np.zeros(0, dtype=np.int64)
+    if interface == "unilateral":
+        axis = layout.iface_r <= 1e-9 * layout.r[-1]
+        off = np.flatnonzero(~axis)
+        s_map = s_map.copy()
+        s_map[off] = nc + ni + np.arange(off.size)
+    n = int(max(p_map.max(), s_map.max())) + 1
+    K = np.zeros((n, n))
+    K[np.ix_(p_map, p_map)] += plate_E * plate.S
+    K[np.ix_(s_map, s_map)] += soil_E * soil.S
+    f = np.zeros(n)
+    f[:nc] = -lam[:nc]
+    if off.size:
+        li = lam[nc:]
+        np.add.at(f, nc + off, li)
+        np.add.at(f, s_map[off], -li)
+    u = _spd_solve(K, f)
+    return u[p_map], u[s_map]
+
+
+def _spd_solve(K: np.ndarray, f: np.ndarray) -> np.ndarray:
+    try:
+        return cho_solve(cho_factor(0.5 * (K + K.T), lower=True, check_finite=False), f,
+                         check_finite=False)
+    except np.linalg.LinAlgError as exc:
+        raise SolverError(f"the condensed scene stiffness is not positive definite: {exc}"
+                          ) from exc
+
+
+def equivalent_radius(radius: float, top: tuple[float, float], bead: tuple[float, float]
+                      ) -> float:
+    """Radius (m) of the rigid sphere that presses the same Hertz pressure on a body
+    ``top = (E, nu)`` as an elastic bead ``bead = (E, nu)`` of ``radius`` at the same force.
+
+    Hertz: ``a^3 = 3 F R / (4 E*)`` and ``p(r) = p0 sqrt(1 - r^2/a^2)`` with
+    ``1/E* = 1/E_top* + 1/E_bead*`` (``E_i* = E_i / (1 - nu_i^2)``); a rigid sphere of radius
+    ``R'`` on the top body alone gives the same ``a`` (and so the same pressure) at the same
+    force when ``R' / E_top* = R / E*``:
+
+        R' = R (1 + E_top* / E_bead*)
+
+    (Johnson 1985, sec. 4.2). Exact for a half-space of the top material; for a plate on a
+    soil it keeps the local contact pressure of the elastic bead (the rigid sphere of the
+    bead's own radius overstates it by ``(E_top*/E*)^(2/3)``: 1.6 for a steel plate under a
+    steel bead).
+    """
+    e_top = top[0] / (1.0 - top[1] ** 2)
+    e_bead = bead[0] / (1.0 - bead[1] ** 2)
+    return float(radius * (1.0 + e_top / e_bead))
+
+
+def _indentation_at(lcp: Any, force: float, guess: float) -> tuple[Any, float]:
+    """The LCP's path and the indentation (m) at which the sphere carries ``force`` (N):
+    the path is traced to ``guess`` (doubled until it holds the force) and the piecewise
+    linear force inverted on its piece."""
+    from ssw.contact.parametric import trace
+
+    ms = lcp.n_sphere
+    end = float(guess)
+    for _ in range(60):
+        path, _ = trace(lcp.W, lcp.q0, lcp.q1, end)
+        br = path.breaks
+        f_lo = path.lam0[:, :ms].sum(1) + br[:-1] * path.lam1[:, :ms].sum(1)
+        f_hi = path.lam0[:, :ms].sum(1) + br[1:] * path.lam1[:, :ms].sum(1)
+        if f_hi[-1] >= force:
+            j = int(np.searchsorted(f_hi, force, side="left"))
+            slope = path.lam1[j, :ms].sum()
+            d = br[j] + (force - f_lo[j]) / slope if slope > 0 else br[j + 1]
+            return path, float(np.clip(d, br[j], br[j + 1]))
+        end *= 2.0
+    raise SolverError(f"no indentation up to {end:.4g} m carries the force {force:.4g} N")
+
+
+def contact_stresses(
+    soil_E: Any, soil_nu: float, plate: tuple[float, float] | None, plate_thickness: float,
+    radius: float, delta: Any, contact: dict[str, Any] | None = None, *,
+    store: OperatorStore | None = None, fields: bool = False,
+    bead: tuple[float, float] | None = None,
+) -> ContactStress:
+    """Peak von Mises stresses of the plate and of the soil at contact states.
+
+    Parameters
+    ----------
+    soil_E : (n,) Pa, the soil modulus of each state (one soil Poisson's ratio).
+    soil_nu : the soil's Poisson's ratio.
+    plate : (E Pa, nu) of the plate, or None (``plate_thickness`` 0).
+    plate_thickness : m.  radius : m, the rigid sphere's.
+    delta : (n,) m, the sphere's indentation at each state (broadcast with ``soil_E``).
+    contact : the ``contact`` settings (mesh, zone, interface); defaults
+        :data:`ssw.contact.scene.DEFAULTS`.
+    store : the operators (default: the process's, :func:`default_store`).
+    fields : also return every evaluation point's stress (:attr:`ContactStress.fields`).
+    bead : (E Pa, nu) of an elastic bead, or None (a rigid sphere). With a bead, each
+        state is the rigid sphere's at ``delta`` (as the chain's fem wall has it: the
+        bead's compliance moved into the indentation), its force ``F``; the stresses are
+        those of the rigid sphere of :func:`equivalent_radius` carrying the same ``F``
+        (the elastic bead's Hertz pressure on the top body). ``delta`` of the result is
+        then that sphere's indentation.
+    """
+    from ssw.contact.parametric import trace
+    from ssw.contact.scene import settings_of
+
+    E, d = np.broadcast_arrays(np.atleast_1d(np.asarray(soil_E, float)),
+                               np.atleast_1d(np.asarray(delta, float)))
+    if np.any(~(d > 0)) or np.any(~(E > 0)):
+        raise ConfigError("delta, soil_E", (d.tolist(), E.tolist()),
+                          "indentations > 0 m and moduli > 0 Pa")
+    cfg = settings_of(contact or {})
+    interface = cfg["interface"]
+    has_plate = plate_thickness > 0
+    if has_plate and plate is None:
+        raise ConfigError("plate", plate, "(E, nu) of the plate when plate_thickness > 0")
+    store = store if store is not None else default_store()
+    geom = geometry_of(cfg, plate_thickness, radius, float(np.max(d)), interface)
+    layout = store.layout(geom)
+    soil_op = store.body(geom, "soil", soil_nu)
+    plate_op = store.body(geom, "plate", plate[1]) if has_plate else None
+    n = E.size
+    force = np.empty(n)
+    uP, uS = [], []
+    d = d.copy()
+    top = plate if has_plate else (None, soil_nu)
+    for k in range(n):
+        lcp = scene_lcp(layout, plate_op, soil_op, float(E[k]),
+                        plate[0] if has_plate else None, interface, radius)
+        path, _ = trace(lcp.W, lcp.q0, lcp.q1, float(d[k]))
+        lam = path.forces(np.array([d[k]]))[0]
+        ms = lcp.n_sphere
+        if bead is not None:
+            top_E = plate[0] if has_plate else float(E[k])
+            r_eq = equivalent_radius(radius, (top_E, top[1]), bead)
+            lcp = scene_lcp(layout, plate_op, soil_op, float(E[k]),
+                            plate[0] if has_plate else None, interface, r_eq)
+            path, d[k] = _indentation_at(lcp, float(lam[:ms].sum()), float(d[k]))
+            lam = path.forces(np.array([d[k]]))[0]
+        if np.any(path.active[:, ms - 1]):
+            raise SolverError(f"the contact zone reached the last candidate (r = "
+                              f"{layout.r[-1]:.4g} m) at the state {k}: soil E {E[k]:.4g} Pa, "
+                              f"indentation {d[k]:.4g} m")
+        force[k] = float(lam[:ms].sum())
+        up, us = retained_displacements(layout, plate_op, soil_op, float(E[k]),
+                                        plate[0] if has_plate else None, interface, lam)
+        uS.append(us)
+        if up is not None:
+            uP.append(up)
+    out_fields: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+
+    def peaks(which: str, nu: float, u: list[np.ndarray], modulus: np.ndarray) -> BodyPeak:
+        fld = body_field(store, geom, which, nu)
+        vm = fld.von_mises(np.stack(u, axis=1), modulus)
+        j = np.argmax(vm, axis=0)
+        pts = fld.points
+        if fields:
+            out_fields[which] = (pts[:, 0], pts[:, 1], vm)
+        return BodyPeak(vm[j, np.arange(vm.shape[1])], pts[j, 0], pts[j, 1])
+
+    soil = peaks("soil", soil_nu, uS, E)
+    plate_peak = peaks("plate", plate[1], uP, np.full(n, plate[0])) if has_plate else None
+    return ContactStress(d, force, plate_peak, soil, out_fields if fields else None)

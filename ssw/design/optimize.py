@@ -1,0 +1,188 @@
+"""The plate design as an optimization: a bounded search in thickness per material, the
+ranking of every candidate evaluated, and the Pareto front of sensitivity against the
+sample's yield.
+
+Merit. One number ranks candidates (the smaller the better), lexicographic in effect:
+
+    merit = -S + W_hard (v_plate + v_mass) + W_soft v_soil,
+
+``S`` the worst-case sensitivity, ``v`` the relative excess of each index over its limit
+(:attr:`ssw.design.evaluate.Candidate.violations`), ``W_hard`` = :data:`HARD_WEIGHT`
+(a plate that yields, or outweighs its limit, loses to any that does not) and ``W_soft`` =
+:data:`SOFT_WEIGHT` (a sample that yields beyond its limit loses to one that does not;
+when every plate lets it yield, the one that lets it yield least wins). For feasible
+candidates the merit is ``-S``: the most sensitive wins.
+
+Search (:func:`search`). Per material (and plate diameter and striker speed, when those are
+design variables too) the thickness is continuous: :data:`ssw.design.spec.SCAN_POINTS`
+thicknesses log-spaced over the range bracket the best one, then scipy's bounded scalar
+minimization (Brent's method with golden-section steps, Forsythe, Malcolm & Moler 1977,
+``fminbound``) refines the merit in ``ln t`` within the bracket to ``thickness_tol``. The
+contact operators of each thickness are built once and cached on disk
+(:mod:`ssw.contact.operators`), so a repeated design costs the chain and the stresses only.
+
+Ranking (:func:`rank`). The recommended candidate has the least merit of all candidates
+evaluated (scan, search and the device's own plate). The Pareto front is the set of
+candidates whose plate stays elastic and light enough (the hard limits) that no other such
+candidate beats on both the sensitivity (larger) and the soil yield index (smaller).
+
+References
+----------
+Forsythe, G. E., Malcolm, M. A. & Moler, C. B. (1977). *Computer Methods for Mathematical
+Computations*, Prentice-Hall (fmin, Brent 1973).
+"""
+
+from __future__ import annotations
+
+from collections.abc import Iterable
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from ssw.design.evaluate import Candidate, Evaluator
+from ssw.design.spec import DesignSpec
+
+#: Weight of the hard limits' violations (plate yield, mass) in the merit.
+HARD_WEIGHT = 1.0e6
+#: Weight of the soil limit's violation in the merit.
+SOFT_WEIGHT = 10.0
+
+
+def merit(c: Candidate) -> float:
+    """The ranking number of a candidate (module docstring); smaller is better."""
+    v = c.violations
+    return (-c.sensitivity + HARD_WEIGHT * (v["plate_yield_index"] + v["mass_ratio"])
+            + SOFT_WEIGHT * v["soil_yield_index"])
+
+
+@dataclass(frozen=True)
+class Search:
+    """The thickness search of one material (plate diameter, striker speed): its best
+    candidate, every thickness it evaluated (in order) and scipy's report."""
+
+    material: str
+    plate_diameter: float
+    striker_velocity: float
+    best: Candidate
+    evaluated: tuple[float, ...]
+    nfev: int
+    message: str
+
+    def to_dict(self) -> dict[str, Any]:
+        return {"material": self.material, "plate_diameter": self.plate_diameter,
+                "striker_velocity": self.striker_velocity,
+                "best_thickness": self.best.thickness, "best_merit": merit(self.best),
+                "evaluated": list(self.evaluated), "nfev": self.nfev, "message": self.message}
+
+
+def search(ev: Evaluator, material: str, plate_diameter: float | None = None,
+           striker_velocity: float | None = None) -> Search:
+    """The best thickness of ``material`` (module docstring): a log-spaced scan, then a
+    bounded scalar minimization of the merit in ``ln t`` around the scan's best point."""
+    from scipy.optimize import minimize_scalar
+
+    spec = ev.spec
+    lo, hi = np.log(spec.thickness[0]), np.log(spec.thickness[1])
+    xs = np.linspace(lo, hi, spec.scan_points)
+    seen: list[Candidate] = []
+
+    def f(x: float, source: str = "search") -> float:
+        c = ev(material, float(np.exp(x)), plate_diameter, striker_velocity, source)
+        seen.append(c)
+        return merit(c)
+
+    values = [f(x, "scan") for x in xs]
+    k = int(np.argmin(values))
+    a, b = xs[max(k - 1, 0)], xs[min(k + 1, xs.size - 1)]
+    res = minimize_scalar(f, bounds=(a, b), method="bounded",
+                          options={"xatol": spec.thickness_tol})
+    best = min(seen, key=merit)
+    return Search(material, best.plate_diameter, best.striker_velocity, best,
+                  tuple(c.thickness for c in seen), int(res.nfev) + len(xs), str(res.message))
+
+
+def pareto_front(cands: Iterable[Candidate]) -> list[Candidate]:
+    """The candidates meeting the hard limits that no other such candidate dominates
+    (larger sensitivity and smaller soil yield index, one of them strictly), sorted by
+    soil yield index."""
+    pool = [c for c in cands if c.plate_feasible]
+    S = np.array([c.sensitivity for c in pool])
+    Y = np.array([c.soil_yield_index for c in pool])
+    front = []
+    for i, c in enumerate(pool):
+        dom = (S >= S[i]) & (Y <= Y[i]) & ((S > S[i]) | (Y < Y[i]))
+        if not np.any(dom):
+            front.append(c)
+    return sorted(front, key=lambda c: (c.soil_yield_index, -c.sensitivity))
+
+
+@dataclass(frozen=True)
+class Ranking:
+    """Every candidate (by merit), the recommended one and why, and the Pareto front."""
+
+    candidates: list[Candidate]
+    recommended: Candidate
+    reasons: list[str]
+    pareto: list[Candidate]
+
+
+def rank(cands: Iterable[Candidate], spec: DesignSpec) -> Ranking:
+    """Rank candidates by merit; the first is recommended, with the reasons it won."""
+    unique: dict[tuple[str, float, float, float], Candidate] = {}
+    for c in cands:  # one per plate (the same plate from two jobs: keep the reference label)
+        old = unique.get(c.key)
+        if old is None or (c.source == "reference" and old.source != "reference"):
+            unique[c.key] = c
+    pool = sorted(unique.values(), key=merit)
+    if not pool:
+        raise ValueError("no candidate to rank")
+    best = pool[0]
+    return Ranking(pool, best, reasons(best, pool, spec), pareto_front(pool))
+
+
+def reasons(best: Candidate, pool: list[Candidate], spec: DesignSpec) -> list[str]:
+    """Why ``best`` won, in words with its numbers."""
+    feas = [c for c in pool if c.feasible]
+    hard = [c for c in pool if c.plate_feasible]
+    out = []
+    lim = (f"plate yield index {best.plate_yield_index:.3g} (<= 1), soil yield index "
+           f"{best.soil_yield_index:.3g} (limit {spec.soil_yield_limit:g}), mass ratio "
+           f"{best.mass_ratio:.3g} (<= {spec.max_mass_ratio:g})")
+    if best.feasible:
+        out.append(f"meets every limit: {lim}")
+        rivals = [c for c in feas if c is not best]
+        if rivals:
+            nxt = max(rivals, key=lambda c: c.sensitivity)
+            out.append(f"the most sensitive of {len(feas)} feasible candidates: worst-case "
+                       f"sensitivity {best.sensitivity:.4g} against {nxt.sensitivity:.4g} "
+                       f"for the next ({_label(nxt)})")
+        else:
+            out.append(f"the only feasible candidate of {len(pool)}")
+    elif best.plate_feasible:
+        out.append(f"no candidate keeps the sample within its yield limit "
+                   f"{spec.soil_yield_limit:g}; of the {len(hard)} whose plate stays elastic "
+                   f"and light, it yields the sample least: {lim}")
+        out.append(f"worst-case sensitivity {best.sensitivity:.4g}")
+    else:
+        out.append(f"no candidate keeps its plate elastic (and within the mass limit); it "
+                   f"violates the hard limits least: {lim}")
+    lo, hi = spec.thickness
+    if best.thickness <= lo * (1 + 1e-3) or best.thickness >= hi * (1 - 1e-3):
+        side = "lower" if best.thickness <= lo * (1 + 1e-3) else "upper"
+        out.append(f"its thickness is at the {side} bound of the range searched "
+                   f"({lo * 1e3:.3g}-{hi * 1e3:.3g} mm): the optimum may lie beyond it")
+    out.append(f"worst-case resolution dE/E {best.resolution:.3g} "
+               f"(u_TOF {spec.tof_uncertainty:.3g} s)")
+    ref = [c for c in pool if c.source == "reference"]
+    if ref and ref[0] is not best:
+        r = ref[0]
+        out.append(f"against the device's plate ({_label(r)}): sensitivity "
+                   f"{best.sensitivity / r.sensitivity:.3g} x, soil yield index "
+                   f"{best.soil_yield_index / r.soil_yield_index:.3g} x, plate yield index "
+                   f"{best.plate_yield_index:.3g} vs {r.plate_yield_index:.3g}")
+    return out
+
+
+def _label(c: Candidate) -> str:
+    return f"{c.material} {c.thickness * 1e3:.3g} mm"

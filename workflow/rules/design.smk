@@ -1,0 +1,99 @@
+# Plate design: for every soil range of config `design.soils`, which plate under the chain
+# (material x continuous thickness) makes the device most sensitive to the soil's modulus
+# while the plate stays elastic and the sample yields least. One job per range and
+# material (`ssw design --soil-range R --materials M`: a bounded thickness search with the
+# chain on the exact fem wall of each plate), then one table per range ranking the
+# materials' candidates together (`ssw design --merge`).
+# Science lives in ssw.design and ssw.contact.stress; these rules call `ssw design`.
+#
+# Outputs (results/design/):
+#   {soil}/{material}.json          ssw design result of one material (candidates, search)
+#   {soil}.json / {soil}.csv        the range's ranking: recommended plate, reasons, Pareto front
+#   figures/{soil}_pareto.png       sensitivity against the sample's yield index; sensitivity curves
+
+DESIGN_DIR = f"{RESULTS}/design"
+DESIGN_SOILS = list(config.get("design", {}).get("soils", {}))
+DESIGN_MATERIALS = list(config.get("design", {}).get("materials", []))
+
+
+# One soil range, one plate material: the thickness search and its candidates. Input: with
+# calibration.use, the calibration (the design's device is the calibrated one; the design
+# runs the fem wall whatever the study's wall law).
+rule design_material:
+    input:
+        unpack(
+            lambda wc: {
+                k: v
+                for k, v in sswwf.calibrated_inputs(config, RESULTS).items()
+                if k == "calibration"
+            }
+        ),
+    output:
+        json=f"{DESIGN_DIR}/{{soil}}/{{material}}.json",
+    log:
+        f"{LOGS}/design/{{soil}}_{{material}}.log",
+    benchmark:
+        f"{BENCHMARKS}/design/{{soil}}_{{material}}.tsv"
+    wildcard_constraints:
+        soil=sswwf.alternatives(DESIGN_SOILS),
+        material=sswwf.alternatives(DESIGN_MATERIALS),
+    conda:
+        SSW_ENV
+    resources:
+        mem_mb=lambda wc, attempt: sswwf.mem_mb("design", 0) * attempt,
+        runtime=lambda wc, attempt: sswwf.runtime_min("design", 0) * attempt,
+    params:
+        inputs=lambda wc: inputs_of("design", wc.soil),
+        digest=lambda wc: digest_of("design", wc.soil),
+        config=STUDY_CONFIG,
+        calibration=lambda wc, input: sswwf.calibration_flag(input),
+    shell:
+        "python -m ssw --inputs-sha256 {params.digest} design --soil-range {wildcards.soil} "
+        "--materials {wildcards.material} --config {params.config} {params.calibration} "
+        "--output {output.json} > {log} 2>&1"
+
+
+# One soil range: every material's candidates ranked together, the table and the figure.
+rule design_table:
+    input:
+        lambda wc: expand(
+            f"{DESIGN_DIR}/{wc.soil}/{{material}}.json", material=DESIGN_MATERIALS
+        ),
+    output:
+        json=f"{DESIGN_DIR}/{{soil}}.json",
+        csv=report(
+            f"{DESIGN_DIR}/{{soil}}.csv",
+            caption="../report/design_table.rst",
+            category="6. Plate design",
+            subcategory="Tables",
+        ),
+        plot=report(
+            f"{DESIGN_DIR}/figures/{{soil}}_pareto.png",
+            caption="../report/design_pareto.rst",
+            category="6. Plate design",
+            subcategory="Figures",
+        ),
+    log:
+        f"{LOGS}/design/{{soil}}_table.log",
+    benchmark:
+        f"{BENCHMARKS}/design/{{soil}}_table.tsv"
+    wildcard_constraints:
+        soil=sswwf.alternatives(DESIGN_SOILS),
+    conda:
+        SSW_ENV
+    params:
+        inputs=lambda wc: inputs_of("design_table", wc.soil),
+        digest=lambda wc: digest_of("design_table", wc.soil),
+    shell:
+        "python -m ssw --inputs-sha256 {params.digest} design --merge {input} "
+        "--output {output.json} --csv {output.csv} --plot {output.plot} > {log} 2>&1"
+
+
+DESIGN_TARGETS = expand(
+    [
+        f"{DESIGN_DIR}/{{soil}}.json",
+        f"{DESIGN_DIR}/{{soil}}.csv",
+        f"{DESIGN_DIR}/figures/{{soil}}_pareto.png",
+    ],
+    soil=DESIGN_SOILS,
+)

@@ -386,7 +386,7 @@ def solve_path(
                     # a step with the elastic tangent, a contraction for the return mapping
                     res, data, load = fe.residual_matrix(u, upd.stress, upd.tangent,
                                                          np.zeros_like(upd.plastic))
-                lu = splu(fe.restricted(data, free), permc_spec="COLAMD")
+                lu = _factor(fe.restricted(data, free))
                 factorizations += 1
                 rhs = -res / fe.scale
                 if np.any(jump):
@@ -412,7 +412,7 @@ def solve_path(
                 else:
                     _, data_el, _ = fe.residual_matrix(u, upd.stress, None,
                                                        np.zeros_like(upd.plastic))
-                    lu = splu(fe.restricted(data_el, free), permc_spec="COLAMD")
+                    lu = _factor(fe.restricted(data_el, free))
                     factorizations += 1
                     du = lu.solve(-res[free] / fe.scale, trans="T")
             was_elastic = elastic
@@ -582,3 +582,15 @@ def scene_curve(scene: Any, contact_cfg: dict[str, Any], indenter_radius: float)
               "indenter_radius": indenter_radius, "soil_model": scene.soil_model.params(),
               "scene_id": scene.scene_id, **settings_of(contact_cfg)}
     return loading_curve(curve, inputs)
+
+
+def _factor(A: Any) -> Any:
+    """SuperLU of a symmetric quasi-definite Newton matrix (the u-p blocks: SPD displacement
+    block, negative definite pressure block; Vanderbei 1995): a minimum-degree ordering of
+    ``A + A^T`` with diagonal pivots, the symmetric structure's fill; partial pivoting (the
+    COLAMD ordering) when a diagonal pivot fails."""
+    try:
+        return splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
+                    options={"SymmetricMode": True})
+    except RuntimeError:
+        return splu(A, permc_spec="COLAMD")

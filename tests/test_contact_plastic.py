@@ -98,7 +98,12 @@ def test_refusals():
     with pytest.raises(ConfigError, match="punch"):
         solve_path(mesh, E, 0.3, VonMises(Y), R, [dy], punch="spiky")
     with pytest.raises(SolverError, match="did not converge"):
-        solve_path(mesh, E, 0.3, VonMises(Y), R, dy * np.array([1.0, 30.0]), max_iter=2)
+        solve_path(mesh, E, 0.3, VonMises(Y), R, dy * np.array([1.0, 30.0]), max_iter=2,
+                   max_cuts=0)
+    # cut in two until Newton converges: a 3 delta_y first step becomes smaller ones
+    c = solve_path(mesh, E, 0.3, VonMises(Y), R, dy * np.array([3.0]), max_iter=9)
+    assert c.stats["cutbacks"] > 0 and c.delta[-1] == 3 * dy
+    assert np.all(np.diff(c.delta) > 0) and c.delta.size == c.stats["cutbacks"] + 1
 
 
 @pytest.mark.parametrize("model", [CrushableFoam(1.61e6), CrushableFoam(1.61e6, 5e6),

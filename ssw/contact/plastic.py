@@ -86,6 +86,8 @@ SET_UPDATES = 8
 STEP_BOUND = 10.0
 #: Halvings of a Newton step that does not lower the residual.
 LINE_SEARCH = 4
+#: Halvings of an increment whose Newton iteration fails, before SolverError.
+MAX_CUTS = 5
 #: Residual tolerance relative to the load scale (the largest nodal internal force).
 RTOL = 1e-9
 
@@ -308,7 +310,7 @@ class _Model:
 def solve_path(
     mesh: Mesh, E: float, nu: float, model: Any, radius: float, deltas: np.ndarray,
     unload: bool = False, *, rtol: float = RTOL, max_iter: int = MAX_ITER,
-    punch: str | None = None,
+    punch: str | None = None, max_cuts: int = MAX_CUTS,
 ) -> PlasticCurve:
     """Load a rigid sphere of ``radius`` (m) through the indentations ``deltas`` (m,
     increasing) into the soil ``(E Pa, nu)`` of constitutive ``model`` on ``mesh``; with
@@ -318,7 +320,9 @@ def solve_path(
 
     ``punch`` ``smooth`` or ``rough``: a rigid flat punch of radius ``radius`` instead of
     the sphere (frictionless, or without slip under its face; the limit-load check of
-    Eason & Shield 1960)."""
+    Eason & Shield 1960). An increment whose Newton iteration fails is cut in two, at most
+    ``max_cuts`` times (``stats['cutbacks']`` counts them; the path then holds the
+    intermediate indentations)."""
     if not hasattr(model, "update"):
         raise ConfigError("soil_model", model, "a model of ssw.constitutive")
     t0 = time.perf_counter()
@@ -347,10 +351,14 @@ def solve_path(
     residual = None
     factorizations = 0
     load_ref = 0.0  # the largest load scale of the path: a floor once the load is gone
-    for k, d in enumerate(path):
+    k, d_prev, cuts = 0, 0.0, 0
+    h0 = float(deltas[0])  # the first (and uniform) step
+    while k < len(path):
+        d = path[k]
         target = fe.g0 - d
         tol_g = 1e-9 * max(abs(d), fe.h_min * 1e-6)
-        step = abs(d - (path[k - 1] if k else 0.0))
+        step = abs(d - d_prev)
+        u_start, active_start = u.copy(), active.copy()
         prev, was_elastic = np.inf, False
         for it in range(max_iter):
             upd = model.update(E, nu, fe.strain(u), state)
@@ -419,9 +427,18 @@ def solve_path(
             u[free] += du
             u += jump
         else:
+            if step > h0 * 0.5 ** max_cuts * (1 + 1e-9):
+                # cut the increment in two: back to the last converged state
+                u, active = u_start, active_start
+                path.insert(k, 0.5 * (d_prev + d))
+                branch.insert(k, branch[k])
+                cuts += 1
+                continue
             raise SolverError(
                 f"plastic contact: increment {k} (delta = {d:.6g} m) did not converge in "
-                f"{max_iter} Newton iterations (residual {err:.3g} N, load scale {load:.3g} N)")
+                f"{max_iter} Newton iterations (residual {err:.3g} N, load scale {load:.3g} N), "
+                f"its step cut to {step:.3g} m")
+        d_prev = d
         last = (upd.tangent, upd.plastic)
         dep = upd.state[:, :4] - state[:, :4]
         work += float(np.sum(np.einsum("gi,gi->g", upd.stress, dep) * fe.w.ravel()))
@@ -453,6 +470,7 @@ def solve_path(
             residual = float(-u[fe.axis_dof])
             branch = branch[: k + 1]
             break
+        k += 1
     # elastic energy stored in the final state: int (s:s / (4 G) + p^2 / (2 K)) dV
     s = upd.stress @ P_DEV
     pq = fe.pressure_q(u).ravel() if fe.mixed else upd.stress @ ONE / 3.0
@@ -460,7 +478,8 @@ def solve_path(
                            + 0.5 * fe.inv_K * pq * pq) * fe.w.ravel()))
     stats = {"nodes": fe.n, "elements": ne, "dofs": fe.ndof, "candidates": fe.cand.size,
              "increments": len(out["delta"]), "newton_iterations": int(np.sum(out["it"])),
-             "factorizations": factorizations, "wall_total": time.perf_counter() - t0}
+             "factorizations": factorizations, "cutbacks": cuts,
+             "wall_total": time.perf_counter() - t0}
     return PlasticCurve(
         np.array(out["delta"]), np.array(out["force"]), np.array(branch, np.int8),
         np.array(out["a"]), np.array(out["work"]), np.array(out["vol"]),

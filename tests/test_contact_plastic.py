@@ -213,3 +213,22 @@ def test_cli_soil_material(capsys):
                "--config", ci, "--json"])
     assert rc == 0
     assert json.loads(capsys.readouterr().out)["soil_model_key"] == "dp-c50kPa-phi25"
+
+
+def test_bench_plastic_runs(tmp_path, capsys):
+    """``ssw bench contact --plastic`` writes its record and figure; its first yield is
+    Johnson's (a small run: the timing itself is the benchmark's, not a test's)."""
+    import json
+    from pathlib import Path
+
+    from ssw.cli import main
+
+    ci = str(Path(__file__).resolve().parent.parent / "config" / "ci.yaml")
+    rc = main(["bench", "contact", "--plastic", "--plastic-steps", "6", "--plastic-growth",
+               "0.2", "--output-dir", str(tmp_path), "--config", ci, "--json"])
+    assert rc == 0
+    res = json.loads(capsys.readouterr().out)
+    assert (tmp_path / "plastic_bench.json").is_file()
+    assert (tmp_path / "plastic_curve.png").stat().st_size > 0
+    assert res["first_yield_force"] == pytest.approx(res["johnson_first_yield_force"],
+                                                     rel=0.03)

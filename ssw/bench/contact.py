@@ -67,6 +67,9 @@ def register(kinds: argparse._SubParsersAction) -> None:
                    help="also compare the bonded, frictionless and unilateral interfaces")
     p.add_argument("--output-dir", default="results/bench", help="folder of the outputs")
     p.add_argument("--config", default="config/config.yaml", help="study config (YAML)")
+    from ssw.bench.plastic import add_arguments
+
+    add_arguments(p)
     add_json_flag(p)
     p.set_defaults(func=run, human=human)
 
@@ -231,6 +234,11 @@ def wall_study(cfg: dict[str, Any], repeat: int) -> dict[str, Any]:
 def run(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.config import load_config
 
+    if getattr(args, "plastic", False):
+        from ssw.bench.plastic import run_plastic
+
+        return run_plastic(args)
+
     cfg = load_config(args.config)
     contact = {**cfg["contact"], "steps": args.steps, "delta_mode": "fixed"}
     contact.pop("delta_reach", None)
@@ -346,6 +354,10 @@ def _plot(rows: list[dict[str, Any]], path: Path) -> None:
 
 
 def human(res: dict[str, Any]) -> str:
+    if res.get("plastic"):
+        from ssw.bench.plastic import human as plastic_human
+
+        return plastic_human(res)
     lu = res["reference_lu"]
     lines = [f"reference: one LU of the {lu['dofs']}-dof 2-D Laplacian ({lu['solver']}): "
              f"{lu['wall']:.3f} s",

@@ -53,6 +53,26 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--engine", choices=["fem", "layered"], default="fem",
                    help="fem: the axisymmetric FEM (default); layered: the semi-analytic "
                    "oracle, an infinite plate on a half-space (ssw.contact.layered)")
+    p.add_argument("--soil-model",
+                   choices=["von-mises", "drucker-prager", "crushable-foam"],
+                   help="constitutive model of the soil beyond elasticity: the "
+                   "elasto-plastic contact solver (ssw.contact.plastic; half-space only)")
+    p.add_argument("--soil-yield-stress", type=float,
+                   help="von Mises yield stress Y, or the foam's compressive strength, Pa")
+    p.add_argument("--soil-cohesion", type=float, help="Drucker-Prager cohesion c, Pa")
+    p.add_argument("--soil-friction-angle", type=float,
+                   help="Drucker-Prager friction angle phi, degrees")
+    p.add_argument("--soil-dilatancy-angle", type=float,
+                   help="Drucker-Prager dilatancy angle psi, degrees (default phi)")
+    p.add_argument("--soil-material",
+                   help="a material key of the library: its E, nu and strengths (with "
+                   "--soil-model; the strengths are the library's, not fitted)")
+    p.add_argument("--soil-hardening", type=float, default=0.0,
+                   help="linear hardening modulus of the soil, Pa (default 0: perfectly "
+                   "plastic)")
+    p.add_argument("--unload", action="store_true",
+                   help="with --soil-model: lift the sphere back after loading (residual "
+                   "indentation, dissipated work)")
     p.add_argument("--output", help="curve file to write (HDF5), one scene")
     p.add_argument("--output-dir",
                    help="folder of the curve files of the --scene batch (ID.h5 each)")
@@ -140,6 +160,9 @@ def run(args: argparse.Namespace) -> dict[str, Any] | None:
     if args.delta_max is not None or not args.scene:
         contact["delta_mode"] = "fixed"  # --delta-max, and scenes given by flags, reach it
     mats = library(cfg)
+    if args.soil_model is not None or args.unload or args.soil_yield_stress is not None \
+            or args.soil_material is not None:
+        return _run_plastic(args, cfg, contact)
     if args.output_dir is not None:
         return _run_batch(args, cfg, contact, mats)
     scene, mats = _scene(args, cfg, mats)
@@ -160,6 +183,82 @@ def run(args: argparse.Namespace) -> dict[str, Any] | None:
         "contact_radius": curve.contact_radius.tolist(), "output": args.output,
         "stats": curve.stats,
     }
+
+
+#: Increments of a plastic curve when neither --steps nor the config sets them (every
+#: increment is a Newton solve; the elastic path's 1000 are samples of an exact path).
+PLASTIC_STEPS = 100
+
+
+def _run_plastic(args: argparse.Namespace, cfg: dict[str, Any],
+                 contact: dict[str, Any]) -> dict[str, Any]:
+    """The elasto-plastic curve of a sphere on a plastic half-space (loading, and with
+    --unload unloading): the curve, first yield, residual indentation, dissipated work."""
+    from ssw.constitutive import model_from
+    from ssw.contact.plastic import solve_plastic_scene, summary, write_plastic_curve
+
+    if args.soil_model is None:
+        raise ConfigError("--soil-model", None, "a model (von-mises) with --unload or "
+                          "--soil-yield-stress")
+    if args.scene or args.output_dir is not None:
+        raise ConfigError("--scene", args.scene, "soil flags with --soil-model (one scene)")
+    if args.soil_material is not None:
+        from ssw.config import library
+
+        mats = library(cfg)
+        if args.soil_material not in mats:
+            raise ConfigError("--soil-material", args.soil_material,
+                              f"a material of the library: {', '.join(sorted(mats))}")
+        mat = mats[args.soil_material]
+        args.soil_E = mat.E if args.soil_E is None else args.soil_E
+        args.soil_nu = mat.nu if args.soil_nu is None else args.soil_nu
+    for name in ("soil_E", "soil_nu"):
+        if getattr(args, name) is None:
+            raise ConfigError(f"--{name.replace('_', '-')}", None, "a value")
+    if args.plate_thickness not in (None, 0.0):
+        raise ConfigError("--plate-thickness", args.plate_thickness,
+                          "0 with --soil-model (the plastic solver models a half-space)")
+    spec: dict[str, Any] = {"model": args.soil_model}
+    if args.soil_material is not None and args.soil_yield_stress is None \
+            and args.soil_cohesion is None:
+        from ssw.constitutive import model_of_strength
+
+        model = model_of_strength(args.soil_model, mat.strength,
+                                  f"materials.{args.soil_material}")
+    else:
+        if args.soil_model in ("von-mises", "crushable-foam"):
+            if args.soil_yield_stress is None:
+                raise ConfigError("--soil-yield-stress", None, "a stress > 0 Pa")
+            key = "yield_stress" if args.soil_model == "von-mises" else "compressive_strength"
+            spec.update({key: args.soil_yield_stress, "hardening": args.soil_hardening})
+        else:
+            spec.update(cohesion=args.soil_cohesion, friction_angle=args.soil_friction_angle,
+                        dilatancy_angle=args.soil_dilatancy_angle)
+            if args.soil_cohesion is None or args.soil_friction_angle is None:
+                raise ConfigError("--soil-cohesion", args.soil_cohesion,
+                                  "a cohesion (Pa) and --soil-friction-angle (degrees)")
+        model = model_from(spec)
+    if model is None:
+        raise ConfigError("--soil-model", args.soil_model, "a plastic model (von-mises)")
+    if args.steps is None and "steps" not in cfg.get("contact", {}):
+        contact["steps"] = PLASTIC_STEPS
+    radius = float(cfg["indenter"]["radius"])
+    curve = solve_plastic_scene((args.soil_E, args.soil_nu), model, radius, contact,
+                                unload=bool(args.unload))
+    from ssw.contact.scene import settings_of
+
+    inputs = {"soil_E": args.soil_E, "soil_nu": args.soil_nu, "soil_model": model.params(),
+              "soil_model_key": model.key, "indenter_radius": radius, "unload": args.unload,
+              **settings_of(contact)}
+    if args.output:
+        write_plastic_curve(args.output, curve, inputs)
+    return {**inputs, **summary(curve), "delta": curve.delta.tolist(),
+            "force": curve.force.tolist(), "branch": curve.branch.tolist(),
+            "contact_radius": curve.contact_radius.tolist(),
+            "dissipated": curve.dissipated.tolist(),
+            "plastic_volume": curve.plastic_volume.tolist(),
+            "iterations": curve.iterations.tolist(), "output": args.output,
+            "stats": curve.stats, "plastic": True}
 
 
 def scene_reach(scenes: list[Any], cfg: dict[str, Any], contact: dict[str, Any],
@@ -269,12 +368,29 @@ def _human(res: dict[str, Any]) -> str:
         from ssw.contact.layered import describe
 
         return describe(res)
+    if res.get("plastic"):
+        def g(x: Any, unit: str) -> str:
+            return "none" if x is None else f"{x:.6g} {unit}"
+
+        return (f"{res['soil_model_key']} on E = {res['soil_E']:.6g} Pa, nu = "
+                f"{res['soil_nu']:.4g}: F_max = {res['force_max']:.6g} N, first yield at "
+                f"{g(res['first_yield_force'], 'N')}, residual indentation "
+                f"{g(res['residual_indentation'], 'm')}, dissipated work "
+                f"{res['dissipated_work']:.6g} J; {res['stats']['increments']} increments, "
+                f"{res['stats']['newton_iterations']} Newton iterations, wall "
+                f"{res['stats']['wall_total']:.3f} s"
+                + (f"\nwrote {res['output']}" if res["output"] else ""))
     if "curves" in res:  # a batch
         rows = [f"{c['scene_id']}: F = {c['force_max']:.6g} N, solve {c['wall_total']:.3f} s"
                 for c in res["curves"]]
         return "\n".join([*rows, f"{len(rows)} scenes in {res['wall_batch']:.3f} s, "
                            f"curves in {res['output_dir']}"])
     st = res["stats"]
+    if "newton_iterations" in st:  # a scene with a soil model (ssw.contact.plastic)
+        return (f"scene {res['scene_id']}: F({res['delta'][-1]:.4g} m) = "
+                f"{res['force'][-1]:.6g} N; {st['dofs']} dofs, {st['increments']} increments, "
+                f"{st['newton_iterations']} Newton iterations, wall {st['wall_total']:.3f} s"
+                + (f"\nwrote {res['output']}" if res["output"] else ""))
     return (
         f"scene {res['scene_id']}: F({res['delta'][-1]:.4g} m) = "
         f"{res['force'][-1]:.6g} N, contact radius {res['contact_radius'][-1]:.4g} m\n"

@@ -471,6 +471,10 @@ def solve_scene(
     cache : a :class:`MeshCache` shared by the scenes of a batch (None: the process's).
     engine : ``substructured`` (default) or ``monolithic`` (the module docstring).
     """
+    if scene.soil_model is not None:  # elasto-plastic: ssw.contact.plastic
+        from ssw.contact.plastic import scene_curve
+
+        return scene_curve(scene, contact_cfg, indenter_radius)
     plate = None
     plate_key = scene.plate_material if scene.plate_thickness > 0 else "none"
     if scene.plate_thickness > 0:

@@ -1,0 +1,91 @@
+"""von Mises (J2) plasticity with linear isotropic hardening: the radial return.
+
+Yield function ``f = q - (Y + H kappa)``, ``q = sqrt(3/2) |s|`` the von Mises stress,
+``kappa`` the accumulated equivalent plastic strain; associated (Prandtl-Reuss) flow
+``d eps_p = d lambda sqrt(3/2) n``, ``d kappa = d lambda``. Plastic flow is isochoric, so
+the mean stress is elastic, ``p = p_tr``.
+
+Return mapping (backward Euler, closed form; Wilkins 1964, Krieg & Key 1976; Simo &
+Hughes 1998, Box 3.2): with the trial ``q_tr`` above ``Y_n = Y + H kappa_n``,
+
+    d lambda = (q_tr - Y_n) / (3 G + H),   q = q_tr - 3 G d lambda,
+
+and the consistent tangent (Simo & Taylor 1985) is the p-q form of
+:func:`ssw.constitutive.tensors.pq_tangent` with ``dq/dq_tr = H / (3 G + H)`` and the
+deviatoric shrink ``q / q_tr``.
+
+References
+----------
+Simo, J. C. & Hughes, T. J. R. (1998). *Computational Inelasticity*. Springer.
+Simo, J. C. & Taylor, R. L. (1985). *Comput. Methods Appl. Mech. Eng.* 48, 101-118.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from ssw.constitutive.base import YIELD_RTOL, Update, number_text
+from ssw.constitutive.tensors import SQRT_3_2, invariants, pq_tangent, stress_of, trial
+from ssw.errors import ConfigError
+
+
+@dataclass(frozen=True)
+class VonMises:
+    """von Mises plasticity: uniaxial yield stress ``yield_stress`` (Pa) and linear
+    isotropic hardening modulus ``hardening`` (Pa, ``dY / d kappa``; 0: perfectly
+    plastic)."""
+
+    yield_stress: float
+    hardening: float = 0.0
+    name: ClassVar[str] = "von-mises"
+
+    def __post_init__(self) -> None:
+        if not (np.isfinite(self.yield_stress) and self.yield_stress > 0):
+            raise ConfigError("soil_model.yield_stress", self.yield_stress, "a stress > 0 Pa")
+        if not (np.isfinite(self.hardening) and self.hardening >= 0):
+            raise ConfigError("soil_model.hardening", self.hardening,
+                              "a hardening modulus >= 0 Pa")
+
+    @property
+    def key(self) -> str:
+        text = f"vm-Y{number_text(self.yield_stress, 1e6)}MPa"
+        if self.hardening:
+            text += f"-H{number_text(self.hardening, 1e6)}MPa"
+        return text
+
+    @property
+    def strength(self) -> float:
+        """The uniaxial yield stress, Pa."""
+        return float(self.yield_stress)
+
+    def params(self) -> dict[str, Any]:
+        return {"model": self.name, "yield_stress": self.yield_stress,
+                "hardening": self.hardening}
+
+    def update(self, E: float, nu: float, strain: np.ndarray, state: np.ndarray) -> Update:
+        """Radial return of ``strain`` (n, 4) from ``state`` (n, 5) (module docstring)."""
+        K, G, p_tr, q_tr, n = trial(E, nu, strain, state[:, :4])
+        H = float(self.hardening)
+        Yn = self.yield_stress + H * state[:, 4]
+        f = q_tr - Yn
+        yl = f > YIELD_RTOL * self.yield_stress
+        dlam = np.where(yl, f / (3.0 * G + H), 0.0)
+        q = q_tr - 3.0 * G * dlam
+        new = state.copy()
+        new[:, :4] += (SQRT_3_2 * dlam)[:, None] * n
+        new[:, 4] += dlam
+        J = np.zeros((q.size, 2, 2))
+        J[:, 0, 0] = 1.0
+        J[:, 1, 1] = np.where(yl, H / (3.0 * G + H), 1.0)
+        with np.errstate(invalid="ignore", divide="ignore"):
+            ratio = np.where(yl, q / q_tr, 1.0)
+        return Update(stress_of(p_tr, q, n), pq_tangent(K, G, n, J, ratio), new, yl,
+                      yl.astype(np.int8))
+
+    def yield_ratio(self, stress: np.ndarray, state: np.ndarray) -> np.ndarray:
+        """``q / (Y + H kappa)`` (n,)."""
+        _, q = invariants(stress)
+        return q / (self.yield_stress + self.hardening * state[:, 4])

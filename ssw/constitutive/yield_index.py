@@ -1,0 +1,47 @@
+"""How close a measurement's contact came to yielding the sample: the Hertz peak pressure
+over the sample's strength, and whether von Mises yield started below the surface.
+
+With the peak contact force ``F`` of a hit (N), the bead's radius ``R`` (m) and the sample's
+``E*`` = ``E / (1 - nu^2)`` (rigid bead), Hertz's peak pressure is
+``p0 = (6 F E*^2 / (pi^3 R^2))^(1/3)`` (Johnson 1985, eq. 4.23); the yield index is
+``p0 / strength`` (the strength a material's library entry states: compressive for foams,
+the yield stress for metals, the unconfined compressive strength of a soil). A von Mises
+half-space first yields below the surface at ``p0 = k(nu) Y`` (``k`` = 1.61 at nu 0.3,
+Johnson 1985, sec. 6.1; :func:`first_yield_ratio`): the index compares pressures,
+``first_yield`` applies the yield criterion.
+
+References
+----------
+Johnson, K. L. (1985). *Contact Mechanics*. Cambridge, sec. 4.2 and 6.1.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+
+def hertz_peak_pressure(force: np.ndarray, E: float, nu: float, radius: float) -> np.ndarray:
+    """``p0 = (6 F E*^2 / (pi^3 R^2))^(1/3)`` (Pa) of forces ``F`` (N) on a half-space of
+    ``E`` (Pa), ``nu`` under a rigid sphere of ``radius`` (m)."""
+    Es = float(E) / (1.0 - float(nu) ** 2)
+    F = np.asarray(force, float)
+    return np.cbrt(6.0 * F * Es * Es / (np.pi ** 3 * float(radius) ** 2))
+
+
+def first_yield_ratio(nu: float) -> float:
+    """``k = p0 / Y`` at first von Mises yield under a sphere (1.61 at nu 0.3): the peak of
+    ``(sigma_r - sigma_z) / p0`` on the axis (Johnson 1985, sec. 6.1), inverted."""
+    z = np.linspace(1e-4, 3.0, 30001)
+    sz = -1.0 / (1.0 + z * z)
+    sr = -((1.0 + nu) * (1.0 - z * np.arctan(1.0 / z)) - 0.5 / (1.0 + z * z))
+    return 1.0 / float(np.max(sr - sz))
+
+
+def yield_index(force: np.ndarray, E: float, nu: float, radius: float,
+                strength: float) -> dict[str, np.ndarray]:
+    """``{"p0": Pa, "index": p0 / strength, "first_yield": p0 > k(nu) strength}`` of peak
+    forces ``F`` (N): the index and whether a von Mises sample of yield stress ``strength``
+    has started to yield (the measurement then carries more than E)."""
+    p0 = hertz_peak_pressure(force, E, nu, radius)
+    return {"p0": p0, "index": p0 / float(strength),
+            "first_yield": p0 > first_yield_ratio(nu) * float(strength)}

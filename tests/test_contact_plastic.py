@@ -1,0 +1,234 @@
+"""Elasto-plastic contact of a rigid sphere on a von Mises half-space: the elastic engine's
+curve below first yield, Johnson's first yield for two Poisson's ratios, loading and
+unloading (residual indentation, energy balance), refusal of what it does not model."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from ssw.constitutive import CrushableFoam, DruckerPrager, VonMises
+from ssw.contact.mesh import MeshSettings, build_mesh
+from ssw.contact.plastic import johnson_first_yield, solve_path
+from ssw.errors import ConfigError, SolverError
+
+E, Y, R = 100e6, 1e6, 4.75e-3
+
+
+def _setting(nu: float, fine: float = 10.0, growth: float = 0.2) -> tuple[dict, float, float]:
+    Fy, dy = johnson_first_yield(E, nu, Y, R)
+    a = np.sqrt(R * dy)
+    cfg = {"soil_radius": 60 * a, "soil_depth": 60 * a, "mesh_size_contact": a / fine,
+           "mesh_growth": growth, "mesh_size_max": 10 * a, "plate_layers": 1}
+    return cfg, Fy, dy
+
+
+def _mesh(cfg):
+    return build_mesh(0.0, 0.0, MeshSettings(
+        cfg["soil_radius"], cfg["soil_depth"], cfg["mesh_size_contact"], cfg["mesh_growth"],
+        cfg["mesh_size_max"], cfg["plate_layers"]))
+
+
+def test_johnson_constants():
+    """The axis stresses of Hertz give Johnson's p0 / Y at first yield (1.61 at nu 0.3,
+    1.81 at nu 0.45 after his table) and F_y = pi^3 R^2 p0^3 / (6 E*^2)."""
+    for nu, k in ((0.3, 1.61), (0.45, 1.81)):
+        F, d = johnson_first_yield(E, nu, Y, R)
+        Es = E / (1 - nu * nu)
+        p0 = (6 * F * Es ** 2 / (np.pi ** 3 * R ** 2)) ** (1 / 3)
+        assert p0 / Y == pytest.approx(k, abs=0.01)
+        assert d == pytest.approx((3 * F / (4 * Es * np.sqrt(R))) ** (2 / 3), rel=1e-12)
+
+
+def test_below_first_yield_equals_elastic_engine():
+    """Below first yield, the plastic solver's curve is the elastic engine's (the monolithic
+    PETSc engine with its LCP, same mesh and increments) to round-off."""
+    from ssw.contact.scene import indentation_steps, solve_curve
+
+    cfg, _Fy, dy = _setting(0.3)
+    cfg = {**cfg, "delta_max": 0.9 * dy, "steps": 6, "candidate_factor": 3.0}
+    elastic, state = solve_curve((E, 0.3), None, 0.0, R, cfg, engine="monolithic")
+    state["solver"].destroy()
+    deltas = indentation_steps(cfg["delta_max"], cfg["steps"])
+    plastic = solve_path(_mesh(cfg), E, 0.3, VonMises(Y), R, deltas)
+    assert plastic.plastic_volume[-1] == 0.0 and plastic.first_yield_force is None
+    np.testing.assert_allclose(plastic.force, elastic.force, rtol=1e-7)
+    np.testing.assert_allclose(plastic.contact_radius, elastic.contact_radius, rtol=1e-6)
+    assert plastic.dissipated_work == 0.0
+
+
+@pytest.mark.parametrize("nu", [0.3, 0.45])
+def test_first_yield_force_matches_johnson(nu):
+    """First yield within 3 % of Johnson's Hertz force (p0 = 1.61 Y at nu 0.3, 1.81 Y at
+    nu 0.45) and in the first plastic increment's bracket."""
+    cfg, Fy, dy = _setting(nu)
+    deltas = dy * np.linspace(0, 1.2, 13)[1:]
+    c = solve_path(_mesh(cfg), E, nu, VonMises(Y), R, deltas)
+    assert c.first_yield_force == pytest.approx(Fy, rel=0.03)
+    k = int(np.argmax(c.plastic_volume > 0))
+    assert c.force[k - 1] < c.first_yield_force <= c.force[k]
+    # the first plastic points lie on the axis near depth 0.48 a (0.53 a at nu 0.45)
+    a = np.sqrt(R * dy)
+    assert c.plastic_depth[k] == pytest.approx((0.48 if nu == 0.3 else 0.53) * a, rel=0.35)
+
+
+def test_loading_unloading_energy_and_residual_indentation():
+    """Loaded to 3 delta_y and unloaded: permanent set > 0, unloading elastic (no more
+    plastic work), and the work of the sphere = plastic work + the elastic energy locked in
+    by the residual stresses (trapezoidal work vs the backward-Euler plastic work: a
+    first-order quadrature, 1e-3 at 30 steps)."""
+    cfg, Fy, dy = _setting(0.3)
+    deltas = dy * np.linspace(0, 3, 31)[1:]
+    c = solve_path(_mesh(cfg), E, 0.3, VonMises(Y), R, deltas, unload=True)
+    load, unl = c.branch == 0, c.branch == 1
+    assert c.residual_indentation is not None and 0 < c.residual_indentation < deltas[-1]
+    assert c.force[unl][-1] == 0.0 and np.all(np.diff(c.force[unl]) <= 0)
+    # the loading curve falls below the elastic (Hertz-like) F ~ delta^1.5 after yield
+    k = np.flatnonzero(load)[-1]
+    assert c.force[k] < Fy * (deltas[-1] / dy) ** 1.5
+    assert c.dissipated_work > 0
+    balance = c.external_work - c.dissipated_work - c.stored_energy
+    assert abs(balance) < 1e-3 * c.external_work
+    assert c.stats["newton_iterations"] < 12 * c.stats["increments"]
+
+
+def test_refusals():
+    cfg, _Fy, dy = _setting(0.3)
+    mesh = _mesh(cfg)
+    with pytest.raises(ConfigError, match="punch"):
+        solve_path(mesh, E, 0.3, VonMises(Y), R, [dy], punch="spiky")
+    with pytest.raises(SolverError, match="did not converge"):
+        solve_path(mesh, E, 0.3, VonMises(Y), R, dy * np.array([1.0, 30.0]), max_iter=2,
+                   max_cuts=0)
+    # cut in two until Newton converges: a 3 delta_y first step becomes smaller ones
+    c = solve_path(mesh, E, 0.3, VonMises(Y), R, dy * np.array([3.0]), max_iter=9)
+    assert c.stats["cutbacks"] > 0 and c.delta[-1] == 3 * dy
+    assert np.all(np.diff(c.delta) > 0) and c.delta.size == c.stats["cutbacks"] + 1
+
+
+@pytest.mark.parametrize("model", [CrushableFoam(1.61e6), CrushableFoam(1.61e6, 5e6),
+                                   DruckerPrager(0.3e6, 30.0, dilatancy_angle=10.0)],
+                         ids=lambda m: m.key)
+def test_volume_changing_models(model):
+    """Crushable foam and Drucker-Prager (the displacement form of the element): the
+    elastic start is the mixed element's to the P2 discretization error, loading-unloading
+    leaves a dent, and the sphere's work = plastic work + stored energy (to 1e-3 of the
+    loading work at 30 steps)."""
+    cfg, _Fy, dy = _setting(0.3)
+    mesh = _mesh(cfg)
+    deltas = dy * np.linspace(0, 3, 31)[1:]
+    c = solve_path(mesh, E, 0.3, model, R, deltas, unload=True)
+    ref = solve_path(mesh, E, 0.3, VonMises(1e12), R, deltas[:2])
+    np.testing.assert_allclose(c.force[:2], ref.force, rtol=5e-3)
+    assert c.first_yield_force is not None and c.residual_indentation > 0
+    load = c.branch == 0
+    w_load = float(np.sum(0.5 * (c.force[load][1:] + c.force[load][:-1])
+                          * np.diff(c.delta[load])))
+    balance = c.external_work - c.dissipated_work - c.stored_energy
+    assert c.dissipated_work > 0 and abs(balance) < 1e-3 * w_load
+
+
+def _punch(kind: str, growth: float):
+    """Mean pressure / Y of a punch of radius a pressed to 0.06 a (E = 1000 Y): fine steps
+    through the elastic-plastic transition, coarser on the plateau."""
+    Yp, a = 1e6, 1e-3
+    mesh = build_mesh(0.0, 0.0, MeshSettings(8 * a, 8 * a, growth * a, growth, a, 1))
+    # the punch's edge on the surface vertex nearest r = a (the mesh is not aligned with it)
+    top = np.unique(mesh.tri[:, :3])
+    top = top[np.abs(mesh.nodes[top, 1]) < 1e-9 * a]
+    a = float(mesh.nodes[top[np.argmin(np.abs(mesh.nodes[top, 0] - a))], 0])
+    deltas = a * np.concatenate([np.linspace(0, 0.02, 21)[1:], np.linspace(0.02, 0.06, 9)[1:]])
+    c = solve_path(mesh, 1000 * Yp, 0.3, VonMises(Yp), a, deltas, punch=kind)
+    return c.force / (np.pi * a * a * Yp)  # mean pressure / Y
+
+
+def test_flat_punch_limit_load_brackets():
+    """Rigid flat punch on a von Mises half-space: the mean pressure levels off at a limit
+    between Eason & Shield's Tresca limits (5.69 k smooth, 6.05 k rough) of the Tresca
+    hexagons inscribed (k = Y/2) and circumscribed (k = Y/sqrt(3)) about the von Mises
+    surface, the rough punch above the smooth one. (Under the Haar-Karman hypothesis, a
+    hoop stress equal to a meridional principal stress, von Mises is Tresca with k = Y/2;
+    the von Mises solution does not keep to it everywhere, and its limit lies inside.)"""
+    smooth, rough = _punch("smooth", 0.1), _punch("rough", 0.1)
+    for p, N in ((smooth, 5.69), (rough, 6.05)):
+        assert abs(p[-1] / p[-2] - 1) < 1e-3  # levelled off
+        assert N / 2 < p[-1] < N / np.sqrt(3)
+    assert rough[-1] > smooth[-1] * 1.03
+
+
+def test_config_soil_model(tmp_path):
+    """``sets.*.soil_model`` enters the scenes (and their ids); such a scene is solved by the
+    plastic solver, whose loading curve below yield is the elastic scene's (the
+    substructured engine); an unknown model is refused by the schema."""
+    import yaml
+
+    from ssw.config import all_scenes, library, load_config
+    from ssw.contact import solve_scene
+
+    sets = {"plate_material": ["pla"], "plate_thickness": {"values": [0.0]},
+            "soil_E": {"values": [38e6]}, "soil_nu": {"values": [0.34]}}
+    cfg = {"contact": {"delta_max": 4e-6, "steps": 4, "mesh_growth": 0.2,
+                       "soil_radius": 0.05, "soil_depth": 0.05, "mesh_size_max": 5e-3},
+           "sets": {"elastic": sets,
+                    "plastic": {**sets, "soil_model": {"model": "von-mises",
+                                                       "yield_stress": 1e9}}}}
+    path = tmp_path / "c.yaml"
+    path.write_text(yaml.safe_dump(cfg))
+    c = load_config(path)
+    scenes = all_scenes(c)
+    assert set(scenes) == {"noplate-E38MPa-nu0.340", "noplate-E38MPa-nu0.340-vm-Y1000MPa"}
+    radius = c["indenter"]["radius"]
+    el = solve_scene(scenes["noplate-E38MPa-nu0.340"], c["contact"], radius, library(c))
+    pl = solve_scene(scenes["noplate-E38MPa-nu0.340-vm-Y1000MPa"], c["contact"], radius,
+                     library(c))
+    assert pl.inputs["soil_model"]["yield_stress"] == 1e9
+    np.testing.assert_allclose(pl.force, el.force, rtol=1e-6)
+    cfg["sets"]["plastic"]["soil_model"] = {"model": "cam-clay"}
+    path.write_text(yaml.safe_dump(cfg))
+    with pytest.raises(ConfigError):
+        load_config(path)
+
+
+def test_cli_soil_material(capsys):
+    """``--soil-material pcf08 --soil-model crushable-foam``: E, nu and the compressive
+    strength come from the library (not fitted); Drucker-Prager from flags."""
+    import json
+    from pathlib import Path
+
+    from ssw.cli import main
+    from ssw.materials import material_set
+
+    ci = str(Path(__file__).resolve().parent.parent / "config" / "ci.yaml")
+    pcf08 = material_set("realistic")["pcf08"]
+    rc = main(["contact", "--soil-material", "pcf08", "--plate-thickness", "0",
+               "--soil-model", "crushable-foam", "--delta-max", "4e-6", "--steps", "4",
+               "--config", ci, "--json"])
+    assert rc == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["soil_E"] == pcf08.E and res["soil_nu"] == pcf08.nu
+    assert res["soil_model"]["compressive_strength"] == pcf08.strength.compressive
+    rc = main(["contact", "--soil-E", "40e6", "--soil-nu", "0.35", "--plate-thickness", "0",
+               "--soil-model", "drucker-prager", "--soil-cohesion", "50e3",
+               "--soil-friction-angle", "25", "--delta-max", "4e-6", "--steps", "4",
+               "--config", ci, "--json"])
+    assert rc == 0
+    assert json.loads(capsys.readouterr().out)["soil_model_key"] == "dp-c50kPa-phi25"
+
+
+def test_bench_plastic_runs(tmp_path, capsys):
+    """``ssw bench contact --plastic`` writes its record and figure; its first yield is
+    Johnson's (a small run: the timing itself is the benchmark's, not a test's)."""
+    import json
+    from pathlib import Path
+
+    from ssw.cli import main
+
+    ci = str(Path(__file__).resolve().parent.parent / "config" / "ci.yaml")
+    rc = main(["bench", "contact", "--plastic", "--plastic-steps", "6", "--plastic-growth",
+               "0.2", "--output-dir", str(tmp_path), "--config", ci, "--json"])
+    assert rc == 0
+    res = json.loads(capsys.readouterr().out)
+    assert (tmp_path / "plastic_bench.json").is_file()
+    assert (tmp_path / "plastic_curve.png").stat().st_size > 0
+    assert res["first_yield_force"] == pytest.approx(res["johnson_first_yield_force"],
+                                                     rel=0.03)

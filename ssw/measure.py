@@ -15,6 +15,16 @@ file) is used instead and the term is labelled ``tof (stated scatter)``; without
 term is missing from the interval, which says so (``missing_terms``), and a survey verdict
 on it is inconclusive.
 
+Yield. When the sample's strength is known (:func:`uniaxial_strength` of a library
+material, or stated), :func:`yield_check` reports how close the measured hit came to
+yielding it: the chain at the measured E gives the wall's peak indentation, the contact
+FEM's elastic field at that state (:func:`ssw.contact.stress.contact_stresses`: through the
+plate, with the bead's compliance) the sample's peak von Mises stress, and the yield index
+is that stress over the strength. At 1 or above the sample has started to yield under the
+bead (Johnson 1985, sec. 6.1: a sphere on a half-space first yields below the surface, at
+``p0 = 1.61 Y`` for nu 0.3): the TOF then carries plastic work as well as E, and the
+measurement says so.
+
 Sampling. A peak time read from a record sampled at ``f_s`` carries a systematic error (the
 module's anti-alias filter reshaping the pulses, the sub-sample interpolation) that the mean
 over hits does not average away. It enters as a TOF uncertainty
@@ -100,6 +110,51 @@ class Measurement:
         }
 
 
+def uniaxial_strength(strength: Any) -> float | None:
+    """The uniaxial strength (Pa) a sample's von Mises stress is compared with, from a
+    :class:`ssw.materials.Strength`: the yield stress, else the compressive strength (foams:
+    the crushing plateau), else the unconfined compressive strength of Mohr-Coulomb
+    ``q_u = 2 c cos(phi) / (1 - sin(phi))``; None when none is known."""
+    if strength is None:
+        return None
+    if strength.yield_stress is not None:
+        return float(strength.yield_stress)
+    if strength.compressive is not None:
+        return float(strength.compressive)
+    if strength.cohesion is not None and strength.friction_angle is not None:
+        phi = np.radians(float(strength.friction_angle))
+        return float(2.0 * strength.cohesion * np.cos(phi) / (1.0 - np.sin(phi)))
+    return None
+
+
+def yield_check(E: float, nu: float, params: Any, wall_options: dict[str, Any] | None,
+                strength: float) -> dict[str, Any]:
+    """How close a hit on a sample of modulus ``E`` (Pa), ``nu`` came to yielding it (module
+    docstring): ``{"sample_peak_von_mises": Pa, "sample_strength": Pa, "yield_index": -,
+    "sample_yielded": bool, "peak_wall_force": N}``, from the device's chain ``params`` on
+    its exact FEM wall (``wall_options``: its ``contact`` settings and operators)."""
+    from ssw.chain.api import peaks
+    from ssw.chain.wall import compliance_scale
+    from ssw.contact.stress import contact_stresses
+    from ssw.errors import ConfigError
+
+    if not (np.isfinite(strength) and strength > 0):
+        raise ConfigError("sample strength", strength, "a strength > 0 Pa")
+    opts = {k: v for k, v in (wall_options or {}).items() if k in ("contact", "operators")}
+    _, run = peaks(E, nu, params, "fem", **opts)
+    d = run.peak_wall_indentation[:1] / compliance_scale(params, np.array([E]),
+                                                         np.array([nu]))
+    plate = (params.plate_E, params.plate_nu) if params.plate_thickness > 0 else None
+    contact = {**(opts.get("contact") or {}), "plate_diameter": params.plate_diameter}
+    st = contact_stresses(np.array([E]), nu, plate, params.plate_thickness,
+                          params.bead_radius, d, contact, store=opts.get("operators"),
+                          bead=(params.bead_E, params.bead_nu))
+    peak = float(st.soil.peak[0])
+    return {"sample_peak_von_mises": peak, "sample_strength": float(strength),
+            "yield_index": peak / float(strength), "sample_yielded": bool(peak >= strength),
+            "peak_wall_force": float(st.force[0])}
+
+
 def pooled_tof(recordings: list[Any], tof_options: Any = None) -> dict[str, Any]:
     """Per-hit TOFs of every recording (the rejection rule applied per session), pooled:
     the accepted hits' mean, sample std and standard error of the mean (s)."""
@@ -129,7 +184,7 @@ def pooled_tof(recordings: list[Any], tof_options: Any = None) -> dict[str, Any]
 def measure(
     recordings: list[Any], nu: float | tuple[float, float], params: Any, wall: str,
     wall_options: dict[str, Any] | None = None, *, calibration: Any = None,
-    tof_options: Any = None, device: Any = None,
+    tof_options: Any = None, device: Any = None, strength: float | None = None,
 ) -> Measurement:
     """E with its 95 % interval from the recordings of one test point (module docstring).
 
@@ -141,6 +196,9 @@ def measure(
     calibration : the :class:`ssw.calibration.Calibration` (its covariance enters) or None.
     device : the :class:`ssw.device.Device` (its stated TOF scatter, when there are too few
         hits to estimate one).
+    strength : the sample's uniaxial strength, Pa (:func:`uniaxial_strength`), or None:
+        with it, the measurement reports its yield index (:func:`yield_check`) and warns
+        when the sample yielded.
     """
     from ssw.modulus import estimate_moduli
 
@@ -174,6 +232,18 @@ def measure(
     from ssw.modulus import COVERAGE_Z
 
     notes = [*est.notes, *notes]
+    extra: dict[str, Any] = {"dlnTOF_dlnE": est.dlnTOF_dlnE,
+                             "wall_extrapolated": est.extrapolated}
+    if strength is not None:
+        yc = yield_check(est.E, est.nu, params, wall_options, strength)
+        extra.update(yc)
+        if yc["sample_yielded"]:
+            notes.append(
+                f"the sample yielded under the bead: peak von Mises stress "
+                f"{yc['sample_peak_von_mises'] / 1e6:.3g} MPa is {yc['yield_index']:.2f} x its "
+                f"strength {strength / 1e6:.3g} MPa (elastic field at the hit's peak force "
+                f"{yc['peak_wall_force']:.3g} N): the TOF carries plastic work as well as E; "
+                "a lower striker speed or a thicker plate keeps it elastic (ssw design)")
     return Measurement(
         E=est.E, E_low=est.E * float(np.exp(-COVERAGE_Z * u)),
         E_high=est.E * float(np.exp(COVERAGE_Z * u)), u=u, contributions=contrib,
@@ -183,8 +253,7 @@ def measure(
         rejections=pool["rejections"], files=[r.path for r in recordings],
         sample_rate=pool["sample_rate"], nu=est.nu, nu_range=est.nu_range,
         synthetic=any(bool(r.meta.get("synthetic", False)) for r in recordings),
-        missing=missing, extra={"dlnTOF_dlnE": est.dlnTOF_dlnE,
-                                "wall_extrapolated": est.extrapolated},
+        missing=missing, extra=extra,
     )
 
 

@@ -36,8 +36,35 @@ def run_measure(args: argparse.Namespace) -> dict[str, Any]:
         args.lowpass = ctx.cfg.get("validation", {}).get("lowpass")
     m = measure(recs, nu, ctx.params, ctx.wall, ctx.wall_options,
                 calibration=ctx.calibration, tof_options=tof_options(args, ctx.params),
-                device=ctx.device)
+                device=ctx.device, strength=sample_strength(args, ctx))
     return {**ctx.inputs(), **m.to_dict()}
+
+
+def sample_strength(args: argparse.Namespace, ctx: Any) -> float | None:
+    """The sample's uniaxial strength (Pa): ``--sample-strength``, else that of the library
+    material ``--sample-material`` (:func:`ssw.measure.uniaxial_strength`), else None."""
+    from ssw.errors import ConfigError
+    from ssw.measure import uniaxial_strength
+
+    if args.sample_strength is not None and args.sample_material is not None:
+        raise ConfigError("--sample-strength", args.sample_strength,
+                          "not with --sample-material (which states one)")
+    if args.sample_strength is not None:
+        return float(args.sample_strength)
+    if args.sample_material is None:
+        return None
+    from ssw.config import library
+
+    mats = library(ctx.cfg)
+    if args.sample_material not in mats:
+        raise ConfigError("--sample-material", args.sample_material,
+                          f"a material of the library: {', '.join(sorted(mats))}")
+    value = uniaxial_strength(mats[args.sample_material].strength)
+    if value is None:
+        raise ConfigError("--sample-material", args.sample_material,
+                          "a material whose library entry states a strength (yield, "
+                          "compressive, or cohesion and friction angle)")
+    return value
 
 
 def _format_options(path: str, opts: dict[str, Any]) -> dict[str, Any]:
@@ -64,6 +91,11 @@ def _human(r: dict[str, Any]) -> str:
         "uncertainty of E (1 sigma): {:.2f} % = {}".format(
             r["E_u_pct"], ", ".join(f"{k} {v:.2f} %" for k, v in r["contributions_pct"].items())),
     ]
+    if "yield_index" in r:
+        lines.append(f"yield index {r['yield_index']:.2f} (sample peak von Mises "
+                     f"{r['sample_peak_von_mises'] / 1e6:.3g} MPa over its strength "
+                     f"{r['sample_strength'] / 1e6:.3g} MPa)"
+                     + (": YIELDED" if r["sample_yielded"] else ""))
     lines += [f"NOT IN THE INTERVAL: {k}: {v}" for k, v in r.get("missing_terms", {}).items()]
     lines += [f"note: {n}" for n in r["notes"]]
     lines += [f"rejected: {x}" for x in r["rejections"]]
@@ -81,6 +113,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("files", nargs="+", help="recordings of one test point")
     p.add_argument("--soil-nu", required=True, metavar="NU|LO:HI",
                    help="Poisson's ratio of the medium, or a range LO:HI")
+    p.add_argument("--sample-strength", type=float, metavar="PA",
+                   help="the sample's uniaxial strength, Pa: report the yield index (peak von "
+                   "Mises stress under the bead over it) and warn when the sample yielded")
+    p.add_argument("--sample-material", metavar="KEY",
+                   help="the sample's material in the library (its strength, e.g. pcf15)")
     add_recording_options(p)
     add_tof_options(p)
     add_device_options(p)

@@ -207,7 +207,8 @@ def fem_wall(
     params : the chain; its ``bead_radius`` (the indenter), ``plate_*`` (the plate; thickness
         0: none), striker, masses, gravity and preload (the range).
     soil_E, soil_nu : Pa and -, broadcast together: one scene each.
-    contact : the ``contact`` settings (mesh, zone); defaults :data:`ssw.contact.DEFAULTS`.
+    contact : the ``contact`` settings (mesh, zone); defaults :data:`ssw.contact.DEFAULTS`;
+        the plate's interface and diameter are the device's (``params``), not these.
     operators : an :class:`ssw.contact.operators.OperatorStore` (default: the process's).
     """
     from ssw.chain.wall import compliance_scale, scene_arrays
@@ -217,7 +218,9 @@ def fem_wall(
     from ssw.hertz import effective_modulus, hertz_coefficient
 
     E, nu = scene_arrays(soil_E, soil_nu)
-    cfg = settings_of({**(contact or {}), "interface": params.plate_interface})
+    # the plate is the device's: its interface and diameter, whatever the contact settings say
+    cfg = settings_of({**(contact or {}), "interface": params.plate_interface,
+                       "plate_diameter": params.plate_diameter})
     store = operators if operators is not None else default_store()
     R = float(params.bead_radius)
     t = float(params.plate_thickness)

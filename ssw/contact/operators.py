@@ -396,6 +396,30 @@ class SceneLCP:
     dofs: int
 
 
+def coupled_stiffness(
+    plate_S: np.ndarray, soil_S: np.ndarray, plate_E: float, soil_E: float, layout: Any,
+    nc: int, unilateral: bool,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The condensed plate and soil assembled on their retained dofs: ``K`` (Pa m-scaled),
+    the plate's dofs ``p_map`` (candidates, then interface) and the soil's ``s_map``
+    (interface) in it, and ``off`` the interface nodes whose plate and soil dofs are two
+    (``unilateral``: every node off the axis; else none, the interface is shared)."""
+    ni = layout.iface_r.size
+    p_map = np.arange(nc + ni)
+    s_map = nc + np.arange(ni)
+    off = np.zeros(0, dtype=np.int64)
+    if unilateral:
+        axis = layout.iface_r <= 1e-9 * layout.r[-1]
+        off = np.flatnonzero(~axis)
+        s_map = s_map.copy()
+        s_map[off] = nc + ni + np.arange(off.size)
+    n = int(max(p_map.max(), s_map.max())) + 1
+    K = np.zeros((n, n))
+    K[np.ix_(p_map, p_map)] += plate_E * plate_S
+    K[np.ix_(s_map, s_map)] += soil_E * soil_S
+    return K, p_map, s_map, off
+
+
 def scene_lcp(layout: Layout, plate: BodyOperator | None, soil: BodyOperator,
               soil_E: float, plate_E: float | None, interface: str, radius: float) -> SceneLCP:
     """Assemble ``E_plate P + E_soil S`` and condense it onto the contact constraints.
@@ -438,17 +462,9 @@ def scene_lcp(layout: Layout, plate: BodyOperator | None, soil: BodyOperator,
                               f"{exc}") from exc
         return SceneLCP(0.5 * (W + W.T), q0s, -np.ones(nc), nc, layout.r, layout.weight,
                         None, nc + ni)
-    p_map = np.arange(nc + ni)
-    s_map = nc + np.arange(ni)
-    if unilateral:
-        axis = layout.iface_r <= 1e-9 * layout.r[-1]
-        off = np.flatnonzero(~axis)
-        s_map = s_map.copy()
-        s_map[off] = nc + ni + np.arange(off.size)
-    n = int(max(p_map.max(), s_map.max())) + 1
-    K = np.zeros((n, n))
-    K[np.ix_(p_map, p_map)] += plate_E * plate.S
-    K[np.ix_(s_map, s_map)] += soil_E * soil.S
+    K, _, s_map, off = coupled_stiffness(plate.S, soil.S, plate_E, soil_E, layout, nc,
+                                         unilateral)
+    n = K.shape[0]
     G = np.zeros((nc, n))
     G[np.arange(nc), np.arange(nc)] = -1.0
     q0, q1 = q0s, -np.ones(nc)
@@ -468,7 +484,7 @@ def scene_lcp(layout: Layout, plate: BodyOperator | None, soil: BodyOperator,
     W = G @ X
     tie = None
     if unilateral:
-        a = np.flatnonzero(axis)
+        a = np.setdiff1d(np.arange(ni), off)  # the interface nodes on the axis
         tie = (soil_E * soil.S[a] @ X[s_map]).sum(axis=0) if a.size else np.zeros(len(q0))
     return SceneLCP(0.5 * (W + W.T), q0, q1, nc, layout.r, layout.weight, tie, n)
 

@@ -266,13 +266,7 @@ class _Model:
         largest element force before assembly (N), the size of what cancels in the
         residual."""
         ne, nq = self.w.shape
-        s = (stress @ self.proj).reshape(ne, nq, 4)
-        ue, pe = u[self.edof_u], u[self.edof[:, 12:]]
-        fu = np.matmul(np.swapaxes(self.B, 2, 3), (s * self.w[:, :, None])[..., None]
-                       ).sum(axis=1)[..., 0] + np.matmul(pe[:, None, :], self.Bp)[:, 0]
-        fp = np.matmul(self.Bp, ue[..., None])[..., 0] - np.matmul(self.Cp, pe[..., None])[..., 0]
-        res = np.zeros(self.ndof)
-        np.add.at(res, self.edof, np.concatenate([fu, fp], axis=1))
+        res, fu = self._residual(u, stress)
         load = max(float(np.max(np.abs(fu))), 1e-300)
         if tangent is None and not plastic.any() and getattr(self, "_elastic_data", None) \
                 is not None:
@@ -290,6 +284,10 @@ class _Model:
 
     def residual_only(self, u: np.ndarray, stress: np.ndarray) -> np.ndarray:
         """The residual of :meth:`residual_matrix` alone (ndof,), N."""
+        return self._residual(u, stress)[0]
+
+    def _residual(self, u: np.ndarray, stress: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """The assembled residual (ndof,) and the elements' displacement forces (ne, 12), N."""
         ne, nq = self.w.shape
         s = (stress @ self.proj).reshape(ne, nq, 4)
         ue, pe = u[self.edof_u], u[self.edof[:, 12:]]
@@ -298,7 +296,7 @@ class _Model:
         fp = np.matmul(self.Bp, ue[..., None])[..., 0] - np.matmul(self.Cp, pe[..., None])[..., 0]
         res = np.zeros(self.ndof)
         np.add.at(res, self.edof, np.concatenate([fu, fp], axis=1))
-        return res
+        return res, fu
 
     def matvec(self, data: np.ndarray, x: np.ndarray) -> np.ndarray:
         """``A x`` of the entries ``data`` (CSR order)."""

@@ -58,6 +58,7 @@ from ssw.contact.operators import (
     Geometry,
     Layout,
     OperatorStore,
+    coupled_stiffness,
     default_store,
     geometry_of,
     scene_lcp,
@@ -114,31 +115,10 @@ class BodyField:
 
     def __init__(self, nodes: np.ndarray, tri: np.ndarray, free: np.ndarray,
                  b_nodes: np.ndarray, b_comps: np.ndarray, nu: float) -> None:
-        import scipy.sparse as sp
+        from ssw.contact.substructure import body_matrix, min_degree_order
 
-        from ssw.contact.assembly import element_sizes, node_graph, pow2, pressure_scale
-        from ssw.contact.elements import element_matrices, lame
-        from ssw.contact.substructure import body_dofs, min_degree_order
-
-        used = np.unique(tri)
-        local = np.full(nodes.shape[0], -1, dtype=np.int64)
-        local[used] = np.arange(used.size)
-        ltri, lnodes = local[tri], nodes[used]
-        lb = local[b_nodes]
-        if np.any(lb < 0):
-            raise SolverError("a retained node does not belong to the body")
-        order = min_degree_order(*node_graph(ltri), used.size)
-        udof, pdof, ndof, n_int = body_dofs(ltri, free[used], lb, np.asarray(b_comps), order)
-        G, inv_K = lame(np.full(len(ltri), 1.0), np.full(len(ltri), float(nu)))
-        ke = element_matrices(lnodes[ltri], G, inv_K, pressure_scale(lnodes, ltri, G))
-        scale = float(pow2(np.min(G) * np.min(element_sizes(lnodes, ltri))))
-        edof = np.concatenate([udof[ltri, 0], udof[ltri, 1], pdof[ltri[:, :3]]], axis=1)
-        rows = np.repeat(edof, 15, axis=1).ravel()
-        cols = np.tile(edof, (1, 15)).ravel()
-        keep = (rows >= 0) & (cols >= 0)
-        K = sp.csc_array((ke.ravel()[keep] / scale, (rows[keep], cols[keep])),
-                         shape=(ndof, ndof))
-        K.sum_duplicates()
+        bm = body_matrix(nodes, tri, nu, free, b_nodes, b_comps, min_degree_order)
+        K, n_int, ndof, udof, lnodes, ltri = bm.K, bm.n_int, bm.ndof, bm.udof, bm.nodes, bm.tri
         self.n_int, self.ndof = n_int, ndof
         self.KIB = K[:n_int, n_int:].tocsc()
         self._lu = _factor(K[:n_int, :n_int].tocsc())
@@ -269,20 +249,9 @@ def retained_displacements(
     if plate is None:
         K = soil_E * soil.S
         return None, _spd_solve(K, -lam[:nc])
-    ni = layout.iface_r.size
-    p_map = np.arange(nc + ni)
-    s_map = nc + np.arange(ni)
-    off = np.zeros(0, dtype=np.int64)
-    if interface == "unilateral":
-        axis = layout.iface_r <= 1e-9 * layout.r[-1]
-        off = np.flatnonzero(~axis)
-        s_map = s_map.copy()
-        s_map[off] = nc + ni + np.arange(off.size)
-    n = int(max(p_map.max(), s_map.max())) + 1
-    K = np.zeros((n, n))
-    K[np.ix_(p_map, p_map)] += plate_E * plate.S
-    K[np.ix_(s_map, s_map)] += soil_E * soil.S
-    f = np.zeros(n)
+    K, p_map, s_map, off = coupled_stiffness(plate.S, soil.S, plate_E, soil_E, layout, nc,
+                                             interface == "unilateral")
+    f = np.zeros(K.shape[0])
     f[:nc] = -lam[:nc]
     if off.size:
         li = lam[nc:]

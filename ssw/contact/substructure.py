@@ -168,26 +168,31 @@ def schur_complement(K: Any, n_int: int) -> tuple[np.ndarray, float, int, bool]:
     return np.asarray(S), berr, int(lu.L.nnz + lu.U.nnz), True
 
 
-def condense_body(
+@dataclass(frozen=True)
+class BodyMatrix:
+    """A body's u-p stiffness at unit E, interior dofs first (``K[:n_int, :n_int]`` is
+    ``K_II``), divided by ``scale`` (nondimensional); ``udof`` (n_local, 2) its displacement
+    dofs (-1: fixed), ``nodes``/``tri`` the body's own (local) mesh."""
+
+    K: Any
+    n_int: int
+    ndof: int
+    scale: float
+    udof: np.ndarray
+    nodes: np.ndarray
+    tri: np.ndarray
+
+
+def body_matrix(
     nodes: np.ndarray, tri: np.ndarray, nu: float, free: np.ndarray,
     b_nodes: np.ndarray, b_comps: np.ndarray, order_nodes,
-) -> Condensation:
-    """Condensed stiffness (unit E) of the body meshed by ``tri`` onto the retained dofs.
-
-    Parameters
-    ----------
-    nodes : (n, 2) m, every node of the model (only those of ``tri`` are used).
-    tri : (ne, 6) the body's quadratic triangles.
-    nu : the body's Poisson's ratio, (-1, 0.5].
-    free : (n, 2) bool, displacement components that are not fixed (rollers, axis, bottom).
-    b_nodes, b_comps : (nb,) the retained dofs (node, 0 = u_r | 1 = u_z), in order.
-    order_nodes : callable ``(rows, cols, n) -> permutation`` (nested dissection).
-    """
+) -> BodyMatrix:
+    """The u-p stiffness (unit E) of the body meshed by ``tri`` with the retained dofs
+    ``(b_nodes, b_comps)`` last (arguments as :func:`condense_body`)."""
     import scipy.sparse as sp
 
     from ssw.contact.assembly import node_graph
 
-    t0 = time.perf_counter()
     used = np.unique(tri)
     local = np.full(nodes.shape[0], -1, dtype=np.int64)
     local[used] = np.arange(used.size)
@@ -206,6 +211,27 @@ def condense_body(
     keep = (rows >= 0) & (cols >= 0)
     K = sp.csc_array((ke.ravel()[keep] / scale, (rows[keep], cols[keep])), shape=(ndof, ndof))
     K.sum_duplicates()
+    return BodyMatrix(K, int(n_int), int(ndof), scale, udof, lnodes, ltri)
+
+
+def condense_body(
+    nodes: np.ndarray, tri: np.ndarray, nu: float, free: np.ndarray,
+    b_nodes: np.ndarray, b_comps: np.ndarray, order_nodes,
+) -> Condensation:
+    """Condensed stiffness (unit E) of the body meshed by ``tri`` onto the retained dofs.
+
+    Parameters
+    ----------
+    nodes : (n, 2) m, every node of the model (only those of ``tri`` are used).
+    tri : (ne, 6) the body's quadratic triangles.
+    nu : the body's Poisson's ratio, (-1, 0.5].
+    free : (n, 2) bool, displacement components that are not fixed (rollers, axis, bottom).
+    b_nodes, b_comps : (nb,) the retained dofs (node, 0 = u_r | 1 = u_z), in order.
+    order_nodes : callable ``(rows, cols, n) -> permutation`` (nested dissection).
+    """
+    t0 = time.perf_counter()
+    bm = body_matrix(nodes, tri, nu, free, b_nodes, b_comps, order_nodes)
+    K, n_int, ndof, scale = bm.K, bm.n_int, bm.ndof, bm.scale
     t1 = time.perf_counter()
     S, berr, nnz, pivoted = schur_complement(K, n_int)
     t2 = time.perf_counter()

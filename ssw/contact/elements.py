@@ -52,6 +52,20 @@ def p2_shape(xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return n, g
 
 
+def physical_gradients(xy: np.ndarray, g2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Gradients (ne, nq, 6, 2) in (r, z) of the P2 shape functions of straight-sided
+    triangles ``xy`` (ne, 6, 2) m, from their reference gradients ``g2`` (nq, 6, 2)
+    (:func:`p2_shape`), and the Jacobian determinants (ne,) m^2: ``J = [x1 - x0, x2 - x0]``,
+    ``grad N = J^-T grad_ref N``."""
+    v = xy[:, :3]
+    jac = np.stack([v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]], axis=2)
+    det = jac[:, 0, 0] * jac[:, 1, 1] - jac[:, 0, 1] * jac[:, 1, 0]
+    inv = np.empty_like(jac)
+    inv[:, 0, 0], inv[:, 1, 1] = jac[:, 1, 1] / det, jac[:, 0, 0] / det
+    inv[:, 0, 1], inv[:, 1, 0] = -jac[:, 0, 1] / det, -jac[:, 1, 0] / det
+    return np.einsum("qas,esx->eqax", g2, inv), det
+
+
 def p1_shape(xi: np.ndarray) -> np.ndarray:
     """P1 shape functions (nq, 3) at points (nq, 2)."""
     return np.stack([1 - xi[:, 0] - xi[:, 1], xi[:, 0], xi[:, 1]], axis=1)

@@ -71,7 +71,14 @@ from ssw.contact.assembly import (
     top_surface_weights,
 )
 from ssw.contact.contact_lcp import edge_radius
-from ssw.contact.elements import QUAD_POINTS, QUAD_WEIGHTS, lame, p1_shape, p2_shape
+from ssw.contact.elements import (
+    QUAD_POINTS,
+    QUAD_WEIGHTS,
+    lame,
+    p1_shape,
+    p2_shape,
+    physical_gradients,
+)
 from ssw.contact.mesh import Mesh
 from ssw.contact.operators import sphere_gap0
 from ssw.errors import ConfigError, SolverError
@@ -146,13 +153,7 @@ class _Model:
         n2, g2 = p2_shape(QUAD_POINTS)
         n1 = p1_shape(QUAD_POINTS)
         xy = nodes[tri]
-        v = xy[:, :3]
-        jac = np.stack([v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]], axis=2)
-        det = jac[:, 0, 0] * jac[:, 1, 1] - jac[:, 0, 1] * jac[:, 1, 0]
-        inv = np.empty_like(jac)
-        inv[:, 0, 0], inv[:, 1, 1] = jac[:, 1, 1] / det, jac[:, 0, 0] / det
-        inv[:, 0, 1], inv[:, 1, 0] = -jac[:, 0, 1] / det, -jac[:, 1, 0] / det
-        dn = np.einsum("qas,esx->eqax", g2, inv)
+        dn, det = physical_gradients(xy, g2)
         r = np.einsum("qa,ea->eq", n2, xy[:, :, 0])
         self.rq = r
         self.zq = np.einsum("qa,ea->eq", n2, xy[:, :, 1])

@@ -179,19 +179,13 @@ def _vertex_strain_operators(nodes: np.ndarray, tri: np.ndarray
     """Strain operators at the elements' vertices: ``B`` (ne, 3, 4, 12) mapping the
     element's ``(u_r[0..5], u_z[0..5])`` to ``(e_rr, e_zz, e_tt, gamma_rz)``, and the
     points' ``(r, z)`` (ne * 3, 2) m."""
-    from ssw.contact.elements import p2_shape
+    from ssw.contact.elements import p2_shape, physical_gradients
 
     a = VERTEX_PULL
     xi = np.array([[a, a], [1.0 - 2.0 * a, a], [a, 1.0 - 2.0 * a]])  # near vertices 0, 1, 2
     n2, g2 = p2_shape(xi)
     xy = nodes[tri]
-    v = xy[:, :3]
-    jac = np.stack([v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]], axis=2)
-    det = jac[:, 0, 0] * jac[:, 1, 1] - jac[:, 0, 1] * jac[:, 1, 0]
-    inv = np.empty_like(jac)
-    inv[:, 0, 0], inv[:, 1, 1] = jac[:, 1, 1] / det, jac[:, 0, 0] / det
-    inv[:, 0, 1], inv[:, 1, 0] = -jac[:, 0, 1] / det, -jac[:, 1, 0] / det
-    dn = np.einsum("qas,esx->eqax", g2, inv)  # (ne, 3, 6, 2)
+    dn, _ = physical_gradients(xy, g2)  # (ne, 3, 6, 2)
     pts = np.einsum("qa,eax->eqx", n2, xy)  # (ne, 3, 2)
     ne = len(tri)
     B = np.zeros((ne, 3, 4, 12))

@@ -41,7 +41,7 @@ ALLOWED: dict[str, set[str]] = {
     "modulus": FOUNDATION | DATA | {"chain", "walls"},
     "calibration": FOUNDATION | DATA | {"chain", "walls", "signal", "daq", "modulus"},
     "measure": FOUNDATION | DATA | {"modulus", "signal", "daq", "chain", "walls",
-                                    "calibration"},
+                                    "calibration", "contact"},
     "survey": FOUNDATION | DATA,
     "validation": FOUNDATION | DATA | {"calibration", "chain", "walls", "daq", "modulus",
                                        "signal"},

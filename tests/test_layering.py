@@ -46,6 +46,7 @@ ALLOWED: dict[str, set[str]] = {
     "validation": FOUNDATION | DATA | {"calibration", "chain", "walls", "daq", "modulus",
                                        "signal"},
     "design": FOUNDATION | DATA | {"contact", "chain", "walls", "fit", "modulus"},
+    "lift": FOUNDATION | DATA | {"contact", "chain", "fit"},
     "report": FOUNDATION,
     "cluster": FOUNDATION,
     "workflow": FOUNDATION | DATA | {"cluster", "survey"},

@@ -59,7 +59,8 @@ class Sample:
     @property
     def key(self) -> str:
         """Short file-name-safe text for scene ids, e.g. ``h40mm-r50mm-bonded-free``
-        (lossless to 1 nm)."""
+        (lengths to 1 um; two samples of a config closer than that share an id, which the
+        config refuses: :func:`ssw.config.scenes`)."""
         def mm(x: float) -> str:
             return f"{round(x * 1e6) / 1e3:g}mm"
 

@@ -139,3 +139,43 @@ def test_samples_are_checked_and_named():
         Sample(0.04, 0.05, "glued")
     with pytest.raises(ConfigError, match="radius"):
         sample_from_dict({"thickness": 0.04, "radius": 0.05, "box": [0.1, 0.1]})
+
+
+def test_a_set_of_the_config_carries_its_sample(tmp_path):
+    """``sets.*.sample`` is schema-checked, enters the scene ids and reaches the FEM: the
+    block's curve is the one of the same sample given to the solver directly, and stiffer
+    than the half-space's."""
+    import yaml
+
+    from ssw.config import library, load_config, scenes
+    from ssw.contact.scene import solve_scene
+
+    root = __import__("pathlib").Path(__file__).resolve().parent.parent
+    cfg = yaml.safe_load((root / "config" / "ci.yaml").read_text())
+    name = next(iter(cfg["sets"]))
+    cfg["sets"][name]["sample"] = {"thickness": 0.02, "box": [0.13, 0.18], "base": "sliding"}
+    path = tmp_path / "c.yaml"
+    path.write_text(yaml.safe_dump(cfg))
+    c = load_config(path)
+    sc = scenes(c, name)[0]
+    assert sc.sample == Sample(0.02, equivalent_radius(0.13, 0.18), "sliding", "free",
+                               sc.sample.lateral_size)
+    assert sc.scene_id.endswith("-h20mm-r86.304mm-sliding-free")
+    contact = {**c["contact"], "delta_mode": "fixed", "steps": 20}
+    block = solve_scene(sc, contact, R, library(c))
+    direct = solve_curve((sc.soil_E, sc.soil_nu), _plate(sc, library(c)), sc.plate_thickness,
+                         R, sc.sample.contact_settings(contact))[0]
+    half = solve_curve((sc.soil_E, sc.soil_nu), _plate(sc, library(c)), sc.plate_thickness,
+                       R, contact)[0]
+    assert np.array_equal(block.force, direct.force)
+    assert np.all(block.force[1:] > half.force[1:])
+    bad = {**cfg}
+    bad["sets"][name]["sample"] = {"thickness": -0.02, "radius": 0.05}
+    path.write_text(yaml.safe_dump(bad))
+    with pytest.raises(ConfigError, match="thickness"):
+        load_config(path)
+
+
+def _plate(sc, mats):
+    return (mats[sc.plate_material].E, mats[sc.plate_material].nu) \
+        if sc.plate_thickness > 0 else None

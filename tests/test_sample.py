@@ -179,3 +179,24 @@ def test_a_set_of_the_config_carries_its_sample(tmp_path):
 def _plate(sc, mats):
     return (mats[sc.plate_material].E, mats[sc.plate_material].nu) \
         if sc.plate_thickness > 0 else None
+
+
+def test_a_calibration_on_blocks_records_them_apart_from_the_device(tmp_path):
+    """References measured on blocks: the calibration runs on the blocks, records them as
+    its references' sample, and keeps the device's wall without them (a later measurement
+    on a half-space must not inherit the references' blocks)."""
+    import json
+
+    from ssw.cli import main
+
+    root = __import__("pathlib").Path(__file__).resolve().parent.parent
+    out = tmp_path / "cal.json"
+    rc = main(["calibrate", "--from-config", "--config", str(root / "config" / "ci.yaml"),
+               "--root", str(root), "--calibration", "none", "--no-loo",
+               "--sample-thickness", "0.04", "--sample-box", "0.13,0.18",
+               "--output", str(out)])
+    assert rc in (0, None)
+    cal = json.loads(out.read_text())
+    contact = cal["wall"]["options"]["contact"]
+    assert "soil_base" not in contact and contact.get("soil_depth", 1.0) != 0.04
+    assert cal["provenance"]["reference_sample"]["thickness"] == 0.04

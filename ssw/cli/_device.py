@@ -126,6 +126,10 @@ class ChainContext:
     params: Any
     wall: str
     wall_options: dict[str, Any]
+    #: the tested sample (ssw.sample.Sample; None: a half-space) and the wall options
+    #: without it (what a calibration records: its sample belongs to its references)
+    sample: Any = None
+    device_wall_options: dict[str, Any] | None = None
 
     def inputs(self) -> dict[str, Any]:
         """Provenance for --json and output files."""
@@ -240,6 +244,7 @@ def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
     if numerics_only:
         return ChainContext(cfg, device, cal, params, "", {})
     wall, opts = wall_law(args, cfg, cal, params, E, nu)
+    plain = dict(opts)
     sample = sample_of(args)
     if sample is not None:  # the tested block, not the device: any calibration applies
         if wall != "fem":
@@ -257,12 +262,14 @@ def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
             raise ConfigError("--soil-density", None,
                               "the tested medium's density (kg/m^3) for --wall-dynamics reduced")
         opts = {**opts, "dynamics": "reduced", "soil_density": float(rho)}
+        plain = {**plain, "dynamics": "reduced", "soil_density": float(rho)}
     elif dyn == "fem":
         if rho is None:
             raise ConfigError("--soil-density", None,
                               "the tested medium's density (kg/m^3) for --wall-dynamics fem")
         opts = {**opts, "dynamics": "fem", "soil_density": float(rho)}
-    return ChainContext(cfg, device, cal, params, wall, opts)
+        plain = {**plain, "dynamics": "fem", "soil_density": float(rho)}
+    return ChainContext(cfg, device, cal, params, wall, opts, sample, plain)
 
 
 def wall_law(args: argparse.Namespace, cfg: dict[str, Any], cal: Any, params: Any,

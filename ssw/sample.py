@@ -10,16 +10,20 @@ mould (152.4 mm), a field lift is a layer on a subgrade. A :class:`Sample` says 
 * ``thickness`` (m) and ``radius`` (m) of the block (axisymmetric); a box of sides ``a x b``
   is taken as the cylinder of the same footprint area, ``radius = sqrt(a b / pi)``
   (:func:`equivalent_radius`; stated in the sample's ``lateral_size``);
-* ``base``: ``bonded`` (glued to a rigid base: ``u = 0``) or ``sliding`` (on a rigid,
-  frictionless base: ``u_z = 0``, ``u_r`` free);
+* ``base``: ``bonded`` (glued to a rigid base: ``u = 0``), ``sliding`` (on a rigid,
+  frictionless base: ``u_z = 0``, ``u_r`` free) or ``elastic``: a lift bonded to a subgrade
+  of ``base_E`` (Pa) and ``base_nu`` that fills the rest of the FEM's soil box (a field
+  lift; laterally the box, so ``radius`` is not given);
 * ``lateral``: ``free`` (traction-free side) or ``mould`` (a rigid, frictionless mould:
   ``u_r = 0``).
 
 The FEM meshes the block itself (its radius and thickness replace the box's) with these
 boundary conditions (:meth:`Sample.contact_settings`); the substructured fast path is kept
-(the block is condensed per geometry and Poisson's ratio like the box). An elastic subgrade
-under a layer and multi-layer field profiles are not modelled by the FEM (the layered
-oracle, ``ssw contact --engine layered``, computes a layer on a rigid base).
+(the block is condensed per geometry and Poisson's ratio like the box). A lift on an
+elastic subgrade is the box in two regions; the soil is then condensed per ratio of the
+moduli (one operator per subgrade-to-lift ratio, not one per Poisson's ratio), so the
+chain's ``fem`` wall, which shares one operator among all soil moduli, takes samples on a
+rigid base only. Multi-layer profiles are the layered oracle's (``ssw.lift``).
 
 Data layer: no heavy imports.
 """
@@ -32,7 +36,7 @@ from typing import Any
 
 from ssw.errors import ConfigError
 
-BASES = ("bonded", "sliding")
+BASES = ("bonded", "sliding", "elastic")
 LATERALS = ("free", "mould")
 
 
@@ -41,20 +45,36 @@ class Sample:
     """A finite cylindrical sample (module docstring). Lengths in m."""
 
     thickness: float
-    radius: float
+    radius: float | None
     base: str = "bonded"
     lateral: str = "free"
     lateral_size: str = ""  # how the radius was obtained (a box's sides), for the record
+    base_E: float | None = None  # Pa, the subgrade's (base elastic)
+    base_nu: float | None = None
 
     def __post_init__(self) -> None:
-        for name in ("thickness", "radius"):
-            v = getattr(self, name)
-            if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
-                raise ConfigError(f"sample.{name}", v, "a length > 0 m")
         if self.base not in BASES:
             raise ConfigError("sample.base", self.base, " | ".join(BASES))
+        elastic = self.base == "elastic"
+        for name in ("thickness", "radius"):
+            v = getattr(self, name)
+            if name == "radius" and elastic:
+                if v is not None:
+                    raise ConfigError("sample.radius", v, "none for a lift on an elastic "
+                                      "base (it spans the FEM's soil box)")
+                continue
+            if not (isinstance(v, int | float) and math.isfinite(v) and v > 0):
+                raise ConfigError(f"sample.{name}", v, "a length > 0 m")
         if self.lateral not in LATERALS:
             raise ConfigError("sample.lateral", self.lateral, " | ".join(LATERALS))
+        if elastic:
+            if not (isinstance(self.base_E, int | float) and self.base_E > 0):
+                raise ConfigError("sample.base_E", self.base_E, "the subgrade's E > 0 Pa")
+            if not (isinstance(self.base_nu, int | float) and -1.0 < self.base_nu <= 0.5):
+                raise ConfigError("sample.base_nu", self.base_nu, "a Poisson's ratio in "
+                                  "(-1, 0.5]")
+        elif self.base_E is not None or self.base_nu is not None:
+            raise ConfigError("sample.base_E", self.base_E, "only with base elastic")
 
     @property
     def key(self) -> str:
@@ -64,11 +84,17 @@ class Sample:
         def mm(x: float) -> str:
             return f"{round(x * 1e6) / 1e3:g}mm"
 
+        if self.base == "elastic":
+            return (f"h{mm(self.thickness)}-on-E{round(self.base_E / 1e3) / 1e3:g}MPa"
+                    f"-nu{self.base_nu:g}")
         return f"h{mm(self.thickness)}-r{mm(self.radius)}-{self.base}-{self.lateral}"
 
     def contact_settings(self, contact: dict[str, Any]) -> dict[str, Any]:
         """The ``contact`` settings of a scene on this sample: the FEM's soil domain is the
         block (its radius and thickness) with the block's base and side conditions."""
+        if self.base == "elastic":  # the box, in two regions: the lift and its subgrade
+            return {**contact, "subgrade_depth": float(self.thickness),
+                    "subgrade_E": float(self.base_E), "subgrade_nu": float(self.base_nu)}
         return {**contact, "soil_radius": float(self.radius),
                 "soil_depth": float(self.thickness), "soil_base": self.base,
                 "soil_lateral": self.lateral}
@@ -76,6 +102,8 @@ class Sample:
     def to_dict(self) -> dict[str, Any]:
         out = {"thickness": self.thickness, "radius": self.radius, "base": self.base,
                "lateral": self.lateral}
+        if self.base == "elastic":
+            out.update(base_E=self.base_E, base_nu=self.base_nu)
         if self.lateral_size:
             out["lateral_size"] = self.lateral_size
         return out
@@ -96,10 +124,16 @@ def sample_from_dict(d: dict[str, Any] | None, field: str = "sample") -> Sample 
         return None
     if not isinstance(d, dict):
         raise ConfigError(field, d, "a mapping {thickness, radius or box, base, lateral}")
-    unknown = set(d) - {"thickness", "radius", "box", "base", "lateral"}
+    unknown = set(d) - {"thickness", "radius", "box", "base", "lateral", "base_E", "base_nu"}
     if unknown:
         raise ConfigError(f"{field}.{sorted(unknown)[0]}", d[sorted(unknown)[0]],
-                          "one of thickness, radius, box, base, lateral")
+                          "one of thickness, radius, box, base, lateral, base_E, base_nu")
+    if d.get("base") == "elastic":
+        try:
+            return Sample(float(d.get("thickness", float("nan"))), d.get("radius"), "elastic",
+                          d.get("lateral", "free"), "", d.get("base_E"), d.get("base_nu"))
+        except (TypeError, ValueError) as exc:
+            raise ConfigError(field, d, f"numbers in m and Pa ({exc})") from exc
     if ("radius" in d) == ("box" in d):
         raise ConfigError(f"{field}.radius", d.get("radius"),
                           "a radius (m) or a box [a, b] (m), one of them")

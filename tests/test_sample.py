@@ -200,3 +200,44 @@ def test_a_calibration_on_blocks_records_them_apart_from_the_device(tmp_path):
     contact = cal["wall"]["options"]["contact"]
     assert "soil_base" not in contact and contact.get("soil_depth", 1.0) != 0.04
     assert cal["provenance"]["reference_sample"]["thickness"] == 0.04
+
+
+@pytest.mark.parametrize("h, ratio, nu", [(0.01, 0.25, 0.3), (0.01, 4.0, 0.3),
+                                          (0.02, 0.25, 0.45), (0.005, 10.0, 0.3)])
+def test_a_lift_on_an_elastic_subgrade_equals_the_layered_oracle(h, ratio, nu):
+    """A lift of thickness h bonded to a subgrade of ratio x its modulus (the FEM's box in
+    two regions, the soil condensed per ratio) against the oracle's layer on an elastic
+    half-space (Burmister): within 1 % over the curve (measured 0.17-0.57 %), and the
+    substructured solve equals the monolithic one to round-off; the subgrade's effect is
+    large (-20 % to +26 % at 0.2 mm), so the check has teeth."""
+    smp = Sample(h, None, "elastic", base_E=ratio * 50e6, base_nu=0.35)
+    cfg = smp.contact_settings({"delta_max": 2e-4, "steps": 20})
+    c, _ = solve_curve((50e6, nu), None, 0.0, R, cfg)
+    m, st = solve_curve((50e6, nu), None, 0.0, R, cfg, engine="monolithic")
+    st["solver"].destroy()
+    o = layered.solve_curve((50e6, nu), None, 0.0, R, cfg, layered.LayeredSettings(
+        soil_depth=h, soil_base="elastic", base_E=ratio * 50e6, base_nu=0.35))
+    half = solve_curve((50e6, nu), None, 0.0, R, {"delta_max": 2e-4, "steps": 20})[0]
+    assert np.max(np.abs(c.force[2:] / o.force[2:] - 1)) < 0.01
+    assert np.max(np.abs(c.force / m.force - 1)) < 1e-10
+    assert abs(c.force[-1] / half.force[-1] - 1) > 0.09
+
+
+def test_engines_refuse_what_they_do_not_model():
+    """The chain's fem wall shares one soil operator among moduli: a lift on an elastic
+    subgrade (an operator per ratio) is refused naming the field; the layered engine's
+    layers are infinitely wide: a mould is refused."""
+    from ssw.chain import api
+    from ssw.chain.params import chain_params
+    from ssw.device import load_device
+    from ssw.materials import material_set
+
+    p = chain_params(load_device("thesis"), material_set(), steps_per_contact=40)
+    lift = Sample(0.01, None, "elastic", base_E=12.5e6, base_nu=0.35)
+    with pytest.raises(ConfigError, match="subgrade_E"):
+        api.tof(50e6, 0.3, p, "fem", contact=lift.contact_settings({}))
+    mould = Scene("none", 0.0, 50e6, 0.3, sample=Sample(0.04, 0.05, "bonded", "mould"))
+    with pytest.raises(ConfigError, match="lateral"):
+        layered.solve_scene(mould, {"delta_max": 1e-4, "steps": 5}, R, {})
+    with pytest.raises(ConfigError, match="radius"):
+        Sample(0.01, 0.05, "elastic", base_E=1e6, base_nu=0.3)

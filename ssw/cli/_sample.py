@@ -21,7 +21,11 @@ def add_sample_options(p: argparse.ArgumentParser) -> None:
                    help="or its sides, m: a box taken as the cylinder of the same footprint "
                    "area, radius sqrt(A B / pi)")
     g.add_argument("--sample-base", choices=BASES, default=None,
-                   help="on a rigid base, bonded (u = 0, default) or sliding (frictionless)")
+                   help="on a rigid base, bonded (u = 0, default) or sliding (frictionless), "
+                   "or elastic: a lift on a subgrade (--base-E, --base-nu; ssw contact only)")
+    g.add_argument("--base-E", type=float, metavar="PA", help="the subgrade's modulus, Pa")
+    g.add_argument("--base-nu", type=float, metavar="NU",
+                   help="the subgrade's Poisson's ratio")
     g.add_argument("--sample-lateral", choices=LATERALS, default=None,
                    help="its side free (default) or in a rigid frictionless mould")
 
@@ -31,12 +35,21 @@ def sample_of(args: argparse.Namespace) -> Sample | None:
     thickness = getattr(args, "sample_thickness", None)
     radius = getattr(args, "sample_radius", None)
     box = getattr(args, "sample_box", None)
-    others = [getattr(args, k, None) for k in ("sample_base", "sample_lateral")]
+    others = [getattr(args, k, None) for k in ("sample_base", "sample_lateral", "base_E",
+                                               "base_nu")]
     if thickness is None:
         if radius is not None or box is not None or any(o is not None for o in others):
             raise ConfigError("--sample-thickness", None,
                               "a thickness (m) with the other --sample-* flags")
         return None
+    if others[0] == "elastic":
+        if radius is not None or box is not None:
+            raise ConfigError("--sample-radius", radius if box is None else box,
+                              "none with --sample-base elastic (the lift spans the soil box)")
+        return Sample(float(thickness), None, "elastic", others[1] or "free", "",
+                      others[2], others[3])
+    if others[2] is not None or others[3] is not None:
+        raise ConfigError("--base-E", others[2], "only with --sample-base elastic")
     if (radius is None) == (box is None):
         raise ConfigError("--sample-radius", radius, "a radius (m) or --sample-box A,B, one")
     size = ""

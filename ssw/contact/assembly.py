@@ -228,7 +228,11 @@ def assemble(
         fixed_faces * mesh.soil_depth, mesh.base, mesh.lateral
     )
     body = mesh.body.astype(np.int64)
-    G, inv_K = lame(np.asarray(E)[body], np.asarray(nu)[body])
+    E_el, nu_el = np.asarray(E, float)[body], np.asarray(nu, float)[body]
+    if mesh.subgrade is not None:  # a lift on a subgrade: the soil's lower region
+        E_el = np.where(mesh.subgrade, E[0] * mesh.subgrade_ratio, E_el)
+        nu_el = np.where(mesh.subgrade, mesh.subgrade_nu, nu_el)
+    G, inv_K = lame(E_el, nu_el)
     ke = element_matrices(nodes[tri], G, inv_K, pressure_scale(nodes, tri, G))
     scale = float(pow2(np.min(G) * np.min(element_sizes(nodes, tri))))
     edof = np.concatenate([udof[tri, 0], udof[tri, 1], pdof[tri[:, :3]]], axis=1)

@@ -52,7 +52,7 @@ the modulus ratio), so it is the faster only for scenes the FEM has not seen.
 from __future__ import annotations
 
 import time
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -93,6 +93,8 @@ class LayeredSettings:
     candidate_factor: float = 1.5
     soil_depth: float | None = None
     soil_base: str = "bonded"
+    base_E: float | None = None  # Pa, soil_base elastic: the subgrade under the soil layer
+    base_nu: float | None = None
     quadrature: Quadrature = field(default_factory=Quadrature)
 
     def __post_init__(self) -> None:
@@ -104,8 +106,12 @@ class LayeredSettings:
             raise ConfigError("layered.candidate_factor", self.candidate_factor, "> 1")
         if self.soil_depth is not None and not self.soil_depth > 0:
             raise ConfigError("layered.soil_depth", self.soil_depth, "None or a depth > 0 m")
-        if self.soil_base not in ("bonded", "sliding"):
-            raise ConfigError("layered.soil_base", self.soil_base, "bonded | sliding")
+        if self.soil_base not in ("bonded", "sliding", "elastic"):
+            raise ConfigError("layered.soil_base", self.soil_base, "bonded | sliding | elastic")
+        if self.soil_base == "elastic" and not (
+                self.base_E is not None and self.base_E > 0 and self.base_nu is not None):
+            raise ConfigError("layered.base_E", self.base_E,
+                              "the subgrade's E > 0 Pa and Poisson's ratio (soil_base elastic)")
 
     @property
     def force_error(self) -> float:
@@ -121,7 +127,7 @@ class LayeredSettings:
         if unknown:
             raise ConfigError("contact.layered", sorted(unknown),
                               "ring_ratio, ring_min, candidate_factor, soil_depth, soil_base, "
-                              "quadrature")
+                              "base_E, base_nu, quadrature")
         return cls(**values, quadrature=Quadrature(**(quad or {})))
 
 
@@ -227,7 +233,7 @@ def solve_curve(soil: tuple[float, float], plate: tuple[float, float] | None,
     if plate_thickness > 0 and plate is None:
         raise ConfigError("plate", plate, "(E, nu) of the plate when plate_thickness > 0")
     stack = plate_on_soil(plate, plate_thickness, soil, cfg["interface"], settings.soil_depth,
-                          settings.soil_base)
+                          settings.soil_base, settings.base_E, settings.base_nu)
     deltas = increments(float(cfg["delta_max"]), int(cfg["steps"]), cfg.get("delta_reach"))
     curve, _ = solve_stack(stack, radius, deltas, settings, int(cfg["pressure_profiles"]))
     has_plate = plate is not None and plate_thickness > 0
@@ -259,6 +265,14 @@ def solve_scene(scene: Any, contact_cfg: dict[str, Any], indenter_radius: float,
                               f"a material of the library: {', '.join(sorted(materials))}")
         m = materials[scene.plate_material]
         plate = (m.E, m.nu)
+    smp = getattr(scene, "sample", None)
+    if smp is not None:  # an infinite layer of the sample's thickness on its base
+        if smp.lateral == "mould":
+            raise ConfigError("sample.lateral", smp.lateral,
+                              "free with the layered engine (its layers are infinitely wide)")
+        base = settings or LayeredSettings.from_config(contact_cfg.get("layered"))
+        settings = replace(base, soil_depth=smp.thickness, soil_base=smp.base,
+                           base_E=smp.base_E, base_nu=smp.base_nu)
     curve = solve_curve((scene.soil_E, scene.soil_nu), plate, scene.plate_thickness,
                         indenter_radius, contact_cfg, settings)
     inputs = {**curve.inputs, "plate_material": key, "scene_id": scene.scene_id}

@@ -109,11 +109,14 @@ class Stack:
 
 def plate_on_soil(plate: tuple[float, float] | None, thickness: float,
                   soil: tuple[float, float], interface: str,
-                  soil_depth: float | None = None, base: str = "bonded") -> Stack:
+                  soil_depth: float | None = None, base: str = "bonded",
+                  base_E: float | None = None, base_nu: float | None = None) -> Stack:
     """The stack of a plate (E, nu; None or ``thickness == 0``: no plate) on a soil.
 
     ``soil_depth`` None: the soil is a half-space; a depth (m): a soil layer of that depth
-    on a rigid base, ``bonded`` (the FEM's fixed bottom) or ``sliding`` (frictionless).
+    on a rigid base, ``bonded`` (the FEM's fixed bottom) or ``sliding`` (frictionless), or
+    bonded to an ``elastic`` half-space of ``base_E`` (Pa), ``base_nu`` (a lift on a
+    subgrade).
     """
     layers: list[Layer] = []
     ifaces: list[str] = []
@@ -125,6 +128,9 @@ def plate_on_soil(plate: tuple[float, float] | None, thickness: float,
     if soil_depth is None:
         return Stack(tuple(layers), tuple(ifaces), float(soil[0]), float(soil[1]))
     layers.append(Layer(float(soil[0]), float(soil[1]), float(soil_depth)))
+    if base == "elastic":
+        ifaces.append("bonded")
+        return Stack(tuple(layers), tuple(ifaces), float(base_E), float(base_nu))
     ifaces.append({"bonded": "bonded", "sliding": "frictionless"}.get(base, base))
     return Stack(tuple(layers), tuple(ifaces), np.inf, 0.0)
 

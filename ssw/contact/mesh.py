@@ -37,6 +37,9 @@ class MeshSettings:
     plate_layers: int  # elements through the plate thickness
     base: str = "bonded"  # bottom: bonded (u = 0) | sliding (u_z = 0) on a rigid base
     lateral: str = "mould"  # side: mould (rollers, u_r = 0) | free (traction-free)
+    subgrade_depth: float = 0.0  # m, a lift of this thickness on a subgrade below (0: none)
+    subgrade_ratio: float = 1.0  # subgrade E / the lift's E
+    subgrade_nu: float = 0.0  # the subgrade's Poisson's ratio
 
 
 @dataclass(frozen=True)
@@ -56,6 +59,11 @@ class Mesh:
     soil_depth: float
     base: str = "bonded"
     lateral: str = "mould"
+    #: (ne,) bool, the soil elements of the subgrade (below the lift); None: no subgrade;
+    #: its E relative to the lift's and its Poisson's ratio
+    subgrade: np.ndarray | None = None
+    subgrade_ratio: float = 1.0
+    subgrade_nu: float = 0.0
 
     @property
     def vertices(self) -> np.ndarray:
@@ -131,11 +139,21 @@ def build_mesh(plate_thickness: float, plate_radius: float, s: MeshSettings) -> 
 
 def _build(gmsh, t: float, rp: float, s: MeshSettings) -> Mesh:
     occ = gmsh.model.occ
-    soil = occ.addRectangle(0.0, -s.soil_depth, 0.0, s.soil_radius, s.soil_depth)
-    plate = None
+    h = float(s.subgrade_depth)
+    if h > 0 and not h < s.soil_depth:
+        raise MeshError(f"the lift ({h} m) must be thinner than the soil domain "
+                        f"({s.soil_depth} m)")
+    if h > 0:  # a lift on a subgrade: two soil regions sharing the line z = -h
+        soil = occ.addRectangle(0.0, -h, 0.0, s.soil_radius, h)
+        sub = occ.addRectangle(0.0, -s.soil_depth, 0.0, s.soil_radius, s.soil_depth - h)
+        others = [(2, sub)]
+    else:
+        soil = occ.addRectangle(0.0, -s.soil_depth, 0.0, s.soil_radius, s.soil_depth)
+        others = []
     if t > 0:
-        plate = occ.addRectangle(0.0, 0.0, 0.0, rp, t)
-        occ.fragment([(2, soil)], [(2, plate)])
+        others.append((2, occ.addRectangle(0.0, 0.0, 0.0, rp, t)))
+    if others:
+        occ.fragment([(2, soil)], others)
     occ.synchronize()
     top = float(t)
 
@@ -184,8 +202,14 @@ def _build(gmsh, t: float, rp: float, s: MeshSettings) -> Mesh:
     nodes = xyz[used].copy()
     tri = renum[tri]
     _check_orientation(nodes, tri)
-    return Mesh(nodes, tri, np.concatenate(bodies), top, rp if t > 0 else 0.0,
-                s.soil_radius, s.soil_depth, s.base, s.lateral)
+    body = np.concatenate(bodies)
+    subgrade = None
+    if h > 0:
+        zc = nodes[tri[:, :3], 1].mean(axis=1)
+        subgrade = (body == 0) & (zc < -h)
+    return Mesh(nodes, tri, body, top, rp if t > 0 else 0.0,
+                s.soil_radius, s.soil_depth, s.base, s.lateral, subgrade, s.subgrade_ratio,
+                s.subgrade_nu)
 
 
 def _check_orientation(nodes: np.ndarray, tri: np.ndarray) -> None:
@@ -213,4 +237,25 @@ def mesh_settings(cfg: dict[str, Any]) -> MeshSettings:
         plate_layers=int(cfg["plate_layers"]),
         base=str(cfg.get("soil_base", "bonded")),
         lateral=str(cfg.get("soil_lateral", "mould")),
+        **_subgrade(cfg),
     )
+
+
+def _subgrade(cfg: dict[str, Any]) -> dict[str, float]:
+    """The subgrade of a lift (``subgrade_depth`` m, the lift's thickness; ``subgrade_ratio``
+    its E over the lift's, set per scene by the solver from ``subgrade_E``; ``subgrade_nu``);
+    none by default."""
+    from ssw.errors import ConfigError
+
+    h = float(cfg.get("subgrade_depth") or 0.0)
+    if h <= 0:
+        return {}
+    if "subgrade_ratio" not in cfg:
+        raise ConfigError("contact.subgrade_E", cfg.get("subgrade_E"),
+                          "a lift's subgrade for a scene of known soil modulus (ssw contact; "
+                          "the fem wall models samples on a rigid base only)")
+    ratio, nu = float(cfg["subgrade_ratio"]), float(cfg.get("subgrade_nu", 0.3))
+    if not (ratio > 0 and -1.0 < nu <= 0.5):
+        raise ConfigError("contact.subgrade", {"ratio": ratio, "nu": nu},
+                          "a subgrade modulus > 0 Pa and a Poisson's ratio in (-1, 0.5]")
+    return {"subgrade_depth": h, "subgrade_ratio": ratio, "subgrade_nu": nu}

@@ -368,7 +368,15 @@ def _condense(model: _Model, which: str, nu: float) -> BodyOperator:
         b_nodes, b_comps = model.iface_nodes[:, 0], model.iface_comp
     else:
         b_nodes, b_comps = model.cand, np.ones(len(model.cand), int)
-    c = condense_body(model.nodes, tri, nu, model.free, b_nodes, b_comps, min_degree_order)
+    E_el: Any = 1.0
+    nu_el: Any = nu
+    sub = model.mesh.subgrade
+    if not plate and sub is not None:  # a lift on its subgrade: one soil body, two materials
+        s = sub[model.body == 0]
+        E_el = np.where(s, model.mesh.subgrade_ratio, 1.0)
+        nu_el = np.where(s, model.mesh.subgrade_nu, nu)
+    c = condense_body(model.nodes, tri, nu_el, model.free, b_nodes, b_comps, min_degree_order,
+                      E_el)
     stats = {"dofs": c.dofs, "nnz_factor": c.nnz_factor, "backward_error": c.backward_error,
              "pivoted": c.pivoted, "wall_mesh": model.wall_mesh,
              "wall_assemble": c.wall_assemble, "wall_factor": c.wall_factor}

@@ -142,6 +142,9 @@ class _Model:
 
     def __init__(self, mesh: Mesh, E: float, nu: float, radius: float,
                  punch: str | None = None, mixed: bool = True) -> None:
+        if mesh.subgrade is not None:
+            raise ConfigError("sample.base", "elastic",
+                              "a rigid base for a plastic sample (no subgrade)")
         if np.any(mesh.body != 0):
             raise ConfigError("plate_thickness", mesh.top,
                               "0 (the plastic contact solver models a half-space only)")

@@ -232,6 +232,8 @@ def solve_curve(
     dict with the condensed problem and the final contact forces (for tests).
     """
     cfg = settings_of(contact_cfg)
+    if cfg.get("subgrade_E") is not None:  # a lift: its subgrade relative to this soil
+        cfg["subgrade_ratio"] = float(cfg["subgrade_E"]) / float(soil[0])
     t_start = time.perf_counter()
     if engine not in ENGINES:
         raise ConfigError("engine", engine, " | ".join(ENGINES))

@@ -208,6 +208,9 @@ def body_field(store: OperatorStore, geom: Geometry, which: str, nu: float) -> B
         _FIELDS.move_to_end(key)
         return _FIELDS[key]
     model = store._model(geom)  # the mesh the operators were condensed on (deterministic)
+    if model.mesh.subgrade is not None:
+        raise ConfigError("sample.base", "elastic",
+                          "a rigid base or the half-space for the stress field (no subgrade)")
     b_nodes, b_comps = retained_dofs(model, which)
     tri = model.tri[model.body == (1 if which == "plate" else 0)]
     fld = BodyField(model.nodes, tri, model.free, b_nodes, b_comps, nu)

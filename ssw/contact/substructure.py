@@ -184,11 +184,12 @@ class BodyMatrix:
 
 
 def body_matrix(
-    nodes: np.ndarray, tri: np.ndarray, nu: float, free: np.ndarray,
-    b_nodes: np.ndarray, b_comps: np.ndarray, order_nodes,
+    nodes: np.ndarray, tri: np.ndarray, nu: Any, free: np.ndarray,
+    b_nodes: np.ndarray, b_comps: np.ndarray, order_nodes, E: Any = 1.0,
 ) -> BodyMatrix:
     """The u-p stiffness (unit E) of the body meshed by ``tri`` with the retained dofs
-    ``(b_nodes, b_comps)`` last (arguments as :func:`condense_body`)."""
+    ``(b_nodes, b_comps)`` last (arguments as :func:`condense_body`); ``E`` and ``nu`` may
+    vary by element (a lift on a subgrade: E relative to the lift's)."""
     import scipy.sparse as sp
 
     from ssw.contact.assembly import node_graph
@@ -202,7 +203,8 @@ def body_matrix(
         raise SolverError("a retained node does not belong to the body")
     order = order_nodes(*node_graph(ltri), used.size)
     udof, pdof, ndof, n_int = body_dofs(ltri, free[used], lb, np.asarray(b_comps), order)
-    G, inv_K = lame(np.full(len(ltri), 1.0), np.full(len(ltri), float(nu)))
+    G, inv_K = lame(np.broadcast_to(np.asarray(E, float), (len(ltri),)),
+                    np.broadcast_to(np.asarray(nu, float), (len(ltri),)))
     ke = element_matrices(lnodes[ltri], G, inv_K, pressure_scale(lnodes, ltri, G))
     scale = float(pow2(np.min(G) * np.min(element_sizes(lnodes, ltri))))
     edof = np.concatenate([udof[ltri, 0], udof[ltri, 1], pdof[ltri[:, :3]]], axis=1)
@@ -215,8 +217,8 @@ def body_matrix(
 
 
 def condense_body(
-    nodes: np.ndarray, tri: np.ndarray, nu: float, free: np.ndarray,
-    b_nodes: np.ndarray, b_comps: np.ndarray, order_nodes,
+    nodes: np.ndarray, tri: np.ndarray, nu: Any, free: np.ndarray,
+    b_nodes: np.ndarray, b_comps: np.ndarray, order_nodes, E: Any = 1.0,
 ) -> Condensation:
     """Condensed stiffness (unit E) of the body meshed by ``tri`` onto the retained dofs.
 
@@ -230,7 +232,7 @@ def condense_body(
     order_nodes : callable ``(rows, cols, n) -> permutation`` (nested dissection).
     """
     t0 = time.perf_counter()
-    bm = body_matrix(nodes, tri, nu, free, b_nodes, b_comps, order_nodes)
+    bm = body_matrix(nodes, tri, nu, free, b_nodes, b_comps, order_nodes, E)
     K, n_int, ndof, scale = bm.K, bm.n_int, bm.ndof, bm.scale
     t1 = time.perf_counter()
     S, berr, nnz, pivoted = schur_complement(K, n_int)

@@ -185,6 +185,7 @@ def measure(
     recordings: list[Any], nu: float | tuple[float, float], params: Any, wall: str,
     wall_options: dict[str, Any] | None = None, *, calibration: Any = None,
     tof_options: Any = None, device: Any = None, strength: float | None = None,
+    sample_range: list[dict[str, Any]] | None = None,
 ) -> Measurement:
     """E with its 95 % interval from the recordings of one test point (module docstring).
 
@@ -199,6 +200,10 @@ def measure(
     strength : the sample's uniaxial strength, Pa (:func:`uniaxial_strength`), or None:
         with it, the measurement reports its yield index (:func:`yield_check`) and warns
         when the sample yielded.
+    sample_range : the wall options of the thinnest and the thickest sample of a stated
+        range of sample thickness (``ssw measure --sample-thickness LO:HI``; the central E
+        is the middle one's, ``wall_options``): the spread of E between them enters the
+        budget as a uniform term, ``|ln(E_hi / E_lo)| / (2 sqrt 3)`` (``sample``).
     """
     from ssw.modulus import estimate_moduli
 
@@ -224,6 +229,12 @@ def measure(
     contrib = dict(est.contributions)
     if notes and "tof" in contrib:
         contrib["tof (stated scatter)"] = contrib.pop("tof")
+    if sample_range is not None:  # a stated range of sample thickness: uniform in ln E
+        ends = [estimate_moduli([pool["tof_mean"]], [float("nan")], nu_arg, params, wall, o,
+                                calibration=None)[0].E for o in sample_range]
+        contrib["sample"] = float(abs(np.log(ends[1] / ends[0])) / (2.0 * np.sqrt(3.0)))
+        notes.append(f"sample thickness stated as a range: E {ends[0] / 1e6:.4g} MPa on the "
+                     f"thinnest, {ends[1] / 1e6:.4g} MPa on the thickest (a uniform term)")
     # sampling: a systematic TOF uncertainty of the peak picking at the record's rate
     u_samp = sampling_uncertainty(pool["sample_rate"]) / (
         pool["tof_mean"] * abs(est.dlnTOF_dlnE))

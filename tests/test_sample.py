@@ -241,3 +241,34 @@ def test_engines_refuse_what_they_do_not_model():
         layered.solve_scene(mould, {"delta_max": 1e-4, "steps": 5}, R, {})
     with pytest.raises(ConfigError, match="radius"):
         Sample(0.01, 0.05, "elastic", base_E=1e6, base_nu=0.3)
+
+
+def test_a_stated_range_of_sample_thickness_is_a_budget_term(tmp_path):
+    """``ssw measure --sample-thickness LO:HI``: E is the middle block's, and the budget
+    gains the uniform term |ln(E_HI / E_LO)| / (2 sqrt 3) of the two blocks' own
+    measurements (each a separate ``ssw measure`` with one thickness); other chain commands
+    refuse a range."""
+    import json
+
+    from ssw.cli import main
+
+    root = __import__("pathlib").Path(__file__).resolve().parent.parent
+    rec = str(root / "data" / "survey_example" / "P1.h5")
+    common = ["--soil-nu", "0.3", "--sample-box", "0.13,0.18", "--calibration", "none",
+              "--config", str(root / "config" / "ci.yaml"), "--json"]
+
+    def run(h: str) -> dict:
+        import contextlib
+        import io
+
+        buf = io.StringIO()
+        with contextlib.redirect_stdout(buf):
+            main(["measure", rec, "--sample-thickness", h, *common])
+        return json.loads(buf.getvalue())
+
+    lo, mid, hi, rng = run("0.02"), run("0.04"), run("0.06"), run("0.02:0.06")
+    assert rng["E"] == pytest.approx(mid["E"], rel=1e-9)
+    term = abs(np.log(hi["E"] / lo["E"])) / (2 * np.sqrt(3)) * 100
+    assert term > 0.3 and rng["contributions_pct"]["sample"] == pytest.approx(term, rel=1e-6)
+    assert main(["tof", "--soil-E", "38e6", "--soil-nu", "0.3", "--sample-thickness",
+                 "0.02:0.06", "--sample-box", "0.13,0.18"]) not in (0, None)

@@ -245,6 +245,11 @@ def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
         return ChainContext(cfg, device, cal, params, "", {})
     wall, opts = wall_law(args, cfg, cal, params, E, nu)
     plain = dict(opts)
+    from ssw.cli._sample import thickness_range
+
+    if thickness_range(args) is not None and not getattr(args, "thickness_range_ok", False):
+        raise ConfigError("--sample-thickness", args.sample_thickness,
+                          "one thickness H, m (a range LO:HI is ssw measure's budget term)")
     sample = sample_of(args)
     if sample is not None:  # the tested block, not the device: any calibration applies
         if wall != "fem":

@@ -13,8 +13,9 @@ def add_sample_options(p: argparse.ArgumentParser) -> None:
     """``--sample-thickness``, ``--sample-radius`` or ``--sample-box``, ``--sample-base``,
     ``--sample-lateral`` (default: none of them, the half-space)."""
     g = p.add_argument_group("sample (default: a half-space)")
-    g.add_argument("--sample-thickness", type=float, metavar="H",
-                   help="a finite sample block of this thickness, m")
+    g.add_argument("--sample-thickness", metavar="H|LO:HI",
+                   help="a finite sample block of this thickness, m; a range LO:HI (ssw "
+                   "measure) adds the spread of E over it to the uncertainty budget")
     g.add_argument("--sample-radius", type=float, metavar="R",
                    help="the block's radius, m (cylinder)")
     g.add_argument("--sample-box", metavar="A,B",
@@ -30,9 +31,30 @@ def add_sample_options(p: argparse.ArgumentParser) -> None:
                    help="its side free (default) or in a rigid frictionless mould")
 
 
-def sample_of(args: argparse.Namespace) -> Sample | None:
-    """The :class:`Sample` of the flags, or None (the half-space) when none is given."""
-    thickness = getattr(args, "sample_thickness", None)
+def thickness_range(args: argparse.Namespace) -> tuple[float, float] | None:
+    """``(lo, hi)`` m of ``--sample-thickness LO:HI``; None for one thickness or none."""
+    text = getattr(args, "sample_thickness", None)
+    if text is None or ":" not in str(text):
+        return None
+    try:
+        lo, hi = (float(x) for x in str(text).split(":"))
+    except ValueError as exc:
+        raise ConfigError("--sample-thickness", text, "H or LO:HI, m") from exc
+    if not 0 < lo < hi:
+        raise ConfigError("--sample-thickness", text, "0 < LO < HI, m")
+    return lo, hi
+
+
+def sample_of(args: argparse.Namespace, thickness: float | None = None) -> Sample | None:
+    """The :class:`Sample` of the flags, or None (the half-space) when none is given; a
+    thickness range gives its middle (or ``thickness``, m)."""
+    text = getattr(args, "sample_thickness", None)
+    rng = thickness_range(args)
+    if thickness is None and text is not None:
+        try:
+            thickness = 0.5 * (rng[0] + rng[1]) if rng else float(text)
+        except ValueError as exc:
+            raise ConfigError("--sample-thickness", text, "H or LO:HI, m") from exc
     radius = getattr(args, "sample_radius", None)
     box = getattr(args, "sample_box", None)
     others = [getattr(args, k, None) for k in ("sample_base", "sample_lateral", "base_E",

@@ -36,8 +36,22 @@ def run_measure(args: argparse.Namespace) -> dict[str, Any]:
         args.lowpass = ctx.cfg.get("validation", {}).get("lowpass")
     m = measure(recs, nu, ctx.params, ctx.wall, ctx.wall_options,
                 calibration=ctx.calibration, tof_options=tof_options(args, ctx.params),
-                device=ctx.device, strength=sample_strength(args, ctx))
+                device=ctx.device, strength=sample_strength(args, ctx),
+                sample_range=_sample_range(args, ctx))
     return {**ctx.inputs(), **m.to_dict()}
+
+
+def _sample_range(args: argparse.Namespace, ctx: Any) -> list[dict[str, Any]] | None:
+    """The wall options of the thinnest and thickest sample of ``--sample-thickness LO:HI``
+    (the budget's sample term), or None."""
+    from ssw.cli._sample import sample_of, thickness_range
+
+    rng = thickness_range(args)
+    if rng is None:
+        return None
+    base = (ctx.device_wall_options or {}).get("contact") or dict(ctx.cfg.get("contact", {}))
+    return [{**ctx.wall_options, "contact": sample_of(args, h).contact_settings(base)}
+            for h in rng]
 
 
 def sample_strength(args: argparse.Namespace, ctx: Any) -> float | None:
@@ -122,4 +136,4 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_tof_options(p)
     add_device_options(p)
     add_json_flag(p)
-    p.set_defaults(func=run_measure, human=_human)
+    p.set_defaults(func=run_measure, human=_human, thickness_range_ok=True)

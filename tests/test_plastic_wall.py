@@ -143,7 +143,25 @@ def test_interpolated_level_matches_a_fresh_fem_path():
                    unload=True)
     down = c.branch == 1
     d_res = w.residual_indentation(np.array([dm]))[0]
-    assert d_res == pytest.approx(c.residual_indentation, rel=0.1)
+    assert d_res == pytest.approx(c.residual_indentation, rel=0.05)
     f_wall = w.force_at(c.delta[down], np.full(down.sum(), dm))
     f_peak = float(c.force[c.branch == 0][-1])
-    assert np.max(np.abs(f_wall - c.force[down])) < 0.05 * f_peak
+    assert np.max(np.abs(f_wall - c.force[down])) < 0.03 * f_peak
+
+
+def test_tof_hits_cli(capsys):
+    """``ssw tof --hits``: one row per hit, the sample's history carried (the set grows),
+    and the plate refused (the plastic solver models a half-space)."""
+    import json
+
+    from ssw.cli import main
+
+    args = ["tof", "--hits", "2", "--soil-material", "pcf08", "--soil-model", "von-mises",
+            "--plastic-levels", "6", "--plastic-increments", "8", "--calibration", "none"]
+    assert main([*args, "--plate-thickness", "0", "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    rows = res["hits"]
+    assert [r["hit"] for r in rows] == [1, 2]
+    assert res["soil_model"]["yield_stress"] == Y  # the library's strength, not fitted
+    assert rows[1]["permanent_set"] >= rows[0]["permanent_set"] > 0
+    assert main([*args, "--plate-thickness", "4e-4"]) != 0

@@ -27,7 +27,9 @@ FEM includes in its unloading curves, does not change the reloading path in that
 Interpolation between levels. Thornton's unloading law, ``F = 4/3 E* sqrt(R_p)
 (d - d_res)^{3/2}`` with a flattened radius ``R_p`` fixed by continuity at ``d_max``, is
 ``F_L(d_max) xi^{3/2}`` in the normalized variable ``xi``: the same shape at every level. The
-FEM's shapes ``f_k(xi)`` are close to that, so ``f`` and ``d_res`` are interpolated linearly
+FEM's shapes ``f_k(xi)`` are close to that (PCF 08: within 0.04 of ``xi^{3/2}`` as von
+Mises, 0.06 as the crushable foam, while ``d_res / d_m`` grows from 0.1 to 0.45 and from 0.4
+to 0.73 over the levels), so ``f`` and ``d_res`` are interpolated linearly
 in ``d_max`` between the two neighbouring levels (exact for a self-similar family); the
 lowest level is ``d_e`` itself (``d_res = 0``, ``f`` the loading curve's own shape).
 Above the last level its shape and ``d_res / d_m`` are kept (beyond ``exact_reach``).
@@ -44,8 +46,9 @@ Bead compliance: as for the other FEM walls, ``F(d) = F_R(d / s)`` with
 first-order correction, ``s - 1 < 1e-3`` on soils and foams below 200 MPa).
 
 Cost: a loading path and ``K`` loading-unloading paths on a mesh scaled to the contact
-radius at ``d_top`` (element ``a / fine`` under the sphere, growth ``growth``): about 1 s a
-path for the default 10 levels x 12 increments on one core (ssw ``tests/test_plastic_wall.py``).
+radius at ``d_top`` (element ``a / fine`` under the sphere, growth ``growth``): 6-7 s for
+PCF 08's 11 paths at the default 10 levels x 12 increments, one core. An unloading curve
+interpolated between two levels matches a fresh FEM path (tests/test_plastic_wall.py).
 
 References
 ----------

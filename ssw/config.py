@@ -288,15 +288,17 @@ def scenes(cfg: dict[str, Any], set_name: str) -> list[Scene]:
         raise ConfigError("set", set_name, f"one of the sets: {', '.join(cfg['sets'])}")
     s = cfg["sets"][set_name]
     from ssw.constitutive import model_from
+    from ssw.sample import sample_from_dict
 
     model = model_from(s.get("soil_model"))
+    sample = sample_from_dict(s.get("sample"), f"sets.{set_name}.sample")
     out: dict[str, Scene] = {}
     for m in s["plate_material"]:
         for t in expand_grid(s["plate_thickness"], f"sets.{set_name}.plate_thickness"):
             for E in expand_grid(s["soil_E"], f"sets.{set_name}.soil_E"):
                 for nu in expand_grid(s["soil_nu"], f"sets.{set_name}.soil_nu"):
                     sc = Scene("none" if t == 0 else m, float(t), float(E), float(nu),
-                               soil_model=model)
+                               sample=sample, soil_model=model)
                     other = out.setdefault(sc.scene_id, sc)
                     if other != sc:
                         raise ConfigError(f"sets.{set_name}", sc.scene_id,

@@ -63,6 +63,9 @@ def register(kinds: argparse._SubParsersAction) -> None:
                    help="also measure the fem wall over the Set 3 sweep (cost, TOF)")
     p.add_argument("--domain-study", action="store_true",
                    help="also measure the boundary effect of the domain size on the force")
+    p.add_argument("--sample", action="store_true",
+                   help="finite samples: cost and force of a curve on blocks against the "
+                   "half-space box (contact_sample.csv)")
     p.add_argument("--interfaces", action="store_true",
                    help="also compare the bonded, frictionless and unilateral interfaces")
     p.add_argument("--output-dir", default="results/bench", help="folder of the outputs")
@@ -240,6 +243,14 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         return run_plastic(args)
 
     cfg = load_config(args.config)
+    if getattr(args, "sample", False):
+        out = Path(args.output_dir)
+        rows = sample_study(cfg, float(cfg["indenter"]["radius"]), args.steps, args.repeat,
+                            out)
+        result = {"sample": rows, "steps": args.steps,
+                  "csv": str(out / "contact_sample.csv")}
+        write_json(out / "contact_sample.json", result, result)
+        return result
     contact = {**cfg["contact"], "steps": args.steps, "delta_mode": "fixed"}
     contact.pop("delta_reach", None)
     if args.soil_radius > 0:
@@ -293,6 +304,52 @@ def domain_study(
         r["effect"] = r["force"] / out[-1]["force"] - 1
     atomic_write_text(out_dir / "contact_domain.csv", "size_m,force_N,dofs,effect\n" + "".join(
         f"{r['size']:g},{r['force']:.8g},{r['dofs']},{r['effect']:.4e}\n" for r in out))
+    return out
+
+
+def sample_study(
+    cfg: dict[str, Any], radius: float, steps: int, repeat: int, out_dir: Path,
+    blocks: tuple[tuple[float, str], ...] = ((0.06, "bonded"), (0.04, "bonded"),
+                                             (0.02, "bonded"), (0.02, "sliding")),
+) -> list[dict[str, Any]]:
+    """A curve (``steps`` increments to 0.1 mm; PCF 08: 38 MPa, nu 0.34; no plate and the
+    0.4 mm PLA plate) on the half-space box and on 130 x 180 mm foam blocks (ssw.sample):
+    cold (mesh, operators, path: a fresh store) and warm (operators in memory) seconds,
+    best of ``repeat``; the dofs; the force at 0.1 mm relative to the half-space's. Writes
+    ``contact_sample.csv``."""
+    import gc
+
+    from ssw.bench import best_time
+    from ssw.config import library
+    from ssw.contact.operators import OperatorStore
+    from ssw.sample import Sample, equivalent_radius
+
+    pla = library(cfg)["pla"]
+    c0 = {**cfg["contact"], "steps": steps, "delta_max": 1e-4, "delta_mode": "fixed"}
+    out = []
+    for plate, t in ((None, 0.0), ((pla.E, pla.nu), 0.4e-3)):
+        half = None
+        for block in (None, *blocks):
+            smp = None if block is None else Sample(block[0], equivalent_radius(0.13, 0.18),
+                                                    block[1], "free")
+            c = c0 if smp is None else smp.contact_settings(c0)
+            def solve(c=c, plate=plate, t=t, store=None):
+                return _curve((38e6, 0.34), plate, t, radius, c, store is None, store)
+
+            gc.collect()  # the previous blocks' operators: not this curve's time
+            cold, curve = best_time(solve, repeat)
+            store = OperatorStore(None)
+            solve(store=store)
+            gc.collect()
+            warm, _ = best_time(lambda s=store, f=solve: f(store=s), repeat)
+            half = curve if half is None else half
+            out.append({"plate_thickness": t, "sample": "half-space" if smp is None
+                        else smp.key, "dofs": int(curve.stats["dofs"]), "cold": cold,
+                        "warm": warm, "force_rel": float(curve.force[-1] / half.force[-1])})
+    keys = list(out[0])
+    atomic_write_text(out_dir / "contact_sample.csv", ",".join(keys) + "\n" + "".join(
+        ",".join(str(r[k]) if isinstance(r[k], str) else f"{r[k]:.6g}" for k in keys) + "\n"
+        for r in out))
     return out
 
 

@@ -172,7 +172,8 @@ def calibrate(
     ranges: dict[str, tuple[float, float]] | None = None, loo: bool = True,
     scan_points: int | None = None, material_set: str = "realistic",
     materials_file: str | None = None, provenance: dict[str, Any] | None = None,
-    on_run: Any = None,
+    on_run: Any = None, recorded_wall_options: dict[str, Any] | None = None,
+    reference_sample: Any = None,
 ) -> Calibration:
     """Identify ``free`` device parameters from ``refs`` (see :mod:`ssw.calibration.fit`).
 
@@ -184,6 +185,11 @@ def calibrate(
     wall, wall_options : the last-contact law.  ranges : scan ranges (SI) per parameter.
     loo : also calibrate without each reference and predict its E.
     on_run : called after each batched run of the forward model (a progress bar's update).
+    recorded_wall_options : the wall options the file records for the calibrated device
+        (default ``wall_options``): without the references' sample, which is theirs, not
+        the device's (a later measurement names its own).
+    reference_sample : the references' sample (:class:`ssw.sample.Sample`), recorded in
+        the provenance; None: half-spaces.
     """
     from ssw.chain import api
 
@@ -225,14 +231,18 @@ def calibrate(
             "parameter_sets_evaluated": model.evaluations, "batched_runs": model.runs,
             "converged": fit.converged, "chi2": fit.chi2,
             "weights": "given TOF uncertainties" if fit.weights_known else
-            "1 % of each TOF, covariance scaled by chi2/(n - p)", **(provenance or {})}
+            "1 % of each TOF, covariance scaled by chi2/(n - p)",
+            "reference_sample": None if reference_sample is None else reference_sample.to_dict(),
+            **(provenance or {})}
     return Calibration(
         device=cal_device, device_nominal=device, free=model.free, parameters=values,
         parameter_std=std,
         covariance=None if fit.covariance is None else fit.covariance.tolist(),
         singular_values=fit.singular_values.tolist(), unidentified=list(fit.unidentified),
         references=references, loo=loo_rows, alternatives=list(fit.alternatives),
-        wall={"law": wall, "options": _plain_options(opts)}, numerics=dict(numerics),
+        wall={"law": wall, "options": _plain_options(
+            opts if recorded_wall_options is None else dict(recorded_wall_options))},
+        numerics=dict(numerics),
         material_set=material_set, materials_file=materials_file, provenance=prov,
         at_bound=fit.at_bound, device_sha256=device_digest(device, materials),
     )

@@ -54,6 +54,9 @@ DEVICE_FLAGS = {
 def add_device_options(p: argparse.ArgumentParser,
                        walls: tuple[str, ...] = WALL_CHOICES) -> None:
     """Config, device, calibration, device-field and wall options."""
+    from ssw.cli._sample import add_sample_options
+
+    add_sample_options(p)
     g = p.add_argument_group("device and calibration")
     g.add_argument("--config", help="study config YAML (default: config/config.yaml of the "
                    "working folder if any, else ssw's defaults)")
@@ -123,6 +126,10 @@ class ChainContext:
     params: Any
     wall: str
     wall_options: dict[str, Any]
+    #: the tested sample (ssw.sample.Sample; None: a half-space) and the wall options
+    #: without it (what a calibration records: its sample belongs to its references)
+    sample: Any = None
+    device_wall_options: dict[str, Any] | None = None
 
     def inputs(self) -> dict[str, Any]:
         """Provenance for --json and output files."""
@@ -201,6 +208,7 @@ def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
                   numerics_only: bool = False) -> ChainContext:
     """Resolve config, calibration, device, params and wall (module docstring)."""
     from ssw.chain.params import chain_params, numerics_of
+    from ssw.cli._sample import sample_of
     from ssw.config import device_of, library, load_config
     from ssw.device import load_device
 
@@ -236,6 +244,14 @@ def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
     if numerics_only:
         return ChainContext(cfg, device, cal, params, "", {})
     wall, opts = wall_law(args, cfg, cal, params, E, nu)
+    plain = dict(opts)
+    sample = sample_of(args)
+    if sample is not None:  # the tested block, not the device: any calibration applies
+        if wall != "fem":
+            raise ConfigError("--sample-thickness", sample.thickness,
+                              f"the fem wall (--law fem; this command's wall is {wall})")
+        opts = {**opts, "contact": sample.contact_settings(opts.get("contact") or
+                                                           dict(cfg.get("contact", {})))}
     dyn = getattr(args, "wall_dynamics", None) or opts.pop("dynamics", None) or cfg.get(
         "chain", {}).get("wall_dynamics", "quasi-static")
     rho = getattr(args, "soil_density", None)
@@ -246,12 +262,14 @@ def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
             raise ConfigError("--soil-density", None,
                               "the tested medium's density (kg/m^3) for --wall-dynamics reduced")
         opts = {**opts, "dynamics": "reduced", "soil_density": float(rho)}
+        plain = {**plain, "dynamics": "reduced", "soil_density": float(rho)}
     elif dyn == "fem":
         if rho is None:
             raise ConfigError("--soil-density", None,
                               "the tested medium's density (kg/m^3) for --wall-dynamics fem")
         opts = {**opts, "dynamics": "fem", "soil_density": float(rho)}
-    return ChainContext(cfg, device, cal, params, wall, opts)
+        plain = {**plain, "dynamics": "fem", "soil_density": float(rho)}
+    return ChainContext(cfg, device, cal, params, wall, opts, sample, plain)
 
 
 def wall_law(args: argparse.Namespace, cfg: dict[str, Any], cal: Any, params: Any,

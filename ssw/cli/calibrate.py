@@ -84,6 +84,7 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
             material_set=ctx.cfg.get("material_set", "realistic"),
             materials_file=ctx.cfg.get("materials_file"),
             provenance={"command": "ssw calibrate", "config": args.config}, on_run=bar,
+            recorded_wall_options=ctx.device_wall_options, reference_sample=ctx.sample,
         )
     if args.output:
         write_calibration(args.output, cal)

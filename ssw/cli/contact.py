@@ -78,6 +78,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="folder of the curve files of the --scene batch (ID.h5 each)")
     p.add_argument("--config",
                    help="study config YAML (default: ./config/config.yaml, else ssw's defaults)")
+    from ssw.cli._sample import add_sample_options
+
+    add_sample_options(p)
     add_json_flag(p)
     p.set_defaults(func=run, human=_human)
 
@@ -106,10 +109,14 @@ def _config_scenes(cfg: dict[str, Any], ids: list[str]) -> list[Any]:
 
 
 def _scene(args: argparse.Namespace, cfg: dict[str, Any], mats: dict) -> Any:
+    from ssw.cli._sample import sample_of
     from ssw.config import Scene
     from ssw.materials import Material
 
     if args.scene:
+        if sample_of(args) is not None:
+            raise ConfigError("--sample-thickness", args.sample_thickness,
+                              "sample flags for a scene given by flags, not with --scene")
         return _config_scenes(cfg, args.scene)[0], mats
     for name in ("soil_E", "soil_nu", "plate_thickness"):
         if getattr(args, name) is None:
@@ -125,7 +132,7 @@ def _scene(args: argparse.Namespace, cfg: dict[str, Any], mats: dict) -> Any:
     else:
         key = args.plate_material or "none"
     return Scene(key if t > 0 else "none", float(t), float(args.soil_E),
-                 float(args.soil_nu)), mats
+                 float(args.soil_nu), sample=sample_of(args)), mats
 
 
 def run(args: argparse.Namespace) -> dict[str, Any] | None:

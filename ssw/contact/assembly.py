@@ -103,7 +103,7 @@ def split_interface(mesh: Mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 def number_dofs(
     nodes: np.ndarray, tri: np.ndarray, pairs: np.ndarray, interface: str, order: np.ndarray,
-    soil_radius: float, soil_depth: float,
+    soil_radius: float, soil_depth: float, base: str = "bonded", lateral: str = "mould",
 ) -> tuple[np.ndarray, np.ndarray, int]:
     """Global dof indices: ``udof`` (n, 2), ``pdof`` (n,), ``ndof``. -1 marks no dof.
 
@@ -114,7 +114,7 @@ def number_dofs(
     n = len(nodes)
     tol = geometric_tolerance(nodes, tri)
     r = nodes[:, 0]
-    free = fixed_free(nodes, tol, soil_radius, soil_depth)
+    free = fixed_free(nodes, tol, soil_radius, soil_depth, base, lateral)
     master = np.tile(np.arange(n)[:, None], (1, 2))  # node whose dof each component uses
     soil, plate = pairs[:, 0], pairs[:, 1]
     if interface == "bonded":
@@ -139,14 +139,26 @@ def number_dofs(
 
 
 def fixed_free(nodes: np.ndarray, tol: float, soil_radius: float,
-               soil_depth: float) -> np.ndarray:
+               soil_depth: float, base: str = "bonded", lateral: str = "mould") -> np.ndarray:
     """(n, 2) bool, the displacement components that are free: ``u_r = 0`` on the axis
-    (symmetry) and on the lateral boundary (rollers), ``u = 0`` on the bottom."""
+    (symmetry); on the lateral boundary ``u_r = 0`` (``mould``: rollers, a rigid
+    frictionless wall; the half-space box) or nothing (``free``); on the bottom ``u = 0``
+    (``bonded``; the half-space box) or ``u_z = 0`` (``sliding``: a rigid frictionless
+    base)."""
     r, z = nodes[:, 0], nodes[:, 1]
     free = np.ones((len(nodes), 2), dtype=bool)
     free[r < tol, 0] = False  # symmetry axis
-    free[r > soil_radius - tol, 0] = False  # rollers
-    free[z < -soil_depth + tol] = False  # fixed bottom
+    if lateral == "mould":
+        free[r > soil_radius - tol, 0] = False  # rollers
+    elif lateral != "free":
+        raise ConfigError("sample.lateral", lateral, "mould | free")
+    bottom = z < -soil_depth + tol
+    if base == "bonded":
+        free[bottom] = False
+    elif base == "sliding":
+        free[bottom, 1] = False
+    else:
+        raise ConfigError("sample.base", base, "bonded | sliding")
     return free
 
 
@@ -213,7 +225,7 @@ def assemble(
     order = elimination_order(tri, pairs, n, order_nodes)
     udof, pdof, ndof = number_dofs(
         nodes, tri, pairs, interface, order, fixed_faces * mesh.soil_radius,
-        fixed_faces * mesh.soil_depth
+        fixed_faces * mesh.soil_depth, mesh.base, mesh.lateral
     )
     body = mesh.body.astype(np.int64)
     G, inv_K = lame(np.asarray(E)[body], np.asarray(nu)[body])

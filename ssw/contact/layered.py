@@ -83,7 +83,8 @@ class LayeredSettings:
     ``ring_min``: smallest contact radius resolved at that ratio, relative to
     ``sqrt(R delta_1)`` of the first increment (contacts on plates are 0.18-0.6 of it);
     ``candidate_factor``: ring zone radius / ``sqrt(R delta_last)``; ``soil_depth``: None
-    for a half-space soil, or a depth (m) over a rigid bonded base; ``quadrature``: the
+    for a half-space soil, or a depth (m) over a rigid base, ``soil_base`` ``bonded``
+    (``u = 0``) or ``sliding`` (frictionless: ``u_z = 0``, no shear); ``quadrature``: the
     Hankel quadrature.
     """
 
@@ -91,6 +92,7 @@ class LayeredSettings:
     ring_min: float = 0.1
     candidate_factor: float = 1.5
     soil_depth: float | None = None
+    soil_base: str = "bonded"
     quadrature: Quadrature = field(default_factory=Quadrature)
 
     def __post_init__(self) -> None:
@@ -102,6 +104,8 @@ class LayeredSettings:
             raise ConfigError("layered.candidate_factor", self.candidate_factor, "> 1")
         if self.soil_depth is not None and not self.soil_depth > 0:
             raise ConfigError("layered.soil_depth", self.soil_depth, "None or a depth > 0 m")
+        if self.soil_base not in ("bonded", "sliding"):
+            raise ConfigError("layered.soil_base", self.soil_base, "bonded | sliding")
 
     @property
     def force_error(self) -> float:
@@ -116,7 +120,8 @@ class LayeredSettings:
         unknown = set(values) - {f for f in cls.__dataclass_fields__ if f != "quadrature"}
         if unknown:
             raise ConfigError("contact.layered", sorted(unknown),
-                              "ring_ratio, ring_min, candidate_factor, soil_depth, quadrature")
+                              "ring_ratio, ring_min, candidate_factor, soil_depth, soil_base, "
+                              "quadrature")
         return cls(**values, quadrature=Quadrature(**(quad or {})))
 
 
@@ -221,7 +226,8 @@ def solve_curve(soil: tuple[float, float], plate: tuple[float, float] | None,
         raise ConfigError("plate_thickness", plate_thickness, "a thickness >= 0 m")
     if plate_thickness > 0 and plate is None:
         raise ConfigError("plate", plate, "(E, nu) of the plate when plate_thickness > 0")
-    stack = plate_on_soil(plate, plate_thickness, soil, cfg["interface"], settings.soil_depth)
+    stack = plate_on_soil(plate, plate_thickness, soil, cfg["interface"], settings.soil_depth,
+                          settings.soil_base)
     deltas = increments(float(cfg["delta_max"]), int(cfg["steps"]), cfg.get("delta_reach"))
     curve, _ = solve_stack(stack, radius, deltas, settings, int(cfg["pressure_profiles"]))
     has_plate = plate is not None and plate_thickness > 0

@@ -109,11 +109,11 @@ class Stack:
 
 def plate_on_soil(plate: tuple[float, float] | None, thickness: float,
                   soil: tuple[float, float], interface: str,
-                  soil_depth: float | None = None) -> Stack:
+                  soil_depth: float | None = None, base: str = "bonded") -> Stack:
     """The stack of a plate (E, nu; None or ``thickness == 0``: no plate) on a soil.
 
     ``soil_depth`` None: the soil is a half-space; a depth (m): a soil layer of that depth
-    bonded to a rigid base (the FEM's fixed bottom).
+    on a rigid base, ``bonded`` (the FEM's fixed bottom) or ``sliding`` (frictionless).
     """
     layers: list[Layer] = []
     ifaces: list[str] = []
@@ -125,7 +125,7 @@ def plate_on_soil(plate: tuple[float, float] | None, thickness: float,
     if soil_depth is None:
         return Stack(tuple(layers), tuple(ifaces), float(soil[0]), float(soil[1]))
     layers.append(Layer(float(soil[0]), float(soil[1]), float(soil_depth)))
-    ifaces.append("bonded")
+    ifaces.append({"bonded": "bonded", "sliding": "frictionless"}.get(base, base))
     return Stack(tuple(layers), tuple(ifaces), np.inf, 0.0)
 
 

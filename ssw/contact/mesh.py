@@ -35,6 +35,8 @@ class MeshSettings:
     growth: float  # element size / distance from the contact point, -
     size_max: float  # m, largest element size
     plate_layers: int  # elements through the plate thickness
+    base: str = "bonded"  # bottom: bonded (u = 0) | sliding (u_z = 0) on a rigid base
+    lateral: str = "mould"  # side: mould (rollers, u_r = 0) | free (traction-free)
 
 
 @dataclass(frozen=True)
@@ -52,6 +54,8 @@ class Mesh:
     plate_radius: float
     soil_radius: float
     soil_depth: float
+    base: str = "bonded"
+    lateral: str = "mould"
 
     @property
     def vertices(self) -> np.ndarray:
@@ -181,7 +185,7 @@ def _build(gmsh, t: float, rp: float, s: MeshSettings) -> Mesh:
     tri = renum[tri]
     _check_orientation(nodes, tri)
     return Mesh(nodes, tri, np.concatenate(bodies), top, rp if t > 0 else 0.0,
-                s.soil_radius, s.soil_depth)
+                s.soil_radius, s.soil_depth, s.base, s.lateral)
 
 
 def _check_orientation(nodes: np.ndarray, tri: np.ndarray) -> None:
@@ -207,4 +211,6 @@ def mesh_settings(cfg: dict[str, Any]) -> MeshSettings:
         growth=float(cfg["mesh_growth"]),
         size_max=float(cfg["mesh_size_max"]),
         plate_layers=int(cfg["plate_layers"]),
+        base=str(cfg.get("soil_base", "bonded")),
+        lateral=str(cfg.get("soil_lateral", "mould")),
     )

@@ -328,7 +328,8 @@ def _build_model(geom: Geometry) -> _Model:
     mesh = build_mesh(geom.plate_thickness, geom.plate_radius, geom.mesh)
     nodes, tri, pairs = split_interface(mesh)
     tol = geometric_tolerance(nodes, tri)
-    free = fixed_free(nodes, tol, mesh.soil_radius, mesh.soil_depth)
+    free = fixed_free(nodes, tol, mesh.soil_radius, mesh.soil_depth, mesh.base,
+                          mesh.lateral)
     top_body = 1 if geom.plate_thickness > 0 else 0
     weight = top_surface_weights(nodes, tri, np.flatnonzero(mesh.body == top_body), mesh.top,
                                  tol)

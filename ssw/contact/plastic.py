@@ -201,7 +201,8 @@ class _Model:
         self.nnz = keys.size
         self.pattern: tuple | None = None
         tol = geometric_tolerance(nodes, tri)
-        free = fixed_free(nodes, tol, mesh.soil_radius, mesh.soil_depth)
+        free = fixed_free(nodes, tol, mesh.soil_radius, mesh.soil_depth, mesh.base,
+                          mesh.lateral)
         self.fixed = np.flatnonzero(~free.ravel())
         weight = top_surface_weights(nodes, tri, np.arange(ne), mesh.top, tol)
         top = np.flatnonzero(weight > 0)

@@ -97,6 +97,11 @@ def settings_of(contact_cfg: dict[str, Any]) -> dict[str, Any]:
     cfg = {**DEFAULTS, **contact_cfg}
     if cfg["interface"] not in INTERFACES:
         raise ConfigError("contact.interface", cfg["interface"], " | ".join(INTERFACES))
+    # the soil's boundaries (ssw.sample: a finite block; default the half-space box)
+    for key, allowed in (("soil_base", ("bonded", "sliding")),
+                         ("soil_lateral", ("mould", "free"))):
+        if key in cfg and cfg[key] not in allowed:
+            raise ConfigError(f"contact.{key}", cfg[key], " | ".join(allowed))
     for key, (kind, lo, closed, hi) in RANGES.items():
         if key not in cfg:
             continue
@@ -471,6 +476,8 @@ def solve_scene(
     cache : a :class:`MeshCache` shared by the scenes of a batch (None: the process's).
     engine : ``substructured`` (default) or ``monolithic`` (the module docstring).
     """
+    if scene.sample is not None:  # a finite block: the FEM's soil domain is the block
+        contact_cfg = scene.sample.contact_settings(contact_cfg)
     if scene.soil_model is not None:  # elasto-plastic: ssw.contact.plastic
         from ssw.contact.plastic import scene_curve
 

@@ -72,7 +72,8 @@ class Run:
     t : (n_t,) s.  sensor : (n_t, n) N, the sensor signal (mean of the sensor particle's two
     contact forces, static precompression included), NaN after a scene stopped.
     wall_force : (n_t, n) N.  forces : (n_t, n, N) N or None: contacts 0..N-2 and the wall.
-    energy : (n_t, n) J or None: kinetic + elastic - gravity potential.
+    energy : (n_t, n) J or None: kinetic + elastic - gravity potential (with a stateful
+    wall, its ``energy(state)``: stored plus dissipated).
     peak_wall_indentation : (n,) m, the largest ``u_{N-1}``.  stop_time : (n,) s (NaN: ran
     to the end).  dt : s.
     """
@@ -265,7 +266,12 @@ def simulate(
             forces[step, active] = f.T
         if energy is not None:
             sub = b.take(active)
-            energy[step, active] = kinetic_energy(sub, v.T) + potential_energy(sub, w, u.T)
+            e = kinetic_energy(sub, v.T) + potential_energy(sub, w, u.T)
+            if stateful and hasattr(w, "energy"):
+                # a stateful wall's energy is its state's: stored plus dissipated
+                stored, lost = w.energy(wstate)
+                e += stored + lost - w.potential(u[-1])
+            energy[step, active] = e
 
     def read(f: np.ndarray, out: np.ndarray) -> None:
         if reads == "upper":

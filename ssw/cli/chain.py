@@ -63,6 +63,11 @@ def run_chain(args: argparse.Namespace) -> dict[str, Any]:
 def run_tof(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.chain.api import peaks
 
+    if args.hits is not None or args.soil_model is not None:
+        args.human = _human_hits
+        return _run_hits(args)
+    if args.soil_E is None or args.soil_nu is None:
+        raise ConfigError("--soil-E/--soil-nu", (args.soil_E, args.soil_nu), "both given")
     ctx = chain_context(args, args.soil_E, args.soil_nu)
     params = ctx.params
     if ctx.wall_options.get("dynamics") == "fem":
@@ -83,6 +88,86 @@ def run_tof(args: argparse.Namespace) -> dict[str, Any]:
         "peak_wall_indentation": float(run.peak_wall_indentation[0]),
         "striker_velocity": params.striker_velocity,
     }
+
+
+def _soil_model(args: argparse.Namespace, cfg: dict[str, Any]) -> Any:
+    """The plastic model of ``--soil-model`` with the flags' strengths or, with
+    ``--soil-material`` and no strength flag, the library's (not fitted); fills soil E and
+    nu from the material when not given."""
+    from ssw.constitutive import model_from, model_of_strength
+
+    mat = None
+    if args.soil_material is not None:
+        from ssw.config import library
+
+        mats = library(cfg)
+        if args.soil_material not in mats:
+            raise ConfigError("--soil-material", args.soil_material,
+                              f"a material of the library: {', '.join(sorted(mats))}")
+        mat = mats[args.soil_material]
+        args.soil_E = mat.E if args.soil_E is None else args.soil_E
+        args.soil_nu = mat.nu if args.soil_nu is None else args.soil_nu
+    if args.soil_E is None or args.soil_nu is None:
+        raise ConfigError("--soil-E/--soil-nu", (args.soil_E, args.soil_nu),
+                          "both given (or --soil-material)")
+    if args.soil_model is None:
+        raise ConfigError("--soil-model", None, "von-mises | drucker-prager | crushable-foam "
+                          "with --hits")
+    if mat is not None and args.soil_yield_stress is None and args.soil_cohesion is None:
+        return model_of_strength(args.soil_model, mat.strength,
+                                 f"materials.{args.soil_material}")
+    spec: dict[str, Any] = {"model": args.soil_model}
+    if args.soil_model == "drucker-prager":
+        spec.update(cohesion=args.soil_cohesion, friction_angle=args.soil_friction_angle,
+                    dilatancy_angle=args.soil_dilatancy_angle)
+    else:
+        key = "yield_stress" if args.soil_model == "von-mises" else "compressive_strength"
+        spec.update({key: args.soil_yield_stress, "hardening": args.soil_hardening})
+    return model_from(spec)
+
+
+def _run_hits(args: argparse.Namespace) -> dict[str, Any]:
+    """``--hits N`` consecutive hits on one plastic sample (:mod:`ssw.walls.hits`)."""
+    from ssw.config import load_config
+    from ssw.walls.hits import run_hits
+    from ssw.walls.plastic import Settings, plastic_wall
+
+    model = _soil_model(args, load_config(args.config))
+    ctx = chain_context(args, args.soil_E, args.soil_nu)
+    if ctx.wall_options.get("dynamics"):
+        raise ConfigError("--wall-dynamics", ctx.wall_options["dynamics"],
+                          "quasi-static with --hits (the plastic wall is static)")
+    settings = Settings(levels=args.plastic_levels, increments=args.plastic_increments)
+    wall = plastic_wall(ctx.params, args.soil_E, args.soil_nu, soil_model=model,
+                        settings=settings)
+    res = run_hits(ctx.params, wall, 1 if args.hits is None else args.hits)
+    rows = res.rows()
+    tof = np.array([r["tof"] for r in rows])
+    return {
+        **ctx.inputs(), "wall": "plastic", "soil_E": args.soil_E, "soil_nu": args.soil_nu,
+        "soil_model": model.params(), "soil_model_key": model.key,
+        "plastic_levels": settings.levels, "plastic_increments": settings.increments,
+        "hits": rows, "static_set": float(res.static_set[0]),
+        "static_dissipated": float(res.static_dissipated[0]),
+        "tof_drift": np.diff(tof).tolist(), "tof_std": float(np.std(tof, ddof=1))
+        if tof.size > 1 else 0.0,
+        "exact_reach": float(res.wall.exact_reach[0]),
+        "beyond_exact_reach": bool(res.wall.d_max0[0] > res.wall.exact_reach[0]),
+        "striker_velocity": ctx.params.striker_velocity,
+    }
+
+
+def _human_hits(res: dict[str, Any]) -> str:
+    """Per hit: TOF, peak wall force, permanent set, its increment, dissipated energy."""
+    lines = [f"{res['soil_model_key']} on E = {res['soil_E']:.4g} Pa, nu = {res['soil_nu']:.3g}"
+             f" (no plate); static set {res['static_set'] * 1e6:.3f} um",
+             "hit   TOF (s)        peak F (N)  set (um)  d set (um)  dissipated (J)"]
+    lines += [f"{r['hit']:3d}  {r['tof']:.6e}  {r['peak_force']:10.4g}  "
+              f"{r['permanent_set'] * 1e6:8.3f}  {r['set_increment'] * 1e6:10.3f}  "
+              f"{r['dissipated']:.4e}" for r in res["hits"]]
+    lines.append(f"TOF std over the hits {res['tof_std']:.3e} s"
+                 + ("; beyond the tabulated reach" if res["beyond_exact_reach"] else ""))
+    return "\n".join(lines)
 
 
 # ---------------------------------------------------------------------------- sweeps
@@ -248,8 +333,27 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser("tof", help="TOF at the sensor for one soil",
                        description="TOF (s) between the incident and reflected peaks.")
     add_device_options(p)
-    p.add_argument("--soil-E", type=float, required=True, help="soil modulus, Pa")
-    p.add_argument("--soil-nu", type=float, required=True, help="soil Poisson's ratio")
+    p.add_argument("--soil-E", type=float, help="soil modulus, Pa")
+    p.add_argument("--soil-nu", type=float, help="soil Poisson's ratio")
+    h = p.add_argument_group("plastic sample (ssw.walls.plastic; no plate: --plate-thickness 0)")
+    h.add_argument("--hits", type=int,
+                   help="consecutive hits on one plastic sample: per hit the TOF, peak wall "
+                   "force, permanent set and dissipated energy")
+    h.add_argument("--soil-model", choices=["von-mises", "drucker-prager", "crushable-foam"],
+                   help="constitutive model of the sample beyond elasticity")
+    h.add_argument("--soil-yield-stress", type=float,
+                   help="von Mises yield stress Y, or the foam's compressive strength, Pa")
+    h.add_argument("--soil-hardening", type=float, default=0.0,
+                   help="linear hardening modulus, Pa (default 0)")
+    h.add_argument("--soil-cohesion", type=float, help="Drucker-Prager cohesion c, Pa")
+    h.add_argument("--soil-friction-angle", type=float, help="Drucker-Prager phi, degrees")
+    h.add_argument("--soil-dilatancy-angle", type=float, help="Drucker-Prager psi, degrees")
+    h.add_argument("--soil-material",
+                   help="a material key of the library: its E, nu and strengths")
+    h.add_argument("--plastic-levels", type=int, default=10,
+                   help="unloading curves tabulated between first yield and the reach")
+    h.add_argument("--plastic-increments", type=int, default=12,
+                   help="FEM increments per loading-unloading path")
     add_json_flag(p)
     p.set_defaults(func=run_tof)
 

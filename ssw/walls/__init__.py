@@ -10,7 +10,9 @@ the walls. The registry :data:`WALLS` maps a name to a builder
 * ``fit`` (:mod:`ssw.chain.wall`'s modified Hertz or power law), with ``k_table=`` a K table
   file of the fit stage (:class:`ssw.fit.table.KTable`, read once per file version) or
   explicit ``K=`` / ``power=(C, n)`` values;
-* ``fem`` (:mod:`ssw.walls.fem`): the exact FEM law, computed on demand.
+* ``fem`` (:mod:`ssw.walls.fem`): the exact FEM law, computed on demand;
+* ``plastic`` (:mod:`ssw.walls.plastic`): a plastic sample's loading and unloading curves,
+  history-dependent (a stateful wall; ``soil_model=`` a model of :mod:`ssw.constitutive`).
 
 :func:`build_wall` adds the tested medium's inertia when asked (:mod:`ssw.dynamics`).
 """
@@ -75,6 +77,14 @@ def fem_wall(params: ChainParams, soil_E: Any, soil_nu: Any, **options: Any) -> 
     return build(params, soil_E, soil_nu, **options)
 
 
+def plastic_wall(params: ChainParams, soil_E: Any, soil_nu: Any, **options: Any) -> Wall:
+    """The history-dependent wall of a plastic sample (``soil_model=``):
+    :func:`ssw.walls.plastic.plastic_wall`."""
+    from ssw.walls.plastic import plastic_wall as build
+
+    return build(params, soil_E, soil_nu, **options)
+
+
 #: Registry: wall name -> builder(params, soil_E, soil_nu, **options).
 WALLS: dict[str, Callable[..., Wall]] = {
     "rigid": rigid_wall,
@@ -82,6 +92,7 @@ WALLS: dict[str, Callable[..., Wall]] = {
     "fit": file_fit_wall,
     "table": table_wall,
     "fem": fem_wall,
+    "plastic": plastic_wall,
 }
 
 
@@ -100,6 +111,8 @@ def build_wall(name: str, params: ChainParams, soil_E: Any, soil_nu: Any, **opti
         raise ConfigError("wall", name, f"one of {', '.join(WALLS)}")
     if name in ("rigid", "hertz") and options:
         raise ConfigError("wall options", sorted(options), f"none for the {name} wall")
+    if name == "plastic" and dynamics != "quasi-static":
+        raise ConfigError("dynamics", dynamics, "quasi-static for the plastic wall")
     w = WALLS[name](params, soil_E, soil_nu, **options)
     if dynamics != "quasi-static":
         from ssw.dynamics.registry import with_dynamics

@@ -1,0 +1,413 @@
+"""The ``plastic`` wall: a history-dependent last contact on an elasto-plastic half-space.
+
+The law of a rigid sphere of the bead's radius on the sample (:mod:`ssw.contact.plastic`,
+any model of :mod:`ssw.constitutive`; no plate: the plastic solver models a half-space) is
+tabulated on demand, once per scene and kept in memory:
+
+* the virgin loading curve ``F_L(d)`` to the reach ``d_top`` (one loading path);
+* unloading curves from ``K`` maximum indentations ``d_m`` spread evenly between the first
+  yield indentation ``d_e`` and ``d_top`` (one loading-unloading path each), each with its
+  residual indentation ``d_res(d_m)``.
+
+State: per scene the largest indentation reached, ``d_max``. Force at an indentation ``d``::
+
+    d >= d_max:            F = F_L(d)                                  (virgin loading)
+    d_res < d < d_max:     F = F_L(d_max) f(xi; d_max),  xi = (d - d_res) / (d_max - d_res)
+    d <= d_res:            F = 0
+
+with ``f(0) = 0`` and ``f(1) = 1``, so the force is continuous at ``d_max`` and vanishes at
+``d_res``. Below ``d_e`` the sample is elastic: ``F = F_L(d)`` both ways. Reloading below
+``d_max`` follows the unloading curve of ``d_max`` (elastic reloading): the material
+that yielded on loading unloads and reloads elastically as long as the load stays below the
+largest one it carried (Melan's shakedown; for the sphere, Johnson 1985 sec. 6.2 and
+Stronge 2000 ch. 4); the contact models of the discrete element method take the same
+branch (Thornton 1997; Li, Wu & Thornton 2002). Reverse yielding on unloading, which the
+FEM includes in its unloading curves, does not change the reloading path in that model.
+
+Interpolation between levels. Thornton's unloading law, ``F = 4/3 E* sqrt(R_p)
+(d - d_res)^{3/2}`` with a flattened radius ``R_p`` fixed by continuity at ``d_max``, is
+``F_L(d_max) xi^{3/2}`` in the normalized variable ``xi``: the same shape at every level. The
+FEM's shapes ``f_k(xi)`` are close to that (PCF 08: within 0.04 of ``xi^{3/2}`` as von
+Mises, 0.06 as the crushable foam, while ``d_res / d_m`` grows from 0.1 to 0.45 and from 0.4
+to 0.73 over the levels), so ``f`` and ``d_res`` are interpolated linearly
+in ``d_max`` between the two neighbouring levels (exact for a self-similar family); the
+lowest level is ``d_e`` itself (``d_res = 0``, ``f`` the loading curve's own shape).
+Above the last level its shape and ``d_res / d_m`` are kept (beyond ``exact_reach``).
+
+Energy. The work the chain does on the wall is a state function: ``stored(d, d_max) =
+F_L(d_max) (d_max - d_res) int_0^xi f`` (released on unloading) and ``dissipated(d_max) =
+W_L(d_max) - stored(d_max, d_max)``, ``W_L = int_0^d F_L`` (the loop's area: plastic work
+plus the elastic energy locked in the residual stresses, both lost to the chain). Both
+integrals are exact for the piecewise linear tables, so the chain's energy balance closes
+to the integrator's error.
+
+Bead compliance: as for the other FEM walls, ``F(d) = F_R(d / s)`` with
+:func:`ssw.chain.wall.compliance_scale` (exact for Hertz; for the plastic branches a
+first-order correction, ``s - 1 < 1e-3`` on soils and foams below 200 MPa).
+
+Cost: a loading path and ``K`` loading-unloading paths on a mesh scaled to the contact
+radius at ``d_top`` (element ``a / fine`` under the sphere, growth ``growth``): 6-7 s for
+PCF 08's 11 paths at the default 10 levels x 12 increments, one core. An unloading curve
+interpolated between two levels matches a fresh FEM path (tests/test_plastic_wall.py).
+
+References
+----------
+Johnson, K. L. (1985). *Contact Mechanics*. Cambridge, ch. 6.
+Li, L.-Y., Wu, C.-Y. & Thornton, C. (2002). A theoretical model for the contact of
+elastoplastic bodies. *Proc. IMechE C* 216, 421-431.
+Stronge, W. J. (2000). *Impact Mechanics*. Cambridge, ch. 4-5.
+Thornton, C. (1997). Coefficient of restitution for collinear collisions of elastic-perfectly
+plastic spheres. *J. Appl. Mech.* 64, 383-386.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass, replace
+from typing import Any
+
+import numpy as np
+
+from ssw.chain.params import ChainParams
+from ssw.chain.wall import compliance_scale, scene_arrays
+from ssw.errors import ConfigError
+
+#: Cells of the virgin curve's uniform table and of the normalized unloading shapes.
+VIRGIN_CELLS, SHAPE_CELLS = 512, 64
+#: Energy the virgin curve must hold up to ``d_top``, as a multiple of the energy of one
+#: hit (striker kinetic energy plus the chain's weight and preload over ``d_top``).
+ENERGY_MARGIN = 3.0
+#: Bisection steps of :meth:`PlasticWall.indentation`.
+BISECTION = 60
+
+
+@dataclass(frozen=True)
+class Settings:
+    """FEM settings of the tables: ``levels`` unloading curves, ``increments`` per path
+    (loading: ``2 x``), mesh: element ``a / fine`` under the sphere, ``growth``, domain
+    ``domain x a`` (``a`` the contact radius at the reach)."""
+
+    levels: int = 10
+    increments: int = 12
+    fine: float = 8.0
+    growth: float = 0.3
+    domain: float = 40.0
+
+
+@dataclass(frozen=True)
+class Tables:
+    """One scene's tables, rigid sphere (SI): virgin ``F`` on ``d = h k``, its cumulative
+    work ``W``; levels ``d_m`` (level 0 = ``d_e``), ``d_res``, shapes ``f`` and their
+    cumulative integrals ``S`` on ``xi = k / SHAPE_CELLS``; ``elastic``: never yielded."""
+
+    h: float
+    F: np.ndarray
+    W: np.ndarray
+    d_m: np.ndarray
+    d_res: np.ndarray
+    f: np.ndarray
+    S: np.ndarray
+    elastic: bool
+    stats: dict
+
+
+def _cumulative(y: np.ndarray, step: float) -> np.ndarray:
+    return np.concatenate([[0.0], np.cumsum(0.5 * (y[1:] + y[:-1]) * step)])
+
+
+def _shape_of(delta: np.ndarray, force: np.ndarray, d_m: float, f_m: float, d_res: float
+              ) -> np.ndarray:
+    """The unloading branch ``(delta, force)`` from ``(d_m, f_m)`` to ``d_res``, normalized
+    and resampled on the ``xi`` grid: nondecreasing, ``f(0) = 0``, ``f(1) = 1``."""
+    xi = (np.concatenate([[d_m], delta, [d_res]]) - d_res) / (d_m - d_res)
+    fn = np.concatenate([[1.0], force / f_m, [0.0]])
+    order = np.argsort(xi, kind="stable")
+    xi, fn = np.clip(xi[order], 0.0, 1.0), np.clip(fn[order], 0.0, 1.0)
+    grid = np.linspace(0.0, 1.0, SHAPE_CELLS + 1)
+    f = np.maximum.accumulate(np.interp(grid, xi, fn))
+    f[0], f[-1] = 0.0, 1.0
+    return f
+
+
+@functools.lru_cache(maxsize=32)
+def tables(E: float, nu: float, model: Any, radius: float, d_top: float,
+           settings: Settings = Settings()) -> Tables:
+    """The tables of one scene (module docstring), computed once per argument set."""
+    import time
+
+    from ssw.contact.mesh import MeshSettings, build_mesh
+    from ssw.contact.plastic import solve_path
+
+    t0 = time.perf_counter()
+    a = np.sqrt(radius * d_top)
+    mesh = build_mesh(0.0, 0.0, MeshSettings(settings.domain * a, settings.domain * a,
+                                             a / settings.fine, settings.growth, 8.0 * a, 1))
+    n_load = 2 * settings.increments
+    load = solve_path(mesh, E, nu, model, radius, d_top * np.arange(1, n_load + 1) / n_load)
+    h = d_top / VIRGIN_CELLS
+    grid = h * np.arange(VIRGIN_CELLS + 1)
+    d, F = load.delta, load.force
+    g = np.interp(grid[1:], d, F / d**1.5)  # F / d^1.5 interpolated: Hertz-exact near 0
+    Fv = np.concatenate([[0.0], g * grid[1:] ** 1.5])
+    Fv = np.maximum.accumulate(Fv)
+    W = _cumulative(Fv, h)
+    elastic = load.dissipated_work <= 0.0
+    xi = np.linspace(0.0, 1.0, SHAPE_CELLS + 1)
+    paths = 1
+    if elastic:
+        d_m, d_res = np.array([np.inf]), np.zeros(1)
+        f = np.zeros((1, SHAPE_CELLS + 1))
+    else:
+        d_e = load.first_yield_delta or float(d[0])
+        d_e = min(d_e, 0.5 * d_top)
+        d_m = np.concatenate([[d_e], np.linspace(d_e, d_top, settings.levels + 1)[1:]])
+        d_res = np.zeros(d_m.size)
+        f = np.zeros((d_m.size, SHAPE_CELLS + 1))
+        f[0] = np.interp(xi * d_e, grid, Fv) / np.interp(d_e, grid, Fv)
+        for k in range(1, d_m.size):
+            n = settings.increments
+            c = solve_path(mesh, E, nu, model, radius, d_m[k] * np.arange(1, n + 1) / n,
+                           unload=True)
+            paths += 1
+            up, down = c.branch == 0, c.branch == 1
+            d_res[k] = c.residual_indentation if c.residual_indentation is not None else 0.0
+            d_res[k] = min(max(d_res[k], 0.0), 0.99 * d_m[k])
+            f[k] = _shape_of(c.delta[down], c.force[down], d_m[k], float(c.force[up][-1]),
+                             d_res[k])
+    S = np.stack([_cumulative(row, 1.0 / SHAPE_CELLS) for row in f])
+    stats = {"paths": paths, "seconds": time.perf_counter() - t0, "nodes": len(mesh.nodes),
+             "first_yield_delta": load.first_yield_delta}
+    return Tables(h, Fv, W, d_m, d_res, f, S, bool(elastic), stats)
+
+
+@dataclass(frozen=True)
+class PlasticState:
+    """Per scene: the indentation ``d`` and the largest one reached ``d_max`` (m)."""
+
+    d: np.ndarray
+    d_max: np.ndarray
+
+
+@dataclass(frozen=True)
+class PlasticWall:
+    """History-dependent wall (module docstring), ``n`` scenes; arrays over the scenes.
+
+    ``h`` (n,) m and ``F``, ``W`` (n, VIRGIN_CELLS + 1) the virgin table (N, J); ``d_m``,
+    ``d_res`` (n, L) m the levels; ``f``, ``S`` (n, L, SHAPE_CELLS + 1) the shapes;
+    ``d_max0`` (n,) m the history the wall starts with (the sample's largest indentation
+    so far). A :class:`ssw.chain.wall.Wall` (the law at the carried history) and a
+    stateful wall (``start``, ``advance``, ``take_state``, ``energy``; docs/CONTRACTS.md).
+    """
+
+    h: np.ndarray
+    F: np.ndarray
+    W: np.ndarray
+    d_m: np.ndarray
+    d_res: np.ndarray
+    f: np.ndarray
+    S: np.ndarray
+    d_max0: np.ndarray
+
+    @property
+    def n(self) -> int:
+        return self.h.shape[0]
+
+    @property
+    def exact_reach(self) -> np.ndarray:
+        """(n,) m: the end of the tabulated virgin curve."""
+        return self.h * VIRGIN_CELLS
+
+    # --- the tables
+    def _virgin(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``F_L(d)`` (N) and ``W_L(d)`` (J), piecewise linear force (linear beyond the
+        table), exact integral."""
+        x = np.maximum(d, 0.0) / self.h
+        k = np.minimum(x.astype(np.int64), VIRGIN_CELLS - 1)
+        r = np.arange(self.n)
+        t = (x - k) * self.h
+        F0, F1 = self.F[r, k], self.F[r, k + 1]
+        slope = (F1 - F0) / self.h
+        return F0 + slope * t, self.W[r, k] + F0 * t + 0.5 * slope * t * t
+
+    def _level(self, d_max: np.ndarray) -> tuple[np.ndarray, ...]:
+        """Residual indentation, and the two neighbouring levels with their weight."""
+        L = self.d_m.shape[1]
+        r = np.arange(self.n)
+        k = np.clip(np.sum(d_max[:, None] >= self.d_m, axis=1) - 1, 0, L - 1)
+        k1 = np.minimum(k + 1, L - 1)
+        lo, hi = self.d_m[r, k], self.d_m[r, k1]
+        span = np.where(np.isfinite(lo), hi - np.where(np.isfinite(lo), lo, 0.0), 0.0)
+        w = np.where(span > 0, (d_max - lo) / np.where(span > 0, span, 1.0), 0.0)
+        w = np.clip(w, 0.0, 1.0)
+        last = k == k1  # beyond the last level: its ratio d_res / d_m
+        ratio = self.d_res[r, k] / np.where(np.isfinite(self.d_m[r, k]), self.d_m[r, k], 1.0)
+        d_res = np.where(last, ratio * d_max, (1 - w) * self.d_res[r, k] + w * self.d_res[r, k1])
+        return d_res, k, k1, w
+
+    def _shape(self, tab: np.ndarray, k: np.ndarray, k1: np.ndarray, w: np.ndarray,
+               xi: np.ndarray) -> np.ndarray:
+        r = np.arange(self.n)
+        x = np.clip(xi, 0.0, 1.0) * SHAPE_CELLS
+        j = np.minimum(x.astype(np.int64), SHAPE_CELLS - 1)
+        t = x - j
+
+        def at(kk: np.ndarray) -> np.ndarray:
+            a, b = tab[r, kk, j], tab[r, kk, j + 1]
+            return a + t * (b - a)
+
+        return (1 - w) * at(k) + w * at(k1)
+
+    def _shape_integral(self, k: np.ndarray, k1: np.ndarray, w: np.ndarray, xi: np.ndarray
+                        ) -> np.ndarray:
+        """``int_0^xi f`` exact for the piecewise linear shapes."""
+        r = np.arange(self.n)
+        x = np.clip(xi, 0.0, 1.0) * SHAPE_CELLS
+        j = np.minimum(x.astype(np.int64), SHAPE_CELLS - 1)
+        t = x - j
+        hx = 1.0 / SHAPE_CELLS
+
+        def at(kk: np.ndarray) -> np.ndarray:
+            a, b = self.f[r, kk, j], self.f[r, kk, j + 1]
+            return self.S[r, kk, j] + hx * (a * t + 0.5 * (b - a) * t * t)
+
+        return (1 - w) * at(k) + w * at(k1)
+
+    # --- the law at a state
+    def force_at(self, d: np.ndarray, d_max: np.ndarray) -> np.ndarray:
+        """Force (N) at indentation ``d`` for the largest indentation ``d_max`` (m)."""
+        d = np.maximum(np.asarray(d, float), 0.0)
+        d_max = np.maximum(np.asarray(d_max, float), d)
+        FL, _ = self._virgin(d)
+        FLm, _ = self._virgin(d_max)
+        d_res, k, k1, w = self._level(d_max)
+        xi = (d - d_res) / np.maximum(d_max - d_res, 1e-300)
+        below = FLm * self._shape(self.f, k, k1, w, xi) * (xi > 0)
+        elastic = (d >= d_max) | (d_max <= self.d_m[:, 0])
+        return np.where(elastic, FL, below)
+
+    def energies(self, d: np.ndarray, d_max: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Stored and dissipated energy (J) at ``d`` for the history ``d_max`` (m)."""
+        d = np.maximum(np.asarray(d, float), 0.0)
+        d_max = np.maximum(np.asarray(d_max, float), d)
+        _, WL = self._virgin(d)
+        FLm, WLm = self._virgin(d_max)
+        d_res, k, k1, w = self._level(d_max)
+        span = np.maximum(d_max - d_res, 1e-300)
+        xi = (d - d_res) / span
+        stored = FLm * span * self._shape_integral(k, k1, w, xi) * (xi > 0)
+        r = np.arange(self.n)
+        full = FLm * span * ((1 - w) * self.S[r, k, -1] + w * self.S[r, k1, -1])
+        elastic = d_max <= self.d_m[:, 0]
+        return np.where(elastic, WL, stored), np.where(elastic, 0.0, WLm - full)
+
+    def residual_indentation(self, d_max: np.ndarray | None = None) -> np.ndarray:
+        """(n,) m: the permanent set after unloading from ``d_max`` (default the history)."""
+        dm = self.d_max0 if d_max is None else np.asarray(d_max, float)
+        return np.where(dm <= self.d_m[:, 0], 0.0, self._level(dm)[0])
+
+    def with_history(self, d_max: np.ndarray) -> PlasticWall:
+        """The same sample after it reached ``d_max`` (m) (the larger of it and the past)."""
+        return replace(self, d_max0=np.maximum(self.d_max0, np.asarray(d_max, float)))
+
+    # --- the Wall protocol (at the carried history)
+    def force(self, d: np.ndarray) -> np.ndarray:
+        return self.force_at(d, self.d_max0)
+
+    def potential(self, d: np.ndarray) -> np.ndarray:
+        """Work of the wall force from the unloaded sample to ``d`` on the current history
+        (J): the stored energy plus what a new yield would dissipate."""
+        s, diss = self.energies(d, self.d_max0)
+        return s + diss - self._lost0
+
+    @functools.cached_property
+    def _lost0(self) -> np.ndarray:
+        """(n,) J: the energy dissipated by the carried history."""
+        return self.energies(np.zeros(self.n), self.d_max0)[1]
+
+    def indentation(self, F: np.ndarray) -> np.ndarray:
+        """Indentation (m) carrying ``F`` (N) on the current history (bisection)."""
+        target = np.maximum(np.asarray(F, float), 0.0)
+        lo, hi = np.zeros(self.n), np.maximum(self.exact_reach, self.d_max0)
+        while np.any(self.force(hi) < target):
+            hi = np.where(self.force(hi) < target, 2.0 * hi, hi)
+        for _ in range(BISECTION):
+            mid = 0.5 * (lo + hi)
+            low = self.force(mid) < target
+            lo, hi = np.where(low, mid, lo), np.where(low, hi, mid)
+        return 0.5 * (lo + hi)
+
+    def take(self, idx: np.ndarray) -> PlasticWall:
+        return PlasticWall(self.h[idx], self.F[idx], self.W[idx], self.d_m[idx],
+                           self.d_res[idx], self.f[idx], self.S[idx], self.d_max0[idx])
+
+    def hertz_equivalent(self, d_ref: float) -> np.ndarray:
+        """``F_L(d) / d^1.5`` (N/m^1.5) at ``max(d_ref, one table cell)``."""
+        d = np.maximum(np.full(self.n, d_ref), self.h)
+        return self._virgin(d)[0] / d**1.5
+
+    # --- stateful wall
+    def start(self, d0: np.ndarray) -> PlasticState:
+        d0 = np.array(d0, float)
+        return PlasticState(d0, np.maximum(self.d_max0, d0))
+
+    def advance(self, st: PlasticState, d: np.ndarray, dt: float
+                ) -> tuple[np.ndarray, PlasticState]:
+        """Force (N) at the new indentation ``d`` (m) and the new state."""
+        d = np.array(d, float)
+        d_max = np.maximum(st.d_max, d)
+        return self.force_at(d, d_max), PlasticState(d, d_max)
+
+    def take_state(self, st: PlasticState, idx: np.ndarray) -> PlasticState:
+        return PlasticState(st.d[idx], st.d_max[idx])
+
+    def energy(self, st: PlasticState) -> tuple[np.ndarray, np.ndarray]:
+        """Stored and dissipated (since the unloaded virgin sample) energy, J."""
+        return self.energies(st.d, st.d_max)
+
+
+def reach(params: ChainParams, E: float, nu: float, margin: float = ENERGY_MARGIN) -> float:
+    """A first ``d_top`` (m): where a Hertz wall stores ``margin`` hits' energy, doubled
+    (a plastic sample is softer). :func:`plastic_wall` extends it when the virgin curve
+    holds less."""
+    A = float(params.wall_coefficient(np.array([E]), np.array([nu]))[0])
+    e_hit = 0.5 * params.masses[0] * params.striker_velocity**2
+    return 2.0 * (2.5 * margin * e_hit / A) ** 0.4
+
+
+def plastic_wall(params: ChainParams, soil_E: Any, soil_nu: Any, *, soil_model: Any = None,
+                 settings: Settings = Settings(), margin: float = ENERGY_MARGIN,
+                 **_: Any) -> PlasticWall:
+    """The plastic wall of the scenes ``broadcast(soil_E, soil_nu)`` on ``soil_model`` (a
+    model of :mod:`ssw.constitutive`), no plate, virgin samples (``d_max0 = 0``)."""
+    if soil_model is None or not hasattr(soil_model, "update"):
+        raise ConfigError("soil_model", soil_model, "a plastic model of ssw.constitutive "
+                          "(von-mises, drucker-prager, crushable-foam)")
+    if params.plate_thickness > 0:
+        raise ConfigError("plate_thickness", params.plate_thickness,
+                          "0 with the plastic wall (the plastic solver models a half-space)")
+    E, nu = scene_arrays(soil_E, soil_nu)
+    s = compliance_scale(params, E, nu)
+    weight = params.g * float(np.sum(params.masses[1:])) if params.gravity else 0.0
+    e_hit = 0.5 * float(params.masses[0]) * params.striker_velocity**2
+    rows = []
+    for Ei, nui, si in zip(E, nu, s, strict=True):
+        d_top = reach(params, float(Ei), float(nui), margin)
+        for _ in range(4):
+            t = tables(float(Ei), float(nui), soil_model, float(params.bead_radius), d_top,
+                       settings)
+            if t.W[-1] >= margin * (e_hit + (weight + params.preload) * d_top):
+                break
+            d_top *= 1.5
+        rows.append((t, float(si)))
+    L = max(t.d_m.size for t, _ in rows)
+
+    def pad(x: np.ndarray) -> np.ndarray:  # repeat the last level up to L
+        return np.concatenate([x, np.repeat(x[-1:], L - x.shape[0], axis=0)], axis=0)
+
+    return PlasticWall(
+        np.array([t.h * si for t, si in rows]), np.stack([t.F for t, _ in rows]),
+        np.stack([t.W * si for t, si in rows]),
+        np.stack([pad(t.d_m * si) for t, si in rows]),
+        np.stack([pad(t.d_res * si) for t, si in rows]),
+        np.stack([pad(t.f) for t, _ in rows]), np.stack([pad(t.S) for t, _ in rows]),
+        np.zeros(len(rows)))

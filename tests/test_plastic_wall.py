@@ -1,0 +1,167 @@
+"""The plastic wall (ssw.walls.plastic) and consecutive hits (ssw.walls.hits): the chain's
+energy balance, the elastic limit against Hertz, shakedown, the law's continuity and its
+interpolation between tabulated levels against a fresh FEM path."""
+
+from __future__ import annotations
+
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from ssw.chain.api import run_peaks
+from ssw.chain.integrate import simulate
+from ssw.chain.params import chain_params
+from ssw.constitutive import VonMises
+from ssw.device import load_device
+from ssw.walls import build_wall
+from ssw.walls.fem import DOMAIN_ERROR_COEF, FORCE_ERROR_COEF
+from ssw.walls.hits import run_hits
+from ssw.walls.plastic import Settings, plastic_wall
+
+E, NU, Y = 38.0e6, 0.34, 1.4e6  # PCF 08 with the catalogue's compressive strength as Y
+CHEAP = Settings(levels=6, increments=8)
+
+
+def _params(short: bool = False, **kw):
+    dev = load_device("thesis")
+    if short:  # a 10-bead chain: half the steps, the same physics
+        dev = dev.with_(beads=10, sensor_index=5)
+    return replace(chain_params(dev), plate_thickness=0.0, **kw)
+
+
+def _wall(Y_: float = Y):
+    return plastic_wall(_params(), E, NU, soil_model=VonMises(Y_), settings=CHEAP)
+
+
+def _placed(w, short: bool = False):
+    from ssw.chain.statics import static_contact_forces
+
+    F0 = np.array([static_contact_forces(_params(short))[-1]])
+    return w.with_history(w.indentation(F0))
+
+
+def _balance(w, steps: int) -> tuple[float, float]:
+    """Largest |E(t) - E(0)| over a hit of the 10-bead chain relative to the striker's
+    kinetic energy, with E = chain kinetic + contacts' elastic - gravity potential + wall
+    stored + wall dissipated; and the energy the wall dissipated in the hit (J)."""
+    p = _params(True, steps_per_contact=steps)
+    run = simulate(p, w, record_energy=True)
+    e = run.energy[:, 0]
+    e = e[np.isfinite(e)]
+    ke = 0.5 * p.masses[0] * p.striker_velocity**2
+    d_new = max(float(w.d_max0[0]), float(run.peak_wall_indentation[0]))
+    lost = w.energies(np.zeros(1), np.array([d_new]))[1] - w.energies(np.zeros(1), w.d_max0)[1]
+    return float(np.max(np.abs(e - e[0])) / ke), float(lost[0])
+
+
+def test_energy_balance_per_hit():
+    """Striker kinetic energy + gravity work = chain kinetic + stored + wall stored + wall
+    dissipated over a hit, to 1e-6 of the striker's energy; the residual is the Verlet's
+    second-order error (it falls 4x when the step halves). Two hits: the first on the
+    virgin sample, the second reloading along the first's unloading curve, then yielding."""
+    w = _placed(_wall(), short=True)
+    for hit in range(2):
+        e1, lost = _balance(w, 100)
+        e2, _ = _balance(w, 200)
+        assert lost > 1e-5  # the wall dissipates a share of the hit: a real balance
+        assert 3.0 < e1 / e2 < 5.0
+        if hit == 1:
+            assert _balance(w, 1000)[0] < 1e-6
+        run = simulate(_params(True), w)
+        w = w.with_history(run.peak_wall_indentation)
+
+
+def test_elastic_limit_is_hertz():
+    """A sample that never yields gives the Hertz wall's law and TOF within the FEM's stated
+    error (mesh growth^2 and the finite domain's stiffening)."""
+    p = _params()
+    w = plastic_wall(p, E, NU, soil_model=VonMises(1e12), settings=CHEAP)
+    h = build_wall("hertz", p, E, NU)
+    d = w.exact_reach[0] * np.linspace(0.05, 1.0, 40)
+    # the domain's stiffening at the largest contact radius a_top (domain = CHEAP.domain a_top)
+    bound = np.hypot(FORCE_ERROR_COEF * CHEAP.growth**2, DOMAIN_ERROR_COEF / CHEAP.domain)
+    f_h = np.array([h.force(np.array([x]))[0] for x in d])
+    rel = np.array([w.force_at(np.array([x]), np.array([x]))[0] for x in d]) / f_h - 1.0
+    assert np.sqrt(np.mean(rel**2)) < bound
+    # below the largest indentation the law is the same: no hysteresis
+    assert w.force_at(d[10:11], d[-1:])[0] == pytest.approx(f_h[10], rel=bound)
+    tof_p = run_peaks(p, w)[0].tof[0]
+    tof_h = run_peaks(p, h)[0].tof[0]
+    assert abs(tof_p / tof_h - 1.0) < bound
+
+
+def test_shakedown():
+    """The second hit adds less permanent set and dissipates less than the first."""
+    res = run_hits(_params(), _wall(), 2)
+    inc, lost = res.set_increment[:, 0], res.dissipated[:, 0]
+    assert inc[0] > 0 and lost[0] > 0
+    assert 0 <= inc[1] < inc[0]
+    assert 0 <= lost[1] < lost[0]
+    assert np.all(np.diff(res.permanent_set[:, 0]) >= 0)
+
+
+def test_force_continuous_at_dmax_and_zero_below_residual():
+    w = _wall()
+    reach = w.exact_reach[0]
+    for dm in reach * np.array([0.03, 0.2, 0.37, 0.61, 0.95, 1.2]):
+        d_max = np.array([dm])
+        FL = w.force_at(d_max, d_max)[0]
+        for eps in (1e-6, 1e-9):
+            below = w.force_at(d_max * (1 - eps), d_max)[0]
+            assert below == pytest.approx(FL, rel=50 * eps * 1.5 + 1e-12)
+        d_res = w.residual_indentation(d_max)[0]
+        assert 0 <= d_res < dm
+        assert np.all(w.force_at(np.linspace(0, d_res, 7), np.full(7, dm)) == 0.0)
+        # the state function: at d_max stored + dissipated = the virgin work
+        s, lost = w.energies(d_max, d_max)
+        _, W = w._virgin(d_max)
+        assert s[0] + lost[0] == pytest.approx(W[0], rel=1e-12)
+        assert lost[0] >= 0
+    # the unloading law is monotone in d
+    d_max = np.full(200, 0.5 * reach)
+    F = w.force_at(np.linspace(0, 0.5 * reach, 200), d_max)
+    assert np.all(np.diff(F) >= 0)
+
+
+def test_interpolated_level_matches_a_fresh_fem_path():
+    """Between two tabulated levels the interpolated unloading curve (normalized variable)
+    matches an FEM loading-unloading path computed at that very d_max."""
+    from ssw.contact.mesh import MeshSettings, build_mesh
+    from ssw.contact.plastic import solve_path
+
+    w = _wall()
+    p = _params()
+    levels = w.d_m[0]
+    dm = 0.5 * (levels[2] + levels[3])
+    top = w.exact_reach[0]
+    a = np.sqrt(p.bead_radius * top)
+    mesh = build_mesh(0.0, 0.0, MeshSettings(CHEAP.domain * a, CHEAP.domain * a,
+                                             a / CHEAP.fine, CHEAP.growth, 8.0 * a, 1))
+    n = CHEAP.increments
+    c = solve_path(mesh, E, NU, VonMises(Y), p.bead_radius, dm * np.arange(1, n + 1) / n,
+                   unload=True)
+    down = c.branch == 1
+    d_res = w.residual_indentation(np.array([dm]))[0]
+    assert d_res == pytest.approx(c.residual_indentation, rel=0.05)
+    f_wall = w.force_at(c.delta[down], np.full(down.sum(), dm))
+    f_peak = float(c.force[c.branch == 0][-1])
+    assert np.max(np.abs(f_wall - c.force[down])) < 0.03 * f_peak
+
+
+def test_tof_hits_cli(capsys):
+    """``ssw tof --hits``: one row per hit, the sample's history carried (the set grows),
+    and the plate refused (the plastic solver models a half-space)."""
+    import json
+
+    from ssw.cli import main
+
+    args = ["tof", "--hits", "2", "--soil-material", "pcf08", "--soil-model", "von-mises",
+            "--plastic-levels", "6", "--plastic-increments", "8", "--calibration", "none"]
+    assert main([*args, "--plate-thickness", "0", "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    rows = res["hits"]
+    assert [r["hit"] for r in rows] == [1, 2]
+    assert res["soil_model"]["yield_stress"] == Y  # the library's strength, not fitted
+    assert rows[1]["permanent_set"] >= rows[0]["permanent_set"] > 0
+    assert main([*args, "--plate-thickness", "4e-4"]) != 0

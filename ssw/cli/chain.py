@@ -90,49 +90,14 @@ def run_tof(args: argparse.Namespace) -> dict[str, Any]:
     }
 
 
-def _soil_model(args: argparse.Namespace, cfg: dict[str, Any]) -> Any:
-    """The plastic model of ``--soil-model`` with the flags' strengths or, with
-    ``--soil-material`` and no strength flag, the library's (not fitted); fills soil E and
-    nu from the material when not given."""
-    from ssw.constitutive import model_from, model_of_strength
-
-    mat = None
-    if args.soil_material is not None:
-        from ssw.config import library
-
-        mats = library(cfg)
-        if args.soil_material not in mats:
-            raise ConfigError("--soil-material", args.soil_material,
-                              f"a material of the library: {', '.join(sorted(mats))}")
-        mat = mats[args.soil_material]
-        args.soil_E = mat.E if args.soil_E is None else args.soil_E
-        args.soil_nu = mat.nu if args.soil_nu is None else args.soil_nu
-    if args.soil_E is None or args.soil_nu is None:
-        raise ConfigError("--soil-E/--soil-nu", (args.soil_E, args.soil_nu),
-                          "both given (or --soil-material)")
-    if args.soil_model is None:
-        raise ConfigError("--soil-model", None, "von-mises | drucker-prager | crushable-foam "
-                          "with --hits")
-    if mat is not None and args.soil_yield_stress is None and args.soil_cohesion is None:
-        return model_of_strength(args.soil_model, mat.strength,
-                                 f"materials.{args.soil_material}")
-    spec: dict[str, Any] = {"model": args.soil_model}
-    if args.soil_model == "drucker-prager":
-        spec.update(cohesion=args.soil_cohesion, friction_angle=args.soil_friction_angle,
-                    dilatancy_angle=args.soil_dilatancy_angle)
-    else:
-        key = "yield_stress" if args.soil_model == "von-mises" else "compressive_strength"
-        spec.update({key: args.soil_yield_stress, "hardening": args.soil_hardening})
-    return model_from(spec)
-
-
 def _run_hits(args: argparse.Namespace) -> dict[str, Any]:
     """``--hits N`` consecutive hits on one plastic sample (:mod:`ssw.walls.hits`)."""
+    from ssw.cli._soil import soil_model_of
     from ssw.config import load_config
     from ssw.walls.hits import run_hits
     from ssw.walls.plastic import Settings, plastic_wall
 
-    model = _soil_model(args, load_config(args.config))
+    model = soil_model_of(args, load_config(args.config))
     ctx = chain_context(args, args.soil_E, args.soil_nu)
     if ctx.wall_options.get("dynamics"):
         raise ConfigError("--wall-dynamics", ctx.wall_options["dynamics"],

@@ -201,7 +201,7 @@ def _run_plastic(args: argparse.Namespace, cfg: dict[str, Any],
                  contact: dict[str, Any]) -> dict[str, Any]:
     """The elasto-plastic curve of a sphere on a plastic half-space (loading, and with
     --unload unloading): the curve, first yield, residual indentation, dissipated work."""
-    from ssw.constitutive import model_from
+    from ssw.cli._soil import soil_model_of
     from ssw.contact.plastic import solve_plastic_scene, summary, write_plastic_curve
 
     if args.soil_model is None:
@@ -209,44 +209,10 @@ def _run_plastic(args: argparse.Namespace, cfg: dict[str, Any],
                           "--soil-yield-stress")
     if args.scene or args.output_dir is not None:
         raise ConfigError("--scene", args.scene, "soil flags with --soil-model (one scene)")
-    if args.soil_material is not None:
-        from ssw.config import library
-
-        mats = library(cfg)
-        if args.soil_material not in mats:
-            raise ConfigError("--soil-material", args.soil_material,
-                              f"a material of the library: {', '.join(sorted(mats))}")
-        mat = mats[args.soil_material]
-        args.soil_E = mat.E if args.soil_E is None else args.soil_E
-        args.soil_nu = mat.nu if args.soil_nu is None else args.soil_nu
-    for name in ("soil_E", "soil_nu"):
-        if getattr(args, name) is None:
-            raise ConfigError(f"--{name.replace('_', '-')}", None, "a value")
     if args.plate_thickness not in (None, 0.0):
         raise ConfigError("--plate-thickness", args.plate_thickness,
                           "0 with --soil-model (the plastic solver models a half-space)")
-    spec: dict[str, Any] = {"model": args.soil_model}
-    if args.soil_material is not None and args.soil_yield_stress is None \
-            and args.soil_cohesion is None:
-        from ssw.constitutive import model_of_strength
-
-        model = model_of_strength(args.soil_model, mat.strength,
-                                  f"materials.{args.soil_material}")
-    else:
-        if args.soil_model in ("von-mises", "crushable-foam"):
-            if args.soil_yield_stress is None:
-                raise ConfigError("--soil-yield-stress", None, "a stress > 0 Pa")
-            key = "yield_stress" if args.soil_model == "von-mises" else "compressive_strength"
-            spec.update({key: args.soil_yield_stress, "hardening": args.soil_hardening})
-        else:
-            spec.update(cohesion=args.soil_cohesion, friction_angle=args.soil_friction_angle,
-                        dilatancy_angle=args.soil_dilatancy_angle)
-            if args.soil_cohesion is None or args.soil_friction_angle is None:
-                raise ConfigError("--soil-cohesion", args.soil_cohesion,
-                                  "a cohesion (Pa) and --soil-friction-angle (degrees)")
-        model = model_from(spec)
-    if model is None:
-        raise ConfigError("--soil-model", args.soil_model, "a plastic model (von-mises)")
+    model = soil_model_of(args, cfg)
     if args.steps is None and "steps" not in cfg.get("contact", {}):
         contact["steps"] = PLASTIC_STEPS
     radius = float(cfg["indenter"]["radius"])

@@ -1,0 +1,53 @@
+"""The plastic sample's model from command-line flags (``ssw contact``, ``ssw tof --hits``):
+``--soil-model`` with its strengths, or a library material's (``--soil-material``: its E,
+nu and strengths, not fitted)."""
+
+from __future__ import annotations
+
+import argparse
+from typing import Any
+
+from ssw.errors import ConfigError
+
+
+def soil_model_of(args: argparse.Namespace, cfg: dict[str, Any]) -> Any:
+    """The :mod:`ssw.constitutive` model of the flags; fills ``args.soil_E``/``soil_nu``
+    from ``--soil-material`` when they are not given. ConfigError naming the flag that is
+    missing or wrong."""
+    from ssw.constitutive import model_from, model_of_strength
+
+    if args.soil_model is None:
+        raise ConfigError("--soil-model", None,
+                          "von-mises | drucker-prager | crushable-foam")
+    mat = None
+    if args.soil_material is not None:
+        from ssw.config import library
+
+        mats = library(cfg)
+        if args.soil_material not in mats:
+            raise ConfigError("--soil-material", args.soil_material,
+                              f"a material of the library: {', '.join(sorted(mats))}")
+        mat = mats[args.soil_material]
+        args.soil_E = mat.E if args.soil_E is None else args.soil_E
+        args.soil_nu = mat.nu if args.soil_nu is None else args.soil_nu
+    for name in ("soil_E", "soil_nu"):
+        if getattr(args, name) is None:
+            raise ConfigError(f"--{name.replace('_', '-')}", None, "a value (or --soil-material)")
+    if mat is not None and args.soil_yield_stress is None and args.soil_cohesion is None:
+        return model_of_strength(args.soil_model, mat.strength, f"materials.{args.soil_material}")
+    spec: dict[str, Any] = {"model": args.soil_model}
+    if args.soil_model in ("von-mises", "crushable-foam"):
+        if args.soil_yield_stress is None:
+            raise ConfigError("--soil-yield-stress", None, "a stress > 0 Pa")
+        key = "yield_stress" if args.soil_model == "von-mises" else "compressive_strength"
+        spec.update({key: args.soil_yield_stress, "hardening": args.soil_hardening})
+    else:
+        if args.soil_cohesion is None or args.soil_friction_angle is None:
+            raise ConfigError("--soil-cohesion", args.soil_cohesion,
+                              "a cohesion (Pa) and --soil-friction-angle (degrees)")
+        spec.update(cohesion=args.soil_cohesion, friction_angle=args.soil_friction_angle,
+                    dilatancy_angle=args.soil_dilatancy_angle)
+    model = model_from(spec)
+    if model is None:
+        raise ConfigError("--soil-model", args.soil_model, "a plastic model (von-mises)")
+    return model

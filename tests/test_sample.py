@@ -241,6 +241,9 @@ def test_engines_refuse_what_they_do_not_model():
         layered.solve_scene(mould, {"delta_max": 1e-4, "steps": 5}, R, {})
     with pytest.raises(ConfigError, match="radius"):
         Sample(0.01, 0.05, "elastic", base_E=1e6, base_nu=0.3)
+    narrow = Sample(0.04, 0.02).contact_settings({"delta_max": 1e-4, "steps": 5})
+    with pytest.raises(ConfigError, match=r"sample\.radius.*larger than the plate"):
+        solve_curve((38e6, 0.3), (3.5e9, 0.36), 4e-4, R, narrow)
 
 
 def test_a_stated_range_of_sample_thickness_is_a_budget_term(tmp_path):

@@ -115,6 +115,10 @@ def geometry_of(contact: dict[str, Any], plate_thickness: float, radius: float,
     from ssw.contact.mesh import mesh_settings
 
     plate_radius = 0.5 * float(contact["plate_diameter"]) if plate_thickness > 0 else 0.0
+    if plate_radius >= float(contact["soil_radius"]):
+        field = "sample.radius" if "soil_lateral" in contact else "contact.soil_radius"
+        raise ConfigError(field, float(contact["soil_radius"]),
+                          f"a radius larger than the plate's ({plate_radius:g} m)")
     return Geometry(
         plate_thickness=float(plate_thickness), plate_radius=plate_radius,
         mesh=mesh_settings(contact),

@@ -44,3 +44,30 @@ def test_the_error_shrinks_with_the_lift_and_names_its_warning_thickness():
     h = warning_thickness(res, 0.25)
     j = int(np.flatnonzero(np.abs(e) > 0.02)[-1])
     assert h is not None and res.thicknesses[j] < h < res.thicknesses[j + 1]
+
+
+def test_measure_warns_on_a_thin_lift():
+    """``ssw measure --lift-thickness``: a 30 mm lift is read 3-4 % off on a subgrade of
+    half or twice its modulus: a note says so; a 300 mm lift is within 2 %: no note."""
+    import contextlib
+    import io
+    import json
+    from pathlib import Path
+
+    from ssw.cli import main
+
+    root = Path(__file__).resolve().parent.parent
+    rec = str(root / "data" / "survey_example" / "P1.h5")
+
+    def run(h: str) -> dict:
+        buf = io.StringIO()
+        with contextlib.redirect_stdout(buf):
+            main(["measure", rec, "--soil-nu", "0.3", "--calibration", "none", "--config",
+                  str(root / "config" / "ci.yaml"), "--lift-thickness", h, "--json"])
+        return json.loads(buf.getvalue())
+
+    thin, thick = run("0.03"), run("0.3")
+    assert max(abs(e) for e in thin["lift_error"].values()) > 0.02
+    assert any("lift read as a half-space" in n for n in thin["notes"])
+    assert max(abs(e) for e in thick["lift_error"].values()) < 0.02
+    assert not any("lift read as a half-space" in n for n in thick["notes"])

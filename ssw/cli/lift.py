@@ -16,7 +16,7 @@ from ssw.cli import add_json_flag
 from ssw.cli._device import add_device_options, chain_context
 
 
-def _floats(text: str, field: str) -> list[float]:
+def parse_floats(text: str, field: str) -> list[float]:
     from ssw.errors import ConfigError
 
     try:
@@ -30,8 +30,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.lift import lift_errors, plot_lift
 
     ctx = chain_context(args, numerics_only=True)
-    res = lift_errors(ctx.params, args.E1, args.nu, _floats(args.ratios, "--ratios"),
-                      _floats(args.thicknesses, "--thicknesses"),
+    res = lift_errors(ctx.params, args.E1, args.nu, parse_floats(args.ratios, "--ratios"),
+                      parse_floats(args.thicknesses, "--thicknesses"),
                       subgrade_nu=args.subgrade_nu, energy=args.reach_energy)
     if args.csv:
         lines = ["subgrade_ratio,lift_thickness_m,tof_s,error_rel"]

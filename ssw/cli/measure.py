@@ -38,7 +38,38 @@ def run_measure(args: argparse.Namespace) -> dict[str, Any]:
                 calibration=ctx.calibration, tof_options=tof_options(args, ctx.params),
                 device=ctx.device, strength=sample_strength(args, ctx),
                 sample_range=_sample_range(args, ctx))
-    return {**ctx.inputs(), **m.to_dict()}
+    out = {**ctx.inputs(), **m.to_dict()}
+    if args.lift_thickness is not None:
+        out.update(_lift_check(args, ctx, m, out["notes"]))
+    return out
+
+
+#: The error of a half-space reading beyond which a lift's measurement warns.
+LIFT_TOLERANCE = 0.02
+
+
+def _lift_check(args: argparse.Namespace, ctx: Any, m: Any, notes: list[str]
+                ) -> dict[str, Any]:
+    """A test point on a lift of ``--lift-thickness`` over a subgrade of
+    ``--subgrade-ratio`` x its modulus (default 0.5 and 2): the error of this half-space
+    reading (:func:`ssw.lift.lift_errors` at the measured E), and a warning beyond
+    :data:`LIFT_TOLERANCE`."""
+    from ssw.cli.lift import parse_floats
+    from ssw.errors import ConfigError
+    from ssw.lift import lift_errors
+
+    if not args.lift_thickness > 0:
+        raise ConfigError("--lift-thickness", args.lift_thickness, "a thickness > 0 m")
+    ratios = parse_floats(args.subgrade_ratio, "--subgrade-ratio")
+    res = lift_errors(ctx.params, m.E, m.nu, ratios, [args.lift_thickness])
+    errs = {f"{r:g}": float(e) for r, e in zip(ratios, res.error[:, 0], strict=True)}
+    worst = max(errs.items(), key=lambda kv: abs(kv[1]))
+    if abs(worst[1]) > LIFT_TOLERANCE:
+        notes.append(f"a {args.lift_thickness * 1e3:g} mm lift read as a half-space: E is off by "
+                     f"{100 * worst[1]:+.1f} % on a subgrade of {worst[0]} x its modulus "
+                     f"(beyond {100 * LIFT_TOLERANCE:g} %; ssw lift-study): measure a thicker "
+                     "lift or know the subgrade")
+    return {"lift_thickness": args.lift_thickness, "lift_error": errs}
 
 
 def _sample_range(args: argparse.Namespace, ctx: Any) -> list[dict[str, Any]] | None:
@@ -130,6 +161,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sample-strength", type=float, metavar="PA",
                    help="the sample's uniaxial strength, Pa: report the yield index (peak von "
                    "Mises stress under the bead over it) and warn when the sample yielded")
+    p.add_argument("--lift-thickness", type=float, metavar="H",
+                   help="the test point is a lift of this thickness, m, on a subgrade: report "
+                   "the error of reading it as a half-space and warn beyond 2 %%")
+    p.add_argument("--subgrade-ratio", default="0.5,2", metavar="R,...",
+                   help="with --lift-thickness: the subgrade's modulus over the lift's "
+                   "(default 0.5,2)")
     p.add_argument("--sample-material", metavar="KEY",
                    help="the sample's material in the library (its strength, e.g. pcf15)")
     add_recording_options(p)

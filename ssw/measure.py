@@ -134,21 +134,14 @@ def yield_check(E: float, nu: float, params: Any, wall_options: dict[str, Any] |
     "sample_yielded": bool, "peak_wall_force": N}``, from the device's chain ``params`` on
     its exact FEM wall (``wall_options``: its ``contact`` settings and operators)."""
     from ssw.chain.api import peaks
-    from ssw.chain.wall import compliance_scale
-    from ssw.contact.stress import contact_stresses
     from ssw.errors import ConfigError
+    from ssw.walls.fem import peak_stresses
 
     if not (np.isfinite(strength) and strength > 0):
         raise ConfigError("sample strength", strength, "a strength > 0 Pa")
     opts = {k: v for k, v in (wall_options or {}).items() if k in ("contact", "operators")}
     _, run = peaks(E, nu, params, "fem", **opts)
-    d = run.peak_wall_indentation[:1] / compliance_scale(params, np.array([E]),
-                                                         np.array([nu]))
-    plate = (params.plate_E, params.plate_nu) if params.plate_thickness > 0 else None
-    contact = {**(opts.get("contact") or {}), "plate_diameter": params.plate_diameter}
-    st = contact_stresses(np.array([E]), nu, plate, params.plate_thickness,
-                          params.bead_radius, d, contact, store=opts.get("operators"),
-                          bead=(params.bead_E, params.bead_nu))
+    st = peak_stresses(params, E, nu, run.peak_wall_indentation[:1], **opts)
     peak = float(st.soil.peak[0])
     return {"sample_peak_von_mises": peak, "sample_strength": float(strength),
             "yield_index": peak / float(strength), "sample_yielded": bool(peak >= strength),

@@ -36,7 +36,7 @@ import numpy as np
 
 from ssw import hertz
 from ssw.bench import best_time
-from ssw.h5io import atomic_path, atomic_write_text, write_json
+from ssw.h5io import atomic_write_text, write_json
 
 LEVELS = (0.4, 0.3, 0.2, 0.15, 0.1, 0.07)
 #: Expected rate of the force error in the mesh growth (see the module docstring).
@@ -386,11 +386,9 @@ def interface_study(
 
 
 def _plot(rows: list[dict[str, Any]], path: Path) -> None:
-    import matplotlib
+    from ssw.plotting import pyplot, save_png
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     fig, ax = plt.subplots(1, 2, figsize=(10, 4))
     for key, lab in (("err_hertz", "vs Hertz"), ("err_sneddon", "vs Sneddon (exact sphere)")):
         ax[0].loglog([r["dofs"] for r in rows], [r[key] for r in rows], "o-", label=lab)
@@ -405,9 +403,7 @@ def _plot(rows: list[dict[str, Any]], path: Path) -> None:
         a.grid(True, which="both", alpha=0.3)
         a.legend(fontsize=7)
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=130)
-    plt.close(fig)
+    save_png(fig, path)
 
 
 def human(res: dict[str, Any]) -> str:

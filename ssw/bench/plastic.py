@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from ssw import hertz
-from ssw.h5io import atomic_path, write_json
+from ssw.h5io import write_json
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
@@ -86,11 +86,9 @@ def run_plastic(args: argparse.Namespace) -> dict[str, Any]:
 
 def _plot(curve: Any, E: float, nu: float, radius: float, Fy: float, res: dict[str, Any],
           path: Path) -> None:
-    import matplotlib
+    from ssw.plotting import pyplot, save_png
 
-    matplotlib.use("Agg")
-    import matplotlib.pyplot as plt
-
+    plt = pyplot()
     fig, ax = plt.subplots(figsize=(6, 4.2))
     d = np.linspace(0, curve.delta.max(), 200)
     ax.plot(d * 1e6, hertz.force(d, hertz.effective_modulus(E, nu), radius), "k:",
@@ -106,9 +104,7 @@ def _plot(curve: Any, E: float, nu: float, radius: float, Fy: float, res: dict[s
     ax.legend(fontsize=8)
     ax.grid(alpha=0.3)
     fig.tight_layout()
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, format="png", dpi=130)
-    plt.close(fig)
+    save_png(fig, path)
 
 
 def human(res: dict[str, Any]) -> str:

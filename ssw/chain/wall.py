@@ -52,6 +52,22 @@ TABLE_TAIL = 0.1
 BISECTION_ITERATIONS = 60
 
 
+def bisect_indentation(force: Any, F: Any, start: np.ndarray) -> np.ndarray:
+    """Indentations (m) at which the monotone laws ``force(d)`` (N, one per scene) carry
+    ``F`` (N, negative read as 0): ``start`` (m, > 0) doubled until it brackets ``F``, then
+    :data:`BISECTION_ITERATIONS` halvings of the bracket (2^-60 of it), vectorized."""
+    target = np.maximum(np.asarray(F, float), 0.0)
+    hi = np.array(start, float)
+    lo = np.zeros_like(hi)
+    while np.any(short := force(hi) < target):
+        hi = np.where(short, 2.0 * hi, hi)
+    for _ in range(BISECTION_ITERATIONS):
+        mid = 0.5 * (lo + hi)
+        low = force(mid) < target
+        lo, hi = np.where(low, mid, lo), np.where(low, hi, mid)
+    return 0.5 * (lo + hi)
+
+
 @dataclass(frozen=True)
 class PowerWall:
     """``F = coef [d]_+^n`` per scene; shapes (n_scenes,)."""
@@ -133,16 +149,7 @@ class TableWall:
 
     def indentation(self, F: np.ndarray) -> np.ndarray:
         """Indentation carrying ``F`` (N): vectorized bisection of the monotone law."""
-        target = np.maximum(np.asarray(F, float), 0.0)
-        lo = np.zeros(self.n)
-        hi = self.h * (self.g.shape[1] - 1)
-        while np.any(self.force(hi) < target):
-            hi = np.where(self.force(hi) < target, 2.0 * hi, hi)
-        for _ in range(BISECTION_ITERATIONS):
-            mid = 0.5 * (lo + hi)
-            low = self.force(mid) < target
-            lo, hi = np.where(low, mid, lo), np.where(low, hi, mid)
-        return 0.5 * (lo + hi)
+        return bisect_indentation(self.force, F, self.h * (self.g.shape[1] - 1))
 
     def take(self, idx: np.ndarray) -> TableWall:
         return TableWall(self.h[idx], self.g[idx], self.f_last[idx], self.n_ext[idx])

@@ -208,7 +208,7 @@ def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
                   numerics_only: bool = False) -> ChainContext:
     """Resolve config, calibration, device, params and wall (module docstring)."""
     from ssw.chain.params import chain_params, numerics_of
-    from ssw.cli._sample import sample_of
+    from ssw.cli._sample import sample_of, thickness_range
     from ssw.config import device_of, library, load_config
     from ssw.device import load_device
 
@@ -245,8 +245,6 @@ def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
         return ChainContext(cfg, device, cal, params, "", {})
     wall, opts = wall_law(args, cfg, cal, params, E, nu)
     plain = dict(opts)
-    from ssw.cli._sample import thickness_range
-
     if thickness_range(args) is not None and not getattr(args, "thickness_range_ok", False):
         raise ConfigError("--sample-thickness", args.sample_thickness,
                           "one thickness H, m (a range LO:HI is ssw measure's budget term)")

@@ -205,8 +205,7 @@ class Evaluator:
     def _evaluate(self, material: str, t: float, D: float, v: float, source: str
                   ) -> Candidate:
         from ssw.chain.api import peaks
-        from ssw.chain.wall import compliance_scale
-        from ssw.contact.stress import contact_stresses
+        from ssw.walls.fem import peak_stresses
 
         t0 = time.perf_counter()
         if material not in self.materials:
@@ -223,15 +222,13 @@ class Evaluator:
         n = E.size
         h = spec.log_step
         E3 = np.concatenate([E * np.exp(-h), E, E * np.exp(h)])
-        # the fem wall takes the plate's diameter from its contact settings
-        contact = {**self.contact, "plate_diameter": D}
-        pk, run = peaks(E3, spec.soil_nu, p, "fem", contact=contact, operators=self.store)
+        pk, run = peaks(E3, spec.soil_nu, p, "fem", contact=self.contact,
+                        operators=self.store)
         tof = pk.tof.reshape(3, n)
         sens = np.abs(np.log(tof[2]) - np.log(tof[0])) / (2.0 * h)
         d_chain = run.peak_wall_indentation[n:2 * n]
-        delta = d_chain / compliance_scale(p, E, np.full(n, spec.soil_nu))
-        st = contact_stresses(E, spec.soil_nu, (m.E, m.nu), t, p.bead_radius, delta,
-                              contact, store=self.store, bead=(p.bead_E, p.bead_nu))
+        st = peak_stresses(p, E, spec.soil_nu, d_chain, contact=self.contact,
+                           operators=self.store)
         mass = m.density * np.pi * 0.25 * D * D * t
         return Candidate(
             material=material, thickness=t, plate_diameter=D, striker_velocity=v,

@@ -307,3 +307,24 @@ def _assemble(rows: list[tuple[np.ndarray, ...]], force_error: np.ndarray
         out.append(arr)
     d, a, b, U = out
     return PiecewiseLinearWall(d, a, b, U, d[:, -1].copy(), force_error)
+
+
+def peak_stresses(params: ChainParams, soil_E: Any, soil_nu: float, d_wall: Any, *,
+                  contact: dict[str, Any] | None = None, operators: Any = None) -> Any:
+    """The contact's elastic stresses at the chain's peak wall indentations ``d_wall`` (m,
+    one per soil modulus ``soil_E``, Pa; one ``soil_nu``): the indentation moved into the
+    rigid sphere's coordinates of the FEM (the bead's compliance out,
+    :func:`ssw.chain.wall.compliance_scale`) and the device's plate (its material,
+    thickness, diameter and interface, as :func:`fem_wall` has them) with the elastic bead
+    (:func:`ssw.contact.stress.contact_stresses`). Returns its ``ContactStress``."""
+    from ssw.chain.wall import compliance_scale
+    from ssw.contact.stress import contact_stresses
+
+    E = np.atleast_1d(np.asarray(soil_E, float))
+    delta = np.asarray(d_wall, float) / compliance_scale(params, E, np.full(E.size, soil_nu))
+    has_plate = params.plate_thickness > 0
+    cfg = {**(contact or {}), "interface": params.plate_interface,
+           "plate_diameter": params.plate_diameter}
+    return contact_stresses(E, soil_nu, (params.plate_E, params.plate_nu) if has_plate
+                            else None, params.plate_thickness, params.bead_radius, delta,
+                            cfg, store=operators, bead=(params.bead_E, params.bead_nu))

@@ -69,7 +69,7 @@ from typing import Any
 import numpy as np
 
 from ssw.chain.params import ChainParams
-from ssw.chain.wall import compliance_scale, scene_arrays
+from ssw.chain.wall import bisect_indentation, compliance_scale, scene_arrays
 from ssw.errors import ConfigError
 
 #: Cells of the virgin curve's uniform table and of the normalized unloading shapes.
@@ -77,8 +77,6 @@ VIRGIN_CELLS, SHAPE_CELLS = 512, 64
 #: Energy the virgin curve must hold up to ``d_top``, as a multiple of the energy of one
 #: hit (striker kinetic energy plus the chain's weight and preload over ``d_top``).
 ENERGY_MARGIN = 3.0
-#: Bisection steps of :meth:`PlasticWall.indentation`.
-BISECTION = 60
 
 
 @dataclass(frozen=True)
@@ -326,15 +324,7 @@ class PlasticWall:
 
     def indentation(self, F: np.ndarray) -> np.ndarray:
         """Indentation (m) carrying ``F`` (N) on the current history (bisection)."""
-        target = np.maximum(np.asarray(F, float), 0.0)
-        lo, hi = np.zeros(self.n), np.maximum(self.exact_reach, self.d_max0)
-        while np.any(self.force(hi) < target):
-            hi = np.where(self.force(hi) < target, 2.0 * hi, hi)
-        for _ in range(BISECTION):
-            mid = 0.5 * (lo + hi)
-            low = self.force(mid) < target
-            lo, hi = np.where(low, mid, lo), np.where(low, hi, mid)
-        return 0.5 * (lo + hi)
+        return bisect_indentation(self.force, F, np.maximum(self.exact_reach, self.d_max0))
 
     def take(self, idx: np.ndarray) -> PlasticWall:
         return PlasticWall(self.h[idx], self.F[idx], self.W[idx], self.d_m[idx],

@@ -11,7 +11,9 @@ A model is a frozen, hashable parameter object (its strengths, Pa and degrees) w
   strain increment at many points at once (arrays of shape (n, ...), no loop per point);
 * ``yield_ratio(stress, state)``: (n,) how far a stress is from yield: 1 on the yield
   surface, below 1 inside;
-* ``params()``: the parameters as a plain dict (SI units).
+* ``params()``: the parameters as a plain dict (SI units);
+* ``isochoric`` (class attribute, optional, default False): plastic flow keeps the volume,
+  so the contact solver may use its mixed u-p form (exact and free of locking then).
 
 The elastic constants (``E`` Pa, ``nu``) are the scene's, passed to ``update``: a model
 holds only what elasticity does not say.

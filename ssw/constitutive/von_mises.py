@@ -41,6 +41,8 @@ class VonMises:
     yield_stress: float
     hardening: float = 0.0
     name: ClassVar[str] = "von-mises"
+    #: plastic flow keeps the volume (the contact solver's mixed u-p form is then exact)
+    isochoric: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
         if not (np.isfinite(self.yield_stress) and self.yield_stress > 0):

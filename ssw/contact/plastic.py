@@ -60,7 +60,6 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-from ssw.constitutive import VonMises
 from ssw.constitutive.base import initial_state
 from ssw.constitutive.tensors import ONE, P_DEV, SQRT2
 from ssw.contact.assembly import (
@@ -334,7 +333,7 @@ def solve_path(
         raise ConfigError("deltas", deltas, "increasing indentations > 0 m")
     if punch not in (None, "smooth", "rough"):
         raise ConfigError("punch", punch, "smooth | rough (or none: the sphere)")
-    fe = _Model(mesh, E, nu, radius, punch, mixed=isinstance(model, VonMises))
+    fe = _Model(mesh, E, nu, radius, punch, mixed=bool(getattr(model, "isochoric", False)))
     ne, nq = fe.w.shape
     state = initial_state(ne * nq)
     last = (None, np.zeros(ne * nq, bool))  # the last converged tangent (elastic at first)

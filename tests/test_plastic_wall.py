@@ -196,3 +196,26 @@ def test_tof_hits_cli(capsys):
     assert 0 < plated["hits"][0]["permanent_set"] < rows[0]["permanent_set"]
     assert main([*args, "--plate-thickness", "4e-4", "--plate-interface", "unilateral"]) != 0
     assert "interface" in capsys.readouterr().err
+
+
+def test_models_per_scene_and_calibration_refusals(capsys):
+    """A wall of several scenes takes one model each (a count that fits neither one nor the
+    scenes is refused); ``ssw calibrate --soil-model`` takes the config's samples (their
+    materials give the strengths) and writes no calibration file."""
+    from ssw.cli import main
+    from ssw.errors import ConfigError
+
+    p = _params()
+    with pytest.raises(ConfigError, match="one per scene"):
+        plastic_wall(p, [E, 2 * E, 3 * E], NU, soil_model=(VonMises(Y), VonMises(2 * Y)),
+                     settings=CHEAP)
+    w = plastic_wall(p, [E, E], NU, soil_model=(VonMises(1e12), VonMises(Y)), settings=CHEAP)
+    d = w.exact_reach * 0.9
+    f_el, f_pl = (w.take(np.array([i])).force_at(d[i:i + 1], d[i:i + 1])[0] for i in (0, 1))
+    assert f_pl < f_el  # the yielding scene is the softer one at the same indentation
+    assert main(["calibrate", "--reference", "38e6,0.34,1.78e-3", "--free",
+                 "striker_velocity", "--soil-model", "von-mises"]) != 0
+    assert "--from-config" in capsys.readouterr().err
+    assert main(["calibrate", "--from-config", "--soil-model", "von-mises", "--output",
+                 "x.json"]) != 0
+    assert "--output" in capsys.readouterr().err

@@ -107,6 +107,11 @@ MAX_CUTS = 5
 RTOL = 1e-9
 
 
+class ContactZoneError(SolverError):
+    """The contact reached the candidates' edge (half the sphere's radius): the indentation
+    lies beyond what the small-strain contact of a sphere models."""
+
+
 @dataclass(frozen=True)
 class PlasticCurve:
     """A loading (and unloading) path. SI units; arrays of shape (n,) per increment.
@@ -542,8 +547,9 @@ def solve_path(
                 last_elastic = (force, d, ratio) if force > 0 else last_elastic
         gap = np.clip(target - u[fe.cand_dof], 0.0, None)
         if punch is None and active.size and active[-1]:
-            raise SolverError(f"the contact zone reached the last candidate node (r = "
-                              f"{fe.cand_r[-1]:.4g} m): a larger domain or sphere")
+            raise ContactZoneError(f"the contact zone reached the last candidate node (r = "
+                                   f"{fe.cand_r[-1]:.4g} m, half the sphere's radius): an "
+                                   f"indentation beyond the small-strain contact's reach")
         out["delta"].append(d)
         out["force"].append(force)
         out["a"].append(edge_radius(fe.cand_r, gap, active))

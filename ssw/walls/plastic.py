@@ -70,6 +70,7 @@ import numpy as np
 
 from ssw.chain.params import ChainParams
 from ssw.chain.wall import bisect_indentation, compliance_scale, scene_arrays
+from ssw.contact.plastic import ContactZoneError
 from ssw.errors import ConfigError
 
 #: Cells of the virgin curve's uniform table and of the normalized unloading shapes.
@@ -378,12 +379,13 @@ def plastic_wall(params: ChainParams, soil_E: Any, soil_nu: Any, *, soil_model: 
                  settings: Settings = Settings(), margin: float = ENERGY_MARGIN,
                  **_: Any) -> PlasticWall:
     """The plastic wall of the scenes ``broadcast(soil_E, soil_nu)`` on ``soil_model`` (a
-    model of :mod:`ssw.constitutive`) under the chain's plate (if any; elastic, tied to
-    the sample by its interface, ``frictionless`` or ``bonded``), virgin samples
-    (``d_max0 = 0``)."""
-    if soil_model is None or not hasattr(soil_model, "update"):
+    model of :mod:`ssw.constitutive`, or a sequence of one per scene) under the chain's
+    plate (if any; elastic, tied to the sample by its interface, ``frictionless`` or
+    ``bonded``), virgin samples (``d_max0 = 0``)."""
+    models = list(soil_model) if isinstance(soil_model, list | tuple) else [soil_model]
+    if not models or any(m is None or not hasattr(m, "update") for m in models):
         raise ConfigError("soil_model", soil_model, "a plastic model of ssw.constitutive "
-                          "(von-mises, drucker-prager, crushable-foam)")
+                          "(von-mises, drucker-prager, crushable-foam), or one per scene")
     plate = None
     if params.plate_thickness > 0:
         if params.plate_interface not in ("frictionless", "bonded"):
@@ -394,17 +396,31 @@ def plastic_wall(params: ChainParams, soil_E: Any, soil_nu: Any, *, soil_model: 
                  float(params.plate_thickness), 0.5 * float(params.plate_diameter),
                  params.plate_interface)
     E, nu = scene_arrays(soil_E, soil_nu)
+    if len(models) not in (1, E.size):
+        raise ConfigError("soil_model", f"{len(models)} models",
+                          f"one model, or one per scene ({E.size})")
+    models = models * E.size if len(models) == 1 else models
     s = compliance_scale(params, E, nu)
     weight = params.g * float(np.sum(params.masses[1:])) if params.gravity else 0.0
     e_hit = 0.5 * float(params.masses[0]) * params.striker_velocity**2
     rows = []
-    for Ei, nui, si in zip(E, nu, s, strict=True):
+    for Ei, nui, si, model in zip(E, nu, s, models, strict=True):
         d_top = reach(params, float(Ei), float(nui), margin)
+        t_prev = None
         for _ in range(4):
-            t = tables(float(Ei), float(nui), soil_model, float(params.bead_radius), d_top,
-                       settings, plate)
+            try:
+                t = tables(float(Ei), float(nui), model, float(params.bead_radius), d_top,
+                           settings, plate)
+            except ContactZoneError:
+                if t_prev is None:
+                    raise
+                # deeper than the small-strain contact reaches: the last tables, whose
+                # exact_reach a hit may pass (run_hits says so)
+                t = t_prev
+                break
             if t.W[-1] >= margin * (e_hit + (weight + params.preload) * d_top):
                 break
+            t_prev = t
             d_top *= 1.5
         rows.append((t, float(si)))
     L = max(t.d_m.size for t, _ in rows)

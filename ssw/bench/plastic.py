@@ -4,19 +4,19 @@ loading-unloading curve, against its error.
 A rigid sphere (the config's indenter) on a von Mises half-space (E, nu, Y given; default
 PCF 08: 38 MPa, 0.34, Y = its catalogue compressive strength 1.4 MPa), loaded to
 ``delta_max`` in ``--plastic-steps`` increments and unloaded in as many (up to where the
-sphere leaves the surface), one core, on two meshes:
+sphere leaves the surface), one core, on meshes scaled to the contact radius ``a`` at
+``delta_max`` (:func:`ssw.contact.plastic.contact_mesh`, the plastic wall's meshes):
 
-* timed: the mesh scaled to the contact radius at ``delta_max``
-  (:func:`ssw.contact.plastic.contact_mesh`, element ``a / --plastic-fine``, growth 0.3;
-  the plastic wall's mesh);
-* reference: the config's contact mesh (graded from the contact point for the elastic
-  engine's indentations down to 1e-9 m; ``--plastic-growth`` sets its growth, the element
-  at the contact ``5e-5 growth`` m), the same increments; ``--no-reference`` skips it.
+* timed: element ``a / --plastic-fine`` at the contact, growth ``--plastic-growth``, a
+  domain of 40 ``a``;
+* reference: element ``a / 32``, growth 0.1, a domain of 60 ``a`` (converged: from growth
+  0.15 and 40 ``a`` to it the residual indentation moves 3 %, from it to ``a / 64`` 0.15 %;
+  ``--no-reference`` skips it), the same increments.
 
 Reports the wall times, increments, Newton iterations, factorizations (new and reused),
 dofs, first yield (and Johnson's), residual indentation and dissipated work of both, and
 the timed curve's error against the reference (largest force difference over the path
-relative to the peak force, residual indentation, dissipated work); writes
+relative to the peak force, residual indentation, dissipated work, first yield); writes
 ``plastic_bench.json`` and ``plastic_curve.png`` (both curves, the elastic Hertz law and
 the first yield) under the output folder.
 """
@@ -57,55 +57,50 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="von Mises yield stress, Pa (plastic)")
     p.add_argument("--plastic-delta-max", type=float, default=1e-4,
                    help="indentation at the end of loading, m (plastic)")
-    p.add_argument("--plastic-growth", type=float, default=None,
-                   help="growth of the reference mesh (default: the config's)")
+    p.add_argument("--plastic-growth", type=float, default=0.2,
+                   help="element growth of the timed mesh")
     p.add_argument("--plastic-fine", type=float, default=8.0,
                    help="contact radius / element size at the contact of the timed mesh")
     p.add_argument("--no-reference", dest="plastic_reference", action="store_false",
-                   help="skip the reference curve on the config's mesh")
+                   help="skip the converged reference curve")
+
+
+#: The reference mesh: contact radius / element size, growth, domain / contact radius.
+REFERENCE_MESH = (32.0, 0.1, 60.0)
 
 
 def run_plastic(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.config import load_config
     from ssw.constitutive import VonMises
-    from ssw.contact.plastic import (
-        contact_mesh,
-        johnson_first_yield,
-        solve_path,
-        solve_plastic_scene,
-        summary,
-    )
+    from ssw.contact.plastic import contact_mesh, johnson_first_yield, solve_path, summary
     from ssw.contact.scene import indentation_steps
 
     cfg = load_config(args.config)
-    contact = {**cfg["contact"], "steps": int(args.plastic_steps),
-               "delta_max": float(args.plastic_delta_max), "delta_mode": "fixed"}
-    contact.pop("delta_reach", None)
-    if args.plastic_growth is not None:
-        contact["mesh_growth"] = args.plastic_growth
-        contact["mesh_size_contact"] = 5e-5 * args.plastic_growth
     radius = float(cfg["indenter"]["radius"])
     E, nu, Y = float(args.plastic_E), float(args.plastic_nu), float(args.plastic_Y)
     d_max = float(args.plastic_delta_max)
     deltas = indentation_steps(d_max, int(args.plastic_steps))
-    mesh = contact_mesh(radius, d_max, fine=float(args.plastic_fine))
+    mesh = contact_mesh(radius, d_max, fine=float(args.plastic_fine),
+                        growth=float(args.plastic_growth))
     t0 = time.perf_counter()
     curve = solve_path(mesh, E, nu, VonMises(Y), radius, deltas, unload=True)
     wall = time.perf_counter() - t0
     Fy, _ = johnson_first_yield(E, nu, Y, radius)
     st = curve.stats
     res = {"soil_E": E, "soil_nu": nu, "yield_stress": Y, "indenter_radius": radius,
-           "mesh": f"contact radius / {args.plastic_fine:g}", **summary(curve),
-           "johnson_first_yield_force": Fy, "wall": wall, **st,
+           "mesh": f"a/{args.plastic_fine:g}, growth {args.plastic_growth:g}, domain 40 a",
+           **summary(curve), "johnson_first_yield_force": Fy, "wall": wall, **st,
            "wall_per_factorization": st["wall_total"] / max(st["factorizations"], 1)}
     ref = None
     if args.plastic_reference:
+        fine, growth, domain = REFERENCE_MESH
+        ref_mesh = contact_mesh(radius, d_max, fine=fine, growth=growth, domain=domain)
         t0 = time.perf_counter()
-        ref = solve_plastic_scene((E, nu), VonMises(Y), radius, contact, unload=True)
+        ref = solve_path(ref_mesh, E, nu, VonMises(Y), radius, deltas, unload=True)
         ref_wall = time.perf_counter() - t0
         n = min(ref.force.size, curve.force.size)
         same = np.allclose(ref.delta[:n], curve.delta[:n], rtol=1e-9, atol=0.0)
-        res["reference"] = {"mesh": "config", "mesh_growth": contact.get("mesh_growth"),
+        res["reference"] = {"mesh": f"a/{fine:g}, growth {growth:g}, domain {domain:g} a",
                             **summary(ref), "wall": ref_wall, **ref.stats}
         res["error"] = {
             "force_max_rel": float(np.max(np.abs(curve.force[:n] - ref.force[:n]))
@@ -116,9 +111,10 @@ def run_plastic(args: argparse.Namespace) -> dict[str, Any]:
             "first_yield_force_rel": _rel(curve.first_yield_force, ref.first_yield_force)}
     out = Path(args.output_dir)
     out.mkdir(parents=True, exist_ok=True)
-    write_json(out / "plastic_bench.json", res, {"contact": contact, "E": E, "nu": nu,
-                                                  "Y": Y, "radius": radius,
-                                                  "fine": args.plastic_fine})
+    write_json(out / "plastic_bench.json", res, {
+        "E": E, "nu": nu, "Y": Y, "radius": radius, "delta_max": d_max,
+        "steps": int(args.plastic_steps), "fine": args.plastic_fine,
+        "growth": args.plastic_growth, "reference_mesh": REFERENCE_MESH})
     _plot(curve, ref, E, nu, radius, Fy, res, out / "plastic_curve.png")
     res["outputs"] = [str(out / "plastic_bench.json"), str(out / "plastic_curve.png")]
     res["plastic"] = True
@@ -138,7 +134,7 @@ def _plot(curve: Any, ref: Any, E: float, nu: float, radius: float, Fy: float,
     d = np.linspace(0, curve.delta.max(), 200)
     ax.plot(d * 1e6, hertz.force(d, hertz.effective_modulus(E, nu), radius), "k:",
             label="elastic (Hertz)")
-    for c, tag, ls in ((curve, "contact-radius mesh", "-"), (ref, "config mesh", "--")):
+    for c, tag, ls in ((curve, "timed mesh", "-"), (ref, "reference mesh", "--")):
         if c is None:
             continue
         for b, lab in ((0, "loading"), (1, "unloading")):
@@ -167,7 +163,7 @@ def human(res: dict[str, Any]) -> str:
             f"{res['dissipated_work']:.4g} J")
     if res.get("reference"):
         r, e = res["reference"], res["error"]
-        text += (f"\nreference (config mesh, {r['dofs']} dofs): {r['wall']:.2f} s; error of "
+        text += (f"\nreference ({r['mesh']}, {r['dofs']} dofs): {r['wall']:.2f} s; error of "
                  f"the timed curve: force {g(e['force_max_rel'])} of the peak, residual "
                  f"indentation {g(e['residual_indentation_rel'])}, dissipated "
                  f"{g(e['dissipated_work_rel'])}, first yield {g(e['first_yield_force_rel'])}")

@@ -332,3 +332,56 @@ def test_bench_plastic_runs(tmp_path, capsys):
     assert (tmp_path / "plastic_curve.png").stat().st_size > 0
     assert res["first_yield_force"] == pytest.approx(res["johnson_first_yield_force"],
                                                      rel=0.03)
+
+
+def _plate_mesh(size: float, domain: float, t: float, rp: float):
+    return build_mesh(t, rp, MeshSettings(domain, domain, size, 0.25, domain / 20, 2))
+
+
+@pytest.mark.parametrize("interface", ["frictionless", "bonded"])
+def test_plate_below_yield_equals_elastic_engine(interface):
+    """A PLA plate on the sample, below yield: the plastic solver's curve is the elastic
+    engine's with the same plate, interface and mesh (the monolithic PETSc engine with its
+    LCP: a second assembly, dof numbering and contact solver)."""
+    from ssw.contact.scene import indentation_steps, solve_curve
+
+    t, rp, Ep, nup = 0.4e-3, 5e-3, 3.5e9, 0.36
+    cfg = {"soil_radius": 20e-3, "soil_depth": 20e-3, "mesh_size_contact": 5e-5,
+           "mesh_growth": 0.25, "mesh_size_max": 1e-3, "plate_layers": 2,
+           "plate_diameter": 2 * rp, "interface": interface, "delta_max": 3e-5, "steps": 4}
+    elastic, state = solve_curve((38e6, 0.34), (Ep, nup), t, 2 * R, cfg, engine="monolithic")
+    state["solver"].destroy()
+    mesh = _plate_mesh(5e-5, 20e-3, t, rp)
+    deltas = indentation_steps(cfg["delta_max"], cfg["steps"])
+    for model in (VonMises(1e12), DruckerPrager(1e12, 30.0)):
+        c = solve_path(mesh, 38e6, 0.34, model, 2 * R, deltas, plate=(Ep, nup),
+                       interface=interface)
+        assert c.plastic_volume[-1] == 0.0
+        # the mixed element to round-off; the displacement form (Drucker-Prager) to its
+        # P2 discretization error
+        rtol = 1e-7 if isinstance(model, VonMises) else 5e-3
+        np.testing.assert_allclose(c.force, elastic.force, rtol=rtol)
+
+
+def test_plate_energy_balance_and_refusals():
+    """Through a plate, loading past yield and unloading: the sphere's work = the sample's
+    plastic work + the energy stored in sample and plate (to 1e-3 of the loading work at
+    20 steps); the plate carries the load to a wider area, so the sample yields at a larger
+    force than without it. The unilateral interface and a missing plate are refused."""
+    t, rp, Ep, nup = 0.4e-3, 5e-3, 3.5e9, 0.36
+    mesh = _plate_mesh(5e-5, 20e-3, t, rp)
+    deltas = np.linspace(0, 6e-5, 21)[1:]
+    model = VonMises(0.5e6)
+    c = solve_path(mesh, 38e6, 0.34, model, 2 * R, deltas, unload=True, plate=(Ep, nup))
+    load = c.branch == 0
+    w_load = float(np.sum(0.5 * (c.force[load][1:] + c.force[load][:-1])
+                          * np.diff(c.delta[load])))
+    balance = c.external_work - c.dissipated_work - c.stored_energy
+    assert c.dissipated_work > 0 and abs(balance) < 1e-3 * w_load
+    Fy_bare, _ = johnson_first_yield(38e6, 0.34, 0.5e6, 2 * R)
+    assert c.first_yield_force > 2 * Fy_bare
+    with pytest.raises(ConfigError, match="interface"):
+        solve_path(mesh, 38e6, 0.34, model, 2 * R, deltas, plate=(Ep, nup),
+                   interface="unilateral")
+    with pytest.raises(ConfigError, match="plate"):
+        solve_path(mesh, 38e6, 0.34, model, 2 * R, deltas)

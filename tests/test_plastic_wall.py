@@ -91,6 +91,31 @@ def test_elastic_limit_is_hertz():
     assert abs(tof_p / tof_h - 1.0) < bound
 
 
+def test_elastic_limit_through_the_plate_is_the_elastic_engine():
+    """Through the device's 0.4 mm PLA plate, a sample that never yields gives the elastic
+    engine's law (substructured, the config's graded mesh: another mesh, assembly and
+    contact solver) within the tables' stated error, and the ``fem`` wall's TOF (the chain's
+    peak lies inside the fem wall's exact reach) to 1e-2 of that error."""
+    from ssw.contact.scene import solve_curve
+
+    p = replace(chain_params(load_device("thesis")), steps_per_contact=100)
+    assert p.plate_thickness == 0.4e-3
+    w = plastic_wall(p, E, NU, soil_model=VonMises(1e12), settings=CHEAP)
+    d = w.exact_reach[0] * np.linspace(0.1, 1.0, 19)
+    cfg = {"delta_max": float(d[-1]), "steps": 40, "plate_diameter": p.plate_diameter,
+           "interface": p.plate_interface}
+    el, _ = solve_curve((E, NU), (p.plate_E, p.plate_nu), p.plate_thickness, p.bead_radius,
+                        cfg)
+    bound = np.hypot(FORCE_ERROR_COEF * CHEAP.growth**2, DOMAIN_ERROR_COEF / CHEAP.domain)
+    f_w = np.array([w.force_at(np.array([x]), np.array([x]))[0] for x in d])
+    rel = f_w / np.interp(d, el.delta, el.force) - 1.0
+    assert np.sqrt(np.mean(rel**2)) < bound
+    fem = build_wall("fem", p, E, NU)
+    run = run_peaks(p, fem)
+    assert run[1].peak_wall_indentation[0] < fem.exact_reach[0]
+    assert abs(run_peaks(p, w)[0].tof[0] / run[0].tof[0] - 1.0) < 0.1 * bound
+
+
 def test_shakedown():
     """The second hit adds less permanent set and dissipates less than the first."""
     res = run_hits(_params(), _wall(), 2)
@@ -150,8 +175,9 @@ def test_interpolated_level_matches_a_fresh_fem_path():
 
 
 def test_tof_hits_cli(capsys):
-    """``ssw tof --hits``: one row per hit, the sample's history carried (the set grows),
-    and the plate refused (the plastic solver models a half-space)."""
+    """``ssw tof --hits``: one row per hit, the sample's history carried (the set grows);
+    through the device's plate the sample takes less permanent set; a plate that may leave
+    the sample (the unilateral interface) is refused."""
     import json
 
     from ssw.cli import main
@@ -164,4 +190,32 @@ def test_tof_hits_cli(capsys):
     assert [r["hit"] for r in rows] == [1, 2]
     assert res["soil_model"]["yield_stress"] == Y  # the library's strength, not fitted
     assert rows[1]["permanent_set"] >= rows[0]["permanent_set"] > 0
-    assert main([*args, "--plate-thickness", "4e-4"]) != 0
+    assert main([*args, "--plate-thickness", "4e-4", "--json"]) == 0
+    plated = json.loads(capsys.readouterr().out)
+    assert plated["plate_thickness"] == 4e-4 and plated["plate_material"] == "pla"
+    assert 0 < plated["hits"][0]["permanent_set"] < rows[0]["permanent_set"]
+    assert main([*args, "--plate-thickness", "4e-4", "--plate-interface", "unilateral"]) != 0
+    assert "interface" in capsys.readouterr().err
+
+
+def test_models_per_scene_and_calibration_refusals(capsys):
+    """A wall of several scenes takes one model each (a count that fits neither one nor the
+    scenes is refused); ``ssw calibrate --soil-model`` takes the config's samples (their
+    materials give the strengths) and writes no calibration file."""
+    from ssw.cli import main
+    from ssw.errors import ConfigError
+
+    p = _params()
+    with pytest.raises(ConfigError, match="one per scene"):
+        plastic_wall(p, [E, 2 * E, 3 * E], NU, soil_model=(VonMises(Y), VonMises(2 * Y)),
+                     settings=CHEAP)
+    w = plastic_wall(p, [E, E], NU, soil_model=(VonMises(1e12), VonMises(Y)), settings=CHEAP)
+    d = w.exact_reach * 0.9
+    f_el, f_pl = (w.take(np.array([i])).force_at(d[i:i + 1], d[i:i + 1])[0] for i in (0, 1))
+    assert f_pl < f_el  # the yielding scene is the softer one at the same indentation
+    assert main(["calibrate", "--reference", "38e6,0.34,1.78e-3", "--free",
+                 "striker_velocity", "--soil-model", "von-mises"]) != 0
+    assert "--from-config" in capsys.readouterr().err
+    assert main(["calibrate", "--from-config", "--soil-model", "von-mises", "--output",
+                 "x.json"]) != 0
+    assert "--output" in capsys.readouterr().err

@@ -1,13 +1,23 @@
 """``ssw bench contact --plastic`` (= ``ssw bench plastic``): the cost of an elasto-plastic
-loading-unloading curve.
+loading-unloading curve, against its error.
 
 A rigid sphere (the config's indenter) on a von Mises half-space (E, nu, Y given; default
 PCF 08: 38 MPa, 0.34, Y = its catalogue compressive strength 1.4 MPa), loaded to
 ``delta_max`` in ``--plastic-steps`` increments and unloaded in as many (up to where the
-sphere leaves the surface), on the config's contact mesh (``--mesh-growth`` coarsens it),
-one core. Reports the wall time, increments, Newton iterations, factorizations, dofs, first
-yield (and Johnson's), residual indentation and dissipated work; writes
-``plastic_bench.json`` and ``plastic_curve.png`` (the curve with the elastic Hertz law and
+sphere leaves the surface), one core, on two meshes:
+
+* timed: the mesh scaled to the contact radius at ``delta_max``
+  (:func:`ssw.contact.plastic.contact_mesh`, element ``a / --plastic-fine``, growth 0.3;
+  the plastic wall's mesh);
+* reference: the config's contact mesh (graded from the contact point for the elastic
+  engine's indentations down to 1e-9 m; ``--plastic-growth`` sets its growth, the element
+  at the contact ``5e-5 growth`` m), the same increments; ``--no-reference`` skips it.
+
+Reports the wall times, increments, Newton iterations, factorizations (new and reused),
+dofs, first yield (and Johnson's), residual indentation and dissipated work of both, and
+the timed curve's error against the reference (largest force difference over the path
+relative to the peak force, residual indentation, dissipated work); writes
+``plastic_bench.json`` and ``plastic_curve.png`` (both curves, the elastic Hertz law and
 the first yield) under the output folder.
 """
 
@@ -48,13 +58,24 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
     p.add_argument("--plastic-delta-max", type=float, default=1e-4,
                    help="indentation at the end of loading, m (plastic)")
     p.add_argument("--plastic-growth", type=float, default=None,
-                   help="mesh growth of the plastic curve (default: the config's)")
+                   help="growth of the reference mesh (default: the config's)")
+    p.add_argument("--plastic-fine", type=float, default=8.0,
+                   help="contact radius / element size at the contact of the timed mesh")
+    p.add_argument("--no-reference", dest="plastic_reference", action="store_false",
+                   help="skip the reference curve on the config's mesh")
 
 
 def run_plastic(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.config import load_config
     from ssw.constitutive import VonMises
-    from ssw.contact.plastic import johnson_first_yield, solve_plastic_scene, summary
+    from ssw.contact.plastic import (
+        contact_mesh,
+        johnson_first_yield,
+        solve_path,
+        solve_plastic_scene,
+        summary,
+    )
+    from ssw.contact.scene import indentation_steps
 
     cfg = load_config(args.config)
     contact = {**cfg["contact"], "steps": int(args.plastic_steps),
@@ -65,27 +86,51 @@ def run_plastic(args: argparse.Namespace) -> dict[str, Any]:
         contact["mesh_size_contact"] = 5e-5 * args.plastic_growth
     radius = float(cfg["indenter"]["radius"])
     E, nu, Y = float(args.plastic_E), float(args.plastic_nu), float(args.plastic_Y)
+    d_max = float(args.plastic_delta_max)
+    deltas = indentation_steps(d_max, int(args.plastic_steps))
+    mesh = contact_mesh(radius, d_max, fine=float(args.plastic_fine))
     t0 = time.perf_counter()
-    curve = solve_plastic_scene((E, nu), VonMises(Y), radius, contact, unload=True)
+    curve = solve_path(mesh, E, nu, VonMises(Y), radius, deltas, unload=True)
     wall = time.perf_counter() - t0
     Fy, _ = johnson_first_yield(E, nu, Y, radius)
     st = curve.stats
     res = {"soil_E": E, "soil_nu": nu, "yield_stress": Y, "indenter_radius": radius,
-           "mesh_growth": contact.get("mesh_growth"), **summary(curve),
+           "mesh": f"contact radius / {args.plastic_fine:g}", **summary(curve),
            "johnson_first_yield_force": Fy, "wall": wall, **st,
            "wall_per_factorization": st["wall_total"] / max(st["factorizations"], 1)}
+    ref = None
+    if args.plastic_reference:
+        t0 = time.perf_counter()
+        ref = solve_plastic_scene((E, nu), VonMises(Y), radius, contact, unload=True)
+        ref_wall = time.perf_counter() - t0
+        n = min(ref.force.size, curve.force.size)
+        same = np.allclose(ref.delta[:n], curve.delta[:n], rtol=1e-9, atol=0.0)
+        res["reference"] = {"mesh": "config", "mesh_growth": contact.get("mesh_growth"),
+                            **summary(ref), "wall": ref_wall, **ref.stats}
+        res["error"] = {
+            "force_max_rel": float(np.max(np.abs(curve.force[:n] - ref.force[:n]))
+                                   / np.max(ref.force)) if same else None,
+            "residual_indentation_rel": _rel(curve.residual_indentation,
+                                             ref.residual_indentation),
+            "dissipated_work_rel": _rel(curve.dissipated_work, ref.dissipated_work),
+            "first_yield_force_rel": _rel(curve.first_yield_force, ref.first_yield_force)}
     out = Path(args.output_dir)
     out.mkdir(parents=True, exist_ok=True)
     write_json(out / "plastic_bench.json", res, {"contact": contact, "E": E, "nu": nu,
-                                                  "Y": Y, "radius": radius})
-    _plot(curve, E, nu, radius, Fy, res, out / "plastic_curve.png")
+                                                  "Y": Y, "radius": radius,
+                                                  "fine": args.plastic_fine})
+    _plot(curve, ref, E, nu, radius, Fy, res, out / "plastic_curve.png")
     res["outputs"] = [str(out / "plastic_bench.json"), str(out / "plastic_curve.png")]
     res["plastic"] = True
     return res
 
 
-def _plot(curve: Any, E: float, nu: float, radius: float, Fy: float, res: dict[str, Any],
-          path: Path) -> None:
+def _rel(x: float | None, ref: float | None) -> float | None:
+    return None if x is None or not ref else float(x / ref - 1.0)
+
+
+def _plot(curve: Any, ref: Any, E: float, nu: float, radius: float, Fy: float,
+          res: dict[str, Any], path: Path) -> None:
     from ssw.plotting import pyplot, save_png
 
     plt = pyplot()
@@ -93,15 +138,18 @@ def _plot(curve: Any, E: float, nu: float, radius: float, Fy: float, res: dict[s
     d = np.linspace(0, curve.delta.max(), 200)
     ax.plot(d * 1e6, hertz.force(d, hertz.effective_modulus(E, nu), radius), "k:",
             label="elastic (Hertz)")
-    for b, lab in ((0, "loading"), (1, "unloading")):
-        m = curve.branch == b
-        ax.plot(curve.delta[m] * 1e6, curve.force[m], "-", label=f"von Mises, {lab}")
+    for c, tag, ls in ((curve, "contact-radius mesh", "-"), (ref, "config mesh", "--")):
+        if c is None:
+            continue
+        for b, lab in ((0, "loading"), (1, "unloading")):
+            m = c.branch == b
+            ax.plot(c.delta[m] * 1e6, c.force[m], ls, label=f"{tag}, {lab}")
     ax.axhline(Fy, color="gray", lw=0.8, ls="--", label="first yield (Johnson)")
     ax.set_xlabel("indentation (um)")
     ax.set_ylabel("force (N)")
-    ax.set_title(f"{res['increments']} increments in {res['wall']:.1f} s, one core",
+    ax.set_title(f"von Mises: {res['increments']} increments in {res['wall']:.1f} s, one core",
                  fontsize=9)
-    ax.legend(fontsize=8)
+    ax.legend(fontsize=7)
     ax.grid(alpha=0.3)
     fig.tight_layout()
     save_png(fig, path)
@@ -111,9 +159,16 @@ def human(res: dict[str, Any]) -> str:
     def g(x: Any) -> str:
         return "none" if x is None else f"{x:.4g}"
 
-    return (f"plastic curve: {res['increments']} increments ({res['dofs']} dofs), "
-            f"{res['newton_iterations']} Newton iterations, {res['factorizations']} "
-            f"factorizations, {res['wall']:.2f} s ({res['wall_per_factorization'] * 1e3:.1f} "
-            f"ms per factorization); first yield {g(res['first_yield_force'])} N (Johnson "
-            f"{res['johnson_first_yield_force']:.4g} N), residual indentation "
-            f"{g(res['residual_indentation'])} m, dissipated {res['dissipated_work']:.4g} J")
+    text = (f"plastic curve ({res['mesh']}): {res['increments']} increments ({res['dofs']} "
+            f"dofs), {res['newton_iterations']} Newton iterations, {res['factorizations']} "
+            f"factorizations ({res['lu_reused']} reused), {res['wall']:.2f} s; first yield "
+            f"{g(res['first_yield_force'])} N (Johnson {res['johnson_first_yield_force']:.4g}"
+            f" N), residual indentation {g(res['residual_indentation'])} m, dissipated "
+            f"{res['dissipated_work']:.4g} J")
+    if res.get("reference"):
+        r, e = res["reference"], res["error"]
+        text += (f"\nreference (config mesh, {r['dofs']} dofs): {r['wall']:.2f} s; error of "
+                 f"the timed curve: force {g(e['force_max_rel'])} of the peak, residual "
+                 f"indentation {g(e['residual_indentation_rel'])}, dissipated "
+                 f"{g(e['dissipated_work_rel'])}, first yield {g(e['first_yield_force_rel'])}")
+    return text

@@ -75,14 +75,17 @@ class BatchInversion:
 def invert_batch(
     tof: Any, soil_nu: Any, params: ChainParams, wall: str = "hertz", *,
     vary: dict[str, Any] | None = None, E_range: tuple[float, float] = E_RANGE,
-    strict: bool = True, refine: int = REFINE_STEPS, **wall_options: Any,
+    strict: bool = True, refine: int = REFINE_STEPS, grid_points: int = GRID_POINTS,
+    **wall_options: Any,
 ) -> BatchInversion:
     """E (Pa) from TOFs (s) of ``k`` targets with their own ``soil_nu`` and per-scene chain
     values ``vary`` (:data:`ssw.chain.params.VARYING` -> (k,) arrays), in few batched runs.
 
-    Targets sharing nu and chain values share one forward grid (``GRID_POINTS`` log-spaced
-    E); every grid advances in ONE run; PCHIP in ``ln E`` against TOF, then ``refine``
-    secant steps on the forward model (one run each, all targets together).
+    Targets sharing nu and chain values share one forward grid (``grid_points`` log-spaced
+    E, default :data:`GRID_POINTS`; fewer over a narrow ``E_range`` where every forward
+    law is costly, as a plastic sample's); every grid advances in ONE run; PCHIP in
+    ``ln E`` against TOF, then ``refine`` secant steps on the forward model (one run each,
+    all targets together).
 
     Raises (``strict``; otherwise E is NaN and ``reason`` says why)
     ------
@@ -104,10 +107,10 @@ def invert_batch(
     groups, gidx = np.unique(keys, axis=0, return_inverse=True)
     gidx = np.asarray(gidx).ravel()
     G = groups.shape[0]
-    E_g = np.geomspace(E_range[0], E_range[1], GRID_POINTS)
-    gvary = {n: np.repeat(groups[:, 1 + j], GRID_POINTS) for j, n in enumerate(vk)}
-    T_g = api.tof(np.tile(E_g, G), np.repeat(groups[:, 0], GRID_POINTS), params, wall,
-                  vary=gvary or None, **wall_options).reshape(G, GRID_POINTS)
+    E_g = np.geomspace(E_range[0], E_range[1], int(grid_points))
+    gvary = {n: np.repeat(groups[:, 1 + j], E_g.size) for j, n in enumerate(vk)}
+    T_g = api.tof(np.tile(E_g, G), np.repeat(groups[:, 0], E_g.size), params, wall,
+                  vary=gvary or None, **wall_options).reshape(G, E_g.size)
     reason = [""] * k
     logE = np.full(k, np.nan)
     lo_T, hi_T = T_g[:, -1].copy(), T_g[:, 0].copy()

@@ -21,6 +21,29 @@ from ssw.cli._device import add_device_options, chain_context
 from ssw.errors import ConfigError
 
 
+def _plastic_options(args: argparse.Namespace, ctx: Any, refs: list) -> dict[str, Any]:
+    """The ``plastic`` wall's options for the config's references: each sample's model of
+    ``--soil-model`` with its material's strengths (the library's, not fitted)."""
+    from ssw.config import library
+    from ssw.constitutive import model_of_strength
+
+    if not args.from_config or args.reference or args.reference_recording:
+        raise ConfigError("--soil-model", args.soil_model, "with --from-config alone (the "
+                          "samples' materials give their strengths)")
+    mats = library(ctx.cfg)
+    by_id = {s["id"]: s.get("material") for s in ctx.cfg.get("validation", {})
+             .get("samples", [])}
+    models = []
+    for r in refs:
+        key = by_id.get(r.id)
+        if key not in mats:
+            raise ConfigError(f"validation.samples[{r.id}].material", key,
+                              "a material of the library with strengths")
+        models.append(model_of_strength(args.soil_model, mats[key].strength,
+                                        f"materials.{key}"))
+    return {"soil_model": tuple(models)}
+
+
 def _ranges(items: list[str] | None) -> dict[str, tuple[float, float]]:
     out: dict[str, tuple[float, float]] = {}
     for it in items or []:
@@ -66,6 +89,13 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
     if not refs:
         raise ConfigError("--reference", None, "references: --reference E,nu,TOF[,STD], "
                           "--reference-recording FILE,E,nu or --from-config")
+    wall, wall_options = ctx.wall, ctx.wall_options
+    if args.soil_model is not None:
+        wall, wall_options = "plastic", _plastic_options(args, ctx, refs)
+        if args.output:
+            raise ConfigError("--output", args.output, "none with --soil-model (a plastic "
+                              "sample's calibration is an analysis; ssw measure inverts "
+                              "through the device's elastic law)")
     free = args.free or (cal_cfg.get("free") if args.from_config else None)
     if not free:
         raise ConfigError("--free", None, "one or more device parameters to identify")
@@ -79,7 +109,7 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
     with progress_bar(None, desc="calibration", unit="run") as bar:
         cal = calibrate(
             refs, ctx.device, free, materials=_materials(ctx.cfg), numerics=numerics,
-            wall=ctx.wall, wall_options=ctx.wall_options, ranges=ranges, loo=loo,
+            wall=wall, wall_options=wall_options, ranges=ranges, loo=loo,
             scan_points=args.scan_points or cal_cfg.get("scan_points"),
             material_set=ctx.cfg.get("material_set", "realistic"),
             materials_file=ctx.cfg.get("materials_file"),
@@ -179,6 +209,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--scan-points", type=int, help="grid points per continuous parameter")
     p.add_argument("--no-loo", action="store_true", help="skip the leave-one-out predictions")
     p.add_argument("--output", help="calibration file to write (JSON)")
+    p.add_argument("--soil-model", choices=("von-mises", "drucker-prager", "crushable-foam"),
+                   help="the references as plastic samples of this model, each with its "
+                   "material's strengths (--from-config): the plastic wall's first hit on the "
+                   "virgin sample, through the device's plate (the leave-one-out inversions "
+                   "tabulate the plastic FEM per trial modulus: minutes)")
     add_device_options(p)
     add_json_flag(p)
     p.set_defaults(func=run_calibrate, human=_human)

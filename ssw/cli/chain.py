@@ -111,6 +111,11 @@ def _run_hits(args: argparse.Namespace) -> dict[str, Any]:
     tof = np.array([r["tof"] for r in rows])
     return {
         **ctx.inputs(), "wall": "plastic", "soil_E": args.soil_E, "soil_nu": args.soil_nu,
+        # the plate the tables were computed with (the device's unless flags override it)
+        "plate_material": ctx.params.plate_material if ctx.params.plate_thickness > 0
+        else "none", "plate_thickness": ctx.params.plate_thickness,
+        "plate_diameter": ctx.params.plate_diameter,
+        "plate_interface": ctx.params.plate_interface,
         "soil_model": model.params(), "soil_model_key": model.key,
         "plastic_levels": settings.levels, "plastic_increments": settings.increments,
         "hits": rows, "static_set": float(res.static_set[0]),
@@ -125,8 +130,11 @@ def _run_hits(args: argparse.Namespace) -> dict[str, Any]:
 
 def _human_hits(res: dict[str, Any]) -> str:
     """Per hit: TOF, peak wall force, permanent set, its increment, dissipated energy."""
+    t = float(res.get("plate_thickness") or 0.0)
+    plate = (f"under a {t * 1e3:.3g} mm {res.get('plate_material', '')} plate" if t > 0
+             else "no plate")
     lines = [f"{res['soil_model_key']} on E = {res['soil_E']:.4g} Pa, nu = {res['soil_nu']:.3g}"
-             f" (no plate); static set {res['static_set'] * 1e6:.3f} um",
+             f" ({plate}); static set {res['static_set'] * 1e6:.3f} um",
              "hit   TOF (s)        peak F (N)  set (um)  d set (um)  dissipated (J)"]
     lines += [f"{r['hit']:3d}  {r['tof']:.6e}  {r['peak_force']:10.4g}  "
               f"{r['permanent_set'] * 1e6:8.3f}  {r['set_increment'] * 1e6:10.3f}  "

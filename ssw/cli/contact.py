@@ -212,19 +212,40 @@ def _run_plastic(args: argparse.Namespace, cfg: dict[str, Any],
                           "--soil-yield-stress")
     if args.scene or args.output_dir is not None:
         raise ConfigError("--scene", args.scene, "soil flags with --soil-model (one scene)")
-    if args.plate_thickness not in (None, 0.0):
-        raise ConfigError("--plate-thickness", args.plate_thickness,
-                          "0 with --soil-model (the plastic solver models a half-space)")
+    from ssw.cli._sample import sample_of
+    from ssw.config import library
+
     model = soil_model_of(args, cfg)
     if args.steps is None and "steps" not in cfg.get("contact", {}):
         contact["steps"] = PLASTIC_STEPS
     radius = float(cfg["indenter"]["radius"])
+    t = float(args.plate_thickness or 0.0)
+    plate, plate_key = None, "none"
+    if t > 0:
+        if args.plate_material is not None:
+            mats = library(cfg)
+            if args.plate_material not in mats:
+                raise ConfigError("--plate-material", args.plate_material,
+                                  f"a material of the library: {', '.join(sorted(mats))}")
+            plate = (mats[args.plate_material].E, mats[args.plate_material].nu)
+            plate_key = args.plate_material
+        elif args.plate_E is not None and args.plate_nu is not None:
+            plate, plate_key = (float(args.plate_E), float(args.plate_nu)), "custom"
+        else:
+            raise ConfigError("--plate-material", None,
+                              "a material key, or --plate-E and --plate-nu, when T > 0")
+    sample = sample_of(args)
+    if sample is not None:
+        contact = sample.contact_settings(contact)
     curve = solve_plastic_scene((args.soil_E, args.soil_nu), model, radius, contact,
-                                unload=bool(args.unload))
+                                unload=bool(args.unload), plate=plate, plate_thickness=t)
     from ssw.contact.scene import settings_of
 
     inputs = {"soil_E": args.soil_E, "soil_nu": args.soil_nu, "soil_model": model.params(),
               "soil_model_key": model.key, "indenter_radius": radius, "unload": args.unload,
+              "plate_material": plate_key, "plate_E": plate[0] if plate else None,
+              "plate_nu": plate[1] if plate else None, "plate_thickness": t,
+              "sample": sample.to_dict() if sample is not None else None,
               **settings_of(contact)}
     if args.output:
         write_plastic_curve(args.output, curve, inputs)

@@ -74,6 +74,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--no-reference", action="store_true",
                    help="do not evaluate the device's own plate")
     g.add_argument("--jobs", type=int, default=1, help="processes (one material search each)")
+    g.add_argument("--plastic-hits", type=int, metavar="N",
+                   help="strike a yielding sample N times through the recommended plate and "
+                   "the device's own (von Mises at the design's soil strength, at the soil "
+                   "where the elastic yield index is largest): per hit TOF, permanent set, "
+                   "dissipated energy, and the TOF drift (ssw.design.hits_check)")
     g.add_argument("--merge", nargs="+", metavar="JSON",
                    help="rank together the results of several ssw design runs (written "
                    "with --output) instead of computing")
@@ -163,6 +168,16 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         contact = dict(ctx.cfg.get("contact", {}))
         res = run_design(spec, ctx.params, mats, contact, reference=not args.no_reference,
                          jobs=max(1, int(args.jobs))).to_dict()
+        if args.plastic_hits is not None:
+            from ssw.design.hits_check import hits_check
+
+            plates = [res["recommended"]]
+            if res["reference"] is not None and (res["reference"]["material"],
+                                                 res["reference"]["thickness"]) != (
+                    res["recommended"]["material"], res["recommended"]["thickness"]):
+                plates.append(res["reference"])
+            res["plastic_check"] = [hits_check(spec, ctx.params, mats, c, args.plastic_hits)
+                                    for c in plates]
         res.update({"device_name": ctx.device.name, "device_source": ctx.device.source,
                     "device_values": ctx.device.physics_dict(),
                     "calibration_file": None if ctx.calibration is None
@@ -195,4 +210,12 @@ def human(res: dict[str, Any]) -> str:
     lines.append(f"recommended: {rec['material']} {rec['thickness'] * 1e3:.4g} mm")
     lines += [f"  - {r}" for r in rec["reasons"]]
     lines.append(f"{res['evaluations']} candidates in {res['wall_time']:.1f} s")
+    for chk in res.get("plastic_check") or []:
+        tofs = ", ".join(f"{h['tof'] * 1e3:.4f}" for h in chk["hits"])
+        lines.append(f"{len(chk['hits'])} hits through {chk['material']} "
+                     f"{chk['thickness'] * 1e3:.4g} mm on E {chk['soil_E']:.4g} Pa (von Mises "
+                     f"Y {chk['yield_stress']:.3g} Pa, elastic index "
+                     f"{chk['elastic_soil_yield_index']:.3g}): TOF {tofs} ms, set "
+                     f"{chk['hits'][-1]['permanent_set'] * 1e6:.3g} um, TOF std "
+                     f"{chk['tof_std']:.3g} s")
     return "\n".join(lines)

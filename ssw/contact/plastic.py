@@ -1,7 +1,8 @@
-"""Elasto-plastic contact: a rigid frictionless sphere pressed into (and lifted off) a von
-Mises half-space, with an active set on the contact inside Newton's iteration.
+"""Elasto-plastic contact: a rigid frictionless sphere pressed into (and lifted off) a plastic
+sample (any model of :mod:`ssw.constitutive`), directly or through an elastic plate, with an
+active set on the contact inside Newton's iteration.
 
-Discretization. The scene's mesh (:func:`ssw.contact.mesh.build_mesh`, no plate) and the
+Discretization. The scene's mesh (:func:`ssw.contact.mesh.build_mesh`) and the
 Taylor-Hood u-p element of the elastic engine (:mod:`ssw.contact.elements`: P2
 displacements, continuous P1 mean stress ``p``), written for a nonlinear deviatoric law
 (Simo & Hughes 1998, sec. 4.4; de Souza Neto et al. 2008, sec. 15.4):
@@ -22,6 +23,13 @@ element (``R_u = sum_e int B^T sigma(eps) dV``, the whole consistent tangent), f
 locking as long as neither the elastic nor the plastic response is near incompressible
 (foams crush with a plastic Poisson's ratio near 0; a dilatant soil changes volume); below
 yield it differs from the elastic engine by the P2 discretization error.
+
+Plate. An elastic plate on the sample (the thesis's device) is meshed as by the elastic
+engine and tied to the sample by the contact config's ``interface``: ``frictionless`` (the
+thesis's; the two surfaces share ``u_z`` and slide freely) or ``bonded``. The tie is
+bilateral, as the elastic engine's: on unloading the plate follows the dent it pressed (a
+plate that springs back off a permanent dent, the ``unilateral`` interface, is refused).
+Below yield the curve is the elastic engine's with the same plate (tests).
 
 Contact. The sphere's candidates are the top-surface nodes with ``r < R / 2``; at an
 indentation ``delta`` the gap of a node is ``g = g0(r) - delta - u_z`` (``g0`` the exact
@@ -60,13 +68,14 @@ import numpy as np
 import scipy.sparse as sp
 from scipy.sparse.linalg import splu
 
-from ssw.constitutive.base import initial_state
+from ssw.constitutive.base import Update, initial_state
 from ssw.constitutive.tensors import ONE, P_DEV, SQRT2
 from ssw.contact.assembly import (
     element_sizes,
     fixed_free,
     geometric_tolerance,
     pow2,
+    split_interface,
     top_surface_weights,
 )
 from ssw.contact.contact_lcp import edge_radius
@@ -96,6 +105,11 @@ LINE_SEARCH = 4
 MAX_CUTS = 5
 #: Residual tolerance relative to the load scale (the largest nodal internal force).
 RTOL = 1e-9
+
+
+class ContactZoneError(SolverError):
+    """The contact reached the candidates' edge (half the sphere's radius): the indentation
+    lies beyond what the small-strain contact of a sphere models."""
 
 
 @dataclass(frozen=True)
@@ -137,21 +151,38 @@ class PlasticCurve:
 
 
 class _Model:
-    """The discrete u-p problem of one mesh and material: constant blocks, dof maps."""
+    """The discrete u-p problem of one mesh and material: constant blocks, dof maps.
+
+    A plate (``mesh.body == 1``, elastic ``plate = (E Pa, nu)``) is tied to the sample by
+    ``interface``: its interface nodes are copies of the sample's (:func:`split_interface`)
+    that share ``u_z`` (``frictionless``, the thesis's interface) or both components
+    (``bonded``) with them; the plate's points are elastic, the sample's follow the model."""
 
     def __init__(self, mesh: Mesh, E: float, nu: float, radius: float,
-                 punch: str | None = None, mixed: bool = True) -> None:
+                 punch: str | None = None, mixed: bool = True,
+                 plate: tuple[float, float] | None = None,
+                 interface: str = "frictionless") -> None:
         if mesh.subgrade is not None:
             raise ConfigError("sample.base", "elastic",
                               "a rigid base for a plastic sample (no subgrade)")
-        if np.any(mesh.body != 0):
-            raise ConfigError("plate_thickness", mesh.top,
-                              "0 (the plastic contact solver models a half-space only)")
-        nodes, tri = mesh.nodes, mesh.tri
+        has_plate = bool(np.any(mesh.body != 0))
+        if has_plate and plate is None:
+            raise ConfigError("plate", None, "the plate's (E Pa, nu) on a mesh with a plate")
+        if has_plate and interface not in ("bonded", "frictionless"):
+            raise ConfigError("contact.interface", interface,
+                              "bonded | frictionless with a plastic sample (the plate stays "
+                              "on the sample)")
+        nodes, tri, pairs = split_interface(mesh)
         n, ne = len(nodes), len(tri)
         self.nodes, self.tri = nodes, tri
-        G, inv_K = (float(x) for x in lame(E, nu))
-        self.G, self.inv_K = G, inv_K
+        body = mesh.body.astype(np.int64)
+        if has_plate:
+            E_el = np.where(body == 1, float(plate[0]), float(E))
+            nu_el = np.where(body == 1, float(plate[1]), float(nu))
+        else:
+            E_el, nu_el = np.full(ne, float(E)), np.full(ne, float(nu))
+        G_e, inv_K_e = (np.asarray(x, float) for x in lame(E_el, nu_el))
+        self.G, self.inv_K = (float(x) for x in lame(E, nu))  # the sample's
         n2, g2 = p2_shape(QUAD_POINTS)
         n1 = p1_shape(QUAD_POINTS)
         xy = nodes[tri]
@@ -161,6 +192,14 @@ class _Model:
         self.zq = np.einsum("qa,ea->eq", n2, xy[:, :, 1])
         self.w = 2.0 * np.pi * r * QUAD_WEIGHTS[None, :] * np.abs(det)[:, None]  # (ne, nq)
         nq = r.shape[1]
+        #: (ne * nq,) the sample's points (the model's); the others are the plate's
+        self.sample_pts = np.repeat(body == 0, nq)
+        self.Gq = np.repeat(G_e, nq)
+        self.inv_Kq = np.repeat(inv_K_e, nq)
+        Kp = 1.0 / float(inv_K_e[body == 1][0]) if has_plate else 0.0
+        Gp = float(G_e[body == 1][0]) if has_plate else 0.0
+        #: the plate's elastic matrix (Mandel), Pa
+        self.D_plate = 2.0 * Gp * P_DEV + Kp * np.outer(ONE, ONE)
         # Mandel strain rows (e_rr, e_zz, e_tt, sqrt(2) e_rz) of (ur_0..5, uz_0..5)
         B = np.zeros((ne, nq, 4, 12))
         B[:, :, 0, :6] = dn[..., 0]
@@ -169,19 +208,22 @@ class _Model:
         B[:, :, 3, :6] = dn[..., 1] / SQRT2
         B[:, :, 3, 6:] = dn[..., 0] / SQRT2
         self.B = B
-        # pressure unknown of a vertex: p = ps * pi (ps = G / h, a power of two times G)
+        # pressure unknown of a vertex: p = ps * pi (ps = G / h, a power of two times G; a
+        # vertex belongs to one body, the interface's being split)
         h = element_sizes(nodes, tri)
         h_node = np.full(n, np.inf)
         np.minimum.at(h_node, tri[:, :3], h[:, None])
+        G_node = np.zeros(n)
+        G_node[tri[:, :3]] = G_e[:, None]
         vert = np.unique(tri[:, :3])
         pid = np.full(n, -1)
         pid[vert] = np.arange(vert.size)
-        self.ps = G * pow2(1.0 / h_node[vert])
-        self.scale = float(pow2(G * float(np.min(h))))
+        self.ps = G_node[vert] * pow2(1.0 / h_node[vert])
+        self.scale = float(pow2(float(np.min(G_e)) * float(np.min(h))))
         div = B[:, :, 0] + B[:, :, 1] + B[:, :, 2]  # (ne, nq, 12)
         ps_e = self.ps[pid[tri[:, :3]]]  # (ne, 3)
         self.Bp = np.einsum("qi,eq,eqj->eij", n1, self.w, div) * ps_e[:, :, None]
-        self.Cp = np.einsum("qi,qj,eq->eij", n1, n1, self.w * inv_K) * (
+        self.Cp = np.einsum("qi,qj,eq->eij", n1, n1, self.w * inv_K_e[:, None]) * (
             ps_e[:, :, None] * ps_e[:, None, :])
         self.N1 = n1
         self.ps_e = ps_e
@@ -191,10 +233,18 @@ class _Model:
         self.proj = P_DEV if mixed else np.eye(4)
         if not mixed:
             self.Bp = np.zeros_like(self.Bp)
-        # dofs: u_r, u_z of node i at 2i, 2i+1; pressure of vertex k at 2n + k
+        # dofs: u_r, u_z of node i at 2i, 2i+1 (a plate copy of an interface node takes its
+        # twin's shared components; its own stay unused and fixed); pressure of vertex k at
+        # 2n + k
+        udof = np.arange(2 * n).reshape(n, 2)
+        soil_n, plate_n = pairs[:, 0], pairs[:, 1]
+        if interface == "bonded":
+            udof[plate_n] = udof[soil_n]
+        else:
+            udof[plate_n, 1] = udof[soil_n, 1]
         self.n = n
         self.ndof = 2 * n + vert.size
-        self.edof_u = np.concatenate([2 * tri, 2 * tri + 1], axis=1)  # (ne, 12)
+        self.edof_u = np.concatenate([udof[tri, 0], udof[tri, 1]], axis=1)  # (ne, 12)
         self.edof = np.concatenate([self.edof_u, 2 * n + pid[tri[:, :3]]], axis=1)  # (ne, 15)
         rows = np.repeat(self.edof, 15, axis=1).ravel()
         cols = np.tile(self.edof, (1, 15)).ravel()
@@ -205,7 +255,8 @@ class _Model:
         tol = geometric_tolerance(nodes, tri)
         free = fixed_free(nodes, tol, mesh.soil_radius, mesh.soil_depth, mesh.base,
                           mesh.lateral)
-        self.fixed = np.flatnonzero(~free.ravel())
+        unused = np.setdiff1d(np.arange(2 * n), self.edof_u)
+        self.fixed = np.union1d(udof[~free], unused)
         weight = top_surface_weights(nodes, tri, np.arange(ne), mesh.top, tol)
         top = np.flatnonzero(weight > 0)
         top = top[np.argsort(nodes[top, 0])]
@@ -214,15 +265,17 @@ class _Model:
         else:  # a rigid flat punch of radius ``radius``: the nodes under its face
             self.cand = top[nodes[top, 0] <= radius + tol]
             if punch == "rough":  # no slip under the face
-                self.fixed = np.union1d(self.fixed, 2 * self.cand)
+                self.fixed = np.union1d(self.fixed, udof[self.cand, 0])
         self.cand_r = nodes[self.cand, 0]
-        self.cand_dof = 2 * self.cand + 1
+        self.cand_dof = udof[self.cand, 1]
         self.g0 = sphere_gap0(self.cand_r, radius) if punch is None else np.zeros(
             self.cand.size)
-        self.axis_dof = int(2 * top[0] + 1)
+        self.axis_dof = int(udof[top[0], 1])
         self.h_min = float(np.min(h))
-        D_el = np.broadcast_to(2.0 * G * P_DEV if mixed else
-                               2.0 * G * P_DEV + np.outer(ONE, ONE) / inv_K, (ne, nq, 4, 4))
+        D_e = 2.0 * G_e[:, None, None] * P_DEV
+        if not mixed:
+            D_e = D_e + np.outer(ONE, ONE)[None] / inv_K_e[:, None, None]
+        D_el = np.broadcast_to(D_e[:, None], (ne, nq, 4, 4))
         self.ke = np.zeros((ne, 15, 15))
         self.ke[:, :12, :12] = self._kuu(np.arange(ne), D_el)
         self.ke[:, 12:, :12] = self.Bp
@@ -251,6 +304,32 @@ class _Model:
             self.pattern = (key, sel, ci, indptr)
         _, sel, ci, indptr = self.pattern
         return sp.csc_matrix((data[sel], ci, indptr), shape=(free.size, free.size))
+
+    def update(self, model: Any, E: float, nu: float, u: np.ndarray, state: np.ndarray
+               ) -> Update:
+        """The model's return mapping at the sample's points and the plate's elastic law at
+        its points, for the displacements ``u`` from ``state`` (all points)."""
+        eps = self.strain(u)
+        s = self.sample_pts
+        if s.all():
+            return model.update(E, nu, eps, state)
+        up = model.update(E, nu, eps[s], state[s])
+        stress = eps @ self.D_plate
+        stress[s] = up.stress
+        tangent = np.repeat(self.D_plate[None], eps.shape[0], axis=0)
+        tangent[s] = up.tangent
+        new = state.copy()
+        new[s] = up.state
+        plastic = np.zeros(eps.shape[0], bool)
+        plastic[s] = up.plastic
+        region = np.zeros(eps.shape[0], np.int8)
+        region[s] = up.region
+        return Update(stress, tangent, new, plastic, region)
+
+    def yield_ratio(self, model: Any, stress: np.ndarray, state: np.ndarray) -> float:
+        """The largest yield ratio of the sample's points."""
+        s = self.sample_pts
+        return float(np.max(model.yield_ratio(stress[s], state[s])))
 
     def strain(self, u: np.ndarray) -> np.ndarray:
         """(ne * nq, 4) Mandel strains of the displacements ``u`` (the full dof vector)."""
@@ -313,6 +392,7 @@ def solve_path(
     mesh: Mesh, E: float, nu: float, model: Any, radius: float, deltas: np.ndarray,
     unload: bool = False, *, rtol: float = RTOL, max_iter: int = MAX_ITER,
     punch: str | None = None, max_cuts: int = MAX_CUTS,
+    plate: tuple[float, float] | None = None, interface: str = "frictionless",
 ) -> PlasticCurve:
     """Load a rigid sphere of ``radius`` (m) through the indentations ``deltas`` (m,
     increasing) into the soil ``(E Pa, nu)`` of constitutive ``model`` on ``mesh``; with
@@ -324,7 +404,8 @@ def solve_path(
     the sphere (frictionless, or without slip under its face; the limit-load check of
     Eason & Shield 1960). An increment whose Newton iteration fails is cut in two, at most
     ``max_cuts`` times (``stats['cutbacks']`` counts them; the path then holds the
-    intermediate indentations)."""
+    intermediate indentations). A mesh with a plate takes its elastic ``plate`` (E Pa, nu)
+    and the plate-sample ``interface`` (``frictionless`` | ``bonded``; :class:`_Model`)."""
     if not hasattr(model, "update"):
         raise ConfigError("soil_model", model, "a model of ssw.constitutive")
     t0 = time.perf_counter()
@@ -333,7 +414,8 @@ def solve_path(
         raise ConfigError("deltas", deltas, "increasing indentations > 0 m")
     if punch not in (None, "smooth", "rough"):
         raise ConfigError("punch", punch, "smooth | rough (or none: the sphere)")
-    fe = _Model(mesh, E, nu, radius, punch, mixed=bool(getattr(model, "isochoric", False)))
+    fe = _Model(mesh, E, nu, radius, punch, mixed=bool(getattr(model, "isochoric", False)),
+                plate=plate, interface=interface)
     ne, nq = fe.w.shape
     state = initial_state(ne * nq)
     last = (None, np.zeros(ne * nq, bool))  # the last converged tangent (elastic at first)
@@ -352,6 +434,7 @@ def solve_path(
     last_elastic = None
     residual = None
     factorizations = 0
+    lus: dict[bytes, Any] = {}  # LUs of the elastic matrix by free set (unloading reuses them)
     load_ref = 0.0  # the largest load scale of the path: a floor once the load is gone
     k, d_prev, cuts = 0, 0.0, 0
     h0 = float(deltas[0])  # the first (and uniform) step
@@ -363,7 +446,7 @@ def solve_path(
         u_start, active_start = u.copy(), active.copy()
         prev, was_elastic = np.inf, False
         for it in range(max_iter):
-            upd = model.update(E, nu, fe.strain(u), state)
+            upd = fe.update(model, E, nu, u, state)
             # the first iteration of an increment takes the last converged tangent (at the
             # committed state the return cannot tell loading from unloading)
             tangent, plastic = (last if it == 0 else (upd.tangent, upd.plastic))
@@ -396,7 +479,14 @@ def solve_path(
                     # a step with the elastic tangent, a contraction for the return mapping
                     res, data, load = fe.residual_matrix(u, upd.stress, upd.tangent,
                                                          np.zeros_like(upd.plastic))
-                lu = _factor(fe.restricted(data, free))
+                try:
+                    lu = _factor_cached(lus, fe, data, free)
+                except RuntimeError:  # a singular consistent tangent (e.g. a region at
+                    if elastic:       # the apex): the elastic tangent's step instead
+                        raise SolverError(f"plastic contact: singular Newton matrix at "
+                                          f"delta = {d:.4g} m") from None
+                    elastic = True
+                    continue
                 factorizations += 1
                 rhs = -res / fe.scale
                 if np.any(jump):
@@ -414,7 +504,7 @@ def solve_path(
                 for _ in range(LINE_SEARCH):
                     trial_u = u.copy()
                     trial_u[free] += du
-                    t_upd = model.update(E, nu, fe.strain(trial_u), state)
+                    t_upd = fe.update(model, E, nu, trial_u, state)
                     r_t = fe.residual_only(trial_u, t_upd.stress)
                     if np.max(np.abs(r_t[free]), initial=0.0) < err:
                         break
@@ -422,7 +512,7 @@ def solve_path(
                 else:
                     _, data_el, _ = fe.residual_matrix(u, upd.stress, None,
                                                        np.zeros_like(upd.plastic))
-                    lu = _factor(fe.restricted(data_el, free))
+                    lu = _factor_cached(lus, fe, data_el, free)
                     factorizations += 1
                     du = lu.solve(-res[free] / fe.scale, trans="T")
             was_elastic = elastic
@@ -446,7 +536,7 @@ def solve_path(
         work += float(np.sum(np.einsum("gi,gi->g", upd.stress, dep) * fe.w.ravel()))
         state = upd.state
         force = float(lam[active].sum())
-        ratio = float(np.max(model.yield_ratio(upd.stress, state)))
+        ratio = fe.yield_ratio(model, upd.stress, state)
         yielded = state[:, 4] > 0
         if first[0] is None:
             if np.any(upd.plastic):
@@ -457,8 +547,9 @@ def solve_path(
                 last_elastic = (force, d, ratio) if force > 0 else last_elastic
         gap = np.clip(target - u[fe.cand_dof], 0.0, None)
         if punch is None and active.size and active[-1]:
-            raise SolverError(f"the contact zone reached the last candidate node (r = "
-                              f"{fe.cand_r[-1]:.4g} m): a larger domain or sphere")
+            raise ContactZoneError(f"the contact zone reached the last candidate node (r = "
+                                   f"{fe.cand_r[-1]:.4g} m, half the sphere's radius): an "
+                                   f"indentation beyond the small-strain contact's reach")
         out["delta"].append(d)
         out["force"].append(force)
         out["a"].append(edge_radius(fe.cand_r, gap, active))
@@ -476,17 +567,40 @@ def solve_path(
     # elastic energy stored in the final state: int (s:s / (4 G) + p^2 / (2 K)) dV
     s = upd.stress @ P_DEV
     pq = fe.pressure_q(u).ravel() if fe.mixed else upd.stress @ ONE / 3.0
-    stored = float(np.sum((np.einsum("gi,gi->g", s, s) / (4.0 * fe.G)
-                           + 0.5 * fe.inv_K * pq * pq) * fe.w.ravel()))
+    stored = float(np.sum((np.einsum("gi,gi->g", s, s) / (4.0 * fe.Gq)
+                           + 0.5 * fe.inv_Kq * pq * pq) * fe.w.ravel()))
     stats = {"nodes": fe.n, "elements": ne, "dofs": fe.ndof, "candidates": fe.cand.size,
              "increments": len(out["delta"]), "newton_iterations": int(np.sum(out["it"])),
-             "factorizations": factorizations, "cutbacks": cuts,
+             "factorizations": factorizations - lus.get(b"hits", 0),
+             "lu_reused": lus.get(b"hits", 0),
+             "cutbacks": cuts,
              "wall_total": time.perf_counter() - t0}
     return PlasticCurve(
         np.array(out["delta"]), np.array(out["force"]), np.array(branch, np.int8),
         np.array(out["a"]), np.array(out["work"]), np.array(out["vol"]),
         np.array(out["depth"]), np.array(out["rad"]), np.array(out["it"]),
         np.array(out["ratio"]), first[0], first[1], residual, stored, stats)
+
+
+def contact_mesh(radius: float, d_max: float, *, fine: float = 8.0, growth: float = 0.3,
+                 domain: float = 40.0, plate: tuple | None = None) -> Mesh:
+    """A mesh scaled to the Hertz contact radius ``a = sqrt(radius d_max)`` at the largest
+    indentation ``d_max`` (m): element ``a / fine`` at the contact point, ``growth``, a
+    domain of ``domain x a`` (the plastic wall's tables and ``ssw bench contact --plastic``;
+    the elastic engine's meshes are graded for indentations down to 1e-9 m, far finer at
+    the contact point than a plastic path needs). ``plate``: None, or ``(E, nu, thickness
+    m, radius m, interface)`` of a plate on the sample (the domain then reaches 4 plate
+    radii at least, and the plate has 2 element layers at least)."""
+    from ssw.contact.mesh import MeshSettings, build_mesh
+
+    a = float(np.sqrt(radius * d_max))
+    if plate is None:
+        return build_mesh(0.0, 0.0, MeshSettings(domain * a, domain * a, a / fine, growth,
+                                                 8.0 * a, 1))
+    t, rp = float(plate[2]), float(plate[3])
+    dom = max(domain * a, 4.0 * rp)
+    return build_mesh(t, rp, MeshSettings(dom, dom, min(a / fine, t / 2), growth,
+                                          max(8.0 * a, 0.05 * dom), 2))
 
 
 def johnson_first_yield(E: float, nu: float, Y: float, radius: float) -> tuple[float, float]:
@@ -505,18 +619,27 @@ def johnson_first_yield(E: float, nu: float, Y: float, radius: float) -> tuple[f
 
 def solve_plastic_scene(
     soil: tuple[float, float], model: Any, radius: float, contact_cfg: dict[str, Any],
-    unload: bool = False,
+    unload: bool = False, plate: tuple[float, float] | None = None,
+    plate_thickness: float = 0.0,
 ) -> PlasticCurve:
-    """The plastic curve of a sphere of ``radius`` (m) on the half-space ``soil`` (E Pa, nu)
-    with the contact config's mesh and increments (:func:`ssw.contact.scene.settings_of`,
-    :func:`ssw.contact.scene.indentation_steps`): the elastic engine's mesh and steps."""
+    """The plastic curve of a sphere of ``radius`` (m) on the sample ``soil`` (E Pa, nu),
+    through an elastic ``plate`` (E Pa, nu) of ``plate_thickness`` (m; 0: none) of the
+    contact config's ``plate_diameter`` and ``interface``, with the config's mesh, domain
+    (a finite block's boundaries included) and increments
+    (:func:`ssw.contact.scene.settings_of`, :func:`ssw.contact.scene.indentation_steps`):
+    the elastic engine's mesh and steps."""
     from ssw.contact.mesh import build_mesh, mesh_settings
     from ssw.contact.scene import indentation_steps, settings_of
 
     cfg = settings_of(contact_cfg)
-    mesh = build_mesh(0.0, 0.0, mesh_settings(cfg))
+    t = float(plate_thickness)
+    if t > 0 and plate is None:
+        raise ConfigError("plate", None, "the plate's (E Pa, nu) when plate_thickness > 0")
+    mesh = build_mesh(t, 0.5 * float(cfg["plate_diameter"]) if t > 0 else 0.0,
+                      mesh_settings(cfg))
     deltas = indentation_steps(float(cfg["delta_max"]), int(cfg["steps"]))
-    return solve_path(mesh, float(soil[0]), float(soil[1]), model, radius, deltas, unload)
+    return solve_path(mesh, float(soil[0]), float(soil[1]), model, radius, deltas, unload,
+                      plate=plate if t > 0 else None, interface=str(cfg["interface"]))
 
 
 #: ``ssw_kind`` of a plastic curve file.
@@ -588,21 +711,50 @@ def loading_curve(curve: PlasticCurve, inputs: dict[str, Any]) -> Any:
                       {**inputs, **summary(curve)}, dict(curve.stats))
 
 
-def scene_curve(scene: Any, contact_cfg: dict[str, Any], indenter_radius: float) -> Any:
+def scene_curve(scene: Any, contact_cfg: dict[str, Any], indenter_radius: float,
+                materials: dict[str, Any]) -> Any:
     """A study scene with a ``soil_model`` (:class:`ssw.config.Scene`): its loading curve
-    (:func:`loading_curve`) on the contact config's mesh and increments; half-space only."""
-    if scene.plate_thickness > 0:
-        raise ConfigError("plate_thickness", scene.plate_thickness,
-                          "0 with a soil_model (the plastic solver models a half-space)")
-    curve = solve_plastic_scene((scene.soil_E, scene.soil_nu), scene.soil_model,
-                                indenter_radius, contact_cfg)
+    (:func:`loading_curve`) on the contact config's mesh and increments, through the scene's
+    plate (a material of ``materials``) when it has one."""
     from ssw.contact.scene import settings_of
 
-    inputs = {"soil_E": scene.soil_E, "soil_nu": scene.soil_nu, "plate_material": "none",
-              "plate_E": None, "plate_nu": None, "plate_thickness": 0.0,
+    plate, plate_key = None, "none"
+    if scene.plate_thickness > 0:
+        if scene.plate_material not in materials:
+            raise ConfigError("plate_material", scene.plate_material,
+                              f"a material of the library: {', '.join(sorted(materials))}")
+        m = materials[scene.plate_material]
+        plate, plate_key = (m.E, m.nu), scene.plate_material
+    curve = solve_plastic_scene((scene.soil_E, scene.soil_nu), scene.soil_model,
+                                indenter_radius, contact_cfg, plate=plate,
+                                plate_thickness=scene.plate_thickness)
+    inputs = {"soil_E": scene.soil_E, "soil_nu": scene.soil_nu, "plate_material": plate_key,
+              "plate_E": plate[0] if plate else None, "plate_nu": plate[1] if plate else None,
+              "plate_thickness": float(scene.plate_thickness),
               "indenter_radius": indenter_radius, "soil_model": scene.soil_model.params(),
               "scene_id": scene.scene_id, **settings_of(contact_cfg)}
     return loading_curve(curve, inputs)
+
+
+#: Elastic LUs kept per path (one per free set: the contact's active set).
+LU_CACHE = 8
+
+
+def _factor_cached(lus: dict, fe: _Model, data: np.ndarray, free: np.ndarray) -> Any:
+    """The LU of the Newton matrix ``data`` on ``free``: for the elastic matrix (no plastic
+    element: the unloading and reloading branches) one kept per free set, the same
+    factorization bit for bit; ``lus[b"hits"]`` counts the reuses."""
+    if data is not getattr(fe, "_elastic_data", None):
+        return _factor(fe.restricted(data, free))
+    key = free.tobytes()
+    if key in lus:
+        lus[b"hits"] = lus.get(b"hits", 0) + 1
+        return lus[key]
+    lu = _factor(fe.restricted(data, free))
+    if len(lus) > LU_CACHE:
+        lus.pop(next(k for k in lus if k != b"hits"))
+    lus[key] = lu
+    return lu
 
 
 def _factor(A: Any) -> Any:

@@ -483,7 +483,7 @@ def solve_scene(
     if scene.soil_model is not None:  # elasto-plastic: ssw.contact.plastic
         from ssw.contact.plastic import scene_curve
 
-        return scene_curve(scene, contact_cfg, indenter_radius)
+        return scene_curve(scene, contact_cfg, indenter_radius, materials)
     plate = None
     plate_key = scene.plate_material if scene.plate_thickness > 0 else "none"
     if scene.plate_thickness > 0:

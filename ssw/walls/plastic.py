@@ -1,7 +1,7 @@
-"""The ``plastic`` wall: a history-dependent last contact on an elasto-plastic half-space.
+"""The ``plastic`` wall: a history-dependent last contact on an elasto-plastic sample.
 
 The law of a rigid sphere of the bead's radius on the sample (:mod:`ssw.contact.plastic`,
-any model of :mod:`ssw.constitutive`; no plate: the plastic solver models a half-space) is
+any model of :mod:`ssw.constitutive`; through the chain's elastic plate when it has one) is
 tabulated on demand, once per scene and kept in memory:
 
 * the virgin loading curve ``F_L(d)`` to the reach ``d_top`` (one loading path);
@@ -70,6 +70,7 @@ import numpy as np
 
 from ssw.chain.params import ChainParams
 from ssw.chain.wall import bisect_indentation, compliance_scale, scene_arrays
+from ssw.contact.plastic import ContactZoneError
 from ssw.errors import ConfigError
 
 #: Cells of the virgin curve's uniform table and of the normalized unloading shapes.
@@ -129,19 +130,29 @@ def _shape_of(delta: np.ndarray, force: np.ndarray, d_m: float, f_m: float, d_re
 
 @functools.lru_cache(maxsize=32)
 def tables(E: float, nu: float, model: Any, radius: float, d_top: float,
-           settings: Settings = Settings()) -> Tables:
-    """The tables of one scene (module docstring), computed once per argument set."""
+           settings: Settings = Settings(), plate: tuple | None = None) -> Tables:
+    """The tables of one scene (module docstring), computed once per argument set.
+
+    ``plate``: None (the sphere on the sample), or ``(E Pa, nu, thickness m, radius m,
+    interface)`` of an elastic plate between them (the domain then reaches 4 plate radii
+    at least, and the plate has 2 element layers at least)."""
     import time
 
-    from ssw.contact.mesh import MeshSettings, build_mesh
-    from ssw.contact.plastic import solve_path
+    from ssw.contact.plastic import contact_mesh, solve_path
 
     t0 = time.perf_counter()
-    a = np.sqrt(radius * d_top)
-    mesh = build_mesh(0.0, 0.0, MeshSettings(settings.domain * a, settings.domain * a,
-                                             a / settings.fine, settings.growth, 8.0 * a, 1))
+    mesh = contact_mesh(radius, d_top, fine=settings.fine, growth=settings.growth,
+                        domain=settings.domain, plate=plate)
+    elastic_plate = None if plate is None else (float(plate[0]), float(plate[1]))
+    interface = "frictionless" if plate is None else str(plate[4])
     n_load = 2 * settings.increments
-    load = solve_path(mesh, E, nu, model, radius, d_top * np.arange(1, n_load + 1) / n_load)
+    # uniform steps, and below the first one 6 halvings (the law of a plate on the sample
+    # is not Hertz's at small indentations: the table must not extrapolate F / d^1.5 there)
+    first = d_top / n_load
+    steps = np.concatenate([first * 0.5 ** np.arange(6, 0, -1),
+                            d_top * np.arange(1, n_load + 1) / n_load])
+    load = solve_path(mesh, E, nu, model, radius, steps, plate=elastic_plate,
+                      interface=interface)
     h = d_top / VIRGIN_CELLS
     grid = h * np.arange(VIRGIN_CELLS + 1)
     d, F = load.delta, load.force
@@ -165,7 +176,7 @@ def tables(E: float, nu: float, model: Any, radius: float, d_top: float,
         for k in range(1, d_m.size):
             n = settings.increments
             c = solve_path(mesh, E, nu, model, radius, d_m[k] * np.arange(1, n + 1) / n,
-                           unload=True)
+                           unload=True, plate=elastic_plate, interface=interface)
             paths += 1
             up, down = c.branch == 0, c.branch == 1
             d_res[k] = c.residual_indentation if c.residual_indentation is not None else 0.0
@@ -368,25 +379,48 @@ def plastic_wall(params: ChainParams, soil_E: Any, soil_nu: Any, *, soil_model: 
                  settings: Settings = Settings(), margin: float = ENERGY_MARGIN,
                  **_: Any) -> PlasticWall:
     """The plastic wall of the scenes ``broadcast(soil_E, soil_nu)`` on ``soil_model`` (a
-    model of :mod:`ssw.constitutive`), no plate, virgin samples (``d_max0 = 0``)."""
-    if soil_model is None or not hasattr(soil_model, "update"):
+    model of :mod:`ssw.constitutive`, or a sequence of one per scene) under the chain's
+    plate (if any; elastic, tied to the sample by its interface, ``frictionless`` or
+    ``bonded``), virgin samples (``d_max0 = 0``)."""
+    models = list(soil_model) if isinstance(soil_model, list | tuple) else [soil_model]
+    if not models or any(m is None or not hasattr(m, "update") for m in models):
         raise ConfigError("soil_model", soil_model, "a plastic model of ssw.constitutive "
-                          "(von-mises, drucker-prager, crushable-foam)")
+                          "(von-mises, drucker-prager, crushable-foam), or one per scene")
+    plate = None
     if params.plate_thickness > 0:
-        raise ConfigError("plate_thickness", params.plate_thickness,
-                          "0 with the plastic wall (the plastic solver models a half-space)")
+        if params.plate_interface not in ("frictionless", "bonded"):
+            raise ConfigError("plate.interface", params.plate_interface,
+                              "frictionless | bonded with the plastic wall (the plate stays "
+                              "on the sample)")
+        plate = (float(params.plate_E), float(params.plate_nu),
+                 float(params.plate_thickness), 0.5 * float(params.plate_diameter),
+                 params.plate_interface)
     E, nu = scene_arrays(soil_E, soil_nu)
+    if len(models) not in (1, E.size):
+        raise ConfigError("soil_model", f"{len(models)} models",
+                          f"one model, or one per scene ({E.size})")
+    models = models * E.size if len(models) == 1 else models
     s = compliance_scale(params, E, nu)
     weight = params.g * float(np.sum(params.masses[1:])) if params.gravity else 0.0
     e_hit = 0.5 * float(params.masses[0]) * params.striker_velocity**2
     rows = []
-    for Ei, nui, si in zip(E, nu, s, strict=True):
+    for Ei, nui, si, model in zip(E, nu, s, models, strict=True):
         d_top = reach(params, float(Ei), float(nui), margin)
+        t_prev = None
         for _ in range(4):
-            t = tables(float(Ei), float(nui), soil_model, float(params.bead_radius), d_top,
-                       settings)
+            try:
+                t = tables(float(Ei), float(nui), model, float(params.bead_radius), d_top,
+                           settings, plate)
+            except ContactZoneError:
+                if t_prev is None:
+                    raise
+                # deeper than the small-strain contact reaches: the last tables, whose
+                # exact_reach a hit may pass (run_hits says so)
+                t = t_prev
+                break
             if t.W[-1] >= margin * (e_hit + (weight + params.preload) * d_top):
                 break
+            t_prev = t
             d_top *= 1.5
         rows.append((t, float(si)))
     L = max(t.d_m.size for t, _ in rows)

@@ -9,6 +9,9 @@ from typing import Any
 
 from ssw.errors import ConfigError
 
+#: ``--soil-model`` choices: the plastic models of :data:`ssw.constitutive.MODELS`.
+PLASTIC_MODELS = ("von-mises", "drucker-prager", "crushable-foam", "tresca")
+
 
 def soil_model_of(args: argparse.Namespace, cfg: dict[str, Any]) -> Any:
     """The :mod:`ssw.constitutive` model of the flags; fills ``args.soil_E``/``soil_nu``
@@ -17,8 +20,7 @@ def soil_model_of(args: argparse.Namespace, cfg: dict[str, Any]) -> Any:
     from ssw.constitutive import model_from, model_of_strength
 
     if args.soil_model is None:
-        raise ConfigError("--soil-model", None,
-                          "von-mises | drucker-prager | crushable-foam")
+        raise ConfigError("--soil-model", None, " | ".join(PLASTIC_MODELS))
     mat = None
     if args.soil_material is not None:
         from ssw.config import library
@@ -41,6 +43,11 @@ def soil_model_of(args: argparse.Namespace, cfg: dict[str, Any]) -> Any:
             raise ConfigError("--soil-yield-stress", None, "a stress > 0 Pa")
         key = "yield_stress" if args.soil_model == "von-mises" else "compressive_strength"
         spec.update({key: args.soil_yield_stress, "hardening": args.soil_hardening})
+    elif args.soil_model == "tresca":
+        if args.soil_cohesion is None:
+            raise ConfigError("--soil-cohesion", None,
+                              "the shear strength k (the undrained cohesion c_u), Pa")
+        spec.update(cohesion=args.soil_cohesion, hardening=args.soil_hardening)
     else:
         if args.soil_cohesion is None or args.soil_friction_angle is None:
             raise ConfigError("--soil-cohesion", args.soil_cohesion,

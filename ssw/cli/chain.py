@@ -16,6 +16,7 @@ import numpy as np
 
 from ssw.cli import add_json_flag
 from ssw.cli._device import add_device_options, chain_context
+from ssw.cli._soil import PLASTIC_MODELS
 from ssw.errors import ConfigError
 
 
@@ -312,13 +313,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     h.add_argument("--hits", type=int,
                    help="consecutive hits on one plastic sample: per hit the TOF, peak wall "
                    "force, permanent set and dissipated energy")
-    h.add_argument("--soil-model", choices=["von-mises", "drucker-prager", "crushable-foam"],
+    h.add_argument("--soil-model", choices=PLASTIC_MODELS,
                    help="constitutive model of the sample beyond elasticity")
     h.add_argument("--soil-yield-stress", type=float,
                    help="von Mises yield stress Y, or the foam's compressive strength, Pa")
     h.add_argument("--soil-hardening", type=float, default=0.0,
                    help="linear hardening modulus, Pa (default 0)")
-    h.add_argument("--soil-cohesion", type=float, help="Drucker-Prager cohesion c, Pa")
+    h.add_argument("--soil-cohesion", type=float,
+                   help="Drucker-Prager cohesion c, or Tresca's shear strength k, Pa")
     h.add_argument("--soil-friction-angle", type=float, help="Drucker-Prager phi, degrees")
     h.add_argument("--soil-dilatancy-angle", type=float, help="Drucker-Prager psi, degrees")
     h.add_argument("--soil-material",

@@ -22,6 +22,7 @@ import argparse
 from typing import Any
 
 from ssw.cli import add_json_flag
+from ssw.cli._soil import PLASTIC_MODELS
 from ssw.errors import ConfigError
 
 
@@ -54,12 +55,14 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="fem: the axisymmetric FEM (default); layered: the semi-analytic "
                    "oracle, an infinite plate on a half-space (ssw.contact.layered)")
     p.add_argument("--soil-model",
-                   choices=["von-mises", "drucker-prager", "crushable-foam"],
+                   choices=PLASTIC_MODELS,
                    help="constitutive model of the soil beyond elasticity: the "
                    "elasto-plastic contact solver (ssw.contact.plastic; half-space only)")
     p.add_argument("--soil-yield-stress", type=float,
                    help="von Mises yield stress Y, or the foam's compressive strength, Pa")
-    p.add_argument("--soil-cohesion", type=float, help="Drucker-Prager cohesion c, Pa")
+    p.add_argument("--soil-cohesion", type=float,
+                   help="Drucker-Prager cohesion c, or Tresca's shear strength k (the "
+                   "undrained cohesion c_u), Pa")
     p.add_argument("--soil-friction-angle", type=float,
                    help="Drucker-Prager friction angle phi, degrees")
     p.add_argument("--soil-dilatancy-angle", type=float,

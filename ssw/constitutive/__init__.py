@@ -14,6 +14,7 @@ from typing import Any
 from ssw.constitutive.crushable_foam import CrushableFoam
 from ssw.constitutive.drucker_prager import DruckerPrager
 from ssw.constitutive.elastic import LinearElastic
+from ssw.constitutive.tresca import Tresca
 from ssw.constitutive.von_mises import VonMises
 from ssw.errors import ConfigError
 
@@ -23,6 +24,7 @@ MODELS: dict[str, type] = {
     VonMises.name: VonMises,
     DruckerPrager.name: DruckerPrager,
     CrushableFoam.name: CrushableFoam,
+    Tresca.name: Tresca,
 }
 
 
@@ -57,7 +59,10 @@ def model_of_strength(name: str, strength: Any, where: str = "material") -> Any:
     * ``von-mises``: ``Y`` = the yield stress (or the compressive strength);
     * ``drucker-prager``: the cohesion, friction and dilatancy angles, the tensile strength
       as the cutoff;
-    * ``crushable-foam``: ``Y0`` = the compressive strength.
+    * ``crushable-foam``: ``Y0`` = the compressive strength;
+    * ``tresca``: ``k`` = the cohesion (a clay's undrained shear strength ``c_u``; the
+      friction angle is not used: undrained, the strength does not depend on the mean
+      stress).
     """
     def need(value: Any, field: str) -> float:
         if value is None:
@@ -74,9 +79,11 @@ def model_of_strength(name: str, strength: Any, where: str = "material") -> Any:
                              strength.dilatancy_angle, strength.tensile)
     if name == CrushableFoam.name:
         return CrushableFoam(need(strength.compressive, "compressive"))
+    if name == Tresca.name:
+        return Tresca(need(strength.cohesion, "cohesion"))
     raise ConfigError("soil_model.model", name,
                       " | ".join(n for n in MODELS if n != LinearElastic.name))
 
 
-__all__ = ["MODELS", "CrushableFoam", "DruckerPrager", "LinearElastic", "VonMises",
+__all__ = ["MODELS", "CrushableFoam", "DruckerPrager", "LinearElastic", "Tresca", "VonMises",
            "model_from", "model_of_strength"]

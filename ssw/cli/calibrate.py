@@ -18,6 +18,7 @@ from typing import Any
 
 from ssw.cli import add_json_flag
 from ssw.cli._device import add_device_options, chain_context
+from ssw.cli._soil import PLASTIC_MODELS
 from ssw.errors import ConfigError
 
 
@@ -209,7 +210,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--scan-points", type=int, help="grid points per continuous parameter")
     p.add_argument("--no-loo", action="store_true", help="skip the leave-one-out predictions")
     p.add_argument("--output", help="calibration file to write (JSON)")
-    p.add_argument("--soil-model", choices=("von-mises", "drucker-prager", "crushable-foam"),
+    p.add_argument("--soil-model", choices=PLASTIC_MODELS,
                    help="the references as plastic samples of this model, each with its "
                    "material's strengths (--from-config): the plastic wall's first hit on the "
                    "virgin sample, through the device's plate (the leave-one-out inversions "

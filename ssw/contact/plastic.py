@@ -526,10 +526,13 @@ def solve_path(
                 branch.insert(k, branch[k])
                 cuts += 1
                 continue
+            hint = ("; a perfectly plastic model with corners (tresca) may stall there: a "
+                    "small hardening (e.g. E/100) restores Newton's convergence"
+                    if getattr(model, "hardening", None) == 0.0 else "")
             raise SolverError(
                 f"plastic contact: increment {k} (delta = {d:.6g} m) did not converge in "
                 f"{max_iter} Newton iterations (residual {err:.3g} N, load scale {load:.3g} N), "
-                f"its step cut to {step:.3g} m")
+                f"its step cut to {step:.3g} m{hint}")
         d_prev = d
         last = (upd.tangent, upd.plastic)
         dep = upd.state[:, :4] - state[:, :4]

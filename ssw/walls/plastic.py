@@ -385,7 +385,7 @@ def plastic_wall(params: ChainParams, soil_E: Any, soil_nu: Any, *, soil_model: 
     models = list(soil_model) if isinstance(soil_model, list | tuple) else [soil_model]
     if not models or any(m is None or not hasattr(m, "update") for m in models):
         raise ConfigError("soil_model", soil_model, "a plastic model of ssw.constitutive "
-                          "(von-mises, drucker-prager, crushable-foam), or one per scene")
+                          "(von-mises, tresca, drucker-prager, crushable-foam), or one per scene")
     plate = None
     if params.plate_thickness > 0:
         if params.plate_interface not in ("frictionless", "bonded"):

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
+from taylor import STEPS, remainders
 
 from ssw.constitutive import MODELS, Tresca, VonMises, model_from, model_of_strength
 from ssw.constitutive.base import initial_state
@@ -49,16 +50,7 @@ def test_taylor_remainder_is_second_order(case):
     remainder is round-off (a corner's return is linear in some directions)."""
     model = CASES[case]
     strain, state, d = _points(model)
-    base = model.update(E, NU, strain, state)
-    hs = 1e-3 * 0.5 ** np.arange(5)
-    r1, r2, same = [], [], np.ones(len(strain), bool)
-    for h in hs:
-        up = model.update(E, NU, strain + h * d, state)
-        same &= up.region == base.region
-        diff = up.stress - base.stress
-        r1.append(np.linalg.norm(diff, axis=1))
-        r2.append(np.linalg.norm(diff - h * np.einsum("nij,nj->ni", base.tangent, d), axis=1))
-    r1, r2 = np.array(r1), np.array(r2)
+    base, r1, r2, same = remainders(model, E, NU, strain, state, d)
     good = same & (r2[-1] > 1e-6 * r1[-1]) & (r1[-1] > 1e-9 * model.strength)
     for region in (1, 2, 3):
         sel = good & (base.region == region)
@@ -78,8 +70,8 @@ def test_taylor_remainder_is_second_order(case):
     # the elastic tangent in place of the consistent one is first order: the test can fail
     K, G = bulk_shear(E, NU)
     sel = good & base.plastic
-    wrong = np.linalg.norm(model.update(E, NU, strain + hs[-1] * d, state).stress
-                           - base.stress - hs[-1] * d @ elastic_tangent(K, G), axis=1)[sel]
+    wrong = np.linalg.norm(model.update(E, NU, strain + STEPS[-1] * d, state).stress
+                           - base.stress - STEPS[-1] * d @ elastic_tangent(K, G), axis=1)[sel]
     assert np.median(wrong / r2[-1, sel]) > 10
 
 

@@ -44,3 +44,12 @@ def test_hits_through_a_soft_and_a_stiff_plate():
     assert stiff["hits"][-1]["permanent_set"] < 0.1 * sets[-1]
     with pytest.raises(ConfigError, match="plastic-hits"):
         hits_check(spec, params, mats, _candidate("pla", 0.4e-3), hits=1)
+
+
+def test_plastic_hits_refused_with_merge(capsys):
+    """``--plastic-hits`` strikes the plates of one design run: with ``--merge`` it is
+    refused by name, not ignored."""
+    from ssw.cli import main
+
+    assert main(["design", "--merge", "a.json", "--plastic-hits", "3"]) != 0
+    assert "--plastic-hits" in capsys.readouterr().err

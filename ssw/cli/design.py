@@ -144,6 +144,9 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.design.run import merge_results, run_design
     from ssw.h5io import write_json
 
+    if args.merge and args.plastic_hits is not None:
+        raise ConfigError("--plastic-hits", args.plastic_hits,
+                          "not with --merge (it strikes the plates of one design run)")
     if args.merge:
         import json
 

@@ -202,8 +202,9 @@ PLASTIC_STEPS = 100
 
 def _run_plastic(args: argparse.Namespace, cfg: dict[str, Any],
                  contact: dict[str, Any]) -> dict[str, Any]:
-    """The elasto-plastic curve of a sphere on a plastic half-space (loading, and with
-    --unload unloading): the curve, first yield, residual indentation, dissipated work."""
+    """The elasto-plastic curve of a sphere on a plastic sample, through a plate when one is
+    given, on the half-space box or a finite block (loading, and with --unload unloading):
+    the curve, first yield, residual indentation, dissipated work."""
     from ssw.cli._soil import soil_model_of
     from ssw.contact.plastic import solve_plastic_scene, summary, write_plastic_curve
 

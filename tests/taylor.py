@@ -26,3 +26,9 @@ def remainders(model: Any, E: float, nu: float, strain: np.ndarray, state: np.nd
         r1.append(np.linalg.norm(diff, axis=1))
         r2.append(np.linalg.norm(diff - h * np.einsum("nij,nj->ni", base.tangent, d), axis=1))
     return base, np.array(r1), np.array(r2), same
+
+
+def rates(r1: np.ndarray, r2: np.ndarray, sel: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The observed orders ``log2`` of the ratios of successive remainders at the points
+    ``sel``: ``(rate1, rate2)`` of ``r1`` (1 expected) and ``r2`` (2 expected)."""
+    return (np.log2(r1[:-1, sel] / r1[1:, sel]), np.log2(r2[:-1, sel] / r2[1:, sel]))

@@ -13,6 +13,28 @@ from ssw.errors import ConfigError
 PLASTIC_MODELS = ("von-mises", "drucker-prager", "crushable-foam", "tresca")
 
 
+def add_soil_model_options(p: Any) -> None:
+    """The flags of a plastic sample's model (``ssw contact``, ``ssw tof --hits``), on a
+    parser or an argument group: read by :func:`soil_model_of`."""
+    p.add_argument("--soil-model", choices=PLASTIC_MODELS,
+                   help="constitutive model of the sample beyond elasticity (the "
+                   "elasto-plastic contact, ssw.contact.plastic; through the plate if any)")
+    p.add_argument("--soil-yield-stress", type=float,
+                   help="von Mises yield stress Y, or the foam's compressive strength, Pa")
+    p.add_argument("--soil-hardening", type=float, default=0.0,
+                   help="linear hardening modulus, Pa (default 0: perfectly plastic)")
+    p.add_argument("--soil-cohesion", type=float,
+                   help="Drucker-Prager cohesion c, or Tresca's shear strength k (the "
+                   "undrained cohesion c_u), Pa")
+    p.add_argument("--soil-friction-angle", type=float,
+                   help="Drucker-Prager friction angle phi, degrees")
+    p.add_argument("--soil-dilatancy-angle", type=float,
+                   help="Drucker-Prager dilatancy angle psi, degrees (default phi)")
+    p.add_argument("--soil-material",
+                   help="a material key of the library: its E, nu and strengths (with "
+                   "--soil-model; the strengths are the library's, not fitted)")
+
+
 def soil_model_of(args: argparse.Namespace, cfg: dict[str, Any]) -> Any:
     """The :mod:`ssw.constitutive` model of the flags; fills ``args.soil_E``/``soil_nu``
     from ``--soil-material`` when they are not given. ConfigError naming the flag that is

@@ -16,7 +16,7 @@ import numpy as np
 
 from ssw.cli import add_json_flag
 from ssw.cli._device import add_device_options, chain_context
-from ssw.cli._soil import PLASTIC_MODELS
+from ssw.cli._soil import add_soil_model_options
 from ssw.errors import ConfigError
 
 
@@ -309,22 +309,12 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_device_options(p)
     p.add_argument("--soil-E", type=float, help="soil modulus, Pa")
     p.add_argument("--soil-nu", type=float, help="soil Poisson's ratio")
-    h = p.add_argument_group("plastic sample (ssw.walls.plastic; no plate: --plate-thickness 0)")
+    h = p.add_argument_group("plastic sample (ssw.walls.plastic; through the device's plate, "
+                             "none with --plate-thickness 0)")
     h.add_argument("--hits", type=int,
                    help="consecutive hits on one plastic sample: per hit the TOF, peak wall "
                    "force, permanent set and dissipated energy")
-    h.add_argument("--soil-model", choices=PLASTIC_MODELS,
-                   help="constitutive model of the sample beyond elasticity")
-    h.add_argument("--soil-yield-stress", type=float,
-                   help="von Mises yield stress Y, or the foam's compressive strength, Pa")
-    h.add_argument("--soil-hardening", type=float, default=0.0,
-                   help="linear hardening modulus, Pa (default 0)")
-    h.add_argument("--soil-cohesion", type=float,
-                   help="Drucker-Prager cohesion c, or Tresca's shear strength k, Pa")
-    h.add_argument("--soil-friction-angle", type=float, help="Drucker-Prager phi, degrees")
-    h.add_argument("--soil-dilatancy-angle", type=float, help="Drucker-Prager psi, degrees")
-    h.add_argument("--soil-material",
-                   help="a material key of the library: its E, nu and strengths")
+    add_soil_model_options(h)
     h.add_argument("--plastic-levels", type=int, default=10,
                    help="unloading curves tabulated between first yield and the reach")
     h.add_argument("--plastic-increments", type=int, default=12,

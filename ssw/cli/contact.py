@@ -22,7 +22,7 @@ import argparse
 from typing import Any
 
 from ssw.cli import add_json_flag
-from ssw.cli._soil import PLASTIC_MODELS
+from ssw.cli._soil import add_soil_model_options
 from ssw.errors import ConfigError
 
 
@@ -54,25 +54,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--engine", choices=["fem", "layered"], default="fem",
                    help="fem: the axisymmetric FEM (default); layered: the semi-analytic "
                    "oracle, an infinite plate on a half-space (ssw.contact.layered)")
-    p.add_argument("--soil-model",
-                   choices=PLASTIC_MODELS,
-                   help="constitutive model of the soil beyond elasticity: the "
-                   "elasto-plastic contact solver (ssw.contact.plastic; half-space only)")
-    p.add_argument("--soil-yield-stress", type=float,
-                   help="von Mises yield stress Y, or the foam's compressive strength, Pa")
-    p.add_argument("--soil-cohesion", type=float,
-                   help="Drucker-Prager cohesion c, or Tresca's shear strength k (the "
-                   "undrained cohesion c_u), Pa")
-    p.add_argument("--soil-friction-angle", type=float,
-                   help="Drucker-Prager friction angle phi, degrees")
-    p.add_argument("--soil-dilatancy-angle", type=float,
-                   help="Drucker-Prager dilatancy angle psi, degrees (default phi)")
-    p.add_argument("--soil-material",
-                   help="a material key of the library: its E, nu and strengths (with "
-                   "--soil-model; the strengths are the library's, not fitted)")
-    p.add_argument("--soil-hardening", type=float, default=0.0,
-                   help="linear hardening modulus of the soil, Pa (default 0: perfectly "
-                   "plastic)")
+    add_soil_model_options(p)
     p.add_argument("--unload", action="store_true",
                    help="with --soil-model: lift the sphere back after loading (residual "
                    "indentation, dissipated work)")
@@ -172,7 +154,7 @@ def run(args: argparse.Namespace) -> dict[str, Any] | None:
     mats = library(cfg)
     if args.soil_model is not None or args.unload or args.soil_yield_stress is not None \
             or args.soil_material is not None:
-        return _run_plastic(args, cfg, contact)
+        return _run_plastic(args, cfg, contact, mats)
     if args.output_dir is not None:
         return _run_batch(args, cfg, contact, mats)
     scene, mats = _scene(args, cfg, mats)
@@ -200,8 +182,8 @@ def run(args: argparse.Namespace) -> dict[str, Any] | None:
 PLASTIC_STEPS = 100
 
 
-def _run_plastic(args: argparse.Namespace, cfg: dict[str, Any],
-                 contact: dict[str, Any]) -> dict[str, Any]:
+def _run_plastic(args: argparse.Namespace, cfg: dict[str, Any], contact: dict[str, Any],
+                 mats: dict) -> dict[str, Any]:
     """The elasto-plastic curve of a sphere on a plastic sample, through a plate when one is
     given, on the half-space box or a finite block (loading, and with --unload unloading):
     the curve, first yield, residual indentation, dissipated work."""
@@ -213,29 +195,19 @@ def _run_plastic(args: argparse.Namespace, cfg: dict[str, Any],
                           "--soil-yield-stress")
     if args.scene or args.output_dir is not None:
         raise ConfigError("--scene", args.scene, "soil flags with --soil-model (one scene)")
-    from ssw.cli._sample import sample_of
-    from ssw.config import library
-
     model = soil_model_of(args, cfg)
     if args.steps is None and "steps" not in cfg.get("contact", {}):
         contact["steps"] = PLASTIC_STEPS
     radius = float(cfg["indenter"]["radius"])
-    t = float(args.plate_thickness or 0.0)
-    plate, plate_key = None, "none"
-    if t > 0:
-        if args.plate_material is not None:
-            mats = library(cfg)
-            if args.plate_material not in mats:
-                raise ConfigError("--plate-material", args.plate_material,
-                                  f"a material of the library: {', '.join(sorted(mats))}")
-            plate = (mats[args.plate_material].E, mats[args.plate_material].nu)
-            plate_key = args.plate_material
-        elif args.plate_E is not None and args.plate_nu is not None:
-            plate, plate_key = (float(args.plate_E), float(args.plate_nu)), "custom"
-        else:
-            raise ConfigError("--plate-material", None,
-                              "a material key, or --plate-E and --plate-nu, when T > 0")
-    sample = sample_of(args)
+    if args.plate_thickness is None:
+        args.plate_thickness = 0.0  # the sample bare unless a plate is given
+    scene, mats = _scene(args, cfg, mats)  # the plate and sample of the flags
+    t = scene.plate_thickness
+    plate_key, sample = scene.plate_material, scene.sample
+    if t > 0 and plate_key not in mats:
+        raise ConfigError("--plate-material", plate_key,
+                          f"a material of the library: {', '.join(sorted(mats))}")
+    plate = (mats[plate_key].E, mats[plate_key].nu) if t > 0 else None
     if sample is not None:
         contact = sample.contact_settings(contact)
     curve = solve_plastic_scene((args.soil_E, args.soil_nu), model, radius, contact,

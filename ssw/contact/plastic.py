@@ -103,6 +103,8 @@ STEP_BOUND = 10.0
 LINE_SEARCH = 4
 #: Halvings of an increment whose Newton iteration fails, before SolverError.
 MAX_CUTS = 5
+#: Elastic LUs kept per path (one per free set: the contact's active set).
+LU_CACHE = 8
 #: Residual tolerance relative to the load scale (the largest nodal internal force).
 RTOL = 1e-9
 
@@ -182,7 +184,6 @@ class _Model:
         else:
             E_el, nu_el = np.full(ne, float(E)), np.full(ne, float(nu))
         G_e, inv_K_e = (np.asarray(x, float) for x in lame(E_el, nu_el))
-        self.G, self.inv_K = (float(x) for x in lame(E, nu))  # the sample's
         n2, g2 = p2_shape(QUAD_POINTS)
         n1 = p1_shape(QUAD_POINTS)
         xy = nodes[tri]
@@ -282,6 +283,27 @@ class _Model:
         self.ke[:, :12, 12:] = np.transpose(self.Bp, (0, 2, 1))
         self.ke[:, 12:, 12:] = -self.Cp
         self.kuu_el = self.ke[:, :12, :12].copy()
+        self._elastic_data: np.ndarray | None = None  # the elastic matrix, once assembled
+        self._lus: dict[bytes, Any] = {}
+        self.factorizations = self.lu_reused = 0
+
+    def factor(self, data: np.ndarray, free: np.ndarray) -> Any:
+        """The LU of the Newton matrix ``data`` (CSR order) on ``free``. The elastic
+        matrix's (no plastic element: the unloading and elastic reloading branches) is kept
+        per free set, at most :data:`LU_CACHE` of them, and reused: the same factorization
+        bit for bit. Counts ``factorizations`` and ``lu_reused``."""
+        elastic = data is self._elastic_data
+        key = free.tobytes()
+        if elastic and key in self._lus:
+            self.lu_reused += 1
+            return self._lus[key]
+        lu = _factor(self.restricted(data, free))
+        self.factorizations += 1
+        if elastic:
+            if len(self._lus) >= LU_CACHE:
+                self._lus.pop(next(iter(self._lus)))
+            self._lus[key] = lu
+        return lu
 
     def _kuu(self, elems: np.ndarray, Dd: np.ndarray) -> np.ndarray:
         """``int B^T Dd B dV`` (len(elems), 12, 12) of deviatoric tangents Dd."""
@@ -351,7 +373,7 @@ class _Model:
         ne, nq = self.w.shape
         res, fu = self._residual(u, stress)
         load = max(float(np.max(np.abs(fu))), 1e-300)
-        if tangent is None and not plastic.any() and getattr(self, "_elastic_data", None) \
+        if tangent is None and not plastic.any() and self._elastic_data is not None \
                 is not None:
             return res, self._elastic_data, load
         pe_mask = plastic.reshape(ne, nq).any(axis=1)
@@ -433,8 +455,6 @@ def solve_path(
     first = (None, None)
     last_elastic = None
     residual = None
-    factorizations = 0
-    lus: dict[bytes, Any] = {}  # LUs of the elastic matrix by free set (unloading reuses them)
     load_ref = 0.0  # the largest load scale of the path: a floor once the load is gone
     k, d_prev, cuts = 0, 0.0, 0
     h0 = float(deltas[0])  # the first (and uniform) step
@@ -480,14 +500,13 @@ def solve_path(
                     res, data, load = fe.residual_matrix(u, upd.stress, upd.tangent,
                                                          np.zeros_like(upd.plastic))
                 try:
-                    lu = _factor_cached(lus, fe, data, free)
+                    lu = fe.factor(data, free)
                 except RuntimeError:  # a singular consistent tangent (e.g. a region at
                     if elastic:       # the apex): the elastic tangent's step instead
                         raise SolverError(f"plastic contact: singular Newton matrix at "
                                           f"delta = {d:.4g} m") from None
                     elastic = True
                     continue
-                factorizations += 1
                 rhs = -res / fe.scale
                 if np.any(jump):
                     rhs -= fe.matvec(data, jump)
@@ -512,8 +531,7 @@ def solve_path(
                 else:
                     _, data_el, _ = fe.residual_matrix(u, upd.stress, None,
                                                        np.zeros_like(upd.plastic))
-                    lu = _factor_cached(lus, fe, data_el, free)
-                    factorizations += 1
+                    lu = fe.factor(data_el, free)
                     du = lu.solve(-res[free] / fe.scale, trans="T")
             was_elastic = elastic
             u[free] += du
@@ -574,8 +592,7 @@ def solve_path(
                            + 0.5 * fe.inv_Kq * pq * pq) * fe.w.ravel()))
     stats = {"nodes": fe.n, "elements": ne, "dofs": fe.ndof, "candidates": fe.cand.size,
              "increments": len(out["delta"]), "newton_iterations": int(np.sum(out["it"])),
-             "factorizations": factorizations - lus.get(b"hits", 0),
-             "lu_reused": lus.get(b"hits", 0),
+             "factorizations": fe.factorizations, "lu_reused": fe.lu_reused,
              "cutbacks": cuts,
              "wall_total": time.perf_counter() - t0}
     return PlasticCurve(
@@ -586,21 +603,22 @@ def solve_path(
 
 
 def contact_mesh(radius: float, d_max: float, *, fine: float = 8.0, growth: float = 0.3,
-                 domain: float = 40.0, plate: tuple | None = None) -> Mesh:
+                 domain: float = 40.0, plate_thickness: float = 0.0,
+                 plate_radius: float = 0.0) -> Mesh:
     """A mesh scaled to the Hertz contact radius ``a = sqrt(radius d_max)`` at the largest
     indentation ``d_max`` (m): element ``a / fine`` at the contact point, ``growth``, a
     domain of ``domain x a`` (the plastic wall's tables and ``ssw bench contact --plastic``;
     the elastic engine's meshes are graded for indentations down to 1e-9 m, far finer at
-    the contact point than a plastic path needs). ``plate``: None, or ``(E, nu, thickness
-    m, radius m, interface)`` of a plate on the sample (the domain then reaches 4 plate
-    radii at least, and the plate has 2 element layers at least)."""
+    the contact point than a plastic path needs). A plate of ``plate_thickness`` and
+    ``plate_radius`` (m) on the sample: the domain then reaches 4 plate radii at least, the
+    plate has 2 element layers at least."""
     from ssw.contact.mesh import MeshSettings, build_mesh
 
     a = float(np.sqrt(radius * d_max))
-    if plate is None:
+    t, rp = float(plate_thickness), float(plate_radius)
+    if t <= 0:
         return build_mesh(0.0, 0.0, MeshSettings(domain * a, domain * a, a / fine, growth,
                                                  8.0 * a, 1))
-    t, rp = float(plate[2]), float(plate[3])
     dom = max(domain * a, 4.0 * rp)
     return build_mesh(t, rp, MeshSettings(dom, dom, min(a / fine, t / 2), growth,
                                           max(8.0 * a, 0.05 * dom), 2))
@@ -715,19 +733,14 @@ def loading_curve(curve: PlasticCurve, inputs: dict[str, Any]) -> Any:
 
 
 def scene_curve(scene: Any, contact_cfg: dict[str, Any], indenter_radius: float,
-                materials: dict[str, Any]) -> Any:
+                plate: tuple[float, float] | None) -> Any:
     """A study scene with a ``soil_model`` (:class:`ssw.config.Scene`): its loading curve
     (:func:`loading_curve`) on the contact config's mesh and increments, through the scene's
-    plate (a material of ``materials``) when it has one."""
+    plate (its ``(E Pa, nu)``, :func:`ssw.contact.scene.solve_scene` resolves it) when it has
+    one."""
     from ssw.contact.scene import settings_of
 
-    plate, plate_key = None, "none"
-    if scene.plate_thickness > 0:
-        if scene.plate_material not in materials:
-            raise ConfigError("plate_material", scene.plate_material,
-                              f"a material of the library: {', '.join(sorted(materials))}")
-        m = materials[scene.plate_material]
-        plate, plate_key = (m.E, m.nu), scene.plate_material
+    plate_key = scene.plate_material if scene.plate_thickness > 0 else "none"
     curve = solve_plastic_scene((scene.soil_E, scene.soil_nu), scene.soil_model,
                                 indenter_radius, contact_cfg, plate=plate,
                                 plate_thickness=scene.plate_thickness)
@@ -737,27 +750,6 @@ def scene_curve(scene: Any, contact_cfg: dict[str, Any], indenter_radius: float,
               "indenter_radius": indenter_radius, "soil_model": scene.soil_model.params(),
               "scene_id": scene.scene_id, **settings_of(contact_cfg)}
     return loading_curve(curve, inputs)
-
-
-#: Elastic LUs kept per path (one per free set: the contact's active set).
-LU_CACHE = 8
-
-
-def _factor_cached(lus: dict, fe: _Model, data: np.ndarray, free: np.ndarray) -> Any:
-    """The LU of the Newton matrix ``data`` on ``free``: for the elastic matrix (no plastic
-    element: the unloading and reloading branches) one kept per free set, the same
-    factorization bit for bit; ``lus[b"hits"]`` counts the reuses."""
-    if data is not getattr(fe, "_elastic_data", None):
-        return _factor(fe.restricted(data, free))
-    key = free.tobytes()
-    if key in lus:
-        lus[b"hits"] = lus.get(b"hits", 0) + 1
-        return lus[key]
-    lu = _factor(fe.restricted(data, free))
-    if len(lus) > LU_CACHE:
-        lus.pop(next(k for k in lus if k != b"hits"))
-    lus[key] = lu
-    return lu
 
 
 def _factor(A: Any) -> Any:

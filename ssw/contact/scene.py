@@ -480,10 +480,6 @@ def solve_scene(
     """
     if scene.sample is not None:  # a finite block: the FEM's soil domain is the block
         contact_cfg = scene.sample.contact_settings(contact_cfg)
-    if scene.soil_model is not None:  # elasto-plastic: ssw.contact.plastic
-        from ssw.contact.plastic import scene_curve
-
-        return scene_curve(scene, contact_cfg, indenter_radius, materials)
     plate = None
     plate_key = scene.plate_material if scene.plate_thickness > 0 else "none"
     if scene.plate_thickness > 0:
@@ -492,6 +488,10 @@ def solve_scene(
                               f"a material of the library: {', '.join(sorted(materials))}")
         m = materials[scene.plate_material]
         plate = (m.E, m.nu)
+    if scene.soil_model is not None:  # elasto-plastic: ssw.contact.plastic
+        from ssw.contact.plastic import scene_curve
+
+        return scene_curve(scene, contact_cfg, indenter_radius, plate)
     curve, state = solve_curve((scene.soil_E, scene.soil_nu), plate, scene.plate_thickness,
                                indenter_radius, contact_cfg, cache, engine=engine)
     if "solver" in state:

@@ -163,6 +163,16 @@ def quantize(thickness: float) -> float:
     return float(np.round(thickness / THICKNESS_QUANTUM) * THICKNESS_QUANTUM)
 
 
+def candidate_params(params: ChainParams, material: Material, thickness: float,
+                     plate_diameter: float, striker_velocity: float) -> ChainParams:
+    """The device's chain ``params`` with a candidate's plate (``material``, ``thickness``
+    m, ``plate_diameter`` m) and striker speed (m/s)."""
+    return params.with_(plate_material=material.key, plate_thickness=float(thickness),
+                        plate_E=material.E, plate_nu=material.nu,
+                        plate_diameter=float(plate_diameter),
+                        striker_velocity=float(striker_velocity))
+
+
 def plate_yield_stress(material: Material) -> float:
     """The plate material's yield stress (Pa); ConfigError when the library has none."""
     y = material.strength.yield_stress
@@ -216,8 +226,7 @@ class Evaluator:
         m = self.materials[material]
         Y = plate_yield_stress(m)
         spec = self.spec
-        p = self.params.with_(plate_material=material, plate_thickness=t, plate_E=m.E,
-                              plate_nu=m.nu, plate_diameter=D, striker_velocity=v)
+        p = candidate_params(self.params, m, t, D, v)
         E = spec.grid
         n = E.size
         h = spec.log_step

@@ -25,7 +25,7 @@ from typing import Any
 import numpy as np
 
 from ssw.chain.params import ChainParams
-from ssw.design.evaluate import Candidate
+from ssw.design.evaluate import Candidate, candidate_params
 from ssw.design.spec import DesignSpec
 from ssw.materials import Material
 
@@ -52,9 +52,8 @@ def hits_check(spec: DesignSpec, params: ChainParams, materials: dict[str, Mater
     k = int(np.argmax(yield_E))
     E = float(np.asarray(c["soil_E"], float)[k])
     Y = float(spec.soil_yield_stress(np.array([E]))[0])
-    p = params.with_(plate_material=c["material"], plate_thickness=float(c["thickness"]),
-                     plate_E=m.E, plate_nu=m.nu, plate_diameter=float(c["plate_diameter"]),
-                     striker_velocity=float(c["striker_velocity"]))
+    p = candidate_params(params, m, c["thickness"], c["plate_diameter"],
+                         c["striker_velocity"])
     wall = plastic_wall(p, E, spec.soil_nu, soil_model=VonMises(Y))
     res = run_hits(p, wall, hits)
     tof = res.tof[:, 0]

@@ -134,17 +134,18 @@ def tables(E: float, nu: float, model: Any, radius: float, d_top: float,
     """The tables of one scene (module docstring), computed once per argument set.
 
     ``plate``: None (the sphere on the sample), or ``(E Pa, nu, thickness m, radius m,
-    interface)`` of an elastic plate between them (the domain then reaches 4 plate radii
-    at least, and the plate has 2 element layers at least)."""
+    interface)`` of an elastic plate between them (:func:`ssw.contact.plastic.contact_mesh`
+    meshes it)."""
     import time
 
     from ssw.contact.plastic import contact_mesh, solve_path
 
     t0 = time.perf_counter()
+    Ep, nup, t, rp, interface = plate if plate is not None else (0, 0, 0.0, 0.0,
+                                                                 "frictionless")
     mesh = contact_mesh(radius, d_top, fine=settings.fine, growth=settings.growth,
-                        domain=settings.domain, plate=plate)
-    elastic_plate = None if plate is None else (float(plate[0]), float(plate[1]))
-    interface = "frictionless" if plate is None else str(plate[4])
+                        domain=settings.domain, plate_thickness=t, plate_radius=rp)
+    elastic_plate = None if plate is None else (float(Ep), float(nup))
     n_load = 2 * settings.increments
     # uniform steps, and below the first one 6 halvings (the law of a plate on the sample
     # is not Hertz's at small indentations: the table must not extrapolate F / d^1.5 there)

@@ -110,11 +110,18 @@ def pq_tangent(K: float, G: float, n: np.ndarray, J: np.ndarray, ratio: np.ndarr
     J : (n, 2, 2) ``[[dp/dp_tr, dp/dq_tr], [dq/dp_tr, dq/dq_tr]]``.
     ratio : (n,) ``q / q_tr`` (the shrink of the deviator; 1 where elastic).
     """
-    dp = J[:, 0, 0, None] * K * ONE + J[:, 0, 1, None] * SQRT6 * G * n  # d p / d eps
-    dq = J[:, 1, 0, None] * K * ONE + J[:, 1, 1, None] * SQRT6 * G * n  # d q / d eps
-    nn = n[:, :, None] * n[:, None, :]
-    D = ONE[None, :, None] * dp[:, None, :] + SQRT_2_3 * n[:, :, None] * dq[:, None, :]
-    D += 2.0 * G * ratio[:, None, None] * (P_DEV[None] - nn)
+    # where the return left the trial alone (J = I, ratio = 1) the formula is the elastic
+    # tangent K ONE ONE^T + 2 G P_DEV (sqrt(2/3) sqrt(6) = 2): evaluate it elsewhere only
+    D = np.repeat(elastic_tangent(K, G)[None], n.shape[0], axis=0)
+    pl = np.flatnonzero((ratio != 1.0) | (J[:, 0, 0] != 1.0) | (J[:, 0, 1] != 0.0)
+                        | (J[:, 1, 0] != 0.0) | (J[:, 1, 1] != 1.0))
+    if pl.size:
+        n, J, r = n[pl], J[pl], ratio[pl]
+        dp = J[:, 0, 0, None] * K * ONE + J[:, 0, 1, None] * SQRT6 * G * n  # d p / d eps
+        dq = J[:, 1, 0, None] * K * ONE + J[:, 1, 1, None] * SQRT6 * G * n  # d q / d eps
+        nn = n[:, :, None] * n[:, None, :]
+        D[pl] = (ONE[None, :, None] * dp[:, None, :] + SQRT_2_3 * n[:, :, None] * dq[:, None, :]
+                 + 2.0 * G * r[:, None, None] * (P_DEV[None] - nn))
     return D
 
 

@@ -373,9 +373,8 @@ class _Model:
         ne, nq = self.w.shape
         res, fu = self._residual(u, stress)
         load = max(float(np.max(np.abs(fu))), 1e-300)
-        if tangent is None and not plastic.any() and self._elastic_data is not None \
-                is not None:
-            return res, self._elastic_data, load
+        if not plastic.any() and self._elastic_data is not None:
+            return res, self._elastic_data, load  # no plastic point: the elastic matrix
         pe_mask = plastic.reshape(ne, nq).any(axis=1)
         self.ke[:, :12, :12] = self.kuu_el
         el = np.flatnonzero(pe_mask)

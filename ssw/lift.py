@@ -91,7 +91,7 @@ def lift_errors(params: Any, E1: float, nu: float, ratios: Any, thicknesses: Any
     ``ratios`` x E1 (``subgrade_nu``, default ``nu``), read through the device's chain
     ``params`` as a half-space (module docstring). ``E_grid`` (Pa): the half-spaces the
     inversion interpolates between (default 41 moduli over E1/5..5 E1, log-spaced)."""
-    from ssw.chain import api
+    from ssw.tof import api
 
     ratios = np.atleast_1d(np.asarray(ratios, float))
     hs = np.atleast_1d(np.asarray(thicknesses, float))

@@ -133,8 +133,8 @@ def yield_check(E: float, nu: float, params: Any, wall_options: dict[str, Any] |
     docstring): ``{"sample_peak_von_mises": Pa, "sample_strength": Pa, "yield_index": -,
     "sample_yielded": bool, "peak_wall_force": N}``, from the device's chain ``params`` on
     its exact FEM wall (``wall_options``: its ``contact`` settings and operators)."""
-    from ssw.chain.api import peaks
     from ssw.errors import ConfigError
+    from ssw.tof.api import peaks
     from ssw.walls.fem import peak_stresses
 
     if not (np.isfinite(strength) and strength > 0):

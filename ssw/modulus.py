@@ -1,7 +1,7 @@
 """E of a sample with an honest interval: the measured TOF through a (calibrated) device.
 
 For each sample, E is the inverse of the device's TOF(E, nu) at the measured mean TOF
-(:func:`ssw.chain.inverse.invert_batch`; at the middle of a Poisson's ratio range). Its
+(:func:`ssw.tof.inverse.invert_batch`; at the middle of a Poisson's ratio range). Its
 uncertainty combines, as standard uncertainties of ``ln E`` (i.e. relative ones; GUM,
 JCGM 100:2008, sec. 5.1: independent contributions add in quadrature):
 
@@ -33,8 +33,8 @@ from typing import Any
 
 import numpy as np
 
-from ssw.chain.inverse import E_RANGE, invert_batch
 from ssw.errors import ConfigError
+from ssw.tof.inverse import E_RANGE, invert_batch
 
 #: Coverage factor of the interval (95 % for a normal ln E).
 COVERAGE_Z = 1.96
@@ -110,8 +110,8 @@ def estimate_moduli(
     params : ChainParams of the (calibrated) device.  wall, wall_options : the wall law.
     calibration : :class:`ssw.calibration.Calibration` whose covariance enters (or None).
     """
-    from ssw.chain import api
     from ssw.chain.wall import beyond_exact_reach
+    from ssw.tof import api
     from ssw.walls import build_wall
 
     opts = dict(wall_options or {})
@@ -241,8 +241,8 @@ class Estimator:
                  extra: dict[str, float] | None = None) -> None:
         from scipy.interpolate import PchipInterpolator
 
-        from ssw.chain import api
-        from ssw.chain.inverse import GRID_POINTS
+        from ssw.tof import api
+        from ssw.tof.inverse import GRID_POINTS
 
         self.params, self.wall, self.opts = params, wall, dict(wall_options or {})
         self.nu, self.calibration, self.E_range = nu, calibration, E_range

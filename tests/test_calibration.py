@@ -117,7 +117,7 @@ def test_recovers_the_striker_speed_of_the_reference_chain(calibration):
 
 
 def test_inverts_an_unseen_sample_within_one_percent(calibration, reference_tofs):
-    from ssw.chain.inverse import invert
+    from ssw.tof.inverse import invert
 
     params = calibration.chain_params()
     E = float(invert(reference_tofs[UNSEEN], UNSEEN[1], params, "hertz").E)
@@ -135,7 +135,7 @@ def test_leave_one_out_predicts_each_reference(calibration):
 def test_covariance_is_the_gauss_newton_one(calibration):
     """One parameter: var(v) = 1 / sum_i (dT_i/dv / s_i)^2, with dT/dv by a central
     difference of the calibrated device's TOFs (an independent evaluation of the formula)."""
-    from ssw.chain import api
+    from ssw.tof import api
 
     p = calibration.chain_params()
     v = calibration.parameters["striker_velocity"]
@@ -164,7 +164,7 @@ def test_a_non_monotone_tof_calibrates_on_one_sample_alone(device):
     """TOF(v) rises then falls with the striker speed under gravity (REFERENCE.md): a
     bracketing root finder fails; the global scan finds the roots and the fit succeeds on
     one sample alone, reporting the other root when there is one."""
-    from ssw.chain import api
+    from ssw.tof import api
 
     p = chain_params(device, material_set(), **NUMERICS)
     v = np.geomspace(0.1, 2.0, 24)

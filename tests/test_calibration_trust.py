@@ -14,12 +14,12 @@ import pytest
 
 from ssw.calibration import Reference, calibrate, load_calibration, write_calibration
 from ssw.calibration.fit import LM_FTOL, _levenberg_marquardt, _Problem
-from ssw.chain import api
 from ssw.chain.params import chain_params
 from ssw.cli import main
 from ssw.device import load_device, write_device
 from ssw.errors import CalibrationError, ConfigError
 from ssw.materials import material_set
+from ssw.tof import api
 
 NUM = {"steps_per_contact": 80, "t_max": 0.02, "gravity": True, "damping": 0.0}
 SOILS = [(38e6, 0.34), (123e6, 0.33), (445e6, 0.30)]

@@ -18,9 +18,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ssw.chain import api
 from ssw.chain.baseline import hertz_wall, solve_dop853
 from ssw.chain.params import ChainParams
+from ssw.tof import api
 
 #: PCF 15 and PCF 30 of the thesis's Table 2 (E Pa, nu), the study's striker speed.
 SCENES = (np.array([123.0e6, 445.0e6]), np.array([0.33, 0.30]))

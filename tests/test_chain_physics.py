@@ -6,11 +6,11 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ssw.chain import api
 from ssw.chain.integrate import simulate
 from ssw.chain.params import ChainParams
 from ssw.chain.statics import initial_state, static_contact_forces
 from ssw.chain.wall import PowerWall
+from ssw.tof import api
 from ssw.walls import build_wall
 
 BASE = ChainParams(gravity=False, striker_velocity=0.5)

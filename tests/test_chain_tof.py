@@ -5,10 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ssw.chain import api
 from ssw.chain.params import ChainParams
 from ssw.chain.tof import pick_peaks, tof_from_signal
 from ssw.errors import RecordingError
+from ssw.tof import api
 
 
 def _pulse(t, t0, amp, width):

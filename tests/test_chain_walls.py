@@ -5,12 +5,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ssw.chain import api
 from ssw.chain.params import ChainParams
 from ssw.chain.wall import TABLE_CELLS, compliance_scale
 from ssw.curve import ForceCurve, write_curve
 from ssw.errors import ConfigError
 from ssw.hertz import effective_modulus, hertz_coefficient
+from ssw.tof import api
 from ssw.walls import build_wall
 
 P = ChainParams(striker_velocity=0.5246)

@@ -1,6 +1,6 @@
 """Lab formats (CSV, TDMS, MAT): units, layouts, round trips, errors, and TOF of known signals.
 
-Truth: recordings of known TOF, the chain's sensor force (``ssw.chain.api``, TOF on its
+Truth: recordings of known TOF, the chain's sensor force (``ssw.tof.api``, TOF on its
 integration grid) sampled like an NI 9234 by the simulated backend, written by independent
 writers (numpy text, npTDMS's own writer), read without flags; and analytic sech^2 pulses.
 Round trips (meshio style) use values with infinite decimal expansions.

@@ -80,8 +80,8 @@ def test_analytic_round_trip_within_half_a_sample(tmp_path, rate):
 
 def test_chain_round_trip_within_half_a_sample(tmp_path):
     """Simulated recordings of the three foams give the chain's TOF back."""
-    from ssw.chain import api
     from ssw.chain.params import ChainParams
+    from ssw.tof import api
 
     params = ChainParams()
     s = DaqSettings(record_samples=1024, pretrigger_samples=64, hits=5)

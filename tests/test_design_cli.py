@@ -1,5 +1,5 @@
 """``ssw design``: the stated sensitivity is a finite difference of the chain's TOF
-(ssw.chain.api.tof, what ``ssw tof`` prints), the recommended plate is dominated by no
+(ssw.tof.api.tof, what ``ssw tof`` prints), the recommended plate is dominated by no
 feasible plate (those it evaluated and a grid it did not), the device's own plate (the
 thesis's 0.4 mm PLA) is among the candidates, and bad input is refused by name.
 
@@ -75,7 +75,7 @@ def test_json_states_the_question_and_every_candidate(design):
 def test_thesis_plate_is_a_candidate_with_its_own_chain(design, chain):
     """The device's 0.4 mm PLA plate is evaluated (source ``reference``) and its TOFs are
     the chain's with the fem wall of that plate."""
-    from ssw.chain.api import tof
+    from ssw.tof.api import tof
 
     res, _ = design
     ref = [c for c in res["candidates"] if c["source"] == "reference"]
@@ -91,8 +91,8 @@ def test_thesis_plate_is_a_candidate_with_its_own_chain(design, chain):
 
 def test_sensitivity_is_a_finite_difference_of_ssw_tof(design, chain):
     """S(E) = |ln TOF(E e^h) - ln TOF(E e^-h)| / (2 h), every TOF a separate run of
-    ssw.chain.api.tof; and a step 2.5x smaller agrees to the O(h^2) truncation."""
-    from ssw.chain.api import tof
+    ssw.tof.api.tof; and a step 2.5x smaller agrees to the O(h^2) truncation."""
+    from ssw.tof.api import tof
 
     res, _ = design
     h = res["spec"]["log_step"]

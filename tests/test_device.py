@@ -7,9 +7,9 @@ import numpy as np
 import pytest
 import yaml
 
-from ssw.chain import api
 from ssw.chain.integrate import simulate
 from ssw.chain.params import Batch, chain_params
+from ssw.chain.run import run_peaks
 from ssw.chain.statics import initial_state, static_contact_forces
 from ssw.device import (
     STANDARD_GRAVITY,
@@ -20,6 +20,7 @@ from ssw.device import (
 )
 from ssw.errors import ConfigError
 from ssw.materials import material_set
+from ssw.tof import api
 from ssw.walls import build_wall
 
 
@@ -146,9 +147,9 @@ def test_a_batch_of_parameter_sets_equals_separate_runs():
     from ssw.chain.integrate import time_step
 
     dt = time_step(b, wall)
-    pk, _ = api.run_peaks(b, wall, dt=dt)
+    pk, _ = run_peaks(b, wall, dt=dt)
     for i in range(3):
-        one, _ = api.run_peaks(P.with_(striker_velocity=v[i], preload=pre[i]), wall.take([i]),
+        one, _ = run_peaks(P.with_(striker_velocity=v[i], preload=pre[i]), wall.take([i]),
                                dt=dt)
         assert pk.tof[i] == pytest.approx(float(one.tof[0]), rel=1e-12)
 

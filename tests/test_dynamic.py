@@ -233,11 +233,11 @@ def test_chain_integrator_runs_the_reduced_wall_like_the_research_loop():
     the wall's force from its state) gives the research loop's sensor signal with the
     reduced wall, to round-off; and ``build_wall(..., dynamics="reduced",
     soil_density=...)``, what every chain command passes, is that wall."""
-    from ssw.chain import api
     from ssw.chain.integrate import simulate as chain_simulate
     from ssw.chain.integrate import time_step
     from ssw.dynamics.integrate import simulate
     from ssw.dynamics.reduced import reduced_wall
+    from ssw.tof import api
     from ssw.walls import build_wall
 
     p = ChainParams(steps_per_contact=40)

@@ -19,9 +19,9 @@ import numpy as np
 import pytest
 
 from ssw import hertz
-from ssw.chain import api
 from ssw.chain.params import ChainParams
 from ssw.contact.operators import OperatorStore
+from ssw.tof import api
 from ssw.walls import WALLS, build_wall
 from ssw.walls.fem import ENERGY_MARGIN, FORCE_ERROR_COEF, chain_energy, energy_bound
 

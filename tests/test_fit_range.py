@@ -44,10 +44,10 @@ def test_without_gravity_the_bound_is_the_closed_form(cfg):
 def test_chain_peak_lies_below_the_energy_bound(cfg):
     """The chain keeps energy in its beads: its peak is below the bound,
     and not far below (the solitary wave carries most of the striker's energy)."""
-    from ssw.chain import api
     from ssw.chain.params import ChainParams
+    from ssw.chain.run import peak_wall_indentation
 
-    peak = api.peak_wall_indentation(E, 0.3, ChainParams.from_config(cfg))
+    peak = peak_wall_indentation(E, 0.3, ChainParams.from_config(cfg))
     bound = energy_bound_indentation(E, 0.3, ChainEstimate.from_config(cfg))
     assert np.all(peak <= bound)
     assert np.all(peak > 0.5 * bound)

@@ -9,7 +9,7 @@ from ssw.curve import ForceCurve
 
 
 def test_hertz_curve_gives_the_hertz_tof_with_every_law():
-    from ssw.fit.tof_impact import tof_impact
+    from ssw.tof.impact import tof_impact
 
     cfg = load_config("config/ci.yaml")
     R = cfg["indenter"]["radius"]

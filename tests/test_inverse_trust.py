@@ -8,14 +8,14 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ssw.chain import api
-from ssw.chain.inverse import invert
 from ssw.chain.params import ChainParams
-from ssw.chain.sweep import Sweep
 from ssw.chain.wall import beyond_exact_reach
 from ssw.curve import ForceCurve
 from ssw.errors import SolverError
 from ssw.modulus import INTEGRATOR_REL_ERROR_80, estimate_moduli
+from ssw.tof import api
+from ssw.tof.inverse import invert
+from ssw.tof.sweep import Sweep
 from ssw.walls import build_wall
 
 P = ChainParams(striker_velocity=0.5)

@@ -7,12 +7,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ssw.chain import api
 from ssw.chain.params import chain_params
 from ssw.device import load_device
 from ssw.lift import lift_errors, warning_thickness
 from ssw.materials import material_set
 from ssw.sample import Sample
+from ssw.tof import api
 
 P = chain_params(load_device("thesis"), material_set(), steps_per_contact=60)
 

@@ -8,13 +8,13 @@ import numpy as np
 import pytest
 
 from ssw.calibration import Reference, calibrate
-from ssw.chain import api
-from ssw.chain.inverse import invert, invert_batch
 from ssw.chain.params import chain_params
 from ssw.device import load_device
 from ssw.errors import ConfigError
 from ssw.materials import material_set
 from ssw.modulus import COVERAGE_Z, Estimator, estimate_moduli
+from ssw.tof import api
+from ssw.tof.inverse import invert, invert_batch
 
 DEVICE = load_device("thesis").with_(plate_thickness=0.0, plate_material="none")
 NUM = {"gravity": True, "steps_per_contact": 80, "t_max": 0.02, "damping": 0.0}

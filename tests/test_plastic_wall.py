@@ -9,9 +9,9 @@ from dataclasses import replace
 import numpy as np
 import pytest
 
-from ssw.chain.api import run_peaks
 from ssw.chain.integrate import simulate
 from ssw.chain.params import chain_params
+from ssw.chain.run import run_peaks
 from ssw.constitutive import VonMises
 from ssw.device import load_device
 from ssw.walls import build_wall

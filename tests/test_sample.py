@@ -227,10 +227,10 @@ def test_engines_refuse_what_they_do_not_model():
     """The chain's fem wall shares one soil operator among moduli: a lift on an elastic
     subgrade (an operator per ratio) is refused naming the field; the layered engine's
     layers are infinitely wide: a mould is refused."""
-    from ssw.chain import api
     from ssw.chain.params import chain_params
     from ssw.device import load_device
     from ssw.materials import material_set
+    from ssw.tof import api
 
     p = chain_params(load_device("thesis"), material_set(), steps_per_contact=40)
     lift = Sample(0.01, None, "elastic", base_E=12.5e6, base_nu=0.35)

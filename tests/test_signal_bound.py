@@ -11,7 +11,6 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ssw.chain import api
 from ssw.chain.params import ChainParams
 from ssw.daq.simulated import sech2
 from ssw.errors import ConfigError
@@ -24,6 +23,7 @@ from ssw.signal.tof import (
     shortest_round_trip,
     solitary_wave_speed,
 )
+from ssw.tof import api
 
 STEEL = {"bead_radius": 9.525e-3, "bead_E": 200e9, "bead_nu": 0.28, "bead_density": 7810.0}
 RATE = 51200.0

@@ -24,12 +24,12 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from ssw.chain import api
 from ssw.chain.integrate import simulate
 from ssw.chain.params import ChainParams
 from ssw.chain.tof import pick_peaks
 from ssw.cli import main as ssw_main
 from ssw.errors import ConfigError
+from ssw.tof import api
 from ssw.walls import build_wall
 
 SOIL_E = np.geomspace(1.0e6, 1.0e10, 5)  # Pa, 1 MPa .. 10 GPa
@@ -99,7 +99,7 @@ def test_long_slow_chain_on_soft_soil_solves() -> None:
     """200 beads at 0.05 m/s on 1 MPa soil, a physically valid case: it must solve (a
     refusal is a failure), though its reflected wave passes the sensor only after t_max:
     the soft soil barely loads (its force peaks ~55 ms after the hit), so the early-stop
-    rule closes the record at ~0.11 s and ssw.chain.api extends the run (doubling t_max).
+    rule closes the record at ~0.11 s and ssw.tof.api extends the run (doubling t_max).
     Its TOF meets independent truth:
 
     * energy conserved within ENERGY_TOL of the striker's kinetic energy (over the first

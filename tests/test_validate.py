@@ -9,13 +9,13 @@ import json
 import numpy as np
 import pytest
 
-from ssw.chain import api
 from ssw.chain.params import ChainParams
 from ssw.cli import main
 from ssw.config import load_config
 from ssw.daq.backend import run_session
 from ssw.daq.settings import DaqSettings
 from ssw.daq.simulated import SimulatedBackend
+from ssw.tof import api
 from ssw.validation.table import pct, validate_samples
 
 PARAMS = ChainParams()
@@ -115,7 +115,7 @@ def test_inverse_range_is_cut_to_the_k_tables_soils():
     """The fit wall exists only over the K table's soils: the inverse must not leave them."""
     from types import SimpleNamespace
 
-    from ssw.chain.inverse import E_RANGE
+    from ssw.tof.inverse import E_RANGE
     from ssw.validation.table import inverse_range
 
     table = SimpleNamespace(soil_E=np.array([30e6, 240e6, 450e6]), K=lambda E, nu: 1.0)

@@ -14,11 +14,11 @@ the 1e-12 one is smaller) and from ``sample_dt`` (peak location between samples)
 **Work** is the wall time per TOF point, everything included (set-up, integration, peak
 picking), best of ``--repeat``, for two uses:
 
-* *batched*: the whole 300-point sweep in one call; Verlet (``ssw.chain.api.peaks``, every
+* *batched*: the whole 300-point sweep in one call; Verlet (``ssw.tof.api.peaks``, every
   scene in one (N, n) array) at ``--spcs`` steps per contact time, and DOP853 on the same
   300 scenes as one ODE system (``solve_dop853`` with 300 walls) at ``--batched-rtols``;
 * *one at a time*: a loop of single-point calls over every 3rd reference point (10
-  points), Verlet (``ssw.chain.api.tof``) and DOP853 (``solve_dop853``) at ``--rtols``.
+  points), Verlet (``ssw.tof.api.tof``) and DOP853 (``solve_dop853``) at ``--rtols``.
 
 Every DOP853 run simulates as long as ssw's run of the same point (its early-stop time).
 The speed-up at equal error is the ratio of the times at which the two methods' error
@@ -62,8 +62,6 @@ ENERGY_SCENE, ENERGY_T_END = (100.0e6, 0.3), 3.0e-3
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
-    from ssw.cli import add_json_flag
-
     p = kinds.add_parser("chain", help="work-precision of the chain integrator vs DOP853")
     p.add_argument("--config", default="config/config.yaml", help="study config (YAML)")
     p.add_argument("--output-dir", default="results/bench", help="folder of the outputs")
@@ -76,7 +74,6 @@ def register(kinds: argparse._SubParsersAction) -> None:
     p.add_argument("--batched-rtols", type=float, nargs="+", default=list(BATCHED_RTOLS),
                    help="DOP853 relative tolerances, the whole sweep as one system")
     p.add_argument("--repeat", type=int, default=2, help="timing repeats (best is kept)")
-    add_json_flag(p)
     p.set_defaults(func=run, human=human)
 
 
@@ -101,7 +98,7 @@ def time_at_error(rows: list[dict[str, Any]], method: str, target: float) -> flo
 
 def energy_error(params: Any, spc: int) -> float:
     """``max |E(t) - E(0)| / |E(0)|`` of the energy scene at ``spc`` steps per contact."""
-    from ssw.chain.api import run_chain
+    from ssw.tof.api import run_chain
 
     run = run_chain(params.with_(steps_per_contact=spc), *ENERGY_SCENE, "hertz",
                     t_end=ENERGY_T_END)
@@ -112,11 +109,11 @@ def energy_error(params: Any, spc: int) -> float:
 def run(args: argparse.Namespace) -> dict[str, Any]:
     from pathlib import Path
 
-    from ssw.chain import api
     from ssw.chain.baseline import hertz_wall, solve_dop853
     from ssw.chain.params import ChainParams
-    from ssw.chain.sweep import grid_points
     from ssw.config import expand_grid, load_config
+    from ssw.tof import api
+    from ssw.tof.sweep import grid_points
 
     cfg = load_config(args.config)
     params = ChainParams.from_config(cfg)

@@ -46,8 +46,6 @@ LAPLACE_N = 256
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
-    from ssw.cli import add_json_flag
-
     p = kinds.add_parser("contact", help="work-precision and cost of the contact FEM")
     p.add_argument("--levels", type=float, nargs="+", default=list(LEVELS),
                    help="mesh_growth values (element size / distance from the contact)")
@@ -73,7 +71,6 @@ def register(kinds: argparse._SubParsersAction) -> None:
     from ssw.bench.plastic import add_arguments
 
     add_arguments(p)
-    add_json_flag(p)
     p.set_defaults(func=run, human=human)
 
 
@@ -179,11 +176,11 @@ def goals(cfg: dict[str, Any], radius: float, repeat: int, lu: float, engines: b
 
 def wall_study(cfg: dict[str, Any], repeat: int) -> dict[str, Any]:
     """The fem wall on the Set 3 sweep: cost and TOF of its representations."""
-    from ssw.chain import api
     from ssw.chain.params import ChainParams
     from ssw.chain.wall import TableWall, _resample
     from ssw.contact.operators import OperatorStore
     from ssw.curve import ForceCurve
+    from ssw.tof import api
     from ssw.walls.fem import PiecewiseLinearWall, fem_wall
 
     params = ChainParams.from_config(cfg)

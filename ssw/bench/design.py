@@ -36,7 +36,6 @@ RANGES = (("soft", 10e6, 100e6, 0.3), ("stiff", 100e6, 1000e6, 0.3))
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
-    from ssw.cli import add_json_flag
     from ssw.design.spec import MATERIALS, MODULI
 
     p = kinds.add_parser("design", help="wall time of a whole plate design (ssw design)")
@@ -50,7 +49,6 @@ def register(kinds: argparse._SubParsersAction) -> None:
     p.add_argument("--no-cold", action="store_true",
                    help="time the warm run only (the operators of this machine's cache)")
     p.add_argument("--output-dir", default="results/bench", help="folder of the outputs")
-    add_json_flag(p)
     p.set_defaults(func=run, human=human)
 
 

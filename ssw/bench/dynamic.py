@@ -37,14 +37,11 @@ A0 = (0.25, 0.5, 0.75, 1.0, 1.25, 1.5)
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
-    from ssw.cli import add_json_flag
-
     p = kinds.add_parser("dynamic", help="dynamic wall: punch impedance, static limit, cost")
     p.add_argument("--parts", nargs="+", choices=PARTS, default=list(PARTS),
                    help="which measurements to run")
     p.add_argument("--output-dir", default="results/bench", help="folder of the outputs")
     p.add_argument("--repeat", type=int, default=1, help="timing repeats (best is kept)")
-    add_json_flag(p)
     p.set_defaults(func=run, human=human)
 
 

@@ -55,8 +55,6 @@ DELTA_MIN = 1e-6
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
-    from ssw.cli import add_json_flag
-
     p = kinds.add_parser("layered", help="layered oracle: convergence, FEM agreement, speed")
     p.add_argument("--parts", nargs="+", choices=["convergence", "compare", "speed"],
                    default=["convergence", "compare", "speed"], help="parts to run")
@@ -70,7 +68,6 @@ def register(kinds: argparse._SubParsersAction) -> None:
     p.add_argument("--repeat", type=int, default=3, help="timed solves; the fastest is kept")
     p.add_argument("--output-dir", default="results/bench", help="folder of the outputs")
     p.add_argument("--config", default="config/config.yaml", help="study config (YAML)")
-    add_json_flag(p)
     p.set_defaults(func=run, human=human)
 
 

@@ -35,14 +35,11 @@ from ssw.h5io import write_json
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
-    from ssw.cli import add_json_flag
-
     p = kinds.add_parser("plastic", help="cost of an elasto-plastic loading-unloading curve "
                          "(= contact --plastic)")
     add_arguments(p)
     p.add_argument("--output-dir", default="results/bench", help="folder of the outputs")
     p.add_argument("--config", default="config/config.yaml", help="study config (YAML)")
-    add_json_flag(p)
     p.set_defaults(func=run_plastic, human=human, plastic=True)
 
 

@@ -52,8 +52,6 @@ DEFAULT_INCREMENT = ("set2_thickness", 0.6e-3)
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
-    from ssw.cli import add_json_flag
-
     p = kinds.add_parser(
         "study", help="wall time of the whole study per stage (snakemake, 2 cores)",
         description="Run the whole study with Snakemake into a fresh working directory and "
@@ -75,7 +73,6 @@ def register(kinds: argparse._SubParsersAction) -> None:
     p.add_argument("--keep-going", action="store_true",
                    help="let Snakemake finish the independent jobs after a failure")
     p.add_argument("--output-dir", default="results/bench", help="folder of the outputs")
-    add_json_flag(p)
     p.set_defaults(func=run, human=human)
 
 

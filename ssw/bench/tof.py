@@ -6,7 +6,7 @@ with each ``--upsample`` factor (1: the parabola on the samples; 16: band-limite
 interpolation first, the default of ssw.signal). Sources of known TOF:
 
 * ``chain`` (default): the chain's sensor force (Hertz wall unless ``--wall``); truth is the
-  chain's own TOF on its integration grid (``ssw.chain.api.tof``);
+  chain's own TOF on its integration grid (``ssw.tof.api.tof``);
 * ``analytic``: two symmetric sech^2 pulses, the reflected one broader (widths
   ``ANALYTIC_WIDTHS``), at the thesis's measured TOF of each foam; truth is exact (a
   linear-phase filter delays a symmetric pulse's peak by its group delay, the same for both).
@@ -39,8 +39,6 @@ UPSAMPLE = (1, 16)
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
-    from ssw.cli import add_json_flag
-
     p = kinds.add_parser("tof", help="TOF error of simulated recordings vs NI 9234 rate")
     p.add_argument("--divisors", type=int, nargs="+", default=list(DIVISORS),
                    help="rate divisors n (rate = 51200/n S/s)")
@@ -52,7 +50,6 @@ def register(kinds: argparse._SubParsersAction) -> None:
                    help="waveform of known TOF (module doc)")
     p.add_argument("--output-dir", default="results/bench", help="folder of the outputs")
     p.add_argument("--config", default="config/config.yaml", help="study config (YAML)")
-    add_json_flag(p)
     p.set_defaults(func=run)
 
 

@@ -191,7 +191,7 @@ def calibrate(
     reference_sample : the references' sample (:class:`ssw.sample.Sample`), recorded in
         the provenance; None: half-spaces.
     """
-    from ssw.chain import api
+    from ssw.tof import api
 
     if not refs:
         raise ConfigError("--reference", [], "at least one reference sample")
@@ -283,7 +283,7 @@ def _loo_predictions(model: TofModel, refs: list[Reference], subs: dict, materia
     singular values are reported with the fit. A ``plastic`` wall (one model per reference,
     ``opts['soil_model']``) inverts each left-out sample with its own model, within
     :data:`PLASTIC_LOO_SPAN` of its E."""
-    from ssw.chain.inverse import invert_batch
+    from ssw.tof.inverse import invert_batch
 
     keys = leave_one_out_sets(len(refs))
     cont = model.continuous

@@ -175,7 +175,7 @@ class TofModel:
         """TOF (s), shape (m, n_refs): rows of ``theta`` (m, len(free)) in SI units, columns
         the references (``refs``: a subset of their indices, default all). NaN where the
         run gives no TOF."""
-        from ssw.chain.api import run_peaks
+        from ssw.chain.run import run_peaks
 
         th = np.atleast_2d(np.asarray(theta, float))
         if th.shape[1] != len(self.free):

@@ -32,7 +32,7 @@ SLOPE_STEP = 0.02
 def tof_slope(E: np.ndarray, nu: np.ndarray, params: Any, wall: str,
               wall_options: dict[str, Any]) -> np.ndarray:
     """``d ln TOF / d ln E`` (central difference, one batched run) at each (E, nu)."""
-    from ssw.chain import api
+    from ssw.tof import api
 
     E = np.asarray(E, float)
     nu = np.asarray(nu, float)

@@ -2,7 +2,11 @@
 
 Modules: :mod:`~ssw.chain.params` (the chain), :mod:`~ssw.chain.wall` (last-contact laws),
 :mod:`~ssw.chain.statics` (gravity precompression), :mod:`~ssw.chain.integrate` (batched
-velocity Verlet), :mod:`~ssw.chain.tof` (peak picking), :mod:`~ssw.chain.api` (public
-entry points), :mod:`~ssw.chain.sweep`, :mod:`~ssw.chain.inverse`,
-:mod:`~ssw.chain.baseline` (scipy DOP853 reference).
+velocity Verlet), :mod:`~ssw.chain.tof` (peak picking), :mod:`~ssw.chain.run` (runs of
+prebuilt walls, a truncated record refused), :mod:`~ssw.chain.baseline` (scipy DOP853
+reference).
+
+The chain knows only the :class:`~ssw.chain.wall.Wall` protocol and the laws made of its own
+numbers; the laws by name are :mod:`ssw.walls`, the TOF on a named wall, its sweeps and its
+inverse :mod:`ssw.tof`.
 """

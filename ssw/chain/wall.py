@@ -29,7 +29,7 @@ size ``c_b/c_w`` (2e-4 at 38 MPa, 5e-3 at 1000 MPa).
 Table extension. Beyond the curve's last point ``(d_L, F_L)`` the force continues as the
 power law ``F = F_L (d/d_L)^n_L`` whose exponent is the curve's log-log slope over its last
 10 % of indentation (clipped to [1, 2]): C^0 and slope-continuous in the mean. The chain's
-peak wall indentation (:func:`ssw.chain.api.peak_wall_indentation`) tells how far a
+peak wall indentation (:func:`ssw.chain.run.peak_wall_indentation`) tells how far a
 sweep reaches beyond the FEM range.
 """
 

@@ -1,4 +1,6 @@
-"""``ssw bench KIND``: benchmarks. Each ``ssw/bench/KIND.py`` registers one kind."""
+"""``ssw bench KIND``: benchmarks. Each ``ssw/bench/KIND.py`` registers one kind (or more);
+the command line adds the ``--json`` flag every subcommand has (the benchmarks import
+nothing of :mod:`ssw.cli`)."""
 
 from __future__ import annotations
 
@@ -16,6 +18,10 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Benchmarks: each writes a table and a plot under results/bench/.",
     )
     kinds = p.add_subparsers(dest="bench_kind", metavar="KIND", required=True)
+    from ssw.cli import add_json_flag
+
     for m in sorted(pkgutil.iter_modules(pkg.__path__), key=lambda m: m.name):
         if not m.name.startswith("_"):
             importlib.import_module(f"ssw.bench.{m.name}").register(kinds)
+    for parser in kinds.choices.values():
+        add_json_flag(parser)

@@ -28,8 +28,8 @@ def _params_dict(params: Any) -> dict[str, Any]:
 
 # ---------------------------------------------------------------------------- ssw chain
 def run_chain(args: argparse.Namespace) -> dict[str, Any]:
-    from ssw.chain.api import run_chain as simulate_one
     from ssw.h5io import atomic_h5, write_dataset
+    from ssw.tof.api import run_chain as simulate_one
 
     ctx = chain_context(args, args.soil_E, args.soil_nu)
     params, wall, opts = ctx.params, ctx.wall, ctx.wall_options
@@ -62,7 +62,7 @@ def run_chain(args: argparse.Namespace) -> dict[str, Any]:
 
 # ---------------------------------------------------------------------------- ssw tof
 def run_tof(args: argparse.Namespace) -> dict[str, Any]:
-    from ssw.chain.api import peaks
+    from ssw.tof.api import peaks
 
     if args.hits is not None or args.soil_model is not None:
         args.human = _human_hits
@@ -146,8 +146,8 @@ def _human_hits(res: dict[str, Any]) -> str:
 
 # ---------------------------------------------------------------------------- sweeps
 def _sweep_points(args: argparse.Namespace, cfg: dict[str, Any]) -> tuple[np.ndarray, np.ndarray]:
-    from ssw.chain.sweep import grid_points
     from ssw.config import expand_grid
+    from ssw.tof.sweep import grid_points
 
     sw = cfg["chain"]["sweep"]
     if args.soil_E_min is not None:
@@ -165,8 +165,8 @@ def _sweep_points(args: argparse.Namespace, cfg: dict[str, Any]) -> tuple[np.nda
 def run_tof_sweep(args: argparse.Namespace) -> dict[str, Any] | None:
     import time
 
-    from ssw.chain.sweep import chunk_slice, run_sweep, write_csv, write_sweep
     from ssw.config import load_config
+    from ssw.tof.sweep import chunk_slice, run_sweep, write_csv, write_sweep
 
     E, nu = _sweep_points(args, load_config(args.config))
     chunk, chunks = args.chunk, args.chunks or 1
@@ -192,14 +192,14 @@ def run_tof_sweep(args: argparse.Namespace) -> dict[str, Any] | None:
         return None  # rank 0 writes and reports
     if args.output:
         inputs = {k: v for k, v in vars(args).items() if k not in ("func", "human")}
-        from ssw.chain.sweep import model_digest
+        from ssw.tof.sweep import model_digest
 
         write_sweep(args.output, sw, {**inputs, **_params_dict(params), **ctx.inputs(),
                                       "model_sha256": model_digest(params, wall, opts)})
         if args.csv:
             write_csv(args.csv, sw)
     if args.plot:
-        from ssw.chain.sweep import plot_fig8
+        from ssw.tof.sweep import plot_fig8
 
         plot_fig8(args.plot, sw.sorted(), f"TOF vs soil modulus, {wall} wall (cf. thesis Fig 8)")
     return {
@@ -223,7 +223,8 @@ def _part(text: str) -> tuple[int, int]:
 
 
 def run_tof_merge(args: argparse.Namespace) -> dict[str, Any]:
-    from ssw.chain.sweep import (
+    from ssw.provenance import require_match
+    from ssw.tof.sweep import (
         merge_sweeps,
         plot_fig8,
         read_sweep,
@@ -231,7 +232,6 @@ def run_tof_merge(args: argparse.Namespace) -> dict[str, Any]:
         write_csv,
         write_sweep,
     )
-    from ssw.provenance import require_match
 
     parts = [read_sweep(p) for p in args.inputs]
     models = [sweep_model(p[1], path) for p, path in zip(parts, args.inputs, strict=True)]
@@ -262,12 +262,12 @@ def run_invert(args: argparse.Namespace) -> dict[str, Any]:
         raise ConfigError("--law", "table", "fem | hertz | fit | rigid for the inverse "
                           "(the table wall needs one FEM curve per E)")
     if args.table:
-        from ssw.chain.inverse import invert
-        from ssw.chain.sweep import read_sweep
+        from ssw.tof.inverse import invert
+        from ssw.tof.sweep import read_sweep
 
         if isinstance(nu, tuple):
             raise ConfigError("--soil-nu", args.soil_nu, "one Poisson's ratio with --table")
-        from ssw.chain.sweep import require_same_model
+        from ssw.tof.sweep import require_same_model
 
         table, table_inputs = read_sweep(args.table)
         require_same_model(table_inputs, args.table, ctx.params, ctx.wall, ctx.wall_options)

@@ -260,7 +260,7 @@ def run_plot(args: argparse.Namespace) -> dict[str, Any]:
 
 def run_tof_impact(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.curve import read_curve
-    from ssw.fit.tof_impact import tof_impact
+    from ssw.tof.impact import tof_impact
 
     rows = tof_impact([read_curve(p) for p in args.curves], load_config(args.config))
     if args.output:
@@ -335,8 +335,8 @@ def run_set(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.fit.deviation import deviation_rows
     from ssw.fit.pipeline import config_laws, table_from_files
     from ssw.fit.table import write_tables
-    from ssw.fit.tof_impact import tof_impact
     from ssw.h5io import write_json, write_rows_csv
+    from ssw.tof.impact import tof_impact
 
     cfg = load_config(args.config)
     if args.set not in cfg["sets"]:

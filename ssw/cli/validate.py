@@ -15,8 +15,8 @@ CURVE_POINTS = 40  # E points of each model curve in Fig 10
 
 
 def run_validate(args: argparse.Namespace) -> dict[str, Any]:
-    from ssw.chain import api
     from ssw.signal.tof import ChainPath, TofOptions
+    from ssw.tof import api
     from ssw.validation.table import inverse_range, validate_samples
 
     ctx = chain_context(args)
@@ -50,7 +50,7 @@ def run_validate(args: argparse.Namespace) -> dict[str, Any]:
         T = np.asarray(api.tof(E[None, :], np.array(nus)[:, None], params, wall, **opts))
         sweep_curves = {}
         if args.sweep:
-            from ssw.chain.sweep import merge_sweeps, read_sweep, require_same_model
+            from ssw.tof.sweep import merge_sweeps, read_sweep, require_same_model
 
             parts = [read_sweep(p) for p in args.sweep]
             for path, (_, inp) in zip(args.sweep, parts, strict=True):

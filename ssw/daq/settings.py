@@ -54,7 +54,7 @@ class SimulationSettings:
     noise_rms : additive white noise at the sensor, N (rms).
     trigger_jitter : standard deviation of the random delay between the wave and the
         sample clock beyond the uniform sample phase, s.
-    source : waveform source: ``chain`` (``ssw.chain.api.sensor_signal``) or ``analytic``
+    source : waveform source: ``chain`` (``ssw.tof.api.sensor_signal``) or ``analytic``
         (two sech^2 pulses with a known TOF, for tests without the chain).
     striker_velocity_cov : relative standard deviation of the striker speed from hit to
         hit (chain source only; 0 = every hit identical). A physical scatter: the TOF goes

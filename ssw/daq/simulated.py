@@ -3,7 +3,7 @@
 Signal path per hit (every random draw from one ``numpy.random.Generator`` seeded from
 config ``seed``):
 
-1. sensor force ``F(t)`` (N) from ``ssw.chain.api.sensor_signal`` (source ``chain``) or
+1. sensor force ``F(t)`` (N) from ``ssw.tof.api.sensor_signal`` (source ``chain``) or
    two sech^2 pulses with a known TOF (source ``analytic``, :func:`analytic_waveform`),
    minus its initial value: an IEPE sensor does not see the static preload; with
    ``daq.simulation.striker_velocity_cov > 0`` each hit reruns the chain with a striker
@@ -103,7 +103,7 @@ class SimulatedBackend:
     ----------
     waveform : ``(t, F)`` sensor force (s, N); or ``None`` to ask the chain for it.
     soil_E, soil_nu, chain_params, wall, wall_options : passed to
-        ``ssw.chain.api.sensor_signal`` and ``ssw.chain.api.tof`` when ``waveform`` is None
+        ``ssw.tof.api.sensor_signal`` and ``ssw.tof.api.tof`` when ``waveform`` is None
         (Pa, -, ``ssw.chain.params.ChainParams``, wall law name, its options).
     seed : seeds the noise, sample phase and jitter.
     true_tof : the waveform's peak-to-peak TOF (s), stored with every hit if known.
@@ -128,9 +128,9 @@ class SimulatedBackend:
                 raise ConfigError("simulated backend", "no waveform",
                                   "a (t, F) waveform or soil_E and soil_nu for the chain")
             try:
-                from ssw.chain import api
+                from ssw.tof import api
             except ImportError as exc:
-                raise DaqError("the chain model (ssw.chain.api) is not available; pass an "
+                raise DaqError("the chain model (ssw.tof.api) is not available; pass an "
                                "analytic waveform") from exc
             opts = wall_options or {}
             waveform = api.sensor_signal(soil_E, soil_nu, chain_params, wall, **opts)
@@ -153,7 +153,7 @@ class SimulatedBackend:
             from dataclasses import asdict, is_dataclass
 
             params = self._chain[0] if self._chain else None
-            d.update(source="ssw.chain.api.sensor_signal", soil_E=self.soil_E,
+            d.update(source="ssw.tof.api.sensor_signal", soil_E=self.soil_E,
                      soil_nu=self.soil_nu, wall=self.wall,
                      chain_params=asdict(params) if is_dataclass(params) else repr(params))
         else:
@@ -168,8 +168,8 @@ class SimulatedBackend:
 
     def _varied(self, v: float) -> tuple[np.ndarray, np.ndarray, float]:
         """The chain's sensor force and TOF with striker speed ``v`` (m/s)."""
-        from ssw.chain import api
         from ssw.chain.tof import tof_from_signal
+        from ssw.tof import api
 
         params, opts = self._chain  # type: ignore[misc]
         t, f = api.sensor_signal(self.soil_E, self.soil_nu, params.with_(striker_velocity=v),

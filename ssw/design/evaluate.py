@@ -214,7 +214,7 @@ class Evaluator:
 
     def _evaluate(self, material: str, t: float, D: float, v: float, source: str
                   ) -> Candidate:
-        from ssw.chain.api import peaks
+        from ssw.tof.api import peaks
         from ssw.walls.fem import peak_stresses
 
         t0 = time.perf_counter()

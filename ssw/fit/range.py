@@ -4,7 +4,7 @@ Fitting a law on the whole FEM curve (0..0.1 mm in the thesis) weights indentati
 device never reaches (stiff soils) or misses those it does (soft soils). The default
 range, mode ``chain``, is ``[0, factor * delta_peak(E, nu)]`` with ``delta_peak`` the peak
 wall indentation of the chain on that soil, with the Hertz wall, from
-``ssw.chain.api.peak_wall_indentation(soil_E, soil_nu, params)`` (the dynamics,
+``ssw.chain.run.peak_wall_indentation(soil_E, soil_nu, params)`` (the dynamics,
 Stage II). Energy conservation bounds it from above (``energy_bound_indentation``, the
 independent check of the tests): the wall cannot store more than the striker's kinetic
 energy plus the work of the chain's weight over the wall's indentation,
@@ -105,12 +105,12 @@ def peak_wall_indentation(
     soil_E: ArrayLike, soil_nu: ArrayLike, cfg: dict[str, Any]
 ) -> tuple[NDArray[np.float64], str]:
     """Peak wall indentation (m) of the config's chain on a Hertz wall (one batched run of
-    ``ssw.chain.api``), and its source, ``"chain"``."""
-    from ssw.chain import api
+    :mod:`ssw.chain.run`), and its source, ``"chain"``."""
     from ssw.chain.params import ChainParams
+    from ssw.chain.run import peak_wall_indentation as chain_peak
 
     params = ChainParams.from_config(cfg)
-    return np.asarray(api.peak_wall_indentation(soil_E, soil_nu, params), float), "chain"
+    return np.asarray(chain_peak(soil_E, soil_nu, params), float), "chain"
 
 
 @dataclass(frozen=True)

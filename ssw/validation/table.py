@@ -3,7 +3,7 @@
 For each sample of config ``validation.samples`` (thesis defaults PCF 08, 15, 30):
 
 * ``tof_sim``: the chain model's TOF at the manufacturer's E and nu
-  (:func:`ssw.chain.api.tof`, the config's wall law);
+  (:func:`ssw.tof.api.tof`, the config's wall law);
 * ``tof_measured``: the mean TOF of the sample's recording (:mod:`ssw.signal.tof`, with its
   hit rejection rule) when ``recordings`` is given, else the thesis's published mean
   (``tof_published``, Table 2);
@@ -92,7 +92,7 @@ def inverse_range(wall: str, wall_options: dict[str, Any], params: Any) -> tuple
     With the ``fit`` wall and a K table, the forward model only exists over the table's
     soil moduli (the table does not extrapolate).
     """
-    from ssw.chain.inverse import E_RANGE
+    from ssw.tof.inverse import E_RANGE
     from ssw.walls import load_k_table
 
     if wall != "fit" or wall_options.get("k_table") is None:
@@ -116,12 +116,12 @@ def validate_samples(
     checked against.
     """
     from ssw.calibration.references import from_config
-    from ssw.chain import api
-    from ssw.chain.inverse import invert_batch
     from ssw.config import library
     from ssw.daq.importers import read_any
     from ssw.modulus import estimate_moduli
     from ssw.signal.tof import recording_tof
+    from ssw.tof import api
+    from ssw.tof.inverse import invert_batch
 
     samples = cfg.get("validation", {}).get("samples", [])
     if not samples:

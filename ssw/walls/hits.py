@@ -7,7 +7,7 @@ hits left it (on the unloading curve of the largest indentation reached: the cha
 lifted and set down again, or came to rest between hits), the striker at the device's
 speed. After each hit the sample's history is the largest indentation reached so far.
 
-Per hit: the TOF (:func:`ssw.chain.api.run_peaks`), the peak wall force, the peak
+Per hit: the TOF (:func:`ssw.chain.run.run_peaks`), the peak wall force, the peak
 indentation, the permanent set (the residual indentation once unloaded), its increment,
 and the energy the sample absorbed irrecoverably (the growth of the wall's dissipated
 energy: the area of the hit's hysteresis loop).
@@ -57,7 +57,7 @@ def dissipated(wall: Any, d_max: np.ndarray) -> np.ndarray:
 def run_hits(params: ChainParams, wall: Any, hits: int) -> Hits:
     """``hits`` consecutive hits of the chain ``params`` on the virgin sample ``wall`` (a
     :class:`ssw.walls.plastic.PlasticWall`)."""
-    from ssw.chain.api import run_peaks
+    from ssw.chain.run import run_peaks
     from ssw.chain.statics import static_contact_forces
 
     if not (isinstance(hits, int | np.integer) and hits >= 1):

@@ -20,10 +20,10 @@ from typing import Any
 
 import numpy as np
 
-from ssw.chain import api
 from ssw.chain.params import ChainParams
-from ssw.chain.sweep import Sweep
 from ssw.errors import ConfigError, OutOfRangeError, SolverError
+from ssw.tof import api
+from ssw.tof.sweep import Sweep
 
 #: Default E range (Pa) of the inverse: the thesis's sweep.
 E_RANGE = (10.0e6, 1000.0e6)

@@ -15,11 +15,11 @@ from typing import Any
 
 import numpy as np
 
-from ssw.chain.api import peaks
 from ssw.chain.params import ChainParams
 from ssw.errors import ConfigError, SswError
 from ssw.h5io import atomic_h5, check_kind, read_inputs, write_dataset
 from ssw.plotting import pyplot, save_png
+from ssw.tof.api import peaks
 
 KIND = "tof_sweep"
 FIELDS = ("soil_E", "soil_nu", "tof", "t_incident", "f_incident", "f_reflected")

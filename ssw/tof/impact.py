@@ -1,6 +1,6 @@
 """How much each law's fit error matters for the time of flight (TOF).
 
-For each contact curve, the chain (``ssw.chain.api.tof``) runs with these last-contact laws:
+For each contact curve, the chain (``ssw.tof.api.tof``) runs with these last-contact laws:
 
 * ``fem``: the exact FEM law of the curve's scene (its plate, interface and mesh settings)
   at the chain bead's radius, computed to whatever depth the chain reaches
@@ -66,10 +66,11 @@ def tof_impact(curves: list[ForceCurve], cfg: dict[str, Any],
     ``records``: the curves' fits when already made (:func:`ssw.fit.pipeline.fit_files`,
     with the ``k_hertz`` and ``power`` laws on the default ranges), else they are fitted.
     """
-    from ssw.chain import api
     from ssw.chain.params import ChainParams
+    from ssw.chain.run import run_peaks
     from ssw.chain.wall import PowerWall
     from ssw.fit.range import FitRange
+    from ssw.tof import api
     from ssw.walls import build_wall
 
     params = ChainParams.from_config(cfg)
@@ -104,7 +105,7 @@ def tof_impact(curves: list[ForceCurve], cfg: dict[str, Any],
                         np.concatenate([nu, nu, nu]))]
     allw = PowerWall(np.concatenate([w.coef for w in walls]),
                      np.concatenate([w.exponent for w in walls]))
-    pk, _ = api.run_peaks(params, allw)
+    pk, _ = run_peaks(params, allw)
     fit_k, fit_power, hertz, up, dn = np.split(pk.tof, 5)
     tof = {
         "fem": tof_fem,

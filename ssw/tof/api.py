@@ -1,13 +1,16 @@
-"""Public entry points of the chain stage (the contracts of docs/CONTRACTS.md).
+"""The TOF of a device on a sample: the chain run against a last-contact law named in
+:data:`ssw.walls.WALLS` (the public entry points of docs/CONTRACTS.md).
 
 * :func:`tof` (s): TOF for broadcast arrays of soil E (Pa) and nu, one batched run;
+* :func:`peaks`: the picked peaks and the run behind them;
 * :func:`sensor_signal` (s, N): the sensor force vs time;
-* :func:`peak_wall_indentation` (m): the largest indentation of the Hertz wall;
 * :func:`run_chain`: every contact force vs time (the ``ssw chain`` command).
 
-``wall`` names a law of :data:`ssw.walls.WALLS` (``rigid``, ``hertz``, ``fit``,
-``table``); ``wall_options`` are its builder's keywords (``K=``, ``power=``, ``k_table=``
-for ``fit``; ``curve=`` for ``table``).
+``wall`` names a law of :data:`ssw.walls.WALLS` (``rigid``, ``hertz``, ``fit``, ``table``,
+``fem``, ``plastic``); ``wall_options`` are its builder's keywords (``K=``, ``power=``,
+``k_table=`` for ``fit``; ``curve=`` for ``table``; ``contact=`` for ``fem``). The chain
+itself (:mod:`ssw.chain`) knows only the wall protocol: :func:`ssw.chain.run.run_peaks` runs
+walls already built.
 """
 
 from __future__ import annotations
@@ -18,9 +21,8 @@ import numpy as np
 
 from ssw.chain.integrate import Run, simulate
 from ssw.chain.params import Batch, ChainParams
-from ssw.chain.tof import Peaks, pick_peaks
-from ssw.chain.wall import Wall
-from ssw.errors import SolverError
+from ssw.chain.run import run_peaks
+from ssw.chain.tof import Peaks
 from ssw.walls import build_wall
 
 
@@ -39,69 +41,6 @@ def _broadcast(soil_E: Any, soil_nu: Any, vary: dict[str, Any] | None
         k: np.broadcast_to(np.asarray(v, float), shape).ravel()
         for k, v in vary.items() if v is not None}
     return E, nu, flat
-
-
-#: Longest simulated time (s) a truncated scene is extended to (doubling from t_max).
-T_END_CAP = 1.0
-
-
-def check_complete(run: Run, params: ChainParams) -> None:
-    """Raise SolverError when a scene ran to its end time without its reflected wave
-    passing the sensor (``stop_time`` NaN: the record is truncated, its TOF a guess)."""
-    bad = np.flatnonzero(np.isnan(run.stop_time))
-    if bad.size:
-        raise SolverError(
-            f"{bad.size} of {run.stop_time.size} scenes (e.g. scene {bad[0]}) ran "
-            f"{run.t[-1]:.4g} s (up to {T_END_CAP} s, doubling chain.t_max = {params.t_max} s) "
-            "before their reflected wave had passed the sensor (record truncated): check "
-            "the wall law and the striker speed"
-        )
-
-
-def run_peaks(params: ChainParams | Batch, wall: Wall, *, strict: bool = True,
-              dt: float | None = None, on_progress: Any = None) -> tuple[Peaks, Run]:
-    """Picked peaks and the run of prebuilt walls (one per scene).
-
-    A scene whose reflected wave has not passed the sensor by ``t_max`` (a long, slow chain
-    on a soft soil) is run again, alone with the others like it, for twice as long, up to
-    :data:`T_END_CAP`: its TOF never comes from a truncated record. The returned run's
-    ``stop_time`` and ``peak_wall_indentation`` are those of the final runs (its ``sensor``
-    record is the first run's). ``strict`` raises on a scene still truncated at the cap or
-    a signal without two peaks (:func:`check_complete`, :func:`ssw.chain.tof.pick_peaks`);
-    otherwise those scenes get NaN (a calibration scan over wide parameter ranges). ``dt``
-    (s) fixes the time step (default :func:`ssw.chain.integrate.time_step` of the batch);
-    ``on_progress(k)`` is told when ``k`` scenes finish.
-    """
-    from dataclasses import replace
-
-    run = simulate(params, wall, dt=dt, on_progress=on_progress)
-    b = params if isinstance(params, Batch) else Batch.of(params, wall.n)
-    p = b.params
-    pk = pick_peaks(run.t, run.sensor, strict=False)
-    cols = [pk.t_incident, pk.t_reflected, pk.f_incident, pk.f_reflected]
-    stop, peak = run.stop_time.copy(), run.peak_wall_indentation.copy()
-    t_end = p.t_max
-    nan = np.isnan(stop)
-    while nan.any() and t_end < T_END_CAP:
-        t_end = min(2.0 * t_end, T_END_CAP)
-        idx = np.flatnonzero(nan)
-        sub = simulate(b.take(idx), wall.take(idx), dt=run.dt, t_end=t_end,
-                       on_progress=on_progress)
-        sp = pick_peaks(sub.t, sub.sensor, strict=False)
-        for c, v in zip(cols, (sp.t_incident, sp.t_reflected, sp.f_incident, sp.f_reflected),
-                        strict=True):
-            c[idx] = v
-        stop[idx], peak[idx] = sub.stop_time, sub.peak_wall_indentation
-        nan = np.isnan(stop)
-    run = replace(run, stop_time=stop, peak_wall_indentation=peak)
-    if strict:
-        check_complete(run, p)
-        if np.any(np.isnan(cols[1])):  # stopped, but no two peaks: the strict picker says why
-            bad = np.flatnonzero(np.isnan(cols[1]))
-            pick_peaks(run.t, run.sensor[:, bad])
-    for c in cols:
-        c[np.isnan(stop)] = np.nan
-    return Peaks(*cols), run
 
 
 def peaks(
@@ -174,17 +113,6 @@ def _hold_last(F: np.ndarray) -> np.ndarray:
     valid = ~np.isnan(out)
     last = np.maximum.accumulate(np.where(valid, np.arange(out.shape[0])[:, None], 0), axis=0)
     return out[last, np.arange(out.shape[1])]
-
-
-def peak_wall_indentation(soil_E: Any, soil_nu: Any, params: ChainParams) -> np.ndarray:
-    """Largest indentation (m) of the last bead into the Hertz wall during the first hit.
-
-    The fit stage uses it as the indentation range its K fits must cover. Shape: the
-    broadcast shape of ``soil_E`` (Pa) and ``soil_nu``.
-    """
-    w = build_wall("hertz", params, soil_E, soil_nu)
-    run = simulate(params, w)
-    return run.peak_wall_indentation.reshape(_shape(soil_E, soil_nu))
 
 
 def run_chain(

@@ -11,6 +11,7 @@ import pkgutil
 
 def register(sub: argparse._SubParsersAction) -> None:
     import ssw.bench as pkg
+    from ssw.cli import add_json_flag
 
     p = sub.add_parser(
         "bench",
@@ -18,8 +19,6 @@ def register(sub: argparse._SubParsersAction) -> None:
         description="Benchmarks: each writes a table and a plot under results/bench/.",
     )
     kinds = p.add_subparsers(dest="bench_kind", metavar="KIND", required=True)
-    from ssw.cli import add_json_flag
-
     for m in sorted(pkgutil.iter_modules(pkg.__path__), key=lambda m: m.name):
         if not m.name.startswith("_"):
             importlib.import_module(f"ssw.bench.{m.name}").register(kinds)

@@ -27,8 +27,11 @@ the work-conjugate equivalent plastic strain): ``state[:, :4]`` and ``state[:, 4
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
+
+from ssw.errors import ConfigError
 
 #: Columns of a point's state: the plastic strain (4, Mandel) and the hardening variable.
 STATE_SIZE = 5
@@ -52,6 +55,14 @@ class Update:
     state: np.ndarray
     plastic: np.ndarray
     region: np.ndarray
+
+
+def check_stress(model: Any, field: str, allowed: str, *, zero: bool = False) -> None:
+    """Refuse a non-finite or negative stress (or modulus) ``field`` of a ``model`` (zero
+    too unless ``zero``), naming the field, its value and ``allowed``."""
+    value = getattr(model, field)
+    if not (np.isfinite(value) and (value >= 0 if zero else value > 0)):
+        raise ConfigError(f"soil_model.{field}", value, allowed)
 
 
 def initial_state(n: int) -> np.ndarray:

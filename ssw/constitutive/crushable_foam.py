@@ -41,7 +41,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ssw.constitutive.base import YIELD_RTOL, Update, number_text
+from ssw.constitutive.base import YIELD_RTOL, Update, check_stress, number_text
 from ssw.constitutive.tensors import (
     ONE,
     SQRT_2_3,
@@ -79,12 +79,8 @@ class CrushableFoam:
     name: ClassVar[str] = "crushable-foam"
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.compressive_strength) and self.compressive_strength > 0):
-            raise ConfigError("soil_model.compressive_strength", self.compressive_strength,
-                              "a stress > 0 Pa")
-        if not (np.isfinite(self.hardening) and self.hardening >= 0):
-            raise ConfigError("soil_model.hardening", self.hardening,
-                              "a hardening modulus >= 0 Pa")
+        check_stress(self, "compressive_strength", "a stress > 0 Pa")
+        check_stress(self, "hardening", "a hardening modulus >= 0 Pa", zero=True)
         if not 0.0 <= self.plastic_poisson <= 0.5:
             raise ConfigError("soil_model.plastic_poisson", self.plastic_poisson,
                               "a plastic Poisson's ratio in [0, 0.5]")

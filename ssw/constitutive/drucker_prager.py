@@ -51,7 +51,7 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ssw.constitutive.base import YIELD_RTOL, Update, number_text
+from ssw.constitutive.base import YIELD_RTOL, Update, check_stress, number_text
 from ssw.constitutive.tensors import ONE, SQRT_2_3, invariants, pq_tangent, stress_of, trial
 from ssw.errors import ConfigError
 
@@ -93,8 +93,7 @@ class DruckerPrager:
     name: ClassVar[str] = "drucker-prager"
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.cohesion) and self.cohesion >= 0):
-            raise ConfigError("soil_model.cohesion", self.cohesion, "a cohesion >= 0 Pa")
+        check_stress(self, "cohesion", "a cohesion >= 0 Pa", zero=True)
         if not 0.0 <= self.friction_angle < 90.0:
             raise ConfigError("soil_model.friction_angle", self.friction_angle,
                               "an angle in [0, 90) degrees")

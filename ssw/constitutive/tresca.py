@@ -56,9 +56,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ssw.constitutive.base import YIELD_RTOL, Update, number_text
+from ssw.constitutive.base import YIELD_RTOL, Update, check_stress, number_text
 from ssw.constitutive.tensors import ONE, P_DEV, SQRT2, bulk_shear, elastic_tangent
-from ssw.errors import ConfigError
 
 #: The in-plane eigenvalues count as equal (the spin coefficient's limit) below this share of
 #: the stress scale.
@@ -118,12 +117,8 @@ class Tresca:
     isochoric: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.cohesion) and self.cohesion > 0):
-            raise ConfigError("soil_model.cohesion", self.cohesion,
-                              "a shear strength k > 0 Pa")
-        if not (np.isfinite(self.hardening) and self.hardening >= 0):
-            raise ConfigError("soil_model.hardening", self.hardening,
-                              "a hardening modulus >= 0 Pa")
+        check_stress(self, "cohesion", "a shear strength k > 0 Pa")
+        check_stress(self, "hardening", "a hardening modulus >= 0 Pa", zero=True)
 
     @property
     def key(self) -> str:

@@ -27,9 +27,8 @@ from typing import Any, ClassVar
 
 import numpy as np
 
-from ssw.constitutive.base import YIELD_RTOL, Update, number_text
+from ssw.constitutive.base import YIELD_RTOL, Update, check_stress, number_text
 from ssw.constitutive.tensors import SQRT_3_2, invariants, pq_tangent, stress_of, trial
-from ssw.errors import ConfigError
 
 
 @dataclass(frozen=True)
@@ -45,11 +44,8 @@ class VonMises:
     isochoric: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
-        if not (np.isfinite(self.yield_stress) and self.yield_stress > 0):
-            raise ConfigError("soil_model.yield_stress", self.yield_stress, "a stress > 0 Pa")
-        if not (np.isfinite(self.hardening) and self.hardening >= 0):
-            raise ConfigError("soil_model.hardening", self.hardening,
-                              "a hardening modulus >= 0 Pa")
+        check_stress(self, "yield_stress", "a stress > 0 Pa")
+        check_stress(self, "hardening", "a hardening modulus >= 0 Pa", zero=True)
 
     @property
     def key(self) -> str:

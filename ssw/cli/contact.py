@@ -187,8 +187,11 @@ def _run_plastic(args: argparse.Namespace, cfg: dict[str, Any], contact: dict[st
     """The elasto-plastic curve of a sphere on a plastic sample, through a plate when one is
     given, on the half-space box or a finite block (loading, and with --unload unloading):
     the curve, first yield, residual indentation, dissipated work."""
+    from dataclasses import replace
+
     from ssw.cli._soil import soil_model_of
-    from ssw.contact.plastic import solve_plastic_scene, summary, write_plastic_curve
+    from ssw.contact.plastic import scene_path, summary, write_plastic_curve
+    from ssw.contact.scene import scene_plate
 
     if args.soil_model is None:
         raise ConfigError("--soil-model", None, "a model (von-mises) with --unload or "
@@ -202,24 +205,13 @@ def _run_plastic(args: argparse.Namespace, cfg: dict[str, Any], contact: dict[st
     if args.plate_thickness is None:
         args.plate_thickness = 0.0  # the sample bare unless a plate is given
     scene, mats = _scene(args, cfg, mats)  # the plate and sample of the flags
-    t = scene.plate_thickness
-    plate_key, sample = scene.plate_material, scene.sample
-    if t > 0 and plate_key not in mats:
-        raise ConfigError("--plate-material", plate_key,
-                          f"a material of the library: {', '.join(sorted(mats))}")
-    plate = (mats[plate_key].E, mats[plate_key].nu) if t > 0 else None
-    if sample is not None:
-        contact = sample.contact_settings(contact)
-    curve = solve_plastic_scene((args.soil_E, args.soil_nu), model, radius, contact,
-                                unload=bool(args.unload), plate=plate, plate_thickness=t)
-    from ssw.contact.scene import settings_of
-
-    inputs = {"soil_E": args.soil_E, "soil_nu": args.soil_nu, "soil_model": model.params(),
-              "soil_model_key": model.key, "indenter_radius": radius, "unload": args.unload,
-              "plate_material": plate_key, "plate_E": plate[0] if plate else None,
-              "plate_nu": plate[1] if plate else None, "plate_thickness": t,
-              "sample": sample.to_dict() if sample is not None else None,
-              **settings_of(contact)}
+    scene = replace(scene, soil_model=model)
+    if scene.sample is not None:
+        contact = scene.sample.contact_settings(contact)
+    curve, inputs = scene_path(scene, contact, radius, scene_plate(scene, mats),
+                               unload=bool(args.unload))
+    inputs.update(soil_model_key=model.key, unload=args.unload,
+                  sample=scene.sample.to_dict() if scene.sample is not None else None)
     if args.output:
         write_plastic_curve(args.output, curve, inputs)
     return {**inputs, **summary(curve), "delta": curve.delta.tolist(),

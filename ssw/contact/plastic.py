@@ -731,24 +731,33 @@ def loading_curve(curve: PlasticCurve, inputs: dict[str, Any]) -> Any:
                       {**inputs, **summary(curve)}, dict(curve.stats))
 
 
-def scene_curve(scene: Any, contact_cfg: dict[str, Any], indenter_radius: float,
-                plate: tuple[float, float] | None) -> Any:
-    """A study scene with a ``soil_model`` (:class:`ssw.config.Scene`): its loading curve
-    (:func:`loading_curve`) on the contact config's mesh and increments, through the scene's
-    plate (its ``(E Pa, nu)``, :func:`ssw.contact.scene.solve_scene` resolves it) when it has
-    one."""
+def scene_path(scene: Any, contact_cfg: dict[str, Any], indenter_radius: float,
+               plate: tuple[float, float] | None, unload: bool = False
+               ) -> tuple[PlasticCurve, dict[str, Any]]:
+    """The plastic path of a scene with a ``soil_model`` (:class:`ssw.config.Scene`) and
+    its inputs: :func:`solve_plastic_scene` on the contact config's mesh and increments
+    (a finite block's settings already applied, :meth:`ssw.sample.Sample.contact_settings`),
+    through the scene's plate ``(E Pa, nu)`` (:func:`ssw.contact.scene.scene_plate`) when
+    it has one; with ``unload``, lifted back until the sphere leaves."""
     from ssw.contact.scene import settings_of
 
     plate_key = scene.plate_material if scene.plate_thickness > 0 else "none"
     curve = solve_plastic_scene((scene.soil_E, scene.soil_nu), scene.soil_model,
-                                indenter_radius, contact_cfg, plate=plate,
+                                indenter_radius, contact_cfg, unload=unload, plate=plate,
                                 plate_thickness=scene.plate_thickness)
     inputs = {"soil_E": scene.soil_E, "soil_nu": scene.soil_nu, "plate_material": plate_key,
               "plate_E": plate[0] if plate else None, "plate_nu": plate[1] if plate else None,
               "plate_thickness": float(scene.plate_thickness),
               "indenter_radius": indenter_radius, "soil_model": scene.soil_model.params(),
               "scene_id": scene.scene_id, **settings_of(contact_cfg)}
-    return loading_curve(curve, inputs)
+    return curve, inputs
+
+
+def scene_curve(scene: Any, contact_cfg: dict[str, Any], indenter_radius: float,
+                plate: tuple[float, float] | None) -> Any:
+    """A study scene with a ``soil_model``: its loading curve (:func:`loading_curve`) of
+    :func:`scene_path`."""
+    return loading_curve(*scene_path(scene, contact_cfg, indenter_radius, plate))
 
 
 def _factor(A: Any) -> Any:

@@ -462,6 +462,18 @@ def strain_energy(state: dict[str, Any], lam: np.ndarray) -> float:
     return 0.5 * float(lam @ W @ lam)
 
 
+def scene_plate(scene: Any, materials: dict[str, Any]) -> tuple[float, float] | None:
+    """The ``(E Pa, nu)`` of a scene's plate from the material library (None: no plate);
+    ConfigError naming ``plate_material`` when the library has no such material."""
+    if scene.plate_thickness <= 0:
+        return None
+    if scene.plate_material not in materials:
+        raise ConfigError("plate_material", scene.plate_material,
+                          f"a material of the library: {', '.join(sorted(materials))}")
+    m = materials[scene.plate_material]
+    return (m.E, m.nu)
+
+
 def solve_scene(
     scene: Scene, contact_cfg: dict[str, Any], indenter_radius: float,
     materials: dict[str, Material], cache: MeshCache | None = None,
@@ -480,14 +492,8 @@ def solve_scene(
     """
     if scene.sample is not None:  # a finite block: the FEM's soil domain is the block
         contact_cfg = scene.sample.contact_settings(contact_cfg)
-    plate = None
+    plate = scene_plate(scene, materials)
     plate_key = scene.plate_material if scene.plate_thickness > 0 else "none"
-    if scene.plate_thickness > 0:
-        if scene.plate_material not in materials:
-            raise ConfigError("plate_material", scene.plate_material,
-                              f"a material of the library: {', '.join(sorted(materials))}")
-        m = materials[scene.plate_material]
-        plate = (m.E, m.nu)
     if scene.soil_model is not None:  # elasto-plastic: ssw.contact.plastic
         from ssw.contact.plastic import scene_curve
 

@@ -35,6 +35,17 @@ BACKWARD_ERROR_TOL = 1e-10
 
 
 def _petsc():
+    """The initialized ``petsc4py.PETSc`` module, the one place ssw imports it.
+
+    With the binary stack (the ``dolfinx-solver-real`` wheel, ``scripts/setup.sh``'s
+    default) its package must be imported first: it loads the ``mpich`` wheel's MPI ahead
+    of PETSc's shared library. A from-source PETSc (``SSW_PETSC=source``) has no such
+    package and needs nothing first.
+    """
+    try:
+        import dolfinx_solver  # noqa: F401  (orders MPI ahead of petsc4py)
+    except ImportError:
+        pass
     import petsc4py
 
     petsc4py.init()

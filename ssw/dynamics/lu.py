@@ -18,6 +18,7 @@ from __future__ import annotations
 import numpy as np
 
 from ssw.contact.petsc_solver import (
+    _petsc,
     backward_error,
     check_backward_error,
     check_converged,
@@ -30,13 +31,8 @@ PREFIX = "ssw_dynamics_"
 
 
 def petsc():
-    """The initialized ``petsc4py.PETSc`` module."""
-    import petsc4py
-
-    petsc4py.init()
-    from petsc4py import PETSc
-
-    return PETSc
+    """The initialized ``petsc4py.PETSc`` module (:func:`ssw.contact.petsc_solver._petsc`)."""
+    return _petsc()
 
 
 class LU:

@@ -15,13 +15,13 @@
 # (default .venv); SSW_PYTHON the interpreter (default: python3.12/3.13/3.14 on PATH, then
 # pyenv's versions, for the binary route; python3.11 for the source route).
 #
-# Packages are installed by uv (pinned in constraints.txt, installed into the venv by pip):
+# Packages are installed by uv (pinned in constraints.txt, put into the venv by pip):
 # measured from an empty cache on 2 cores, uv installs the binary stack and ssw's
 # dependencies in 27 s where pip takes 225 s.
 #
 # Idempotent: a stamp records the hash of this script, constraints.txt, pyproject.toml, the
-# route and the interpreter; when nothing changed and the imports still work, it returns in
-# a few seconds. A venv made by the other route (or another Python) is made anew.
+# route and the interpreter; when nothing changed and the packages are in place, it returns
+# in about a second. A venv made by the other route (or another Python) is made anew.
 #
 # Why the source recipe looks the way it does (measured on this kind of machine):
 #   * PETSc's build uses the `mpicc` on PATH and keeps that MPI's RUNPATH in the wheel that
@@ -86,10 +86,14 @@ PYVER=$("$PY" -c 'import sys; print("%d.%d" % sys.version_info[:2])') ||
 SYS_PKGS=(libglu1-mesa libxrender1 libxcursor1 libxft2 libxinerama1 libgl1 chromium
           chromium-driver)
 # source route: libopenblas-dev (BLAS/LAPACK for PETSc), libmpich-dev + mpich (the one MPI:
-# mpicc, mpiexec); a Debian Python needs its venv module's package to make the venv.
+# mpicc, mpiexec).
 if [ "$ROUTE" = source ]; then
   SYS_PKGS+=(libopenblas-dev libmpich-dev mpich)
-  "$PY" -c 'import ensurepip' >/dev/null 2>&1 || SYS_PKGS+=("python$PYVER-venv")
+fi
+# A Debian Python without pip needs its venv package (ensurepip) to make a venv with pip.
+if ! "$PY" -m pip --version >/dev/null 2>&1 && ! "$PY" -c 'import ensurepip' >/dev/null 2>&1
+then
+  SYS_PKGS+=("python$PYVER-venv")
 fi
 missing=()
 for p in "${SYS_PKGS[@]}"; do
@@ -117,7 +121,14 @@ if [ "$ROUTE" = source ]; then
 fi
 
 # ---------------------------------------------------------------- virtual environment
-# The check that the venv works: ssw's own import of PETSc (the binary stack's MPI first).
+# Up to date: the stamp of this set-up is there and the packages are in place (the full
+# import check ran when the stamp was written; this one costs hundredths of a second).
+present() {
+  "$VENV/bin/python" -c "import importlib.util as u, sys
+sys.exit(any(u.find_spec(m) is None
+             for m in ('ssw', 'gmsh', 'h5py', 'snakemake', 'petsc4py', 'mpi4py')))" 2>/dev/null
+}
+# The full check: ssw's own import of PETSc (the binary stack's MPI first) and mpi4py.
 check_imports() {
   "$VENV/bin/python" -c "import gmsh, h5py, snakemake, mpi4py
 from ssw.contact.petsc_solver import _petsc
@@ -128,7 +139,7 @@ id_line="$ROUTE $("$PY" -c 'import sys; print(sys.version.split()[0])')"
 stamp_src=$( (cat scripts/setup.sh constraints.txt pyproject.toml; echo "$id_line") |
             sha256sum | cut -c1-16)
 stamp="$VENV/.ssw-setup-$stamp_src"
-if [ -f "$stamp" ] && check_imports; then
+if [ -f "$stamp" ] && present; then
   log "environment up to date ($VENV, $id_line)"
   exit 0
 fi
@@ -139,20 +150,30 @@ if [ -f "$VENV/pyvenv.cfg" ] && [ "$(cat "$VENV/.ssw-route" 2>/dev/null)" != "$i
   log "replacing $VENV (made for: $(cat "$VENV/.ssw-route" 2>/dev/null || echo unknown))"
   rm -rf "$VENV"
 fi
+C=(-c "$here/constraints.txt")
 if [ ! -x "$VENV/bin/python" ]; then
   log "creating $VENV ($id_line, $PY)"
-  "$PY" -m venv "$VENV"
+  # without ensurepip's pip (seconds) where the interpreter has a pip to install uv with;
+  # uv installs the pinned pip with the rest
+  if "$PY" -m pip --version >/dev/null 2>&1; then
+    "$PY" -m venv --without-pip "$VENV"
+  else
+    "$PY" -m venv "$VENV"
+  fi
   echo "$id_line" > "$VENV/.ssw-route"
 fi
-C=(-c "$here/constraints.txt")
 if ! "$VENV/bin/uv" --version >/dev/null 2>&1; then
-  "$VENV/bin/python" -m pip --disable-pip-version-check -q install "${C[@]}" uv
+  if "$VENV/bin/python" -m pip --version >/dev/null 2>&1; then
+    "$VENV/bin/python" -m pip --disable-pip-version-check -q install "${C[@]}" uv
+  else
+    "$PY" -m pip --disable-pip-version-check -q --python "$VENV/bin/python" install "${C[@]}" uv
+  fi
 fi
 uvpip() { "$VENV/bin/uv" pip "$1" --quiet --python "$VENV/bin/python" "${@:2}"; }
 
 if [ "$ROUTE" = binary ]; then
   log "installing ssw, its pinned dependencies and the binary PETSc stack"
-  uvpip install "${C[@]}" -e ".[dev,petsc]"
+  uvpip install "${C[@]}" pip -e ".[dev,petsc]"
 else
   uvpip install "${C[@]}" numpy cython setuptools wheel
   if ! "$VENV/bin/python" -c "import petsc" >/dev/null 2>&1; then
@@ -170,7 +191,7 @@ else
     MPICC="$MPICC" uvpip install "${C[@]}" --no-binary mpi4py mpi4py
   fi
   log "installing ssw and its pinned dependencies"
-  uvpip install "${C[@]}" -e ".[dev]"
+  uvpip install "${C[@]}" pip -e ".[dev]"
 fi
 
 check_imports || {

@@ -26,17 +26,22 @@ backward error ``||A X - B|| / (||A|| ||X|| + ||B||)`` of the block (of the sing
 for ``plastic``); for ``schur`` the whole condensation's time and the largest difference
 to today's ``S`` relative to its largest entry. Wall times are the best of ``--repeat``.
 
-Measured 2026-11-26 on 2 cores (shared, load 9-13, so CPU times are the comparison; binary
-stack, PETSc 3.25.5) with ``ssw bench lu --repeat 3``. Monolithic u-p (18 735 and 27 964
-dofs): MUMPS factors in 0.16/0.27 s CPU against PETSc's 0.20/0.40 s and solves a block of
-64 in 0.06/0.09 s against 0.16/0.28 s, backward errors 1e-20 both: the monolithic engine
-switched to MUMPS (``LUSolver(solver="auto")``; its whole curve 0.58 s CPU against 1.06 s).
-Dynamic u-p (18 870 dofs): MUMPS factors faster (0.18 against 0.25 s) but solves one
-right-hand side slower (6.1 ms against 3.8 ms), and a wall takes thousands of such
-solves: PETSc's LU stays. Schur complements (112-231 retained dofs): today's trailing
-block of SuperLU takes 0.09-0.10 s CPU, MUMPS's factor-and-solve 0.22-0.33 s: stays.
-Plastic Newton matrices (18 735 dofs): SuperLU 0.10-0.11 s, MUMPS and SuperLU_DIST
-0.11-0.12 s, solves 3.4 ms against 5.8-6.7 ms: stays.
+Measured 2026-11-26 on 2 cores (shared, load 5-8: CPU times in parentheses are the
+comparison; binary stack, PETSc 3.25.5) with ``ssw bench lu --repeat 3``:
+
+* monolithic u-p (18 735 and 27 964 dofs): MUMPS factors in 0.15/0.25 s CPU against
+  PETSc's 0.19/0.39 s and solves a block of 64 in 0.06/0.09 s against 0.16/0.29 s,
+  backward errors 1e-20 both; the whole curve (1000 increments) 0.49/0.59 s CPU against
+  0.66/0.87 s (wall 0.98/1.11 s against 1.31/1.73 s), forces equal within 7e-11: the
+  monolithic engine switched to MUMPS (``LUSolver(solver="auto")``);
+* dynamic u-p (18 870 dofs): MUMPS factors faster (0.17 against 0.24 s) but solves one
+  right-hand side slower (5.9 against 3.5 ms), and a wall steps thousands of such solves:
+  PETSc's natural-order LU stays;
+* Schur complements (112-231 retained dofs): today's trailing block of SuperLU takes
+  0.08-0.10 s CPU, the fastest alternative (MUMPS, factor and solve) 0.22-0.33 s: stays;
+* plastic Newton matrices (18 735 dofs): SuperLU factors in 0.10-0.11 s and solves in
+  3.8 ms, MUMPS 0.11 s and 5.8-6.0 ms, SuperLU_DIST 0.11 s and 6.4-6.5 ms, PETSc
+  (nested dissection) 0.16 s and 3.4 ms: SuperLU stays.
 
 Writes ``lu_bench.csv`` and ``lu_bench.json`` under the output folder.
 """

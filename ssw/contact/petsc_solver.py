@@ -14,7 +14,7 @@ with each node's displacements before its pressure: the saddle-point u-p matrix 
 no zero pivot, up to ``nu = 0.5``. A factorization package (``solver``: MUMPS,
 SuperLU_DIST where the PETSc build has them) or another PETSc ordering can be asked for;
 those packages order and pivot by themselves. ``ssw bench lu`` times them all on ssw's
-matrices: MUMPS factors the contact's u-p matrices ~25 % faster than PETSc's own LU and
+matrices: MUMPS factors the contact's u-p matrices 20-35 % faster than PETSc's own LU and
 solves a block of right-hand sides ~3x faster, at equal backward errors, so the monolithic
 engine (which solves blocks) uses it (``solver="auto"``); PETSc's own LU solves a single
 right-hand side ~1.6x faster, so the dynamic wall's time steps keep it.
@@ -58,9 +58,9 @@ BACKWARD_ERROR_TOL = 1e-10
 #: packages the binary PETSc stack carries).
 SOLVERS = ("petsc", "mumps", "superlu_dist")
 #: The package of ``solver="auto"``: MUMPS solves a block of right-hand sides ~3x faster
-#: than PETSc's own LU (one column at a time) and factors the contact's u-p matrices ~25 %
+#: than PETSc's own LU (one column at a time) and factors the contact's u-p matrices 20-35 %
 #: faster, with backward errors as small; PETSc's LU keeps the single solve (~1.6x faster:
-#: the dynamic wall's time steps). ``ssw bench lu``, 2 cores.
+#: the dynamic wall's time steps). ``ssw bench lu`` (its module docstring), 2 cores.
 BLOCK_SOLVER = "mumps"
 
 

@@ -46,8 +46,6 @@ from ssw.errors import ConfigError, SolverError
 
 #: LCP gap tolerance relative to the indentation scale.
 LCP_TOL = 1e-10
-#: Bisection steps of the static indentation carrying a force.
-BISECTION_STEPS = 80
 #: How the bead's elasticity enters (:class:`Scene`).
 BEAD_MODELS = ("compliance", "scale", "rigid")
 #: The FEM sleeps (the soil at rest under the static contact, the force the static one)
@@ -183,21 +181,16 @@ class ContactFEM:
         return np.array([self.static_contact(x).sum() for x in d.ravel()]).reshape(d.shape)
 
     def static_indentation(self, F: float) -> float:
-        """Indentation (m) at which the static force is ``F`` (N): bisection."""
+        """Indentation (m) at which the static force is ``F`` (N): the root of the monotone
+        static law (:func:`ssw.roots.find_root`, the bracket grown from ``[0, 1 um]`` up
+        to the bead's radius)."""
+        from ssw.roots import find_root
+
         if F <= 0:
             return 0.0
-        lo, hi = 0.0, 1e-6
-        while self.static_contact(hi).sum() < F:
-            lo, hi = hi, 2.0 * hi
-            if hi > self.scene.radius:
-                raise SolverError(f"no static indentation carries {F} N")
-        for _ in range(BISECTION_STEPS):
-            mid = 0.5 * (lo + hi)
-            if self.static_contact(mid).sum() < F:
-                lo = mid
-            else:
-                hi = mid
-        return 0.5 * (lo + hi)
+        root = find_root(lambda d: self.static_force(d) - F, 0.0, 1e-6, grow=True,
+                         limit=self.scene.radius)
+        return float(root.x)
 
     def rest(self, d: float) -> State:
         """The state at rest with the bead held at ``d`` (m)."""

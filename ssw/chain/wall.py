@@ -43,6 +43,7 @@ import numpy as np
 
 from ssw.chain.params import ChainParams
 from ssw.errors import ConfigError, SswError
+from ssw.hertz import effective_modulus, hertz_coefficient
 from ssw.roots import find_root
 
 #: Cells of the uniform indentation grid a FEM curve is resampled on.
@@ -215,7 +216,7 @@ def scene_arrays(soil_E: Any, soil_nu: Any) -> tuple[np.ndarray, np.ndarray]:
 def rigid_wall(params: ChainParams, soil_E: Any, soil_nu: Any) -> PowerWall:
     """Rigid flat: ``F = 4/3 sqrt(R) E_b/(1-nu_b^2) d^1.5`` (soil values only set the count)."""
     E, _ = scene_arrays(soil_E, soil_nu)
-    coef = 4.0 / 3.0 * np.sqrt(params.bead_radius) / params.bead_compliance
+    coef = hertz_coefficient(effective_modulus(params.bead_E, params.bead_nu), params.bead_radius)
     return PowerWall(np.full(E.size, coef), np.full(E.size, 1.5))
 
 

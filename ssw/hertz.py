@@ -106,15 +106,16 @@ def energy_indentation(A: ArrayLike, energy: ArrayLike, load: ArrayLike = 0.0
         ``(2/5) A delta^(5/2) - P delta = W``,
 
     the bound energy conservation sets on the indentation of an impact that brings ``W``
-    while ``P`` presses on (energy conservation in a Hertz impact; Johnson 1985,
-    ch. 11). Without a load it is
+    while ``P`` presses on (Johnson 1985, ch. 11). Without a load it is
     ``(5 W / (2 A))^(2/5)``; with one, the root of the convex left side (negative, then
     increasing beyond its minimum) by :func:`ssw.roots.find_root` on the bracket
-    ``[(5 W / (2 A))^(2/5), max((5 W / A)^(2/5), (5 P / A)^(2/3))]`` (the left side is
-    ``-P delta <= 0`` at the lower end; at the upper one ``(1/5) A delta^(5/2)`` covers
-    ``W`` and ``P delta`` each). The upper end of the final bracket is returned: the
-    contact stores at least ``W + P delta`` there, so the value bounds the reach from
-    above, as its users need (a range that must hold the energy, an upper bound of a peak).
+    ``[max((5 W / (2 A))^(2/5), (5 P / (2 A))^(2/3)), max((5 W / A)^(2/5), (5 P / A)^(2/3))]``
+    (at the lower end the left side is ``-P delta`` or ``-W``, <= 0: the bracket starts
+    1e-9 below it; at the upper one ``(1/5) A delta^(5/2)`` covers ``W`` and ``P delta``
+    each); without an energy the root is ``(5 P / (2 A))^(2/3)``. The upper end of the
+    final bracket is returned: the contact stores at least ``W + P delta`` there, so the
+    value bounds the reach from above, as its users need (a range that must hold the
+    energy, an upper bound of a peak).
 
     Parameters
     ----------
@@ -133,11 +134,14 @@ def energy_indentation(A: ArrayLike, energy: ArrayLike, load: ArrayLike = 0.0
     Aa = _check_positive("A", A)
     W, P = np.broadcast_arrays(np.asarray(energy, float), np.asarray(load, float))
     if np.any(~(W >= 0)) or np.any(~(P >= 0)):
-        raise ConfigError("energy, load", (energy, load), "energies and loads >= 0")
+        raise ConfigError("energy", (energy, load), "energies and loads >= 0 (J, N)")
     Aa, W, P = np.broadcast_arrays(Aa, W, P)
     lo = (2.5 * W / Aa) ** 0.4
     if not np.any(P > 0):
         return lo
+    # a hair below the lower end: there the left side is negative by far more than its
+    # round-off (its slope is at least 1.5 W / delta, or 1.5 P)
+    lo = (1.0 - 1e-9) * np.maximum(lo, (2.5 * P / Aa) ** (2.0 / 3.0))
     hi = np.maximum((5.0 * W / Aa) ** 0.4, (5.0 * P / Aa) ** (2.0 / 3.0))
     root = find_root(lambda d: 0.4 * Aa * d**2.5 - P * d - W, lo, hi)
     return root.hi

@@ -53,12 +53,26 @@ TABLE_TAIL = 0.1
 
 
 def force_indentation(force: Any, F: Any, start: np.ndarray) -> np.ndarray:
-    """Indentations (m) at which the non-decreasing laws ``force(d)`` (N, one per scene)
-    carry ``F`` (N, negative read as 0).
+    """Indentations (m) at which the non-decreasing laws ``force(d)`` carry ``F``.
 
-    The bracket ``[0, start]`` (m, > 0) is grown until it holds ``F``, then the roots are
-    found by :func:`ssw.roots.find_root` to its default relative tolerance (a few ulp),
-    vectorized over the scenes.
+    The bracket ``[0, start]`` is grown until it holds ``F``, then the roots are found by
+    :func:`ssw.roots.find_root` to its default relative tolerance (a few ulp), vectorized
+    over the scenes.
+
+    Parameters
+    ----------
+    force : callable
+        ``force(d) -> F``: the laws' forces (N) at the indentations ``d`` (m), one per
+        scene.
+    F : array_like
+        Forces to carry (N), one per scene; a negative one is read as 0.
+    start : array_like
+        First upper end of each bracket (m, > 0).
+
+    Returns
+    -------
+    ndarray
+        Indentations (m), the broadcast shape of ``start`` and ``F``.
     """
     hi, target = np.broadcast_arrays(np.asarray(start, float), np.asarray(F, float))
     target = np.maximum(target, 0.0)

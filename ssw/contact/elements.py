@@ -53,10 +53,23 @@ def p2_shape(xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def triangle_jacobian(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Jacobians (ne, 2, 2) and their determinants (ne,) m^2 of the affine maps of the
-    reference triangle onto the straight-sided triangles whose first three nodes are
-    ``xy[:, :3]`` (ne, >= 3, 2) m: ``J = [x1 - x0, x2 - x0]`` (columns), ``det J`` twice the
-    signed area (positive counter-clockwise)."""
+    """Jacobians of the affine maps of the reference triangle onto straight-sided ones.
+
+    ``J = [x1 - x0, x2 - x0]`` (columns: d(r, z)/d(s, t)); ``det J`` is twice the signed
+    area, positive for counter-clockwise vertices.
+
+    Parameters
+    ----------
+    xy : ndarray
+        (ne, >= 3, 2) node coordinates (r, z), m; the first three are the vertices.
+
+    Returns
+    -------
+    jac : ndarray
+        (ne, 2, 2) Jacobians, m.
+    det : ndarray
+        (ne,) their determinants, m^2.
+    """
     v = xy[:, :3]
     jac = np.stack([v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]], axis=2)  # (ne, 2 (r,z), 2 (s,t))
     return jac, jac[:, 0, 0] * jac[:, 1, 1] - jac[:, 0, 1] * jac[:, 1, 0]

@@ -67,7 +67,20 @@ class ForwardGrid:
     vary: dict[str, np.ndarray]
 
     def group_of(self, nu: np.ndarray, vary: dict[str, np.ndarray]) -> np.ndarray:
-        """(k,) the group of each target (its nu and chain values), -1 where none."""
+        """The group of each target (its nu and chain values).
+
+        Parameters
+        ----------
+        nu : ndarray
+            (k,) Poisson's ratios of the targets.
+        vary : dict
+            The targets' chain values, name -> (k,) array.
+
+        Returns
+        -------
+        ndarray
+            (k,) int: the row of each target's group, -1 where the grid has none.
+        """
         if set(vary) != set(self.vary):
             return np.full(nu.size, -1)
         rows = {tuple(r): g for g, r in enumerate(
@@ -122,7 +135,22 @@ def forward_grid(
 
 
 def sweep_grid(sweep: Sweep, soil_nu: float, E_range: tuple[float, float]) -> ForwardGrid:
-    """The :class:`ForwardGrid` of a stored sweep at ``soil_nu``, within ``E_range``."""
+    """The :class:`ForwardGrid` of a stored sweep.
+
+    Parameters
+    ----------
+    sweep : Sweep
+        A stored forward sweep.
+    soil_nu : float
+        The Poisson's ratio (one of the sweep's).
+    E_range : tuple of float
+        ``(E_min, E_max)``, Pa: the sweep's moduli kept.
+
+    Returns
+    -------
+    ForwardGrid
+        One group: the sweep's TOFs at ``soil_nu`` within ``E_range``.
+    """
     E, T = sweep.curve(soil_nu)
     sel = (E >= E_range[0] * (1 - 1e-12)) & (E <= E_range[1] * (1 + 1e-12))
     return ForwardGrid(np.asarray(E[sel], float), np.asarray(T[sel], float)[None],
@@ -130,10 +158,25 @@ def sweep_grid(sweep: Sweep, soil_nu: float, E_range: tuple[float, float]) -> Fo
 
 
 def grid_fault(E: np.ndarray, T: np.ndarray, nu: float) -> str:
-    """Why the forward TOFs ``T`` (s) on the grid ``E`` (Pa) cannot be inverted at Poisson's
-    ratio ``nu``, or "" if they can: fewer than two points, a missing (NaN) or infinite
-    TOF (NaN compares false: a bare difference test would pass it), or TOF(E) not strictly
-    decreasing."""
+    """Why a forward grid cannot be inverted (the inversion's guards), or "" if it can.
+
+    Fewer than two points, a missing (NaN) or infinite TOF (NaN compares false: a bare
+    difference test would pass it), or TOF(E) not strictly decreasing.
+
+    Parameters
+    ----------
+    E : ndarray
+        (m,) moduli of the grid, Pa, increasing.
+    T : ndarray
+        (m,) their TOFs, s.
+    nu : float
+        The Poisson's ratio (for the message).
+
+    Returns
+    -------
+    str
+        The reason, "" when the grid is invertible.
+    """
     if E.size < 2 or not np.all(np.isfinite(T)) or not np.all(np.diff(T) < 0):
         return (f"TOF(E) at nu = {nu:g} is not strictly decreasing on the E grid "
                 f"[{E[0]:.4g}, {E[-1]:.4g}] Pa, or has a missing value: cannot invert")

@@ -136,7 +136,7 @@ def estimate_moduli(
     names: tuple[str, ...] = ()
     cov = None
     if calibration is not None and calibration.covariance is not None:
-        names = calibration.continuous()
+        names = calibration.covariance_parameters
         cov = calibration.covariance_array()
     Es = [E * (1 + E_STEP), E * (1 - E_STEP)]
     nus_run = [nu_c, nu_c]

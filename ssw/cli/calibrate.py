@@ -122,6 +122,7 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
     out = {
         **ctx.inputs(),
         "parameters": cal.parameters, "parameter_std": cal.parameter_std,
+        "at_bound": cal.at_bound, "covariance_parameters": list(cal.covariance_parameters),
         "covariance": cal.covariance, "singular_values": cal.singular_values,
         "unidentified": cal.unidentified, "residuals": cal.residuals,
         "references": cal.references,
@@ -153,8 +154,11 @@ def _human(r: dict[str, Any]) -> str:
              f"{len(r['references'])} reference(s):"]
     for k, v in r["parameters"].items():
         std = (r["parameter_std"] or {}).get(k)
-        lines.append(f"  {k} = {v:.6g}" + (f" +- {std:.3g}" if std is not None else
-                                            " (no standard error: see below)"))
+        side = r["at_bound"].get(k)
+        lines.append(f"  {k} = {v:.6g}" + (
+            f" (held on its {side} bound: no standard error; the others' covariance is "
+            "conditional on it)" if side else f" +- {std:.3g}" if std is not None else
+            " (no standard error: see below)"))
     lines.append(f"  (striker drop height {r['drop_height'] * 1e3:.3g} mm)")
     lines.append("  singular values: " + ", ".join(f"{s:.3g}" for s in r["singular_values"]))
     lines += [f"  not identified: {u}" for u in r["unidentified"]]

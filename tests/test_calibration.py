@@ -220,3 +220,42 @@ def test_each_thesis_foam_alone_calibrates_the_striker_speed(foam):
                     wall_options={"contact": cfg["contact"]}, loo=False, scan_points=16)
     assert cal.references[0]["residual"] == pytest.approx(0.0, abs=0.1 * 1.0e-5)
     assert 0.1 <= cal.parameters["striker_velocity"] <= 2.0
+
+
+def test_the_readme_device_calibration_identifies_its_default_parameters(tmp_path, capsys):
+    """README "Measuring with your own device", steps 2 and 3, on the example recordings
+    (data/recordings: simulated by the chain with the Hertz wall, hence ``--law hertz``):
+    ``ssw calibrate --device ... --reference-recording ... --output ...`` without ``--free``
+    identifies the striker speed and the preload (before: "--free = None is not allowed").
+    The recordings' chain had no preload and struck at the speeds stored with each hit: the
+    calibrated speed is within 2 % of their mean, the preload within 0.5 N of 0 (at its
+    bound, flagged, or free), and ``ssw measure`` through the file brackets PCF15's 123 MPa."""
+    import json
+
+    import h5py
+
+    from ssw.cli import main
+
+    rec = ROOT / "data" / "recordings"
+    device = tmp_path / "my_device.yaml"
+    device.write_text((ROOT / "config" / "devices" / "thesis.yaml").read_text())
+    out = tmp_path / "my_calibration.json"
+    args = ["calibrate", "--device", str(device), "--law", "hertz", "--calibration", "none"]
+    for name, E, nu in (("PCF08", 38e6, 0.34), ("PCF15", 123e6, 0.33), ("PCF30", 445e6, 0.30)):
+        args += ["--reference-recording", f"{rec / name}.h5,{E},{nu}"]
+    assert main([*args, "--output", str(out)]) == 0
+    capsys.readouterr()
+    cal = load_calibration(out)
+    assert cal.free == ("striker_velocity", "preload")
+    speeds = []
+    for name in ("PCF08", "PCF15", "PCF30"):
+        with h5py.File(rec / f"{name}.h5") as f:
+            speeds += [json.loads(h.attrs["extra_json"])["striker_velocity"]
+                       for h in f["hits"].values()]
+    assert cal.parameters["striker_velocity"] == pytest.approx(np.mean(speeds), rel=0.02)
+    assert cal.parameters["preload"] < 0.5
+    assert ("preload" in cal.at_bound) == ("preload" not in cal.covariance_parameters)
+    assert main(["measure", str(rec / "PCF15.h5"), "--soil-nu", "0.33", "--device",
+                 str(device), "--calibration", str(out), "--json"]) == 0
+    m = json.loads(capsys.readouterr().out)
+    assert m["E_low"] < 123e6 < m["E_high"]

@@ -62,6 +62,10 @@ from ssw.calibration.residuals import (
 from ssw.device import parameter, parameter_value
 from ssw.errors import ConfigError, SolverError
 
+#: The parameters a calibration identifies when none are named: the striker speed and the
+#: static load on the chain (the soft/stiff TOF contrast of the references is set by the
+#: static load, their common level by the speed: README "Calibration").
+DEFAULT_FREE = ("striker_velocity", "preload")
 #: Grid points per continuous parameter: this many for one, fewer for several (product cap).
 SCAN_POINTS_1D = 32
 SCAN_BUDGET = 144

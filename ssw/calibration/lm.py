@@ -20,7 +20,7 @@ Levenberg-Marquardt step; Bertsekas 1982, the active set of a projected Newton m
   coordinate that crosses a bound stops on it and is active at the next iteration if the
   gradient still points out);
 * a problem is **converged** at a first-order (KKT) point: the undamped Gauss-Newton step of
-  its free coordinates would gain less than :data:`LM_FTOL` in chi^2, every active
+  its free coordinates would gain less than :func:`tolerance` in chi^2, every active
   coordinate's gradient pointing out of the box. A parameter whose optimum lies beyond its
   bound therefore converges ON the bound, and the problem's other parameters to their
   optimum given it.
@@ -49,7 +49,11 @@ LM_XTOL = 1e-6
 #: uncertainties squared: a change of 1 is one standard uncertainty, so 1e-3 moves the
 #: parameters by ~0.03 of their standard errors; the model TOF's own noise, the sub-step
 #: interpolation of its peaks, makes chi^2 jitter by ~1e-5 near chi^2 ~ 1); chi^2 itself
-#: below it is an exact fit.
+#: below it is an exact fit. Where the misfit exceeds the data's uncertainties (chi^2 per
+#: degree of freedom ``c > 1``: weights that are not uncertainties, or a model that does not
+#: describe the data) the standard errors scale by ``sqrt(c)`` and so does the chi^2 a step
+#: must gain: the tolerance is ``LM_FTOL * max(1, c)`` (:func:`tolerance`), the same
+#: fraction of the standard errors, and above the model's noise amplified by the misfit.
 LM_FTOL = 1e-3
 #: A coordinate within BOUND_TOL (scaled units) of a bound is on it.
 BOUND_TOL = 1e-9
@@ -102,6 +106,13 @@ class Problem:
     converged: bool = False
     iterations: int = 0
     active: np.ndarray = field(default_factory=lambda: np.zeros(0, int))
+
+
+def tolerance(pr: Problem) -> float:
+    """The chi^2 a step must gain to count (:data:`LM_FTOL`, scaled by the misfit per
+    degree of freedom when it exceeds 1)."""
+    dof = max(pr.r.size - pr.basis.shape[1], 1)
+    return LM_FTOL * max(1.0, pr.cost / dof) if np.isfinite(pr.cost) else LM_FTOL
 
 
 def active_set(x: np.ndarray, g: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
@@ -211,7 +222,7 @@ def levenberg_marquardt(problems: list[Problem], evaluate: Evaluate, lo: np.ndar
                 pr.nu_up = 2.0
                 # a step stopped by a bound gains little and may still be far from the
                 # optimum on it: the next iteration decides (the active set changes)
-                if (gain <= LM_FTOL and not clipped[i]) or cost < LM_FTOL:
+                if (gain <= tolerance(pr) and not clipped[i]) or cost < LM_FTOL:
                     pr.done = pr.converged = True
             else:
                 _reject(pr)
@@ -241,7 +252,7 @@ def _step(pr: Problem, lo: np.ndarray, hi: np.ndarray
         return None
     A = pr.J @ B
     H, g = A.T @ A, A.T @ pr.r
-    if float(g @ np.linalg.lstsq(H, g, rcond=None)[0]) < LM_FTOL:
+    if float(g @ np.linalg.lstsq(H, g, rcond=None)[0]) < tolerance(pr):
         pr.done = pr.converged = True  # even the undamped step gains too little: KKT
         return None
     D = np.diag(np.maximum(np.diag(H), 1e-12))

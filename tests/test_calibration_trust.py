@@ -145,6 +145,16 @@ def test_a_parameter_beyond_its_bound_is_held_there_flagged_with_a_conditional_c
     d = json.loads(path.read_text())
     assert d["at_bound"] == {"preload": "lower"}
     assert d["covariance_parameters"] == ["striker_velocity"]
+    assert load_calibration(path).at_bound == {"preload": "lower"}
+    # a file of an older ssw: a list of names near a bound, the covariance over every
+    # continuous parameter (one-sided differences there): read as it was made
+    old = tmp_path / "old.json"
+    old.write_text(json.dumps({**{k: v for k, v in d.items() if k != "covariance_parameters"},
+                               "at_bound": ["preload"],
+                               "covariance": [[d["covariance"][0][0], 0.0], [0.0, 0.01]]}))
+    back = load_calibration(old)
+    assert back.at_bound == {} and back.covariance_parameters == ("striker_velocity",
+                                                                  "preload")
     dev_file = tmp_path / "nominal.yaml"
     write_device(dev_file, dev.with_(preload=3.0))
     assert main(["invert", "--tof", repr(float(tofs[1])), "--tof-std", "1e-6", "--soil-nu",
@@ -221,8 +231,9 @@ def test_a_covariance_that_is_not_positive_definite_is_refused_on_load(no_preloa
 def test_the_calibration_names_its_device_and_a_mismatch_is_refused(no_preload, tmp_path,
                                                                      capsys):
     """The calibration records the digest of the device it was made for: --device that
-    device is fine, another bead count is refused naming both sides, and a flag changing a
-    calibrated parameter is refused naming it."""
+    device is fine, a device file with another bead count is refused naming both sides, and
+    a flag contradicting the calibration (a device field, a calibrated parameter, the model)
+    is refused naming it and the calibrated value."""
     dev, tofs = no_preload
     cal = calibrate(_refs(tofs), dev.with_(preload=1.0), ["striker_velocity", "preload"],
                     materials=material_set(), numerics=NUM, wall="hertz", loo=False)
@@ -234,13 +245,17 @@ def test_the_calibration_names_its_device_and_a_mismatch_is_refused(no_preload, 
             "--calibration", str(path)]
     assert main([*base, "--device", str(dev_file)]) == 0
     capsys.readouterr()
-    assert main([*base, "--device", str(dev_file), "--beads", "30"]) == 2
+    other = tmp_path / "other.yaml"
+    write_device(other, dev.with_(preload=1.0, beads=30))
+    assert main([*base, "--device", str(other)]) == 2
     err = capsys.readouterr().err
     assert "beads: 20 there, 30 here" in err and "digest differs" in err
+    assert main([*base, "--device", str(dev_file), "--beads", "30"]) == 2
+    assert "--beads = 30" in (err := capsys.readouterr().err) and "beads = 20" in err
     assert main([*base, "--striker-velocity", "0.5"]) == 2
     assert "identified striker_velocity" in capsys.readouterr().err
     assert main([*base, "--damping", "0.1"]) == 2
-    assert "the model" in capsys.readouterr().err
+    assert "was made with damping = 0.0" in capsys.readouterr().err
 
 
 def test_too_few_hits_use_the_stated_scatter_or_say_the_term_is_missing(tmp_path, capsys):

@@ -131,7 +131,7 @@ def load_calibration(path: str | Path) -> Calibration:
         alternatives=d["alternatives"], wall=d["wall"], numerics=d["numerics"],
         material_set=d.get("material_set", "realistic"),
         materials_file=d.get("materials_file"), provenance=d.get("provenance", {}),
-        at_bound=_at_bound(d.get("at_bound", {}), d["parameters"]),
+        at_bound=_at_bound(d.get("at_bound", {})),
         device_sha256=d.get("device_sha256", ""), path=str(p),
         # a file without the list has its covariance over every continuous free parameter
         covariance_parameters=tuple(d.get("covariance_parameters", cont)),
@@ -140,16 +140,13 @@ def load_calibration(path: str | Path) -> Calibration:
     return cal
 
 
-def _at_bound(value: Any, parameters: dict[str, Any]) -> dict[str, str]:
-    """``{name: lower | upper}`` of a file's ``at_bound`` (a list of names in files of
-    older ssw versions: the side is the nearer end of the parameter's default range)."""
+def _at_bound(value: Any) -> dict[str, str]:
+    """``{name: lower | upper}`` of a file's ``at_bound``. Files of older ssw versions list
+    names (a parameter within one difference step of its bound, still in the covariance,
+    differentiated one-sidedly): none is held there."""
     if isinstance(value, dict):
         return {str(k): str(v) for k, v in value.items()}
-    out = {}
-    for n in value:
-        p, v = parameter(n), float(parameters[n])
-        out[n] = "lower" if abs(v - p.lower) <= abs(p.upper - v) else "upper"
-    return out
+    return {}
 
 
 def check_covariance(cal: Calibration, source: str) -> None:

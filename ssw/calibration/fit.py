@@ -345,8 +345,26 @@ class Local:
 
 def local(x: np.ndarray, r: np.ndarray, Jw: np.ndarray, lo: np.ndarray, hi: np.ndarray
           ) -> Local:
-    """The :class:`Local` picture at ``x`` (scaled coordinates) with the weighted residuals
-    ``r`` (n,) and their Jacobian ``Jw`` (n, p) there, within the bounds ``lo``, ``hi``."""
+    """The :class:`Local` picture of a least-squares point.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        The point, scaled coordinates (p,).
+    r : numpy.ndarray
+        The weighted residuals there (n,).
+    Jw : numpy.ndarray
+        Their Jacobian in the scaled coordinates (n, p).
+    lo : numpy.ndarray
+        Lower bounds of the scaled coordinates (p,).
+    hi : numpy.ndarray
+        Upper bounds (p,).
+
+    Returns
+    -------
+    Local
+        The held parameters and the singular values of the others.
+    """
     held = active_set(x, Jw.T @ r, lo, hi)
     free = np.flatnonzero(held == 0)
     q = free.size

@@ -107,11 +107,27 @@ def resolve_calibration(spec: str | None, cfg: dict[str, Any]) -> Any:
 
 
 def check_device(cal: Any, device: Any, materials: dict[str, Any], spec: str | None) -> None:
-    """ConfigError unless the calibration ``cal`` was made for ``device`` (the command's:
-    ``--device``, else the config's with ``--calibration auto``, else the calibration's own,
-    with the device flags that agree with the calibration applied) with these
-    ``materials``. The message names both sides (the calibration's device and the
-    command's)."""
+    """Refuse a calibration made for another device than the command's.
+
+    Parameters
+    ----------
+    cal : ssw.calibration.Calibration
+        The calibration.
+    device : ssw.device.Device
+        The command's device: ``--device``, else the config's with ``--calibration auto``,
+        else the calibration's own, with the device flags of parameters it did not identify
+        applied.
+    materials : dict
+        The command's materials library (key -> Material).
+    spec : str or None
+        The ``--calibration`` argument (``auto``: the study's calibration).
+
+    Raises
+    ------
+    ssw.provenance.ProvenanceError
+        Unless the device digests agree (``ssw.provenance.require_match``), naming both
+        sides.
+    """
     from ssw.calibration.file import device_digest
     from ssw.provenance import require_match
 

@@ -70,19 +70,30 @@ def chain_tof(E: float, nu: float, v: float, *, sensor_mass: float = BEAD_MASS,
     load = G * m
     load[1] += preload
 
-    stiff = np.append(np.full(n - 1, A), Aw)[:, None]
+    stiff = np.append(np.full(n - 1, A), Aw)
 
     def forces(x: np.ndarray, w: np.ndarray) -> np.ndarray:
-        """Contact forces (n, k) of states (n, k): the n - 1 bead pairs, then the wall."""
-        d = np.concatenate([x[:-1] - x[1:], x[-1:]])
-        rate = np.concatenate([w[:-1] - w[1:], w[-1:]])
-        return stiff * np.maximum(d, 0.0) ** 1.5 + damping * rate * (d > 0)
+        """Contact forces (n, ...) of positions and velocities (n, ...): the n - 1 bead
+        pairs, then the wall."""
+        d = x.copy()
+        d[:-1] -= x[1:]
+        dp = np.maximum(d, 0.0)
+        f = stiff.reshape((n,) + (1,) * (x.ndim - 1)) * dp * np.sqrt(dp)
+        if damping:
+            rate = w.copy()
+            rate[:-1] -= w[1:]
+            f += damping * rate * (d > 0)
+        return f
+
+    out = np.empty(2 * n)
 
     def rhs(_t: float, y: np.ndarray) -> np.ndarray:
-        f = forces(y[:n, None], y[n:, None])[:, 0]
-        net = load - f
-        net[1:] += f[:-1]
-        return np.concatenate([y[n:], net / m])
+        f = forces(y[:n], y[n:])
+        out[:n] = y[n:]
+        out[n:] = load - f
+        out[n + 1:] += f[:-1]
+        out[n:] /= m
+        return out.copy()
 
     t = np.arange(0.0, T_END, SAMPLE)
     sol = solve_ivp(rhs, (0.0, t[-1]), np.concatenate([u, v0]), method="DOP853",

@@ -17,7 +17,6 @@ import pytest
 from ssw.calibration import load_calibration
 from ssw.chain.params import ChainParams, chain_params, numerics_of
 from ssw.cli import build_parser, main
-from ssw.cli._flags import DEVICE, FLAGS, MODEL
 from ssw.config import load_config
 from ssw.device import Device, load_device
 from ssw.materials import material_set
@@ -146,6 +145,8 @@ def test_calibrate_refuses_a_flag_it_cannot_honour_by_name(flags, option, tmp_pa
 def test_every_flag_sets_one_field_and_every_chain_command_takes_it():
     """The table names a Device field, a ChainParams field or a wall option for each flag,
     and the calibrating command and its consumers accept every flag of it."""
+    from ssw.cli._flags import DEVICE, FLAGS, MODEL
+
     device = {f.name for f in fields(Device)} | {"drop_height"}
     chain = {f.name for f in fields(ChainParams)}
     wall = {"law", "K", "k_table", "curve", "contact_dir", "dynamics", "soil_density"}

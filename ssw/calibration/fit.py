@@ -149,7 +149,7 @@ class Fit:
     scan_points: int
     evaluations: int
     runs: int
-    covariance_names: tuple[str, ...] = ()
+    covariance_names: tuple[str, ...] = ()  # the continuous free ones no bound holds
     at_bound: dict[str, str] = field(default_factory=dict)
     tof_range: np.ndarray | None = None  # (n, 2) s: the TOFs the scan's device can give
 

@@ -37,7 +37,6 @@ import numpy as np
 from ssw.cli._flags import DEVICE, MODEL, add_flags, contradictions, fields_of
 from ssw.errors import ConfigError
 
-DEFAULT_K_TABLE = "results/fit/sets/<fit.set>/k_table.h5"
 DEFAULT_CONTACT_DIR = "results/contact"
 #: Environment variable giving the default of ``--calibration`` (a file, auto or none).
 CALIBRATION_ENV = "SSW_CALIBRATION"
@@ -246,9 +245,9 @@ def wall_law(args: argparse.Namespace, cfg: dict[str, Any], cal: Any, params: An
         from ssw.workflow import scene_file
 
         Eb, nub = np.broadcast_arrays(np.asarray(E, float), np.asarray(nu, float))
-        paths = [scene_file(args.contact_dir or DEFAULT_CONTACT_DIR, Scene(params.plate_material,
-                                                    params.plate_thickness, float(e),
-                                                    float(n)).scene_id)
+        folder = args.contact_dir or DEFAULT_CONTACT_DIR
+        paths = [scene_file(folder, Scene(params.plate_material, params.plate_thickness,
+                                          float(e), float(n)).scene_id)
                  for e, n in zip(Eb.ravel(), nub.ravel(), strict=True)]
         return law, {"curve": paths}
     return law, {}

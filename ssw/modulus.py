@@ -136,7 +136,7 @@ def estimate_moduli(
     names: tuple[str, ...] = ()
     cov = None
     if calibration is not None and calibration.covariance is not None:
-        names = calibration.continuous()
+        names = calibration.covariance_parameters
         cov = calibration.covariance_array()
     Es = [E * (1 + E_STEP), E * (1 - E_STEP)]
     nus_run = [nu_c, nu_c]
@@ -173,6 +173,10 @@ def estimate_moduli(
         else:
             contrib["tof"] = float(S[i] / (T[i] * abs(kk)))
         if cov is not None:
+            if calibration.at_bound:  # held parameters: fixed, not part of the covariance
+                notes.append("the calibration holds " + ", ".join(
+                    f"{n} on its {side} bound" for n, side in calibration.at_bound.items())
+                    + ": its term is conditional on that")
             g = np.empty(len(names))
             for j, n in enumerate(names):
                 plus, minus = ends[n]

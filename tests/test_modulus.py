@@ -71,7 +71,7 @@ def test_the_calibration_term_matches_a_monte_carlo_over_its_covariance(calibrat
     parameter sets drawn from the calibration's covariance (seeded), all in one batch."""
     params = calibrated.chain_params()
     e = estimate_moduli([tof0], [0.0], NU0, params, "hertz", calibration=calibrated)[0]
-    names = calibrated.continuous()
+    names = calibrated.covariance_parameters
     mean = np.array([calibrated.parameters[n] for n in names])
     draws = np.random.default_rng(20261123).multivariate_normal(
         mean, calibrated.covariance_array(), size=64)

@@ -485,6 +485,85 @@ def check_cluster_fit(workflow: Any) -> None:
     check_jobs_fit(jobs)
 
 
+def _job_name(job: Any) -> str:
+    """A Snakemake job as ``rule[wildcard=value,...]`` (a group job: its group)."""
+    rule = getattr(job, "rule", None)
+    if rule is None:
+        return str(job)
+    wildcards = getattr(job, "wildcards_dict", None) or {}
+    return rule.name + (f"[{','.join(f'{k}={v}' for k, v in wildcards.items())}]"
+                        if wildcards else "")
+
+
+def prepare_slurm_run(workflow: Any) -> list[str]:
+    """Make a Snakemake run on Slurm see its jobs end, before anything is submitted.
+
+    On a cluster without accounting storage the run's status command becomes ``squeue``
+    (:func:`ssw.cluster.status_command`; or a ConfigError naming the flag), every job must
+    fit a node (:func:`check_cluster_fit`), and a watch stops the run with a message when
+    its jobs are lost (:func:`ssw.cluster.watch_lost_jobs`, querying the run's jobs the
+    way the executor plugin does).
+
+    Parameters
+    ----------
+    workflow : snakemake.workflow.Workflow
+        The run (the ``workflow`` of a Snakefile's ``onstart``; its executor is ``slurm``).
+
+    Returns
+    -------
+    list[str]
+        What changed or may go wrong, one line each, for the run's log.
+
+    Raises
+    ------
+    ConfigError
+        A job no node can hold, or a cluster on which the plugin cannot see jobs end.
+    """
+    import shutil
+
+    from snakemake_executor_plugin_slurm import job_status_query as plugin_query
+
+    from ssw import cluster
+
+    notes = []
+    settings = workflow.executor_settings
+    info = cluster.slurm_config()
+    sacct = shutil.which("sacct") is not None
+    init_s = int(settings.init_seconds_before_status_checks)
+    wanted = cluster.status_command(info, settings.status_command, init_s, sacct)
+    if wanted != settings.status_command:
+        notes.append(f"this Slurm keeps no job accounting (AccountingStorageType = "
+                     f"{info.accounting_storage}): job states come from {wanted}, as with "
+                     f"--slurm-status-command {wanted}")
+        settings.status_command = wanted
+    used = cluster.effective_status_command(wanted, info.min_job_age_s, init_s, sacct)
+    warning = cluster.short_job_age(info, used)
+    if warning:
+        notes.append(warning)
+    check_cluster_fit(workflow)
+
+    scheduler = workflow.scheduler
+    run_id = getattr(getattr(scheduler, "_executor", None), "run_uuid", None)
+    if run_id is None:
+        notes.append("the lost-jobs watch is off: the Slurm executor has no run ID")
+        return notes
+    command = (plugin_query.query_job_status_squeue(run_id) if used == "squeue"
+               else plugin_query.query_job_status_sacct(run_id))
+
+    def waiting() -> list[str]:
+        return sorted(_job_name(j) for j in list(scheduler.running) if not j.is_local)
+
+    def lost(message: str) -> None:
+        from snakemake_interface_common.exceptions import WorkflowError
+
+        scheduler.executor_error_callback(WorkflowError(f"Lost cluster jobs: {message}"))
+
+    stall_s = (cluster.PLUGIN_MAX_STATUS_INTERVAL_S + cluster.VANISH_GRACE_S
+               + float(workflow.execution_settings.latency_wait))
+    cluster.watch_lost_jobs(lambda: cluster.query_states(command), waiting, lost, stall_s)
+    return notes
+
+
 def report_tables(targets: list[Any], categories: dict[str, str], results: str = RESULTS
                   ) -> dict[str, list[str]]:
     """Stage -> its CSV tables among ``targets`` (a stage is a results sub-folder)."""

@@ -55,9 +55,12 @@ RECORDINGS_ROOT = str(REPO)
 
 
 onstart:
-    # on a cluster, a job no node can hold is an error now, not a wait in the queue
+    # On Slurm, a run that would wait forever is an error now: a job no node can hold, a
+    # status command that cannot see jobs end (no accounting: squeue instead of sacct), and,
+    # while the run goes, jobs that Slurm no longer shows (ssw.cluster).
     if sswwf.submits_to_slurm(workflow):
-        sswwf.check_cluster_fit(workflow)
+        for note in sswwf.prepare_slurm_run(workflow):
+            print(f"ssw cluster check: {note}", file=sys.stderr)
     sswwf.write_study_config(config, STUDY_CONFIG)
 
 

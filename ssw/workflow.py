@@ -564,6 +564,64 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
     return notes
 
 
+#: The study's stages in the report's order: results sub-folder -> the title of its category
+#: (workflow/report/workflow.rst describes each title).
+REPORT_STAGES: dict[str, str] = {
+    "contact": "Contact (Stage I)",
+    "fit": "Fits (Stage I)",
+    "chain": "Chain (Stage II)",
+    "validation": "Validation (Stage III)",
+    "survey": "Survey",
+    "design": "Plate design",
+}
+
+
+def report_stages(cfg: dict[str, Any]) -> list[str]:
+    """The stages whose figures and tables a study's report shows, in report order.
+
+    Parameters
+    ----------
+    cfg : dict[str, Any]
+        The validated study config.
+
+    Returns
+    -------
+    list[str]
+        Keys of :data:`REPORT_STAGES`: ``contact`` when a set has one soil (its contact
+        figure, rule ``fit_set``), ``fit`` when there are sets, ``chain`` and ``validation``
+        always, ``survey`` when it has points, ``design`` when it has soil ranges.
+    """
+    shown = {
+        "contact": bool(one_soil_sets(cfg)),
+        "fit": bool(cfg.get("sets")),
+        "chain": True,
+        "validation": True,
+        "survey": bool(survey_points(cfg)),
+        "design": bool(cfg.get("design", {}).get("soils")),
+    }
+    return [stage for stage in REPORT_STAGES if shown[stage]]
+
+
+def report_categories(cfg: dict[str, Any]) -> dict[str, str]:
+    """Stage -> its category in the study's report: the stages the report shows numbered
+    1, 2, ... in order (:func:`report_stages`); a stage it does not show keeps its bare
+    title (no file of it reaches the report).
+
+    Parameters
+    ----------
+    cfg : dict[str, Any]
+        The validated study config.
+
+    Returns
+    -------
+    dict[str, str]
+        Every key of :data:`REPORT_STAGES`, e.g. ``{"design": "5. Plate design", ...}``.
+    """
+    numbered = {st: f"{i}. {REPORT_STAGES[st]}"
+                for i, st in enumerate(report_stages(cfg), start=1)}
+    return {st: numbered.get(st, title) for st, title in REPORT_STAGES.items()}
+
+
 def report_tables(targets: list[Any], categories: dict[str, str], results: str = RESULTS
                   ) -> dict[str, list[str]]:
     """Stage -> its CSV tables among ``targets`` (a stage is a results sub-folder)."""

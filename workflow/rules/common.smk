@@ -49,6 +49,9 @@ BENCHMARKS = f"{RESULTS}/benchmarks"
 STUDY_CONFIG = sswwf.STUDY_CONFIG
 STUDY = sswwf.Study(config)
 SCENES = STUDY.scenes
+# The report's outline: stage -> its category, the stages the study shows numbered in order
+# (ssw.workflow.report_categories; workflow/report/workflow.rst lists the same categories).
+REPORT_CATEGORIES = sswwf.report_categories(config)
 # Relative recording paths in the config start from the repository (the Snakefile's folder),
 # so that runs with --directory elsewhere find them; `ssw ... --root` gets the same.
 RECORDINGS_ROOT = str(REPO)
@@ -99,7 +102,7 @@ def fit_figure(name, caption):
     return report(
         f"{RESULTS}/fit/figures/{{set}}_{name}.png",
         caption=f"../report/{caption}.rst",
-        category="2. Fits (Stage I)",
+        category=REPORT_CATEGORIES["fit"],
         subcategory="Figures",
     )
 

@@ -53,7 +53,7 @@ rule survey_table:
                 "map": report(
                     f"{SURVEY_DIR}/figures/survey_map.png",
                     caption="../report/survey_map.rst",
-                    category="5. Survey",
+                    category=REPORT_CATEGORIES["survey"],
                     subcategory="Figures",
                 )
             }
@@ -65,7 +65,7 @@ rule survey_table:
         plot=report(
             f"{SURVEY_DIR}/figures/survey_E.png",
             caption="../report/survey_E.rst",
-            category="5. Survey",
+            category=REPORT_CATEGORIES["survey"],
             subcategory="Figures",
         ),
     log:

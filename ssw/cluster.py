@@ -439,11 +439,11 @@ class LostJobsWatch:
 
     Two cases, each with its own patience:
 
-    * **vanished**: the status query lists no job of the run at all for ``vanish_s``
-      (slurmctld forgot them ``MinJobAge`` after their end, or lost its state); the
-      executor plugin would take them as still queued forever;
-    * **unseen**: every job of the run it lists has ended, for ``stall_s``: longer than the
-      plugin's longest pause between queries, so its queries no longer report them (it
+    * **vanished**: Slurm lists no job of the run at all for ``vanish_s`` (slurmctld forgot
+      them ``MinJobAge`` after their end, or lost its state); an executor plugin that
+      queries ``squeue`` takes them as still queued forever;
+    * **unseen**: every job of the run Slurm lists has ended, for ``stall_s``: longer than
+      the plugin's longest pause between queries, so its queries no longer report them (it
       drops the jobs of a status query that failed on every attempt).
 
     Attributes
@@ -521,8 +521,8 @@ def watch_lost_jobs(query: Callable[[], Mapping[str, str] | None],
     Parameters
     ----------
     query : Callable[[], Mapping[str, str] | None]
-        Job id -> state of the run's jobs, the way the executor plugin queries them (None
-        when the query fails).
+        Job id -> state of the run's jobs as the controller lists them (the executor
+        plugin's ``squeue`` query; None when the query fails).
     waiting : Callable[[], Sequence[str]]
         The cluster jobs Snakemake waits for.
     on_lost : Callable[[str], None]

@@ -501,8 +501,8 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
     On a cluster without accounting storage the run's status command becomes ``squeue``
     (:func:`ssw.cluster.status_command`; or a ConfigError naming the flag), every job must
     fit a node (:func:`check_cluster_fit`), and a watch stops the run with a message when
-    its jobs are lost (:func:`ssw.cluster.watch_lost_jobs`, querying the run's jobs the
-    way the executor plugin does).
+    its jobs are lost (:func:`ssw.cluster.watch_lost_jobs`, with the executor plugin's own
+    ``squeue`` query of the run's jobs).
 
     Parameters
     ----------
@@ -547,8 +547,10 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
     if run_id is None:
         notes.append("the lost-jobs watch is off: the Slurm executor has no run ID")
         return notes
-    command = (plugin_query.query_job_status_squeue(run_id) if used == "squeue"
-               else plugin_query.query_job_status_sacct(run_id))
+    # The controller's view of the run's jobs (the plugin's squeue query): with squeue as the
+    # status command a job it no longer lists is lost to the run after the short grace; with
+    # sacct (history kept in slurmdbd, which may lag) only after the longest patience.
+    command = plugin_query.query_job_status_squeue(run_id)
 
     def waiting() -> list[str]:
         return sorted(_job_name(j) for j in list(scheduler.running) if not j.is_local)
@@ -560,7 +562,9 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
 
     stall_s = (cluster.PLUGIN_MAX_STATUS_INTERVAL_S + cluster.VANISH_GRACE_S
                + float(workflow.execution_settings.latency_wait))
-    cluster.watch_lost_jobs(lambda: cluster.query_states(command), waiting, lost, stall_s)
+    vanish_s = cluster.VANISH_GRACE_S if used == "squeue" else stall_s
+    cluster.watch_lost_jobs(lambda: cluster.query_states(command), waiting, lost, stall_s,
+                            vanish_s)
     return notes
 
 

@@ -118,11 +118,13 @@ def check_report(report: Path, shots: Path) -> dict:
             "return Array.from(document.querySelectorAll('.prose .document a'))"
             ".filter(a => a.href.startsWith('javascript:app.showCategory'))"
             ".map(a => a.innerText)")
-        for name in seen["intro"]:  # each link opens its category (its subcategories)
+        for name in seen["intro"]:  # each link opens its category: the menu leaves the
+            # index (GENERAL ...) for the category, named in its breadcrumbs
             driver.find_element(By.CSS_SELECTOR, ".prose .document").find_element(
                 By.LINK_TEXT, name).click()
-            _wait(driver, "return Array.from(document.querySelectorAll('a')).some("
-                  "a => ['Figures', 'Tables'].includes(a.innerText.trim()))")
+            _wait(driver, "return !document.body.innerText.includes('GENERAL') && "
+                  "Array.from(document.querySelectorAll('a')).filter("
+                  f"a => a.innerText.trim() === {name!r}).length >= 2")
             driver.get(url)
             _wait(driver, ready)
         driver.set_script_timeout(30)

@@ -15,9 +15,10 @@
 # (default .venv); SSW_PYTHON the interpreter (default: python3.12/3.13/3.14 on PATH, then
 # pyenv's versions, for the binary route; python3.11 for the source route).
 #
-# Packages are installed by uv (pinned in constraints.txt, put into the venv by pip):
-# measured from an empty cache on 2 cores, uv installs the binary stack and ssw's
-# dependencies in 27 s where pip takes 225 s.
+# Packages are installed by uv (pinned in constraints.txt, put into the venv by pip), the
+# source route's three builds by pip (below). Measured on 2 cores from empty caches: the
+# whole binary set-up 12 s with uv; its packages alone take 64 s by pip (49 s of CPU
+# against uv's 11 s).
 #
 # Idempotent: a stamp records the hash of this script, constraints.txt, pyproject.toml, the
 # route and the interpreter; when nothing changed and the packages are in place, it returns
@@ -25,7 +26,7 @@
 #
 # Why the source recipe looks the way it does (measured on this kind of machine):
 #   * PETSc's build uses the `mpicc` on PATH and keeps that MPI's RUNPATH in the wheel that
-#     the installer caches, so MPICH's development package must be installed before it;
+#     pip caches, so MPICH's development package must be installed before it;
 #   * petsc4py's isolated build would reuse whatever petsc wheel is cached, so it is built
 #     with --no-build-isolation against the petsc just installed in the venv;
 #   * the mpi4py binary wheel looks for libmpi.so.12, which Debian's MPICH names
@@ -175,23 +176,26 @@ if [ "$ROUTE" = binary ]; then
   log "installing ssw, its pinned dependencies and the binary PETSc stack"
   uvpip install "${C[@]}" pip -e ".[dev,petsc]"
 else
-  uvpip install "${C[@]}" numpy cython setuptools wheel
+  # The three builds go through pip, whose wheel cache keeps the built PETSc for the next
+  # venv: uv's cache of a registry sdist's build was seen to build PETSc again here.
+  uvpip install "${C[@]}" pip numpy cython setuptools wheel
+  pip() { "$VENV/bin/python" -m pip --disable-pip-version-check -q "$@"; }
   if ! "$VENV/bin/python" -c "import petsc" >/dev/null 2>&1; then
-    log "building PETSc (about 10-13 minutes on 2 cores, once; the wheel is cached)"
+    log "building PETSc (about 10-13 minutes on 2 cores, once; pip caches the wheel)"
     PETSC_CONFIGURE_OPTIONS="--with-cuda=0 --with-fc=0 --with-x=0 --with-debugging=0" \
-      MPICC="$MPICC" uvpip install "${C[@]}" petsc
+      MPICC="$MPICC" pip install "${C[@]}" petsc
   fi
   if ! "$VENV/bin/python" -c "import petsc4py; petsc4py.init(); from petsc4py import PETSc" \
        >/dev/null 2>&1; then
     log "building petsc4py against the venv's PETSc"
-    uvpip install "${C[@]}" --no-build-isolation petsc4py
+    pip install "${C[@]}" --no-build-isolation petsc4py
   fi
   if ! "$VENV/bin/python" -c "from mpi4py import MPI" >/dev/null 2>&1; then
     log "building mpi4py against MPICH"
-    MPICC="$MPICC" uvpip install "${C[@]}" --no-binary mpi4py mpi4py
+    MPICC="$MPICC" pip install "${C[@]}" --no-binary=mpi4py mpi4py
   fi
   log "installing ssw and its pinned dependencies"
-  uvpip install "${C[@]}" pip -e ".[dev]"
+  uvpip install "${C[@]}" -e ".[dev]"
 fi
 
 check_imports || {

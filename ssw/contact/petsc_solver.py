@@ -225,19 +225,18 @@ class LUSolver:
                  scale: float = 1.0, *, solver: str = "petsc", ordering: str | None = "natural",
                  parallel: bool = True, prefix: str = PREFIX, what: str = "the u-p matrix"
                  ) -> None:
+        have = available_solvers()
         if solver == "auto":
-            if BLOCK_SOLVER in available_solvers():
-                solver, ordering = BLOCK_SOLVER, None
-            else:
-                solver = "petsc"
+            solver = BLOCK_SOLVER if BLOCK_SOLVER in have else "petsc"
+            ordering = None if solver == BLOCK_SOLVER else ordering
         if solver not in SOLVERS:
             raise ConfigError("solver", solver, f"one of {', '.join(SOLVERS)} or auto")
         if solver != "petsc" and ordering is not None:
             raise ConfigError("ordering", ordering,
                               f"None with solver {solver} (it orders by itself)")
-        if solver not in available_solvers():
-            raise ConfigError("solver", solver, "a package this PETSc build has: "
-                              f"{', '.join(available_solvers())}")
+        if solver not in have:
+            raise ConfigError("solver", solver,
+                              f"a package this PETSc build has: {', '.join(have)}")
         PETSc = _petsc()
         self.PETSc = PETSc
         comm = PETSc.COMM_WORLD if parallel else PETSc.COMM_SELF
@@ -271,8 +270,11 @@ class LUSolver:
             opts = PETSc.Options()
             opts[f"{prefix}redundant_pc_type"] = "lu"
             opts[f"{prefix}redundant_pc_factor_mat_solver_type"] = solver
+            key = f"{prefix}redundant_pc_factor_mat_ordering_type"
             if ordering is not None:
-                opts[f"{prefix}redundant_pc_factor_mat_ordering_type"] = ordering
+                opts[key] = ordering
+            else:  # not an earlier solver's with the same prefix
+                opts.delValue(key)
         ksp.setFromOptions()
         try:
             ksp.setUp()

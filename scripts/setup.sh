@@ -6,10 +6,11 @@
 #   binary  the default where a Python >= 3.12 is on the machine: the dolfinx-solver-real
 #           wheel (PETSc, petsc4py, MUMPS, SuperLU_DIST, SLEPc) built against the mpich
 #           wheel, which mpi4py's binary wheel loads too; its mpiexec is .venv/bin/mpiexec.
-#           Nothing is compiled: about a minute from an empty cache, seconds from a warm one.
+#           Nothing is compiled: 12 s from an empty cache, 10 s from a warm one (2 cores).
 #   source  SSW_PETSC=source (or no Python >= 3.12 found): PETSc and petsc4py built from
 #           their sdists against Debian's MPICH, mpi4py from its sdist against the same
-#           mpicc; about 10-13 minutes on 2 cores, once (the built wheels are cached).
+#           mpicc: 15 minutes of CPU (10-13 minutes on 2 quiet cores), once (pip caches the
+#           built wheels: 25 s for the next venv).
 #
 # Environment: SSW_PETSC=binary|source picks the route; SSW_VENV the venv's directory
 # (default .venv); SSW_PYTHON the interpreter (default: python3.12/3.13/3.14 on PATH, then

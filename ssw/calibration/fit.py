@@ -484,7 +484,7 @@ def refine_subsets(model: TofModel, T: np.ndarray, s: np.ndarray, start: np.ndar
     subsets advance together, one batched run (central differences) per iteration.
     ``at_start``: the model's TOFs (s, every reference) and their central-difference
     Jacobian (s per scaled unit, ``model.continuous`` columns) at ``start`` when already
-    computed (:func:`_uncertainty`), so that they are not computed again."""
+    computed (``_uncertainty``), so that they are not computed again."""
     cont = model.continuous
     idx = [model.free.index(n) for n in cont]
     p = len(cont)

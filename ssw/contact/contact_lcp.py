@@ -57,16 +57,26 @@ def solve_lcp(
 
     Parameters
     ----------
-    W : (m, m) symmetric positive definite compliance (m/N).
-    g0 : (m,) gaps at zero force (m).
-    active : (m,) bool, the initial guess of the active set (warm start).
-    tol : m, gap and force-scale tolerance (a few ulp of the problem's lengths).
-    cache : dict kept between calls with the same ``W``: the Cholesky factor of the last
-        active block.
+    W : numpy.ndarray
+        (m, m) symmetric positive definite compliance, m/N.
+    g0 : numpy.ndarray
+        (m,) gaps at zero force, m.
+    active : numpy.ndarray
+        (m,) bool, the initial guess of the active set (warm start).
+    tol : float
+        Gap and force-scale tolerance, m (a few ulp of the problem's lengths).
+    cache : dict or None
+        Kept between calls with the same ``W``: the Cholesky factor of the last active
+        block.
 
     Returns
     -------
-    lam : (m,) N; active : (m,) bool; pivots : number of active-set changes.
+    lam : numpy.ndarray
+        (m,) contact forces, N.
+    active : numpy.ndarray
+        (m,) bool, the active set.
+    pivots : int
+        The number of active-set changes.
     """
     act = active.copy()
     lam = np.zeros_like(g0)

@@ -30,7 +30,8 @@ class ActiveSetLCP:
 
     Parameters
     ----------
-    W : (m, m) symmetric positive definite compliance (m/N).
+    W : numpy.ndarray
+        (m, m) symmetric positive definite compliance, m/N.
     """
 
     def __init__(self, W: np.ndarray) -> None:

@@ -87,10 +87,13 @@ def invert_batch(
     ``ln E`` against TOF, then ``refine`` secant steps on the forward model (one run each,
     all targets together).
 
-    Raises (``strict``; otherwise E is NaN and ``reason`` says why)
+    Raises
     ------
-    OutOfRangeError : a TOF outside its forward model's range over ``E_range``.
-    SolverError : a forward TOF(E) that is not strictly decreasing (not invertible).
+    OutOfRangeError
+        (``strict``; otherwise E is NaN and ``reason`` says why) A TOF outside its forward
+        model's range over ``E_range``.
+    SolverError
+        (``strict``) A forward TOF(E) that is not strictly decreasing (not invertible).
     """
     from scipy.interpolate import PchipInterpolator
 

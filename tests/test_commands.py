@@ -10,7 +10,8 @@ on GitHub and in the built site)::
 with, shell-quoted:
 
 * ``replace="OLD=>NEW"`` (repeatable): the small-input variant, a literal substitution in
-  the block (``make study`` on the five-point survey config instead of the thesis study);
+  the block (``make study`` as a dry run of the thesis study: its config validated and its
+  jobs planned; ``tests/test_workflow.py`` runs a whole small study);
 * ``append="ARGS"``: ARGS added to every ``ssw`` command of the block (``--config
   config/ci.yaml``: the small study's coarser mesh);
 * ``fixture=NAME`` (repeatable): inputs the block needs, made first by the public commands

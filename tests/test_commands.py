@@ -36,6 +36,7 @@ import os
 import re
 import shlex
 import shutil
+import signal
 import subprocess
 import sys
 from dataclasses import dataclass, field
@@ -52,8 +53,10 @@ SOURCES = ["README.md", *sorted(
 SHELLS = {"sh", "bash", "shell", "console"}
 _FENCE = re.compile(r"^```(\w*)\s*$")
 _MARKER = re.compile(r"^<!--\s*command-test:(.*?)-->\s*$")
-#: Wall-clock bound of one block, s (a hang must fail, not stall the suite).
+#: Wall-clock bound of one block, s (a hang must fail, not stall the suite); a slow block
+#: runs its commands as written, minutes each on a loaded machine.
 TIMEOUT_S = 900
+SLOW_TIMEOUT_S = 3600
 
 
 @dataclass
@@ -156,9 +159,23 @@ def _param(b: Block):
 # ---------------------------------------------------------------------------- fixtures
 
 
-def _run(cmd: list[str] | str, cwd: Path, env: dict[str, str]) -> None:
-    r = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True,
-                       timeout=TIMEOUT_S, shell=isinstance(cmd, str))
+def run_group(cmd: list[str], cwd: Path, env: dict[str, str],
+              timeout: float) -> subprocess.CompletedProcess:
+    """Run ``cmd`` in its own process group; on timeout kill the whole group (a command's
+    worker processes included) and report the timeout as exit status -9."""
+    proc = subprocess.Popen(cmd, cwd=cwd, env=env, stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True, start_new_session=True)
+    try:
+        out, err = proc.communicate(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(proc.pid, signal.SIGKILL)
+        out, err = proc.communicate()
+        err += f"\n[timed out after {timeout:.0f} s]"
+    return subprocess.CompletedProcess(cmd, proc.returncode, out, err)
+
+
+def _run(cmd: list[str], cwd: Path, env: dict[str, str]) -> None:
+    r = run_group(cmd, cwd, env, TIMEOUT_S)
     assert r.returncode == 0, f"{cmd}: exit {r.returncode}\n{r.stdout[-3000:]}\n{r.stderr[-3000:]}"
 
 
@@ -280,8 +297,8 @@ def test_command_block_runs(block: Block, made, tmp_path):
     for name in block.options.get("fixture", []):
         shutil.copytree(made(name), work, dirs_exist_ok=True)
     script = block.script()
-    r = subprocess.run(["bash", "-e", "-o", "pipefail", "-c", script], cwd=work, env=_env(),
-                       capture_output=True, text=True, timeout=TIMEOUT_S)
+    timeout = SLOW_TIMEOUT_S if "slow" in block.options else TIMEOUT_S
+    r = run_group(["bash", "-e", "-o", "pipefail", "-c", script], work, _env(), timeout)
     assert r.returncode == 0, (
         f"{block.where} exited {r.returncode}:\n{script}\n--- stdout\n{r.stdout[-4000:]}"
         f"\n--- stderr\n{r.stderr[-4000:]}")

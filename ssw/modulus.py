@@ -104,11 +104,23 @@ def estimate_moduli(
 
     Parameters
     ----------
-    tof : (k,) measured mean TOFs, s.  tof_sem : (k,) their standard errors, s; NaN where the
-        scatter is not known (the ``tof`` term is then listed as missing).
-    nu : a Poisson's ratio per sample, or (k, 2) ranges ``[lo, hi]``.
-    params : ChainParams of the (calibrated) device.  wall, wall_options : the wall law.
-    calibration : :class:`ssw.calibration.Calibration` whose covariance enters (or None).
+    tof : array_like
+        (k,) measured mean TOFs, s.
+    tof_sem : array_like
+        (k,) their standard errors, s; NaN where the scatter is not known (the ``tof``
+        term is then listed as missing).
+    nu : array_like
+        A Poisson's ratio per sample, or (k, 2) ranges ``[lo, hi]``.
+    params : ssw.chain.params.ChainParams
+        The chain of the (calibrated) device.
+    wall : str
+        The wall law's name (:data:`ssw.walls.WALLS`).
+    wall_options : dict or None
+        The wall builder's options.
+    calibration : ssw.calibration.Calibration or None
+        The calibration whose covariance enters the interval.
+    E_range : tuple of float
+        ``(lo, hi)``, Pa: the moduli the inversion searches.
     """
     from ssw.chain.wall import beyond_exact_reach
     from ssw.tof import api

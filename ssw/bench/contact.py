@@ -22,6 +22,7 @@ Tables:
   law against the same law tabulated on 400 uniform cells (linear in F) and as the
   ``table`` wall's F/d^1.5 table: what a resampled representation would cost.
 * ``domain`` (``--domain-study``) and ``interfaces`` (``--interfaces``) as before.
+
 Writes ``contact_work_precision.csv`` and ``.png``, ``contact_bench.json`` under the output
 folder.
 """

@@ -261,12 +261,17 @@ def tof_rule(h: float, S: np.ndarray, R: np.ndarray) -> tuple[float, float]:
 
     Parameters
     ----------
-    h : s, the sample step (sample ``k`` at ``k h``).  S : (n_t,) N, the sensor force,
-    ``S[0]`` the static baseline.  R : (n_t,) N/s, its exact time derivative.
+    h : float
+        The sample step, s (sample ``k`` at ``k h``).
+    S : numpy.ndarray
+        (n_t,) the sensor force, N; ``S[0]`` the static baseline.
+    R : numpy.ndarray
+        (n_t,) its exact time derivative, N/s.
 
     Raises
     ------
-    RecordingError : no incident or no reflected peak.
+    RecordingError
+        No incident or no reflected peak.
     """
     s = S - S[0]
     k = np.flatnonzero((R[:-1] > 0) & (R[1:] <= 0))  # a maximum inside [t_k, t_k+1]
@@ -304,16 +309,28 @@ def solve_dop853(
 
     Parameters
     ----------
-    params : the chain (its numbers only).  wall : ``(coef, exponent)`` (n,) arrays, or an
-        object with ``coef``/``exponent`` (a PowerWall): ``F = coef [d]_+^exponent`` (N, m).
-    t_end : s, scalar or (n,): each scene's record ends there (the system runs to the
-        largest).  rtol : relative tolerance.  atol : absolute tolerance, scalar or (2 N n,)
-        (m for ``u``, m/s for ``v``); default ``rtol`` x (peak two-bead overlap, striker
-        speed).  sample_dt : s, the sensor's sample step.
+    params : ssw.chain.params.ChainParams
+        The chain (its numbers only).
+    wall : tuple of numpy.ndarray or object
+        ``(coef, exponent)`` (n,) arrays, or an object with ``coef``/``exponent`` (a
+        PowerWall): ``F = coef [d]_+^exponent`` (N, m).
+    t_end : float or numpy.ndarray
+        Scalar or (n,), s: each scene's record ends there (the system runs to the
+        largest).
+    rtol : float
+        Relative tolerance.
+    atol : float or numpy.ndarray or None
+        Absolute tolerance, scalar or (2 N n,) (m for ``u``, m/s for ``v``); default
+        ``rtol`` x (peak two-bead overlap, striker speed).
+    sample_dt : float
+        The sensor's sample step, s.
 
     Raises
     ------
-    SolverError : DOP853 failed.  RecordingError : a record without its peaks.
+    SolverError
+        DOP853 failed.
+    RecordingError
+        A record without its peaks.
     """
     from scipy.integrate import DOP853
 

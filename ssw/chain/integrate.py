@@ -196,15 +196,28 @@ def simulate(
 
     Parameters
     ----------
-    params : the chain; a :class:`Batch` of ``wall.n`` scenes for per-scene striker speeds,
-        preloads or masses.  wall : the last-contact law, one per scene.
-    t_end : s, the end time (default ``params.t_max``).  dt : s (default :func:`time_step`).
-    stop_early : stop each scene once its reflected pulses have passed the sensor.
-    record_forces, record_energy : also keep every contact force / the total energy.
-    check_every : steps between stop checks.
-    initial : ``(u, v)`` (m, m/s), shapes (n, N), instead of :func:`initial_state`.
-    on_progress : called as ``on_progress(k)`` when ``k`` more scenes have finished (a
-        progress bar's update; ``ssw.progress``).
+    params : ssw.chain.params.ChainParams or Batch
+        The chain; a ``Batch`` of ``wall.n`` scenes for per-scene striker speeds,
+        preloads or masses.
+    wall : ssw.chain.wall.Wall
+        The last-contact law, one per scene.
+    t_end : float or None
+        The end time, s (default ``params.t_max``).
+    dt : float or None
+        The time step, s (default :func:`time_step`).
+    stop_early : bool
+        Stop each scene once its reflected pulses have passed the sensor.
+    record_forces : bool
+        Also keep every contact force.
+    record_energy : bool
+        Also keep the total energy.
+    check_every : int
+        Steps between stop checks.
+    initial : tuple of numpy.ndarray or None
+        ``(u, v)`` (m, m/s), shapes (n, N), instead of the static initial state.
+    on_progress : callable or None
+        Called as ``on_progress(k)`` when ``k`` more scenes have finished (a progress
+        bar's update; ``ssw.progress``).
     """
     n = wall.n
     b = params if isinstance(params, Batch) else Batch.of(params, n)

@@ -70,14 +70,23 @@ def pick_peaks(
 
     Parameters
     ----------
-    t : (n_t,) s, uniform.  F : (n_t,) or (n_t, n) N; NaN samples (a stopped scene) count
-        as the baseline.
-    split_share, incident_share, gap_share : the rule's shares (module docstring).
-    strict : raise on a column without two peaks (else its values are NaN).
+    t : numpy.ndarray
+        (n_t,) uniform sample times, s.
+    F : numpy.ndarray
+        (n_t,) or (n_t, n) forces, N; NaN samples (a stopped scene) count as the baseline.
+    split_share : float
+        The reflected peak's share of the largest (module docstring).
+    incident_share : float
+        The incident peak's share of the largest (module docstring).
+    gap_share : float
+        The gap's share of the largest (module docstring).
+    strict : bool
+        Raise on a column without two peaks (else its values are NaN).
 
     Raises
     ------
-    RecordingError : (strict) a column has no incident or no reflected peak.
+    RecordingError
+        (strict) A column has no incident or no reflected peak.
     """
     t = np.asarray(t, float)
     Fa = np.asarray(F, float)

@@ -439,11 +439,20 @@ def scene_lcp(layout: Layout, plate: BodyOperator | None, soil: BodyOperator,
 
     Parameters
     ----------
-    layout : the retained dofs of the geometry.
-    plate, soil : the bodies' operators (unit E); ``plate`` None without a plate.
-    soil_E, plate_E : Pa.
-    interface : ``frictionless`` | ``bonded`` | ``unilateral``.
-    radius : m, the rigid sphere's.
+    layout : Layout
+        The retained dofs of the geometry.
+    plate : BodyOperator or None
+        The plate's operator (unit E); None without a plate.
+    soil : BodyOperator
+        The soil's operator (unit E).
+    soil_E : float
+        The soil's Young's modulus, Pa.
+    plate_E : float or None
+        The plate's Young's modulus, Pa; None without a plate.
+    interface : str
+        ``frictionless`` | ``bonded`` | ``unilateral``.
+    radius : float
+        The rigid sphere's radius, m.
     """
     nc = layout.r.size
     q0s = sphere_gap0(layout.r, radius)

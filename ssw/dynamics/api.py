@@ -66,12 +66,24 @@ def fem_tof(
 
     Parameters
     ----------
-    params : :class:`ssw.chain.params.ChainParams`.
-    soil_E, soil_nu, soil_density : Pa, -, kg/m^3, broadcast (one FEM per scene).
-    keep_runs : keep the records.  keep_curves : keep the static boxes' laws (to
-        :data:`CURVE_REACH` x the Hertz wall's peak indentation).
-    record_energy : record the energies (the balance).
-    options : keywords of :func:`ssw.dynamics.fem_wall.fem_wall` (``boundary``, ``spec``,
+    params : ssw.chain.params.ChainParams
+        The chain.
+    soil_E : array_like
+        The soil's Young's modulus, Pa, broadcast with ``soil_nu`` and ``soil_density``
+        (one FEM per scene).
+    soil_nu : array_like
+        The soil's Poisson's ratio.
+    soil_density : array_like
+        The soil's density, kg/m^3.
+    keep_runs : bool
+        Keep the records.
+    keep_curves : bool
+        Keep the static boxes' laws (to ``CURVE_REACH`` x the Hertz wall's peak
+        indentation).
+    record_energy : bool
+        Record the energies (the balance).
+    **options : dict
+        Keywords of :func:`ssw.dynamics.fem_wall.fem_wall` (``boundary``, ``spec``,
         ``plate_density``, ``bead``, ``candidate_factor``, ``scales``).
     """
     from ssw.dynamics.fem_wall import StaticFEMWall, fem_wall

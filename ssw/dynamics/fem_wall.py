@@ -119,9 +119,18 @@ class ContactFEM:
 
     Parameters
     ----------
-    scene : the scene.  spec : the domain sizing.  dt : s, the time step (None: static only).
-    r_cand : m, radius of the candidate zone.  boundary : ``absorbing`` | ``fixed``.
-    d_scale : m, the indentation scale of the LCP tolerance.
+    scene : Scene
+        The scene (bead, plate, soil).
+    spec : ssw.dynamics.domain.DomainSpec
+        The domain sizing.
+    dt : float or None
+        The time step, s (None: static only).
+    r_cand : float
+        The radius of the candidate zone, m.
+    boundary : str
+        ``absorbing`` | ``fixed``.
+    d_scale : float
+        The indentation scale of the LCP tolerance, m.
     """
 
     def __init__(self, scene: Scene, spec: DomainSpec, dt: float | None, r_cand: float,
@@ -294,7 +303,8 @@ class FEMWall:
 
 
 def plate_of(params: Any, plate_density: float | None = None) -> Material | None:
-    """The chain's plate as a :class:`Material` (None without a plate); the density comes
+    """The chain's plate as a :class:`ssw.dynamics.system.Material` (None without a plate); the
+    density comes
     from the materials library by ``params.plate_material`` unless given."""
     if params.plate_thickness <= 0:
         return None

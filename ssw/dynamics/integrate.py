@@ -140,10 +140,18 @@ def simulate(
 
     Parameters
     ----------
-    params : the chain.  wall : the stateful last contact, one per scene.
-    t_end : s.  dt : s (the quasi-static run's step; ``wall.dt`` must agree if set).
-    record_energy : also record the energies (the balance of the tests).
-    every : record every ``every``-th step only (the peaks are picked on the record).
+    params : ssw.chain.params.ChainParams
+        The chain.
+    wall : StatefulWall
+        The stateful last contact, one per scene.
+    t_end : float
+        The end time, s.
+    dt : float
+        The time step, s (the quasi-static run's step; ``wall.dt`` must agree if set).
+    record_energy : bool
+        Also record the energies (the balance of the tests).
+    every : int
+        Record every ``every``-th step only (the peaks are picked on the record).
     """
     if wall.dt is not None and abs(wall.dt - dt) > 1e-15 * dt:
         raise ValueError(f"the wall was built for dt = {wall.dt} s, the run uses {dt} s")

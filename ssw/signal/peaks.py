@@ -137,15 +137,24 @@ def pick_peaks(
 
     Parameters
     ----------
-    y : (n,) record, N, baseline removed.
-    rate : S/s.  noise : the record's noise sigma, N.  rule : the thresholds.
-    min_tof : s, the shortest physical round trip (rule 3); ``None``: no bound.
-    upsample : interpolation factor before the parabolic vertex (1: none).
+    y : numpy.ndarray
+        (n,) record, N, baseline removed.
+    rate : float
+        Sample rate, S/s.
+    noise : float
+        The record's noise sigma, N.
+    rule : PeakRule
+        The thresholds.
+    min_tof : float or None
+        The shortest physical round trip, s (rule 3); ``None``: no bound.
+    upsample : int
+        Interpolation factor before the parabolic vertex (1: none).
 
     Raises
     ------
-    PeakError : no peak, a single peak, a peak on the record's edge, or a reflection
-        earlier than ``min_tof``.
+    PeakError
+        No peak, a single peak, a peak on the record's edge, or a reflection earlier
+        than ``min_tof``.
     """
     from scipy import signal
 

@@ -64,14 +64,26 @@ def tof(
 
     Parameters
     ----------
-    soil_E : Pa, soil_nu : -, and the arrays of ``vary`` (per-scene striker speed, preload,
-        masses), broadcast together; the result has their broadcast shape.
-    params : the chain.  wall : last-contact law.  wall_options : its options.
+    soil_E : array_like
+        The soil's Young's modulus, Pa; broadcast with ``soil_nu`` and the arrays of
+        ``vary``: the result has their broadcast shape.
+    soil_nu : array_like
+        The soil's Poisson's ratio.
+    params : ssw.chain.params.ChainParams
+        The chain.
+    wall : str
+        The last-contact law's name (:data:`ssw.walls.WALLS`).
+    vary : dict or None
+        Per-scene arrays of chain parameters (striker speed, preload, masses:
+        :data:`ssw.chain.params.VARYING`).
+    **wall_options : dict
+        The wall builder's options.
 
     Raises
     ------
-    SolverError : a scene's record is truncated (its reflected wave had not passed the
-        sensor at ``params.t_max``).
+    SolverError
+        A scene's record is truncated (its reflected wave had not passed the sensor at
+        ``params.t_max``).
     """
     pk, _ = peaks(soil_E, soil_nu, params, wall, vary=vary, **wall_options)
     return pk.tof.reshape(_shape(soil_E, soil_nu, vary))
@@ -90,7 +102,7 @@ def sensor_signal(
 
     Returns ``(t, F)``: ``t`` (n_t,) s from the striker's first contact, ``F`` N, the mean of
     the sensor particle's two contact forces, static precompression included; shape (n_t,)
-    for scalar ``soil_E``/``soil_nu``, else (n_t, *broadcast shape). Without ``t_end`` the run
+    for scalar ``soil_E``/``soil_nu``, else ``(n_t, *broadcast_shape)``. Without ``t_end`` the run
     stops once the reflected wave has passed the sensor (the latest scene's stop time);
     with ``t_end`` (s) it runs exactly that long.
     """

@@ -85,7 +85,7 @@ def plastic_wall(params: ChainParams, soil_E: Any, soil_nu: Any, **options: Any)
     return build(params, soil_E, soil_nu, **options)
 
 
-#: Registry: wall name -> builder(params, soil_E, soil_nu, **options).
+#: Registry: wall name -> ``builder(params, soil_E, soil_nu, **options)``.
 WALLS: dict[str, Callable[..., Wall]] = {
     "rigid": rigid_wall,
     "hertz": hertz_wall,

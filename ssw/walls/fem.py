@@ -192,12 +192,18 @@ def fem_wall(
 
     Parameters
     ----------
-    params : the chain; its ``bead_radius`` (the indenter), ``plate_*`` (the plate; thickness
+    params : ssw.chain.params.ChainParams
+        The chain; its ``bead_radius`` (the indenter), ``plate_*`` (the plate; thickness
         0: none), striker, masses, gravity and preload (the range).
-    soil_E, soil_nu : Pa and -, broadcast together: one scene each.
-    contact : the ``contact`` settings (mesh, zone); defaults :data:`ssw.contact.DEFAULTS`;
+    soil_E : array_like
+        The soil's Young's modulus, Pa, broadcast with ``soil_nu``: one scene each.
+    soil_nu : array_like
+        The soil's Poisson's ratio.
+    contact : dict or None
+        The ``contact`` settings (mesh, zone); defaults :data:`ssw.contact.scene.DEFAULTS`;
         the plate's interface and diameter are the device's (``params``), not these.
-    operators : an :class:`ssw.contact.operators.OperatorStore` (default: the process's).
+    operators : ssw.contact.operators.OperatorStore or None
+        The contact operators (default: the process's).
     """
     from ssw.chain.wall import compliance_scale, scene_arrays
     from ssw.contact.operators import default_store, geometry_of, scene_lcp

@@ -27,15 +27,16 @@ comparison):
   ``dF_j/dt = 3/2 A sqrt(d_j) (v_j - v_{j+1})`` (+ ``c (a_j - a_{j+1})``) are sampled
   from DOP853's dense output, and each peak is located as the root of the cubic Hermite
   interpolant's derivative between the two samples where ``dF/dt`` changes sign (no
-  parabola through three force samples, as :mod:`ssw.chain.tof` uses). The rule that
-  chooses the peaks is the one documented in :mod:`ssw.chain.tof` (incident: first
-  maximum >= 0.5 of the largest; gap below 0.25 of it; reflected: first maximum >= 0.2 of
-  the largest after the gap), written again here.
+  parabola through three force samples, nor the quintic dense output of
+  :mod:`ssw.chain.dense`). The rule that chooses the peaks is :mod:`ssw.signal.rule`'s
+  (its thresholds are read from there: the rule is the TOF's definition, not a
+  computation), applied here to the continuous maxima.
 
 Nothing of :mod:`ssw.chain.integrate`, :mod:`ssw.chain.statics`, :mod:`ssw.chain.tof`,
-:mod:`ssw.walls` or :mod:`ssw.hertz` is used. What remains shared is the
-:class:`ssw.chain.params.ChainParams` record (its numbers) and, when a ``PowerWall`` is
-passed, the wall's coefficient and exponent (the model's input).
+:mod:`ssw.chain.dense`, :mod:`ssw.walls` or :mod:`ssw.hertz` is used. What remains shared
+is the :class:`ssw.chain.params.ChainParams` record (its numbers), the peak rule's three
+thresholds and, when a ``PowerWall`` is passed, the wall's coefficient and exponent (the
+model's input).
 
 The method: the adaptive explicit Runge-Kutta 8(5,3) of Dormand & Prince (Hairer, Norsett &
 Wanner 1993, *Solving ODEs I*, sec. II.10), ``scipy.integrate.DOP853`` stepped by hand so
@@ -54,9 +55,8 @@ import numpy as np
 
 from ssw.chain.params import ChainParams
 from ssw.errors import ConfigError, RecordingError, SolverError
+from ssw.signal.rule import RULE
 
-#: The TOF rule's shares (ssw.chain.tof's documented rule, restated).
-INCIDENT_SHARE, GAP_SHARE, SPLIT_SHARE = 0.5, 0.25, 0.2
 #: Bisection iterations for a peak inside one sample interval (2^-60 of it).
 PEAK_BISECTIONS = 60
 #: Largest static acceleration (share of g, or of the preload's) the initial state may
@@ -273,17 +273,17 @@ def tof_rule(h: float, S: np.ndarray, R: np.ndarray) -> tuple[float, float]:
     off, val = _hermite_peak(s[k], s[k + 1], R[k], R[k + 1], h)
     t_pk = k * h + off
     top = max(float(s.max()), float(val.max()))
-    inc = np.flatnonzero(val >= INCIDENT_SHARE * top)
+    inc = np.flatnonzero(val >= RULE.incident_fraction * top)
     if top <= 0 or inc.size == 0:
         raise RecordingError("reference: no incident peak")
     i = inc[0]
-    below = np.flatnonzero((np.arange(s.size) > k[i]) & (s < GAP_SHARE * val[i]))
+    below = np.flatnonzero((np.arange(s.size) > k[i]) & (s < RULE.gap_fraction * val[i]))
     if below.size == 0:
         raise RecordingError("reference: the incident pulse does not end")
     kg = below[0]
     after = k >= kg
     wmax = max(float(s[kg:].max()), float(val[after].max()) if after.any() else -np.inf)
-    ref = np.flatnonzero(after & (val >= SPLIT_SHARE * wmax))
+    ref = np.flatnonzero(after & (val >= RULE.split_fraction * wmax))
     if wmax <= 0 or ref.size == 0:
         raise RecordingError("reference: no reflected peak")
     return float(t_pk[i]), float(t_pk[ref[0]])

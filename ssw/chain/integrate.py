@@ -39,19 +39,22 @@ the arrays.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Any
 
 import numpy as np
 
 from ssw.chain.params import Batch, ChainParams
+from ssw.chain.sensitivity import Tangent, tangent_of
 from ssw.chain.statics import (
     initial_state,
+    initial_tangent,
     kinetic_energy,
     potential_energy,
     static_contact_forces,
 )
-from ssw.chain.wall import Wall
+from ssw.chain.wall import Wall, is_stateful
+from ssw.errors import ConfigError
 
 #: Fall of the sensor signal (share of its peak) that ends the incident pulse.
 INCIDENT_END = 0.3
@@ -67,15 +70,45 @@ NOISE_SHARE = 0.01
 
 @dataclass(frozen=True)
 class Run:
-    """The record of a batched run. SI units.
+    """The record of a batched run. SI units; ``n`` scenes, ``k`` parameters.
 
-    t : (n_t,) s.  sensor : (n_t, n) N, the sensor signal (mean of the sensor particle's two
-    contact forces, static precompression included), NaN after a scene stopped.
-    wall_force : (n_t, n) N.  forces : (n_t, n, N) N or None: contacts 0..N-2 and the wall.
-    energy : (n_t, n) J or None: kinetic + elastic - gravity potential (with a stateful
-    wall, its ``energy(state)``: stored plus dissipated).
-    peak_wall_indentation : (n,) m, the largest ``u_{N-1}``.  stop_time : (n,) s (NaN: ran
-    to the end).  dt : s.
+    Attributes
+    ----------
+    t : numpy.ndarray
+        (n_t,) s.
+    sensor : numpy.ndarray
+        (n_t, n) N, the sensor signal (``ChainParams.sensor_reads``: the mean of the sensor
+        particle's two contact forces, or one of them; static precompression included),
+        NaN after a scene stopped.
+    wall_force : numpy.ndarray
+        (n_t, n) N.
+    forces : numpy.ndarray or None
+        (n_t, n, N) N: contacts 0..N-2 and the wall.
+    energy : numpy.ndarray or None
+        (n_t, n) J: kinetic + elastic - the work potential of gravity and the preload +
+        what left the chain (a stateful wall's stored and dissipated energy instead of a
+        potential; the dashpots' work): constant up to the integrator's error.
+    peak_wall_indentation : numpy.ndarray
+        (n,) m, the largest ``u_{N-1}``.
+    stop_time : numpy.ndarray
+        (n,) s (NaN: ran to the end).
+    dt : float
+        s, the step.
+    energy_wall : numpy.ndarray or None
+        (n_t, n) J, what a stateful wall stores (with ``record_energy``).
+    dissipated : numpy.ndarray or None
+        (n_t, n) J, what left the chain for good: the wall's dissipated or radiated energy
+        and the dashpots' work (with ``record_energy``).
+    nodes : numpy.ndarray or None
+        (n_t, 3, 2, n): the sensor contacts' overlap (m), its rate (m/s) and its second
+        derivative (m/s^2) at each step, upper contact (beads s-1, s) first: the dense
+        output's data (:mod:`ssw.chain.dense`).
+    tangent : Tangent or None
+        The parameters of the sensitivities.
+    dsensor : numpy.ndarray or None
+        (n_t, n, k) N per unit of each parameter: the derivative of ``sensor``.
+    dnodes : numpy.ndarray or None
+        (n_t, 3, 2, k, n): the derivatives of ``nodes``.
     """
 
     t: np.ndarray
@@ -86,6 +119,50 @@ class Run:
     peak_wall_indentation: np.ndarray
     stop_time: np.ndarray
     dt: float
+    energy_wall: np.ndarray | None = None
+    dissipated: np.ndarray | None = None
+    nodes: np.ndarray | None = None
+    tangent: Tangent | None = None
+    dsensor: np.ndarray | None = None
+    dnodes: np.ndarray | None = None
+
+    def take(self, idx: np.ndarray) -> Run:
+        """The scenes ``idx`` of the record."""
+        def sel(x: np.ndarray | None, axis: int) -> np.ndarray | None:
+            return None if x is None else np.take(x, idx, axis=axis)
+
+        return replace(self, sensor=self.sensor[:, idx], wall_force=self.wall_force[:, idx],
+                       forces=sel(self.forces, 1), energy=sel(self.energy, 1),
+                       peak_wall_indentation=self.peak_wall_indentation[idx],
+                       stop_time=self.stop_time[idx], energy_wall=sel(self.energy_wall, 1),
+                       dissipated=sel(self.dissipated, 1), nodes=sel(self.nodes, -1),
+                       dsensor=sel(self.dsensor, 1), dnodes=sel(self.dnodes, -1))
+
+
+class _Record:
+    """Per-step rows of the active scenes, kept in blocks of ``check_every`` steps and
+    assembled at the end into arrays (n_t, *shape, n), NaN where a scene had stopped."""
+
+    def __init__(self, shapes: dict[str, tuple[int, ...]], n: int, block: int) -> None:
+        self.n = n
+        self.buf = {k: np.empty((block, *sh, n)) for k, sh in shapes.items()}
+        self.blocks: list[tuple[int, np.ndarray, dict[str, np.ndarray]]] = []
+
+    def flush(self, j0: int, rows: int, active: np.ndarray) -> dict[str, np.ndarray]:
+        """Keep rows ``0..rows-1`` of the buffers (steps ``j0..``) of the scenes
+        ``active``; returns them."""
+        na = active.size
+        got = {k: b[:rows, ..., :na].copy() for k, b in self.buf.items()}
+        self.blocks.append((j0, active, got))
+        return got
+
+    def assemble(self, n_t: int) -> dict[str, np.ndarray]:
+        """The records, (n_t, *shape, n)."""
+        out = {k: np.full((n_t, *b.shape[1:-1], self.n), np.nan) for k, b in self.buf.items()}
+        for j, act, got in self.blocks:
+            for k, x in got.items():
+                out[k][j : j + x.shape[0], ..., act] = x
+        return out
 
 
 def impact_scales(params: ChainParams | Batch) -> tuple[np.ndarray, np.ndarray]:
@@ -181,7 +258,7 @@ class _StopRule:
 
 def simulate(
     params: ChainParams | Batch,
-    wall: Wall,
+    wall: Any,
     *,
     t_end: float | None = None,
     dt: float | None = None,
@@ -191,20 +268,50 @@ def simulate(
     check_every: int = 32,
     initial: tuple[np.ndarray, np.ndarray] | None = None,
     on_progress: Any = None,
+    derivatives: Any = None,
 ) -> Run:
     """Integrate ``wall.n`` chains from the initial state of :mod:`ssw.chain.statics`.
 
     Parameters
     ----------
-    params : the chain; a :class:`Batch` of ``wall.n`` scenes for per-scene striker speeds,
-        preloads or masses.  wall : the last-contact law, one per scene.
-    t_end : s, the end time (default ``params.t_max``).  dt : s (default :func:`time_step`).
-    stop_early : stop each scene once its reflected pulses have passed the sensor.
-    record_forces, record_energy : also keep every contact force / the total energy.
-    check_every : steps between stop checks.
-    initial : ``(u, v)`` (m, m/s), shapes (n, N), instead of :func:`initial_state`.
-    on_progress : called as ``on_progress(k)`` when ``k`` more scenes have finished (a
-        progress bar's update; ``ssw.progress``).
+    params : ChainParams or Batch
+        The chain; a :class:`Batch` of ``wall.n`` scenes for per-scene striker speeds,
+        preloads or masses.
+    wall : Wall or StatefulWall
+        The last-contact law, one per scene (:class:`ssw.chain.wall.Wall`), or a wall with
+        internal state (:class:`ssw.chain.wall.StatefulWall`: advanced after each drift).
+    t_end : float or None
+        s, the end time (default ``params.t_max``).
+    dt : float or None
+        s, the step (default :func:`time_step`; a stateful wall built for a step, ``wall.dt``,
+        must be run with it).
+    stop_early : bool
+        Stop each scene once its reflected pulses have passed the sensor.
+    record_forces : bool
+        Also keep every contact force.
+    record_energy : bool
+        Also keep the energy record (``energy``, ``energy_wall``, ``dissipated``).
+    check_every : int
+        Steps between stop checks.
+    initial : tuple of numpy.ndarray or None
+        ``(u, v)`` (m, m/s), shapes (n, N), instead of :func:`initial_state`.
+    on_progress : callable or None
+        Called as ``on_progress(k)`` when ``k`` more scenes have finished (a progress bar's
+        update; ``ssw.progress``).
+    derivatives : Tangent or str or sequence of str or None
+        Parameters (:data:`ssw.chain.sensitivity.PARAMETERS`) whose forward sensitivities
+        the run carries (``dsensor``, ``dnodes``); None: none (no extra cost).
+
+    Returns
+    -------
+    Run
+        The record.
+
+    Raises
+    ------
+    ConfigError
+        Sensitivities asked of a stateful wall without ``advance_tangent``, or with an
+        ``initial`` state, or with a wall step other than ``dt``.
     """
     n = wall.n
     b = params if isinstance(params, Batch) else Batch.of(params, n)
@@ -212,6 +319,9 @@ def simulate(
         raise ValueError(f"batch of {b.n} scenes for a wall of {n}")
     p = b.params
     dt = float(dt if dt is not None else time_step(b, wall))
+    wall_dt = getattr(wall, "dt", None)
+    if wall_dt is not None and abs(wall_dt - dt) > 1e-15 * dt:
+        raise ConfigError("dt", dt, f"the step the wall was built for ({wall_dt} s)")
     t_end = float(t_end if t_end is not None else p.t_max)
     n_steps = int(np.ceil(t_end / dt - 1e-9))
     N, s = p.n_beads, p.sensor_index
@@ -225,102 +335,214 @@ def simulate(
     preload_all = b.preload.copy()
     has_preload = bool(np.any(preload_all > 0))
     reads = p.sensor_reads
+    stateful = is_stateful(wall)
+    tg = tangent_of(derivatives)
+    if tg is not None and stateful and not hasattr(wall, "advance_tangent"):
+        raise ConfigError("derivatives", list(tg.names),
+                          f"none for the {type(wall).__name__} (no exact tangent: "
+                          "differentiate its TOF by central differences, ssw.tof.api)")
+    if tg is not None and initial is not None:
+        raise ConfigError("derivatives", list(tg.names), "none with a given initial state")
+    # the dashpot's velocity is needed when it acts, or to differentiate with respect to it
+    c_D = None if tg is None else tg.col("damping")
+    dashpot = damping > 0.0 or c_D is not None
 
     # internal layout (N, n_scenes): every bead's row is contiguous
     u0, v0 = initial if initial is not None else initial_state(b, wall)
     u, v = np.ascontiguousarray(u0.T), np.ascontiguousarray(v0.T)
-    forces = np.full((n_steps + 1, n, N), np.nan) if record_forces else None
-    energy = np.full((n_steps + 1, n), np.nan) if record_energy else None
     peak_ind = u[-1].copy()  # per active scene
     peak_all = np.empty(n)
     inv_m, preload = inv_m_all, preload_all
-    # a wall with internal state (ssw.dynamics: the reduced dynamic wall) advances it every
-    # step from the last bead's new position; its force is then f_wall, not force(u_last)
-    stateful = hasattr(wall, "advance")
+    # a wall with internal state advances it every step from the last bead's new position;
+    # its force is then f_wall, not force(u_last)
     wstate = wall.start(u[-1].copy()) if stateful else None
     f_wall = wall.force(u[-1]) if stateful else None
 
-    def accel(u: np.ndarray, v: np.ndarray, w: Wall) -> tuple[np.ndarray, np.ndarray]:
+    # forward sensitivities (ssw.chain.sensitivity): U, V, Acc (N, n, k)
+    if tg is not None:
+        c_E, c_P = tg.col("E"), tg.col("preload")
+        c_m0 = tg.col("striker_mass")
+        c_ms = None if p.uniform else tg.col("sensor_mass")
+        U, V = initial_tangent(b, wall, u0, tg)
+        dE_all = np.zeros((n, tg.k))
+        if c_E is not None:
+            dE_all[:, c_E] = 1.0
+        dE = dE_all
+        tstate = wall.start_tangent(wstate, U[-1], dE) if stateful else None
+        df_wall = None
+        if stateful:
+            df_wall = wall.dforce_dd(u[-1])[:, None] * U[-1]
+            if c_E is not None:
+                df_wall[:, c_E] += wall.dforce_dE(u[-1])
+
+    def contact_forces(u: np.ndarray, vd: np.ndarray, w: Any
+                       ) -> tuple[np.ndarray, np.ndarray, Any, Any]:
+        """Contact forces (N, n), ``sqrt`` of the overlaps, the dashpot's velocities and
+        which contacts are closed (None without a dashpot)."""
         d = u[:-1] - u[1:]
         np.maximum(d, 0.0, out=d)
+        sq = np.sqrt(d)
         f = np.empty_like(u)
-        np.multiply(d, np.sqrt(d), out=f[:-1])
+        np.multiply(d, sq, out=f[:-1])
         f[:-1] *= A
         f[-1] = w.force(u[-1]) if f_wall is None else f_wall
-        if damping > 0.0:
+        dv = closed = None
+        if dashpot:
             dv = np.empty_like(u)
-            dv[:-1] = v[:-1] - v[1:]
-            dv[-1] = v[-1]
+            dv[:-1] = vd[:-1] - vd[1:]
+            dv[-1] = vd[-1]
             closed = np.concatenate([d > 0, u[-1:] > 0], axis=0)
-            f += damping * dv * closed
+            if damping > 0.0:
+                f += damping * dv * closed
+        return f, sq, dv, closed
+
+    def accel(f: np.ndarray) -> np.ndarray:
         net = -f
         net[1:] += f[:-1]
         if has_preload:
             net[1] += preload
         net *= inv_m
         net += g_acc
-        return net, f
+        return net
 
-    def record_state(step: int, active: np.ndarray, f: np.ndarray, w: Wall) -> None:
-        if forces is not None:
-            forces[step, active] = f.T
-        if energy is not None:
-            sub = b.take(active)
-            e = kinetic_energy(sub, v.T) + potential_energy(sub, w, u.T)
-            if stateful and hasattr(w, "energy"):
-                # a stateful wall's energy is its state's: stored plus dissipated
-                stored, lost = w.energy(wstate)
-                e += stored + lost - w.potential(u[-1])
-            energy[step, active] = e
+    def wall_tangent(w: Any, u_last: np.ndarray, U_last: np.ndarray) -> np.ndarray:
+        """``dF_wall`` (n, k) of a displacement wall."""
+        out = w.dforce_dd(u_last)[:, None] * U_last
+        if c_E is not None:
+            out[:, c_E] += w.dforce_dE(u_last)
+        return out
+
+    def accel_tangent(U: np.ndarray, VD: np.ndarray, a: np.ndarray, sq: np.ndarray,
+                      dv: Any, closed: Any, dfw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """``dAcc`` and ``dF`` (N, n, k) of the step's accelerations and contact forces."""
+        df = np.empty_like(U)
+        np.subtract(U[:-1], U[1:], out=df[:-1])
+        df[:-1] *= (1.5 * A * sq)[:, :, None]
+        df[-1] = dfw
+        if damping > 0.0:
+            ddv = np.empty_like(VD)
+            np.subtract(VD[:-1], VD[1:], out=ddv[:-1])
+            ddv[-1] = VD[-1]
+            df += damping * closed[:, :, None] * ddv
+        if c_D is not None:
+            df[:, :, c_D] += dv * closed
+        dnet = -df
+        dnet[1:] += df[:-1]
+        if c_P is not None:
+            dnet[1, :, c_P] += 1.0
+        dA = dnet * inv_m[:, :, None]
+        if c_m0 is not None:
+            dA[0, :, c_m0] -= (a[0] - g_acc) * inv_m[0]
+        if c_ms is not None:
+            dA[s, :, c_ms] -= (a[s] - g_acc) * inv_m[s]
+        return dA, df
 
     def read(f: np.ndarray, out: np.ndarray) -> None:
         if reads == "upper":
-            out[:] = f[s - 1]
+            out[...] = f[s - 1]
         elif reads == "lower":
-            out[:] = f[s]
+            out[...] = f[s]
         else:
             np.add(f[s - 1], f[s], out=out)
             out *= 0.5
 
-    a, f = accel(u, v, wall)
-    active = np.arange(n)
+    def dashpot_power(dv: Any, closed: Any) -> np.ndarray:
+        """``sum c (closed) dv^2`` (W) per scene: the dashpots' dissipation rate."""
+        return damping * np.sum(dv * dv * closed, axis=0)
+
     w = wall
-    record_state(0, active, f, w)
-    first = np.empty(n)
-    read(f, first)
-    blocks: list[tuple[int, np.ndarray, np.ndarray, np.ndarray]] = [
-        (0, active, first[None, :], f[-1][None, :])
-    ]
+    vd0 = v
+    f, sq, dv, closed = contact_forces(u, vd0, w)
+    a = accel(f)
+    active = np.arange(n)
+    shapes: dict[str, tuple[int, ...]] = {"sensor": (), "wall": (), "nodes": (3, 2)}
+    if tg is not None:
+        shapes.update(dsensor=(tg.k,), dnodes=(3, 2, tg.k))
+        if not stateful:
+            df_wall = wall_tangent(w, u[-1], U[-1])
+        Acc, dF = accel_tangent(U, V, a, sq, dv, closed, df_wall)
+    if record_energy:
+        shapes.update(energy=(), energy_wall=(), dissipated=())
+        w_dash = np.zeros(n)  # the dashpots' work so far (J)
+        p_dash = dashpot_power(dv, closed) if damping > 0.0 else np.zeros(n)
+    if record_forces:
+        shapes["forces"] = (N,)
+    rec = _Record(shapes, n, check_every)
+    buf = rec.buf
+
+    def record_row(k: int, na: int, f: np.ndarray, sub_w: Any) -> None:
+        """Row ``k`` of the block buffers (the active scenes' first ``na`` columns)."""
+        read(f, buf["sensor"][k, :na])
+        buf["wall"][k, :na] = f[-1]
+        nd = buf["nodes"][k, :, :, :na]
+        nd[0] = sq[s - 1 : s + 1] ** 2
+        np.subtract(v[s - 1 : s + 1], v[s : s + 2], out=nd[1])
+        np.subtract(a[s - 1 : s + 1], a[s : s + 2], out=nd[2])
+        if tg is not None:
+            read(dF.transpose(0, 2, 1), buf["dsensor"][k, :, :na])
+            dn = buf["dnodes"][k, :, :, :, :na]
+            np.subtract(U[s - 1 : s + 1], U[s : s + 2], out=dn[0].transpose(0, 2, 1))
+            np.subtract(V[s - 1 : s + 1], V[s : s + 2], out=dn[1].transpose(0, 2, 1))
+            np.subtract(Acc[s - 1 : s + 1], Acc[s : s + 2], out=dn[2].transpose(0, 2, 1))
+        if record_forces:
+            buf["forces"][k, :, :na] = f
+        if record_energy:
+            sub = b.take(active)
+            e = kinetic_energy(sub, v.T) + potential_energy(sub, None if stateful else sub_w,
+                                                            u.T)
+            stored = lost = 0.0
+            if stateful:
+                stored, lost = sub_w.energy(wstate)
+            buf["energy_wall"][k, :na] = stored if stateful else np.nan
+            buf["dissipated"][k, :na] = lost + w_dash
+            buf["energy"][k, :na] = e + stored + lost + w_dash
+
+    record_row(0, n, f, w)
+    rec.flush(0, 1, active)
     stop_time = np.full(n, np.nan)
-    blk_s = np.empty((check_every, n))
-    blk_w = np.empty((check_every, n))
     half = 0.5 * dt
     step, j0 = 0, 1
     for step in range(1, n_steps + 1):
         v += half * a
         u += dt * v
+        if tg is not None:
+            V += half * Acc
+            U += dt * V
         if stateful:
-            f_wall, wstate = w.advance(wstate, u[-1].copy(), dt)
+            if tg is not None:
+                f_wall, df_wall, wstate, tstate = w.advance_tangent(
+                    wstate, tstate, u[-1].copy(), U[-1], dt, dE)
+            else:
+                f_wall, wstate = w.advance(wstate, u[-1].copy(), dt)
+        elif tg is not None:
+            df_wall = wall_tangent(w, u[-1], U[-1])
         # the dashpot needs the velocity at the new time: v_half + dt/2 a_old estimates it
         # to O(dt^2) (a half-step velocity would make the damped scheme first order)
-        a, f = accel(u, v + half * a if damping > 0.0 else v, w)
+        vd = v + half * a if dashpot else v
+        f, sq, dv, closed = contact_forces(u, vd, w)
+        if tg is not None:
+            VD = V + half * Acc if dashpot else V
+        a = accel(f)
         v += half * a
+        if tg is not None:
+            Acc, dF = accel_tangent(U, VD, a, sq, dv, closed, df_wall)
+            V += half * Acc
         k = step - j0
         na = active.size
-        read(f, blk_s[k, :na])
-        blk_w[k, :na] = f[-1]
         np.maximum(peak_ind, u[-1], out=peak_ind)
-        record_state(step, active, f, w)
+        if record_energy and damping > 0.0:
+            p_new = dashpot_power(dv, closed)
+            w_dash += half * (p_dash + p_new)
+            p_dash = p_new
+        record_row(k, na, f, w)
         if k + 1 < check_every and step < n_steps:
             continue
-        S = blk_s[: k + 1, :na].copy()
-        W = blk_w[: k + 1, :na].copy()
-        blocks.append((j0, active, S, W))
+        got = rec.flush(j0, k + 1, active)
         times = dt * np.arange(j0, step + 1)
         j0 = step + 1
         if not stop_early:
             continue
-        done = rule.update(active, times, S, W)
+        done = rule.update(active, times, got["sensor"], got["wall"])
         if np.any(done):
             if on_progress is not None:
                 on_progress(int(np.count_nonzero(done)))
@@ -330,26 +552,37 @@ def simulate(
             active, peak_ind = active[keep], peak_ind[keep]
             if active.size == 0:
                 break
+            idx = np.flatnonzero(keep)
             u, v, a = u[:, keep], v[:, keep], a[:, keep]
             inv_m, preload = inv_m_all[:, active], preload_all[active]
+            if record_energy:
+                w_dash, p_dash = w_dash[keep], p_dash[keep]
+            if tg is not None:
+                U, V, Acc = U[:, keep], V[:, keep], Acc[:, keep]
+                dE = dE_all[active]
+                if stateful:
+                    df_wall = df_wall[keep]
+                    tstate = tuple(x[idx] for x in tstate)
             if stateful:
-                wstate = w.take_state(wstate, np.flatnonzero(keep))
+                wstate = w.take_state(wstate, idx)
                 f_wall = f_wall[keep]
-            w = w.take(np.flatnonzero(keep))
+            w = w.take(idx)
     peak_all[active] = peak_ind
     n_t = step + 1
-    sensor = np.full((n_t, n), np.nan)
-    wall_f = np.full((n_t, n), np.nan)
-    for j, act, S, W in blocks:
-        sensor[j : j + S.shape[0], act] = S
-        wall_f[j : j + W.shape[0], act] = W
+    out = rec.assemble(n_t)
     return Run(
         t=dt * np.arange(n_t),
-        sensor=sensor,
-        wall_force=wall_f,
-        forces=None if forces is None else forces[:n_t],
-        energy=None if energy is None else energy[:n_t],
+        sensor=out["sensor"],
+        wall_force=out["wall"],
+        forces=np.moveaxis(out["forces"], 1, 2) if record_forces else None,
+        energy=out.get("energy"),
         peak_wall_indentation=peak_all,
         stop_time=stop_time,
         dt=dt,
+        energy_wall=out.get("energy_wall") if record_energy and stateful else None,
+        dissipated=out.get("dissipated"),
+        nodes=out["nodes"],
+        tangent=tg,
+        dsensor=None if tg is None else np.moveaxis(out["dsensor"], 1, 2),
+        dnodes=out.get("dnodes"),
     )

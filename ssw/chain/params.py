@@ -152,6 +152,15 @@ class ChainParams:
         e_star = effective_modulus(self.bead_E, self.bead_nu, soil_E, soil_nu)
         return hertz_coefficient(e_star, self.bead_radius)
 
+    def wall_coefficient_dE(self, soil_E: Any, soil_nu: Any) -> np.ndarray:
+        """``dA_w/dE`` (N/m^1.5/Pa) of :meth:`wall_coefficient` at fixed ``soil_nu``:
+        ``A_w E* c_w / E`` with ``c_w = (1 - nu_w^2) / E``, from
+        ``dE*/dE = E*^2 c_w / E``."""
+        E = np.asarray(soil_E, float)
+        c_w = (1.0 - np.asarray(soil_nu, float) ** 2) / E
+        e_star = effective_modulus(self.bead_E, self.bead_nu, soil_E, soil_nu)
+        return self.wall_coefficient(soil_E, soil_nu) * e_star * c_w / E
+
     def contact_time(self) -> float:
         """Hertz contact time (s) of two beads meeting at the striker speed (Johnson 11.24)."""
         from ssw.hertz import contact_time

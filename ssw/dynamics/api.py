@@ -1,7 +1,9 @@
 """Entry points: the TOF of a scene with a dynamic wall, and with its quasi-static twin.
 
 * :func:`fem_tof`: the dynamic FEM wall and the same scene's quasi-static laws, all run
-  through :func:`ssw.dynamics.integrate.simulate` over the same record length. The
+  through the chain's one integrator (:func:`ssw.chain.integrate.simulate`, which honours
+  every device field: the sensor's reading, the contact dashpot, the preload, gravity,
+  the masses) over the same record length. The
   quasi-static references are static FEMs of the same contact mesh in fixed boxes
   (:data:`ssw.dynamics.quasistatic.STATIC_BOXES`): the 1 m box of the quasi-static study
   (``ssw contact``) and the half-space, extrapolated from the 1 and 3 m boxes in ``1 / L``.
@@ -22,8 +24,8 @@ from typing import Any
 
 import numpy as np
 
+from ssw.chain.integrate import Run, simulate
 from ssw.chain.tof import pick_peaks
-from ssw.dynamics.integrate import DynamicRun, simulate
 
 #: The static curves kept reach this multiple of the Hertz wall's peak indentation.
 CURVE_REACH = 1.5
@@ -46,7 +48,7 @@ class DynamicTof:
     tof_static: np.ndarray
     tof_half_space: np.ndarray
     stats: list[dict[str, Any]] = field(default_factory=list)
-    runs: tuple[DynamicRun, DynamicRun] | None = None
+    runs: tuple[Run, Run] | None = None
     curves: list[dict[float, tuple[np.ndarray, np.ndarray]]] | None = None
 
     @property
@@ -89,7 +91,8 @@ def fem_tof(
             boxes = []
             for L in STATIC_BOXES:
                 box = static_box(w.contacts[0], L)
-                r_s = simulate(params, StaticFEMWall([box]), t_end=t_end, dt=scales.dt)
+                r_s = simulate(params, StaticFEMWall([box]), t_end=t_end, dt=scales.dt,
+                               stop_early=False)
                 boxes.append((L, float(pick_peaks(r_s.t, r_s.sensor[:, 0]).tof), r_s))
                 if keep_curves:
                     if not boxes[1:]:
@@ -98,7 +101,8 @@ def fem_tof(
                 box.destroy()
             (L1, T1, r_box), (L2, T2, _) = boxes
             t2 = time.perf_counter()
-            r_d = simulate(params, w, t_end=t_end, dt=scales.dt, record_energy=record_energy)
+            r_d = simulate(params, w, t_end=t_end, dt=scales.dt, record_energy=record_energy,
+                           stop_early=False)
             t3 = time.perf_counter()
             tof_s.append(T1)
             tof_h.append(T2 + (T2 - T1) * (1.0 / L2) / (1.0 / L1 - 1.0 / L2))
@@ -111,9 +115,9 @@ def fem_tof(
                   "f_max": float(scales.f_max[k]), "wall_build": t_build / wall.n,
                   "wall_static_runs": t2 - t1, "wall_dynamic_run": t3 - t2}
             if record_energy:
-                tot = r_d.energy_chain[:, 0] + r_d.energy_wall[:, 0] + r_d.dissipated[:, 0]
-                st.update({"energy_input": float(r_d.energy_chain[0, 0]
-                                                 - r_d.energy_chain[:, 0].min()),
+                tot = r_d.energy[:, 0]
+                chain = tot - r_d.energy_wall[:, 0] - r_d.dissipated[:, 0]
+                st.update({"energy_input": float(chain[0] - chain.min()),
                            "energy_drift": float(np.max(np.abs(tot - tot[0]))),
                            "energy_radiated": float(r_d.dissipated[-1, 0])})
             stats.append(st)
@@ -167,7 +171,6 @@ def reduced_tof(params: Any, soil_E: Any, soil_nu: Any, soil_density: Any, *,
     from types import SimpleNamespace
 
     from ssw.chain.wall import compliance_scale, hertz_wall, table_wall
-    from ssw.dynamics.integrate import QuasiStatic
     from ssw.dynamics.quasistatic import STATIC_BOXES
     from ssw.dynamics.reduced import plate_areal_density, reduced_wall
     from ssw.dynamics.scales import chain_scales
@@ -190,8 +193,8 @@ def reduced_tof(params: Any, soil_E: Any, soil_nu: Any, soil_density: Any, *,
         tw = table_wall(params, E, nu, curve=curves)
         rw = reduced_wall(tw, E, nu, rho, plate_areal_density=plate_areal_density(
             params, options.get("plate_density")), **coef)
-        for name, w in (("static", QuasiStatic(tw)), ("reduced", rw)):
-            run = simulate(params, w, t_end=t_end, dt=scales.dt)
+        for name, w in (("static", tw), ("reduced", rw)):
+            run = simulate(params, w, t_end=t_end, dt=scales.dt, stop_early=False)
             tof[(name, L)] = pick_peaks(run.t, run.sensor).tof
     L1, L2 = STATIC_BOXES
     w2 = (1.0 / L2) / (1.0 / L1 - 1.0 / L2)

@@ -24,7 +24,7 @@ the static FEM (0.4 mm PLA: 19-27 mg on 10 MPa, 5-7 mg on 100 MPa, 1-2 mg on 1 G
 tangent mode's ``phi M phi``), it is :data:`K_P` ``mu_p pi a^2`` within about 25 %.
 ``ssw dynamic-study`` measures the reduced wall against the FEM wall.
 
-Time discretization (the stateful wall protocol of :mod:`ssw.dynamics.integrate`): the
+Time discretization (the stateful wall protocol, :class:`ssw.chain.wall.StatefulWall`): the
 force at the new position uses the second-order backward differences
 
     d'_(n+1) = (3 d_(n+1) - 4 d_n + d_(n-1)) / (2 dt),
@@ -139,7 +139,7 @@ class ReducedWall:
         k2 = kt * kt
         return f_c * k2, (f_m * kt + f_p) * k2
 
-    # the stateful wall protocol (ssw.dynamics.integrate) and the Wall protocol
+    # the stateful wall protocol (ssw.chain.wall.StatefulWall) and the Wall protocol
     def force(self, d: np.ndarray) -> np.ndarray:
         """Quasi-static force (N)."""
         return self.qs.force(d)

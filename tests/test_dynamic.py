@@ -103,8 +103,8 @@ def test_density_limit_is_the_quasi_static_chain():
     2.6 % and 0.5 %); and the static law is Hertz's with the bead's compliance
     (1/E* = c_soil + c_bead) within 2 % on this coarse mesh."""
     from ssw import hertz
+    from ssw.chain.dense import dense_peaks
     from ssw.chain.integrate import simulate
-    from ssw.chain.tof import pick_peaks
     from ssw.dynamics.fem_wall import fem_wall
     from ssw.dynamics.quasistatic import static_table_wall
 
@@ -118,9 +118,9 @@ def test_density_limit_is_the_quasi_static_chain():
         for kw in VARIANTS:
             pv = p.with_(**kw)
             run = simulate(pv, wall, t_end=float(sc.t_end[0]), dt=sc.dt, stop_early=False)
-            tof_fem = pick_peaks(run.t, run.sensor[:, 0]).tof
+            tof_fem = dense_peaks(run).tof[0]
             qs = simulate(pv, table, t_end=float(sc.t_end[0]), dt=sc.dt, stop_early=False)
-            tof_qs = pick_peaks(qs.t, qs.sensor[:, 0]).tof
+            tof_qs = dense_peaks(qs).tof[0]
             assert abs(tof_fem / tof_qs - 1) < 1e-3, kw
             tofs.append(float(tof_fem))
         assert abs(tofs[1] / tofs[0] - 1) > 0.01 and abs(tofs[2] / tofs[0] - 1) > 2e-3
@@ -183,8 +183,8 @@ def test_reduced_wall_limits_scaling_and_energy():
     The chain's energy balance holds with what the wall's dashpot and the contact
     dashpots dissipated, to second order in the step (its error falls >= 3x when the step
     halves; the dashpot alone: the lagged participating mass is first order)."""
+    from ssw.chain.dense import dense_peaks
     from ssw.chain.integrate import simulate, time_step
-    from ssw.chain.tof import pick_peaks
     from ssw.dynamics.reduced import reduced_wall
     from ssw.walls import build_wall
 
@@ -195,12 +195,12 @@ def test_reduced_wall_limits_scaling_and_energy():
     ref = simulate(p, qs, t_end=t_end, dt=dt, stop_early=False)
     zero = simulate(p, reduced_wall(qs, E, 0.3, 0.0), t_end=t_end, dt=dt, stop_early=False)
     assert np.array_equal(zero.sensor, ref.sensor)
-    t_ref = pick_peaks(ref.t, ref.sensor).tof
+    t_ref = dense_peaks(ref).tof
     shift = []
     for rho in (2200.0, 550.0):
         run = simulate(p, reduced_wall(qs, E, 0.3, rho, m_r=0.0), t_end=t_end, dt=dt,
                        stop_early=False)
-        shift.append(pick_peaks(run.t, run.sensor).tof / t_ref - 1)
+        shift.append(dense_peaks(run).tof / t_ref - 1)
     assert np.all(np.abs(shift[0] / shift[1] - 2.0) < 0.2)
     for damping in (0.0, 2.0):
         errors = []

@@ -89,9 +89,9 @@ def punch_part(out: Path) -> dict[str, Any]:
 
 def static_limit_part() -> dict[str, Any]:
     """Density 1e-6 in the quasi-static FEM's box and mesh vs the study's pipeline."""
+    from ssw.chain.dense import dense_peaks
     from ssw.chain.integrate import simulate as chain_simulate
     from ssw.chain.params import ChainParams
-    from ssw.chain.tof import pick_peaks
     from ssw.chain.wall import table_wall
     from ssw.contact import solve_curve
     from ssw.dynamics.fem_wall import fem_wall
@@ -114,8 +114,8 @@ def static_limit_part() -> dict[str, Any]:
     curve, _ = solve_curve((E, nu), (p.plate_E, p.plate_nu), p.plate_thickness,
                            p.bead_radius, cfg)
     qs = chain_simulate(p, table_wall(p, E, nu, curve=curve), dt=sc.dt)
-    tof_fem = float(pick_peaks(run.t, run.sensor[:, 0]).tof)
-    tof_qs = float(pick_peaks(qs.t, qs.sensor[:, 0]).tof)
+    tof_fem = float(dense_peaks(run).tof[0])
+    tof_qs = float(dense_peaks(qs).tof[0])
     return {"soil_E": E, "soil_nu": nu, "density": 1e-6, "tof_fem_dynamic": tof_fem,
             "tof_quasi_static_pipeline": tof_qs, "relative_difference": tof_fem / tof_qs - 1,
             "dofs": dofs, "dofs_contact_solver": curve.stats["dofs"], "wall": t_fem}

@@ -44,6 +44,7 @@ from typing import Any
 
 import numpy as np
 
+from ssw.chain.impulse import closed_share, hertz_force, near_events
 from ssw.chain.params import Batch, ChainParams
 from ssw.chain.sensitivity import Tangent, tangent_of
 from ssw.chain.statics import (
@@ -99,16 +100,11 @@ class Run:
     dissipated : numpy.ndarray or None
         (n_t, n) J, what left the chain for good: the wall's dissipated or radiated energy
         and the dashpots' work (with ``record_energy``).
-    nodes : numpy.ndarray or None
-        (n_t, 3, 2, n): the sensor contacts' overlap (m), its rate (m/s) and its second
-        derivative (m/s^2) at each step, upper contact (beads s-1, s) first: the dense
-        output's data (:mod:`ssw.chain.dense`).
     tangent : Tangent or None
         The parameters of the sensitivities.
     dsensor : numpy.ndarray or None
-        (n_t, n, k) N per unit of each parameter: the derivative of ``sensor``.
-    dnodes : numpy.ndarray or None
-        (n_t, 3, 2, k, n): the derivatives of ``nodes``.
+        (n_t, n, k) N per unit of each parameter: the derivative of ``sensor`` at every
+        step (the dense output's, :mod:`ssw.chain.dense`, at any time).
     """
 
     t: np.ndarray
@@ -121,10 +117,8 @@ class Run:
     dt: float
     energy_wall: np.ndarray | None = None
     dissipated: np.ndarray | None = None
-    nodes: np.ndarray | None = None
     tangent: Tangent | None = None
     dsensor: np.ndarray | None = None
-    dnodes: np.ndarray | None = None
 
     def take(self, idx: np.ndarray) -> Run:
         """The scenes ``idx`` of the record."""
@@ -135,8 +129,7 @@ class Run:
                        forces=sel(self.forces, 1), energy=sel(self.energy, 1),
                        peak_wall_indentation=self.peak_wall_indentation[idx],
                        stop_time=self.stop_time[idx], energy_wall=sel(self.energy_wall, 1),
-                       dissipated=sel(self.dissipated, 1), nodes=sel(self.nodes, -1),
-                       dsensor=sel(self.dsensor, 1), dnodes=sel(self.dnodes, -1))
+                       dissipated=sel(self.dissipated, 1), dsensor=sel(self.dsensor, 1))
 
 
 class _Record:
@@ -300,7 +293,7 @@ def simulate(
         update; ``ssw.progress``).
     derivatives : Tangent or str or sequence of str or None
         Parameters (:data:`ssw.chain.sensitivity.PARAMETERS`) whose forward sensitivities
-        the run carries (``dsensor``, ``dnodes``); None: none (no extra cost).
+        the run carries (``dsensor``); None: none (no extra cost).
 
     Returns
     -------
@@ -343,9 +336,10 @@ def simulate(
                           "differentiate its TOF by central differences, ssw.tof.api)")
     if tg is not None and initial is not None:
         raise ConfigError("derivatives", list(tg.names), "none with a given initial state")
-    # the dashpot's velocity is needed when it acts, or to differentiate with respect to it
     c_D = None if tg is None else tg.col("damping")
-    dashpot = damping > 0.0 or c_D is not None
+    predict = damping > 0.0 or c_D is not None
+    half = 0.5 * dt
+    moving = not stateful and hasattr(wall, "force_moving")
 
     # internal layout (N, n_scenes): every bead's row is contiguous
     u0, v0 = initial if initial is not None else initial_state(b, wall)
@@ -375,26 +369,50 @@ def simulate(
             if c_E is not None:
                 df_wall[:, c_E] += wall.dforce_dE(u[-1])
 
-    def contact_forces(u: np.ndarray, vd: np.ndarray, w: Any
-                       ) -> tuple[np.ndarray, np.ndarray, Any, Any]:
-        """Contact forces (N, n), ``sqrt`` of the overlaps, the dashpot's velocities and
-        which contacts are closed (None without a dashpot)."""
-        d = u[:-1] - u[1:]
-        np.maximum(d, 0.0, out=d)
-        sq = np.sqrt(d)
+    def contact_forces(u: np.ndarray, v: np.ndarray, acc: Any, w: Any
+                       ) -> tuple[np.ndarray, Any]:
+        """Contact forces (N, n) the step applies (:mod:`ssw.chain.impulse`: the Hertz law
+        and the dashpot smooth through the contacts' events along the relative motion of
+        the half-step velocities ``v``; the dashpot at the new time's velocity, ``v + dt/2
+        acc`` with the last accelerations ``acc``) and, for the sensitivities and the
+        dashpots' work, what they were made of."""
+        d = np.empty_like(u)
+        np.subtract(u[:-1], u[1:], out=d[:-1])
+        d[-1] = u[-1]
+        dv = np.empty_like(u)
+        np.subtract(v[:-1], v[1:], out=dv[:-1])
+        dv[-1] = v[-1]
+        a = np.abs(dv)
+        a *= dt
+        x = d / a  # NaN or inf where a contact does not move (errors ignored: simulate)
         f = np.empty_like(u)
-        np.multiply(d, sq, out=f[:-1])
-        f[:-1] *= A
-        f[-1] = w.force(u[-1]) if f_wall is None else f_wall
-        dv = closed = None
-        if dashpot:
-            dv = np.empty_like(u)
-            dv[:-1] = vd[:-1] - vd[1:]
-            dv[-1] = vd[-1]
-            closed = np.concatenate([d > 0, u[-1:] > 0], axis=0)
+        near = near_events(x[:-1])
+        fd, fa = hertz_force(d[:-1], a[:-1], x[:-1], A, near, f[:-1], tangent=tg is not None)
+        wparts = None
+        if f_wall is not None:
+            f[-1] = f_wall
+        elif moving:
+            got = w.force_moving(u[-1], a[-1], tangent=tg is not None)
+            f[-1] = got[0]
+            wparts = got[1:]
+        else:
+            f[-1] = w.force(u[-1])
+            if tg is not None:
+                wparts = (w.dforce_dd(u[-1]), 0.0,
+                          w.dforce_dE(u[-1]) if c_E is not None else None)
+        dvp = share = gd = ga = None
+        if predict:
+            # the dashpot's velocity at the new time: v_half + dt/2 a_old, to O(dt^2) (the
+            # half-step velocity would make the damped scheme first order)
+            dvp = dv.copy()
+            if acc is not None:
+                dvp[:-1] += half * (acc[:-1] - acc[1:])
+                dvp[-1] += half * acc[-1]
+            touch = ((x > -1.0) & (x < 1.0)).ravel().nonzero()[0]
+            share, gd, ga = closed_share(d, a, touch, tangent=tg is not None)
             if damping > 0.0:
-                f += damping * dv * closed
-        return f, sq, dv, closed
+                f += damping * dvp * share
+        return f, (fd, fa, dv, dvp, share, gd, ga, wparts)
 
     def accel(f: np.ndarray) -> np.ndarray:
         net = -f
@@ -405,27 +423,43 @@ def simulate(
         net += g_acc
         return net
 
-    def wall_tangent(w: Any, u_last: np.ndarray, U_last: np.ndarray) -> np.ndarray:
-        """``dF_wall`` (n, k) of a displacement wall."""
-        out = w.dforce_dd(u_last)[:, None] * U_last
-        if c_E is not None:
-            out[:, c_E] += w.dforce_dE(u_last)
-        return out
-
-    def accel_tangent(U: np.ndarray, VD: np.ndarray, a: np.ndarray, sq: np.ndarray,
-                      dv: Any, closed: Any, dfw: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """``dAcc`` and ``dF`` (N, n, k) of the step's accelerations and contact forces."""
+    def accel_tangent(U: np.ndarray, V: np.ndarray, Acc_old: Any, a: np.ndarray,
+                      parts: Any, dfw: Any) -> tuple[np.ndarray, np.ndarray]:
+        """``dAcc`` and ``dF`` (N, n, k) of the step's accelerations and contact forces, from
+        the derivatives of the positions ``U``, the half-step velocities ``V`` and the last
+        accelerations ``Acc_old`` (``dfw`` the wall force's (n, k) from a stateful wall,
+        else None)."""
+        fd, fa, dv, dvp, share, gd, ga, wparts = parts
+        dD = np.empty_like(U)
+        np.subtract(U[:-1], U[1:], out=dD[:-1])
+        dD[-1] = U[-1]
+        dDV = np.empty_like(V)
+        np.subtract(V[:-1], V[1:], out=dDV[:-1])
+        dDV[-1] = V[-1]
+        # d|dv dt| = sign(dv) dt dDV
+        sdt = np.sign(dv) * dt
         df = np.empty_like(U)
-        np.subtract(U[:-1], U[1:], out=df[:-1])
-        df[:-1] *= (1.5 * A * sq)[:, :, None]
-        df[-1] = dfw
+        np.multiply(dD[:-1], fd[:, :, None], out=df[:-1])
+        df[:-1] += (fa * sdt[:-1])[:, :, None] * dDV[:-1]
+        if dfw is not None:
+            df[-1] = dfw
+        else:
+            wd, wa, wE = wparts
+            np.multiply(U[-1], np.asarray(wd)[:, None], out=df[-1])
+            df[-1] += (wa * sdt[-1])[:, None] * V[-1]
+            if c_E is not None:
+                df[-1, :, c_E] += wE
         if damping > 0.0:
-            ddv = np.empty_like(VD)
-            np.subtract(VD[:-1], VD[1:], out=ddv[:-1])
-            ddv[-1] = VD[-1]
-            df += damping * closed[:, :, None] * ddv
+            # c dvp Phi(d, |dv| dt): c Phi dDVP + c dvp (Phi_d dD + Phi_a sign(dv) dt dDV)
+            dDVP = dDV.copy()
+            if Acc_old is not None:
+                dDVP[:-1] += half * (Acc_old[:-1] - Acc_old[1:])
+                dDVP[-1] += half * Acc_old[-1]
+            df += (damping * share)[:, :, None] * dDVP
+            df += (damping * dvp * ga * sdt)[:, :, None] * dDV
+            df += (damping * dvp * gd)[:, :, None] * dD
         if c_D is not None:
-            df[:, :, c_D] += dv * closed
+            df[:, :, c_D] += dvp * share
         dnet = -df
         dnet[1:] += df[:-1]
         if c_P is not None:
@@ -446,127 +480,114 @@ def simulate(
             np.add(f[s - 1], f[s], out=out)
             out *= 0.5
 
-    def dashpot_power(dv: Any, closed: Any) -> np.ndarray:
-        """``sum c (closed) dv^2`` (W) per scene: the dashpots' dissipation rate."""
-        return damping * np.sum(dv * dv * closed, axis=0)
+    def dashpot_power(parts: Any) -> np.ndarray:
+        """``sum c Phi dv^2`` (W) per scene: the dashpots' dissipation rate."""
+        dvp, share = parts[3], parts[4]
+        return damping * np.sum(dvp * dvp * share, axis=0)
 
-    w = wall
-    vd0 = v
-    f, sq, dv, closed = contact_forces(u, vd0, w)
-    a = accel(f)
-    active = np.arange(n)
-    shapes: dict[str, tuple[int, ...]] = {"sensor": (), "wall": (), "nodes": (3, 2)}
-    if tg is not None:
-        shapes.update(dsensor=(tg.k,), dnodes=(3, 2, tg.k))
-        if not stateful:
-            df_wall = wall_tangent(w, u[-1], U[-1])
-        Acc, dF = accel_tangent(U, V, a, sq, dv, closed, df_wall)
-    if record_energy:
-        shapes.update(energy=(), energy_wall=(), dissipated=())
-        w_dash = np.zeros(n)  # the dashpots' work so far (J)
-        p_dash = dashpot_power(dv, closed) if damping > 0.0 else np.zeros(n)
-    if record_forces:
-        shapes["forces"] = (N,)
-    rec = _Record(shapes, n, check_every)
-    buf = rec.buf
-
-    def record_row(k: int, na: int, f: np.ndarray, sub_w: Any) -> None:
-        """Row ``k`` of the block buffers (the active scenes' first ``na`` columns)."""
-        read(f, buf["sensor"][k, :na])
-        buf["wall"][k, :na] = f[-1]
-        nd = buf["nodes"][k, :, :, :na]
-        nd[0] = sq[s - 1 : s + 1] ** 2
-        np.subtract(v[s - 1 : s + 1], v[s : s + 2], out=nd[1])
-        np.subtract(a[s - 1 : s + 1], a[s : s + 2], out=nd[2])
-        if tg is not None:
-            read(dF.transpose(0, 2, 1), buf["dsensor"][k, :, :na])
-            dn = buf["dnodes"][k, :, :, :, :na]
-            np.subtract(U[s - 1 : s + 1], U[s : s + 2], out=dn[0].transpose(0, 2, 1))
-            np.subtract(V[s - 1 : s + 1], V[s : s + 2], out=dn[1].transpose(0, 2, 1))
-            np.subtract(Acc[s - 1 : s + 1], Acc[s : s + 2], out=dn[2].transpose(0, 2, 1))
-        if record_forces:
-            buf["forces"][k, :, :na] = f
-        if record_energy:
-            sub = b.take(active)
-            e = kinetic_energy(sub, v.T) + potential_energy(sub, None if stateful else sub_w,
-                                                            u.T)
-            stored = lost = 0.0
-            if stateful:
-                stored, lost = sub_w.energy(wstate)
-            buf["energy_wall"][k, :na] = stored if stateful else np.nan
-            buf["dissipated"][k, :na] = lost + w_dash
-            buf["energy"][k, :na] = e + stored + lost + w_dash
-
-    record_row(0, n, f, w)
-    rec.flush(0, 1, active)
-    stop_time = np.full(n, np.nan)
-    half = 0.5 * dt
-    step, j0 = 0, 1
-    for step in range(1, n_steps + 1):
-        v += half * a
-        u += dt * v
-        if tg is not None:
-            V += half * Acc
-            U += dt * V
-        if stateful:
-            if tg is not None:
-                f_wall, df_wall, wstate, tstate = w.advance_tangent(
-                    wstate, tstate, u[-1].copy(), U[-1], dt, dE)
-            else:
-                f_wall, wstate = w.advance(wstate, u[-1].copy(), dt)
-        elif tg is not None:
-            df_wall = wall_tangent(w, u[-1], U[-1])
-        # the dashpot needs the velocity at the new time: v_half + dt/2 a_old estimates it
-        # to O(dt^2) (a half-step velocity would make the damped scheme first order)
-        vd = v + half * a if dashpot else v
-        f, sq, dv, closed = contact_forces(u, vd, w)
-        if tg is not None:
-            VD = V + half * Acc if dashpot else V
+    # x = d / |delta| of a contact at rest divides by 0: NaN or inf, never near an event
+    errors = np.seterr(divide="ignore", invalid="ignore")
+    try:
+        w = wall
+        f, parts = contact_forces(u, v, None, w)
         a = accel(f)
-        v += half * a
+        active = np.arange(n)
+        shapes: dict[str, tuple[int, ...]] = {"sensor": (), "wall": ()}
         if tg is not None:
-            Acc, dF = accel_tangent(U, VD, a, sq, dv, closed, df_wall)
-            V += half * Acc
-        k = step - j0
-        na = active.size
-        np.maximum(peak_ind, u[-1], out=peak_ind)
-        if record_energy and damping > 0.0:
-            p_new = dashpot_power(dv, closed)
-            w_dash += half * (p_dash + p_new)
-            p_dash = p_new
-        record_row(k, na, f, w)
-        if k + 1 < check_every and step < n_steps:
-            continue
-        got = rec.flush(j0, k + 1, active)
-        times = dt * np.arange(j0, step + 1)
-        j0 = step + 1
-        if not stop_early:
-            continue
-        done = rule.update(active, times, got["sensor"], got["wall"])
-        if np.any(done):
-            if on_progress is not None:
-                on_progress(int(np.count_nonzero(done)))
-            stop_time[active[done]] = times[-1]
-            keep = ~done
-            peak_all[active[done]] = peak_ind[done]
-            active, peak_ind = active[keep], peak_ind[keep]
-            if active.size == 0:
-                break
-            idx = np.flatnonzero(keep)
-            u, v, a = u[:, keep], v[:, keep], a[:, keep]
-            inv_m, preload = inv_m_all[:, active], preload_all[active]
-            if record_energy:
-                w_dash, p_dash = w_dash[keep], p_dash[keep]
+            shapes.update(dsensor=(tg.k,))
+            Acc, dF = accel_tangent(U, V, None, a, parts, df_wall)
+        if record_energy:
+            shapes.update(energy=(), energy_wall=(), dissipated=())
+            w_dash = np.zeros(n)  # the dashpots' work so far (J)
+            p_dash = dashpot_power(parts) if damping > 0.0 else np.zeros(n)
+        if record_forces:
+            shapes["forces"] = (N,)
+        rec = _Record(shapes, n, check_every)
+        buf = rec.buf
+
+        def record_row(k: int, na: int, f: np.ndarray, sub_w: Any) -> None:
+            """Row ``k`` of the block buffers (the active scenes' first ``na`` columns)."""
+            read(f, buf["sensor"][k, :na])
+            buf["wall"][k, :na] = f[-1]
             if tg is not None:
-                U, V, Acc = U[:, keep], V[:, keep], Acc[:, keep]
-                dE = dE_all[active]
+                read(dF.transpose(0, 2, 1), buf["dsensor"][k, :, :na])
+            if record_forces:
+                buf["forces"][k, :, :na] = f
+            if record_energy:
+                sub = b.take(active)
+                e = kinetic_energy(sub, v.T) + potential_energy(sub, None if stateful else sub_w,
+                                                                u.T)
+                stored = lost = 0.0
                 if stateful:
-                    df_wall = df_wall[keep]
-                    tstate = tuple(x[idx] for x in tstate)
+                    stored, lost = sub_w.energy(wstate)
+                buf["energy_wall"][k, :na] = stored if stateful else np.nan
+                buf["dissipated"][k, :na] = lost + w_dash
+                buf["energy"][k, :na] = e + stored + lost + w_dash
+
+        record_row(0, n, f, w)
+        rec.flush(0, 1, active)
+        stop_time = np.full(n, np.nan)
+        step, j0 = 0, 1
+        for step in range(1, n_steps + 1):
+            v += half * a
+            u += dt * v
+            if tg is not None:
+                V += half * Acc
+                U += dt * V
             if stateful:
-                wstate = w.take_state(wstate, idx)
-                f_wall = f_wall[keep]
-            w = w.take(idx)
+                if tg is not None:
+                    f_wall, df_wall, wstate, tstate = w.advance_tangent(
+                        wstate, tstate, u[-1].copy(), U[-1], dt, dE)
+                else:
+                    f_wall, wstate = w.advance(wstate, u[-1].copy(), dt)
+            f, parts = contact_forces(u, v, a, w)
+            a = accel(f)
+            v += half * a
+            if tg is not None:
+                Acc, dF = accel_tangent(U, V, Acc, a, parts, df_wall)
+                V += half * Acc
+            k = step - j0
+            na = active.size
+            np.maximum(peak_ind, u[-1], out=peak_ind)
+            if record_energy and damping > 0.0:
+                p_new = dashpot_power(parts)
+                w_dash += half * (p_dash + p_new)
+                p_dash = p_new
+            record_row(k, na, f, w)
+            if k + 1 < check_every and step < n_steps:
+                continue
+            got = rec.flush(j0, k + 1, active)
+            times = dt * np.arange(j0, step + 1)
+            j0 = step + 1
+            if not stop_early:
+                continue
+            done = rule.update(active, times, got["sensor"], got["wall"])
+            if np.any(done):
+                if on_progress is not None:
+                    on_progress(int(np.count_nonzero(done)))
+                stop_time[active[done]] = times[-1]
+                keep = ~done
+                peak_all[active[done]] = peak_ind[done]
+                active, peak_ind = active[keep], peak_ind[keep]
+                if active.size == 0:
+                    break
+                idx = np.flatnonzero(keep)
+                u, v, a = u[:, keep], v[:, keep], a[:, keep]
+                inv_m, preload = inv_m_all[:, active], preload_all[active]
+                if record_energy:
+                    w_dash, p_dash = w_dash[keep], p_dash[keep]
+                if tg is not None:
+                    U, V, Acc = U[:, keep], V[:, keep], Acc[:, keep]
+                    dE = dE_all[active]
+                    if stateful:
+                        df_wall = df_wall[keep]
+                        tstate = tuple(x[idx] for x in tstate)
+                if stateful:
+                    wstate = w.take_state(wstate, idx)
+                    f_wall = f_wall[keep]
+                w = w.take(idx)
+    finally:
+        np.seterr(**errors)
     peak_all[active] = peak_ind
     n_t = step + 1
     out = rec.assemble(n_t)
@@ -581,8 +602,6 @@ def simulate(
         dt=dt,
         energy_wall=out.get("energy_wall") if record_energy and stateful else None,
         dissipated=out.get("dissipated"),
-        nodes=out["nodes"],
         tangent=tg,
         dsensor=None if tg is None else np.moveaxis(out["dsensor"], 1, 2),
-        dnodes=out.get("dnodes"),
     )

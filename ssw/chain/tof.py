@@ -13,6 +13,7 @@ resampled or filtered force, a sweep of saved records).
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -34,17 +35,44 @@ class Peaks:
         Incident peak heights above the baseline (N).
     f_reflected : numpy.ndarray
         Reflected peak heights above the baseline (N).
+    dt_incident : numpy.ndarray or None
+        (n, k) s per unit of each parameter of ``tangent``: the incident time's derivatives
+        (peaks on a run's dense output with sensitivities, :mod:`ssw.chain.dense`).
+    dt_reflected : numpy.ndarray or None
+        (n, k), the reflected time's.
+    df_incident : numpy.ndarray or None
+        (n, k) N per unit, the incident height's.
+    df_reflected : numpy.ndarray or None
+        (n, k), the reflected height's.
+    dense : numpy.ndarray or None
+        (n,) bool: both peaks located on the dense output (False: a parabolic vertex);
+        None for peaks of a sampled signal.
+    tangent : Tangent or None
+        The parameters of the derivatives.
     """
 
     t_incident: np.ndarray
     t_reflected: np.ndarray
     f_incident: np.ndarray
     f_reflected: np.ndarray
+    dt_incident: np.ndarray | None = None
+    dt_reflected: np.ndarray | None = None
+    df_incident: np.ndarray | None = None
+    df_reflected: np.ndarray | None = None
+    dense: np.ndarray | None = None
+    tangent: Any = None
 
     @property
     def tof(self) -> np.ndarray:
         """``t_reflected - t_incident`` (s)."""
         return self.t_reflected - self.t_incident
+
+    @property
+    def dtof(self) -> np.ndarray | None:
+        """(n, k) s per unit of each parameter: the TOF's derivatives (None without)."""
+        if self.dt_reflected is None or self.dt_incident is None:
+            return None
+        return self.dt_reflected - self.dt_incident
 
 
 def _parabolic(y: np.ndarray, k: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:

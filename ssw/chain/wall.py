@@ -115,6 +115,45 @@ class PowerWall:
             return 1.5 * self.coef * np.sqrt(dp)
         return np.where(dp > 0, self.exponent * self.coef * dp ** (self.exponent - 1.0), 0.0)
 
+    def force_moving(self, d: np.ndarray, a: np.ndarray, tangent: bool = False
+                     ) -> tuple[np.ndarray, ...]:
+        """The force a step applies at indentation ``d`` (m) moving by ``a = |d'| dt`` (m):
+        for a Hertz-shaped law (every exponent 1.5) the law smooth through the contact's
+        events as a bead-bead contact's (:mod:`ssw.chain.impulse`: a rigid wall is then
+        exactly the mirror image of a bead pair), else the law itself.
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            (n,) m.
+        a : numpy.ndarray
+            (n,) m.
+        tangent : bool
+            Also return ``dF/dd`` (N/m), ``dF/da`` (N/m) and ``dF/dE`` (N/Pa, None when
+            the E-dependence is not known).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ``(F,)`` or ``(F, dF/dd, dF/da, dF/dE)``.
+        """
+        from ssw.chain.impulse import hertz_force, near_events
+
+        if not self.hertzian:
+            if not tangent:
+                return (self.force(d),)
+            dE = None if self.dcoef_dE is None else self.dforce_dE(d)
+            return self.force(d), self.dforce_dd(d), np.zeros(self.n), dE
+        with np.errstate(divide="ignore", invalid="ignore"):
+            x = d / a
+        F = np.empty(self.n)
+        near = near_events(x)
+        fd, fa = hertz_force(d, a, x, self.coef, near, F, tangent)
+        if not tangent:
+            return (F,)
+        dE = None if self.dcoef_dE is None else self.dcoef_dE * (F / self.coef)
+        return F, fd, fa, dE
+
     def dforce_dE(self, d: np.ndarray) -> np.ndarray:
         """``dF/dE`` (N/Pa) at fixed indentation ``d`` (m): ``dcoef/dE d^n + coef d^n ln(d)
         dn/dE``; ConfigError when the builder did not state the law's E-dependence."""

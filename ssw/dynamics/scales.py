@@ -64,13 +64,13 @@ def chain_scales(params: Any, wall: Any) -> ChainScales:
     ChainScales
         Per scene.
     """
+    from ssw.chain.dense import dense_peaks
     from ssw.chain.integrate import simulate, time_step
-    from ssw.chain.tof import pick_peaks
 
     params = params.with_(sensor_reads="mean", damping=0.0)
     dt = time_step(params, wall)
     run = simulate(params, wall, dt=dt)
-    pk = pick_peaks(run.t, run.sensor)
+    pk = dense_peaks(run)
     stop = np.where(np.isnan(run.stop_time), run.t[-1], run.stop_time)
     Fr = np.nan_to_num(run.wall_force - run.wall_force[0])
     onset = run.t[np.argmax(Fr > 0.01 * Fr.max(axis=0), axis=0)]

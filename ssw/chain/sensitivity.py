@@ -32,6 +32,8 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numpy as np
+
 from ssw.errors import ConfigError
 
 #: Parameters the chain differentiates with respect to, and their SI units.
@@ -98,3 +100,78 @@ def tangent_of(names: Tangent | str | list[str] | tuple[str, ...] | None) -> Tan
     if isinstance(names, str):
         names = [x.strip() for x in names.split(",") if x.strip()]
     return Tangent(tuple(names))
+
+
+#: Relative step of the central differences (of the value, or of 1 SI unit when the value
+#: is 0): TOFs are smooth to ~1e-10 relative, so the differences' error is their
+#: truncation (tests/test_tof_derivatives.py).
+CENTRAL_STEP = 1e-4
+#: Difference stencils for walls without forward sensitivities: order -> (central,
+#: one-sided at a lower bound of 0: a preload or a dashpot of 0), each (offsets in steps,
+#: weights, denominator in steps).
+STENCILS = {
+    2: ((np.array([-1.0, 1.0]), np.array([-1.0, 1.0]), 2.0),
+        (np.arange(3.0), np.array([-3.0, 4.0, -1.0]), 2.0)),
+    4: ((np.array([-2.0, -1.0, 1.0, 2.0]), np.array([1.0, -8.0, 8.0, -1.0]), 12.0),
+        (np.arange(5.0), np.array([-25.0, 48.0, -36.0, 16.0, -3.0]), 12.0)),
+}
+#: Parameters that may not go below 0.
+NON_NEGATIVE = ("preload", "damping")
+
+
+@dataclass(frozen=True)
+class Stencil:
+    """A difference stencil for one parameter: evaluate at ``value + offsets h`` and combine
+    with :meth:`derivative`.
+
+    Attributes
+    ----------
+    offsets : numpy.ndarray
+        Offsets in steps.
+    weights : numpy.ndarray
+        Weights of the values.
+    denominator : float
+        Steps the weighted sum is divided by (times ``h``).
+    h : numpy.ndarray
+        (n,) the step per scene (the parameter's SI unit).
+    """
+
+    offsets: np.ndarray
+    weights: np.ndarray
+    denominator: float
+    h: np.ndarray
+
+    def derivative(self, values: list[np.ndarray]) -> np.ndarray:
+        """The derivative from the values at the offsets (one array each)."""
+        total = sum(w * v for w, v in zip(self.weights, values, strict=True))
+        return total / (self.denominator * self.h)
+
+
+def stencil(name: str, value: np.ndarray, rel: float = CENTRAL_STEP, order: int = 4
+            ) -> Stencil:
+    """The difference stencil of parameter ``name`` at ``value`` (:data:`STENCILS`): central,
+    or one-sided where a non-negative parameter would go below 0.
+
+    Parameters
+    ----------
+    name : str
+        A name of :data:`PARAMETERS`.
+    value : numpy.ndarray
+        (n,) the parameter per scene (SI).
+    rel : float
+        Relative step (of 1 SI unit where the value is 0).
+    order : int
+        2 or 4.
+
+    Returns
+    -------
+    Stencil
+        Offsets, weights and steps.
+    """
+    value = np.asarray(value, float)
+    h = rel * np.where(value != 0, np.abs(value), 1.0)
+    central, one_sided = STENCILS[order]
+    reach = np.max(np.abs(central[0]))
+    at_bound = name in NON_NEGATIVE and bool(np.any(value - reach * h < 0))
+    offsets, weights, den = one_sided if at_bound else central
+    return Stencil(offsets, weights, den, h)

@@ -13,7 +13,7 @@
 * :func:`reduced_tof`: the reduced dynamic wall (:mod:`ssw.dynamics.reduced`) and its
   quasi-static law, batched over scenes.
 
-TOFs are picked by :func:`ssw.chain.tof.pick_peaks` on the sensor signal.
+TOFs are the peaks of the runs' dense output (:func:`ssw.chain.dense.dense_peaks`).
 """
 
 from __future__ import annotations
@@ -24,8 +24,9 @@ from typing import Any
 
 import numpy as np
 
+from ssw.chain.dense import dense_peaks
 from ssw.chain.integrate import Run, simulate
-from ssw.chain.tof import pick_peaks
+from ssw.chain.sensitivity import CENTRAL_STEP, PARAMETERS
 
 #: The static curves kept reach this multiple of the Hertz wall's peak indentation.
 CURVE_REACH = 1.5
@@ -93,7 +94,7 @@ def fem_tof(
                 box = static_box(w.contacts[0], L)
                 r_s = simulate(params, StaticFEMWall([box]), t_end=t_end, dt=scales.dt,
                                stop_early=False)
-                boxes.append((L, float(pick_peaks(r_s.t, r_s.sensor[:, 0]).tof), r_s))
+                boxes.append((L, float(dense_peaks(r_s).tof[0]), r_s))
                 if keep_curves:
                     if not boxes[1:]:
                         curves.append({})
@@ -106,7 +107,7 @@ def fem_tof(
             t3 = time.perf_counter()
             tof_s.append(T1)
             tof_h.append(T2 + (T2 - T1) * (1.0 / L2) / (1.0 / L1 - 1.0 / L2))
-            tof_d.append(float(pick_peaks(r_d.t, r_d.sensor[:, 0]).tof))
+            tof_d.append(float(dense_peaks(r_d).tof[0]))
             c = w.contacts[0]
             st = {"dofs": c.system.ndof, "candidates": c.n_candidates,
                   "domain": c.mesh.soil_radius, "elements": len(c.mesh.tri),
@@ -127,6 +128,119 @@ def fem_tof(
         wall.destroy()
     return DynamicTof(np.array(tof_d), np.array(tof_s), np.array(tof_h), stats, runs,
                       curves if keep_curves else None)
+
+
+def fem_tof_derivatives(
+    params: Any, soil_E: Any, soil_nu: Any, soil_density: Any, *,
+    derivatives: Any = tuple(PARAMETERS), step: float = CENTRAL_STEP, order: int = 2,
+    **options: Any,
+) -> tuple[np.ndarray, dict[str, np.ndarray], dict[str, float]]:
+    """The dynamic FEM wall's TOF and its derivatives by central differences (the wall
+    has no tangent), one scene at a time.
+
+    Every perturbed run keeps the base run's step and length and, for the device's
+    parameters, its FEM wall (one mesh, one factorization); for ``E`` the wall is rebuilt
+    on the same mesh (the base scene's domain and largest element, its scales: only the
+    soil's modulus changes). Derivatives of the discrete TOF at that step and mesh, by the
+    stencils of :func:`ssw.chain.sensitivity.stencil` (``order`` 2: two FEM runs per
+    parameter, truncation ~1e-4 relative at the default step; 4: four runs).
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu`` and ``soil_density``: one FEM per scene.
+    soil_nu : array_like
+        -.
+    soil_density : array_like
+        kg/m^3.
+    derivatives : sequence of str or str
+        Names of :data:`ssw.chain.sensitivity.PARAMETERS`.
+    step : float
+        Relative step.
+    order : int
+        2 or 4, the stencils' order.
+    **options
+        Keywords of :func:`ssw.dynamics.fem_wall.fem_wall`.
+
+    Returns
+    -------
+    tuple
+        ``(tof, dtof, steps)``: (n,) s, name -> (n,) s per SI unit, name -> the first
+        scene's step (SI).
+    """
+    from ssw.chain.params import Batch
+    from ssw.chain.sensitivity import stencil, tangent_of
+    from ssw.dynamics.fem_wall import fem_wall
+
+    names = tangent_of(derivatives).names
+    E, nu, rho = (np.ravel(x).astype(float) for x in np.broadcast_arrays(
+        np.asarray(soil_E, float), np.asarray(soil_nu, float),
+        np.asarray(soil_density, float)))
+    wall, scales = fem_wall(params, E, nu, rho, **options)
+    tof = np.empty(E.size)
+    dtof = {k: np.empty(E.size) for k in names}
+    used: dict[str, float] = {}
+    try:
+        for i in range(wall.n):
+            w = wall.take(np.array([i]))
+            t_end = float(scales.t_end[i])
+
+            def run_tof(chain: Any, wl: Any, t_end: float = t_end) -> float:
+                r = simulate(chain, wl, t_end=t_end, dt=scales.dt, stop_early=False)
+                return float(dense_peaks(r).tof[0])
+
+            tof[i] = run_tof(params, w)
+            b0 = Batch.of(params, 1)
+            values = {"E": E[i:i + 1], "striker_velocity": b0.striker_velocity,
+                      "preload": b0.preload, "striker_mass": b0.masses[:, 0],
+                      "sensor_mass": b0.masses[:, params.sensor_index],
+                      "damping": np.array([params.damping])}
+            c = w.contacts[0]
+            fixed = {**options.get("spec", {}), "domain": float(c.mesh.soil_radius),
+                     "size_max": _largest_element(c)}
+            for name in names:
+                st = stencil(name, values[name], step, order)
+                h = float(st.h[0])
+                used.setdefault(name, h)
+                got = []
+                for o in st.offsets:
+                    x = float(values[name][0] + o * h)
+                    if name == "E":
+                        opts = {**options, "spec": fixed, "scales": _scene_scales(scales, i)}
+                        we, _ = fem_wall(params, x, nu[i], rho[i], **opts)
+                        try:
+                            got.append(run_tof(params, we))
+                        finally:
+                            we.destroy()
+                    elif name == "damping":
+                        got.append(run_tof(params.with_(damping=x), w))
+                    else:
+                        got.append(run_tof(Batch.of(params, 1, {name: x}), w))
+                dtof[name][i] = float(st.derivative([np.array([g]) for g in got])[0])
+    finally:
+        wall.destroy()
+    return tof, dtof, used
+
+
+def _largest_element(contact: Any) -> float:
+    """The largest element (m) of a scene's mesh settings (the wave rule's, when the spec
+    leaves it free)."""
+    from ssw.dynamics.domain import mesh_settings
+
+    return float(mesh_settings(contact.scene.soil, contact.scene.plate_radius,
+                               contact.spec).size_max)
+
+
+def _scene_scales(scales: Any, i: int) -> Any:
+    """The scales of scene ``i`` alone."""
+    from dataclasses import replace as dc_replace
+
+    one = slice(i, i + 1)
+    return dc_replace(scales, t_end=scales.t_end[one], window=scales.window[one],
+                      f_max=scales.f_max[one], d_peak=scales.d_peak[one],
+                      t_onset=scales.t_onset[one])
 
 
 def static_laws(params: Any, soil_E: Any, soil_nu: Any, soil_density: Any, scales: Any,
@@ -195,7 +309,7 @@ def reduced_tof(params: Any, soil_E: Any, soil_nu: Any, soil_density: Any, *,
             params, options.get("plate_density")), **coef)
         for name, w in (("static", tw), ("reduced", rw)):
             run = simulate(params, w, t_end=t_end, dt=scales.dt, stop_early=False)
-            tof[(name, L)] = pick_peaks(run.t, run.sensor).tof
+            tof[(name, L)] = dense_peaks(run).tof
     L1, L2 = STATIC_BOXES
     w2 = (1.0 / L2) / (1.0 / L1 - 1.0 / L2)
 

@@ -68,9 +68,28 @@ STATIC_TOL = 1e-8
 class ChainModel:
     """The equations of motion, as numbers. SI units; ``n`` scenes share the chain.
 
-    masses : (N,) kg.  A : N/m^1.5, bead-bead.  wall_coef : (n,) N/m^wall_exp.
-    wall_exp : (n,) -.  g : m/s^2 (0 without gravity).  preload : N on bead 1.
-    damping : N s/m.  sensor : index.  reads : ``mean|upper|lower``.  v0 : m/s.
+    Attributes
+    ----------
+    masses : numpy.ndarray
+        (N,) kg.
+    A : float
+        N/m^1.5, bead-bead.
+    wall_coef : numpy.ndarray
+        (n,) N/m^wall_exp.
+    wall_exp : numpy.ndarray
+        (n,) -.
+    g : float
+        m/s^2 (0 without gravity).
+    preload : float
+        N on bead 1.
+    damping : float
+        N s/m.
+    sensor : int
+        The sensor's index.
+    reads : str
+        ``mean|upper|lower``.
+    v0 : float
+        m/s, the striker's speed.
     """
 
     masses: np.ndarray
@@ -106,9 +125,22 @@ class ChainModel:
 class BaselineResult:
     """The reference's peaks and work.
 
-    tof, t_incident, t_reflected : (n,) s.  t : (n_t,) s, the sample times.
-    sensor : (n_t, n) N, the sensor force (NaN after a scene's own ``t_end``).
-    nfev : right-hand-side evaluations.  steps : accepted steps.
+    Attributes
+    ----------
+    tof : numpy.ndarray
+        (n,) s.
+    t_incident : numpy.ndarray
+        (n,) s.
+    t_reflected : numpy.ndarray
+        (n,) s.
+    t : numpy.ndarray
+        (n_t,) s, the sample times.
+    sensor : numpy.ndarray
+        (n_t, n) N, the sensor force (NaN after a scene's own ``t_end``).
+    nfev : int
+        Right-hand-side evaluations.
+    steps : int
+        Accepted steps.
     """
 
     tof: np.ndarray
@@ -123,8 +155,21 @@ class BaselineResult:
 def hertz_wall(params: ChainParams, soil_E: Any, soil_nu: Any) -> tuple[np.ndarray, np.ndarray]:
     """Bead on an elastic half-space, ``F = A_w d^1.5`` (Johnson 1985, eq. 4.23).
 
-    ``A_w = 4/3 sqrt(R) E*``, ``1/E* = (1 - nu_b^2)/E_b + (1 - nu^2)/E`` (N/m^1.5), flat over
-    the broadcast of ``soil_E`` (Pa) and ``soil_nu``; returns ``(A_w, 1.5)`` arrays (n,).
+    ``A_w = 4/3 sqrt(R) E*``, ``1/E* = (1 - nu_b^2)/E_b + (1 - nu^2)/E``.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain (its bead's numbers).
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu``, flattened.
+    soil_nu : array_like
+        -.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(A_w, 1.5)``: (n,) N/m^1.5 and (n,) -.
     """
     E, nu = np.broadcast_arrays(np.asarray(soil_E, float), np.asarray(soil_nu, float))
     inv = (1.0 - params.bead_nu**2) / params.bead_E + (1.0 - nu.ravel() ** 2) / E.ravel()
@@ -133,7 +178,20 @@ def hertz_wall(params: ChainParams, soil_E: Any, soil_nu: Any) -> tuple[np.ndarr
 
 
 def chain_model(params: ChainParams, wall: Any) -> ChainModel:
-    """The model of ``params`` with ``wall``: ``(coef, exponent)`` or an object with them."""
+    """The model of ``params`` with ``wall``.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain (its numbers only).
+    wall : tuple or object
+        ``(coef, exponent)`` (n,) arrays or an object with them (a PowerWall).
+
+    Returns
+    -------
+    ChainModel
+        The equations, as numbers.
+    """
     if isinstance(wall, tuple):
         coef, expo = wall
     elif hasattr(wall, "coef") and hasattr(wall, "exponent"):
@@ -190,12 +248,23 @@ def _acceleration(mod: ChainModel, u: np.ndarray, v: np.ndarray,
 
 
 def static_state(mod: ChainModel) -> tuple[np.ndarray, np.ndarray]:
-    """Initial ``u`` (m) and ``v`` (m/s), shapes (N, n): beads 1..N-1 in static equilibrium
-    under gravity and the preload, the striker touching bead 1 at the striker speed.
+    """Beads 1..N-1 in static equilibrium under gravity and the preload, the striker
+    touching bead 1 at the striker speed.
+
+    Parameters
+    ----------
+    mod : ChainModel
+        The equations.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        Initial ``u`` (m) and ``v`` (m/s), shapes (N, n).
 
     Raises
     ------
-    SolverError : the state leaves beads 1..N-1 accelerating (a defect of this function).
+    SolverError
+        The state leaves beads 1..N-1 accelerating (a defect of this function).
     """
     N, n = mod.N, mod.n
     load = mod.preload + mod.g * np.cumsum(mod.masses[1:])  # contacts 1..N-2, then the wall
@@ -259,12 +328,22 @@ def tof_rule(h: float, S: np.ndarray, R: np.ndarray) -> tuple[float, float]:
 
     Parameters
     ----------
-    h : s, the sample step (sample ``k`` at ``k h``).  S : (n_t,) N, the sensor force,
-    ``S[0]`` the static baseline.  R : (n_t,) N/s, its exact time derivative.
+    h : float
+        s, the sample step (sample ``k`` at ``k h``).
+    S : numpy.ndarray
+        (n_t,) N, the sensor force, ``S[0]`` the static baseline.
+    R : numpy.ndarray
+        (n_t,) N/s, its exact time derivative.
+
+    Returns
+    -------
+    tuple of float
+        The incident and reflected peak times (s).
 
     Raises
     ------
-    RecordingError : no incident or no reflected peak.
+    RecordingError
+        No incident or no reflected peak.
     """
     s = S - S[0]
     k = np.flatnonzero((R[:-1] > 0) & (R[1:] <= 0))  # a maximum inside [t_k, t_k+1]
@@ -302,16 +381,32 @@ def solve_dop853(
 
     Parameters
     ----------
-    params : the chain (its numbers only).  wall : ``(coef, exponent)`` (n,) arrays, or an
-        object with ``coef``/``exponent`` (a PowerWall): ``F = coef [d]_+^exponent`` (N, m).
-    t_end : s, scalar or (n,): each scene's record ends there (the system runs to the
-        largest).  rtol : relative tolerance.  atol : absolute tolerance, scalar or (2 N n,)
-        (m for ``u``, m/s for ``v``); default ``rtol`` x (peak two-bead overlap, striker
-        speed).  sample_dt : s, the sensor's sample step.
+    params : ChainParams
+        The chain (its numbers only).
+    wall : tuple or object
+        ``(coef, exponent)`` (n,) arrays, or an object with ``coef``/``exponent`` (a
+        PowerWall): ``F = coef [d]_+^exponent`` (N, m).
+    t_end : float or numpy.ndarray
+        s, scalar or (n,): each scene's record ends there (the system runs to the largest).
+    rtol : float
+        Relative tolerance.
+    atol : float or numpy.ndarray or None
+        Absolute tolerance, scalar or (2 N n,) (m for ``u``, m/s for ``v``); default
+        ``rtol`` x (peak two-bead overlap, striker speed).
+    sample_dt : float
+        s, the sensor's sample step.
+
+    Returns
+    -------
+    BaselineResult
+        Peaks, TOF, record and work.
 
     Raises
     ------
-    SolverError : DOP853 failed.  RecordingError : a record without its peaks.
+    SolverError
+        DOP853 failed.
+    RecordingError
+        A record without its peaks.
     """
     from scipy.integrate import DOP853
 

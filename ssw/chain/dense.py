@@ -26,7 +26,7 @@ TOF:
 ``dH'/dp`` the same combination of the samples' forward sensitivities (``Run.dsensor``,
 :mod:`ssw.chain.sensitivity`). The peak's height moves as ``dH/dp`` (``H' = 0`` there). With
 the contact forces of :mod:`ssw.chain.impulse` (smooth through contact events) the TOF is
-smooth in the parameters to ~1e-10 (``ssw bench chain --smoothness``).
+smooth in the parameters to ~1e-10 (``ssw bench smooth``).
 
 Which maxima are the incident and the reflected peaks is the rule of
 :mod:`ssw.signal.rule`, applied to the samples; the chosen sample's neighbouring interval
@@ -49,7 +49,7 @@ from typing import Any
 
 import numpy as np
 
-from ssw.chain.tof import Peaks, check_selection, pick_peaks
+from ssw.chain.tof import Peaks, check_selection, parabolic
 from ssw.signal.rule import RULE, PeakRule, select
 
 #: Quintic Hermite basis on [0, 1]: row m multiplies the m-th node datum of
@@ -209,24 +209,25 @@ def dense_peaks(run: Any, *, rule: PeakRule = RULE, strict: bool = True) -> Peak
     """
     y = run.sensor
     s = y - y[0]
+    s = np.where(np.isnan(s), 0.0, s)
     sel = select(s, rule)
     bad = check_selection(sel, strict)
     n = y.shape[1]
     cols = np.arange(n)
     base = y[0]
-    par = pick_peaks(run.t, y, rule=rule, strict=False)
     out: dict[str, np.ndarray] = {}
     derivs = run.tangent is not None
     dense = ~bad
-    for name, k, t_par, f_par in (("incident", sel.k_incident, par.t_incident,
-                                   par.f_incident),
-                                  ("reflected", sel.k_reflected, par.t_reflected,
-                                   par.f_reflected)):
+    for name, k in (("incident", sel.k_incident), ("reflected", sel.k_reflected)):
         i, theta, H, H2, ok = _refine(run, k, cols)
         ok &= ~bad
         dense &= ok
-        out[f"t_{name}"] = np.where(ok, run.t[0] + (i + theta) * run.dt, t_par)
-        out[f"f_{name}"] = np.where(ok, H - base, f_par)
+        # a peak without a dense maximum keeps the parabolic vertex of its samples
+        kk = np.clip(k, 1, s.shape[0] - 2)
+        off, h_par = parabolic(s, kk, cols)
+        out[f"t_{name}"] = np.where(ok, run.t[0] + (i + theta) * run.dt,
+                                    run.t[0] + (kk + off) * run.dt)
+        out[f"f_{name}"] = np.where(ok, H - base, h_par)
         if derivs:
             _, dY = hermite_data(run, i, cols, tangent=True)
             # dH/dp and dH'/dp at theta*: the basis (and its derivative) at theta* times dY

@@ -11,8 +11,8 @@ is a smooth function of the run's parameters. The Hertz law ``A [d]_+^(3/2)`` an
 dashpot's switch at ``d = 0`` are not smooth where a contact opens or closes: there the
 error depends on where the event falls between two steps (``O(dt^(5/2))``, oscillating
 with that phase). The phase moves as a parameter moves the waves, so TOFs were noisy in
-their parameters (~1e-6 relative between moduli 0.1 % apart, ``ssw bench chain
---smoothness``) and exact derivatives of the discrete TOF wiggled with it.
+their parameters (~1e-6 relative between moduli 0.1 % apart, ``ssw bench smooth``) and
+exact derivatives of the discrete TOF wiggled with it.
 
 Here a bead-bead contact whose overlap ``d`` lies within ``-|delta| < d < FAR |delta|`` of an
 event (``delta = d' dt``, ``d'`` its rate at the new time, predicted as the dashpot's) exerts
@@ -93,13 +93,20 @@ def phi(x: np.ndarray, tangent: bool = False) -> tuple[np.ndarray, np.ndarray | 
     derivative (powers by products and square roots: no ``pow``)."""
     y = np.maximum(x[:, None] + OFFSETS, 0.0)
     y25 = y * y * np.sqrt(y)
-    xp = np.ones((x.size, POWERS.size))
-    xp[:, 1:] = x[:, None]
-    np.cumprod(xp, axis=1, out=xp)
-    val = (y25 * y) @ WEIGHTS - xp @ BRIDGE
+    val = (y25 * y) @ WEIGHTS
+    val -= _horner(BRIDGE, x)
     if not tangent:
         return val, None
-    return val, 3.5 * (y25 @ WEIGHTS) - xp @ BRIDGE_SLOPE
+    return val, 3.5 * (y25 @ WEIGHTS) - _horner(BRIDGE_SLOPE, x)
+
+
+def _horner(c: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """The polynomial of coefficients ``c`` (low to high) at ``x``."""
+    r = np.full_like(x, c[-1])
+    for ci in c[-2::-1]:
+        r *= x
+        r += ci
+    return r
 
 
 def near_events(x: np.ndarray) -> np.ndarray:

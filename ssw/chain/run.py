@@ -27,8 +27,21 @@ T_END_CAP = 1.0
 
 
 def check_complete(run: Run, params: ChainParams) -> None:
-    """Raise SolverError when a scene ran to its end time without its reflected wave
-    passing the sensor (``stop_time`` NaN: the record is truncated, its TOF a guess)."""
+    """Refuse a truncated record.
+
+    Parameters
+    ----------
+    run : Run
+        The record.
+    params : ChainParams
+        The chain (its ``t_max``, for the message).
+
+    Raises
+    ------
+    SolverError
+        A scene ran to its end time without its reflected wave passing the sensor
+        (``stop_time`` NaN: the record is truncated, its TOF a guess).
+    """
     bad = np.flatnonzero(np.isnan(run.stop_time))
     if bad.size:
         raise SolverError(
@@ -119,10 +132,23 @@ def run_peaks(params: ChainParams | Batch, wall: Wall, *, strict: bool = True,
 
 
 def peak_wall_indentation(soil_E: Any, soil_nu: Any, params: ChainParams) -> np.ndarray:
-    """Largest indentation (m) of the last bead into the Hertz wall during the first hit.
+    """Largest indentation of the last bead into the Hertz wall during the first hit.
 
-    The fit stage uses it as the indentation range its K fits must cover. Shape: the
-    broadcast shape of ``soil_E`` (Pa) and ``soil_nu``.
+    The fit stage uses it as the indentation range its K fits must cover.
+
+    Parameters
+    ----------
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu``: one scene each.
+    soil_nu : array_like
+        -.
+    params : ChainParams
+        The chain.
+
+    Returns
+    -------
+    numpy.ndarray
+        m, the broadcast shape of ``soil_E`` and ``soil_nu``.
     """
     w = hertz_wall(params, soil_E, soil_nu)
     run = simulate(params, w)

@@ -30,9 +30,17 @@ def _batch(params: ChainParams | Batch, n: int) -> Batch:
 
 
 def static_contact_forces(params: ChainParams | Batch) -> np.ndarray:
-    """Static forces (N) of contacts 0..N-2 and the wall (last).
+    """Static forces of contacts 0..N-2 and the wall (last).
 
-    Shape (N,) for a ChainParams, (n, N) for a Batch of ``n`` scenes.
+    Parameters
+    ----------
+    params : ChainParams or Batch
+        The chain.
+
+    Returns
+    -------
+    numpy.ndarray
+        N, (N,) for a ChainParams, (n, N) for a Batch of ``n`` scenes.
     """
     b = _batch(params, 1)
     g = b.params.g if b.params.gravity else 0.0
@@ -42,7 +50,20 @@ def static_contact_forces(params: ChainParams | Batch) -> np.ndarray:
 
 
 def initial_state(params: ChainParams | Batch, wall: Wall) -> tuple[np.ndarray, np.ndarray]:
-    """Positions ``u`` (m) and velocities ``v`` (m/s), shapes (n_scenes, N)."""
+    """The chain at rest on the wall, the striker touching bead 1 at its speed.
+
+    Parameters
+    ----------
+    params : ChainParams or Batch
+        The chain.
+    wall : Wall
+        The last contact (its static ``indentation``).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        Positions ``u`` (m) and velocities ``v`` (m/s), shapes (n_scenes, N).
+    """
     n = wall.n
     b = _batch(params, n)
     if b.n != n:
@@ -157,6 +178,19 @@ def potential_energy(params: ChainParams | Batch, wall: Wall | None, u: np.ndarr
 
 
 def kinetic_energy(params: ChainParams | Batch, v: np.ndarray) -> np.ndarray:
-    """``sum m v^2 / 2`` (J) per scene."""
+    """Kinetic energy ``sum m v^2 / 2`` per scene.
+
+    Parameters
+    ----------
+    params : ChainParams or Batch
+        The chain (its masses).
+    v : numpy.ndarray
+        (n, N) m/s.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n,) J.
+    """
     b = _batch(params, v.shape[0])
     return 0.5 * np.sum(v**2 * b.masses, axis=1)

@@ -18,6 +18,7 @@ from typing import Any
 import numpy as np
 
 from ssw.errors import RecordingError
+from ssw.signal.peaks import parabolic_vertex
 from ssw.signal.rule import RULE, PeakRule, Selection, select
 
 
@@ -75,18 +76,34 @@ class Peaks:
         return self.dt_reflected - self.dt_incident
 
 
-def _parabolic(y: np.ndarray, k: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Vertex offset (samples) and height of the parabola through ``y[k-1..k+1, col]``."""
-    ym, y0, yp = y[k - 1, cols], y[k, cols], y[k + 1, cols]
-    den = ym - 2.0 * y0 + yp
-    safe = np.where(den < 0, den, -1.0)
-    off = np.where(den < 0, 0.5 * (ym - yp) / safe, 0.0)
-    return off, y0 - 0.25 * (ym - yp) * off
+def parabolic(y: np.ndarray, k: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Vertex offset (samples) and height of the parabola through ``y[k-1..k+1, col]``
+    (``y`` (n_t, n), ``k`` and ``cols`` (m,) with ``1 <= k <= n_t - 2``):
+    :func:`ssw.signal.peaks.parabolic_vertex`."""
+    pos, height = parabolic_vertex(y, k, cols)
+    return pos - k, height
 
 
 def check_selection(sel: Selection, strict: bool) -> np.ndarray:
-    """(n,) bool: the columns without two peaks; raises RecordingError for any when
-    ``strict``."""
+    """The columns without two peaks.
+
+    Parameters
+    ----------
+    sel : Selection
+        The rule's choice (:func:`ssw.signal.rule.select`).
+    strict : bool
+        Raise for any.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n,) bool.
+
+    Raises
+    ------
+    RecordingError
+        (strict) a column has no incident or no reflected peak.
+    """
     bad = ~sel.ok
     if np.any(bad) and strict:
         raise RecordingError(
@@ -135,8 +152,8 @@ def pick_peaks(t: np.ndarray, F: np.ndarray, *, rule: PeakRule = RULE,
     cols = np.arange(s.shape[1])
     k_inc = np.clip(sel.k_incident, 1, s.shape[0] - 2)
     k_ref = np.clip(sel.k_reflected, 1, s.shape[0] - 2)
-    o_i, h_i = _parabolic(s, k_inc, cols)
-    o_r, h_r = _parabolic(s, k_ref, cols)
+    o_i, h_i = parabolic(s, k_inc, cols)
+    o_r, h_r = parabolic(s, k_ref, cols)
     nan = np.where(bad, np.nan, 0.0)
     res = Peaks(
         t_incident=t[0] + (k_inc + o_i) * dt + nan,

@@ -115,44 +115,13 @@ class PowerWall:
             return 1.5 * self.coef * np.sqrt(dp)
         return np.where(dp > 0, self.exponent * self.coef * dp ** (self.exponent - 1.0), 0.0)
 
-    def force_moving(self, d: np.ndarray, a: np.ndarray, tangent: bool = False
-                     ) -> tuple[np.ndarray, ...]:
-        """The force a step applies at indentation ``d`` (m) moving by ``a = |d'| dt`` (m):
-        for a Hertz-shaped law (every exponent 1.5) the law smooth through the contact's
-        events as a bead-bead contact's (:mod:`ssw.chain.impulse`: a rigid wall is then
-        exactly the mirror image of a bead pair), else the law itself.
-
-        Parameters
-        ----------
-        d : numpy.ndarray
-            (n,) m.
-        a : numpy.ndarray
-            (n,) m.
-        tangent : bool
-            Also return ``dF/dd`` (N/m), ``dF/da`` (N/m) and ``dF/dE`` (N/Pa, None when
-            the E-dependence is not known).
-
-        Returns
-        -------
-        tuple of numpy.ndarray
-            ``(F,)`` or ``(F, dF/dd, dF/da, dF/dE)``.
-        """
-        from ssw.chain.impulse import hertz_force, near_events
-
-        if not self.hertzian:
-            if not tangent:
-                return (self.force(d),)
-            dE = None if self.dcoef_dE is None else self.dforce_dE(d)
-            return self.force(d), self.dforce_dd(d), np.zeros(self.n), dE
-        with np.errstate(divide="ignore", invalid="ignore"):
-            x = d / a
-        F = np.empty(self.n)
-        near = near_events(x)
-        fd, fa = hertz_force(d, a, x, self.coef, near, F, tangent)
-        if not tangent:
-            return (F,)
-        dE = None if self.dcoef_dE is None else self.dcoef_dE * (F / self.coef)
-        return F, fd, fa, dE
+    @property
+    def hertz_coef(self) -> np.ndarray | None:
+        """(n,) N/m^1.5 for a Hertz-shaped law (every exponent 1.5), else None: the
+        integrator then treats this contact's openings and closings as a bead pair's
+        (:mod:`ssw.chain.impulse`; a rigid wall is exactly the mirror image of a bead
+        pair)."""
+        return self.coef if self.hertzian else None
 
     def dforce_dE(self, d: np.ndarray) -> np.ndarray:
         """``dF/dE`` (N/Pa) at fixed indentation ``d`` (m): ``dcoef/dE d^n + coef d^n ln(d)
@@ -263,10 +232,21 @@ class TableWall:
 
 
 def beyond_exact_reach(wall: Any, peak_indentation: np.ndarray) -> np.ndarray:
-    """(n,) bool: the scenes whose last bead went deeper than the wall's exact law reaches
-    (a tabulated FEM curve's end, the FEM law's computed range: ``wall.exact_reach``),
-    where the force is an extension, not the model; all False for a law defined at any
-    depth (no ``exact_reach``)."""
+    """The scenes whose last bead went deeper than the wall's exact law reaches.
+
+    Parameters
+    ----------
+    wall : Wall
+        The last contact (its ``exact_reach``, m: a tabulated FEM curve's end, the FEM
+        law's computed range; none for a law defined at any depth).
+    peak_indentation : numpy.ndarray
+        (n,) m, the run's largest indentations.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n,) bool: where the force was an extension, not the model.
+    """
     reach = getattr(wall, "exact_reach", None)
     peak = np.asarray(peak_indentation, float)
     if reach is None:
@@ -358,22 +338,69 @@ def is_stateful(wall: Any) -> bool:
 
 
 def compliance_scale(params: ChainParams, soil_E: np.ndarray, soil_nu: np.ndarray) -> np.ndarray:
-    """``s = (1 + c_b/c_w)^(2/3)``: rigid-sphere law ``F_R(d)`` -> steel bead ``F_R(d/s)``."""
+    """``s = (1 + c_b/c_w)^(2/3)``: rigid-sphere law ``F_R(d)`` -> steel bead ``F_R(d/s)``.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain (its bead's compliance ``c_b``).
+    soil_E : numpy.ndarray
+        Pa.
+    soil_nu : numpy.ndarray
+        -.
+
+    Returns
+    -------
+    numpy.ndarray
+        -, broadcast.
+    """
     c_w = (1.0 - np.asarray(soil_nu, float) ** 2) / np.asarray(soil_E, float)
     return (1.0 + params.bead_compliance / c_w) ** (2.0 / 3.0)
 
 
 def compliance_scale_dE(params: ChainParams, soil_E: np.ndarray, soil_nu: np.ndarray
                         ) -> np.ndarray:
-    """``ds/dE`` (1/Pa) of :func:`compliance_scale`: with ``x = c_b E / (1 - nu^2)``,
-    ``s = (1 + x)^(2/3)`` and ``ds/dE = 2/3 (1 + x)^(-1/3) c_b / (1 - nu^2)``."""
+    """``ds/dE`` of :func:`compliance_scale`: with ``x = c_b E / (1 - nu^2)``,
+    ``s = (1 + x)^(2/3)`` and ``ds/dE = 2/3 (1 + x)^(-1/3) c_b / (1 - nu^2)``.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    soil_E : numpy.ndarray
+        Pa.
+    soil_nu : numpy.ndarray
+        -.
+
+    Returns
+    -------
+    numpy.ndarray
+        1/Pa, broadcast.
+    """
     k = params.bead_compliance / (1.0 - np.asarray(soil_nu, float) ** 2)
     return 2.0 / 3.0 * (1.0 + k * np.asarray(soil_E, float)) ** (-1.0 / 3.0) * k
 
 
 def scene_arrays(soil_E: Any, soil_nu: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Soil moduli (Pa) and Poisson's ratios broadcast together and flattened, one per
-    scene; ConfigError for E <= 0 or nu outside (-1, 0.5]."""
+    """Soil moduli and Poisson's ratios broadcast together and flattened, one per scene.
+
+    Parameters
+    ----------
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu``: one scene each.
+    soil_nu : array_like
+        -.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (n,) Pa and (n,) -.
+
+    Raises
+    ------
+    ConfigError
+        E <= 0 or nu outside (-1, 0.5].
+    """
     E, nu = np.broadcast_arrays(np.asarray(soil_E, float), np.asarray(soil_nu, float))
     E, nu = E.ravel(), nu.ravel()
     if np.any(~(E > 0)):
@@ -384,14 +411,44 @@ def scene_arrays(soil_E: Any, soil_nu: Any) -> tuple[np.ndarray, np.ndarray]:
 
 
 def rigid_wall(params: ChainParams, soil_E: Any, soil_nu: Any) -> PowerWall:
-    """Rigid flat: ``F = 4/3 sqrt(R) E_b/(1-nu_b^2) d^1.5`` (soil values only set the count)."""
+    """Rigid flat: ``F = 4/3 sqrt(R) E_b/(1-nu_b^2) d^1.5`` (only the bead deforms).
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu``: they only set the count of scenes.
+    soil_nu : array_like
+        -.
+
+    Returns
+    -------
+    PowerWall
+        One law per scene (no E-dependence).
+    """
     E, _ = scene_arrays(soil_E, soil_nu)
     coef = 4.0 / 3.0 * np.sqrt(params.bead_radius) / params.bead_compliance
     return PowerWall(np.full(E.size, coef), np.full(E.size, 1.5), dcoef_dE=np.zeros(E.size))
 
 
 def hertz_wall(params: ChainParams, soil_E: Any, soil_nu: Any) -> PowerWall:
-    """Elastic half-space: ``F = A_w d^1.5``."""
+    """Elastic half-space: ``F = A_w d^1.5`` (REFERENCE.md; Johnson 1985 ch. 4).
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu``: one scene each.
+    soil_nu : array_like
+        -.
+
+    Returns
+    -------
+    PowerWall
+        One law per scene, with ``dA_w/dE``.
+    """
     E, nu = scene_arrays(soil_E, soil_nu)
     return PowerWall(params.wall_coefficient(E, nu), np.full(E.size, 1.5),
                      dcoef_dE=params.wall_coefficient_dE(E, nu))
@@ -493,8 +550,30 @@ def fit_wall(
 def table_wall(
     params: ChainParams, soil_E: Any, soil_nu: Any, *, curve: Any = None
 ) -> TableWall:
-    """The FEM curve(s) themselves: ``curve`` is one curve/path for every scene or a
-    sequence with one per scene (:class:`ssw.curve.ForceCurve` or HDF5 path)."""
+    """The FEM curve(s) themselves, interpolated (module docstring).
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain (the bead's compliance).
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu``: one scene each.
+    soil_nu : array_like
+        -.
+    curve : ForceCurve or str or sequence
+        One curve (:class:`ssw.curve.ForceCurve` or HDF5 path) for every scene, or a
+        sequence with one per scene.
+
+    Returns
+    -------
+    TableWall
+        One table per scene (data for one modulus each: no E-dependence).
+
+    Raises
+    ------
+    ConfigError
+        No curve, or not one per scene.
+    """
     E, nu = scene_arrays(soil_E, soil_nu)
     if curve is None:
         raise ConfigError("curve", None, "a contact curve (ForceCurve or results/contact/*.h5)")

@@ -34,15 +34,27 @@ CURVE_REACH = 1.5
 
 @dataclass(frozen=True)
 class DynamicTof:
-    """TOFs (s) of a dynamic wall and of its quasi-static laws, shape (n,), and what it took.
+    """TOFs of a dynamic wall and of its quasi-static laws, and what it took.
 
-    ``tof_static``: the quasi-static FEM's law (1 m box); ``tof_half_space``: the
-    half-space's static law. ``error`` is ``tof_half_space / tof_dynamic - 1``, the
-    relative error the quasi-static assumption makes in the TOF; ``error_box`` the same
-    against the 1 m box the study's curves use (static box effect included). ``stats``:
-    dofs, candidates, domain (m), wall times (s), energy balance (J) per scene. ``runs``:
-    (dynamic, 1 m static) records when kept. ``curves``: per scene, the static boxes'
-    laws ``{L: (d, F)}`` (m, N; the bead's compliance included) when kept.
+    Attributes
+    ----------
+    tof_dynamic : numpy.ndarray
+        (n,) s, the dynamic wall's.
+    tof_static : numpy.ndarray
+        (n,) s, the quasi-static FEM's law (1 m box).
+    tof_half_space : numpy.ndarray
+        (n,) s, the half-space's static law.
+    stats : list of dict
+        Per scene: dofs, candidates, domain (m), wall times (s), energy balance (J).
+    runs : tuple or None
+        (dynamic, 1 m static) records when kept.
+    curves : list or None
+        Per scene, the static boxes' laws ``{L: (d, F)}`` (m, N; the bead's compliance
+        included) when kept.
+
+    ``error`` is ``tof_half_space / tof_dynamic - 1``, the relative error the quasi-static
+    assumption makes in the TOF; ``error_box`` the same against the 1 m box the study's
+    curves use (static box effect included).
     """
 
     tof_dynamic: np.ndarray
@@ -65,17 +77,34 @@ def fem_tof(
     params: Any, soil_E: Any, soil_nu: Any, soil_density: Any, *, keep_runs: bool = False,
     keep_curves: bool = False, record_energy: bool = True, **options: Any,
 ) -> DynamicTof:
-    """TOF of the chain ``params`` with the dynamic FEM wall and with its static law.
+    """TOF of the chain ``params`` with the dynamic FEM wall and with its static law,
+    every run through the chain's one integrator (every device field honoured).
 
     Parameters
     ----------
-    params : :class:`ssw.chain.params.ChainParams`.
-    soil_E, soil_nu, soil_density : Pa, -, kg/m^3, broadcast (one FEM per scene).
-    keep_runs : keep the records.  keep_curves : keep the static boxes' laws (to
-        :data:`CURVE_REACH` x the Hertz wall's peak indentation).
-    record_energy : record the energies (the balance).
-    options : keywords of :func:`ssw.dynamics.fem_wall.fem_wall` (``boundary``, ``spec``,
+    params : ChainParams
+        The chain.
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu`` and ``soil_density``: one scene each.
+    soil_nu : array_like
+        -.
+    soil_density : array_like
+        kg/m^3.
+    keep_runs : bool
+        Keep the records.
+    keep_curves : bool
+        Keep the static boxes' laws (to :data:`CURVE_REACH` x the Hertz wall's peak
+        indentation).
+    record_energy : bool
+        Record the energies (the balance).
+    **options
+        Keywords of :func:`ssw.dynamics.fem_wall.fem_wall` (``boundary``, ``spec``,
         ``plate_density``, ``bead``, ``candidate_factor``, ``scales``).
+
+    Returns
+    -------
+    DynamicTof
+        TOFs and statistics, one per scene.
     """
     from ssw.dynamics.fem_wall import StaticFEMWall, fem_wall
     from ssw.dynamics.quasistatic import STATIC_BOXES, static_box, static_curve
@@ -245,10 +274,30 @@ def _scene_scales(scales: Any, i: int) -> Any:
 
 def static_laws(params: Any, soil_E: Any, soil_nu: Any, soil_density: Any, scales: Any,
                 **options: Any) -> list[dict[float, tuple[np.ndarray, np.ndarray]]]:
-    """Per scene, the static FEM laws ``{L: (d, F)}`` of the quasi-static boxes
+    """Per scene, the static FEM laws of the quasi-static boxes
     (:data:`ssw.dynamics.quasistatic.STATIC_BOXES`), up to :data:`CURVE_REACH` x the Hertz
-    wall's peak indentation. ``options``: ``plate_density``, ``bead``, ``spec`` (mesh),
-    ``candidate_factor``."""
+    wall's peak indentation.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu`` and ``soil_density``: one scene each.
+    soil_nu : array_like
+        -.
+    soil_density : array_like
+        kg/m^3.
+    scales : ChainScales
+        The scenes' scales (:func:`ssw.dynamics.scales.chain_scales`).
+    **options
+        ``plate_density``, ``bead``, ``spec`` (mesh), ``candidate_factor``.
+
+    Returns
+    -------
+    list of dict
+        Per scene ``{L: (d, F)}`` (m, N).
+    """
     from ssw.dynamics.domain import DomainSpec
     from ssw.dynamics.fem_wall import CANDIDATE_FACTOR, ContactFEM, scenes_of
     from ssw.dynamics.quasistatic import STATIC_BOXES, STATIC_SIZE_MAX, static_curve
@@ -275,12 +324,31 @@ def reduced_tof(params: Any, soil_E: Any, soil_nu: Any, soil_density: Any, *,
                 laws: list[dict[float, tuple[np.ndarray, np.ndarray]]] | None = None,
                 **options: Any) -> DynamicTof:
     """TOF of the chain with the reduced dynamic wall on the static FEM laws of the
-    quasi-static boxes, batched over the scenes (broadcast E Pa, nu, density kg/m^3).
+    quasi-static boxes, batched over the scenes.
 
     ``tof_dynamic`` is the reduced wall's on the half-space law (``1 / L`` extrapolation
     of its TOFs on the 1 and 3 m boxes, as the quasi-static ``tof_half_space``);
-    ``tof_static`` the 1 m box's quasi-static TOF. ``laws``: the static laws when already
-    known (:func:`static_laws`); ``options``: theirs and ``c_r``, ``m_r``, ``k_p``.
+    ``tof_static`` the 1 m box's quasi-static TOF.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu`` and ``soil_density``: one scene each.
+    soil_nu : array_like
+        -.
+    soil_density : array_like
+        kg/m^3.
+    laws : list or None
+        The static laws when already known (:func:`static_laws`).
+    **options
+        Those of :func:`static_laws` and ``c_r``, ``m_r``, ``k_p``.
+
+    Returns
+    -------
+    DynamicTof
+        TOFs, one per scene.
     """
     from types import SimpleNamespace
 

@@ -67,14 +67,28 @@ class PeakError(RecordingError):
     """A record's peaks cannot be picked (the message gives the reason)."""
 
 
-def parabolic_vertex(y: np.ndarray, k: int | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def parabolic_vertex(y: np.ndarray, k: int | np.ndarray, cols: np.ndarray | None = None
+                     ) -> tuple[np.ndarray, np.ndarray]:
     """Sub-sample offset ``p`` and height of the parabola through ``y[k-1], y[k], y[k+1]``.
 
-    Returns ``(k + p, y_peak)`` with ``y_peak = y[k] - (y[k-1] - y[k+1]) p / 4``;
-    vectorized over ``k`` (each ``1 <= k <= len(y) - 2``).
+    Parameters
+    ----------
+    y : numpy.ndarray
+        (n_t,) samples, or (n_t, n) with ``cols``.
+    k : int or numpy.ndarray
+        Sample indices, each ``1 <= k <= n_t - 2``.
+    cols : numpy.ndarray or None
+        Column of each ``k`` in a 2-d ``y``.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(k + p, y_peak)`` with ``y_peak = y[k] - (y[k-1] - y[k+1]) p / 4`` (``|p| <=
+        1/2``).
     """
     k = np.asarray(k)
-    ym, y0, yp = y[k - 1], y[k], y[k + 1]
+    at = (lambda j: y[j]) if cols is None else (lambda j: y[j, cols])
+    ym, y0, yp = at(k - 1), at(k), at(k + 1)
     den = ym - 2 * y0 + yp
     safe = np.where(den < 0, den, -1.0)
     p = np.where(den < 0, 0.5 * (ym - yp) / safe, 0.0)

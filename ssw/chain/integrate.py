@@ -253,6 +253,16 @@ def time_step(params: ChainParams | Batch, wall: Wall) -> float:
     return min(float(np.min(b.contact_time())), t_wall) / p.steps_per_contact
 
 
+def contact_differences(x: np.ndarray) -> np.ndarray:
+    """Per contact, the difference of a bead quantity ``x`` (N, ...) across it: ``x_j -
+    x_(j+1)`` for the bead pairs and ``x_(N-1)`` for the wall (overlaps from positions,
+    their rates from velocities), shape of ``x``."""
+    out = np.empty_like(x)
+    np.subtract(x[:-1], x[1:], out=out[:-1])
+    out[-1] = x[-1]
+    return out
+
+
 class _StopRule:
     """Per-scene state of the early-stop rule (module docstring); arrays over all scenes."""
 
@@ -431,12 +441,8 @@ def simulate(
         the half-step velocities ``v``; the dashpot at the new time's velocity, ``v + dt/2
         acc`` with the last accelerations ``acc``) and, for the sensitivities and the
         dashpots' work, what they were made of."""
-        d = np.empty_like(u)
-        np.subtract(u[:-1], u[1:], out=d[:-1])
-        d[-1] = u[-1]
-        dv = np.empty_like(u)
-        np.subtract(v[:-1], v[1:], out=dv[:-1])
-        dv[-1] = v[-1]
+        d = contact_differences(u)
+        dv = contact_differences(v)
         a = np.abs(dv)
         a *= dt
         x = d / a  # NaN or inf where a contact does not move (errors ignored: simulate)
@@ -469,10 +475,7 @@ def simulate(
         if predict:
             # the dashpot's velocity at the new time: v_half + dt/2 a_old, to O(dt^2) (the
             # half-step velocity would make the damped scheme first order)
-            dvp = dv.copy()
-            if acc is not None:
-                dvp[:-1] += half * (acc[:-1] - acc[1:])
-                dvp[-1] += half * acc[-1]
+            dvp = dv if acc is None else dv + half * contact_differences(acc)
             touch = ((x > -1.0) & (x < 1.0)).ravel().nonzero()[0]
             share, gd, ga = closed_share(d, a, touch, tangent=tg is not None)
             if damping > 0.0:
@@ -495,12 +498,8 @@ def simulate(
         accelerations ``Acc_old`` (``dfw`` the wall force's (n, k) from a stateful wall,
         else None)."""
         fd, fa, dv, dvp, share, gd, ga, wparts = parts
-        dD = np.empty_like(U)
-        np.subtract(U[:-1], U[1:], out=dD[:-1])
-        dD[-1] = U[-1]
-        dDV = np.empty_like(V)
-        np.subtract(V[:-1], V[1:], out=dDV[:-1])
-        dDV[-1] = V[-1]
+        dD = contact_differences(U)
+        dDV = contact_differences(V)
         # d|dv dt| = sign(dv) dt dDV
         sdt = np.sign(dv) * dt
         df = np.empty_like(U)
@@ -516,10 +515,7 @@ def simulate(
                 df[-1, :, c_E] += wE
         if damping > 0.0:
             # c dvp Phi(d, |dv| dt): c Phi dDVP + c dvp (Phi_d dD + Phi_a sign(dv) dt dDV)
-            dDVP = dDV.copy()
-            if Acc_old is not None:
-                dDVP[:-1] += half * (Acc_old[:-1] - Acc_old[1:])
-                dDVP[-1] += half * Acc_old[-1]
+            dDVP = dDV if Acc_old is None else dDV + half * contact_differences(Acc_old)
             df += (damping * share)[:, :, None] * dDVP
             df += (damping * dvp * ga * sdt)[:, :, None] * dDV
             df += (damping * dvp * gd)[:, :, None] * dD

@@ -92,19 +92,26 @@ def test_nesterenko_solitary_wave_speed():
 def test_rigid_wall_is_the_mirror_image_of_a_symmetric_collision():
     """A bead on a rigid flat obeys F = 2^1.5 A u^1.5 = A (2u)^1.5: the wall is the mirror
     plane of a chain of 2N beads hit at both ends with opposite speeds. The wall force of
-    the N-bead chain equals the middle contact force of the 2N chain."""
-    p = BASE.with_(n_beads=8, sensor_index=4, steps_per_contact=100)
-    run_w = simulate(p, build_wall("rigid", p, 1e9, 0.3), t_end=1.2e-3, stop_early=False,
-                     record_forces=True)
-    p2 = p.with_(n_beads=16, sensor_index=8)
-    far = PowerWall(np.array([1.0]), np.array([1.5]))  # never touched: the chain moves up
-    u, v = initial_state(p2, far)
-    v[0, -1] = -p.striker_velocity
-    run_m = simulate(p2, far, t_end=1.2e-3, dt=run_w.dt, stop_early=False,
-                     record_forces=True, initial=(u, v))
-    f_wall = run_w.forces[:, 0, -1]
-    f_mid = run_m.forces[:, 0, 7]
-    assert np.max(np.abs(f_wall - f_mid)) < 1e-9 * np.max(f_wall)
+    the N-bead chain equals the middle contact force of the 2N chain up to the step's
+    treatment of a contact's opening and closing (a bead pair's law is averaged over the
+    step's motion, ssw.chain.impulse; a wall's is not): measured 7.1e-5, 3.4e-5, 9.0e-6 of
+    the peak force at 100, 200, 400 steps per contact, so within 1.5e-4 and falling at
+    least 1.8x when the step halves."""
+    diffs = []
+    for spc in (100, 200):
+        p = BASE.with_(n_beads=8, sensor_index=4, steps_per_contact=spc)
+        run_w = simulate(p, build_wall("rigid", p, 1e9, 0.3), t_end=1.2e-3,
+                         stop_early=False, record_forces=True)
+        p2 = p.with_(n_beads=16, sensor_index=8)
+        far = PowerWall(np.array([1.0]), np.array([1.5]))  # never touched: the chain moves up
+        u, v = initial_state(p2, far)
+        v[0, -1] = -p.striker_velocity
+        run_m = simulate(p2, far, t_end=1.2e-3, dt=run_w.dt, stop_early=False,
+                         record_forces=True, initial=(u, v))
+        f_wall = run_w.forces[:, 0, -1]
+        f_mid = run_m.forces[:, 0, 7]
+        diffs.append(np.max(np.abs(f_wall - f_mid)) / np.max(f_wall))
+    assert diffs[0] < 1.5e-4 and diffs[1] < diffs[0] / 1.8, diffs
 
 
 def test_hertz_wall_tends_to_the_rigid_wall():

@@ -69,10 +69,6 @@ FIRST = np.array([-1.0, 9.0, -45.0, 0.0, 45.0, -9.0, 1.0]) / 60.0
 SECOND = np.array([2.0, -27.0, 270.0, -490.0, 270.0, -27.0, 2.0]) / 180.0
 #: Samples each side of a node the differences use.
 HALF = 3
-#: Newton iterations (bisection-safeguarded) for the root of ``H'`` in its interval.
-NEWTON_ITERATIONS = 60
-#: Convergence of ``theta`` (relative to the interval).
-THETA_TOL = 1e-15
 #: The Hermite data of an interval from its samples ``i - 3 .. i + 4`` (8): rows
 #: ``[S_i, dt S'_i, dt^2 S''_i, S_i+1, dt S'_i+1, dt^2 S''_i+1]``.
 STENCIL = np.zeros((6, 2 * HALF + 2))
@@ -116,16 +112,25 @@ def hermite_data(run: Any, i: np.ndarray, cols: np.ndarray, tangent: bool = Fals
         ``Y`` (m, 6): ``[S_i, dt S'_i, dt^2 S''_i, S_i+1, dt S'_i+1, dt^2 S''_i+1]`` (N;
         NaN where the samples do not reach), and ``dY`` (m, 6, k) or None.
     """
-    Y = np.einsum("rj,mj->mr", STENCIL, _samples(run.sensor, i, cols))
+    # sums over a fixed small axis, not matrix products: a scene's numbers do not depend on
+    # the scenes around it
+    Y = (STENCIL[None] * _samples(run.sensor, i, cols)[:, None, :]).sum(axis=2)
     if not tangent:
         return Y, None
-    dY = np.einsum("rj,mjk->mrk", STENCIL, _samples(np.moveaxis(run.dsensor, 2, 1), i, cols))
+    dS = _samples(np.moveaxis(run.dsensor, 2, 1), i, cols)  # (m, 8, k)
+    dY = (STENCIL[None, :, :, None] * dS[:, None, :, :]).sum(axis=2)
     return Y, dY
 
 
 def _poly(Y: np.ndarray) -> np.ndarray:
     """Monomial coefficients (m, 6) of the Hermite polynomials of the node data Y (m, 6)."""
-    return Y @ BASIS
+    return (Y[:, :, None] * BASIS[None]).sum(axis=1)
+
+
+def _basis_at(powers: np.ndarray) -> np.ndarray:
+    """The six basis functions (or their derivatives) from the powers of theta (m, 6):
+    ``powers @ BASIS.T`` in a fixed order, (m, 6)."""
+    return (powers[:, None, :] * BASIS[None]).sum(axis=2)
 
 
 def _eval(c: np.ndarray, x: np.ndarray, order: int) -> np.ndarray:
@@ -140,24 +145,17 @@ def _eval(c: np.ndarray, x: np.ndarray, order: int) -> np.ndarray:
 
 
 def _root(c: np.ndarray) -> np.ndarray:
-    """The root in [0, 1] of ``H'`` (``H'(0) > 0 >= H'(1)``): Newton's method kept inside
-    the shrinking bracket (bisection when a Newton step leaves it), vectorized."""
-    lo, hi = np.zeros(c.shape[0]), np.ones(c.shape[0])
-    x = np.full(c.shape[0], 0.5)
-    for _ in range(NEWTON_ITERATIONS):
-        g = _eval(c, x, 1)
-        pos = g > 0
-        lo, hi = np.where(pos, x, lo), np.where(pos, hi, x)
-        dg = _eval(c, x, 2)
-        step = np.where(dg < 0, -g / np.where(dg < 0, dg, -1.0), np.inf)
-        new = x + step
-        bad = ~((new > lo) & (new < hi))
-        new = np.where(bad, 0.5 * (lo + hi), new)
-        done = np.abs(new - x) <= THETA_TOL
-        x = new
-        if np.all(done):
-            break
-    return x
+    """The root in [0, 1] of ``H'`` (``H'(0) > 0 >= H'(1)``), vectorized: Chandrupatla's
+    bracketing method (``scipy.optimize.elementwise.find_root``), to machine precision."""
+    from scipy.optimize import elementwise
+
+    def slope(x: np.ndarray, *coef: np.ndarray) -> np.ndarray:
+        return _eval(np.stack(coef, axis=-1), x, 1)
+
+    res = elementwise.find_root(slope, (np.zeros(c.shape[0]), np.ones(c.shape[0])),
+                                args=tuple(c.T))
+    # H'(1) = 0 exactly is no bracket for the solver: the maximum is the node itself
+    return np.where(np.isfinite(res.x), res.x, 1.0)
 
 
 def _refine(run: Any, k: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, ...]:
@@ -233,10 +231,10 @@ def dense_peaks(run: Any, *, rule: PeakRule = RULE, strict: bool = True) -> Peak
             # dH/dp and dH'/dp at theta*: the basis (and its derivative) at theta* times dY
             pw = theta[:, None] ** np.arange(6)
             dpw = np.concatenate([np.zeros((n, 1)), np.arange(1, 6) * pw[:, :5]], axis=1)
-            b0 = pw @ BASIS.T  # (n, 6): the basis functions at theta*
-            b1 = dpw @ BASIS.T
-            dH = np.einsum("nm,nmk->nk", b0, dY)
-            dH1 = np.einsum("nm,nmk->nk", b1, dY)
+            b0 = _basis_at(pw)  # (n, 6): the basis functions at theta*
+            b1 = _basis_at(dpw)
+            dH = (b0[:, :, None] * dY).sum(axis=1)
+            dH1 = (b1[:, :, None] * dY).sum(axis=1)
             dtheta = -dH1 / np.where(ok, H2, -1.0)[:, None]
             nan = np.where(ok, 0.0, np.nan)[:, None]
             out[f"dt_{name}"] = run.dt * dtheta + nan
@@ -280,8 +278,8 @@ def evaluate(run: Any, t: np.ndarray, *, tangent: bool = False
     ii = i[:, None].repeat(n, axis=1).ravel()
     cols = np.tile(np.arange(n), t.size)
     Y, dY = hermite_data(run, ii, cols, tangent=tangent and run.tangent is not None)
-    b0 = (theta[:, None] ** np.arange(6)) @ BASIS.T  # (m n, 6)
-    S = np.einsum("qm,qm->q", b0, Y).reshape(t.size, n)
+    b0 = _basis_at(theta[:, None] ** np.arange(6))  # (m n, 6)
+    S = (b0 * Y).sum(axis=1).reshape(t.size, n)
     if dY is None:
         return S, None
-    return S, np.einsum("qm,qmk->qk", b0, dY).reshape(t.size, n, -1)
+    return S, (b0[:, :, None] * dY).sum(axis=1).reshape(t.size, n, -1)

@@ -72,10 +72,17 @@ def psi(x: np.ndarray, tangent: bool = False) -> tuple[np.ndarray, np.ndarray | 
     """
     y = np.maximum(x[:, None] + OFFSETS, 0.0)
     y25 = y * y * np.sqrt(y)
-    val = (y25 * y) @ WEIGHTS
+    # explicit sums (not a matrix product, whose rounding may follow the batch's size): a
+    # scene's force does not depend on the scenes run with it
+    val = _weighted(y25 * y)
     if not tangent:
         return val, None
-    return val, 3.5 * (y25 @ WEIGHTS)
+    return val, 3.5 * _weighted(y25)
+
+
+def _weighted(y: np.ndarray) -> np.ndarray:
+    """``y @ WEIGHTS`` for (m, 3) ``y``, in a fixed order."""
+    return y[:, 0] * WEIGHTS[0] + y[:, 1] * WEIGHTS[1] + y[:, 2] * WEIGHTS[2]
 
 
 def near_events(x: np.ndarray) -> np.ndarray:

@@ -399,12 +399,6 @@ def simulate(
     c_D = None if tg is None else tg.col("damping")
     predict = damping > 0.0 or c_D is not None
     half = 0.5 * dt
-    # a Hertz-shaped wall's contact is treated as the bead pairs' (ssw.chain.impulse), in the
-    # same arrays: one coefficient per contact row
-    A_rows = None
-    if not stateful and getattr(wall, "hertz_coef", None) is not None:
-        A_rows = np.full((N, n), A)
-        A_rows[-1] = wall.hertz_coef
 
     # internal layout (N, n_scenes): every bead's row is contiguous
     u0, v0 = initial if initial is not None else initial_state(b, wall)
@@ -448,14 +442,6 @@ def simulate(
         x = d / a  # NaN or inf where a contact does not move (errors ignored: simulate)
         f = np.empty_like(u)
         wparts = None
-        if A_rows is not None:
-            near = near_events(x)
-            fd, fa = hertz_force(d, a, x, A_rows, near, f, tangent=tg is not None)
-            if tg is not None:
-                wparts = (fd[-1], fa[-1], None if c_E is None or w.dcoef_dE is None
-                          else w.dcoef_dE * f[-1] / A_rows[-1])
-                fd, fa = fd[:-1], fa[:-1]
-            return finish(f, d, a, x, dv, acc, (fd, fa, dv), wparts)
         near = near_events(x[:-1])
         fd, fa = hertz_force(d[:-1], a[:-1], x[:-1], A, near, f[:-1], tangent=tg is not None)
         if f_wall is not None:
@@ -635,8 +621,6 @@ def simulate(
                 idx = np.flatnonzero(keep)
                 u, v, a = u[:, keep], v[:, keep], a[:, keep]
                 inv_m, preload = inv_m_all[:, active], preload_all[active]
-                if A_rows is not None:
-                    A_rows = A_rows[:, keep]
                 if record_energy:
                     w_dash, p_dash = w_dash[keep], p_dash[keep]
                 if tg is not None:

@@ -115,14 +115,6 @@ class PowerWall:
             return 1.5 * self.coef * np.sqrt(dp)
         return np.where(dp > 0, self.exponent * self.coef * dp ** (self.exponent - 1.0), 0.0)
 
-    @property
-    def hertz_coef(self) -> np.ndarray | None:
-        """(n,) N/m^1.5 for a Hertz-shaped law (every exponent 1.5), else None: the
-        integrator then treats this contact's openings and closings as a bead pair's
-        (:mod:`ssw.chain.impulse`; a rigid wall is exactly the mirror image of a bead
-        pair)."""
-        return self.coef if self.hertzian else None
-
     def dforce_dE(self, d: np.ndarray) -> np.ndarray:
         """``dF/dE`` (N/Pa) at fixed indentation ``d`` (m): ``dcoef/dE d^n + coef d^n ln(d)
         dn/dE``; ConfigError when the builder did not state the law's E-dependence."""

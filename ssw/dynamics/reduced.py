@@ -166,37 +166,12 @@ class ReducedWall:
         d0 = np.asarray(d0, float)
         return ReducedState(d0.copy(), d0.copy(), np.zeros(d0.shape))
 
-    def _law(self, st: ReducedState, d: np.ndarray, tangent: bool = False
-             ) -> tuple[np.ndarray, np.ndarray, tuple | None]:
-        """The quasi-static law's force the step applies, and its point value: a
-        Hertz-shaped law (``qs.hertz_coef``) averaged over the step's motion as the chain
-        averages its displacement walls (:mod:`ssw.chain.impulse`; ``|d - d1|`` is exactly
-        the chain's ``|v_half| dt``), so that the density -> 0 limit is that wall exactly;
-        with ``tangent``, ``dF/dd``, ``dF/dd1`` and ``dF/dE`` (None: the point law's)."""
-        from ssw.chain.impulse import hertz_force, near_events
-
-        F_pt = self.qs.force(d)
-        coef = getattr(self.qs, "hertz_coef", None)
-        if coef is None:
-            return F_pt, F_pt, None
-        step = d - st.d1
-        a = np.abs(step)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            x = d / a
-        F = np.empty_like(d)
-        fd, fa = hertz_force(d, a, x, coef, near_events(x), F, tangent)
-        if not tangent:
-            return F, F_pt, None
-        fa = fa * np.sign(step)
-        dcoef = getattr(self.qs, "dcoef_dE", None)
-        return F, F_pt, (fd + fa, -fa, None if dcoef is None else dcoef * F / coef)
-
     def advance(self, st: ReducedState, d: np.ndarray, dt: float
                 ) -> tuple[np.ndarray, ReducedState]:
         """Force (N) at the new indentation ``d`` (m) and the new state."""
         d = np.array(d, float)  # kept in the state: a copy, whatever the caller does to d
-        F, F_pt, _ = self._law(st, d)
-        C, m = self.coefficients(d, self.tangent(d, F_pt))
+        F = self.qs.force(d)
+        C, m = self.coefficients(d, self.tangent(d, F))
         v = (3.0 * d - 4.0 * st.d1 + st.d0) / (2.0 * dt)
         F += C * v
         F += m * (d - 2.0 * st.d1 + st.d0) / dt**2
@@ -240,8 +215,8 @@ class ReducedWall:
         """
         D1, D0 = tst
         d = np.array(d, float)
-        F_qs, F_pt, law = self._law(st, d, tangent=True)
-        kt = self.tangent(d, F_pt)
+        F_qs = self.qs.force(d)
+        kt = self.tangent(d, F_qs)
         C, m = self.coefficients(d, kt)
         v = (3.0 * d - 4.0 * st.d1 + st.d0) / (2.0 * dt)
         acc = (d - 2.0 * st.d1 + st.d0) / dt**2
@@ -257,16 +232,13 @@ class ReducedWall:
         Fd = self.qs.dforce_dd(d)
         dkt_dd = np.where(pos, ((1.0 + TANGENT_STEP) * self.qs.dforce_dd(up) - Fd) / h
                           - kt / np.where(pos, d, 1.0), 0.0)
-        if law is None:
-            dF_qs = Fd[:, None] * D
-        else:
-            dF_qs = law[0][:, None] * D + law[1][:, None] * D1
+        dF_qs = Fd[:, None] * D
         dkt = dkt_dd[:, None] * D
         f_c, f_m, f_p = self._factors
         E = 2.0 * (1.0 + self.nu) * self.G
         if use_E:
             FE = self.qs.dforce_dE(d)
-            dF_qs += (FE if law is None or law[2] is None else law[2])[:, None] * dE
+            dF_qs += FE[:, None] * dE
             dkt += np.where(pos, (self.qs.dforce_dE(up) - FE) / h, 0.0)[:, None] * dE
         k2 = kt * kt
         dC = (2.0 * f_c * kt)[:, None] * dkt

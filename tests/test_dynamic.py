@@ -266,3 +266,35 @@ def test_build_wall_gives_the_reduced_wall_every_command_runs():
     t_red = api.tof(E, 0.3, p, "hertz", dynamics="reduced", soil_density=2200.0)
     t_qs = api.tof(E, 0.3, p, "hertz")
     assert np.all(np.abs(t_red / t_qs - 1) < 5e-3) and np.any(t_red != t_qs)
+
+
+def test_fem_wall_derivatives_are_central_differences_near_the_quasi_static_ones():
+    """The dynamic FEM wall has no tangent: its derivatives are central differences of its
+    TOF on one mesh and step (labelled so by ``ssw tof --derivatives central``). On a soil
+    of 2000 kg/m^3, where the wall's dynamics moves the TOF by 1.5e-4, they match the exact
+    forward derivatives of the same mesh's quasi-static law (a table wall, another method)
+    within 5 % (measured 1-3 %)."""
+    from types import SimpleNamespace
+
+    from ssw.chain.wall import compliance_scale
+    from ssw.dynamics.api import fem_tof_derivatives
+    from ssw.dynamics.fem_wall import fem_wall
+    from ssw.dynamics.quasistatic import static_curve
+    from ssw.tof.api import tof_derivatives
+
+    p = _cheap_params()
+    names = ("striker_velocity", "damping")
+    _, dtof, steps = fem_tof_derivatives(p, 300e6, 0.3, 2000.0, derivatives=names,
+                                         **CHEAP)
+    assert set(steps) == set(names) and all(v > 0 for v in steps.values())
+    wall, sc = fem_wall(p, 300e6, 0.3, 2000.0, **CHEAP)
+    try:
+        d, F = static_curve(wall.contacts[0], 1.5 * float(sc.d_peak[0]))
+    finally:
+        wall.destroy()
+    s = float(compliance_scale(p, 300e6, 0.3))
+    curve = SimpleNamespace(delta=d / s, force=F)  # the table wall scales by s again
+    qs = tof_derivatives(300e6, 0.3, p, "table", derivatives=names, curve=curve)
+    assert set(qs.method.values()) == {"forward"} and qs.dt == pytest.approx(sc.dt)
+    for k in names:
+        assert abs(dtof[k][0] / float(qs.dtof[k]) - 1) < 0.05, (k, dtof[k], qs.dtof[k])

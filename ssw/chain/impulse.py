@@ -14,8 +14,8 @@ with that phase). The phase moves as a parameter moves the waves, so TOFs were n
 their parameters (~1e-6 relative between moduli 0.1 % apart, ``ssw bench smooth``) and
 exact derivatives of the discrete TOF wiggled with it.
 
-Here every bead-bead contact (and a Hertz-shaped wall) exerts the hat average of its law
-along the linear relative motion ``d + s d'``, ``|s| <= dt`` (``delta = d' dt``, ``d'`` the
+Here every bead-bead contact exerts the hat average of its law along the linear relative
+motion ``d + s d'``, ``|s| <= dt`` (``delta = d' dt``, ``d'`` the
 overlap's rate at the half step):
 
     F = A |delta|^(3/2) psi(d / |delta|),
@@ -31,7 +31,10 @@ relative, and nearer the independent DOP853 solution (10 MPa: -7.4e-5 instead of
 The dashpot ``c d'`` acts with the hat-weighted share ``Phi(d / |delta|)`` of the two
 half-steps the contact is closed (``Phi`` the hat's distribution function: 0 below -1,
 ``(1 + x)^2 / 2`` to 0, ``1 - (1 - x)^2 / 2`` to 1, 1 beyond), the exact average of its
-switch along the linear motion, C1 (unchanged away from events).
+switch along the linear motion, C1 (unchanged away from events). The wall's law applies at
+its point value (any law, and the same for a stateful wall's static limit: walls that
+coincide give one TOF); the thesis device's wall stays closed under the chain's weight
+through the first hit, so it has no event to smooth.
 
 References
 ----------

@@ -57,8 +57,6 @@ from ssw.chain.params import ChainParams
 from ssw.errors import ConfigError, RecordingError, SolverError
 from ssw.signal.rule import RULE
 
-#: Bisection iterations for a peak inside one sample interval (2^-60 of it).
-PEAK_BISECTIONS = 60
 #: Largest static acceleration (share of g, or of the preload's) the initial state may
 #: leave on beads 1..N-1: the equilibrium is exact up to rounding.
 STATIC_TOL = 1e-8
@@ -311,15 +309,19 @@ def _sensor(mod: ChainModel, u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, 
 
 def _hermite_peak(s0, s1, r0, r1, h):
     """Maximum of the cubic Hermite interpolant on ``[0, h]`` with values ``s0, s1`` and
-    slopes ``r0 > 0 >= r1``: (offset in s, value). Bisection on its derivative."""
+    slopes ``r0 > 0 >= r1``: (offset in s, value).
+
+    Its derivative in ``th = t / h`` is the quadratic ``m0 + 2 c2 th + 3 c3 th^2``, positive
+    at 0 and ``m1 <= 0`` at 1: the maximum is its first root in ``(0, 1]``, in closed form
+    (the cancellation-free pair ``q / a``, ``c / q``; Press et al. 2007, sec. 5.6)."""
     m0, m1, dl = h * r0, h * r1, s1 - s0
     c2, c3 = 3.0 * dl - 2.0 * m0 - m1, m0 + m1 - 2.0 * dl
-    lo, hi = np.zeros_like(s0), np.ones_like(s0)
-    for _ in range(PEAK_BISECTIONS):
-        th = 0.5 * (lo + hi)
-        pos = m0 + 2.0 * c2 * th + 3.0 * c3 * th**2 > 0
-        lo, hi = np.where(pos, th, lo), np.where(pos, hi, th)
-    th = 0.5 * (lo + hi)
+    a, b = 3.0 * c3, 2.0 * c2
+    q = -0.5 * (b + np.copysign(np.sqrt(np.maximum(b * b - 4.0 * a * m0, 0.0)), b))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        roots = np.stack([m0 / q, q / a])
+    roots = np.where((roots > 0) & (roots <= 1), roots, np.inf)
+    th = np.minimum(np.min(roots, axis=0), 1.0)
     return th * h, s0 + m0 * th + c2 * th**2 + c3 * th**3
 
 

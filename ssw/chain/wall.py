@@ -43,29 +43,40 @@ import numpy as np
 
 from ssw.chain.params import ChainParams
 from ssw.errors import ConfigError, SswError
+from ssw.hertz import effective_modulus, hertz_coefficient
+from ssw.roots import find_root
 
 #: Cells of the uniform indentation grid a FEM curve is resampled on.
 TABLE_CELLS = 400
 #: Share of the curve's indentation range used for the extension's exponent.
 TABLE_TAIL = 0.1
-#: Bisection iterations for the static indentation of a tabulated wall (2^-60 of range).
-BISECTION_ITERATIONS = 60
 
 
-def bisect_indentation(force: Any, F: Any, start: np.ndarray) -> np.ndarray:
-    """Indentations (m) at which the monotone laws ``force(d)`` (N, one per scene) carry
-    ``F`` (N, negative read as 0): ``start`` (m, > 0) doubled until it brackets ``F``, then
-    :data:`BISECTION_ITERATIONS` halvings of the bracket (2^-60 of it), vectorized."""
-    target = np.maximum(np.asarray(F, float), 0.0)
-    hi = np.array(start, float)
-    lo = np.zeros_like(hi)
-    while np.any(short := force(hi) < target):
-        hi = np.where(short, 2.0 * hi, hi)
-    for _ in range(BISECTION_ITERATIONS):
-        mid = 0.5 * (lo + hi)
-        low = force(mid) < target
-        lo, hi = np.where(low, mid, lo), np.where(low, hi, mid)
-    return 0.5 * (lo + hi)
+def force_indentation(force: Any, F: Any, start: np.ndarray) -> np.ndarray:
+    """Indentations (m) at which the non-decreasing laws ``force(d)`` carry ``F``.
+
+    The bracket ``[0, start]`` is grown until it holds ``F``, then the roots are found by
+    :func:`ssw.roots.find_root` to its default relative tolerance (a few ulp), vectorized
+    over the scenes.
+
+    Parameters
+    ----------
+    force : callable
+        ``force(d) -> F``: the laws' forces (N) at the indentations ``d`` (m), one per
+        scene.
+    F : array_like
+        Forces to carry (N), one per scene; a negative one is read as 0.
+    start : array_like
+        First upper end of each bracket (m, > 0).
+
+    Returns
+    -------
+    ndarray
+        Indentations (m), the broadcast shape of ``start`` and ``F``.
+    """
+    hi, target = np.broadcast_arrays(np.asarray(start, float), np.asarray(F, float))
+    target = np.maximum(target, 0.0)
+    return find_root(lambda d: force(d) - target, np.zeros(hi.shape), hi, grow=True).x
 
 
 @dataclass(frozen=True)
@@ -211,8 +222,9 @@ class TableWall:
                           "hertz (a table wall's curve is data for one modulus)")
 
     def indentation(self, F: np.ndarray) -> np.ndarray:
-        """Indentation carrying ``F`` (N): vectorized bisection of the monotone law."""
-        return bisect_indentation(self.force, F, self.h * (self.g.shape[1] - 1))
+        """Indentation carrying ``F`` (N): the root of the monotone law
+        (:func:`force_indentation`)."""
+        return force_indentation(self.force, F, self.h * (self.g.shape[1] - 1))
 
     def take(self, idx: np.ndarray) -> TableWall:
         """The scenes ``idx`` (may repeat)."""
@@ -420,7 +432,7 @@ def rigid_wall(params: ChainParams, soil_E: Any, soil_nu: Any) -> PowerWall:
         One law per scene (no E-dependence).
     """
     E, _ = scene_arrays(soil_E, soil_nu)
-    coef = 4.0 / 3.0 * np.sqrt(params.bead_radius) / params.bead_compliance
+    coef = hertz_coefficient(effective_modulus(params.bead_E, params.bead_nu), params.bead_radius)
     return PowerWall(np.full(E.size, coef), np.full(E.size, 1.5), dcoef_dE=np.zeros(E.size))
 
 

@@ -35,19 +35,17 @@ from typing import Any
 
 import numpy as np
 
+from ssw.contact.contact_lcp import solve_lcp
 from ssw.contact.mesh import Mesh, build_mesh
 from ssw.contact.petsc_solver import nd_order
 from ssw.dynamics.bead import bead_compliance
 from ssw.dynamics.domain import DomainSpec, mesh_settings
-from ssw.dynamics.lcp import ActiveSetLCP
 from ssw.dynamics.newmark import Newmark, State, Static
 from ssw.dynamics.system import DynamicSystem, Material, assemble_dynamic, without_mass
 from ssw.errors import ConfigError, SolverError
 
 #: LCP gap tolerance relative to the indentation scale.
 LCP_TOL = 1e-10
-#: Bisection steps of the static indentation carrying a force.
-BISECTION_STEPS = 80
 #: How the bead's elasticity enters (:class:`Scene`).
 BEAD_MODELS = ("compliance", "scale", "rigid")
 #: The FEM sleeps (the soil at rest under the static contact, the force the static one)
@@ -153,11 +151,12 @@ class ContactFEM:
             c_b = (1.0 - scene.bead_nu**2) / scene.bead_E
             self.d_factor = (1.0 + c_b / c_w) ** (-2.0 / 3.0)
         self.static = Static(self.system, self.dofs)
-        self.lcp_static = ActiveSetLCP(self.static.W + self.W_bead)
+        # the two condensed compliances of the LCPs (static, one step) and their factor caches
+        self.W_static, self._cache_static = self.static.W + self.W_bead, {}
         self.tol, self.d_scale = LCP_TOL * d_scale, d_scale
         self.newmark = Newmark(self.system, dt, self.dofs) if dt is not None else None
-        self.lcp = (ActiveSetLCP(self.newmark.W + self.W_bead)
-                    if self.newmark is not None else None)
+        self.W_step = self.newmark.W + self.W_bead if self.newmark is not None else None
+        self._cache_step: dict = {}
         self._active = np.zeros(m, bool)
 
     @property
@@ -172,8 +171,8 @@ class ContactFEM:
     # ------------------------------------------------------------------ static
     def static_contact(self, d: float) -> np.ndarray:
         """Contact forces (N) of the bead held at indentation ``d`` (m), at rest."""
-        lam, self._active = self.lcp_static.solve(self.shape - self.d_factor * d, self._active,
-                                                  self.tol)
+        lam, self._active, _ = solve_lcp(self.W_static, self.shape - self.d_factor * d,
+                                         self._active, self.tol, self._cache_static)
         self._check_zone(lam)
         return lam
 
@@ -183,21 +182,16 @@ class ContactFEM:
         return np.array([self.static_contact(x).sum() for x in d.ravel()]).reshape(d.shape)
 
     def static_indentation(self, F: float) -> float:
-        """Indentation (m) at which the static force is ``F`` (N): bisection."""
+        """Indentation (m) at which the static force is ``F`` (N): the root of the monotone
+        static law (:func:`ssw.roots.find_root`, the bracket grown from ``[0, 1 um]`` up
+        to the bead's radius)."""
+        from ssw.roots import find_root
+
         if F <= 0:
             return 0.0
-        lo, hi = 0.0, 1e-6
-        while self.static_contact(hi).sum() < F:
-            lo, hi = hi, 2.0 * hi
-            if hi > self.scene.radius:
-                raise SolverError(f"no static indentation carries {F} N")
-        for _ in range(BISECTION_STEPS):
-            mid = 0.5 * (lo + hi)
-            if self.static_contact(mid).sum() < F:
-                lo = mid
-            else:
-                hi = mid
-        return 0.5 * (lo + hi)
+        root = find_root(lambda d: self.static_force(d) - F, 0.0, 1e-6, grow=True,
+                         limit=self.scene.radius)
+        return float(root.x)
 
     def rest(self, d: float) -> State:
         """The state at rest with the bead held at ``d`` (m)."""
@@ -224,7 +218,8 @@ class ContactFEM:
             raise SolverError("this contact was built without a time step (static only)")
         u_free = self.newmark.free(st)
         g0 = self.shape - self.d_factor * d - u_free[self.dofs]
-        lam, self._active = self.lcp.solve(g0, self._active, self.tol)
+        lam, self._active, _ = solve_lcp(self.W_step, g0, self._active, self.tol,
+                                         self._cache_step)
         self._check_zone(lam)
         return float(lam.sum()), self.newmark.finish(st, u_free, lam)
 

@@ -15,7 +15,7 @@ motion ``u_free`` (no contact force) and, the contact forces entering only throu
 candidate dofs, ``u = u_free + X lam`` with ``X = K_eff^-1 G^T`` computed once
 (``G^T``: a downward unit force on each candidate). The candidates' gaps are affine in
 ``lam`` with the condensed compliance ``W = G X``: one small LCP per step
-(:mod:`ssw.dynamics.lcp`). Then
+(:func:`ssw.contact.contact_lcp.solve_lcp`). Then
 
     a_(n+1) = 4/dt^2 (u_(n+1) - u_n) - 4/dt v_n - a_n,   v_(n+1) = 2/dt (u_(n+1) - u_n) - v_n.
 

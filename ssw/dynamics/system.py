@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from ssw.contact.assembly import System, assemble
-from ssw.contact.elements import p2_shape
+from ssw.contact.elements import p2_shape, triangle_jacobian
 from ssw.contact.mesh import Mesh
 from ssw.errors import ConfigError
 
@@ -187,9 +187,7 @@ def mass_matrices(xy: np.ndarray, rho: np.ndarray) -> np.ndarray:
     rho : (ne,) density, kg/m^3.
     """
     n, _ = p2_shape(MASS_POINTS)
-    v = xy[:, :3]
-    det = (v[:, 1, 0] - v[:, 0, 0]) * (v[:, 2, 1] - v[:, 0, 1]) - (
-        v[:, 2, 0] - v[:, 0, 0]) * (v[:, 1, 1] - v[:, 0, 1])
+    det = triangle_jacobian(xy)[1]
     r = np.einsum("qa,ea->eq", n, xy[:, :, 0])
     w = 2.0 * np.pi * r * MASS_WEIGHTS[None, :] * np.abs(det)[:, None] * rho[:, None]
     return np.einsum("qa,qb,eq->eab", n, n, w)

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ssw import hertz
 from ssw.errors import ConfigError, OutOfRangeError, SswError
 from ssw.fit.fitting import FitResult
 from ssw.fit.interp import GridInterpolant
@@ -112,8 +113,7 @@ class KTable:
         """``A_H = 4/3 E/(1 - nu^2) sqrt(R)`` (rigid indenter), on the grid by default."""
         if soil_E is None:
             soil_E, soil_nu = np.meshgrid(self.soil_E, self.soil_nu)
-        E, nu = np.asarray(soil_E, float), np.asarray(soil_nu, float)
-        return 4.0 / 3.0 * E / (1.0 - nu**2) * np.sqrt(self.radius)
+        return hertz.hertz_coefficient(hertz.effective_modulus(soil_E, soil_nu), self.radius)
 
     def _need(self, key: str, law: str) -> GridInterpolant:
         if key not in self._interp:

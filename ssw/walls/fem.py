@@ -212,18 +212,6 @@ def energy_bound(d: np.ndarray, F: np.ndarray, W: float, Wg: float) -> tuple[flo
     return float(min(x0 + y, x1)), U
 
 
-def _hertz_bound(A: np.ndarray, W: float, Wg: float) -> np.ndarray:
-    """Root of ``(2/5) A d^2.5 - Wg d = W`` (m) by bisection in ``log d``, vectorized."""
-    lo = np.full(A.shape, np.log(1e-12))
-    hi = np.full(A.shape, np.log(1.0))
-    for _ in range(100):
-        mid = 0.5 * (lo + hi)
-        x = np.exp(mid)
-        above = 0.4 * A * x**2.5 - Wg * x - W > 0
-        hi, lo = np.where(above, mid, hi), np.where(above, lo, mid)
-    return np.exp(hi)
-
-
 def fem_wall(
     params: ChainParams, soil_E: Any, soil_nu: Any, *, contact: dict[str, Any] | None = None,
     operators: Any = None, with_dE: bool = False,
@@ -264,7 +252,7 @@ def fem_wall(
     from ssw.contact.operators import default_store, geometry_of, scene_lcp
     from ssw.contact.parametric import Tracer, prefix_path
     from ssw.contact.scene import settings_of
-    from ssw.hertz import effective_modulus, hertz_coefficient
+    from ssw.hertz import effective_modulus, energy_indentation, hertz_coefficient
 
     E, nu = scene_arrays(soil_E, soil_nu)
     # the plate is the device's: its interface and diameter, whatever the contact settings say
@@ -284,10 +272,10 @@ def fem_wall(
     # the real one); it sets the candidate zone, the trace goes on as far as needed
     Eh = np.minimum(E, plate[0]) if has_plate else E
     A = hertz_coefficient(effective_modulus(Eh, nu), R)
-    guess = _hertz_bound(A, W, Wg)
+    guess = energy_indentation(A, W, Wg)
     # the zone: as the study's curves (the nominal energy's reach), so that the wall shares
     # their operators; a deeper contact is caught (the last candidate must stay open)
-    geom = geometry_of(cfg, t, R, float(np.max(_hertz_bound(A, W0, Wg))), cfg["interface"])
+    geom = geometry_of(cfg, t, R, float(np.max(energy_indentation(A, W0, Wg))), cfg["interface"])
     layout = store.layout(geom)
     plate_op = store.body(geom, "plate", plate[1]) if has_plate else None
     rows = []
@@ -328,7 +316,7 @@ def fem_wall(
         rows.append((*row, *(deriv if deriv is not None else (None, None))))
     # per scene: the mesh's error and the finite domain's stiffening at its own contact
     # radius (a soft soil's is larger)
-    a_peak = np.sqrt(R * _hertz_bound(A, W0, Wg))
+    a_peak = np.sqrt(R * energy_indentation(A, W0, Wg))
     L = min(float(cfg["soil_radius"]), float(cfg["soil_depth"]))
     error = np.hypot(FORCE_ERROR_COEF * float(cfg["mesh_growth"]) ** 2,
                      DOMAIN_ERROR_COEF * a_peak / L)

@@ -145,17 +145,12 @@ def _eval(c: np.ndarray, x: np.ndarray, order: int) -> np.ndarray:
 
 
 def _root(c: np.ndarray) -> np.ndarray:
-    """The root in [0, 1] of ``H'`` (``H'(0) > 0 >= H'(1)``), vectorized: Chandrupatla's
-    bracketing method (``scipy.optimize.elementwise.find_root``), to machine precision."""
-    from scipy.optimize import elementwise
+    """The root in [0, 1] of ``H'`` (``H'(0) > 0 >= H'(1)``), vectorized, to a few ulp: the
+    one bracketed root finder (:func:`ssw.roots.find_root`) on the non-decreasing ``-H'``."""
+    from ssw.roots import find_root
 
-    def slope(x: np.ndarray, *coef: np.ndarray) -> np.ndarray:
-        return _eval(np.stack(coef, axis=-1), x, 1)
-
-    res = elementwise.find_root(slope, (np.zeros(c.shape[0]), np.ones(c.shape[0])),
-                                args=tuple(c.T))
-    # H'(1) = 0 exactly is no bracket for the solver: the maximum is the node itself
-    return np.where(np.isfinite(res.x), res.x, 1.0)
+    m = c.shape[0]
+    return find_root(lambda x: -_eval(c, x, 1), np.zeros(m), np.ones(m)).x
 
 
 def _refine(run: Any, k: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, ...]:

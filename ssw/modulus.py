@@ -41,7 +41,7 @@ COVERAGE_Z = 1.96
 #: Relative TOF error of the default 80 velocity-Verlet steps per contact against an
 #: independent DOP853 solution (rtol 1e-10), the largest over soils of 10-1000 MPa (nu 0.3)
 #: for the thesis chain at its nominal striker speed (0.52 m/s: 3.5e-5, at 1000 MPa) and at
-#: the study's calibrated one (0.39 m/s: 4.85e-5, at 1000 MPa); rounded up. It scales as
+#: the study's calibrated one (0.39 m/s: 4.95e-5, at 1000 MPa); rounded up. It scales as
 #: dt^2 (tests/test_chain_order.py, tests/test_inverse_trust.py).
 INTEGRATOR_REL_ERROR_80 = 5.0e-5
 #: Relative step of E for k = d ln TOF / d ln E.

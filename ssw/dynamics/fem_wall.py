@@ -22,7 +22,7 @@ touch) is
   which neither damps nor bounds such jumps, let them grow into a chatter that blew up a
   no-plate run within 400 steps.
 
-:class:`FEMWall` is a *stateful wall* (the protocol of :mod:`ssw.dynamics.integrate`) over
+:class:`FEMWall` is a *stateful wall* (:class:`ssw.chain.wall.StatefulWall`) over
 a list of scenes; :func:`fem_wall` builds it for a chain's scenes; :class:`StaticFEMWall`
 is the same scenes' static law as a wall (a static LCP per step). The quasi-static
 references of the study are static FEMs in fixed boxes (:mod:`ssw.dynamics.quasistatic`).
@@ -245,8 +245,8 @@ class ContactFEM:
 
 
 class FEMWall:
-    """A stateful wall over scenes, each a :class:`ContactFEM` (the protocol of
-    :mod:`ssw.dynamics.integrate`). States are lists of :class:`ssw.dynamics.newmark.State`.
+    """A stateful wall over scenes, each a :class:`ContactFEM`
+    (:class:`ssw.chain.wall.StatefulWall`). States are lists of :class:`WallState`.
     """
 
     def __init__(self, contacts: list[ContactFEM]) -> None:

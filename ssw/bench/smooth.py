@@ -43,7 +43,8 @@ def register(kinds: argparse._SubParsersAction) -> None:
                          "differences, the sensitivities' cost")
     p.add_argument("--config", default="config/config.yaml", help="study config (YAML)")
     p.add_argument("--output-dir", default="results/bench", help="folder of the outputs")
-    p.add_argument("--parts", nargs="+", choices=PARTS, default=list(PARTS))
+    p.add_argument("--parts", nargs="+", choices=PARTS, default=list(PARTS),
+                   help="what to measure: noise, derivatives, cost (default all)")
     p.add_argument("--walls", nargs="+", default=["hertz", "fem"],
                    help="walls of the noise and derivative parts")
     p.add_argument("--moduli", type=int, default=101, help="moduli 95-105 MPa")

@@ -75,12 +75,12 @@ class Calibration:
         return chain_params(self.device, self.materials(), **{**self.numerics, **numerics})
 
     def covariance_array(self) -> np.ndarray | None:
-        """The covariance (SI) of :attr:`covariance_parameters`, or None."""
+        """The covariance (SI) of ``covariance_parameters``, or None."""
         return None if self.covariance is None else np.asarray(self.covariance, float)
 
     def continuous(self) -> tuple[str, ...]:
         """The continuous free parameters, in order (the covariance is over those of them
-        no bound holds: :attr:`covariance_parameters`)."""
+        no bound holds: ``covariance_parameters``)."""
         return tuple(n for n in self.free if parameter(n).kind == "continuous")
 
     def to_dict(self) -> dict[str, Any]:

@@ -1,7 +1,7 @@
 """The contact forces a step applies: each law averaged over the step's relative motion.
 
 Velocity Verlet's positions obey ``u_(n+1) - 2 u_n + u_(n-1) = dt^2 a(u_n)`` (Störmer's
-form; Hairer, Lubich & Wanner 2006, sec. I.1.4), while the exact motion obeys
+form; Hairer, Lubich & Wanner 2006, sec. I.1.4), while the exact motion obeys::
 
     u(t + dt) - 2 u(t) + u(t - dt) = dt^2 <a>,  <a> = int_{-dt}^{dt} (dt - |s|) a(t + s) ds / dt^2,
 
@@ -16,7 +16,7 @@ exact derivatives of the discrete TOF wiggled with it.
 
 Here every bead-bead contact exerts the hat average of its law along the linear relative
 motion ``d + s d'``, ``|s| <= dt`` (``delta = d' dt``, ``d'`` the
-overlap's rate at the half step):
+overlap's rate at the half step)::
 
     F = A |delta|^(3/2) psi(d / |delta|),
     psi(x) = [(x + 1)_+^(7/2) - 2 x_+^(7/2) + (x - 1)_+^(7/2)] / (35/4),

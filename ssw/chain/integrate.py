@@ -328,8 +328,8 @@ def simulate(
     Parameters
     ----------
     params : ChainParams or Batch
-        The chain; a :class:`Batch` of ``wall.n`` scenes for per-scene striker speeds,
-        preloads or masses.
+        The chain; a :class:`ssw.chain.params.Batch` of ``wall.n`` scenes for per-scene
+        striker speeds, preloads or masses.
     wall : Wall or StatefulWall
         The last-contact law, one per scene (:class:`ssw.chain.wall.Wall`), or a wall with
         internal state (:class:`ssw.chain.wall.StatefulWall`: advanced after each drift).
@@ -347,7 +347,7 @@ def simulate(
     check_every : int
         Steps between stop checks.
     initial : tuple of numpy.ndarray or None
-        ``(u, v)`` (m, m/s), shapes (n, N), instead of :func:`initial_state`.
+        ``(u, v)`` (m, m/s), shapes (n, N), instead of :func:`ssw.chain.statics.initial_state`.
     on_progress : callable or None
         Called as ``on_progress(k)`` when ``k`` more scenes have finished (a progress bar's
         update; ``ssw.progress``).

@@ -95,6 +95,8 @@ def peaks(
     derivatives : sequence of str or None
         Forward sensitivities to carry (:func:`ssw.chain.run.run_peaks`); the wall must
         have them (:func:`tof_derivatives` chooses).
+    dt : float or None
+        s, the time step (default: :func:`ssw.chain.integrate.time_step` of the batch).
     **wall_options
         The wall builder's keywords.
 
@@ -229,7 +231,7 @@ def central_differences(
     vary : dict or None
         The base run's per-scene fields, (n,) each.
     step : float
-        Relative step (:data:`CENTRAL_STEP`).
+        Relative step (:data:`ssw.chain.sensitivity.CENTRAL_STEP`).
     strict : bool
         As :func:`peaks`.
     **wall_options
@@ -395,7 +397,8 @@ def sensor_signal(
     tuple of numpy.ndarray
         ``(t, F)``: ``t`` (n_t,) s from the striker's first contact, ``F`` N, what the
         sensor reads (``params.sensor_reads``), static precompression included; shape
-        (n_t,) for scalar ``soil_E``/``soil_nu``, else (n_t, *broadcast shape).
+        (n_t,) for scalar ``soil_E``/``soil_nu``, else ``n_t`` followed by their
+        broadcast shape.
     """
     w = build_wall(wall, params, soil_E, soil_nu, **wall_options)
     if t_end is None:

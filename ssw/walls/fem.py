@@ -228,13 +228,13 @@ def fem_wall(
     soil_nu : array_like
         -.
     contact : dict or None
-        The ``contact`` settings (mesh, zone); defaults :data:`ssw.contact.DEFAULTS`; the
+        The ``contact`` settings (mesh, zone); defaults :data:`ssw.contact.scene.DEFAULTS`; the
         plate's interface and diameter are the device's (``params``), not these.
     operators : OperatorStore or None
         :class:`ssw.contact.operators.OperatorStore` (default: the process's).
     with_dE : bool
         Also the pieces' derivatives with respect to the soil's modulus
-        (:func:`_pieces_dE`: implicit differentiation of the condensed contact problem at
+        (``_pieces_dE``: implicit differentiation of the condensed contact problem at
         each piece's active set; frictionless or bonded plates, or none), for
         ``dforce_dE``; they cost about half a build more.
 

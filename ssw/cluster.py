@@ -528,9 +528,9 @@ def watch_lost_jobs(query: Callable[[], Mapping[str, str] | None],
     on_lost : Callable[[str], None]
         Called with the message; the thread ends after it.
     stall_s : float
-        :attr:`LostJobsWatch.stall_s`, s.
+        ``LostJobsWatch.stall_s``, s.
     vanish_s : float
-        :attr:`LostJobsWatch.vanish_s`, s.
+        ``LostJobsWatch.vanish_s``, s.
     poll_s : float
         Seconds between two looks.
 
@@ -567,7 +567,7 @@ def query_states(command: str) -> dict[str, str] | None:
     Parameters
     ----------
     command : str
-        The command line (split with :func:`shlex.split`, run without a shell).
+        The command line (split with ``shlex.split``, run without a shell).
 
     Returns
     -------

@@ -41,7 +41,7 @@ COVERAGE_Z = 1.96
 #: Relative TOF error of the default 80 velocity-Verlet steps per contact against an
 #: independent DOP853 solution (rtol 1e-10), the largest over soils of 10-1000 MPa (nu 0.3)
 #: for the thesis chain at its nominal striker speed (0.52 m/s: 3.5e-5, at 1000 MPa) and at
-#: the study's calibrated one (0.39 m/s: 4.85e-5, at 1000 MPa); rounded up. It scales as
+#: the study's calibrated one (0.39 m/s: 4.95e-5, at 1000 MPa); rounded up. It scales as
 #: dt^2 (tests/test_chain_order.py, tests/test_inverse_trust.py).
 INTEGRATOR_REL_ERROR_80 = 5.0e-5
 #: Relative step of E for k = d ln TOF / d ln E.
@@ -104,11 +104,23 @@ def estimate_moduli(
 
     Parameters
     ----------
-    tof : (k,) measured mean TOFs, s.  tof_sem : (k,) their standard errors, s; NaN where the
-        scatter is not known (the ``tof`` term is then listed as missing).
-    nu : a Poisson's ratio per sample, or (k, 2) ranges ``[lo, hi]``.
-    params : ChainParams of the (calibrated) device.  wall, wall_options : the wall law.
-    calibration : :class:`ssw.calibration.Calibration` whose covariance enters (or None).
+    tof : array_like
+        (k,) measured mean TOFs, s.
+    tof_sem : array_like
+        (k,) their standard errors, s; NaN where the scatter is not known (the ``tof``
+        term is then listed as missing).
+    nu : array_like
+        A Poisson's ratio per sample, or (k, 2) ranges ``[lo, hi]``.
+    params : ssw.chain.params.ChainParams
+        The chain of the (calibrated) device.
+    wall : str
+        The wall law's name (:data:`ssw.walls.WALLS`).
+    wall_options : dict or None
+        The wall builder's options.
+    calibration : ssw.calibration.Calibration or None
+        The calibration whose covariance enters the interval.
+    E_range : tuple of float
+        ``(lo, hi)``, Pa: the moduli the inversion searches.
     """
     from ssw.chain.wall import beyond_exact_reach
     from ssw.tof import api

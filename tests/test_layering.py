@@ -30,10 +30,11 @@ ALLOWED: dict[str, set[str]] = {
     # data
     "device": FOUNDATION, "sample": FOUNDATION, "constitutive": FOUNDATION,
     "config": FOUNDATION | {"device", "sample", "constitutive"},
-    # physics: the chain knows the wall protocol only; the laws by name are ssw.walls
+    # physics: the chain knows the wall protocol only; the laws by name are ssw.walls.
+    # The peak rule (ssw.signal.rule) is the signal area's: the chain reads it
     "contact": FOUNDATION | DATA,
-    "chain": FOUNDATION | DATA,
     "signal": FOUNDATION,
+    "chain": FOUNDATION | DATA | {"signal"},
     "fit": FOUNDATION | DATA | {"contact", "chain"},
     "dynamics": FOUNDATION | DATA | {"contact", "chain"},
     "walls": FOUNDATION | DATA | {"contact", "chain", "fit", "dynamics"},

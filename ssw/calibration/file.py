@@ -75,12 +75,12 @@ class Calibration:
         return chain_params(self.device, self.materials(), **{**self.numerics, **numerics})
 
     def covariance_array(self) -> np.ndarray | None:
-        """The covariance (SI) of :attr:`covariance_parameters`, or None."""
+        """The covariance (SI) of ``covariance_parameters``, or None."""
         return None if self.covariance is None else np.asarray(self.covariance, float)
 
     def continuous(self) -> tuple[str, ...]:
         """The continuous free parameters, in order (the covariance is over those of them
-        no bound holds: :attr:`covariance_parameters`)."""
+        no bound holds: ``covariance_parameters``)."""
         return tuple(n for n in self.free if parameter(n).kind == "continuous")
 
     def to_dict(self) -> dict[str, Any]:
@@ -199,17 +199,41 @@ def calibrate(
 
     Parameters
     ----------
-    refs : reference samples with measured TOFs.  device : the nominal device.
-    free : names of :data:`ssw.device.PARAMETERS`.
-    materials : materials library; numerics : non-device ChainParams fields.
-    wall, wall_options : the last-contact law.  ranges : scan ranges (SI) per parameter.
-    loo : also calibrate without each reference and predict its E.
-    on_run : called after each batched run of the forward model (a progress bar's update).
-    recorded_wall_options : the wall options the file records for the calibrated device
-        (default ``wall_options``): without the references' sample, which is theirs, not
-        the device's (a later measurement names its own).
-    reference_sample : the references' sample (:class:`ssw.sample.Sample`), recorded in
-        the provenance; None: half-spaces.
+    refs : list of ssw.calibration.model.Reference
+        Reference samples with measured TOFs.
+    device : ssw.device.Device
+        The nominal device.
+    free : list of str
+        Names of :data:`ssw.device.PARAMETERS` to identify.
+    materials : dict
+        The materials library (key -> Material).
+    numerics : dict
+        Non-device ChainParams fields (steps_per_contact, t_max, gravity, ...).
+    wall : str
+        The last-contact law's name (:data:`ssw.walls.WALLS`).
+    wall_options : dict or None
+        The wall builder's options.
+    ranges : dict or None
+        Scan range ``(lo, hi)`` (SI) per free parameter; None: the defaults of
+        :data:`ssw.device.PARAMETERS`.
+    loo : bool
+        Also calibrate without each reference and predict its E.
+    scan_points : int or None
+        Grid points per continuous parameter of the global scan; None: automatic.
+    material_set : str
+        The materials library's set, recorded in the file.
+    materials_file : str or None
+        The materials library's file, recorded in the file; None: the shipped one.
+    provenance : dict or None
+        Extra provenance entries recorded in the file.
+    on_run : callable or None
+        Called after each batched run of the forward model (a progress bar's update).
+    recorded_wall_options : dict or None
+        The wall options the file records for the calibrated device (default
+        ``wall_options``): without the references' sample, which is theirs, not the
+        device's (a later measurement names its own).
+    reference_sample : ssw.sample.Sample or None
+        The references' sample, recorded in the provenance; None: half-spaces.
     """
     from ssw.tof import api
 

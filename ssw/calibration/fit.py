@@ -1,8 +1,8 @@
 """Least-squares identification of device parameters from measured TOFs on reference samples.
 
 Problem. References ``i`` (known ``E_i``, ``nu_i``; measured ``T_i`` with standard uncertainty
-``s_i``) and free parameters ``theta`` of the device, each within its range (:func:`scan_
-ranges`): minimize the weighted sum of squares
+``s_i``) and free parameters ``theta`` of the device, each within its range
+(:func:`scan_ranges`): minimize the weighted sum of squares
 
     ``chi^2(theta) = sum_i ((TOF(E_i, nu_i; theta) - T_i) / s_i)^2``  subject to
     ``lo <= theta <= hi``.
@@ -438,7 +438,7 @@ def refine_subsets(model: TofModel, obs: Observations, derivs: Derivatives,
         At most this many iterations.
     at_start : tuple, optional
         The model's values (n,) and their Jacobian in the scaled coordinates (n, p) at
-        ``start`` when already computed (:func:`_uncertainty`), so that they are not
+        ``start`` when already computed (``_uncertainty``), so that they are not
         computed again.
 
     Returns

@@ -94,6 +94,7 @@ class Flag:
         return v
 
 
+#: Every device, model and wall flag of the chain's commands (module docstring).
 FLAGS: tuple[Flag, ...] = (
     # ---- device fields
     Flag("--beads", DEVICE, "beads", True, "beads including the striker (bead 0); keeps the "

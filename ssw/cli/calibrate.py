@@ -1,5 +1,7 @@
 """``ssw calibrate``: identify device parameters from measured TOFs on reference samples.
 
+Usage::
+
     ssw calibrate --reference E,nu,TOF[,TOF_STD] ... [--free NAME ...] [device flags]
                   [--output FILE.json] [--json]
     ssw calibrate --reference-recording FILE,E,nu ... [--free NAME ...]

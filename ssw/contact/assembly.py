@@ -208,13 +208,20 @@ def assemble(
 
     Parameters
     ----------
-    mesh : the section mesh.
-    E, nu : (soil, plate) Young's moduli (Pa) and Poisson's ratios.
-    interface : ``bonded`` | ``frictionless`` | ``unilateral``.
-    order_nodes : callable ``(rows, cols, n) -> permutation`` (nested dissection).
-    fixed_faces : where the rollers and the fixed bottom lie, as a multiple of the mesh's
-        soil radius and depth (1: on its faces; 2: beyond them, a free truncation boundary
-        as the dynamic wall's absorbing one).
+    mesh : ssw.contact.mesh.Mesh
+        The section mesh.
+    E : tuple of float
+        ``(soil, plate)`` Young's moduli, Pa.
+    nu : tuple of float
+        ``(soil, plate)`` Poisson's ratios.
+    interface : str
+        ``bonded`` | ``frictionless`` | ``unilateral``.
+    order_nodes : callable
+        ``(rows, cols, n) -> permutation`` (nested dissection).
+    fixed_faces : float
+        Where the rollers and the fixed bottom lie, as a multiple of the mesh's soil
+        radius and depth (1: on its faces; 2: beyond them, a free truncation boundary as
+        the dynamic wall's absorbing one).
     """
     nodes, tri, pairs = split_interface(mesh)
     n = len(nodes)

@@ -105,10 +105,14 @@ def element_matrices(
 
     Parameters
     ----------
-    xy : (ne, 6, 2) node coordinates (r, z), m; straight-sided elements.
-    G : (ne,) shear modulus, Pa.
-    inv_K : (ne,) bulk compliance 1/K, 1/Pa (0 for incompressible).
-    p_scale : (ne,) or (ne, 3), Pa/m^k; the pressure unknown of a vertex is ``p / p_scale``
+    xy : numpy.ndarray
+        (ne, 6, 2) node coordinates (r, z), m; straight-sided elements.
+    G : numpy.ndarray
+        (ne,) shear modulus, Pa.
+    inv_K : numpy.ndarray
+        (ne,) bulk compliance 1/K, 1/Pa (0 for incompressible).
+    p_scale : numpy.ndarray
+        (ne,) or (ne, 3), Pa/m^k; the pressure unknown of a vertex is ``p / p_scale``
         (balances the blocks for LU: see :func:`ssw.contact.assembly.pressure_scale`). A
         (ne,) value applies to the element's three vertices.
     """

@@ -135,17 +135,30 @@ def solve_sphere(C: NDArray, points: NDArray, areas: NDArray, radius: float,
 
     Parameters
     ----------
-    C : (n, n) influence coefficients (m/Pa) at the ring midpoints ``points`` (m).
-    areas : (n,) ring areas (m^2): the force is ``areas @ p``.
-    radius : sphere radius (m).
-    deltas : (m,) increasing indentations (m).
-    keep : increments whose pressure profile is returned.
+    C : numpy.ndarray
+        (n, n) influence coefficients, m/Pa, at the ring midpoints ``points``.
+    points : numpy.ndarray
+        (n,) the ring midpoints' radii, m.
+    areas : numpy.ndarray
+        (n,) ring areas, m^2: the force is ``areas @ p``.
+    radius : float
+        The sphere's radius, m.
+    deltas : numpy.ndarray
+        (m,) increasing indentations, m.
+    keep : numpy.ndarray or None
+        Increments whose pressure profile is returned.
 
     Returns
     -------
-    :class:`LcpResult`; raises :class:`ZoneError` when the contact reaches the last rings
-    (the candidate zone is too small), SolverError when the active-set iteration does not
-    converge.
+    LcpResult
+        The curve and the kept pressure profiles.
+
+    Raises
+    ------
+    ZoneError
+        The contact reaches the last rings (the candidate zone is too small).
+    ssw.errors.SolverError
+        The active-set iteration does not converge.
     """
     n = len(points)
     s = sphere_surface(points, radius)

@@ -104,9 +104,12 @@ def build_mesh(plate_thickness: float, plate_radius: float, s: MeshSettings) -> 
 
     Parameters
     ----------
-    plate_thickness : m, 0 for no plate.
-    plate_radius : m, half the plate diameter.
-    s : domain and density settings.
+    plate_thickness : float
+        The plate's thickness, m; 0 for no plate.
+    plate_radius : float
+        Half the plate diameter, m.
+    s : MeshSettings
+        Domain and density settings.
 
     Returns
     -------

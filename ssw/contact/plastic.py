@@ -426,7 +426,7 @@ def solve_path(
     Eason & Shield 1960). An increment whose Newton iteration fails is cut in two, at most
     ``max_cuts`` times (``stats['cutbacks']`` counts them; the path then holds the
     intermediate indentations). A mesh with a plate takes its elastic ``plate`` (E Pa, nu)
-    and the plate-sample ``interface`` (``frictionless`` | ``bonded``; :class:`_Model`)."""
+    and the plate-sample ``interface`` (``frictionless`` | ``bonded``; ``_Model``)."""
     if not hasattr(model, "update"):
         raise ConfigError("soil_model", model, "a model of ssw.constitutive")
     t0 = time.perf_counter()

@@ -22,7 +22,7 @@ touch) is
   which neither damps nor bounds such jumps, let them grow into a chatter that blew up a
   no-plate run within 400 steps.
 
-:class:`FEMWall` is a *stateful wall* (the protocol of :mod:`ssw.dynamics.integrate`) over
+:class:`FEMWall` is a *stateful wall* (:class:`ssw.chain.wall.StatefulWall`) over
 a list of scenes; :func:`fem_wall` builds it for a chain's scenes; :class:`StaticFEMWall`
 is the same scenes' static law as a wall (a static LCP per step). The quasi-static
 references of the study are static FEMs in fixed boxes (:mod:`ssw.dynamics.quasistatic`).
@@ -119,9 +119,18 @@ class ContactFEM:
 
     Parameters
     ----------
-    scene : the scene.  spec : the domain sizing.  dt : s, the time step (None: static only).
-    r_cand : m, radius of the candidate zone.  boundary : ``absorbing`` | ``fixed``.
-    d_scale : m, the indentation scale of the LCP tolerance.
+    scene : Scene
+        The scene (bead, plate, soil).
+    spec : ssw.dynamics.domain.DomainSpec
+        The domain sizing.
+    dt : float or None
+        The time step, s (None: static only).
+    r_cand : float
+        The radius of the candidate zone, m.
+    boundary : str
+        ``absorbing`` | ``fixed``.
+    d_scale : float
+        The indentation scale of the LCP tolerance, m.
     """
 
     def __init__(self, scene: Scene, spec: DomainSpec, dt: float | None, r_cand: float,
@@ -236,8 +245,8 @@ class ContactFEM:
 
 
 class FEMWall:
-    """A stateful wall over scenes, each a :class:`ContactFEM` (the protocol of
-    :mod:`ssw.dynamics.integrate`). States are lists of :class:`ssw.dynamics.newmark.State`.
+    """A stateful wall over scenes, each a :class:`ContactFEM`
+    (:class:`ssw.chain.wall.StatefulWall`). States are lists of :class:`WallState`.
     """
 
     def __init__(self, contacts: list[ContactFEM]) -> None:
@@ -294,7 +303,8 @@ class FEMWall:
 
 
 def plate_of(params: Any, plate_density: float | None = None) -> Material | None:
-    """The chain's plate as a :class:`Material` (None without a plate); the density comes
+    """The chain's plate as a :class:`ssw.dynamics.system.Material` (None without a plate); the
+    density comes
     from the materials library by ``params.plate_material`` unless given."""
     if params.plate_thickness <= 0:
         return None

@@ -162,12 +162,20 @@ def fit_ranges(
 
     Parameters
     ----------
-    soil_E, soil_nu : the scenes' soils (Pa, -).
-    curve_delta_max : each curve's last indentation, m.
-    cfg : validated study config (``fit.range.{mode, factor, delta_min, delta_max}``); in
+    soil_E : array_like
+        The scenes' soil moduli, Pa.
+    soil_nu : array_like
+        The scenes' soil Poisson's ratios.
+    curve_delta_max : array_like
+        Each curve's last indentation, m.
+    cfg : dict
+        Validated study config (``fit.range.{mode, factor, delta_min, delta_max}``); in
         mode ``chain`` the chain runs once for all scenes (batched).
-    plate_E, plate_nu : the plates (Pa, -; None entries: no plate). In mode ``chain`` a
-        plate softer than its soil replaces the soil in the Hertz wall (``softer_half_space``).
+    plate_E : array_like or None
+        The plates' moduli, Pa (None entries: no plate). In mode ``chain`` a plate softer
+        than its soil replaces the soil in the Hertz wall (``softer_half_space``).
+    plate_nu : array_like or None
+        The plates' Poisson's ratios.
     """
     E, nu = softer_half_space(soil_E, soil_nu, plate_E, plate_nu)
     dmax = np.atleast_1d(np.asarray(curve_delta_max, float))

@@ -260,11 +260,18 @@ def session_tof(
 
     Parameters
     ----------
-    forces : records, N (one per hit).
-    rate : sample rate, S/s.
-    n_pre : pretrigger samples (baseline and noise come from them).
-    clipped : per-hit clipping flags (rule 1).
-    source : name used in error messages.
+    forces : list of numpy.ndarray
+        Records, N (one per hit).
+    rate : float
+        Sample rate, S/s.
+    n_pre : int
+        Pretrigger samples (baseline and noise come from them).
+    clipped : list of bool or None
+        Per-hit clipping flags (rule 1).
+    opts : TofOptions or None
+        The peak rule, bound and rejection rule (default ``TofOptions()``).
+    source : str
+        Name used in error messages.
     """
     opts = opts or TofOptions()
     n = len(forces)

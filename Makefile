@@ -45,6 +45,7 @@ bench: setup
 	$(VENV)/bin/ssw bench chain
 	$(VENV)/bin/ssw bench tof
 	$(VENV)/bin/ssw bench study
+	$(VENV)/bin/ssw bench lu
 
 ## The study's report (Snakemake's own; after `make study`): results/report.html.
 report: setup

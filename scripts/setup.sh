@@ -1,13 +1,33 @@
 #!/usr/bin/env bash
-# Set up ssw's environment in .venv: system packages (as root), pinned Python packages,
-# and PETSc + petsc4py + mpi4py built against one MPI (Debian's MPICH).
+# Set up ssw's environment in .venv: system packages (as root), then a virtual environment
+# with the pinned packages of constraints.txt and one PETSc + petsc4py + mpi4py on one MPI.
 #
-# Idempotent: a stamp records the hash of this script, constraints.txt and pyproject.toml;
-# when nothing changed and the imports still work, it returns in a few seconds.
+# Two routes to PETSc (the pins say which versions; one PETSc, 3.25.5, by either route):
+#   binary  the default where a Python >= 3.12 is on the machine: the dolfinx-solver-real
+#           wheel (PETSc, petsc4py, MUMPS, SuperLU_DIST, SLEPc) built against the mpich
+#           wheel, which mpi4py's binary wheel loads too; its mpiexec is .venv/bin/mpiexec.
+#           Nothing is compiled: 12 s from an empty cache, 10 s from a warm one (2 cores).
+#   source  SSW_PETSC=source (or no Python >= 3.12 found): PETSc and petsc4py built from
+#           their sdists against Debian's MPICH, mpi4py from its sdist against the same
+#           mpicc: 15 minutes of CPU (10-13 minutes on 2 quiet cores), once (pip caches the
+#           built wheels: 25 s for the next venv).
 #
-# Why the PETSc recipe looks the way it does (measured on this kind of machine):
-#   * PETSc's pip build uses the `mpicc` on PATH and keeps that MPI's RUNPATH in the wheel
-#     that pip caches, so MPICH's development package must be installed before it;
+# Environment: SSW_PETSC=binary|source picks the route; SSW_VENV the venv's directory
+# (default .venv); SSW_PYTHON the interpreter (default: python3.12/3.13/3.14 on PATH, then
+# pyenv's versions, for the binary route; python3.11 for the source route).
+#
+# Packages are installed by uv (pinned in constraints.txt, put into the venv by pip), the
+# source route's three builds by pip (below). Measured on 2 cores from empty caches: the
+# whole binary set-up 12 s with uv; its packages alone take 64 s by pip (49 s of CPU
+# against uv's 11 s).
+#
+# Idempotent: a stamp records the hash of this script, constraints.txt, pyproject.toml, the
+# route and the interpreter; when nothing changed and the packages are in place, it returns
+# in about a second. A venv made by the other route (or another Python) is made anew.
+#
+# Why the source recipe looks the way it does (measured on this kind of machine):
+#   * PETSc's build uses the `mpicc` on PATH and keeps that MPI's RUNPATH in the wheel that
+#     pip caches, so MPICH's development package must be installed before it;
 #   * petsc4py's isolated build would reuse whatever petsc wheel is cached, so it is built
 #     with --no-build-isolation against the petsc just installed in the venv;
 #   * the mpi4py binary wheel looks for libmpi.so.12, which Debian's MPICH names
@@ -17,19 +37,66 @@ set -euo pipefail
 here=$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)
 cd "$here"
 VENV=${SSW_VENV:-$here/.venv}
-PY=${PYTHON:-python3.11}
-command -v "$PY" >/dev/null 2>&1 || PY=python3
 
 log() { printf '[setup] %s\n' "$*" >&2; }
+die() { printf 'ssw setup: %s\n' "$*" >&2; exit 1; }
+
+# ---------------------------------------------------------------- route and interpreter
+# A Python >= 3.12 (the binary wheel's floor): $SSW_PYTHON, then on PATH, then pyenv's.
+py_ok() { "$1" -c 'import sys; sys.exit(sys.version_info < (3, 12))' >/dev/null 2>&1; }
+find_python() {
+  local c
+  for c in ${SSW_PYTHON:-} python3.12 python3.13 python3.14 \
+           "${PYENV_ROOT:-$HOME/.pyenv}"/versions/3.1[2-4]*/bin/python3; do
+    if py_ok "$c"; then
+      "$c" -c 'import sys; print(sys.executable)'
+      return 0
+    fi
+  done
+  return 1
+}
+
+ROUTE=${SSW_PETSC:-}
+case "$ROUTE" in
+  binary)
+    PY=$(find_python) || die "SSW_PETSC=binary needs a Python >= 3.12 (set SSW_PYTHON=...)"
+    ;;
+  source)
+    PY=${SSW_PYTHON:-python3.11}
+    command -v "$PY" >/dev/null 2>&1 && "$PY" -c '' 2>/dev/null || PY=python3
+    ;;
+  "")
+    if PY=$(find_python); then
+      ROUTE=binary
+    else
+      ROUTE=source
+      PY=${SSW_PYTHON:-python3}
+      log "no Python >= 3.12 found (SSW_PYTHON, python3.12-3.14, pyenv): building PETSc" \
+          "from source (SSW_PETSC=source, about 10-13 minutes on 2 cores)"
+    fi
+    ;;
+  *) die "SSW_PETSC = '$ROUTE' is not allowed: binary (the default) or source" ;;
+esac
+PYVER=$("$PY" -c 'import sys; print("%d.%d" % sys.version_info[:2])') ||
+  die "cannot run the Python interpreter '$PY' (set SSW_PYTHON=...)"
 
 # ---------------------------------------------------------------- system packages
-# libopenblas-dev: BLAS/LAPACK for PETSc; libmpich-dev + mpich: the one MPI (mpicc, mpiexec);
-# libglu1-mesa, libxrender1, libxcursor1, libxft2, libxinerama1: shared libraries the
-# gmsh wheel's libgmsh.so links against even when no window is opened.
+# libglu1-mesa, libxrender1, libxcursor1, libxft2, libxinerama1, libgl1: shared libraries
+# the gmsh wheel's libgmsh.so links against even when no window is opened.
 # chromium + chromium-driver: the headless browser the report test opens the study report in
 # (tests/test_report_browser.py, through selenium; no browser download).
-SYS_PKGS=(libopenblas-dev libmpich-dev mpich libglu1-mesa libxrender1 libxcursor1 libxft2
-          libxinerama1 libgl1 chromium chromium-driver)
+SYS_PKGS=(libglu1-mesa libxrender1 libxcursor1 libxft2 libxinerama1 libgl1 chromium
+          chromium-driver)
+# source route: libopenblas-dev (BLAS/LAPACK for PETSc), libmpich-dev + mpich (the one MPI:
+# mpicc, mpiexec).
+if [ "$ROUTE" = source ]; then
+  SYS_PKGS+=(libopenblas-dev libmpich-dev mpich)
+fi
+# A Debian Python without pip needs its venv package (ensurepip) to make a venv with pip.
+if ! "$PY" -m pip --version >/dev/null 2>&1 && ! "$PY" -c 'import ensurepip' >/dev/null 2>&1
+then
+  SYS_PKGS+=("python$PYVER-venv")
+fi
 missing=()
 for p in "${SYS_PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
@@ -46,56 +113,96 @@ if ((${#missing[@]})); then
     exit 1
   fi
 fi
-MPICC=$(command -v mpicc || true)
-if [ -z "$MPICC" ] || ! "$MPICC" -show 2>/dev/null | grep -q mpich; then
-  echo "ssw setup: 'mpicc' on PATH must be MPICH's (found: ${MPICC:-none})." >&2
-  echo "PETSc, petsc4py and mpi4py must share one MPI; put /usr/bin first on PATH." >&2
-  exit 1
+if [ "$ROUTE" = source ]; then
+  MPICC=$(command -v mpicc || true)
+  if [ -z "$MPICC" ] || ! "$MPICC" -show 2>/dev/null | grep -q mpich; then
+    echo "ssw setup: 'mpicc' on PATH must be MPICH's (found: ${MPICC:-none})." >&2
+    echo "PETSc, petsc4py and mpi4py must share one MPI; put /usr/bin first on PATH." >&2
+    exit 1
+  fi
 fi
 
 # ---------------------------------------------------------------- virtual environment
-stamp_src=$(cat scripts/setup.sh constraints.txt pyproject.toml | sha256sum | cut -c1-16)
+# Up to date: the stamp of this set-up is there and the packages are in place (the full
+# import check ran when the stamp was written; this one costs hundredths of a second).
+present() {
+  "$VENV/bin/python" -c "import importlib.util as u, sys
+sys.exit(any(u.find_spec(m) is None
+             for m in ('ssw', 'gmsh', 'h5py', 'snakemake', 'petsc4py', 'mpi4py')))" 2>/dev/null
+}
+# The full check: ssw's own import of PETSc (the binary stack's MPI first) and mpi4py.
+check_imports() {
+  "$VENV/bin/python" -c "import gmsh, h5py, snakemake, mpi4py
+from ssw.contact.petsc_solver import _petsc
+from mpi4py import MPI
+assert _petsc().COMM_WORLD.getSize() == MPI.COMM_WORLD.Get_size()" >/dev/null 2>&1
+}
+id_line="$ROUTE $("$PY" -c 'import sys; print(sys.version.split()[0])')"
+stamp_src=$( (cat scripts/setup.sh constraints.txt pyproject.toml; echo "$id_line") |
+            sha256sum | cut -c1-16)
 stamp="$VENV/.ssw-setup-$stamp_src"
-if [ -f "$stamp" ] && "$VENV/bin/python" -c \
-   "import petsc4py, mpi4py, gmsh, h5py, snakemake, ssw; petsc4py.init(); from petsc4py import PETSc" \
-   >/dev/null 2>&1; then
-  log "environment up to date ($VENV)"
+if [ -f "$stamp" ] && present; then
+  log "environment up to date ($VENV, $id_line)"
   exit 0
 fi
 
-[ -x "$VENV/bin/python" ] || { log "creating $VENV"; "$PY" -m venv "$VENV"; }
-pip() { "$VENV/bin/python" -m pip --disable-pip-version-check -q "$@"; }
+# a venv of the other route or of another Python is not reused (a second PETSc in the
+# binary route's venv is refused by its import guard)
+if [ -f "$VENV/pyvenv.cfg" ] && [ "$(cat "$VENV/.ssw-route" 2>/dev/null)" != "$id_line" ]; then
+  log "replacing $VENV (made for: $(cat "$VENV/.ssw-route" 2>/dev/null || echo unknown))"
+  rm -rf "$VENV"
+fi
 C=(-c "$here/constraints.txt")
-
-pip install "${C[@]}" --upgrade pip >/dev/null 2>&1 || true
-pip install "${C[@]}" numpy cython setuptools wheel
-
-if ! "$VENV/bin/python" -c "import petsc" >/dev/null 2>&1; then
-  log "building PETSc (about 11-15 minutes on 2 cores, once; pip caches the wheel)"
-  PETSC_CONFIGURE_OPTIONS="--with-cuda=0 --with-fc=0 --with-x=0 --with-debugging=0" \
-    MPICC="$MPICC" pip install "${C[@]}" petsc
+if [ ! -x "$VENV/bin/python" ]; then
+  log "creating $VENV ($id_line, $PY)"
+  # without ensurepip's pip (seconds) where the interpreter has a pip to install uv with;
+  # uv installs the pinned pip with the rest
+  if "$PY" -m pip --version >/dev/null 2>&1; then
+    "$PY" -m venv --without-pip "$VENV"
+  else
+    "$PY" -m venv "$VENV"
+  fi
+  echo "$id_line" > "$VENV/.ssw-route"
 fi
-if ! "$VENV/bin/python" -c "import petsc4py; petsc4py.init(); from petsc4py import PETSc" \
-     >/dev/null 2>&1; then
-  log "building petsc4py against the venv's PETSc"
-  pip install "${C[@]}" --no-build-isolation petsc4py
+if ! "$VENV/bin/uv" --version >/dev/null 2>&1; then
+  if "$VENV/bin/python" -m pip --version >/dev/null 2>&1; then
+    "$VENV/bin/python" -m pip --disable-pip-version-check -q install "${C[@]}" uv
+  else
+    "$PY" -m pip --disable-pip-version-check -q --python "$VENV/bin/python" install "${C[@]}" uv
+  fi
 fi
-if ! "$VENV/bin/python" -c "from mpi4py import MPI" >/dev/null 2>&1; then
-  log "building mpi4py against MPICH"
-  MPICC="$MPICC" pip install "${C[@]}" --no-binary=mpi4py mpi4py
+uvpip() { "$VENV/bin/uv" pip "$1" --quiet --python "$VENV/bin/python" "${@:2}"; }
+
+if [ "$ROUTE" = binary ]; then
+  log "installing ssw, its pinned dependencies and the binary PETSc stack"
+  uvpip install "${C[@]}" pip -e ".[dev,petsc]"
+else
+  # The three builds go through pip, whose wheel cache keeps the built PETSc for the next
+  # venv: uv's cache of a registry sdist's build was seen to build PETSc again here.
+  uvpip install "${C[@]}" pip numpy cython setuptools wheel
+  pip() { "$VENV/bin/python" -m pip --disable-pip-version-check -q "$@"; }
+  if ! "$VENV/bin/python" -c "import petsc" >/dev/null 2>&1; then
+    log "building PETSc (about 10-13 minutes on 2 cores, once; pip caches the wheel)"
+    PETSC_CONFIGURE_OPTIONS="--with-cuda=0 --with-fc=0 --with-x=0 --with-debugging=0" \
+      MPICC="$MPICC" pip install "${C[@]}" petsc
+  fi
+  if ! "$VENV/bin/python" -c "import petsc4py; petsc4py.init(); from petsc4py import PETSc" \
+       >/dev/null 2>&1; then
+    log "building petsc4py against the venv's PETSc"
+    pip install "${C[@]}" --no-build-isolation petsc4py
+  fi
+  if ! "$VENV/bin/python" -c "from mpi4py import MPI" >/dev/null 2>&1; then
+    log "building mpi4py against MPICH"
+    MPICC="$MPICC" pip install "${C[@]}" --no-binary=mpi4py mpi4py
+  fi
+  log "installing ssw and its pinned dependencies"
+  uvpip install "${C[@]}" -e ".[dev]"
 fi
 
-log "installing ssw and its pinned dependencies"
-pip install "${C[@]}" -e ".[dev]"
-
-"$VENV/bin/python" - <<'PY'
-import petsc4py
-petsc4py.init()
-from petsc4py import PETSc
-from mpi4py import MPI
-import gmsh, h5py, snakemake  # noqa: F401
-assert PETSc.COMM_WORLD.getSize() == MPI.COMM_WORLD.Get_size()
-PY
+check_imports || {
+  "$VENV/bin/python" -c "from ssw.contact.petsc_solver import _petsc; _petsc()" || true
+  die "the environment in $VENV does not import PETSc and mpi4py (see above)"
+}
 rm -f "$VENV"/.ssw-setup-*
 touch "$stamp"
-log "environment ready ($VENV)"
+log "environment ready ($VENV, $id_line)"

@@ -9,9 +9,10 @@ Two engines compute the same curve (to round-off; tests/test_contact_engines.py)
   ratio at unit E (:mod:`ssw.contact.operators`, cached), a dense system of a few hundred
   unknowns per scene, and the exact piecewise-affine path of the contact LCP in the
   indentation (:mod:`ssw.contact.parametric`), sampled at the increments;
-* ``monolithic``: the whole u-p matrix factored with PETSc (:mod:`ssw.contact.petsc_solver`),
-  condensed onto the candidates (:mod:`ssw.contact.condense`) and an LCP solved at every
-  increment (:mod:`ssw.contact.contact_lcp`): the independent check.
+* ``monolithic``: the whole u-p matrix factored with PETSc (MUMPS where the build has it,
+  :mod:`ssw.contact.petsc_solver`), condensed onto the candidates
+  (:mod:`ssw.contact.condense`) and an LCP solved at every increment
+  (:mod:`ssw.contact.contact_lcp`): the independent check.
 """
 
 from __future__ import annotations
@@ -357,7 +358,7 @@ def _monolithic(
     t_mesh = time.perf_counter()
     sysm = assemble(mesh, (soil[0], pe[0]), (soil[1], pe[1]), cfg["interface"], order_nodes)
     t_asm = time.perf_counter()
-    solver = LUSolver(sysm.rows, sysm.cols, sysm.vals, sysm.ndof, sysm.scale)
+    solver = LUSolver(sysm.rows, sysm.cols, sysm.vals, sysm.ndof, sysm.scale, solver="auto")
     t_fact = time.perf_counter()
     a_ref = np.sqrt(radius * deltas[-1])
     r_cand = float(cfg["candidate_factor"]) * a_ref

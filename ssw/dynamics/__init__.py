@@ -4,7 +4,6 @@ Modules (one concept each):
 
 * :mod:`~ssw.dynamics.system`: the axisymmetric elastodynamic operators of plate and soil
   (stiffness of :mod:`ssw.contact.assembly`, consistent mass, absorbing boundary);
-* :mod:`~ssw.dynamics.lu`: one PETSc LU factorization, many solves;
 * :mod:`~ssw.dynamics.newmark`: the trapezoidal (average-acceleration) Newmark step with
   the contact forces condensed onto their candidate dofs;
 * :mod:`~ssw.dynamics.bead`: the bead's own elastic compliance on the contact candidates;

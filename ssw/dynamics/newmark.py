@@ -10,12 +10,12 @@ step ``dt`` the effective matrix
 
     K_eff = K + 4/dt^2 M + 2/dt C
 
-is factored once (:class:`ssw.dynamics.lu.LU`); each step is then one solve for the free
-motion ``u_free`` (no contact force) and, the contact forces entering only through the
-candidate dofs, ``u = u_free + X lam`` with ``X = K_eff^-1 G^T`` computed once
-(``G^T``: a downward unit force on each candidate). The candidates' gaps are affine in
-``lam`` with the condensed compliance ``W = G X``: one small LCP per step
-(:func:`ssw.contact.contact_lcp.solve_lcp`). Then
+is factored once (:class:`ssw.contact.petsc_solver.LUSolver`, the process's own); each
+step is then one solve for the free motion ``u_free`` (no contact force) and, the contact
+forces entering only through the candidate dofs, ``u = u_free + X lam`` with
+``X = K_eff^-1 G^T`` computed once (``G^T``: a downward unit force on each candidate).
+The candidates' gaps are affine in ``lam`` with the condensed compliance ``W = G X``: one
+small LCP per step (:func:`ssw.contact.contact_lcp.solve_lcp`). Then
 
     a_(n+1) = 4/dt^2 (u_(n+1) - u_n) - 4/dt v_n - a_n,   v_(n+1) = 2/dt (u_(n+1) - u_n) - v_n.
 
@@ -46,7 +46,7 @@ from dataclasses import dataclass, replace
 
 import numpy as np
 
-from ssw.dynamics.lu import LU
+from ssw.contact.petsc_solver import LUSolver
 from ssw.dynamics.system import DynamicSystem
 
 
@@ -70,6 +70,35 @@ def dot(a: np.ndarray, b: np.ndarray) -> float:
     return float(np.einsum("i,i->", a, b))
 
 
+#: Options prefix of the dynamic solver's KSP (users may add PETSc options under it).
+PREFIX = "ssw_dynamics_"
+
+
+def factor(rows: np.ndarray, cols: np.ndarray, vals: np.ndarray, system: DynamicSystem
+           ) -> LUSolver:
+    """The LU factors of a dynamic u-p matrix, the process's own (a dynamic wall is one
+    scene; a sweep's ranks each step their own).
+
+    Parameters
+    ----------
+    rows : numpy.ndarray
+        Row indices of the nondimensional matrix's COO triplets.
+    cols : numpy.ndarray
+        Column indices of the triplets.
+    vals : numpy.ndarray
+        Values of the triplets (duplicates summed).
+    system : DynamicSystem
+        The operators (size ``ndof`` and unit ``scale``, N/m).
+
+    Returns
+    -------
+    LUSolver
+        Factors of ``scale * A``.
+    """
+    return LUSolver(rows, cols, vals, system.ndof, system.scale, parallel=False,
+                    prefix=PREFIX, what="the dynamic u-p matrix")
+
+
 class Newmark:
     """Average-acceleration Newmark steps with forces on the dofs ``load_dofs``.
 
@@ -88,7 +117,7 @@ class Newmark:
         self.c0, self.c1, self.c2 = 4.0 / dt**2, 4.0 / dt, 2.0 / dt
         self.load_dofs = np.asarray(load_dofs, np.int64)
         rows, cols, vals = system.stiffness_triplets(self.c0, self.c2)
-        self.lu = LU(rows, cols, vals, system.ndof, system.scale)
+        self.lu = factor(rows, cols, vals, system)
         gt = np.zeros((system.ndof, self.load_dofs.size))
         gt[self.load_dofs, np.arange(self.load_dofs.size)] = -1.0
         self.X = self.lu.solve(gt)  # (ndof, m): displacement per unit downward force
@@ -126,7 +155,7 @@ class Static:
         self.system = system
         self.load_dofs = np.asarray(load_dofs, np.int64)
         rows, cols, vals = system.stiffness_triplets()
-        self.lu = LU(rows, cols, vals, system.ndof, system.scale)
+        self.lu = factor(rows, cols, vals, system)
         gt = np.zeros((system.ndof, self.load_dofs.size))
         gt[self.load_dofs, np.arange(self.load_dofs.size)] = -1.0
         self.X = self.lu.solve(gt)

@@ -8,10 +8,11 @@ Problem. References ``i`` (known ``E_i``, ``nu_i``; measured ``T_i`` with standa
     ``lo <= theta <= hi``.
 
 The observations and the model's derivatives are those of :mod:`ssw.calibration.residuals`
-(one function ``theta -> (values, d values / d theta)``; central differences of the batched
-model today), so that other kinds of observations can join the TOFs. TOF is not monotone in
-the parameters (REFERENCE.md: TOF rises then falls with the striker speed under gravity), so
-no bracketing is assumed:
+(one function ``theta -> (values, d values / d theta)``: the chain's exact forward
+sensitivities where the walls carry them, else central differences of the batched model), so
+that other kinds of observations can join the TOFs. TOF is not monotone in the parameters
+(REFERENCE.md: TOF rises then falls with the striker speed under gravity), so no bracketing
+is assumed:
 
 1. **global scan**: a tensor grid of the continuous parameters (log-spaced where a parameter
    is scaled, :data:`ssw.device.PARAMETERS`) times every value of the integer ones, all
@@ -27,7 +28,7 @@ no bracketing is assumed:
    values is taken.
 
 Uncertainty (Bard 1974; Press et al. 2007, sec. 15.5): with the weighted Jacobian ``J``
-(central differences at the solution) of the parameters NOT held on a bound, their
+(the model's derivatives at the solution) of the parameters NOT held on a bound, their
 covariance is ``(J^T J)^-1``: conditional on the held ones, which are fixed at their bound
 (their rows and columns are absent, not given a fictitious variance; a bound is not a
 measurement, and the first-order interval of a parameter there would reach outside its
@@ -54,9 +55,9 @@ from ssw.calibration.residuals import (
     Derivatives,
     Observations,
     bounds_x,
-    central_differences,
     dtheta_dx,
     from_x,
+    model_derivatives,
     to_x,
 )
 from ssw.device import parameter, parameter_value
@@ -529,7 +530,7 @@ def identify(
     s = np.array([r.tof_std if known else DEFAULT_REL_STD * r.tof for r in refs], float)
     obs = Observations.tof(T, s)
     rng = scan_ranges(model.free, ranges, model.device)
-    derivs = central_differences(model, model.free, rng)
+    derivs = model_derivatives(model, rng)
     nominal = np.array([parameter_value(model.device, n) for n in model.free])
     for j, n in enumerate(model.free):  # the nominal start inside the scan
         nominal[j] = np.clip(nominal[j], *rng[n])

@@ -248,7 +248,7 @@ def _run(cmd: list[str], cwd: Path, timeout: float) -> RunTime:
 
 def usage_records(workdir: Path, since: float = 0.0) -> dict[str, dict[str, float]]:
     """CPU time of each job of a run in ``workdir`` (the ``ssw`` processes' records,
-    :func:`ssw.cli._record_usage`), keyed as :func:`job_records` keys the jobs (the job's
+    ``ssw.cli._record_usage``), keyed as :func:`job_records` keys the jobs (the job's
     log ``results/logs/<stage>/<job>.log``; a process without a log: its command): ``cpu_s``,
     ``wall_s`` and ``startup_s`` (s before the command's own code ran), summed over the
     job's processes; only records written after ``since`` (Unix s)."""

@@ -125,7 +125,7 @@ def _terminate(signum: int, frame: object) -> None:
 
 
 #: Environment variable naming a folder: each ``ssw`` process writes its CPU and wall time
-#: there when it ends (:func:`_record_usage`; ``ssw bench study`` sets it).
+#: there when it ends (``_record_usage``; ``ssw bench study`` sets it).
 USAGE_ENV = "SSW_USAGE_DIR"
 
 

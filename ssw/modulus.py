@@ -6,9 +6,9 @@ uncertainty combines, as standard uncertainties of ``ln E`` (i.e. relative ones;
 JCGM 100:2008, sec. 5.1: independent contributions add in quadrature):
 
 * ``tof``: the standard error of the mean TOF over the accepted hits,
-  ``u = s_T / (T |k|)``, ``k = d ln TOF / d ln E`` at the sample (central difference);
+  ``u = s_T / (T |k|)``, ``k = d ln TOF / d ln E`` at the sample;
 * ``calibration``: the covariance ``C`` of the calibrated continuous parameters,
-  ``u^2 = g^T C g`` with ``g_j = - (d ln TOF / d theta_j) / k`` (central differences);
+  ``u^2 = g^T C g`` with ``g_j = - (d ln TOF / d theta_j) / k``;
 * ``poisson``: a Poisson's ratio known only as a range ``[lo, hi]``, taken as uniform
   (GUM 4.3.7): ``u = |ln E(hi) - ln E(lo)| / sqrt(12)``;
 * ``wall``: the stated relative force error ``e`` of the wall law (``wall.force_error``: a
@@ -18,6 +18,11 @@ JCGM 100:2008, sec. 5.1: independent contributions add in quadrature):
 * ``integrator``: the TOF error of the time step, ``c (80 / steps_per_contact)^2`` with
   ``c`` the relative error measured at 80 steps against an independent DOP853 solution
   (:data:`INTEGRATOR_REL_ERROR_80`), ``u = c / |k|``.
+
+The derivatives ``k`` and ``d ln TOF / d theta_j`` are the chain's exact forward
+sensitivities from the run at the sample's E (:func:`ssw.tof.api.tof_derivatives`), or
+its central differences of TOFs for a wall without them (``plastic``, a ``table`` wall's
+E).
 
 The interval is ``E exp(+- z u)`` with ``z = 1.96`` (95 % for a normal ``ln E``). Every
 contribution is reported, so a user sees what dominates, and every one that could not be
@@ -44,10 +49,6 @@ COVERAGE_Z = 1.96
 #: the study's calibrated one (0.39 m/s: 4.95e-5, at 1000 MPa); rounded up. It scales as
 #: dt^2 (tests/test_chain_order.py, tests/test_inverse_trust.py).
 INTEGRATOR_REL_ERROR_80 = 5.0e-5
-#: Relative step of E for k = d ln TOF / d ln E.
-E_STEP = 0.01
-#: Relative (log) step of a calibrated parameter for d ln TOF / d theta.
-THETA_STEP = 1e-3
 
 
 @dataclass(frozen=True)
@@ -145,32 +146,20 @@ def estimate_moduli(
     lnE_lo[ranged] = np.log(inv.E[k:k + nr])
     lnE_hi[ranged] = np.log(inv.E[k + nr:])
     # one run: slope in E, and d TOF / d theta of the calibrated continuous parameters
+    # (forward sensitivities where the wall has them, central differences otherwise)
     names: tuple[str, ...] = ()
     cov = None
     if calibration is not None and calibration.covariance is not None:
         names = calibration.covariance_parameters
         cov = calibration.covariance_array()
-    Es = [E * (1 + E_STEP), E * (1 - E_STEP)]
-    nus_run = [nu_c, nu_c]
-    vary: dict[str, list[np.ndarray]] = {n: [] for n in names}
-    base = {n: float(getattr(params, n)) for n in names}
-    ends = {n: theta_ends(n, base[n]) for n in names}
-    for n in names:
-        vary[n] = [np.full(k, base[n])] * 2
-    for n in names:
-        for end in ends[n]:
-            Es.append(E)
-            nus_run.append(nu_c)
-            for m in names:
-                vary[m].append(np.full(k, end if m == n else base[m]))
-    vary_flat = {n: np.concatenate(v) for n, v in vary.items()} or None
-    pk, run = api.peaks(np.concatenate(Es), np.concatenate(nus_run), params, wall,
-                        vary=vary_flat, **opts)
-    Tr = np.asarray(pk.tof, float).reshape(-1, k)
-    slope = np.log(Tr[0] / Tr[1]) / np.log((1 + E_STEP) / (1 - E_STEP))
+    der = api.tof_derivatives(E, nu_c, params, wall, derivatives=("E", *names), **opts)
+    Tb = np.asarray(der.tof, float)
+    slope = E * np.asarray(der.dtof["E"], float) / Tb
+    # d ln TOF / d theta_j, (len(names), k)
+    dln = np.array([np.asarray(der.dtof[n], float) / Tb for n in names]).reshape(-1, k)
     w = build_wall(wall, params, E, nu_c, **opts)  # every sample's own law (its error)
-    # the softer neighbour (E (1 - E_STEP)) presses deepest: beyond the law's exact range?
-    beyond = beyond_exact_reach(w, run.peak_wall_indentation.reshape(-1, k)[1])
+    # the sample's own peak indentation: beyond the law's exact range?
+    beyond = beyond_exact_reach(w, der.run.peak_wall_indentation)
     force_error = getattr(w, "force_error", None)
     if force_error is not None:
         force_error = np.broadcast_to(np.asarray(force_error, float), (k,))
@@ -189,11 +178,7 @@ def estimate_moduli(
                 notes.append("the calibration holds " + ", ".join(
                     f"{n} on its {side} bound" for n, side in calibration.at_bound.items())
                     + ": its term is conditional on that")
-            g = np.empty(len(names))
-            for j, n in enumerate(names):
-                plus, minus = ends[n]
-                dln = np.log(Tr[2 + 2 * j, i] / Tr[3 + 2 * j, i]) / (plus - minus)
-                g[j] = -dln / kk
+            g = -dln[:, i] / kk
             var = float(g @ cov @ g)
             if not var > 0:
                 raise ConfigError("calibration covariance", var,
@@ -227,18 +212,6 @@ def estimate_moduli(
             dlnTOF_dlnE=kk, notes=tuple(notes), missing=missing,
             extrapolated=bool(beyond[i])))
     return out
-
-
-def theta_ends(name: str, value: float) -> tuple[float, float]:
-    """The two values (upper, lower) of a calibrated parameter's difference quotient:
-    ``value -+ h``, ``h`` = :data:`THETA_STEP` times its size (or its scale,
-    ``ssw.device.PARAMETERS``), the lower one kept >= 0 (every calibratable parameter, a
-    speed, a force or a mass, is): at the bound (a preload of 0 N) the difference is
-    one-sided."""
-    from ssw.device import parameter
-
-    h = THETA_STEP * max(abs(value), parameter(name).scale)
-    return value + h, max(value - h, 0.0)
 
 
 class Estimator:

@@ -118,3 +118,20 @@ def test_a_failed_study_still_reports_the_finished_jobs(toy_study: Path, tmp_pat
     assert saved["status"] == "failed"
     assert saved["stages"]["alpha"]["jobs"] == 4 and "beta" not in saved["stages"]
     assert "FAILED" in (out / "study.md").read_text()
+
+
+def test_every_ssw_process_records_its_cpu_time(tmp_path: Path, monkeypatch) -> None:
+    """With SSW_USAGE_DIR set, an ssw command leaves its CPU and wall times there, and the
+    bench reads them back per job (a process without a job's log: keyed by its command)."""
+    import time
+
+    from ssw.cli import USAGE_ENV, main
+
+    monkeypatch.setenv(USAGE_ENV, str(tmp_path / study.USAGE))
+    t0 = time.time() - 1.0
+    with pytest.raises(SystemExit):
+        main(["tof", "--help"])
+    rec = study.usage_records(tmp_path, t0)
+    assert list(rec) == ["tof"]
+    assert rec["tof"]["cpu_s"] > 0 and rec["tof"]["wall_s"] >= rec["tof"]["startup_s"] >= 0
+    assert study.usage_records(tmp_path, time.time() + 10.0) == {}  # older records ignored

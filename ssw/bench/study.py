@@ -33,6 +33,7 @@ import sys
 import tempfile
 import time
 from collections import defaultdict
+from dataclasses import dataclass
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
@@ -49,6 +50,10 @@ BENCHMARKS = Path("results") / "benchmarks"
 #: The edit the increment measurement makes by default: one more plate thickness (m) in the
 #: thesis's Set 2.
 DEFAULT_INCREMENT = ("set2_thickness", 0.6e-3)
+#: Jobs whose log is not named as their benchmark record (job -> log, both without suffix).
+LOG_OF = {"chain/sweep_figure": "chain/tof_sweep"}
+#: Folder of the ``ssw`` processes' CPU records, relative to the working folder.
+USAGE = "usage"
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
@@ -78,8 +83,11 @@ def register(kinds: argparse._SubParsersAction) -> None:
 
 def job_records(workdir: Path, since: float = 0.0) -> list[dict[str, Any]]:
     """One record per job of a run in ``workdir`` from its ``benchmark:`` files
-    (``results/benchmarks/<stage>/<job>.tsv``): stage, job, wall s, peak memory MB; only
-    files written after ``since`` (Unix s)."""
+    (``results/benchmarks/<stage>/<job>.tsv``): stage, job, wall s, peak memory MB, and
+    the CPU time (s) of its ``ssw`` processes (:func:`usage_records`, None when it left
+    none: Snakemake's own sampled ``cpu_time`` misses the end of a job); only files
+    written after ``since`` (Unix s)."""
+    usage = usage_records(workdir, since)
     out = []
     root = workdir / BENCHMARKS
     for tsv in sorted(root.rglob("*.tsv")) if root.is_dir() else []:
@@ -95,14 +103,19 @@ def job_records(workdir: Path, since: float = 0.0) -> list[dict[str, Any]]:
             continue
         rss = row.get("max_rss", "NA")
         rel = tsv.relative_to(root)
+        job = str(rel.with_suffix(""))
+        use = usage.get(job) or usage.get(LOG_OF.get(job, ""))
         out.append({"stage": rel.parts[0] if len(rel.parts) > 1 else "other",
-                    "job": str(rel.with_suffix("")), "s": seconds,
-                    "max_rss_mb": float(rss) if rss not in ("NA", "-", "") else None})
+                    "job": job, "s": seconds,
+                    "max_rss_mb": float(rss) if rss not in ("NA", "-", "") else None,
+                    "cpu_s": use["cpu_s"] if use else None,
+                    "startup_s": use["startup_s"] if use else None})
     return out
 
 
 def stage_times(records: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
-    """Per-stage job count, summed wall time of its jobs, peak memory and costliest job."""
+    """Per-stage job count, summed wall and CPU times of its jobs, peak memory and
+    costliest job."""
     by_stage: dict[str, list[dict[str, Any]]] = defaultdict(list)
     for r in records:
         by_stage[r["stage"]].append(r)
@@ -110,11 +123,16 @@ def stage_times(records: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
     for stage, recs in by_stage.items():
         top = max(recs, key=lambda r: r["s"])
         rss = [r["max_rss_mb"] for r in recs if r["max_rss_mb"] is not None]
+        cpu = [r.get("cpu_s") for r in recs]
         out[stage] = {"jobs": len(recs), "busy_s": sum(r["s"] for r in recs),
+                      "cpu_s": None if None in cpu else sum(cpu),
                       "max_rss_mb": max(rss) if rss else None,
-                      "costliest": {"job": top["job"], "s": top["s"]},
+                      "costliest": {"job": top["job"], "s": top["s"],
+                                    "cpu_s": top.get("cpu_s")},
                       "busy_s_per_job": {r["job"]: r["s"] for r in
-                                         sorted(recs, key=lambda r: -r["s"])}}
+                                         sorted(recs, key=lambda r: -r["s"])},
+                      "cpu_s_per_job": {r["job"]: r.get("cpu_s") for r in
+                                        sorted(recs, key=lambda r: -r["s"])}}
     return dict(sorted(out.items(), key=lambda kv: -kv[1]["busy_s"]))
 
 
@@ -176,13 +194,46 @@ def _incremented_config(config: Path, set_name: str, thickness: float, out: Path
     return out
 
 
-def _run(cmd: list[str], cwd: Path, timeout: float) -> tuple[float, str | None]:
-    """Run ``cmd``; its wall time (s) and, if it failed, the tail of its log. The condensed
-    FEM operators are cached in the working folder (``SSW_CACHE_DIR``), so "from clean"
-    also means no operator reused from an earlier run."""
+def load_average() -> list[float] | None:
+    """The machine's 1, 5 and 15 minute load averages (``/proc/loadavg``), or None."""
+    try:
+        return [float(x) for x in Path("/proc/loadavg").read_text().split()[:3]]
+    except (OSError, ValueError):
+        return None
+
+
+def _children_cpu() -> float:
+    """CPU time (user + system, s) of this process's waited-for children so far."""
+    import resource
+
+    r = resource.getrusage(resource.RUSAGE_CHILDREN)
+    return r.ru_utime + r.ru_stime
+
+
+@dataclass(frozen=True)
+class RunTime:
+    """One Snakemake run: its wall time (s), the CPU time (s) of Snakemake and every job
+    it ran, the load averages before and after, and, if it failed, the tail of its log."""
+
+    wall_s: float
+    cpu_s: float
+    load_before: list[float] | None
+    load_after: list[float] | None
+    error: str | None
+
+
+def _run(cmd: list[str], cwd: Path, timeout: float) -> RunTime:
+    """Run ``cmd`` (module docstring). The condensed FEM operators are cached in the
+    working folder (``SSW_CACHE_DIR``), so "from clean" also means no operator reused from
+    an earlier run; every ``ssw`` process records its CPU time in ``usage/`` there
+    (:data:`ssw.cli.USAGE_ENV`)."""
+    from ssw.cli import USAGE_ENV
+
     env = dict(os.environ)
     env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"
     env["SSW_CACHE_DIR"] = str(cwd / "cache")
+    env[USAGE_ENV] = str(cwd / USAGE)
+    load0, cpu0 = load_average(), _children_cpu()
     t0 = time.perf_counter()
     try:
         proc = subprocess.run(cmd, cwd=cwd, env=env, capture_output=True, text=True,
@@ -190,9 +241,38 @@ def _run(cmd: list[str], cwd: Path, timeout: float) -> tuple[float, str | None]:
     except subprocess.TimeoutExpired as exc:
         raise SswError(f"study run exceeded --timeout {timeout} s: {shlex.join(cmd)}") from exc
     wall = time.perf_counter() - t0
-    if proc.returncode != 0:
-        return wall, f"snakemake failed (exit {proc.returncode}): {proc.stderr[-3000:]}"
-    return wall, None
+    error = (f"snakemake failed (exit {proc.returncode}): {proc.stderr[-3000:]}"
+             if proc.returncode != 0 else None)
+    return RunTime(wall, _children_cpu() - cpu0, load0, load_average(), error)
+
+
+def usage_records(workdir: Path, since: float = 0.0) -> dict[str, dict[str, float]]:
+    """CPU time of each job of a run in ``workdir`` (the ``ssw`` processes' records,
+    ``ssw.cli._record_usage``), keyed as :func:`job_records` keys the jobs (the job's
+    log ``results/logs/<stage>/<job>.log``; a process without a log: its command): ``cpu_s``,
+    ``wall_s`` and ``startup_s`` (s before the command's own code ran), summed over the
+    job's processes; only records written after ``since`` (Unix s)."""
+    import json
+
+    out: dict[str, dict[str, float]] = {}
+    folder = workdir / USAGE
+    for f in sorted(folder.glob("*.json")) if folder.is_dir() else []:
+        if f.stat().st_mtime < since:
+            continue
+        try:
+            rec = json.loads(f.read_text())
+        except (OSError, ValueError):
+            continue
+        log = Path(rec.get("log") or "")
+        logs = workdir / BENCHMARKS.parent / "logs"
+        try:
+            key = str(log.resolve().relative_to(logs.resolve()).with_suffix(""))
+        except ValueError:
+            key = " ".join(a for a in rec.get("argv", []) if not a.startswith("-"))[:60]
+        acc = out.setdefault(key, {"cpu_s": 0.0, "wall_s": 0.0, "startup_s": 0.0})
+        for k in acc:
+            acc[k] += float(rec.get(k) or 0.0)
+    return out
 
 
 def _prepare_workdir(args: argparse.Namespace) -> tuple[Path, bool]:
@@ -225,26 +305,34 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     inc: dict[str, Any] | None = None
     try:
         cmd = _snakemake_cmd(args, work, config)
-        dag_s, error = _run([*cmd, "--dry-run", "--quiet"], work, args.timeout)
-        if error:
-            raise SswError(f"the study's dry run failed: {shlex.join(cmd)}\n{error}")
+        dry = _run([*cmd, "--dry-run", "--quiet"], work, args.timeout)
+        if dry.error:
+            raise SswError(f"the study's dry run failed: {shlex.join(cmd)}\n{dry.error}")
         if args.keep_going:
             cmd.append("--keep-going")
-        wall_s, error = _run(cmd, work, args.timeout)
+        full = _run(cmd, work, args.timeout)
+        error = full.error
         records = job_records(work)
         if increment is not None and error is None:
             edited = _incremented_config(config, *increment, work / "incremented.yaml")
             t0 = time.time()
-            inc_s, inc_error = _run(_snakemake_cmd(args, work, edited), work, args.timeout)
-            inc = {"set": increment[0], "thickness": increment[1], "wall_s": inc_s,
-                   "error": inc_error, "jobs": [r["job"] for r in job_records(work, t0)]}
+            rerun = _run(_snakemake_cmd(args, work, edited), work, args.timeout)
+            new = job_records(work, t0)
+            inc = {"set": increment[0], "thickness": increment[1], "wall_s": rerun.wall_s,
+                   "cpu_s": rerun.cpu_s, "load_before": rerun.load_before,
+                   "load_after": rerun.load_after, "error": rerun.error,
+                   "jobs": [r["job"] for r in new],
+                   "cpu_s_per_job": {r["job"]: r["cpu_s"] for r in new}}
     finally:
         if temporary and not args.keep:
             shutil.rmtree(work, ignore_errors=True)
     stages = stage_times(records)
     result = {
         "status": "failed" if error else "complete", "error": error,
-        "config": str(config), "cores": args.cores, "wall_s": wall_s, "dry_run_s": dag_s,
+        "config": str(config), "cores": args.cores, "wall_s": full.wall_s,
+        "cpu_s": full.cpu_s, "jobs_cpu_s": _sum_cpu(records),
+        "load_before": full.load_before, "load_after": full.load_after,
+        "dry_run_s": dry.wall_s,
         "jobs": len(records), "busy_s": sum(r["s"] for r in records), "stages": stages,
         "increment": inc,
         "command": shlex.join(cmd), "workdir": str(work) if (args.keep or not temporary)
@@ -261,6 +349,19 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     return result
 
 
+def _sum_cpu(records: list[dict[str, Any]]) -> float | None:
+    cpu = [r.get("cpu_s") for r in records]
+    return None if None in cpu else float(sum(cpu))
+
+
+def _f(x: float | None, fmt: str = ".1f") -> str:
+    return "-" if x is None else format(x, fmt)
+
+
+def _load(x: list[float] | None) -> str:
+    return "-" if not x else " ".join(f"{v:.2f}" for v in x)
+
+
 def markdown(result: dict[str, Any]) -> str:
     """The report as a Markdown table."""
     m = result["machine"]
@@ -272,34 +373,46 @@ def markdown(result: dict[str, Any]) -> str:
         f"- date: {result['date_utc']}",
         f"- command: `{result['command']}`", "",
         f"**Total wall time: {result['wall_s']:.1f} s** ({result['busy_s']:.1f} s of jobs; "
+        f"CPU {_f(result.get('cpu_s'))} s with Snakemake's own, "
+        f"{_f(result.get('jobs_cpu_s'))} s in the jobs; "
         f"DAG dry run before: {result['dry_run_s']:.1f} s)"
         + ("" if result["status"] == "complete" else
-           " -- **the run FAILED**; the table shows the jobs that finished"), "",
-        "| stage | jobs | busy (s) | peak memory (MB) | costliest job |",
-        "|---|---:|---:|---:|---|",
+           " -- **the run FAILED**; the table shows the jobs that finished"),
+        f"- load average (1, 5, 15 min) before: {_load(result.get('load_before'))}, "
+        f"after: {_load(result.get('load_after'))}", "",
+        "| stage | jobs | busy (s) | CPU (s) | peak memory (MB) | costliest job |",
+        "|---|---:|---:|---:|---:|---|",
     ]
     for name, s in result["stages"].items():
         rss = "-" if s["max_rss_mb"] is None else f"{s['max_rss_mb']:.0f}"
-        lines.append(f"| {name} | {s['jobs']} | {s['busy_s']:.1f} | {rss} | "
-                     f"{s['costliest']['job']} ({s['costliest']['s']:.1f} s) |")
+        top = s["costliest"]
+        lines.append(f"| {name} | {s['jobs']} | {s['busy_s']:.1f} | {_f(s.get('cpu_s'))} | "
+                     f"{rss} | {top['job']} ({top['s']:.1f} s, "
+                     f"CPU {_f(top.get('cpu_s'))} s) |")
     lines += ["", "busy: the summed wall time of the stage's jobs (Snakemake's benchmark "
-              "records, results/benchmarks/<stage>/).", ""]
+              "records, results/benchmarks/<stage>/); CPU: user + system time of the "
+              "jobs' ssw processes (their own records).", ""]
     inc = result.get("increment")
     if inc:
         lines += [f"**Rerun after adding a {inc['thickness'] * 1e3:g} mm plate to "
-                  f"{inc['set']}: {inc['wall_s']:.1f} s**, jobs: "
-                  + ", ".join(f"`{j}`" for j in inc["jobs"]), ""]
+                  f"{inc['set']}: {inc['wall_s']:.1f} s** (CPU {_f(inc.get('cpu_s'))} s; "
+                  f"load before {_load(inc.get('load_before'))}), jobs: "
+                  + ", ".join(f"`{j}` ({_f((inc.get('cpu_s_per_job') or {}).get(j))} s CPU)"
+                              for j in inc["jobs"]), ""]
     return "\n".join(lines)
 
 
 def human(result: dict[str, Any]) -> str:
     """Short summary for the terminal."""
     rows = [f"study: {result['wall_s']:.1f} s wall on {result['cores']} cores, "
-            f"{result['jobs']} jobs, {result['busy_s']:.1f} s of jobs"]
-    rows += [f"  {k:<12} {s['busy_s']:8.1f} s busy  {s['jobs']} jobs"
-             for k, s in result["stages"].items()]
+            f"{result['jobs']} jobs, {result['busy_s']:.1f} s of jobs, CPU "
+            f"{_f(result.get('cpu_s'))} s ({_f(result.get('jobs_cpu_s'))} s in jobs), load "
+            f"{_load(result.get('load_before'))} -> {_load(result.get('load_after'))}"]
+    rows += [f"  {k:<12} {s['busy_s']:8.1f} s busy {_f(s.get('cpu_s')):>8} s CPU  "
+             f"{s['jobs']} jobs" for k, s in result["stages"].items()]
     inc = result.get("increment")
     if inc:
         rows.append(f"rerun with {inc['thickness'] * 1e3:g} mm added to {inc['set']}: "
-                    f"{inc['wall_s']:.1f} s, jobs {', '.join(inc['jobs'])}")
+                    f"{inc['wall_s']:.1f} s wall, {_f(inc.get('cpu_s'))} s CPU, jobs "
+                    f"{', '.join(inc['jobs'])}")
     return "\n".join(rows)

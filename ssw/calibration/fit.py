@@ -8,10 +8,12 @@ Problem. References ``i`` (known ``E_i``, ``nu_i``; measured ``T_i`` with standa
     ``lo <= theta <= hi``.
 
 The observations and the model's derivatives are those of :mod:`ssw.calibration.residuals`
-(one function ``theta -> (values, d values / d theta)``; central differences of the batched
-model today), so that other kinds of observations can join the TOFs. TOF is not monotone in
-the parameters (REFERENCE.md: TOF rises then falls with the striker speed under gravity), so
-no bracketing is assumed:
+(one function ``theta -> (values, d values / d theta)``): the search's steps take central
+differences of the batched model (the cheaper at a calibration's few scenes); the covariance
+at the solution the chain's exact forward sensitivities where the walls carry them
+(:func:`ssw.calibration.residuals.model_derivatives`), so that other kinds of observations
+can join the TOFs. TOF is not monotone in the parameters (REFERENCE.md: TOF rises then falls
+with the striker speed under gravity), so no bracketing is assumed:
 
 1. **global scan**: a tensor grid of the continuous parameters (log-spaced where a parameter
    is scaled, :data:`ssw.device.PARAMETERS`) times every value of the integer ones, all
@@ -27,7 +29,7 @@ no bracketing is assumed:
    values is taken.
 
 Uncertainty (Bard 1974; Press et al. 2007, sec. 15.5): with the weighted Jacobian ``J``
-(central differences at the solution) of the parameters NOT held on a bound, their
+(the model's derivatives at the solution) of the parameters NOT held on a bound, their
 covariance is ``(J^T J)^-1``: conditional on the held ones, which are fixed at their bound
 (their rows and columns are absent, not given a fictitious variance; a bound is not a
 measurement, and the first-order interval of a parameter there would reach outside its
@@ -57,6 +59,7 @@ from ssw.calibration.residuals import (
     central_differences,
     dtheta_dx,
     from_x,
+    model_derivatives,
     to_x,
 )
 from ssw.device import parameter, parameter_value
@@ -529,7 +532,13 @@ def identify(
     s = np.array([r.tof_std if known else DEFAULT_REL_STD * r.tof for r in refs], float)
     obs = Observations.tof(T, s)
     rng = scan_ranges(model.free, ranges, model.device)
-    derivs = central_differences(model, model.free, rng)
+    # the search's steps take central differences (one batched run of 1 + 2 p points per
+    # row: at a calibration's few scenes the chain's cost is per step, not per scene, and
+    # they cost 1.1-1.8 plain runs against 2.2 for the forward tangent of two parameters,
+    # measured on the thesis chain with 3 references and 1-16 rows); the covariance at the
+    # solution, a result, takes the exact derivatives
+    search_derivs = central_differences(model, model.free, rng)
+    derivs = model_derivatives(model, rng)
     nominal = np.array([parameter_value(model.device, n) for n in model.free])
     for j, n in enumerate(model.free):  # the nominal start inside the scan
         nominal[j] = np.clip(nominal[j], *rng[n])
@@ -546,13 +555,13 @@ def identify(
     model.refix_time_step(np.array([_order(np.concatenate([from_x(x0, cont), fx])[None, :],
                                            cont, model.integers, model.free)[0]
                                     for _, x0, fx in problems]), rng)
-    sols = _lm_batch(model, obs, derivs, problems, rng)
+    sols = _lm_batch(model, obs, search_derivs, problems, rng)
     best, others = _pick(sols, to_x(nominal, model.free), model)
     fit, at_best = _uncertainty(model, obs, derivs, known, best, others, rng, grid.shape[0])
     fit = replace(fit, tof_range=tof_range)
     if not subsets:
         return fit, {}
-    subs = refine_subsets(model, obs, derivs, best.theta, list(subsets), rng,
+    subs = refine_subsets(model, obs, search_derivs, best.theta, list(subsets), rng,
                           at_start=at_best)
     return fit, subs
 

@@ -200,6 +200,39 @@ class TofModel:
         """TOF (s), shape (m, n_refs): rows of ``theta`` (m, len(free)) in SI units, columns
         the references (``refs``: a subset of their indices, default all). NaN where the
         run gives no TOF."""
+        return self._run(theta, refs, False)[0]
+
+    def forward(self) -> bool:
+        """Whether the references' walls carry the forward sensitivities of every
+        continuous free parameter (:func:`ssw.tof.api.forward_ok`): then
+        :meth:`derivatives` is exact, else a calibration takes central differences."""
+        from ssw.tof.api import forward_ok
+
+        return bool(self.continuous) and all(
+            forward_ok(self.walls(), self.continuous).values())
+
+    def derivatives(self, theta: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """TOFs and their exact derivatives in the continuous free parameters, from the
+        runs that give the TOFs (the integrator's forward sensitivities,
+        :mod:`ssw.chain.sensitivity`; the wall must have them: :meth:`forward`).
+
+        Parameters
+        ----------
+        theta : numpy.ndarray
+            (m, len(free)) parameter sets, SI.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ``values`` (m, n_refs) s and ``jacobian`` (m, n_refs, len(continuous)) s per SI
+            unit of each continuous free parameter (:mod:`ssw.calibration.residuals`'s
+            ``derivatives(theta)``); NaN where the run gives no TOF.
+        """
+        return self._run(theta, None, True)
+
+    def _run(self, theta: np.ndarray, refs: np.ndarray | None, tangent: bool
+             ) -> tuple[np.ndarray, np.ndarray | None]:
+        """TOFs (m, k) and, with ``tangent``, their derivatives (m, k, p)."""
         from ssw.chain.run import run_peaks
 
         th = np.atleast_2d(np.asarray(theta, float))
@@ -207,7 +240,9 @@ class TofModel:
             raise ValueError(f"theta has {th.shape[1]} columns for {len(self.free)} parameters")
         idx = np.arange(self.n_refs) if refs is None else np.asarray(refs, int)
         m, k = th.shape[0], idx.size
+        p = len(self.continuous)
         out = np.full((m, k), np.nan)
+        jac = np.full((m, k, p), np.nan) if tangent else None
         cols = {name: th[:, j] for j, name in enumerate(self.free)}
         ints = np.stack([np.rint(cols[n]) for n in self.integers], axis=1) if self.integers \
             else np.zeros((m, 0))
@@ -219,13 +254,16 @@ class TofModel:
             vary = {n: np.repeat(cols[n][rows], k) for n in self.continuous}
             batch = Batch.of(base, rows.size * k, vary)
             w = walls.take(np.tile(idx, rows.size))
-            pk, _ = run_peaks(batch, w, strict=False, dt=self.dt)
+            pk, _ = run_peaks(batch, w, strict=False, dt=self.dt,
+                              derivatives=self.continuous if tangent and p else None)
             out[rows] = pk.tof.reshape(rows.size, k)
+            if jac is not None:
+                jac[rows] = np.asarray(pk.dtof, float).reshape(rows.size, k, p)
             self.runs += 1
             if self.on_run is not None:
                 self.on_run(1, sets=self.evaluations + m)
         self.evaluations += m
-        return out
+        return out, jac
 
 
 def _cast(values: dict[str, float]) -> dict[str, Any]:

@@ -11,17 +11,20 @@ comes from ONE function, the model's **derivatives**::
     jacobian (m, n, len(continuous)): d value / d theta_j per SI unit of each continuous
     free parameter (integers, the bead count, are scanned, not differentiated).
 
+:func:`model_derivatives` chooses it: a model whose walls carry the chain's exact forward
+sensitivities (:mod:`ssw.chain.sensitivity`) gives it from the runs of its values (one
+batched run for the ``m`` rows, exact for the discrete TOF); otherwise
 :func:`central_differences` builds it from the model's values alone (one batched run for
-every row's ``1 + 2 p`` points); a model with exact forward sensitivities gives the same
-function directly. The least squares works in scaled coordinates ``x`` (``ln theta`` for a
-log-scaled parameter, ``theta / scale`` otherwise: :data:`ssw.device.PARAMETERS`), where the
-Jacobian is ``jacobian * d theta / d x``.
+every row's ``1 + 2 p`` points). The least squares works in scaled coordinates ``x``
+(``ln theta`` for a log-scaled parameter, ``theta / scale`` otherwise:
+:data:`ssw.device.PARAMETERS`), where the Jacobian is ``jacobian * d theta / d x``.
 """
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -136,6 +139,30 @@ def central_differences(values: Callable[[np.ndarray], np.ndarray], free: tuple[
         return f0, jac
 
     return derivatives
+
+
+def model_derivatives(model: Any, ranges: dict[str, tuple[float, float]]) -> Derivatives:
+    """The model's derivatives (module docstring): exact where it has them, central
+    differences otherwise.
+
+    Parameters
+    ----------
+    model : ssw.calibration.model.TofModel
+        The model: callable on ``theta`` (its values), with ``free`` (the parameter names),
+        ``forward()`` (whether its walls carry the forward sensitivities) and
+        ``derivatives(theta)``.
+    ranges : dict
+        The admissible range (SI) of each continuous free parameter (the central
+        differences' points stay inside it).
+
+    Returns
+    -------
+    callable
+        ``derivatives(theta) -> (values (m, n), jacobian (m, n, p))``.
+    """
+    if model.forward():
+        return model.derivatives
+    return central_differences(model, model.free, ranges)
 
 
 # --------------------------------------------------------------------- observations

@@ -124,10 +124,65 @@ def _terminate(signum: int, frame: object) -> None:
     raise KeyboardInterrupt
 
 
+#: Environment variable naming a folder: each ``ssw`` process writes its CPU and wall time
+#: there when it ends (``_record_usage``; ``ssw bench study`` sets it).
+USAGE_ENV = "SSW_USAGE_DIR"
+
+
+def _process_wall() -> float:
+    """Seconds since this process started (Linux ``/proc``), or NaN elsewhere."""
+    try:
+        ticks = os.sysconf("SC_CLK_TCK")
+        start = int(Path("/proc/self/stat").read_text().rsplit(")", 1)[1].split()[19])
+        uptime = float(Path("/proc/uptime").read_text().split()[0])
+        return uptime - start / ticks
+    except (OSError, ValueError, IndexError):
+        return float("nan")
+
+
+def _record_usage(argv: Sequence[str], started: float) -> None:
+    """Write this process's CPU time (user + system, its own and its waited children's,
+    s), wall time since it started and at :func:`main`'s start (s, the interpreter's
+    start-up and the CLI's imports) and peak memory to ``$SSW_USAGE_DIR/<pid>.json``,
+    with its command line and the file its stderr goes to (a workflow job's log: the job).
+    Nothing when the variable is unset; a failure to write is ignored (a measurement,
+    never the run's result)."""
+    import json
+    import resource
+
+    folder = os.environ.get(USAGE_ENV)
+    if not folder:
+        return
+    me, kids = resource.getrusage(resource.RUSAGE_SELF), resource.getrusage(
+        resource.RUSAGE_CHILDREN)
+    try:
+        log = os.readlink("/proc/self/fd/2")
+    except OSError:
+        log = None
+    rec = {"argv": list(argv), "log": log, "cwd": os.getcwd(),
+           "cpu_s": me.ru_utime + me.ru_stime + kids.ru_utime + kids.ru_stime,
+           "user_s": me.ru_utime + kids.ru_utime, "sys_s": me.ru_stime + kids.ru_stime,
+           "wall_s": _process_wall(), "startup_s": started,
+           "max_rss_mb": me.ru_maxrss / 1024.0}
+    try:
+        Path(folder).mkdir(parents=True, exist_ok=True)
+        Path(folder, f"{os.getpid()}.json").write_text(json.dumps(rec))
+    except OSError:
+        pass
+
+
 def main(argv: Sequence[str] | None = None) -> int:
+    started = _process_wall()
+    argv = list(sys.argv[1:] if argv is None else argv)
+    try:
+        return _main(argv)
+    finally:
+        _record_usage(argv, started)
+
+
+def _main(argv: list[str]) -> int:
     from ssw.provenance import record, set_context
 
-    argv = list(sys.argv[1:] if argv is None else argv)
     parser = build_parser(argv)
     args = parser.parse_args(argv)
     set_context([getattr(args.func, "__module__", "ssw")], args.inputs_sha256)

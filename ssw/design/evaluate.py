@@ -4,11 +4,13 @@ For a plate (material, thickness, diameter) and striker speed, over the soil mod
 of the design (:attr:`ssw.design.spec.DesignSpec.grid`):
 
 1. TOF: the device's chain with the exact FEM law of that plate as its wall (the ``fem``
-   wall, :mod:`ssw.walls.fem`), in one batched run over ``E_k e^-h``, ``E_k``,
-   ``E_k e^h`` (``h`` = ``log_step``);
-2. sensitivity ``S_k = |ln TOF(E_k e^h) - ln TOF(E_k e^-h)| / (2 h)``, the central
-   difference of ``ln TOF`` in ``ln E`` (error ``O(h^2)``: the third derivative of a curve
-   that bends slowly; ``tests/test_design_cli.py`` compares it with ``ssw tof``);
+   wall, :mod:`ssw.walls.fem`), in one batched run over the ``E_k`` carrying the forward
+   sensitivity ``dTOF/dE`` (:func:`ssw.tof.api.tof_derivatives`; with the unilateral
+   interface, whose law has no E tangent, its central differences of TOFs at the same step);
+2. sensitivity ``S_k = |d ln TOF / d ln E| = |E_k dTOF/dE / TOF_k|``, exact for the
+   discrete TOF at the run's fixed step (no difference quotient, hence no quotient of two
+   TOFs' rounding: the curve is smooth in E; ``tests/test_design_cli.py`` compares it with
+   central differences of ``ssw tof``'s TOFs);
 3. resolution ``dE/E = u_TOF / (TOF_k S_k)``: the relative change of E that moves the
    mean TOF of one measurement by its standard uncertainty
    (:attr:`ssw.design.spec.DesignSpec.tof_uncertainty`);
@@ -221,7 +223,7 @@ class Evaluator:
 
     def _evaluate(self, material: str, t: float, D: float, v: float, source: str
                   ) -> Candidate:
-        from ssw.tof.api import peaks
+        from ssw.tof.api import tof_derivatives
         from ssw.walls.fem import peak_stresses
 
         t0 = time.perf_counter()
@@ -235,21 +237,18 @@ class Evaluator:
         spec = self.spec
         p = candidate_params(self.params, m, t, D, v)
         E = spec.grid
-        n = E.size
-        h = spec.log_step
-        E3 = np.concatenate([E * np.exp(-h), E, E * np.exp(h)])
-        pk, run = peaks(E3, spec.soil_nu, p, "fem", contact=self.contact,
-                        operators=self.store)
-        tof = pk.tof.reshape(3, n)
-        sens = np.abs(np.log(tof[2]) - np.log(tof[0])) / (2.0 * h)
-        d_chain = run.peak_wall_indentation[n:2 * n]
+        res = tof_derivatives(E, spec.soil_nu, p, "fem", derivatives=("E",),
+                              contact=self.contact, operators=self.store)
+        tof = np.asarray(res.tof, float)
+        sens = np.abs(E * res.dtof["E"] / tof)
+        d_chain = res.run.peak_wall_indentation
         st = peak_stresses(p, E, spec.soil_nu, d_chain, contact=self.contact,
                            operators=self.store)
         mass = m.density * np.pi * 0.25 * D * D * t
         return Candidate(
             material=material, thickness=t, plate_diameter=D, striker_velocity=v,
-            soil_E=E, tof_E=tof[1], sensitivity_E=sens,
-            resolution_E=spec.tof_uncertainty / (tof[1] * sens),
+            soil_E=E, tof_E=tof, sensitivity_E=sens,
+            resolution_E=spec.tof_uncertainty / (tof * sens),
             peak_force_E=st.force, peak_indentation_E=d_chain,
             plate_von_mises_E=st.plate.peak, soil_von_mises_E=st.soil.peak,
             plate_yield_E=st.plate.peak / Y,

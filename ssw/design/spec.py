@@ -175,8 +175,8 @@ class DesignSpec:
                     "on it)")
         return {
             "objective": "maximize the worst case over the soil range of the sensitivity "
-                         "|d ln TOF / d ln E| (central difference of the chain's TOF with "
-                         f"the fem wall, half-step {self.log_step:g} in ln E)",
+                         "|d ln TOF / d ln E| (the exact derivative of the chain's TOF with "
+                         "the fem wall: its forward sensitivity in E)",
             "constraints": {
                 "plate_yield_index": "max over E of the plate's peak von Mises stress over "
                                      "its yield stress <= 1 (the plate stays elastic)",

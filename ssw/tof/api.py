@@ -192,8 +192,22 @@ class TofDerivatives:
         return out
 
 
-def _forward_ok(w: Any, names: tuple[str, ...]) -> dict[str, bool]:
-    """Which parameters the wall ``w`` can carry forward sensitivities for."""
+def forward_ok(w: Any, names: tuple[str, ...]) -> dict[str, bool]:
+    """Which parameters the wall ``w`` can carry forward sensitivities for.
+
+    Parameters
+    ----------
+    w : Wall
+        A built wall (:func:`ssw.walls.build_wall`).
+    names : tuple of str
+        Names of :data:`ssw.chain.sensitivity.PARAMETERS`.
+
+    Returns
+    -------
+    dict
+        Name -> True where the wall states the tangent the forward sensitivity needs (a
+        stateful wall its ``advance_tangent``; ``E`` its ``dforce_dE``).
+    """
     stateful = hasattr(w, "advance")
     tangent = not stateful or hasattr(w, "advance_tangent")
     ok = {name: tangent for name in names}
@@ -340,7 +354,7 @@ def tof_derivatives(
     w = build_wall(wall, params, E, nu, **opts)
     b = Batch.of(params, w.n, flat) if flat else params
     dt = time_step(b, w)
-    ok = _forward_ok(w, names) if method != "central" else dict.fromkeys(names, False)
+    ok = forward_ok(w, names) if method != "central" else dict.fromkeys(names, False)
     if method == "forward" and not all(ok.values()):
         bad = [k for k, v in ok.items() if not v]
         raise ConfigError("derivatives", bad, f"parameters the {wall} wall has forward "

@@ -665,3 +665,138 @@ def dtheta_dx(setup: Setup, cols: list[Column], values: np.ndarray) -> np.ndarra
     """``d value / d x`` per column (the value for a log coordinate, else the scale)."""
     return np.array([values[j] if coordinate(setup, c)[0] else coordinate(setup, c)[1]
                      for j, c in enumerate(cols)])
+
+
+#: The chi^2 quantile beyond which a fit says the model does not explain the records.
+FLAG_QUANTILE = 0.999
+
+
+@dataclass(frozen=True)
+class Fit:
+    """A fit of a waveform model's free parameters to the records. SI units.
+
+    Attributes
+    ----------
+    state : State
+        The parameters at the optimum.
+    free : list of Column
+        The fitted parameters.
+    values : numpy.ndarray
+        (q,) their values, SI.
+    cov_x : numpy.ndarray
+        (q, q) their covariance in the scaled coordinates (:func:`coordinate`), from the
+        Gauss-Newton curvature at the optimum (unscaled by the misfit).
+    chi2 : float
+        The weighted residuals' sum of squares (data and priors).
+    dof : int
+        Observations minus free parameters.
+    quantile : float
+        ``P(X <= chi2)`` for ``X`` chi^2-distributed with ``dof`` degrees of freedom (1:
+        far beyond what the noise explains).
+    converged : bool
+        The Levenberg-Marquardt stopped at a first-order point.
+    runs : int
+        Chain runs.
+    """
+
+    state: State
+    free: list[Column]
+    values: np.ndarray
+    cov_x: np.ndarray
+    chi2: float
+    dof: int
+    quantile: float
+    converged: bool
+    runs: int
+
+    @property
+    def flagged(self) -> bool:
+        """The misfit is beyond the noise (:data:`FLAG_QUANTILE`)."""
+        return not self.quantile <= FLAG_QUANTILE
+
+    @property
+    def misfit(self) -> float:
+        """``max(1, chi2 / dof)``: the factor a model-discrepancy term scales the
+        covariance by (Press et al. 2007, sec. 15.1: errors scaled by the fit's
+        ``sqrt(chi2 / dof)`` when the model does not reach the noise)."""
+        return float(max(1.0, self.chi2 / max(self.dof, 1)))
+
+    def std(self, col: Column, scaled: bool = True) -> float:
+        """The standard error of ``col`` in its scaled coordinate (relative for a log
+        coordinate), times ``sqrt(misfit)`` when ``scaled``."""
+        j = self.free.index(col)
+        s = float(np.sqrt(max(self.cov_x[j, j], 0.0)))
+        return s * np.sqrt(self.misfit) if scaled else s
+
+
+def _residuals(setup: Setup, state: State, free: list[Column], wanted: set[str]
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """Weighted residuals and their Jacobian in the scaled coordinates of ``free`` (rows
+    where the model or the data has no value, a feature not found, count 0)."""
+    obs = observe(setup, state, wanted)
+    index = {c: j for j, c in enumerate(obs.columns)}
+    vals = np.array([get(state, c) for c in free])
+    J = obs.jacobian[:, [index[c] for c in free]] * dtheta_dx(setup, free, vals)[None, :]
+    r = (obs.model - obs.data) / obs.sigma
+    ok = np.isfinite(r) & np.all(np.isfinite(J), axis=1)
+    return np.where(ok, r, 0.0), np.where(ok[:, None], J / obs.sigma[:, None], 0.0)
+
+
+def fit(setup: Setup, state: State, free: list[Column]) -> Fit:
+    """Fit the ``free`` parameters of ``state`` to the records by the one bounded
+    Levenberg-Marquardt (:func:`ssw.calibration.lm.levenberg_marquardt`), in the scaled
+    coordinates, each parameter within its range (:data:`PARAMETERS`).
+
+    Parameters
+    ----------
+    setup : Setup
+        The model and the records (its chain step fixed: :meth:`Setup.fix_step`).
+    state : State
+        The start (the other parameters stay at their values).
+    free : list of Column
+        The parameters fitted.
+
+    Returns
+    -------
+    Fit
+        The optimum, its covariance and goodness of fit.
+    """
+    from scipy import stats
+
+    from ssw.calibration.lm import Problem, levenberg_marquardt
+
+    wanted = {c.name for c in free}
+    work = state.copy()
+    x0 = to_x(setup, free, np.array([get(work, c) for c in free]))
+    lo, hi = np.empty(len(free)), np.empty(len(free))
+    for j, c in enumerate(free):
+        p = parameter(c.name)
+        log, scale = coordinate(setup, c)
+        lo[j], hi[j] = ((np.log(p.lower), np.log(p.upper)) if log
+                        else (p.lower / scale, p.upper / scale))
+    x0 = np.clip(x0, lo, hi)
+
+    def at(x: np.ndarray) -> State:
+        st = work.copy()
+        for c, v in zip(free, from_x(setup, free, x), strict=True):
+            put(st, c, v)
+        return st
+
+    r, J = _residuals(setup, at(x0), free, wanted)
+    pr = Problem(x0, r, J, float(r @ r), np.eye(len(free)))
+
+    def evaluate(trial: dict[int, np.ndarray]) -> dict[int, tuple[np.ndarray, np.ndarray,
+                                                                  float]]:
+        out = {}
+        for i, x in trial.items():
+            rr, JJ = _residuals(setup, at(x), free, wanted)
+            out[i] = (rr, JJ, float(rr @ rr))
+        return out
+
+    levenberg_marquardt([pr], evaluate, lo, hi)
+    n_obs = int(np.count_nonzero(np.any(pr.J != 0, axis=1) | (pr.r != 0)))
+    dof = max(n_obs - len(free), 1)
+    cov = np.linalg.pinv(pr.J.T @ pr.J)
+    final = at(pr.x)
+    return Fit(final, list(free), from_x(setup, free, pr.x), cov, float(pr.cost), dof,
+               float(stats.chi2.cdf(pr.cost, dof)), bool(pr.converged), setup.runs)

@@ -518,7 +518,8 @@ def sensor_force(
     wall : str
         A law of :data:`ssw.walls.WALLS`.
     t_end : float or None
-        s, the run's length (None: until the reflected wave has passed the sensor).
+        s, the run's length (None: twice the time the reflected wave needs to pass the
+        sensor).
     **wall_options
         The law's options.
 
@@ -531,6 +532,10 @@ def sensor_force(
 
     w = build_wall(wall, params, soil_E, soil_nu, **wall_options)
     run = simulate(params, w, t_end=t_end, stop_early=t_end is None)
+    if t_end is None and np.isfinite(run.stop_time[0]):
+        # on to twice that time: the secondary reflection and the rattle after it are in
+        # a record's window too
+        run = simulate(params, w, t_end=2.0 * float(run.stop_time[0]), stop_early=False)
     stop = float(run.stop_time[0]) if np.isfinite(run.stop_time[0]) else float(run.t[-1])
     last = stop - 5 * run.dt
     base = float(run.sensor[0, 0])

@@ -301,7 +301,7 @@ _FIT_REPLACES = ("tof", "tof (stated scatter)", "sampling")
 def measure_information(m: Measurement, recordings: list[Any], level: str, params: Any,
                         wall: str, wall_options: dict[str, Any] | None, *, acquisition: Any,
                         trigger_level: float, tof_scatter: float,
-                        full_scale: float | None = None) -> Measurement:
+                        full_scale: float | None = None, gain: float = 1.0) -> Measurement:
     """E from the records' features or whole waveforms (``ssw measure --information``),
     starting from the TOF measurement ``m`` of the same recordings.
 
@@ -338,6 +338,8 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
         s, one hit's TOF scatter (the prior of each hit's delay).
     full_scale : float or None
         N, the rails (samples at them are left out).
+    gain : float
+        The DAQ gain (a waveform calibration's, :func:`ssw.calibration.waveform.with_fit`).
 
     Returns
     -------
@@ -376,7 +378,7 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
     glob = {"preload": float(params.preload),
             "sensor_mass": float(params.masses[params.sensor_index]),
             "striker_mass": float(params.masses[0]), "damping": float(params.damping),
-            "gain": 1.0}
+            "gain": float(gain)}
     v0 = float(params.striker_velocity)
     setup.fix_step(State(np.array([m.E]), np.full(hits.n, 1.5 * v0), np.zeros(hits.n),
                          np.zeros(hits.n), glob))

@@ -84,3 +84,26 @@ def test_a_recording_the_model_cannot_explain_is_flagged(recording, edit):
     d = w.to_dict()
     assert d["flagged"] and d["chi2_quantile"] > 0.999
     assert any("FLAGGED" in n for n in d["notes"])
+
+
+def test_calibrate_with_the_waveform_frees_what_the_records_identify(capsys, tmp_path):
+    """Three simulated references of the nominal device (the simulated backend runs the
+    chain at its own step; the fit at another): the waveform calibration frees the device's
+    globals it identifies and finds the nominal sensor mass, a zero dashpot and unit gain."""
+    refs = []
+    for mat, E, nu in (("pcf08", 38e6, 0.34), ("pcf30", 445e6, 0.30)):
+        path = tmp_path / f"{mat}.h5"
+        assert main(["acquire", "--simulate", "--material", mat, "--wall", "hertz", "--hits",
+                     "3", "--sample", mat, "--output", str(path), "--json"]) == 0
+        capsys.readouterr()
+        refs += ["--reference-recording", f"{path},{E},{nu}"]
+    out = tmp_path / "cal.json"
+    r = _run(capsys, ["calibrate", *refs, "--wall", "hertz", "--information", "waveform",
+                      "--no-loo", "--output", str(out)])
+    info = r["information"]
+    assert info["level"] == "waveform" and "sensor_mass" in info["freed"]
+    assert info["values"]["sensor_mass"] == pytest.approx(PARAMS.masses[PARAMS.sensor_index],
+                                                          rel=0.01)
+    assert abs(info["values"].get("damping", 0.0)) < 0.5
+    assert info["gain"] == pytest.approx(1.0, rel=0.01)
+    assert json.loads(out.read_text())["provenance"]["information"]["freed"] == info["freed"]

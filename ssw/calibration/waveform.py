@@ -800,3 +800,115 @@ def fit(setup: Setup, state: State, free: list[Column]) -> Fit:
     final = at(pr.x)
     return Fit(final, list(free), from_x(setup, free, pr.x), cov, float(pr.cost), dof,
                float(stats.chi2.cdf(pr.cost, dof)), bool(pr.converged), setup.runs)
+
+
+def calibrate_records(samples: list[Hits], params: Any, wall: str,
+                      wall_options: dict[str, Any], acq: Acquisition, level: str,
+                      trigger_level: float, tof_scatter: float,
+                      free_globals: tuple[str, ...] = GLOBALS) -> Fit:
+    """Fit the device's global parameters to reference records (every sample's E known):
+    first every one of ``free_globals`` with each hit's striker speed, time offset and
+    delay; then, if some global is not identified (its standard error, scaled by the
+    misfit, beyond :data:`ssw.calibration.information.IDENTIFIED_U` in its scaled
+    coordinate), again with only the identified ones free, the others at the device's
+    values.
+
+    Parameters
+    ----------
+    samples : list of Hits
+        The references' records, each with its E.
+    params : ChainParams
+        The device's chain (the start, and the values of what is not freed).
+    wall : str
+        The wall law.
+    wall_options : dict
+        Its options.
+    acq : Acquisition
+        The measurement model.
+    level : str
+        ``features`` or ``waveform``.
+    trigger_level : float
+        N, the records' trigger level.
+    tof_scatter : float
+        s, a hit's TOF scatter (the delays' prior).
+    free_globals : tuple of str
+        The globals that may be freed (:data:`GLOBALS`).
+
+    Returns
+    -------
+    Fit
+        The last fit (its ``free`` lists the globals it identified first).
+
+    Raises
+    ------
+    ConfigError
+        A reference without its E.
+    """
+    from ssw.calibration.information import IDENTIFIED_U
+
+    if any(s.E is None for s in samples):
+        raise ConfigError("reference", [s.id for s in samples if s.E is None],
+                          "references with a known E")
+    setup = Setup(params, wall, dict(wall_options), acq, level, samples, trigger_level,
+                  tof_scatter=tof_scatter)
+    glob = {"preload": float(params.preload),
+            "sensor_mass": float(params.masses[params.sensor_index]),
+            "striker_mass": float(params.masses[0]), "damping": float(params.damping),
+            "gain": 1.0}
+    E = np.array([s.E for s in samples], float)
+    v0 = float(params.striker_velocity)
+    n_h = setup.n_hits
+    setup.fix_step(State(E, np.full(n_h, 1.5 * v0), np.zeros(n_h), np.zeros(n_h), glob))
+    state = initial_state(setup, glob, E, v0)
+    per_hit = [Column(name, h) for name in PER_HIT for h in range(n_h)]
+    free = [Column(g) for g in free_globals]
+    while True:
+        f = fit(setup, state, free + per_hit)
+        kept = [c for c in free if f.std(c) <= IDENTIFIED_U]
+        if len(kept) == len(free):
+            return f
+        free = kept
+
+
+def with_fit(cal: Any, f: Fit, level: str) -> Any:
+    """A calibration with what a fit of its references' records identified
+    (:func:`calibrate_records`): the device's preload and masses, the dashpot (the
+    numerics' ``damping``) and the striker speed (the hits' mean) at their fitted values;
+    the fit itself (level, freed parameters with their standard errors, the DAQ gain,
+    chi^2 and its quantile) in ``provenance["information"]``, where ``ssw measure
+    --information`` reads the gain. The TOF calibration's covariance stays the
+    calibration term of a TOF measurement's budget.
+
+    Parameters
+    ----------
+    cal : ssw.calibration.Calibration
+        The TOF calibration of the same references.
+    f : Fit
+        The fit of their records.
+    level : str
+        Its level of information.
+
+    Returns
+    -------
+    ssw.calibration.Calibration
+        The updated calibration.
+    """
+    fitted = {c.name: (get(f.state, c), f.std(c)) for c in f.free if c.index < 0}
+    speed = float(np.mean(f.state.striker_velocity))
+    changes: dict[str, float] = {k: v for k, (v, _) in fitted.items()
+                                 if k in ("preload", "sensor_mass", "striker_mass")}
+    changes["striker_velocity"] = speed
+    numerics = dict(cal.numerics)
+    if "damping" in fitted:
+        numerics["damping"] = fitted["damping"][0]
+    info = {"level": level, "freed": list(fitted),
+            "values": {k: v for k, (v, _) in fitted.items()},
+            "std_scaled": {k: s for k, (_, s) in fitted.items()},
+            "gain": fitted["gain"][0] if "gain" in fitted else 1.0,
+            "striker_velocity_per_hit": [float(v) for v in f.state.striker_velocity],
+            "chi2": f.chi2, "chi2_dof": f.dof, "chi2_quantile": f.quantile,
+            "flagged": f.flagged, "converged": f.converged, "runs": f.runs}
+    parameters = {**cal.parameters, **{k: v for k, v in changes.items()
+                                       if k in cal.parameters}}
+    return replace(cal, device=cal.device.with_(**changes), parameters=parameters,
+                   numerics=numerics, provenance={**cal.provenance, "information": info})

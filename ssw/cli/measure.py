@@ -70,10 +70,13 @@ def _with_information(args: argparse.Namespace, ctx: Any, recs: list[Any], m: An
         raise ConfigError("--information", args.information, "tof, or a device that states "
                           "its TOF scatter per hit (repeatability.tof_std), or enough hits "
                           "to estimate it")
+    cal = ctx.calibration
+    info = (getattr(cal, "provenance", None) or {}).get("information") or {}
+    gain = float(info.get("gain", 1.0))  # a waveform calibration's DAQ gain
     return measure_information(
         m, recs, args.information, ctx.params, ctx.wall, ctx.wall_options, acquisition=acq,
         trigger_level=float(meta.get("trigger_level", settings.trigger_level)),
-        tof_scatter=float(scatter), full_scale=ctx.device.full_scale_force)
+        tof_scatter=float(scatter), full_scale=ctx.device.full_scale_force, gain=gain)
 
 
 #: The error of a half-space reading beyond which a lift's measurement warns.

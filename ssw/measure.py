@@ -357,6 +357,7 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
         Setup,
         State,
         coordinate,
+        device_globals,
         fit,
         initial_state,
     )
@@ -375,10 +376,7 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
                    m.sample_rate, E=None, nu=m.nu, full_scale=full_scale)
     setup = Setup(params, wall, dict(wall_options or {}), acquisition, level, [hits],
                   trigger_level, tof_scatter=tof_scatter)
-    glob = {"preload": float(params.preload),
-            "sensor_mass": float(params.masses[params.sensor_index]),
-            "striker_mass": float(params.masses[0]), "damping": float(params.damping),
-            "gain": float(gain)}
+    glob = device_globals(params, gain)
     v0 = float(params.striker_velocity)
     setup.fix_step(State(np.array([m.E]), np.full(hits.n, 1.5 * v0), np.zeros(hits.n),
                          np.zeros(hits.n), glob))

@@ -310,6 +310,7 @@ def identifiability(params: Any, wall: str, wall_options: dict[str, Any], E: flo
         Hits,
         Setup,
         State,
+        device_globals,
         dtheta_dx,
         get,
         observe,
@@ -329,8 +330,7 @@ def identifiability(params: Any, wall: str, wall_options: dict[str, Any], E: flo
                   noise=acq.noise)
     fs = acq.sample_rate
     tau = hit.extra["t_first_sample"] + hit.trigger_index / fs
-    glob = {"preload": params.preload, "sensor_mass": float(params.masses[params.sensor_index]),
-            "striker_mass": float(params.masses[0]), "damping": params.damping, "gain": 1.0}
+    glob = device_globals(params)
     state = State(np.array([E]), np.array([params.striker_velocity]), np.array([tau]),
                   np.zeros(1), glob)
     values = {"E": E, "nu": nu, "striker_velocity": params.striker_velocity, **glob}

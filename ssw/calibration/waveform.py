@@ -93,6 +93,14 @@ TAIL_WIDTHS, TAIL_SAMPLES = 3.0, 16
 RAIL_SHARE = 0.999
 
 
+def device_globals(params: Any, gain: float = 1.0) -> dict[str, float]:
+    """The global parameters (:data:`GLOBALS`, SI) of a chain ``params`` and a DAQ gain."""
+    return {"preload": float(params.preload),
+            "sensor_mass": float(params.masses[params.sensor_index]),
+            "striker_mass": float(params.masses[0]), "damping": float(params.damping),
+            "gain": float(gain)}
+
+
 def parameter(name: str) -> Parameter:
     """The parameter ``name`` of :data:`PARAMETERS` (ConfigError listing them otherwise)."""
     if name not in PARAMETERS:
@@ -851,10 +859,7 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
                           "references with a known E")
     setup = Setup(params, wall, dict(wall_options), acq, level, samples, trigger_level,
                   tof_scatter=tof_scatter)
-    glob = {"preload": float(params.preload),
-            "sensor_mass": float(params.masses[params.sensor_index]),
-            "striker_mass": float(params.masses[0]), "damping": float(params.damping),
-            "gain": 1.0}
+    glob = device_globals(params)
     E = np.array([s.E for s in samples], float)
     v0 = float(params.striker_velocity)
     n_h = setup.n_hits

@@ -109,7 +109,8 @@ def antialias_fir(oversample: int = OVERSAMPLE) -> np.ndarray:
     f_s``.
 
     Kaiser design (``scipy.signal.kaiserord``/``firwin``): cutoff at ``f_s / 2``,
-    transition :data:`PASS_EDGE` .. :data:`STOP_EDGE` ``f_s``, :data:`STOP_DB` ripple; unit
+    transition :data:`ssw.daq.model.PASS_EDGE` .. :data:`ssw.daq.model.STOP_EDGE` ``f_s``,
+    :data:`ssw.daq.model.STOP_DB` ripple; unit
     DC gain; odd length ``L``, group delay ``(L - 1) / 2`` fine samples.
 
     Parameters
@@ -174,7 +175,7 @@ class Acquisition:
 
     @property
     def noise(self) -> float:
-        """N rms, the noise floor (:attr:`noise_rms`, else the module's idle noise)."""
+        """N rms, the noise floor (``noise_rms``, else the module's idle noise)."""
         return float(NOISE_V / self.sensitivity if self.noise_rms is None else self.noise_rms)
 
     @property

@@ -21,7 +21,7 @@ with respect to ``k`` parameters, :func:`pulse_features` gives (:data:`NAMES`):
 
 Peaks are the vertex of the parabola through the largest sample and its neighbours
 (:func:`ssw.signal.peaks.parabolic_vertex`) on a signal band-limited and upsampled
-:data:`ssw.signal.peaks.UPSAMPLE` times (:func:`upsample`, the record's own interpolation
+``ssw.signal.peaks.UPSAMPLE`` times (:func:`upsample`, the record's own interpolation
 for measured records and, applied to the model's samples, for the model: both go through
 the same steps, so a feature compares like with like). Every feature is a smooth function
 of the samples between changes of the chosen sample (the vertex's error on the fine grid,

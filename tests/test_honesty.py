@@ -110,7 +110,8 @@ def study(folder: Path) -> list[dict]:
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason=(
     "measured 2026-11-26: the TOF level puts 20 and 80 MPa outside their 95 % intervals "
-    "(errors -3.9 %, -2.3 %, intervals 0.9 % and 4.5 % wide) without a flag; the features "
+    "(errors -3.9 %, -2.3 %, intervals 0.9 % and 4.5 % wide; +5.03 % at 800 MPa) without "
+    "a flag; the features "
     "and waveform calibrations stop in a local minimum (sensor mass not found 1.5x, chi2 "
     "per degree of freedom ~1e6): every features/waveform measurement is flagged"))
 def test_every_unseen_modulus_is_inside_its_interval_or_flagged(tmp_path):

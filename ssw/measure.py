@@ -36,7 +36,7 @@ NI 9234 records of known TOF (x16 band-limited interpolation before the paraboli
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -291,3 +291,128 @@ def parse_nu(text: str | float) -> float | tuple[float, float]:
     except ValueError as exc:
         raise ConfigError("--soil-nu", text, "a Poisson's ratio NU or a range LO:HI with "
                           "-1 < LO <= HI <= 0.5") from exc
+
+
+#: Terms of the TOF budget that a fit of the records replaces (the scatter of the hits and
+#: the peak picking's sampling error are in the fit's own residuals).
+_FIT_REPLACES = ("tof", "tof (stated scatter)", "sampling")
+
+
+def measure_information(m: Measurement, recordings: list[Any], level: str, params: Any,
+                        wall: str, wall_options: dict[str, Any] | None, *, acquisition: Any,
+                        trigger_level: float, tof_scatter: float,
+                        full_scale: float | None = None, gain: float = 1.0) -> Measurement:
+    """E from the records' features or whole waveforms (``ssw measure --information``),
+    starting from the TOF measurement ``m`` of the same recordings.
+
+    The sample's E, each accepted hit's striker speed, trigger time offset and delay are
+    fitted (:func:`ssw.calibration.waveform.fit`) with the device at its (calibrated)
+    values. E's standard error in ``ln E`` is the fit's, scaled by ``sqrt(chi2 / dof)``
+    when the model does not reach the noise (a model-discrepancy term, stated); it
+    replaces the TOF's scatter and sampling terms of ``m``'s budget, whose other terms
+    (calibration, Poisson's ratio, wall, integrator) stay. ``chi2`` and its quantile flag
+    a recording the model does not explain (a clipped hit, a yielding sample, a time
+    offset the trigger does not explain): beyond
+    :data:`ssw.calibration.waveform.FLAG_QUANTILE` the measurement says so in its notes and
+    ``flagged``.
+
+    Parameters
+    ----------
+    m : Measurement
+        The TOF measurement of the recordings (its E the start, its accepted hits used).
+    recordings : list of ssw.daq.recording.Recording
+        The sessions.
+    level : str
+        ``features`` or ``waveform``.
+    params : ssw.chain.params.ChainParams
+        The (calibrated) device's chain.
+    wall : str
+        The wall law.
+    wall_options : dict or None
+        Its options.
+    acquisition : ssw.daq.model.Acquisition
+        The measurement model (rate, sensitivity, coupling).
+    trigger_level : float
+        N, the recordings' trigger level.
+    tof_scatter : float
+        s, one hit's TOF scatter (the prior of each hit's delay).
+    full_scale : float or None
+        N, the rails (samples at them are left out).
+    gain : float
+        The DAQ gain (a waveform calibration's, :func:`ssw.calibration.waveform.with_fit`).
+
+    Returns
+    -------
+    Measurement
+        ``m`` with E, its interval and budget from the fit, and in ``extra``:
+        ``information``, ``identified`` (value and standard error of every fitted parameter
+        the records identify), ``chi2``, ``chi2_dof``, ``chi2_quantile``, ``flagged``,
+        ``fit_runs``.
+    """
+    from ssw.calibration.information import IDENTIFIED_U
+    from ssw.calibration.waveform import (
+        FLAG_QUANTILE,
+        Column,
+        Hits,
+        Setup,
+        State,
+        coordinate,
+        device_globals,
+        fit,
+        initial_state,
+    )
+    from ssw.modulus import COVERAGE_Z
+
+    forces, kt = [], []
+    for rec in recordings:
+        for h in rec.hits:
+            forces.append(h.force)
+            kt.append(h.trigger_index)
+    keep = [i for i, a in enumerate(m.accepted) if a]
+    if not keep:
+        raise RecordingError("no accepted hit to fit")
+    n = min(len(f) for f in forces)
+    hits = Hits.of(np.stack([forces[i][:n] for i in keep]), [kt[i] for i in keep],
+                   m.sample_rate, E=None, nu=m.nu, full_scale=full_scale)
+    setup = Setup(params, wall, dict(wall_options or {}), acquisition, level, [hits],
+                  trigger_level, tof_scatter=tof_scatter)
+    glob = device_globals(params, gain)
+    v0 = float(params.striker_velocity)
+    setup.fix_step(State(np.array([m.E]), np.full(hits.n, 1.5 * v0), np.zeros(hits.n),
+                         np.zeros(hits.n), glob))
+    state = initial_state(setup, glob, [m.E], v0)
+    free = [Column("E", 0)] + [Column(name, h) for name in
+                               ("striker_velocity", "time_offset", "delay")
+                               for h in range(hits.n)]
+    f = fit(setup, state, free)
+    E = float(f.state.E[0])
+    contrib = {k: v for k, v in m.contributions.items() if k not in _FIT_REPLACES}
+    u_fit = f.std(Column("E", 0))
+    contrib[f"{level} fit"] = u_fit
+    u = float(np.sqrt(sum(v**2 for v in contrib.values())))
+    notes = [x for x in m.notes if "TOF term" not in x]
+    if f.misfit > 1.0:
+        notes.append(f"the model leaves chi2/dof = {f.misfit:.3g} of the records unexplained: "
+                     f"E's fit error is scaled by sqrt({f.misfit:.3g}) (a model-discrepancy "
+                     "term)")
+    if f.flagged:
+        notes.append(f"FLAGGED: the model does not explain these records (chi2 {f.chi2:.4g} "
+                     f"on {f.dof} degrees of freedom, quantile {f.quantile:.6f} > "
+                     f"{FLAG_QUANTILE}): a clipped hit, a yielding sample or a time "
+                     "offset the trigger did not remove; E is not to be trusted as is")
+    if not f.converged:
+        notes.append("the fit did not converge: E is its last iterate")
+    identified: dict[str, dict[str, float]] = {}
+    for c, v in zip(f.free, f.values, strict=True):
+        s = f.std(c)
+        if s <= IDENTIFIED_U:
+            log = c.name in ("E", "striker_velocity")
+            identified[c.label] = {"value": float(v),
+                                   "std": float(s * v if log else s * coordinate(setup, c)[1])}
+    extra = {**m.extra, "information": level, "identified": identified,
+             "chi2": f.chi2, "chi2_dof": f.dof, "chi2_quantile": f.quantile,
+             "flagged": f.flagged, "fit_converged": f.converged, "fit_runs": f.runs,
+             "E_tof": m.E, "E_tof_low": m.E_low, "E_tof_high": m.E_high}
+    return replace(m, E=E, E_low=E * float(np.exp(-COVERAGE_Z * u)),
+                   E_high=E * float(np.exp(COVERAGE_Z * u)), u=u, contributions=contrib,
+                   notes=tuple(notes), extra=extra)

@@ -26,10 +26,11 @@ BEAD_MASS = 4.0 / 3.0 * np.pi * R**3 * RHO  # kg
 SAMPLE, T_END = 0.2e-6, 4.5e-3
 
 
-def chain_tof(E: float, nu: float, v: float, *, sensor_mass: float = BEAD_MASS,
-              damping: float = 0.0, preload: float = 0.0) -> float:
-    """TOF (s) of the chain of the module docstring on a half-space of modulus ``E`` (Pa) and
-    Poisson's ratio ``nu``.
+def sensor_signal(E: float, nu: float, v: float, *, sensor_mass: float = BEAD_MASS,
+                  damping: float = 0.0, preload: float = 0.0
+                  ) -> tuple[np.ndarray, np.ndarray]:
+    """The sensor signal of the chain of the module docstring on a half-space of modulus
+    ``E`` (Pa) and Poisson's ratio ``nu``, minus its static value.
 
     Parameters
     ----------
@@ -48,8 +49,8 @@ def chain_tof(E: float, nu: float, v: float, *, sensor_mass: float = BEAD_MASS,
 
     Returns
     -------
-    float
-        The TOF between the incident and the reflected peak of the sensor signal, s.
+    tuple of numpy.ndarray
+        Times (s, every :data:`SAMPLE` from the striker's contact) and the signal (N).
     """
     n = N_BEADS
     m = np.full(n, BEAD_MASS)
@@ -101,7 +102,16 @@ def chain_tof(E: float, nu: float, v: float, *, sensor_mass: float = BEAD_MASS,
     assert sol.success, sol.message
     f = forces(sol.y[:n], sol.y[n:])
     s = 0.5 * (f[SENSOR - 1] + f[SENSOR])
-    s = s - s[0]
+    return t, s - s[0]
+
+
+def chain_tof(E: float, nu: float, v: float, *, sensor_mass: float = BEAD_MASS,
+              damping: float = 0.0, preload: float = 0.0) -> float:
+    """TOF (s) of the chain of the module docstring on a half-space of modulus ``E`` (Pa) and
+    Poisson's ratio ``nu`` (:func:`sensor_signal`'s arguments): between its incident and
+    reflected peaks."""
+    t, s = sensor_signal(E, nu, v, sensor_mass=sensor_mass, damping=damping,
+                         preload=preload)
 
     def vertex(k: int) -> float:
         ym, y0, yp = s[k - 1], s[k], s[k + 1]

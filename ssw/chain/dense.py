@@ -244,8 +244,8 @@ def dense_peaks(run: Any, *, rule: PeakRule = RULE, strict: bool = True) -> Peak
     )
 
 
-def evaluate(run: Any, t: np.ndarray, *, tangent: bool = False
-             ) -> tuple[np.ndarray, np.ndarray | None]:
+def evaluate(run: Any, t: np.ndarray, *, tangent: bool = False, rate: bool = False
+             ) -> tuple[np.ndarray, ...]:
     """The dense output (module docstring) of every scene at times ``t`` (s, from the
     striker's first contact, e.g. a recording's sample times), with its derivatives.
 
@@ -254,27 +254,38 @@ def evaluate(run: Any, t: np.ndarray, *, tangent: bool = False
     run : Run
         The record (``dsensor`` for the derivatives).
     t : numpy.ndarray
-        (m,) s, inside the record (NaN where a scene's samples do not reach: before
-        ``3 dt``, after its stop).
+        (m,) s, the same times for every scene, or (m, n) one column of times per scene,
+        inside the record (NaN where a scene's samples do not reach: before ``3 dt``, after
+        its stop).
     tangent : bool
         Also the derivatives with respect to the run's parameters (``run.tangent``).
+    rate : bool
+        Also the time derivative ``dS/dt`` (N/s) of the dense output (the quintic's own
+        derivative: what a shift of the signal in time changes).
 
     Returns
     -------
     tuple
         ``S`` (m, n) N and ``dS`` (m, n, k) N per unit of each parameter (None without
-        ``tangent``).
+        ``tangent``); with ``rate`` a third item, ``dS/dt`` (m, n) N/s.
     """
-    t = np.atleast_1d(np.asarray(t, float))
+    t = np.asarray(t, float)
     n = run.sensor.shape[1]
-    pos = (t - run.t[0]) / run.dt
+    tt = np.broadcast_to(t.reshape(-1, 1) if t.ndim <= 1 else t, (t.size if t.ndim <= 1
+                                                                    else t.shape[0], n))
+    m = tt.shape[0]
+    pos = (tt - run.t[0]) / run.dt
     i = np.clip(np.floor(pos).astype(np.int64), 0, run.sensor.shape[0] - 2)
-    theta = (pos - i)[:, None].repeat(n, axis=1).ravel()
-    ii = i[:, None].repeat(n, axis=1).ravel()
-    cols = np.tile(np.arange(n), t.size)
+    theta = (pos - i).ravel()
+    ii = i.ravel()
+    cols = np.tile(np.arange(n), m)
     Y, dY = hermite_data(run, ii, cols, tangent=tangent and run.tangent is not None)
-    b0 = _basis_at(theta[:, None] ** np.arange(6))  # (m n, 6)
-    S = (b0 * Y).sum(axis=1).reshape(t.size, n)
-    if dY is None:
-        return S, None
-    return S, (b0[:, :, None] * dY).sum(axis=1).reshape(t.size, n, -1)
+    powers = theta[:, None] ** np.arange(6)
+    b0 = _basis_at(powers)  # (m n, 6)
+    S = (b0 * Y).sum(axis=1).reshape(m, n)
+    dS = None if dY is None else (b0[:, :, None] * dY).sum(axis=1).reshape(m, n, -1)
+    if not rate:
+        return S, dS
+    dpw = np.concatenate([np.zeros((theta.size, 1)), np.arange(1, 6) * powers[:, :5]], axis=1)
+    S1 = (_basis_at(dpw) * Y).sum(axis=1).reshape(m, n) / run.dt
+    return S, dS, S1

@@ -126,6 +126,8 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
             provenance={"command": "ssw calibrate", "config": args.config}, on_run=bar,
             recorded_wall_options=ctx.device_wall_options, reference_sample=ctx.sample,
         )
+    if args.information != "tof":
+        cal = _with_information(args, ctx, cal)
     if args.output:
         write_calibration(args.output, cal)
     out = {
@@ -141,7 +143,38 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
         "parameter_sets_evaluated": cal.provenance["parameter_sets_evaluated"],
         "batched_runs": cal.provenance["batched_runs"],
     }
+    if "information" in cal.provenance:
+        out["information"] = cal.provenance["information"]
     return out
+
+
+def _with_information(args: argparse.Namespace, ctx: Any, cal: Any) -> Any:
+    """The TOF calibration ``cal`` refined by a fit of the reference recordings' features
+    or waveforms (:func:`ssw.calibration.waveform.calibrate_records`): the device's globals
+    they identify are freed, the others held."""
+    from ssw.calibration.waveform import Hits, calibrate_records, with_fit
+    from ssw.daq.importers import read_any
+    from ssw.daq.model import Acquisition
+    from ssw.daq.settings import settings_from_config
+
+    if not args.reference_recording or args.reference or args.from_config:
+        raise ConfigError("--information", args.information, "tof, or reference recordings "
+                          "alone (--reference-recording FILE,E,nu): a fit of their records")
+    settings = settings_from_config(ctx.cfg, ctx.device)
+    samples, trig, rate = [], settings.trigger_level, None
+    for t in args.reference_recording:
+        path, E, nu = t.split(",")
+        rec = read_any(path, full_scale=ctx.device.full_scale_force, clipped="drop")
+        trig = float(rec.meta.get("trigger_level", trig))
+        rate = rec.sample_rate
+        samples.append(Hits.from_recording(rec, E=float(E), nu=float(nu),
+                                           full_scale=ctx.device.full_scale_force))
+    scatter = ctx.device.tof_scatter or 1.53e-5  # the thesis's scatter when none is stated
+    acq = Acquisition(sample_rate=float(rate), sensitivity=ctx.device.sensitivity,
+                      coupling=settings.coupling)
+    f = calibrate_records(samples, cal.chain_params(), ctx.wall, ctx.wall_options, acq,
+                          args.information, trig, float(scatter))
+    return with_fit(cal, f, args.information)
 
 
 def _tof_options(params: Any, lowpass: float | None = None, min_hits: int = 3) -> Any:
@@ -225,6 +258,11 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--scan-points", type=int, help="grid points per continuous parameter")
     p.add_argument("--no-loo", action="store_true", help="skip the leave-one-out predictions")
     p.add_argument("--output", help="calibration file to write (JSON)")
+    p.add_argument("--information", choices=("tof", "features", "waveform"), default="tof",
+                   help="what of the reference recordings calibrates: their TOF (default), "
+                   "or then also their features or whole waveforms, which free the device's "
+                   "preload, masses, contact dashpot and DAQ gain where they identify them "
+                   "(said in the output's information.freed)")
     p.add_argument("--soil-model", choices=PLASTIC_MODELS,
                    help="the references as plastic samples of this model, each with its "
                    "material's strengths (--from-config): the plastic wall's first hit on the "

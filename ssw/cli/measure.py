@@ -38,10 +38,45 @@ def run_measure(args: argparse.Namespace) -> dict[str, Any]:
                 calibration=ctx.calibration, tof_options=tof_options(args, ctx.params),
                 device=ctx.device, strength=sample_strength(args, ctx),
                 sample_range=_sample_range(args, ctx))
+    if args.information != "tof":
+        m = _with_information(args, ctx, recs, m)
     out = {**ctx.inputs(), **m.to_dict()}
     if args.lift_thickness is not None:
         out.update(_lift_check(args, ctx, m, out["notes"]))
     return out
+
+
+def _with_information(args: argparse.Namespace, ctx: Any, recs: list[Any], m: Any) -> Any:
+    """E from the records' features or waveforms (:func:`ssw.measure.measure_information`):
+    the acquisition as recorded (rate, sensitivity, coupling, trigger level; the config's
+    where a format does not say), each hit's TOF scatter the device's stated one (else the
+    hits' own)."""
+    import numpy as np
+
+    from ssw.daq.model import Acquisition
+    from ssw.daq.settings import settings_from_config
+    from ssw.errors import ConfigError
+    from ssw.measure import measure_information
+
+    settings = settings_from_config(ctx.cfg, ctx.device)
+    meta = recs[0].meta
+    acq = Acquisition(sample_rate=float(m.sample_rate),
+                      sensitivity=float(meta.get("sensitivity", ctx.device.sensitivity)),
+                      coupling=str(meta.get("coupling", settings.coupling)))
+    scatter = ctx.device.tof_scatter
+    if scatter is None:
+        scatter = m.tof_std
+    if scatter is None or not np.isfinite(scatter) or not scatter > 0:
+        raise ConfigError("--information", args.information, "tof, or a device that states "
+                          "its TOF scatter per hit (repeatability.tof_std), or enough hits "
+                          "to estimate it")
+    cal = ctx.calibration
+    info = (getattr(cal, "provenance", None) or {}).get("information") or {}
+    gain = float(info.get("gain", 1.0))  # a waveform calibration's DAQ gain
+    return measure_information(
+        m, recs, args.information, ctx.params, ctx.wall, ctx.wall_options, acquisition=acq,
+        trigger_level=float(meta.get("trigger_level", settings.trigger_level)),
+        tof_scatter=float(scatter), full_scale=ctx.device.full_scale_force, gain=gain)
 
 
 #: The error of a half-space reading beyond which a lift's measurement warns.
@@ -141,6 +176,12 @@ def _human(r: dict[str, Any]) -> str:
                      f"{r['sample_peak_von_mises'] / 1e6:.3g} MPa over its strength "
                      f"{r['sample_strength'] / 1e6:.3g} MPa)"
                      + (": YIELDED" if r["sample_yielded"] else ""))
+    if "chi2" in r:
+        lines.append(f"{r['information']} fit: chi2 {r['chi2']:.4g} on {r['chi2_dof']} degrees "
+                     f"of freedom (quantile {r['chi2_quantile']:.4f})"
+                     + (": FLAGGED" if r["flagged"] else "") + "; identified: "
+                     + ", ".join(f"{k} {v['value']:.4g} +- {v['std']:.2g}"
+                                 for k, v in r["identified"].items()))
     lines += [f"NOT IN THE INTERVAL: {k}: {v}" for k, v in r.get("missing_terms", {}).items()]
     lines += [f"note: {n}" for n in r["notes"]]
     lines += [f"rejected: {x}" for x in r["rejections"]]
@@ -169,6 +210,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "(default 0.5,2)")
     p.add_argument("--sample-material", metavar="KEY",
                    help="the sample's material in the library (its strength, e.g. pcf15)")
+    p.add_argument("--information", choices=("tof", "features", "waveform"), default="tof",
+                   help="what of the records E comes from: the TOF (default), the features "
+                   "(TOF, amplitude ratios, secondary reflection, pulse widths) or the whole "
+                   "waveform, fitted through the measurement model; the latter two also "
+                   "report the parameters the records identify and the fit's chi2 with its "
+                   "quantile (flagged beyond 0.999)")
     add_recording_options(p)
     add_tof_options(p)
     add_device_options(p)

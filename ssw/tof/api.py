@@ -443,6 +443,8 @@ class SensorDerivatives:
         The parameters (the last axis of ``dsensor``).
     run : Run
         The run (its samples and their sensitivities at every step, ``run.dsensor``).
+    rate : numpy.ndarray or None
+        (m, n) N/s, the time derivative of ``sensor`` (with ``rate=True``).
     """
 
     t: np.ndarray
@@ -450,12 +452,14 @@ class SensorDerivatives:
     dsensor: np.ndarray
     names: tuple[str, ...]
     run: Run
+    rate: np.ndarray | None = None
 
 
 def sensor_derivatives(
     soil_E: Any, soil_nu: Any, params: ChainParams, wall: str = "hertz", *,
     times: Any = None, derivatives: Any = tuple(PARAMETERS), t_end: float | None = None,
-    vary: dict[str, Any] | None = None, **wall_options: Any,
+    vary: dict[str, Any] | None = None, rate: bool = False, dt: float | None = None,
+    **wall_options: Any,
 ) -> SensorDerivatives:
     """The sensor signal and its exact derivatives (forward sensitivities of the discrete
     scheme, on its dense output) at ``times`` (a recording's samples; default: the run's
@@ -472,13 +476,20 @@ def sensor_derivatives(
     wall : str
         A law of :data:`ssw.walls.WALLS` with forward sensitivities (module docstring).
     times : array_like or None
-        (m,) s; None: every step.
+        (m,) s, or (m, n) one column per scene (a recording's samples per hit); None:
+        every step.
     derivatives : sequence of str or str
         Names of :data:`ssw.chain.sensitivity.PARAMETERS`.
     t_end : float or None
         s, the run's length (default: until every scene's reflected wave has passed).
     vary : dict or None
         Per-scene striker speed, preload, masses.
+    rate : bool
+        Also the signal's time derivative (``SensorDerivatives.rate``, N/s): what a shift
+        in time (a trigger's offset) changes.
+    dt : float or None
+        s, the time step (default :func:`ssw.chain.integrate.time_step` of the batch; a
+        fit fixes it, so that its runs compare one discretization).
     **wall_options
         The law's options.
 
@@ -496,10 +507,61 @@ def sensor_derivatives(
         opts["with_dE"] = True
     w = build_wall(wall, params, E, nu, **opts)
     b = Batch.of(params, w.n, flat) if flat else params
-    run = simulate(b, w, derivatives=tg, t_end=t_end, stop_early=t_end is None)
+    run = simulate(b, w, derivatives=tg, t_end=t_end, stop_early=t_end is None, dt=dt)
     t = run.t if times is None else np.asarray(times, float)
-    S, dS = evaluate(run, t, tangent=True)
-    return SensorDerivatives(t, S, dS, tg.names, run)
+    out = evaluate(run, t, tangent=True, rate=rate)
+    return SensorDerivatives(t, out[0], out[1], tg.names, run, out[2] if rate else None)
+
+
+def sensor_force(
+    soil_E: float, soil_nu: float, params: ChainParams, wall: str = "hertz", *,
+    t_end: float | None = None, **wall_options: Any,
+) -> tuple[Any, float]:
+    """One scene's sensor force as a function of time: the dense output
+    (:func:`ssw.chain.dense.evaluate`) minus the static value, 0 before the wave, the last
+    value after the run (what a measurement model samples, :mod:`ssw.daq.model`).
+
+    Parameters
+    ----------
+    soil_E : float
+        Pa.
+    soil_nu : float
+        -.
+    params : ChainParams
+        The chain.
+    wall : str
+        A law of :data:`ssw.walls.WALLS`.
+    t_end : float or None
+        s, the run's length (None: twice the time the reflected wave needs to pass the
+        sensor).
+    **wall_options
+        The law's options.
+
+    Returns
+    -------
+    tuple
+        ``force(s) -> F`` (any shape of times ``s``, s; N) and the run's last time, s.
+    """
+    from ssw.chain.dense import evaluate
+
+    w = build_wall(wall, params, soil_E, soil_nu, **wall_options)
+    run = simulate(params, w, t_end=t_end, stop_early=t_end is None)
+    if t_end is None and np.isfinite(run.stop_time[0]):
+        # on to twice that time: the secondary reflection and the rattle after it are in
+        # a record's window too
+        run = simulate(params, w, t_end=2.0 * float(run.stop_time[0]), stop_early=False)
+    stop = float(run.stop_time[0]) if np.isfinite(run.stop_time[0]) else float(run.t[-1])
+    last = stop - 5 * run.dt
+    base = float(run.sensor[0, 0])
+    tail = float(evaluate(run, np.array([last]))[0][0, 0]) - base
+
+    def force(s: np.ndarray) -> np.ndarray:
+        s = np.asarray(s, float)
+        inside = (s > 4 * run.dt) & (s < last)
+        got = evaluate(run, np.clip(s, 4 * run.dt, last).ravel())[0][:, 0].reshape(s.shape)
+        return np.where(inside, got - base, np.where(s >= last, tail, 0.0))
+
+    return force, last
 
 
 def _hold_last(F: np.ndarray) -> np.ndarray:

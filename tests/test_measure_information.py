@@ -1,0 +1,109 @@
+"""``ssw measure --information``: the TOF path unchanged to the digit by default; fits of the
+features and of the whole waveform through the measurement model that recover E from a
+chain recording within their interval, and a goodness of fit that flags recordings the
+model does not explain (a clipped hit, a time offset the trigger did not remove) instead
+of turning them into a confident E."""
+
+from __future__ import annotations
+
+import json
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from ssw.chain.params import chain_params
+from ssw.cli import main
+from ssw.daq.importers import read_any
+from ssw.daq.model import Acquisition
+from ssw.device import load_device
+from ssw.measure import measure, measure_information
+
+E_TRUE, NU = 123e6, 0.33  # PCF 15 (the simulated sample's library entry)
+PARAMS = chain_params(load_device("thesis"))  # the CLI's default device
+
+
+@pytest.fixture(scope="module")
+def recording(tmp_path_factory):
+    path = tmp_path_factory.mktemp("rec") / "p15.h5"
+    assert main(["acquire", "--simulate", "--material", "pcf15", "--wall", "hertz",
+                 "--hits", "4", "--sample", "P15", "--output", str(path), "--json"]) == 0
+    return str(path)
+
+
+def _run(capsys, argv):
+    assert main([*argv, "--json"]) == 0
+    return json.loads(capsys.readouterr().out)
+
+
+def test_default_is_the_tof_measurement_to_the_digit(capsys, recording):
+    base = ["measure", recording, "--soil-nu", str(NU), "--wall", "hertz"]
+    default = _run(capsys, base)
+    tof = _run(capsys, [*base, "--information", "tof"])
+    assert default == tof
+    assert "chi2" not in default and "identified" not in default
+    # the library function the TOF path has always called gives the same numbers
+    m = measure([read_any(recording)], NU, PARAMS, "hertz", {})
+    assert default["E"] == m.E and default["E_low"] == m.E_low
+    assert default["E_high"] == m.E_high
+
+
+def _fit(recording, level, edit=None):
+    rec = read_any(recording)
+    if edit is not None:
+        rec = replace(rec, hits=(edit(rec.hits[0]), *rec.hits[1:]))
+    m = measure([rec], NU, PARAMS, "hertz", {})
+    return measure_information(m, [rec], level, PARAMS, "hertz", {},
+                               acquisition=Acquisition(sample_rate=rec.sample_rate),
+                               trigger_level=5.0, tof_scatter=1.53e-5, full_scale=445.0)
+
+
+def test_the_waveform_fit_recovers_e_within_its_interval(recording):
+    w = _fit(recording, "waveform")
+    d = w.to_dict()
+    assert not d["flagged"] and d["fit_converged"]
+    assert w.E_low < E_TRUE < w.E_high
+    assert abs(w.E / E_TRUE - 1) < 0.01
+    assert "E[0]" in d["identified"]
+    assert d["E_high"] / d["E_low"] < d["E_tof_high"] / d["E_tof_low"]
+
+
+def _clip(h):
+    """A sensor saturating at 60 % of the hit's peak, below the module's rails."""
+    return replace(h, force=np.minimum(h.force, 0.6 * float(np.max(h.force))))
+
+
+def _shift(h):
+    """The wave 8 samples later than the record's trigger sample says."""
+    return replace(h, force=np.concatenate([np.full(8, h.force[0]), h.force[:-8]]))
+
+
+@pytest.mark.parametrize("edit", [_clip, _shift], ids=["clipped-hit", "untriggered-offset"])
+def test_a_recording_the_model_cannot_explain_is_flagged(recording, edit):
+    w = _fit(recording, "waveform", edit)
+    d = w.to_dict()
+    assert d["flagged"] and d["chi2_quantile"] > 0.999
+    assert any("FLAGGED" in n for n in d["notes"])
+
+
+def test_calibrate_with_the_waveform_frees_what_the_records_identify(capsys, tmp_path):
+    """Three simulated references of the nominal device (the simulated backend runs the
+    chain at its own step; the fit at another): the waveform calibration frees the device's
+    globals it identifies and finds the nominal sensor mass, a zero dashpot and unit gain."""
+    refs = []
+    for mat, E, nu in (("pcf08", 38e6, 0.34), ("pcf30", 445e6, 0.30)):
+        path = tmp_path / f"{mat}.h5"
+        assert main(["acquire", "--simulate", "--material", mat, "--wall", "hertz", "--hits",
+                     "3", "--sample", mat, "--output", str(path), "--json"]) == 0
+        capsys.readouterr()
+        refs += ["--reference-recording", f"{path},{E},{nu}"]
+    out = tmp_path / "cal.json"
+    r = _run(capsys, ["calibrate", *refs, "--wall", "hertz", "--information", "waveform",
+                      "--no-loo", "--output", str(out)])
+    info = r["information"]
+    assert info["level"] == "waveform" and "sensor_mass" in info["freed"]
+    assert info["values"]["sensor_mass"] == pytest.approx(PARAMS.masses[PARAMS.sensor_index],
+                                                          rel=0.01)
+    assert abs(info["values"].get("damping", 0.0)) < 0.5
+    assert info["gain"] == pytest.approx(1.0, rel=0.01)
+    assert json.loads(out.read_text())["provenance"]["information"]["freed"] == info["freed"]

@@ -17,9 +17,9 @@ settings, 50 MPa soil, nu 0.3; the PLA plate of the library):
   MPa; :mod:`ssw.contact.plastic`: SuperLU, minimum degree on ``A + A^T``, diagonal
   pivots).
 
-Each is factored by the method in use (``current``) and by :class:`LUSolver` with PETSc's
-own LU (natural order; nested dissection), MUMPS and SuperLU_DIST (those order and pivot by
-themselves), where the PETSc build has them. Columns: the factorization's wall and CPU
+Each is factored by the method in use (``current``) and by
+:class:`ssw.contact.petsc_solver.LUSolver` with PETSc's own LU (natural order; nested
+dissection), MUMPS and SuperLU_DIST (those order and pivot by themselves), where the PETSc build has them. Columns: the factorization's wall and CPU
 time (for LUSolver the COO assembly included, as ssw pays it), one solve with one
 right-hand side and one with a block of ``--block`` (the condensation's columns), and the
 backward error ``||A X - B|| / (||A|| ||X|| + ||B||)`` of the block (of the single solve

@@ -3,7 +3,7 @@
 The one LU wrapper of ssw: the monolithic contact engine (``ssw.contact.solve_curve(...,
 engine="monolithic")``, the independent check of the substructured one) and the dynamic
 FEM wall's time stepper (:mod:`ssw.dynamics.newmark`) both factor through
-:class:`LUSolver`, and this module is the one place ssw imports petsc4py (:func:`_petsc`).
+:class:`LUSolver`, and this module is the one place ssw imports petsc4py (``_petsc``).
 
 The matrix comes as COO triplets (``MatSetPreallocationCOO``, duplicates summed) of a
 nondimensional ``A`` and a unit ``scale`` (a power of two, :mod:`ssw.contact.assembly`),

@@ -19,12 +19,13 @@ settings, 50 MPa soil, nu 0.3; the PLA plate of the library):
 
 Each is factored by the method in use (``current``) and by
 :class:`ssw.contact.petsc_solver.LUSolver` with PETSc's own LU (natural order; nested
-dissection), MUMPS and SuperLU_DIST (those order and pivot by themselves), where the PETSc build has them. Columns: the factorization's wall and CPU
-time (for LUSolver the COO assembly included, as ssw pays it), one solve with one
-right-hand side and one with a block of ``--block`` (the condensation's columns), and the
-backward error ``||A X - B|| / (||A|| ||X|| + ||B||)`` of the block (of the single solve
-for ``plastic``); for ``schur`` the whole condensation's time and the largest difference
-to today's ``S`` relative to its largest entry. Wall times are the best of ``--repeat``.
+dissection), MUMPS and SuperLU_DIST (those order and pivot by themselves), where the PETSc
+build has them. Columns: the factorization's wall and CPU time (for LUSolver the COO
+assembly included, as ssw pays it), one solve with one right-hand side and one with a block
+of ``--block`` (the condensation's columns), and the backward error ``||A X - B|| / (||A||
+||X|| + ||B||)`` of the block (of the single solve for ``plastic``); for ``schur`` the
+whole condensation's time and the largest difference to today's ``S`` relative to its
+largest entry. Wall times are the best of ``--repeat``.
 
 Measured 2026-11-26 on 2 cores (shared, load 5-8: CPU times in parentheses are the
 comparison; binary stack, PETSc 3.25.5) with ``ssw bench lu --repeat 3``:

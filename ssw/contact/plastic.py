@@ -42,11 +42,16 @@ solves for the rest; at convergence the contact forces are the reactions ``lam =
 the set gains the nodes with ``g < 0`` and loses those with ``lam < 0`` (a primal-dual active
 set, Hintermueller, Ito & Kunisch 2003) until it is stable and the residual is below
 ``rtol`` times the load scale. An increment that does not converge in ``max_iter``
-iterations raises SolverError.
+iterations is cut in two (at most ``max_cuts`` times), unless its best iterate stalled
+within :data:`STALL_RTOL` of the load scale (accepted), then raises SolverError.
 
 Path. Loading through ``delta`` then, with ``unload``, back in the same steps until the
 sphere leaves the surface; the residual indentation is the axis's depth then (contact is
-lost; the body stays as it is).
+lost; the body stays as it is). Per increment: force, contact radius, the plastic zone
+(volume, depth below the loaded surface, radius), the plastic work ``sum int sigma_{n+1} :
+d eps_p dV`` (backward Euler) and Newton's iterations. First yield: the elastic
+increments' largest yield ratio ``q / Y`` scales as the Hertz pressure ``p0 ~ F^(1/3)``
+(self-similar elastic contact), so ``F_y = F / ratio^3`` of the last elastic increment.
 
 Cost. Exact reductions of the same discrete problem (the curve is the one the increments'
 Newton iterations on the whole mesh give, to round-off; tests):
@@ -67,11 +72,7 @@ A study config's plastic curve (``ssw contact --soil-model``) is solved on the c
 domain and growth with its element at the contact point scaled to the path
 (:func:`path_mesh_settings`; ``--plastic-mesh study``: the elastic engine's mesh, whose
 element at the contact point resolves indentations down to 3e-7 m); times and errors
-against a converged mesh: ``ssw bench plastic --plastic-study``. Per increment: force, contact radius, the plastic zone
-(volume, depth, radius), the plastic work ``sum int sigma_{n+1} : d eps_p dV`` (backward
-Euler) and Newton's iterations. First yield: the elastic increments' largest yield ratio
-``q / Y`` scales as the Hertz pressure ``p0 ~ F^(1/3)`` (self-similar elastic contact), so
-``F_y = F / ratio^3`` of the last elastic increment.
+against a converged mesh: ``ssw bench plastic --plastic-study``.
 
 References
 ----------
@@ -129,6 +130,12 @@ SET_UPDATES = 8
 #: A Newton step moving a node by more than this many indentation steps is taken as a
 #: leap along a nearly singular tangent and replaced by an elastic-tangent step.
 STEP_BOUND = 10.0
+#: An increment whose Newton iteration stalls (cycling between the branches of a
+#: non-smooth return, e.g. Drucker-Prager's apex and cone, with the set of points at the
+#: apex changing by a few from one iterate to the next) is accepted after ``max_iter``
+#: iterations when its residual is below this share of the load scale
+#: (``stats['stalled']`` counts them; the force then carries an error of that order).
+STALL_RTOL = 1e-6
 #: Halvings of a Newton step that does not lower the residual.
 LINE_SEARCH = 4
 #: Halvings of an increment whose Newton iteration fails, before SolverError.
@@ -812,7 +819,7 @@ def _path(mesh: Mesh, E: float, nu: float, model: Any, radius: float, deltas: np
     last_elastic = None
     residual = interface_residual = None
     load_ref = 0.0  # the largest load scale of the path: a floor once the load is gone
-    k, d_prev, cuts, spans, spanned = 0, 0.0, 0, 0, 0
+    k, d_prev, cuts, spans, spanned, stalled = 0, 0.0, 0, 0, 0, 0
     h0 = float(deltas[0])  # the first (and uniform) step
     ring = np.repeat(fe.ring, nq)
     upd = fe.update(model, E, nu, u, state)
@@ -847,6 +854,7 @@ def _path(mesh: Mesh, E: float, nu: float, model: Any, radius: float, deltas: np
             u = u + (d - d_prev) * trend  # the last plastic increment's rate: a predictor
         prev, was_elastic = np.inf, False
         ahead = None  # the update and residual at u, when the line search computed them
+        best: tuple = (np.inf,)  # the equilibrium iterate of least residual (a stall)
         for it in range(max_iter):
             upd, known = ahead if ahead is not None else (fe.update(model, E, nu, u, state),
                                                           None)
@@ -867,6 +875,9 @@ def _path(mesh: Mesh, E: float, nu: float, model: Any, radius: float, deltas: np
             jump = np.zeros(fe.ndof)
             jump[fe.cand_dof[active]] = target[active] - u[fe.cand_dof[active]]
             err = float(np.max(np.abs(res[free]), initial=0.0))
+            if it > 0 and err < best[0] and not np.any(jump) \
+                    and np.array_equal(new_active, active):
+                best = (err, u.copy(), upd, res, lam, load)
             if it > 0 and err <= tol and not np.any(jump):
                 if np.array_equal(new_active, active):
                     break
@@ -917,20 +928,24 @@ def _path(mesh: Mesh, E: float, nu: float, model: Any, radius: float, deltas: np
             u[free] += du
             u += jump
         else:
-            if step > h0 * 0.5 ** max_cuts * (1 + 1e-9):
+            if best[0] <= STALL_RTOL * best[5]:  # a stall within STALL_RTOL: accepted
+                _, u, upd, res, lam, load = best
+                stalled += 1
+            elif step > h0 * 0.5 ** max_cuts * (1 + 1e-9):
                 # cut the increment in two: back to the last converged state
                 u, active, trend = u_start, active_start, None
                 path.insert(k, 0.5 * (d_prev + d))
                 branch.insert(k, branch[k])
                 cuts += 1
                 continue
-            hint = ("; a perfectly plastic model with corners (tresca) may stall there: a "
-                    "small hardening (e.g. E/100) restores Newton's convergence"
-                    if getattr(model, "hardening", None) == 0.0 else "")
-            raise SolverError(
-                f"plastic contact: increment {k} (delta = {d:.6g} m) did not converge in "
-                f"{max_iter} Newton iterations (residual {err:.3g} N, load scale {load:.3g} N), "
-                f"its step cut to {step:.3g} m{hint}")
+            else:
+                hint = ("; a perfectly plastic model with corners (tresca) may stall there: "
+                        "a small hardening (e.g. E/100) restores Newton's convergence"
+                        if getattr(model, "hardening", None) == 0.0 else "")
+                raise SolverError(
+                    f"plastic contact: increment {k} (delta = {d:.6g} m) did not converge in "
+                    f"{max_iter} Newton iterations (residual {err:.3g} N, load scale "
+                    f"{load:.3g} N), its step cut to {step:.3g} m{hint}")
         trend = (u - u_start) / (d - d_prev) if upd.plastic.any() else None
         d_prev = d
         last = (upd.tangent, upd.plastic)
@@ -975,7 +990,8 @@ def _path(mesh: Mesh, E: float, nu: float, model: Any, radius: float, deltas: np
              "increments": len(out["delta"]), "newton_iterations": int(np.sum(out["it"])),
              "elastic_spans": spans, "spanned_increments": spanned,
              "factorizations": fe.factorizations, "lu_reused": fe.lu_reused,
-             "krylov_iterations": fe.krylov, "cutbacks": cuts, **fe.far_stats,
+             "krylov_iterations": fe.krylov, "cutbacks": cuts, "stalled": stalled,
+             **fe.far_stats,
              "wall_total": time.perf_counter() - t0}
     return PlasticCurve(
         np.array(out["delta"]), np.array(out["force"]), np.array(branch, np.int8),

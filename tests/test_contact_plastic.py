@@ -102,7 +102,7 @@ def test_refusals():
         solve_path(mesh, E, 0.3, VonMises(Y), R, dy * np.array([1.0, 30.0]), max_iter=2,
                    max_cuts=0)
     # cut in two until Newton converges: a 3 delta_y first step becomes smaller ones
-    c = solve_path(mesh, E, 0.3, VonMises(Y), R, dy * np.array([3.0]), max_iter=9)
+    c = solve_path(mesh, E, 0.3, VonMises(Y), R, dy * np.array([3.0]), max_iter=7)
     assert c.stats["cutbacks"] > 0 and c.delta[-1] == 3 * dy
     assert np.all(np.diff(c.delta) > 0) and c.delta.size == c.stats["cutbacks"] + 1
 
@@ -285,8 +285,11 @@ def test_config_soil_model(tmp_path):
                      library(c))
     assert pl.inputs["soil_model"]["yield_stress"] == 1e9
     assert pl.inputs["plastic_mesh"] == "path"
-    # the path's mesh: its element at the contact scaled to the path (growth 0.2: 0.4 %)
-    np.testing.assert_allclose(pl.force, el.force, rtol=5e-3)
+    # the path's mesh: its element at the contact scaled to the path's end (growth 0.2:
+    # 0.3 % there; the first step's contact is half as wide, 1 % against Hertz)
+    np.testing.assert_allclose(pl.force[1:], el.force[1:], rtol=1e-2)
+    np.testing.assert_allclose(pl.force[-1], el.force[-1], rtol=5e-3)
+    np.testing.assert_allclose(pl.force[0], el.force[0], rtol=1.5e-2)
     same, _ = scene_path(scenes["noplate-E38MPa-nu0.340-vm-Y1000MPa"], c["contact"], radius,
                          None, mesh="study")
     np.testing.assert_allclose(same.force, el.force, rtol=1e-6)

@@ -35,6 +35,24 @@ def add_soil_model_options(p: Any) -> None:
                    "--soil-model; the strengths are the library's, not fitted)")
 
 
+def soil_material_of(args: argparse.Namespace, cfg: dict[str, Any]) -> Any:
+    """The library material of ``--soil-material`` (None without it); fills
+    ``args.soil_E``/``soil_nu`` from it when they are not given. ConfigError naming the
+    flag for a key the library lacks."""
+    if args.soil_material is None:
+        return None
+    from ssw.config import library
+
+    mats = library(cfg)
+    if args.soil_material not in mats:
+        raise ConfigError("--soil-material", args.soil_material,
+                          f"a material of the library: {', '.join(sorted(mats))}")
+    mat = mats[args.soil_material]
+    args.soil_E = mat.E if args.soil_E is None else args.soil_E
+    args.soil_nu = mat.nu if args.soil_nu is None else args.soil_nu
+    return mat
+
+
 def soil_model_of(args: argparse.Namespace, cfg: dict[str, Any]) -> Any:
     """The :mod:`ssw.constitutive` model of the flags; fills ``args.soil_E``/``soil_nu``
     from ``--soil-material`` when they are not given. ConfigError naming the flag that is
@@ -43,17 +61,7 @@ def soil_model_of(args: argparse.Namespace, cfg: dict[str, Any]) -> Any:
 
     if args.soil_model is None:
         raise ConfigError("--soil-model", None, " | ".join(PLASTIC_MODELS))
-    mat = None
-    if args.soil_material is not None:
-        from ssw.config import library
-
-        mats = library(cfg)
-        if args.soil_material not in mats:
-            raise ConfigError("--soil-material", args.soil_material,
-                              f"a material of the library: {', '.join(sorted(mats))}")
-        mat = mats[args.soil_material]
-        args.soil_E = mat.E if args.soil_E is None else args.soil_E
-        args.soil_nu = mat.nu if args.soil_nu is None else args.soil_nu
+    mat = soil_material_of(args, cfg)
     for name in ("soil_E", "soil_nu"):
         if getattr(args, name) is None:
             raise ConfigError(f"--{name.replace('_', '-')}", None, "a value (or --soil-material)")

@@ -94,7 +94,7 @@ def run_tof(args: argparse.Namespace) -> dict[str, Any]:
 def _run_hits(args: argparse.Namespace) -> dict[str, Any]:
     """``--hits N`` consecutive hits on one plastic sample, or through a yielding plate
     (:mod:`ssw.walls.hits`)."""
-    from ssw.cli._soil import plate_model_of, soil_model_of
+    from ssw.cli._soil import plate_model_of, soil_material_of, soil_model_of
     from ssw.config import library, load_config
     from ssw.walls.hits import run_hits
     from ssw.walls.plastic import Settings, plastic_wall
@@ -103,15 +103,11 @@ def _run_hits(args: argparse.Namespace) -> dict[str, Any]:
     if args.soil_model is None and args.plate_model is None:
         raise ConfigError("--soil-model", None, "a plastic model of the sample (or "
                           "--plate-model: a yielding plate on an elastic sample)")
-    model = soil_model_of(args, cfg) if args.soil_model is not None else None
-    if model is None and args.soil_material is not None:  # an elastic sample of the library
-        mats = library(cfg)
-        if args.soil_material not in mats:
-            raise ConfigError("--soil-material", args.soil_material,
-                              f"a material of the library: {', '.join(sorted(mats))}")
-        m = mats[args.soil_material]
-        args.soil_E = m.E if args.soil_E is None else args.soil_E
-        args.soil_nu = m.nu if args.soil_nu is None else args.soil_nu
+    model = None
+    if args.soil_model is not None:
+        model = soil_model_of(args, cfg)
+    else:  # an elastic sample: its E and nu from the flags, or the library's
+        soil_material_of(args, cfg)
     if model is None and (args.soil_E is None or args.soil_nu is None):
         raise ConfigError("--soil-E/--soil-nu", (args.soil_E, args.soil_nu), "both given")
     ctx = chain_context(args, args.soil_E, args.soil_nu)

@@ -854,7 +854,7 @@ def _path(mesh: Mesh, E: float, nu: float, model: Any, radius: float, deltas: np
             u = u + (d - d_prev) * trend  # the last plastic increment's rate: a predictor
         prev, was_elastic = np.inf, False
         ahead = None  # the update and residual at u, when the line search computed them
-        best: tuple = (np.inf,)  # the equilibrium iterate of least residual (a stall)
+        best: tuple | None = None  # the equilibrium iterate of least residual (a stall)
         for it in range(max_iter):
             upd, known = ahead if ahead is not None else (fe.update(model, E, nu, u, state),
                                                           None)
@@ -875,7 +875,7 @@ def _path(mesh: Mesh, E: float, nu: float, model: Any, radius: float, deltas: np
             jump = np.zeros(fe.ndof)
             jump[fe.cand_dof[active]] = target[active] - u[fe.cand_dof[active]]
             err = float(np.max(np.abs(res[free]), initial=0.0))
-            if it > 0 and err < best[0] and not np.any(jump) \
+            if it > 0 and (best is None or err < best[0]) and not np.any(jump) \
                     and np.array_equal(new_active, active):
                 best = (err, u.copy(), upd, res, lam, load)
             if it > 0 and err <= tol and not np.any(jump):
@@ -928,7 +928,7 @@ def _path(mesh: Mesh, E: float, nu: float, model: Any, radius: float, deltas: np
             u[free] += du
             u += jump
         else:
-            if best[0] <= STALL_RTOL * best[5]:  # a stall within STALL_RTOL: accepted
+            if best is not None and best[0] <= STALL_RTOL * best[5]:  # a stall: accepted
                 _, u, upd, res, lam, load = best
                 stalled += 1
             elif step > h0 * 0.5 ** max_cuts * (1 + 1e-9):

@@ -7,7 +7,7 @@ CORES   ?= 2
 CONFIG  ?= config/config.yaml
 PYTEST_ARGS ?=
 
-.PHONY: setup study test test-all lint bench report clean
+.PHONY: setup study test test-all lint bench report docs clean
 
 setup:
 	@bash scripts/setup.sh
@@ -50,5 +50,15 @@ bench: setup
 report: setup
 	$(SMK) --cores $(CORES) --configfile $(CONFIG) --report results/report.html
 
+## The documentation site (Sphinx + MyST; the configuration, command-line and API
+## references are generated from the schemas, the parser and the docstrings):
+## docs/_build/html/index.html. Warnings are errors, as in tests/test_docs.py.
+## SPHINXOPTS adds options (tests/test_docs.py: a doctree cache and -a).
+DOCS_OUT ?= docs/_build/html
+SPHINXOPTS ?=
+docs: setup
+	$(VENV)/bin/sphinx-build -b html -W --keep-going -n -q $(SPHINXOPTS) docs $(DOCS_OUT)
+	@echo "docs: $(DOCS_OUT)/index.html"
+
 clean:
-	rm -rf results .snakemake
+	rm -rf results .snakemake docs/_build

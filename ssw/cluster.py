@@ -1,34 +1,106 @@
-"""What a Slurm cluster can run: a job that asks for more than any node has is an error.
+"""What a Slurm cluster can run, and how a run on it learns that its jobs ended.
 
-Slurm queues a job whose request exceeds every node forever (``Reason=PartitionConfig`` or
-``Resources``) and Snakemake waits for it without a word. The workflow checks every job it
-is about to submit against the largest node (``sinfo``) when it starts (its ``onstart``
-handler, ``workflow/rules/common.smk``) and stops with an error naming the rule, the
-resource, what it asks and what the largest node has.
+Two ways a Snakemake run on Slurm waits forever without a word, both stopped here before or
+while the run goes (the workflow's ``onstart`` handler, ``workflow/rules/common.smk``, through
+:func:`ssw.workflow.prepare_slurm_run`):
+
+* **A job no node can hold.** Slurm queues it forever (``Reason=PartitionConfig`` or
+  ``Resources``). Every job about to be submitted is checked against the largest node
+  (``sinfo``): :func:`check_jobs_fit` names the rule, the resource, the request and the
+  node's size, and nothing is submitted.
+* **A job whose end nobody sees.** snakemake-executor-plugin-slurm (2.8.0) asks Slurm for the
+  states of a run's jobs with ``sacct`` (where the ``sacct`` binary exists) or ``squeue``
+  (``--slurm-status-command``). On a cluster without accounting storage
+  (``AccountingStorageType=accounting_storage/none``) every ``sacct`` query fails, and after
+  its attempts the plugin drops the run's jobs from its list without reporting them:
+  Snakemake then waits for them forever. With ``squeue``, a job the query does not list is
+  taken as still queued, and slurmctld forgets a finished job ``MinJobAge`` seconds after
+  its end. :func:`status_command` picks the command that works on the cluster (the run's
+  settings are switched to it) or stops at once naming the flag; :class:`LostJobsWatch`
+  stops a run whose jobs Slurm no longer shows as queued or running while Snakemake still
+  waits for them.
+
+The plugin's behaviour quoted here is that of its version pinned in ``constraints.txt``
+(``snakemake_executor_plugin_slurm/__init__.py``, ``Executor.check_active_jobs``).
 """
 
 from __future__ import annotations
 
+import re
 import shutil
 import subprocess
-from collections.abc import Iterable, Mapping
-from dataclasses import dataclass
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from dataclasses import dataclass, field
 from typing import Any
 
 from ssw.errors import ConfigError, SswError
 
+#: ``AccountingStorageType`` of a cluster without accounting storage (no ``sacct``).
+NO_ACCOUNTING = "accounting_storage/none"
 
+#: The executor plugin's longest pause between two status queries of a run, s (2.8.0:
+#: ``max_sleep_time`` of ``check_active_jobs``; the pause starts at
+#: ``--slurm-init-seconds-before-status-checks`` and grows by 10 s per query that sees no
+#: job finish).
+PLUGIN_MAX_STATUS_INTERVAL_S = 180.0
+
+#: The plugin trades ``squeue`` for ``sacct`` (where the binary exists) when ``MinJobAge``
+#: is shorter than this many times ``--slurm-init-seconds-before-status-checks`` (2.8.0).
+PLUGIN_SQUEUE_AGE_FACTOR = 3
+
+#: Job states (``squeue -o %T``, ``sacct -o State``) of a job that still waits for or holds
+#: its resources; every other state (COMPLETED, FAILED, CANCELLED, TIMEOUT, OUT_OF_MEMORY,
+#: NODE_FAIL, BOOT_FAIL, DEADLINE, PREEMPTED, REVOKED, SPECIAL_EXIT) is final. Slurm 22.05
+#: ``squeue(1)``, JOB STATE CODES.
+ACTIVE_STATES = frozenset({
+    "PENDING", "RUNNING", "CONFIGURING", "COMPLETING", "SUSPENDED", "REQUEUED",
+    "REQUEUE_FED", "REQUEUE_HOLD", "RESIZING", "SIGNALING", "STAGE_OUT", "STOPPED",
+    "RESV_DEL_HOLD",
+})
+
+#: Seconds between two looks of :func:`watch_lost_jobs` at the run's jobs.
+WATCH_POLL_S = 15.0
+#: Seconds Slurm may list no job of a run at all (a submission in flight) before the run's
+#: jobs count as lost.
+VANISH_GRACE_S = 60.0
+
+
+# --------------------------------------------------------------------- nodes and jobs
 @dataclass(frozen=True)
 class NodeLimits:
-    """The largest node of a cluster: CPUs and memory (MB), each the maximum over nodes."""
+    """The largest node of a cluster, each field the maximum over its nodes.
+
+    Attributes
+    ----------
+    cpus : int
+        CPUs of the node with the most.
+    mem_mb : int
+        Memory of the node with the most, MB.
+    """
 
     cpus: int
     mem_mb: int
 
 
 def parse_sinfo(text: str) -> NodeLimits:
-    """:class:`NodeLimits` of ``sinfo -h -N -o "%c %m"`` output (one line per node: CPUs,
-    memory in MB; ``sinfo`` may append ``+`` to a range's lower end)."""
+    """The largest node in ``sinfo -h -N -o "%c %m"`` output.
+
+    Parameters
+    ----------
+    text : str
+        One line per node: CPUs, memory in MB (``sinfo`` may append ``+`` to a range's
+        lower end).
+
+    Returns
+    -------
+    NodeLimits
+        The maximum CPUs and the maximum memory over the nodes.
+
+    Raises
+    ------
+    SswError
+        No line names a node with CPUs and memory.
+    """
     cpus, mem = 0, 0
     for line in text.splitlines():
         parts = line.split()
@@ -44,31 +116,79 @@ def parse_sinfo(text: str) -> NodeLimits:
     return NodeLimits(cpus, mem)
 
 
-def node_limits(partition: str | None = None) -> NodeLimits:
-    """The largest node of the cluster (of ``partition`` when given), from ``sinfo``."""
-    if shutil.which("sinfo") is None:
-        raise SswError("sinfo is not on PATH: is this a Slurm cluster's login node?")
-    cmd = ["sinfo", "-h", "-N", "-o", "%c %m"]
-    if partition:
-        cmd += ["-p", partition]
+def _run(cmd: list[str], what: str) -> str:
+    """stdout of a Slurm command; SswError naming it when it is missing or fails."""
+    if shutil.which(cmd[0]) is None:
+        raise SswError(f"{cmd[0]} is not on PATH: is this a Slurm cluster's login node? "
+                       f"({what})")
     try:
         out = subprocess.run(cmd, capture_output=True, text=True, timeout=60, check=True)
     except (OSError, subprocess.SubprocessError) as exc:
-        raise SswError(f"{' '.join(cmd)} failed: {exc}") from exc
-    return parse_sinfo(out.stdout)
+        raise SswError(f"{' '.join(cmd)} failed ({what}): {exc}") from exc
+    return out.stdout
+
+
+def node_limits(partition: str | None = None) -> NodeLimits:
+    """The largest node of the cluster, from ``sinfo``.
+
+    Parameters
+    ----------
+    partition : str or None
+        Only this partition's nodes (every node when None).
+
+    Returns
+    -------
+    NodeLimits
+        Its CPUs and memory.
+
+    Raises
+    ------
+    SswError
+        ``sinfo`` is missing or fails.
+    """
+    cmd = ["sinfo", "-h", "-N", "-o", "%c %m"]
+    if partition:
+        cmd += ["-p", partition]
+    return parse_sinfo(_run(cmd, "the nodes' CPUs and memory"))
 
 
 def job_cpus(threads: int, resources: Mapping[str, Any]) -> int:
-    """CPUs a job's sbatch asks for: ``cpus_per_task`` (else ``threads``) times ``tasks``
-    (the Slurm executor's rule: ``--cpus-per-task`` and ``--ntasks``)."""
+    """CPUs a job's sbatch asks for (the Slurm executor's ``--cpus-per-task`` times
+    ``--ntasks``).
+
+    Parameters
+    ----------
+    threads : int
+        The rule's threads (``--cpus-per-task`` unless resources ``cpus_per_task`` is set).
+    resources : Mapping[str, Any]
+        The job's resources (``cpus_per_task``, ``tasks``).
+
+    Returns
+    -------
+    int
+        CPUs per task times tasks.
+    """
     per_task = resources.get("cpus_per_task") or threads or 1
     return int(per_task) * int(resources.get("tasks") or 1)
 
 
 def oversized(jobs: Iterable[tuple[str, int, Mapping[str, Any]]], limits: NodeLimits
               ) -> list[str]:
-    """One message per job (``(rule, threads, resources)``) that asks for more CPUs or
-    memory than the largest node has (single-node jobs: ``nodes`` unset or 1)."""
+    """The jobs that ask for more CPUs or memory than the largest node has.
+
+    Parameters
+    ----------
+    jobs : Iterable[tuple[str, int, Mapping[str, Any]]]
+        ``(rule, threads, resources)`` of each job; jobs over several nodes (resources
+        ``nodes`` > 1) are not checked.
+    limits : NodeLimits
+        The largest node.
+
+    Returns
+    -------
+    list[str]
+        One message per request that no node can hold.
+    """
     out = []
     for rule, threads, res in jobs:
         if int(res.get("nodes") or 1) > 1:
@@ -86,7 +206,20 @@ def oversized(jobs: Iterable[tuple[str, int, Mapping[str, Any]]], limits: NodeLi
 
 def check_jobs_fit(jobs: Iterable[tuple[str, int, Mapping[str, Any]]],
                    limits: NodeLimits | None = None) -> None:
-    """ConfigError listing every job that no node can run (:func:`oversized`)."""
+    """Stop a run that holds a job no node can run (:func:`oversized`).
+
+    Parameters
+    ----------
+    jobs : Iterable[tuple[str, int, Mapping[str, Any]]]
+        ``(rule, threads, resources)`` of each job to be submitted.
+    limits : NodeLimits or None
+        The largest node (None: :func:`node_limits`).
+
+    Raises
+    ------
+    ConfigError
+        Listing every request that no node can hold.
+    """
     limits = limits or node_limits()
     bad = sorted(set(oversized(jobs, limits)))
     if bad:
@@ -94,3 +227,358 @@ def check_jobs_fit(jobs: Iterable[tuple[str, int, Mapping[str, Any]]],
                           "requests a node of the cluster can hold (lower them with "
                           "--set-resources RULE:mem_mb=... or the profile's set-resources; "
                           "no job was submitted)")
+
+
+# --------------------------------------------------------------------- job states
+@dataclass(frozen=True)
+class SlurmConfig:
+    """What the controller says about how long it keeps jobs (``scontrol show config``).
+
+    Attributes
+    ----------
+    accounting_storage : str
+        ``AccountingStorageType`` (:data:`NO_ACCOUNTING`: no ``sacct`` history).
+    min_job_age_s : int or None
+        ``MinJobAge``, s: how long slurmctld (and so ``squeue``) keeps a finished job;
+        None when the controller does not say.
+    """
+
+    accounting_storage: str
+    min_job_age_s: int | None
+
+    @property
+    def keeps_accounting(self) -> bool:
+        """Whether ``sacct`` can answer (accounting storage other than none)."""
+        return self.accounting_storage != NO_ACCOUNTING
+
+
+def _seconds(value: str) -> int | None:
+    """Seconds of a ``scontrol`` duration such as ``300 sec``, ``5 min`` or ``1h``."""
+    m = re.match(r"^\s*(\d+)\s*([a-zA-Z]*)", value)
+    if not m:
+        return None
+    unit = m.group(2).lower()
+    scale = {"h": 3600, "hour": 3600, "hours": 3600, "min": 60, "mins": 60,
+             "minute": 60, "minutes": 60}.get(unit, 1)
+    return int(m.group(1)) * scale
+
+
+def parse_scontrol_config(text: str) -> SlurmConfig:
+    """The accounting storage and ``MinJobAge`` in ``scontrol show config`` output.
+
+    Parameters
+    ----------
+    text : str
+        ``Key = value`` lines.
+
+    Returns
+    -------
+    SlurmConfig
+        The two settings (accounting ``none`` when the output does not name it: without
+        the key Slurm keeps no accounting).
+    """
+    values = {}
+    for line in text.splitlines():
+        key, sep, value = line.partition("=")
+        if sep:
+            values[key.strip()] = value.strip()
+    age = values.get("MinJobAge")
+    return SlurmConfig(values.get("AccountingStorageType", NO_ACCOUNTING),
+                       None if age is None else _seconds(age))
+
+
+def slurm_config() -> SlurmConfig:
+    """This cluster's :class:`SlurmConfig`, from ``scontrol show config``.
+
+    Returns
+    -------
+    SlurmConfig
+        Its accounting storage and ``MinJobAge``.
+
+    Raises
+    ------
+    SswError
+        ``scontrol`` is missing or fails.
+    """
+    return parse_scontrol_config(_run(["scontrol", "show", "config"],
+                                      "the controller's accounting and MinJobAge"))
+
+
+def effective_status_command(requested: str, min_job_age_s: int | None, init_s: int,
+                             sacct_on_path: bool) -> str:
+    """The command the executor plugin queries job states with, given its setting.
+
+    Parameters
+    ----------
+    requested : str
+        ``--slurm-status-command`` (``sacct`` or ``squeue``; the plugin's default is
+        ``sacct`` wherever the binary exists).
+    min_job_age_s : int or None
+        The cluster's ``MinJobAge``, s (None: unknown).
+    init_s : int
+        ``--slurm-init-seconds-before-status-checks``, s.
+    sacct_on_path : bool
+        Whether the ``sacct`` binary exists.
+
+    Returns
+    -------
+    str
+        ``sacct`` or ``squeue``: the plugin (2.8.0) trades ``squeue`` for ``sacct`` when the
+        binary exists and ``MinJobAge`` is unknown or shorter than
+        :data:`PLUGIN_SQUEUE_AGE_FACTOR` x ``init_s``, and ``sacct`` for ``squeue`` when
+        the binary is missing.
+    """
+    cmd = requested
+    if cmd == "squeue" and sacct_on_path and (
+            min_job_age_s is None or min_job_age_s < PLUGIN_SQUEUE_AGE_FACTOR * init_s):
+        cmd = "sacct"
+    if cmd == "sacct" and not sacct_on_path:
+        cmd = "squeue"
+    return cmd
+
+
+def status_command(cluster: SlurmConfig, requested: str, init_s: int,
+                   sacct_on_path: bool) -> str:
+    """The ``--slurm-status-command`` that lets a run see its jobs end on this cluster.
+
+    Parameters
+    ----------
+    cluster : SlurmConfig
+        The controller's accounting storage and ``MinJobAge``.
+    requested : str
+        The run's ``--slurm-status-command`` (``sacct`` or ``squeue``).
+    init_s : int
+        The run's ``--slurm-init-seconds-before-status-checks``, s.
+    sacct_on_path : bool
+        Whether the ``sacct`` binary exists.
+
+    Returns
+    -------
+    str
+        ``requested`` where the cluster keeps accounting (``sacct`` works there, and
+        ``squeue`` is the user's choice); ``squeue`` on a cluster without accounting,
+        where every ``sacct`` query fails.
+
+    Raises
+    ------
+    ConfigError
+        On a cluster without accounting whose ``MinJobAge`` is unknown or shorter than
+        :data:`PLUGIN_SQUEUE_AGE_FACTOR` x ``init_s``: the plugin would query with
+        ``sacct`` whatever the setting (:func:`effective_status_command`), so no job is
+        submitted and the message names the flag that helps.
+    """
+    if cluster.keeps_accounting:
+        return requested
+    cmd = "squeue"
+    if effective_status_command(cmd, cluster.min_job_age_s, init_s, sacct_on_path) != cmd:
+        age = cluster.min_job_age_s
+        limit = "" if age is None else f" = {age // PLUGIN_SQUEUE_AGE_FACTOR} s"
+        raise ConfigError(
+            "--slurm-init-seconds-before-status-checks", init_s,
+            f"at most MinJobAge/{PLUGIN_SQUEUE_AGE_FACTOR}{limit} on this cluster "
+            f"(MinJobAge = {age}): it keeps no accounting (AccountingStorageType = "
+            f"{cluster.accounting_storage}), so job states can only come from squeue, and "
+            "the executor plugin queries sacct instead when MinJobAge is shorter than "
+            f"{PLUGIN_SQUEUE_AGE_FACTOR} x this delay; every sacct query fails there and "
+            "the run would wait forever (no job was submitted)")
+    return cmd
+
+
+def short_job_age(cluster: SlurmConfig, status: str) -> str | None:
+    """A warning when ``squeue`` may forget a finished job before a status query sees it.
+
+    Parameters
+    ----------
+    cluster : SlurmConfig
+        The controller's ``MinJobAge``.
+    status : str
+        The status command the run uses.
+
+    Returns
+    -------
+    str or None
+        The warning when the run queries ``squeue`` and ``MinJobAge`` is shorter than the
+        plugin's longest pause between queries (:data:`PLUGIN_MAX_STATUS_INTERVAL_S`),
+        else None.
+    """
+    age = cluster.min_job_age_s
+    if status != "squeue" or age is None or age >= PLUGIN_MAX_STATUS_INTERVAL_S:
+        return None
+    return (f"MinJobAge = {age} s is shorter than the executor plugin's longest pause "
+            f"between status queries ({PLUGIN_MAX_STATUS_INTERVAL_S:.0f} s): squeue may "
+            "forget a finished job before a query sees it; such a run stops with a message "
+            "(ssw.cluster.LostJobsWatch). Ask for MinJobAge >= 300 s.")
+
+
+def parse_job_states(text: str) -> dict[str, str]:
+    """Job id -> state in ``ID|STATE`` lines (``squeue -o '%i|%T'``, ``sacct --parsable2
+    -o JobIdRaw,State``).
+
+    Parameters
+    ----------
+    text : str
+        The command's output.
+
+    Returns
+    -------
+    dict[str, str]
+        The state's first word (``sacct`` writes ``CANCELLED by 0``), upper case.
+    """
+    out = {}
+    for line in text.splitlines():
+        jid, sep, state = line.partition("|")
+        if sep and jid.strip() and state.strip():
+            out[jid.strip()] = state.split()[0].upper()
+    return out
+
+
+@dataclass
+class LostJobsWatch:
+    """Decides when a run's cluster jobs are lost: Snakemake waits for jobs, and Slurm
+    shows none of the run's jobs queued or running.
+
+    Two cases, each with its own patience:
+
+    * **vanished**: Slurm lists no job of the run at all for ``vanish_s`` (slurmctld forgot
+      them ``MinJobAge`` after their end, or lost its state); an executor plugin that
+      queries ``squeue`` takes them as still queued forever;
+    * **unseen**: every job of the run Slurm lists has ended, for ``stall_s``: longer than
+      the plugin's longest pause between queries, so its queries no longer report them (it
+      drops the jobs of a status query that failed on every attempt).
+
+    Attributes
+    ----------
+    vanish_s : float
+        Patience of the vanished case, s.
+    stall_s : float
+        Patience of the unseen case, s.
+    """
+
+    vanish_s: float
+    stall_s: float
+    _absent_since: float | None = field(default=None, repr=False)
+    _ended_since: float | None = field(default=None, repr=False)
+
+    def step(self, now: float, waiting: Sequence[str], states: Mapping[str, str] | None
+             ) -> str | None:
+        """Take one look; the message when the run's jobs count as lost.
+
+        Parameters
+        ----------
+        now : float
+            A monotonic clock, s.
+        waiting : Sequence[str]
+            The cluster jobs Snakemake waits for (their names).
+        states : Mapping[str, str] or None
+            Job id -> state of the run's jobs (None: the query failed; the look counts for
+            nothing).
+
+        Returns
+        -------
+        str or None
+            Why the run cannot end, naming the jobs; None while it can.
+        """
+        if not waiting:
+            self._absent_since = self._ended_since = None
+            return None
+        if states is None:
+            return None
+        if any(s in ACTIVE_STATES for s in states.values()):
+            self._absent_since = self._ended_since = None
+            return None
+        names = ", ".join(waiting[:10]) + (f" and {len(waiting) - 10} more"
+                                            if len(waiting) > 10 else "")
+        if not states:
+            self._ended_since = None
+            self._absent_since = now if self._absent_since is None else self._absent_since
+            if now - self._absent_since >= self.vanish_s:
+                return (f"Slurm lists no job of this run any more (for "
+                        f"{now - self._absent_since:.0f} s) while Snakemake waits for "
+                        f"{len(waiting)} cluster job(s): {names}. Their ends cannot be seen: "
+                        "slurmctld forgets a finished job MinJobAge after it ends (scontrol "
+                        "show config), or lost its jobs in a restart. Outputs of finished "
+                        "jobs are kept; run the same command again to redo the rest.")
+            return None
+        self._absent_since = None
+        self._ended_since = now if self._ended_since is None else self._ended_since
+        if now - self._ended_since >= self.stall_s:
+            ended = ", ".join(f"{j} {s}" for j, s in sorted(states.items())[:10])
+            return (f"every Slurm job of this run has ended ({ended}) for "
+                    f"{now - self._ended_since:.0f} s, but the executor plugin's status "
+                    f"queries no longer report them, while Snakemake waits for "
+                    f"{len(waiting)} cluster job(s): {names}. Outputs of finished jobs "
+                    "are kept; run the same command again to redo the rest.")
+        return None
+
+
+def watch_lost_jobs(query: Callable[[], Mapping[str, str] | None],
+                    waiting: Callable[[], Sequence[str]],
+                    on_lost: Callable[[str], None], stall_s: float,
+                    vanish_s: float = VANISH_GRACE_S, poll_s: float = WATCH_POLL_S) -> Any:
+    """Start a daemon thread that calls ``on_lost`` once when a run's jobs are lost
+    (:class:`LostJobsWatch`).
+
+    Parameters
+    ----------
+    query : Callable[[], Mapping[str, str] | None]
+        Job id -> state of the run's jobs as the controller lists them (the executor
+        plugin's ``squeue`` query; None when the query fails).
+    waiting : Callable[[], Sequence[str]]
+        The cluster jobs Snakemake waits for.
+    on_lost : Callable[[str], None]
+        Called with the message; the thread ends after it.
+    stall_s : float
+        ``LostJobsWatch.stall_s``, s.
+    vanish_s : float
+        ``LostJobsWatch.vanish_s``, s.
+    poll_s : float
+        Seconds between two looks.
+
+    Returns
+    -------
+    threading.Thread
+        The started thread.
+    """
+    import threading
+    import time
+
+    watch = LostJobsWatch(vanish_s, stall_s)
+
+    def loop() -> None:
+        while True:
+            time.sleep(poll_s)
+            try:
+                jobs = list(waiting())
+            except RuntimeError:  # Snakemake changed its set of running jobs meanwhile
+                continue
+            msg = watch.step(time.monotonic(), jobs, query() if jobs else {})
+            if msg is not None:
+                on_lost(msg)
+                return
+
+    thread = threading.Thread(target=loop, name="ssw-lost-jobs-watch", daemon=True)
+    thread.start()
+    return thread
+
+
+def query_states(command: str) -> dict[str, str] | None:
+    """Job id -> state from a status command (``ID|STATE`` lines); None when it fails.
+
+    Parameters
+    ----------
+    command : str
+        The command line (split with ``shlex.split``, run without a shell).
+
+    Returns
+    -------
+    dict[str, str] or None
+        :func:`parse_job_states` of its output.
+    """
+    import shlex
+
+    try:
+        out = subprocess.run(shlex.split(command), capture_output=True, text=True,
+                             timeout=60)
+    except (OSError, subprocess.SubprocessError):
+        return None
+    return parse_job_states(out.stdout) if out.returncode == 0 else None

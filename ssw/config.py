@@ -65,7 +65,7 @@ def check_moved_keys(cfg: dict[str, Any]) -> None:
 def validate_config(cfg: dict[str, Any]) -> dict[str, Any]:
     """Validate ``cfg`` in place against the schema, fill defaults, and run semantic checks.
 
-    Returns ``cfg``. Raises :class:`ConfigError` on the first problem (the deepest error of
+    Returns ``cfg``. Raises :class:`.ConfigError` on the first problem (the deepest error of
     the schema, so that the message names the offending field).
     """
     from ssw.schema import first_error, path_of
@@ -165,7 +165,7 @@ def _materials_path(cfg: dict[str, Any]) -> Path:
 
 
 def check_config(cfg: dict[str, Any]) -> None:
-    """Checks the schema cannot express. Raises :class:`ConfigError` naming the field."""
+    """Checks the schema cannot express. Raises :class:`.ConfigError` naming the field."""
     mats = library(cfg)
     known = ", ".join(sorted(mats))
 
@@ -270,7 +270,7 @@ class Scene:
     def scene_id(self) -> str:
         """File-name-safe identifier, e.g. ``pla-t400um-E10MPa-nu0.300``; lossless: two
         scenes have the same id only when they are equal (every number reads back to its
-        value exactly, :func:`_lossless`), so two grid points never share a curve."""
+        value exactly), so two grid points never share a curve."""
         plate = (
             "noplate"
             if self.plate_thickness == 0

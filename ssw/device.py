@@ -206,7 +206,8 @@ def _yaml_field(name: str) -> str:
 def device_from_dict(data: dict[str, Any], source: str = "") -> Device:
     """A device from its nested layout: schema-validated, defaults filled.
 
-    Raises :class:`ConfigError` naming the field (``device.<path>``), the value and what is
+    Raises :class:`~ssw.errors.ConfigError` naming the field (``device.<path>``), the value and
+    what is
     allowed.
     """
     from ssw.schema import first_error, path_of

@@ -185,9 +185,12 @@ def atomic_h5(
 
     Parameters
     ----------
-    path : destination file.
-    kind : value of the ``ssw_kind`` root attribute.
-    inputs : every input that produced the file (SI units); stored as ``inputs_json``.
+    path : str or os.PathLike
+        Destination file.
+    kind : str
+        Value of the ``ssw_kind`` root attribute.
+    inputs : Mapping
+        Every input that produced the file (SI units); stored as ``inputs_json``.
     """
     import h5py
 
@@ -228,7 +231,7 @@ def read_inputs(f: Any) -> dict[str, Any]:
 
 
 def check_kind(f: Any, kind: str) -> None:
-    """Raise :class:`SswError` unless the open file's ``ssw_kind`` is ``kind``."""
+    """Raise :class:`~ssw.errors.SswError` unless the open file's ``ssw_kind`` is ``kind``."""
     got = f.attrs.get("ssw_kind")
     if got != kind:
         raise SswError(f"{getattr(f, 'filename', f)}: ssw_kind is {got!r}, expected {kind!r}")

@@ -6,6 +6,9 @@ Equations (Johnson 1985, *Contact Mechanics*, ch. 4; Popov 2010, ch. 5; Sneddon 
 * effective radius ``1/R* = 1/R1 + 1/R2`` (a flat: ``R = inf``);
 * force ``F = 4/3 E* sqrt(R*) delta^(3/2)``; contact radius ``a = sqrt(R* delta)``;
 * peak pressure ``p0 = 3 F / (2 pi a^2) = 2 E* a / (pi R*)``;
+* stored energy ``U = (2/5) A delta^(5/2)``; the indentation at which ``U`` exceeds the work
+  of a constant load ``P`` by ``W``, ``(2/5) A delta^(5/2) - P delta = W`` (an energy bound of
+  the indentation an impact reaches);
 * impact duration of two bodies of reduced mass ``m`` meeting at speed ``v`` under
   ``F = A delta^(3/2)``: ``t_c = 2.9432 (5 m / (4 A))^(2/5) v^(-1/5)`` (Johnson 1985, eq. 11.24);
 * exact (non-paraboloidal) rigid sphere on an elastic half-space (Sneddon 1965):
@@ -20,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from ssw.errors import ConfigError
+from ssw.roots import find_root
 
 
 def _check_positive(name: str, value: ArrayLike) -> NDArray[np.float64]:
@@ -92,6 +96,55 @@ def pressure_profile(
     p0 = peak_pressure(delta, E_star, R_star)
     s = 1.0 - (np.asarray(r, float) / np.where(a > 0, a, np.inf)) ** 2
     return p0 * np.sqrt(np.clip(s, 0.0, None))
+
+
+def energy_indentation(A: ArrayLike, energy: ArrayLike, load: ArrayLike = 0.0
+                       ) -> NDArray[np.float64]:
+    """Indentation (m) at which ``F = A delta^(3/2)`` stores ``energy`` more than the work of
+    a constant ``load``: the positive root of
+
+        ``(2/5) A delta^(5/2) - P delta = W``,
+
+    the bound energy conservation sets on the indentation of an impact that brings ``W``
+    while ``P`` presses on (Johnson 1985, ch. 11). Without a load it is
+    ``(5 W / (2 A))^(2/5)``; with one, the root of the convex left side (negative, then
+    increasing beyond its minimum) by :func:`ssw.roots.find_root` on the bracket
+    ``[max((5 W / (2 A))^(2/5), (5 P / (2 A))^(2/3)), max((5 W / A)^(2/5), (5 P / A)^(2/3))]``
+    (at the lower end the left side is ``-P delta`` or ``-W``, <= 0: the bracket starts
+    1e-9 below it; at the upper one ``(1/5) A delta^(5/2)`` covers ``W`` and ``P delta``
+    each); without an energy the root is ``(5 P / (2 A))^(2/3)``. The upper end of the
+    final bracket is returned: the contact stores at least ``W + P delta`` there, so the
+    value bounds the reach from above, as its users need (a range that must hold the
+    energy, an upper bound of a peak).
+
+    Parameters
+    ----------
+    A : array_like
+        Hertz coefficient (N m^-3/2), > 0.
+    energy : array_like
+        ``W``, J, >= 0.
+    load : array_like
+        ``P``, N, >= 0.
+
+    Returns
+    -------
+    ndarray
+        Indentation (m), the broadcast shape of the inputs.
+    """
+    Aa = _check_positive("A", A)
+    W, P = np.broadcast_arrays(np.asarray(energy, float), np.asarray(load, float))
+    if np.any(~(W >= 0)) or np.any(~(P >= 0)):
+        raise ConfigError("energy", (energy, load), "energies and loads >= 0 (J, N)")
+    Aa, W, P = np.broadcast_arrays(Aa, W, P)
+    lo = (2.5 * W / Aa) ** 0.4
+    if not np.any(P > 0):
+        return lo
+    # a hair below the lower end: there the left side is negative by far more than its
+    # round-off (its slope is at least 1.5 W / delta, or 1.5 P)
+    lo = (1.0 - 1e-9) * np.maximum(lo, (2.5 * P / Aa) ** (2.0 / 3.0))
+    hi = np.maximum((5.0 * W / Aa) ** 0.4, (5.0 * P / Aa) ** (2.0 / 3.0))
+    root = find_root(lambda d: 0.4 * Aa * d**2.5 - P * d - W, lo, hi)
+    return root.hi
 
 
 def contact_time(m_eff: ArrayLike, A: ArrayLike, v: ArrayLike) -> NDArray[np.float64]:

@@ -89,9 +89,11 @@ def lift_errors(params: Any, E1: float, nu: float, ratios: Any, thicknesses: Any
                 E_grid: Any = None) -> LiftErrors:
     """``E_app / E1 - 1`` of a lift (E1 Pa, nu; ``thicknesses`` m) on subgrades of
     ``ratios`` x E1 (``subgrade_nu``, default ``nu``), read through the device's chain
-    ``params`` as a half-space (module docstring). ``E_grid`` (Pa): the half-spaces the
-    inversion interpolates between (default 41 moduli over E1/5..5 E1, log-spaced)."""
+    ``params`` as a half-space (module docstring): the layered TOFs inverted by
+    :func:`ssw.tof.inverse.invert_batch` on the half-spaces' TOFs (``E_grid``, Pa: the
+    half-spaces; default 41 moduli over E1/5..5 E1, log-spaced)."""
     from ssw.tof import api
+    from ssw.tof.inverse import ForwardGrid, invert_batch
 
     ratios = np.atleast_1d(np.asarray(ratios, float))
     hs = np.atleast_1d(np.asarray(thicknesses, float))
@@ -104,16 +106,19 @@ def lift_errors(params: Any, E1: float, nu: float, ratios: Any, thicknesses: Any
             else np.asarray(E_grid, float))
     half = [_curve(params, float(E), nu, None, energy) for E in grid]
     tof_half = np.asarray(api.tof(grid, np.full(grid.size, nu), params, "table", curve=half))
-    if np.any(np.diff(tof_half) >= 0):
-        raise ConfigError("E_grid", grid.tolist(), "moduli whose TOFs fall monotonically")
     curves = [_curve(params, E1, nu, (h, r * E1, nu2), energy) for r in ratios for h in hs]
     tof = np.asarray(api.tof(np.full(len(curves), E1), np.full(len(curves), nu), params,
                              "table", curve=curves)).reshape(ratios.size, hs.size)
-    lo, hi = tof_half[-1], tof_half[0]
-    if np.any((tof < lo) | (tof > hi)):
+    # the one TOF inversion (its guards, its interpolation) on the half-spaces' grid
+    half_grid = ForwardGrid(grid, tof_half[None, :], np.array([float(nu)]), {})
+    inv = invert_batch(tof.ravel(), float(nu), params, "table", grid=half_grid, refine=0,
+                       strict=False)
+    bad = [r for r in inv.reason if r]
+    if bad:
         raise ConfigError("E_grid", [grid[0], grid[-1]],
-                          "a range of half-spaces that brackets every layered TOF")
-    E_app = np.exp(np.interp(-np.log(tof), -np.log(tof_half), np.log(grid)))
+                          "half-space moduli whose TOFs fall strictly and bracket every "
+                          f"layered TOF ({bad[0]})")
+    E_app = inv.E.reshape(tof.shape)
     return LiftErrors(float(E1), float(nu), nu2, ratios, hs, E_app / E1 - 1.0, tof)
 
 

@@ -9,7 +9,7 @@ covariance, the Poisson's ratio range, the wall law's and the integrator's error
 TOF's sampling uncertainty (below).
 
 Scatter. The TOF's standard error is the accepted hits' sample standard deviation over the
-square root of their number; with fewer than :data:`MIN_HITS_FOR_SCATTER` accepted hits the
+square root of their number; with fewer than ``MIN_HITS_FOR_SCATTER`` accepted hits the
 scatter is not estimable: the device's stated scatter (``repeatability.tof_std`` of its
 file) is used instead and the term is labelled ``tof (stated scatter)``; without one, the
 term is missing from the interval, which says so (``missing_terms``), and a survey verdict
@@ -184,18 +184,30 @@ def measure(
 
     Parameters
     ----------
-    recordings : :class:`ssw.daq.recording.Recording` objects (one or more sessions).
-    nu : the medium's Poisson's ratio, or a range ``(lo, hi)``.
-    params, wall, wall_options : the (calibrated) device's chain and wall law.
-    calibration : the :class:`ssw.calibration.Calibration` (its covariance enters) or None.
-    device : the :class:`ssw.device.Device` (its stated TOF scatter, when there are too few
-        hits to estimate one).
-    strength : the sample's uniaxial strength, Pa (:func:`uniaxial_strength`), or None:
-        with it, the measurement reports its yield index (:func:`yield_check`) and warns
-        when the sample yielded.
-    sample_range : the wall options of the thinnest and the thickest sample of a stated
-        range of sample thickness (``ssw measure --sample-thickness LO:HI``; the central E
-        is the middle one's, ``wall_options``): the spread of E between them enters the
+    recordings : list of ssw.daq.recording.Recording
+        The sessions of the test point (one or more).
+    nu : float or tuple of float
+        The medium's Poisson's ratio, or a range ``(lo, hi)``.
+    params : ssw.chain.params.ChainParams
+        The (calibrated) device's chain.
+    wall : str
+        The wall law's name (:data:`ssw.walls.WALLS`).
+    wall_options : dict or None
+        The wall builder's options (its plate, sample and contact settings).
+    calibration : ssw.calibration.Calibration or None
+        The calibration whose covariance enters the interval.
+    tof_options : ssw.signal.tof.TofOptions or None
+        Options of the TOF picking and the rejection rule (:func:`pooled_tof`).
+    device : ssw.device.Device or None
+        The device (its stated TOF scatter, when there are too few hits to estimate one).
+    strength : float or None
+        The sample's uniaxial strength, Pa (:func:`uniaxial_strength`), or None: with it,
+        the measurement reports its yield index (:func:`yield_check`) and warns when the
+        sample yielded.
+    sample_range : list of dict or None
+        The wall options of the thinnest and the thickest sample of a stated range of
+        sample thickness (``ssw measure --sample-thickness LO:HI``; the central E is the
+        middle one's, ``wall_options``): the spread of E between them enters the
         budget as a uniform term, ``|ln(E_hi / E_lo)| / (2 sqrt 3)`` (``sample``).
     """
     from ssw.modulus import estimate_moduli

@@ -41,7 +41,7 @@ COVERAGE_Z = 1.96
 #: Relative TOF error of the default 80 velocity-Verlet steps per contact against an
 #: independent DOP853 solution (rtol 1e-10), the largest over soils of 10-1000 MPa (nu 0.3)
 #: for the thesis chain at its nominal striker speed (0.52 m/s: 3.5e-5, at 1000 MPa) and at
-#: the study's calibrated one (0.39 m/s: 4.85e-5, at 1000 MPa); rounded up. It scales as
+#: the study's calibrated one (0.39 m/s: 4.95e-5, at 1000 MPa); rounded up. It scales as
 #: dt^2 (tests/test_chain_order.py, tests/test_inverse_trust.py).
 INTEGRATOR_REL_ERROR_80 = 5.0e-5
 #: Relative step of E for k = d ln TOF / d ln E.
@@ -104,11 +104,23 @@ def estimate_moduli(
 
     Parameters
     ----------
-    tof : (k,) measured mean TOFs, s.  tof_sem : (k,) their standard errors, s; NaN where the
-        scatter is not known (the ``tof`` term is then listed as missing).
-    nu : a Poisson's ratio per sample, or (k, 2) ranges ``[lo, hi]``.
-    params : ChainParams of the (calibrated) device.  wall, wall_options : the wall law.
-    calibration : :class:`ssw.calibration.Calibration` whose covariance enters (or None).
+    tof : array_like
+        (k,) measured mean TOFs, s.
+    tof_sem : array_like
+        (k,) their standard errors, s; NaN where the scatter is not known (the ``tof``
+        term is then listed as missing).
+    nu : array_like
+        A Poisson's ratio per sample, or (k, 2) ranges ``[lo, hi]``.
+    params : ssw.chain.params.ChainParams
+        The chain of the (calibrated) device.
+    wall : str
+        The wall law's name (:data:`ssw.walls.WALLS`).
+    wall_options : dict or None
+        The wall builder's options.
+    calibration : ssw.calibration.Calibration or None
+        The calibration whose covariance enters the interval.
+    E_range : tuple of float
+        ``(lo, hi)``, Pa: the moduli the inversion searches.
     """
     from ssw.chain.wall import beyond_exact_reach
     from ssw.tof import api
@@ -136,7 +148,7 @@ def estimate_moduli(
     names: tuple[str, ...] = ()
     cov = None
     if calibration is not None and calibration.covariance is not None:
-        names = calibration.continuous()
+        names = calibration.covariance_parameters
         cov = calibration.covariance_array()
     Es = [E * (1 + E_STEP), E * (1 - E_STEP)]
     nus_run = [nu_c, nu_c]
@@ -173,6 +185,10 @@ def estimate_moduli(
         else:
             contrib["tof"] = float(S[i] / (T[i] * abs(kk)))
         if cov is not None:
+            if calibration.at_bound:  # held parameters: fixed, not part of the covariance
+                notes.append("the calibration holds " + ", ".join(
+                    f"{n} on its {side} bound" for n, side in calibration.at_bound.items())
+                    + ": its term is conditional on that")
             g = np.empty(len(names))
             for j, n in enumerate(names):
                 plus, minus = ends[n]
@@ -229,11 +245,36 @@ class Estimator:
     """E with its interval from (mean TOF, standard error), fast enough to call after every
     hit (``ssw acquire``'s running E; :class:`ssw.signal.live.LiveTof`).
 
-    The device's TOF(E) is computed once on the inverse's grid (one batched run) and
-    inverted by PCHIP in ln E; the contributions that do not depend on the TOF's scatter
-    (calibration, Poisson's ratio, wall law, integrator) come from one full
-    :func:`estimate_moduli` at the first estimate's TOF and are kept (they change slowly
-    with E); the TOF's own contribution is recomputed at every call.
+    E is the inversion ``ssw measure`` makes (:func:`ssw.tof.inverse.invert_batch`, with
+    its guards and its secant refinement on the forward model), on the device's forward
+    grid computed once (:func:`ssw.tof.inverse.forward_grid`, one batched run): the same
+    recording gives the same E live and in ``ssw measure``. The contributions that do not
+    depend on the TOF's scatter (calibration, Poisson's ratio, wall law, integrator) come
+    from one full :func:`estimate_moduli` at the first estimate's TOF and are kept (they
+    change slowly with E); the TOF's own contribution is recomputed at every call, with the
+    grid's interpolated slope ``d ln E / d TOF``.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The (calibrated) device's chain.
+    wall : str
+        The wall law's name.
+    wall_options : dict, optional
+        The wall law's options.
+    nu : array_like
+        The sample's Poisson's ratio, or its range ``(lo, hi)`` (E at its middle).
+    calibration : Calibration, optional
+        The calibration whose covariance enters.
+    E_range : tuple of float
+        ``(E_min, E_max)`` of the inversion, Pa.
+    extra : dict, optional
+        Further TOF uncertainties (s) per name, turned into ln E terms (e.g. sampling).
+
+    Raises
+    ------
+    SolverError
+        The forward TOF(E) is not invertible (:func:`ssw.tof.inverse.grid_fault`).
     """
 
     def __init__(self, params: Any, wall: str, wall_options: dict[str, Any] | None,
@@ -241,35 +282,33 @@ class Estimator:
                  extra: dict[str, float] | None = None) -> None:
         from scipy.interpolate import PchipInterpolator
 
-        from ssw.tof import api
-        from ssw.tof.inverse import GRID_POINTS
+        from ssw.errors import SolverError
+        from ssw.tof.inverse import forward_grid, grid_fault
 
         self.params, self.wall, self.opts = params, wall, dict(wall_options or {})
         self.nu, self.calibration, self.E_range = nu, calibration, E_range
         self.extra = dict(extra or {})  # further ln E contributions per TOF, e.g. sampling
-        nu_c = float(np.mean(np.atleast_1d(np.asarray(nu, float))))
-        E = np.geomspace(E_range[0], E_range[1], GRID_POINTS)
-        T = np.asarray(api.tof(E, nu_c, params, wall, **self.opts), float)
-        if np.any(np.diff(T) >= 0):
-            from ssw.errors import SolverError
-
-            raise SolverError(f"TOF(E) at nu = {nu_c:g} is not strictly decreasing: cannot "
-                              "invert")
-        self._spline = PchipInterpolator(T[::-1], np.log(E[::-1]))
-        self._slope = self._spline.derivative()
+        self.nu_c = float(_nu_args(nu, 1)[0][0])
+        self.grid = forward_grid(self.nu_c, params, wall, E_range=E_range, **self.opts)
+        E, T = self.grid.E, self.grid.T[0]
+        fault = grid_fault(E, T, self.nu_c)
+        if fault:
+            raise SolverError(fault)
+        self._slope = PchipInterpolator(T[::-1], np.log(E[::-1])).derivative()
         self.tof_range = (float(T[-1]), float(T[0]))
         self._fixed: dict[str, float] | None = None
 
     def __call__(self, tof_mean: float, tof_sem: float) -> dict[str, Any]:
         """``{"E", "E_low", "E_high", "u", "contributions"}`` (Pa; ln E standard
-        uncertainties) for a mean TOF (s) and its standard error (s)."""
-        from ssw.errors import OutOfRangeError
+        uncertainties) for a mean TOF (s) and its standard error (s).
 
-        lo, hi = self.tof_range
-        if not lo <= tof_mean <= hi:
-            raise OutOfRangeError(f"TOF {tof_mean:.6g} s is outside the device's range "
-                                  f"[{lo:.6g}, {hi:.6g}] s")
-        lnE = float(self._spline(tof_mean))
+        Raises
+        ------
+        OutOfRangeError
+            The TOF lies outside the device's range over ``E_range``.
+        """
+        E = float(invert_batch([tof_mean], self.nu_c, self.params, self.wall,
+                               E_range=self.E_range, grid=self.grid, **self.opts).E[0])
         if self._fixed is None:
             est = estimate_moduli([tof_mean], [0.0], np.asarray(self.nu, float), self.params,
                                   self.wall, self.opts, calibration=self.calibration,
@@ -281,6 +320,5 @@ class Estimator:
         for k, v in self.extra.items():  # TOF uncertainties (s) -> ln E
             contrib[k] = float(v) * dlnE_dT
         u = float(np.sqrt(sum(v**2 for v in contrib.values())))
-        E = float(np.exp(lnE))
         return {"E": E, "E_low": E * float(np.exp(-COVERAGE_Z * u)),
                 "E_high": E * float(np.exp(COVERAGE_Z * u)), "u": u, "contributions": contrib}

@@ -485,6 +485,147 @@ def check_cluster_fit(workflow: Any) -> None:
     check_jobs_fit(jobs)
 
 
+def _job_name(job: Any) -> str:
+    """A Snakemake job as ``rule[wildcard=value,...]`` (a group job: its group)."""
+    rule = getattr(job, "rule", None)
+    if rule is None:
+        return str(job)
+    wildcards = getattr(job, "wildcards_dict", None) or {}
+    return rule.name + (f"[{','.join(f'{k}={v}' for k, v in wildcards.items())}]"
+                        if wildcards else "")
+
+
+def prepare_slurm_run(workflow: Any) -> list[str]:
+    """Make a Snakemake run on Slurm see its jobs end, before anything is submitted.
+
+    On a cluster without accounting storage the run's status command becomes ``squeue``
+    (:func:`ssw.cluster.status_command`; or a ConfigError naming the flag), every job must
+    fit a node (:func:`check_cluster_fit`), and a watch stops the run with a message when
+    its jobs are lost (:func:`ssw.cluster.watch_lost_jobs`, with the executor plugin's own
+    ``squeue`` query of the run's jobs).
+
+    Parameters
+    ----------
+    workflow : snakemake.workflow.Workflow
+        The run (the ``workflow`` of a Snakefile's ``onstart``; its executor is ``slurm``).
+
+    Returns
+    -------
+    list[str]
+        What changed or may go wrong, one line each, for the run's log.
+
+    Raises
+    ------
+    ConfigError
+        A job no node can hold, or a cluster on which the plugin cannot see jobs end.
+    """
+    import shutil
+
+    from snakemake_executor_plugin_slurm import job_status_query as plugin_query
+
+    from ssw import cluster
+
+    notes = []
+    settings = workflow.executor_settings
+    info = cluster.slurm_config()
+    sacct = shutil.which("sacct") is not None
+    init_s = int(settings.init_seconds_before_status_checks)
+    wanted = cluster.status_command(info, settings.status_command, init_s, sacct)
+    if wanted != settings.status_command:
+        notes.append(f"this Slurm keeps no job accounting (AccountingStorageType = "
+                     f"{info.accounting_storage}): job states come from {wanted}, as with "
+                     f"--slurm-status-command {wanted}")
+        settings.status_command = wanted
+    used = cluster.effective_status_command(wanted, info.min_job_age_s, init_s, sacct)
+    warning = cluster.short_job_age(info, used)
+    if warning:
+        notes.append(warning)
+    check_cluster_fit(workflow)
+
+    scheduler = workflow.scheduler
+    run_id = getattr(getattr(scheduler, "_executor", None), "run_uuid", None)
+    if run_id is None:
+        notes.append("the lost-jobs watch is off: the Slurm executor has no run ID")
+        return notes
+    # The controller's view of the run's jobs (the plugin's squeue query): with squeue as the
+    # status command a job it no longer lists is lost to the run after the short grace; with
+    # sacct (history kept in slurmdbd, which may lag) only after the longest patience.
+    command = plugin_query.query_job_status_squeue(run_id)
+
+    def waiting() -> list[str]:
+        return sorted(_job_name(j) for j in list(scheduler.running) if not j.is_local)
+
+    def lost(message: str) -> None:
+        from snakemake_interface_common.exceptions import WorkflowError
+
+        scheduler.executor_error_callback(WorkflowError(f"Lost cluster jobs: {message}"))
+
+    stall_s = (cluster.PLUGIN_MAX_STATUS_INTERVAL_S + cluster.VANISH_GRACE_S
+               + float(workflow.execution_settings.latency_wait))
+    vanish_s = cluster.VANISH_GRACE_S if used == "squeue" else stall_s
+    cluster.watch_lost_jobs(lambda: cluster.query_states(command), waiting, lost, stall_s,
+                            vanish_s)
+    return notes
+
+
+#: The study's stages in the report's order: results sub-folder -> the title of its category
+#: (workflow/report/workflow.rst describes each title).
+REPORT_STAGES: dict[str, str] = {
+    "contact": "Contact (Stage I)",
+    "fit": "Fits (Stage I)",
+    "chain": "Chain (Stage II)",
+    "validation": "Validation (Stage III)",
+    "survey": "Survey",
+    "design": "Plate design",
+}
+
+
+def report_stages(cfg: dict[str, Any]) -> list[str]:
+    """The stages whose figures and tables a study's report shows, in report order.
+
+    Parameters
+    ----------
+    cfg : dict[str, Any]
+        The validated study config.
+
+    Returns
+    -------
+    list[str]
+        Keys of :data:`REPORT_STAGES`: ``contact`` when a set has one soil (its contact
+        figure, rule ``fit_set``), ``fit`` when there are sets, ``chain`` and ``validation``
+        always, ``survey`` when it has points, ``design`` when it has soil ranges.
+    """
+    shown = {
+        "contact": bool(one_soil_sets(cfg)),
+        "fit": bool(cfg.get("sets")),
+        "chain": True,
+        "validation": True,
+        "survey": bool(survey_points(cfg)),
+        "design": bool(cfg.get("design", {}).get("soils")),
+    }
+    return [stage for stage in REPORT_STAGES if shown[stage]]
+
+
+def report_categories(cfg: dict[str, Any]) -> dict[str, str]:
+    """Stage -> its category in the study's report: the stages the report shows numbered
+    1, 2, ... in order (:func:`report_stages`); a stage it does not show keeps its bare
+    title (no file of it reaches the report).
+
+    Parameters
+    ----------
+    cfg : dict[str, Any]
+        The validated study config.
+
+    Returns
+    -------
+    dict[str, str]
+        Every key of :data:`REPORT_STAGES`, e.g. ``{"design": "5. Plate design", ...}``.
+    """
+    numbered = {st: f"{i}. {REPORT_STAGES[st]}"
+                for i, st in enumerate(report_stages(cfg), start=1)}
+    return {st: numbered.get(st, title) for st, title in REPORT_STAGES.items()}
+
+
 def report_tables(targets: list[Any], categories: dict[str, str], results: str = RESULTS
                   ) -> dict[str, list[str]]:
     """Stage -> its CSV tables among ``targets`` (a stage is a results sub-folder)."""

@@ -132,6 +132,34 @@ def test_cli_tof_sweep_and_invert_agree(tmp_path, capsys):
     assert head[0].startswith("# ssw ") and head[1].startswith("soil_E_Pa,")  # provenance
 
 
+def test_cli_tof_reports_its_derivatives(capsys):
+    """``ssw tof --json`` gives ``dtof_dE`` and ``dtof_d<parameter>`` (s per SI unit) with
+    the method of each: forward sensitivities here (Hertz wall), equal to the API's and to
+    central differences of the CLI's own TOFs within 1e-4 (E, striker speed); ``--derivatives
+    none`` gives the same TOF and no derivatives."""
+    from ssw.chain.sensitivity import PARAMETERS
+
+    base = ["--law", "hertz", "--calibration", "none", "--soil-nu", "0.3", "--json"]
+    res = _cli(["tof", "--soil-E", "1.2e8", *base], capsys)
+    assert set(res["derivative_method"]) == set(PARAMETERS)
+    assert set(res["derivative_method"].values()) == {"forward"}
+    for name in PARAMETERS:
+        assert np.isfinite(res[f"dtof_d{name}"])
+    assert res["derivative_units"]["dtof_dE"] == "s/(Pa)"
+    plain = _cli(["tof", "--soil-E", "1.2e8", *base, "--derivatives", "none"], capsys)
+    assert plain["tof"] == res["tof"] and "dtof_dE" not in plain
+    h = 1e-4
+    up, down = (_cli(["tof", "--soil-E", str(1.2e8 * (1 + s * h)), *base, "--derivatives",
+                      "none"], capsys)["tof"] for s in (1, -1))
+    assert (up - down) / (2 * h * 1.2e8) == pytest.approx(res["dtof_dE"], rel=1e-4)
+    v = res["striker_velocity"]
+    up, down = (_cli(["tof", "--soil-E", "1.2e8", *base, "--derivatives", "none",
+                      "--striker-velocity", str(v * (1 + s * h))], capsys)["tof"]
+                for s in (1, -1))
+    assert (up - down) / (2 * h * v) == pytest.approx(res["dtof_dstriker_velocity"],
+                                                      rel=1e-4)
+
+
 def test_cli_reports_out_of_range_tof(capsys):
     assert main(["invert", "--tof", "0.05", "--soil-nu", "0.3", "--law", "hertz"]) == 2
     assert "valid range" in capsys.readouterr().err

@@ -77,3 +77,24 @@ def test_chain_with_gravity_splits_soft_soil_reflections_and_picks_the_first():
     assert np.all(s[between] < 0.2 * pk.f_reflected)
     later = t > pk.t_reflected + 0.2e-3
     assert np.max(s[later]) > 0.4 * pk.f_reflected  # a secondary pulse exists
+
+
+@pytest.mark.parametrize("split", [0.2, 0.7])
+def test_recordings_and_simulations_share_one_peak_rule(split):
+    """One rule (ssw.signal.rule) for both pickers: on a noiseless record with a split
+    reflection, ssw.signal.peaks (a measured record's picker, without upsampling) and
+    ssw.chain.tof pick the same samples and so the same parabolic vertices, with the
+    default rule (the primary pulse) and with a split share that skips it (the secondary
+    pulse, 0.4 ms later)."""
+    from ssw.signal.peaks import pick_peaks as record_peaks
+    from ssw.signal.rule import PeakRule
+
+    rate = 51200.0
+    t = np.arange(0, 5e-3, 1 / rate)
+    F = (_pulse(t, 0.8e-3, 200.0, 40e-6) + _pulse(t, 2.6e-3, 70.0, 50e-6)
+         + _pulse(t, 3.0e-3, 120.0, 50e-6))
+    rule = PeakRule(split_fraction=split)
+    rec = record_peaks(F, rate, 0.0, rule, upsample=1)
+    sim = pick_peaks(t, F, rule=rule)
+    assert rec.tof == pytest.approx(float(sim.tof), abs=1e-12)
+    assert rec.tof == pytest.approx(1.8e-3 if split < 0.5 else 2.2e-3, abs=2e-6)

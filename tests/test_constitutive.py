@@ -138,13 +138,33 @@ def test_drucker_prager_regions():
     assert set(np.unique(cut.update(E, NU, strain, state).region)) == {0, 1, 2, 3}
 
 
-def test_mohr_coulomb_outer_cone_in_triaxial_compression():
-    """The outer cone gives Mohr-Coulomb's unconfined compressive strength
-    ``2 c cos(phi) / (1 - sin(phi))`` exactly (axial compression, a compressive edge)."""
-    dp = DruckerPrager(30e3, 35.0)
-    ucs = dp.strength
-    stress = np.array([[0.0, -ucs, 0.0, 0.0]])
-    assert dp.yield_ratio(stress, initial_state(1))[0] == pytest.approx(1.0, rel=1e-12)
+@pytest.mark.parametrize("match", ["outer", "inner"])
+def test_drucker_prager_cones_pass_through_mohr_coulomb_meridians(match):
+    """Mohr-Coulomb in principal stresses (tension positive, ``s1 >= s2 >= s3``; de Souza
+    Neto, Peric & Owen 2008, ch. 6): ``(s1 - s3) + (s1 + s3) sin(phi) = 2 c cos(phi)``. Under
+    a confining pressure ``s`` the deviator at failure is then
+
+        ``q = 2 (c cos(phi) + s sin(phi)) / (1 - sin(phi))``
+
+    on both meridians: triaxial compression (``s1 = s2 = -s``, ``s3 = -s - q``; the stress
+    under an indenter's axis) and triaxial extension (``s1 = -s``, ``s2 = s3 = -s - q``).
+    The outer cone passes through the first, the inner through the second: the model's
+    yield ratio is 1 at these stresses, computed here from Mohr-Coulomb alone, over
+    confinements from 0 to 30 cohesions; at ``s = 0`` the compressive one is the unconfined
+    compressive strength the model reports."""
+    c, phi = 30e3, 35.0
+    dp = DruckerPrager(c, phi, match=match)
+    sin_p, cos_p = np.sin(np.radians(phi)), np.cos(np.radians(phi))
+    s = np.array([0.0, 0.3, 3.0, 30.0]) * c
+    q = 2.0 * (c * cos_p + s * sin_p) / (1.0 - sin_p)
+    if match == "outer":  # (rr, zz, tt, sqrt2 rz): the axis of z the most compressive
+        stress = np.column_stack([-s, -s - q, -s, np.zeros_like(s)])
+    else:  # r and t the most compressive
+        stress = np.column_stack([-s - q, -s, -s - q, np.zeros_like(s)])
+    np.testing.assert_allclose(dp.yield_ratio(stress, initial_state(s.size)), 1.0,
+                               rtol=1e-12)
+    if match == "outer":
+        assert dp.strength == pytest.approx(q[0], rel=1e-14)
 
 
 @pytest.mark.parametrize("nu_p", [0.0, 0.2])

@@ -136,6 +136,60 @@ def test_lcp_matches_nnls():
     assert np.all(lam >= 0) and np.all(g >= -1e-10) and abs(lam @ g) < 1e-9
 
 
+def _lcp_by_enumeration(M: np.ndarray, q: np.ndarray) -> np.ndarray:
+    """The LCP's solution by trying every active set (a second method: 2^m linear solves)."""
+    from itertools import product
+
+    m = q.size
+    found = []
+    for bits in product((False, True), repeat=m):
+        A = np.array(bits)
+        lam = np.zeros(m)
+        if A.any():
+            lam[A] = np.linalg.solve(M[np.ix_(A, A)], -q[A])
+        g = q + M @ lam
+        if np.all(lam >= -1e-12) and np.all(g[~A] >= -1e-12):
+            found.append(lam)
+    assert len(found) >= 1
+    return found[0]
+
+
+@pytest.mark.parametrize("seed", range(5))
+def test_lcp_of_a_nonsymmetric_p_matrix_matches_enumeration(seed):
+    """A non-symmetric P-matrix (the layered oracle's ring influence coefficients are one)
+    through a caller's block solver: the solution every active set is tried for, from a
+    cold start and from a wrong warm start (every constraint active)."""
+    rng = np.random.default_rng(seed)
+    m = 9
+    M = np.diag(rng.uniform(2.0, 4.0, m)) + 0.15 * rng.normal(size=(m, m))
+    q = rng.normal(size=m)
+    ref = _lcp_by_enumeration(M, q)
+    calls = []
+
+    def block(idx, rhs):
+        calls.append(idx.size)
+        return np.linalg.solve(M[np.ix_(idx, idx)], rhs)
+
+    for guess in (np.zeros(m, bool), np.ones(m, bool)):
+        lam, act, _ = solve_lcp(M, q, guess, 1e-14, solve_active=block)
+        assert np.allclose(lam, ref, rtol=1e-10, atol=1e-12)
+        assert np.array_equal(act, lam > 0)
+    assert calls  # the caller's solver served
+
+
+def test_lcp_force_vanishing_at_the_solution_does_not_cycle():
+    """Degenerate complementarity (a constraint at zero force and zero gap): round-off may
+    make its force -1e-17; the one tolerance policy keeps it, the solve ends at once."""
+    W = np.array([[2.0, 1.0], [1.0, 2.0]])
+    lam_true = np.array([1.0, 0.0])
+    g0 = -W @ lam_true  # constraint 1: g = 0 and lam = 0 at the solution
+    lam, _, pivots = solve_lcp(W, g0, np.array([True, True]), 1e-14)
+    assert np.allclose(lam, lam_true, atol=1e-14)
+    assert pivots <= 1
+    g = g0 + W @ lam
+    assert np.all(g >= -1e-14) and abs(lam @ g) < 1e-14
+
+
 def test_sphere_gap_and_edge_radius():
     """Exact spherical gap; the edge estimate recovers a gap opening as (r - a)^1.5."""
     r = np.array([0.0, 1e-3])

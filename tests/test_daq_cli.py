@@ -31,6 +31,21 @@ def test_simulated_acquire_from_the_chain(capsys, tmp_path):
     assert abs(a["tof_mean"] - a["true_tof"]) < 0.5 / 51200
 
 
+def test_tof_recording_of_a_one_hit_file_says_how_to_accept_it(capsys, tmp_path):
+    """One good hit and the default of three: refused with the flag that accepts it
+    (``--min-hits 1``), not an empty list of rejections; with that flag, its TOF (the
+    simulated pulses' 1.3 ms, to half a sample)."""
+    out = tmp_path / "one.h5"
+    run_json(capsys, ["acquire", "--simulate", "--tof", "1.3e-3", "--hits", "1",
+                      "--min-hits", "1", "--sample", "T1", "--output", str(out)])
+    assert main(["tof-recording", str(out)]) == 2
+    err = capsys.readouterr().err
+    assert "1 of 1 hits accepted, at least 3 needed" in err
+    assert "--min-hits 1" in err and "rejected" not in err
+    b = run_json(capsys, ["tof-recording", str(out), "--min-hits", "1"])
+    assert b["n_accepted"] == 1 and abs(b["tof_mean"] - 1.3e-3) < 0.5 / 51200
+
+
 def test_real_acquire_without_driver_fails_cleanly(capsys, tmp_path):
     assert main(["acquire", "--sample", "X", "--output", str(tmp_path / "r.h5")]) == 2
     assert "NI-DAQmx driver is not installed" in capsys.readouterr().err

@@ -113,16 +113,19 @@ def test_preload_statics_carry_the_weight_and_the_preload():
 
 def test_energy_with_a_preload_is_conserved():
     """The preload is a constant force: kinetic + elastic - g sum m u - P u_1 is a conserved
-    quantity; velocity Verlet keeps its error bounded (measured: at most 8.4e-5 of the
-    striker's energy during the contacts, 1.4e-6 after them, at 80 steps per contact). The
-    preload's work matters: a force without its potential term (or the reverse) would make
-    the total drift by ~P du_1, ~2 % of the striker's energy here, 100x the bound."""
+    quantity; the integrator keeps its error small (measured at 80 steps per contact: at
+    most 2.1e-4 of the striker's energy during the contacts, 5e-6 after them, 3 ms; the
+    contacts exert their laws averaged over each step's relative motion, ssw.chain.impulse,
+    which the record's Hertz energy does not follow to O(dt^2); 5e-5 and 2e-7 at 160
+    steps). The preload's work matters: a force without its potential term (or the
+    reverse) would make the total drift by ~P du_1, ~2 % of the striker's energy here, 70x
+    the bound."""
     p = P.with_(preload=6.0)
     run = api.run_chain(p, 80e6, 0.3, "hertz", t_end=3e-3)
     e = run.energy[:, 0]
     ke0 = 0.5 * p.bead_mass * p.striker_velocity**2
-    assert np.max(np.abs(e - e[0])) < 2e-4 * ke0
-    assert abs(e[-1] - e[0]) < 1e-5 * ke0
+    assert np.max(np.abs(e - e[0])) < 3e-4 * ke0
+    assert abs(e[-1] - e[0]) < 5e-5 * ke0
 
 
 def test_the_sensor_reads_its_upper_lower_or_mean_contact():

@@ -89,16 +89,23 @@ def _cheap_params() -> ChainParams:
     return ChainParams(plate_thickness=0.0, steps_per_contact=40)
 
 
+#: Device variants the dynamic walls must honour as the quasi-static ones do: the sensor's
+#: upper contact and a contact dashpot (each moves the TOF by 0.5-3 % on this scene).
+VARIANTS = ({}, {"sensor_reads": "upper"}, {"damping": 2.0})
+
+
 def test_density_limit_is_the_quasi_static_chain():
     """Soil and no plate of density 1e-6 kg/m^3: the dynamic FEM wall's TOF equals the
-    quasi-static chain's (ssw.chain.integrate with the FEM's static law as a table wall)
-    within 0.1 % (the issue's bound; measured 1e-6), and the static law is Hertz's with the
-    bead's compliance (1/E* = c_soil + c_bead) within 2 % on this coarse mesh."""
+    quasi-static chain's (the same integrator with the FEM's static law as a table wall)
+    within 0.1 % (the issue's bound; measured 1.6e-6) for the default device, its sensor
+    read at the upper contact and with a contact dashpot (2 N s/m): the dynamic wall
+    honours every device field (a loop that read the mean and had no dashpot missed by
+    2.6 % and 0.5 %); and the static law is Hertz's with the bead's compliance
+    (1/E* = c_soil + c_bead) within 2 % on this coarse mesh."""
     from ssw import hertz
-    from ssw.chain.integrate import simulate as chain_simulate
-    from ssw.chain.tof import pick_peaks
+    from ssw.chain.dense import dense_peaks
+    from ssw.chain.integrate import simulate
     from ssw.dynamics.fem_wall import fem_wall
-    from ssw.dynamics.integrate import simulate
     from ssw.dynamics.quasistatic import static_table_wall
 
     p = _cheap_params()
@@ -106,12 +113,17 @@ def test_density_limit_is_the_quasi_static_chain():
     wall, sc = fem_wall(p, E, nu, 1e-6, boundary="fixed",
                         spec=dict(CHEAP["spec"], domain=0.2, size_max=0.05))
     try:
-        run = simulate(p, wall, t_end=float(sc.t_end[0]), dt=sc.dt)
-        tof_fem = pick_peaks(run.t, run.sensor[:, 0]).tof
         table = static_table_wall(p, wall, 1.5 * sc.d_peak)
-        qs = chain_simulate(p, table, dt=sc.dt)
-        tof_qs = pick_peaks(qs.t, qs.sensor[:, 0]).tof
-        assert abs(tof_fem / tof_qs - 1) < 1e-3
+        tofs = []
+        for kw in VARIANTS:
+            pv = p.with_(**kw)
+            run = simulate(pv, wall, t_end=float(sc.t_end[0]), dt=sc.dt, stop_early=False)
+            tof_fem = dense_peaks(run).tof[0]
+            qs = simulate(pv, table, t_end=float(sc.t_end[0]), dt=sc.dt, stop_early=False)
+            tof_qs = dense_peaks(qs).tof[0]
+            assert abs(tof_fem / tof_qs - 1) < 1e-3, kw
+            tofs.append(float(tof_fem))
+        assert abs(tofs[1] / tofs[0] - 1) > 0.01 and abs(tofs[2] / tofs[0] - 1) > 2e-3
         d = np.linspace(0.3, 1.0, 8) * sc.d_peak[0]
         e_star = hertz.effective_modulus(p.bead_E, p.bead_nu, E, nu)
         F_hertz = hertz.force(d, e_star, p.bead_radius)
@@ -120,53 +132,63 @@ def test_density_limit_is_the_quasi_static_chain():
         wall.destroy()
 
 
-def test_energy_balance_of_the_fem_wall():
-    """Soil of 2000 kg/m^3 with absorbing boundaries: the chain's energy lost equals what
-    the plate/soil store plus what the boundary dashpots absorbed (the radiated energy),
-    to 1e-3 of the energy the chain gave the wall; the radiated share is not negligible."""
-    from ssw.dynamics.fem_wall import fem_wall
-    from ssw.dynamics.integrate import simulate
+def test_fem_tof_follows_the_sensor_reading_and_the_dashpot():
+    """ssw.dynamics.api.fem_tof (what ``ssw tof --wall-dynamics fem`` runs) on a soil of
+    2000 kg/m^3: the sensor's upper contact and a 2 N s/m dashpot change the dynamic TOF
+    as they change the quasi-static ones. The dynamic wall's shift against the
+    quasi-static half-space is the same for both readings within 0.02 % of the TOF (the
+    issue's bound; measured 5e-5), and the dashpot moves the dynamic TOF as it moves the
+    quasi-static one within 5 % of its move (measured 0.2 %). The old loop read the mean
+    and had no dashpot: its TOF did not move at all."""
+    from ssw.dynamics.api import fem_tof
 
-    p = _cheap_params()
+    res = [fem_tof(_cheap_params().with_(**kw), 300e6, 0.3, 2000.0, record_energy=False,
+                   **CHEAP) for kw in VARIANTS]
+    dyn = np.array([float(r.tof_dynamic[0]) for r in res])
+    qs = np.array([float(r.tof_half_space[0]) for r in res])
+    shift = dyn - qs
+    assert abs(dyn[1] / dyn[0] - 1) > 0.01 and abs(dyn[2] / dyn[0] - 1) > 2e-3
+    assert abs(shift[1] - shift[0]) < 2e-4 * dyn[0]
+    move_dyn, move_qs = dyn[2] - dyn[0], qs[2] - qs[0]
+    assert abs(move_dyn / move_qs - 1) < 0.05, (move_dyn, move_qs)
+
+
+@pytest.mark.parametrize("damping", [0.0, 2.0])
+def test_energy_balance_of_the_fem_wall(damping):
+    """Soil of 2000 kg/m^3 with absorbing boundaries: the chain's energy lost equals what
+    the plate/soil store plus what the boundary dashpots absorbed (the radiated energy)
+    and, with a contact dashpot, its work, to 1e-3 of the energy the chain gave the wall;
+    the radiated share is not negligible."""
+    from ssw.chain.integrate import simulate
+    from ssw.dynamics.fem_wall import fem_wall
+
+    p = _cheap_params().with_(damping=damping)
     wall, sc = fem_wall(p, 300e6, 0.3, 2000.0, spec=CHEAP["spec"])
     try:
-        run = simulate(p, wall, t_end=float(sc.t_end[0]), dt=sc.dt, record_energy=True)
+        run = simulate(p, wall, t_end=float(sc.t_end[0]), dt=sc.dt, record_energy=True,
+                       stop_early=False)
     finally:
         wall.destroy()
-    chain, stored, radiated = (x[:, 0] for x in (run.energy_chain, run.energy_wall,
-                                                 run.dissipated))
-    lost = chain[0] - chain
-    gained = stored - stored[0] + radiated
-    given = lost.max()
-    assert np.max(np.abs(lost - gained)) < 1e-3 * given
-    assert radiated[-1] > 0.01 * given
-    assert np.all(np.diff(radiated) >= -1e-15)
-
-
-def test_stateful_integrator_reproduces_the_chain_integrator():
-    """The research copy of the Verlet loop with a stateless wall gives the chain stage's
-    sensor signal (same algorithm, same step) to round-off."""
-    from ssw.chain.integrate import simulate as chain_simulate
-    from ssw.dynamics.integrate import QuasiStatic, simulate
-    from ssw.walls import build_wall
-
-    p = ChainParams(steps_per_contact=40)
-    w = build_wall("hertz", p, np.array([38e6, 445e6]), 0.3)
-    ref = chain_simulate(p, w, stop_early=False, t_end=1.5e-3)
-    run = simulate(p, QuasiStatic(w), t_end=1.5e-3, dt=ref.dt)
-    n = min(ref.t.size, run.t.size)
-    assert np.max(np.abs(run.sensor[:n] - ref.sensor[:n])) < 1e-9 * np.max(ref.sensor)
+    total, stored, lost = (x[:, 0] for x in (run.energy, run.energy_wall, run.dissipated))
+    chain = total - stored - lost
+    given = np.max(chain[0] - chain)
+    assert np.max(np.abs(total - total[0])) < 1e-3 * given
+    assert lost[-1] > 0.01 * given
+    assert np.all(np.diff(lost) >= -1e-15)
 
 
 def test_reduced_wall_limits_scaling_and_energy():
     """Density -> 0: the reduced wall is the quasi-static wall exactly. Its dashpot grows as
     sqrt(rho): for small shifts the TOF's shift scales so (rho / 4 -> half the shift).
-    The chain's energy balance holds with what the dashpot dissipated, to second order in
-    the step (its error falls >= 3x when the step halves; the dashpot alone: the lagged
-    participating mass is first order)."""
-    from ssw.chain.integrate import time_step
-    from ssw.chain.tof import pick_peaks
-    from ssw.dynamics.integrate import QuasiStatic, simulate
+    The chain's energy balance holds with what the wall's dashpot and the contact
+    dashpots dissipated, to second order in the step (its error falls >= 3x when the step
+    halves; the dashpot alone: the lagged participating mass is first order). Measured,
+    relative to the dissipated energy, at 40 and 80 steps per contact: 1.2e-2 and 3.0e-3
+    (10 MPa), 2.0e-2 and 5.2e-3 (100 MPa) without contact dashpots, a quarter of that with
+    2 N s/m (the contacts' forces, averaged over each step's motion, ssw.chain.impulse,
+    follow the record's Hertz energy to O(dt^2))."""
+    from ssw.chain.dense import dense_peaks
+    from ssw.chain.integrate import simulate, time_step
     from ssw.dynamics.reduced import reduced_wall
     from ssw.walls import build_wall
 
@@ -174,24 +196,26 @@ def test_reduced_wall_limits_scaling_and_energy():
     E = np.array([10e6, 100e6])
     qs = build_wall("hertz", p, E, 0.3)
     dt, t_end = time_step(p, qs), 4.5e-3
-    ref = simulate(p, QuasiStatic(qs), t_end=t_end, dt=dt)
-    zero = simulate(p, reduced_wall(qs, E, 0.3, 0.0), t_end=t_end, dt=dt)
+    ref = simulate(p, qs, t_end=t_end, dt=dt, stop_early=False)
+    zero = simulate(p, reduced_wall(qs, E, 0.3, 0.0), t_end=t_end, dt=dt, stop_early=False)
     assert np.array_equal(zero.sensor, ref.sensor)
-    t_ref = pick_peaks(ref.t, ref.sensor).tof
+    t_ref = dense_peaks(ref).tof
     shift = []
     for rho in (2200.0, 550.0):
-        run = simulate(p, reduced_wall(qs, E, 0.3, rho, m_r=0.0), t_end=t_end, dt=dt)
-        shift.append(pick_peaks(run.t, run.sensor).tof / t_ref - 1)
+        run = simulate(p, reduced_wall(qs, E, 0.3, rho, m_r=0.0), t_end=t_end, dt=dt,
+                       stop_early=False)
+        shift.append(dense_peaks(run).tof / t_ref - 1)
     assert np.all(np.abs(shift[0] / shift[1] - 2.0) < 0.2)
-    errors = []
-    for spc in (40, 80):
-        pk = p.with_(steps_per_contact=spc)
-        dense = simulate(pk, reduced_wall(qs, E, 0.3, 2200.0, m_r=0.0), t_end=t_end,
-                         dt=time_step(pk, qs), record_energy=True)
-        total = dense.energy_chain + dense.energy_wall + dense.dissipated
-        errors.append(np.max(np.abs(total - total[0]), axis=0)
-                      / np.max(dense.dissipated, axis=0))
-    assert np.all(errors[1] < errors[0] / 3.0) and np.all(errors[1] < 3e-3)
+    for damping in (0.0, 2.0):
+        errors = []
+        for spc in (40, 80):
+            pk = p.with_(steps_per_contact=spc, damping=damping)
+            dense = simulate(pk, reduced_wall(qs, E, 0.3, 2200.0, m_r=0.0), t_end=t_end,
+                             dt=time_step(pk, qs), record_energy=True, stop_early=False)
+            total = dense.energy
+            errors.append(np.max(np.abs(total - total[0]), axis=0)
+                          / np.max(dense.dissipated, axis=0))
+        assert np.all(errors[1] < errors[0] / 3.0) and np.all(errors[1] < 1e-2), damping
 
 
 @pytest.mark.slow
@@ -228,29 +252,49 @@ def test_wall_dynamics_registry():
         with_dynamics("fem", w, p, [10e6, 20e6], 0.3, 1800.0)
 
 
-def test_chain_integrator_runs_the_reduced_wall_like_the_research_loop():
-    """The chain stage's integrator with a stateful wall (the hook: advance after the drift,
-    the wall's force from its state) gives the research loop's sensor signal with the
-    reduced wall, to round-off; and ``build_wall(..., dynamics="reduced",
-    soil_density=...)``, what every chain command passes, is that wall."""
-    from ssw.chain.integrate import simulate as chain_simulate
-    from ssw.chain.integrate import time_step
-    from ssw.dynamics.integrate import simulate
-    from ssw.dynamics.reduced import reduced_wall
+def test_build_wall_gives_the_reduced_wall_every_command_runs():
+    """``build_wall(..., dynamics="reduced", soil_density=...)``, what every chain command
+    passes, is the reduced wall; its TOF differs from the quasi-static one by less than
+    0.5 % on these soils, and differs."""
     from ssw.tof import api
     from ssw.walls import build_wall
 
     p = ChainParams(steps_per_contact=40)
     E = np.array([10e6, 200e6])
-    qs = build_wall("hertz", p, E, 0.3)
-    dt = time_step(p, qs)
-    ref = simulate(p, reduced_wall(qs, E, 0.3, 2200.0), t_end=2.5e-3, dt=dt)
-    run = chain_simulate(p, reduced_wall(qs, E, 0.3, 2200.0), t_end=2.5e-3, dt=dt,
-                         stop_early=False)
-    n = min(ref.t.size, run.t.size)
-    assert np.max(np.abs(run.sensor[:n] - ref.sensor[:n])) < 1e-9 * np.max(ref.sensor)
     w = build_wall("hertz", p, E, 0.3, dynamics="reduced", soil_density=2200.0)
     assert type(w).__name__ == "ReducedWall"
     t_red = api.tof(E, 0.3, p, "hertz", dynamics="reduced", soil_density=2200.0)
     t_qs = api.tof(E, 0.3, p, "hertz")
     assert np.all(np.abs(t_red / t_qs - 1) < 5e-3) and np.any(t_red != t_qs)
+
+
+def test_fem_wall_derivatives_are_central_differences_near_the_quasi_static_ones():
+    """The dynamic FEM wall has no tangent: its derivatives are central differences of its
+    TOF on one mesh and step (labelled so by ``ssw tof --derivatives central``). On a soil
+    of 2000 kg/m^3, where the wall's dynamics moves the TOF by 1.5e-4, they match the exact
+    forward derivatives of the same mesh's quasi-static law (a table wall, another method)
+    within 5 % (measured 1-3 %)."""
+    from types import SimpleNamespace
+
+    from ssw.chain.wall import compliance_scale
+    from ssw.dynamics.api import fem_tof_derivatives
+    from ssw.dynamics.fem_wall import fem_wall
+    from ssw.dynamics.quasistatic import static_curve
+    from ssw.tof.api import tof_derivatives
+
+    p = _cheap_params()
+    names = ("striker_velocity", "damping")
+    _, dtof, steps = fem_tof_derivatives(p, 300e6, 0.3, 2000.0, derivatives=names,
+                                         **CHEAP)
+    assert set(steps) == set(names) and all(v > 0 for v in steps.values())
+    wall, sc = fem_wall(p, 300e6, 0.3, 2000.0, **CHEAP)
+    try:
+        d, F = static_curve(wall.contacts[0], 1.5 * float(sc.d_peak[0]))
+    finally:
+        wall.destroy()
+    s = float(compliance_scale(p, 300e6, 0.3))
+    curve = SimpleNamespace(delta=d / s, force=F)  # the table wall scales by s again
+    qs = tof_derivatives(300e6, 0.3, p, "table", derivatives=names, curve=curve)
+    assert set(qs.method.values()) == {"forward"} and qs.dt == pytest.approx(sc.dt)
+    for k in names:
+        assert abs(dtof[k][0] / float(qs.dtof[k]) - 1) < 0.05, (k, dtof[k], qs.dtof[k])

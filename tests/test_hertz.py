@@ -72,3 +72,26 @@ def test_bad_input_names_the_field():
         hertz.effective_modulus(1e6, 0.7)
     with pytest.raises(ConfigError, match="E1"):
         hertz.effective_modulus(-1e6, 0.3)
+
+
+def test_energy_indentation_closed_forms_and_upper_end():
+    """``(2/5) A d^2.5 - P d = W``: without a load ``(5 W / 2 A)^(2/5)``, without an energy
+    the static ``(5 P / 2 A)^(2/3)`` (where the stored energy equals the load's work), and
+    with both the root scipy's brentq finds (another method), returned as the upper end of
+    its bracket: the contact stores at least ``W + P d`` there."""
+    from scipy.optimize import brentq
+
+    A = np.array([3e8, 5e9, 2e10])
+    W = np.array([1e-3, 4e-3, 2e-2])
+    assert np.allclose(hertz.energy_indentation(A, W), (2.5 * W / A) ** 0.4, rtol=1e-15)
+    P = np.array([0.5, 3.0, 40.0])
+    assert np.allclose(hertz.energy_indentation(A, 0.0, P), (2.5 * P / A) ** (2 / 3),
+                       rtol=1e-14)
+    d = hertz.energy_indentation(A, W, P)
+    for a, w, p, x in zip(A, W, P, d, strict=True):
+        ref = brentq(lambda t, a=a, w=w, p=p: 0.4 * a * t**2.5 - p * t - w, 1e-12, 1.0,
+                     xtol=1e-20, rtol=1e-15)
+        assert x == pytest.approx(ref, rel=1e-14)
+        assert 0.4 * a * x**2.5 - p * x - w >= 0
+    with pytest.raises(ConfigError, match="energy"):
+        hertz.energy_indentation(A, -1.0)

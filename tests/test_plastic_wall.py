@@ -58,9 +58,12 @@ def _balance(w, steps: int) -> tuple[float, float]:
 
 def test_energy_balance_per_hit():
     """Striker kinetic energy + gravity work = chain kinetic + stored + wall stored + wall
-    dissipated over a hit, to 1e-6 of the striker's energy; the residual is the Verlet's
-    second-order error (it falls 4x when the step halves). Two hits: the first on the
-    virgin sample, the second reloading along the first's unloading curve, then yielding."""
+    dissipated over a hit, to 2e-6 of the striker's energy at 1000 steps per contact
+    (measured 1.5e-6: the bead contacts' forces, averaged over each step's motion by
+    ssw.chain.impulse, follow the record's Hertz energy to O(dt^2)); the residual is the
+    integrator's second-order error (it falls 4x when the step halves). Two hits: the first
+    on the virgin sample, the second reloading along the first's unloading curve, then
+    yielding."""
     w = _placed(_wall(), short=True)
     for hit in range(2):
         e1, lost = _balance(w, 100)
@@ -68,7 +71,7 @@ def test_energy_balance_per_hit():
         assert lost > 1e-5  # the wall dissipates a share of the hit: a real balance
         assert 3.0 < e1 / e2 < 5.0
         if hit == 1:
-            assert _balance(w, 1000)[0] < 1e-6
+            assert _balance(w, 1000)[0] < 2e-6
         run = simulate(_params(True), w)
         w = w.with_history(run.peak_wall_indentation)
 
@@ -139,11 +142,19 @@ def test_force_continuous_at_dmax_and_zero_below_residual():
         d_res = w.residual_indentation(d_max)[0]
         assert 0 <= d_res < dm
         assert np.all(w.force_at(np.linspace(0, d_res, 7), np.full(7, dm)) == 0.0)
-        # the state function: at d_max stored + dissipated = the virgin work
-        s, lost = w.energies(d_max, d_max)
-        _, W = w._virgin(d_max)
-        assert s[0] + lost[0] == pytest.approx(W[0], rel=1e-12)
-        assert lost[0] >= 0
+        # the energies against the work of the law's own forces (trapezoid quadrature,
+        # exact to ~1e-11 for these piecewise linear laws): loading along the virgin curve
+        # does stored + dissipated; the unloading curve gives back what is stored, at d_max
+        # and half-way down
+        x = np.linspace(0.0, dm, 200_001)
+        virgin_work = np.trapezoid(w.force_at(x, x), x)
+        stored, lost = (e[0] for e in w.energies(d_max, d_max))
+        for d in (dm, 0.5 * (d_res + dm)):
+            xu = np.linspace(d_res, d, 200_001)
+            released = np.trapezoid(w.force_at(xu, np.full(xu.size, dm)), xu)
+            assert w.energies(np.array([d]), d_max)[0][0] == pytest.approx(released, rel=1e-9)
+        assert stored + lost == pytest.approx(virgin_work, rel=1e-9)
+        assert lost >= 0
     # the unloading law is monotone in d
     d_max = np.full(200, 0.5 * reach)
     F = w.force_at(np.linspace(0, 0.5 * reach, 200), d_max)

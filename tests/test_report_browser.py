@@ -2,10 +2,12 @@
 
 A tiny workflow built like the study's (figures made by ssw.plotting, the stage's tables
 rendered by ``ssw report``, every caption of workflow/report/, the study's categories) is
-run, its report built with ``snakemake --report``, and opened in chromium: every result of
-every category is viewed; every image must have loaded (naturalWidth > 0), every table page
-must open, and the screenshots must not be blank. :func:`check_report` is usable on any
-Snakemake report (e.g. the CI study's).
+run, its report built with ``snakemake --report`` (with the study's stylesheet), and opened
+in chromium: the outline (the RESULTS menu and the introduction's list) must be the thesis
+study's stages (ssw.workflow.report_categories), the introduction must start at the top of
+the window, every result of every category is viewed; every image must have loaded
+(naturalWidth > 0), every table page must open, and the screenshots must not be blank.
+:func:`check_report` is usable on any Snakemake report (e.g. the CI study's).
 """
 
 from __future__ import annotations
@@ -86,6 +88,9 @@ def check_report(report: Path, shots: Path) -> dict:
     """Open a Snakemake report in headless chromium; return what it shows.
 
     * ``categories``: the report's categories that its RESULTS menu shows;
+    * ``intro``: the categories the introduction lists (its links), each checked to open
+      its category when clicked;
+    * ``band``: px between the top of the window and the introduction's first line;
     * ``images``: ``(path, naturalWidth)`` of every PNG result, each decoded by the browser;
     * ``viewed``: ``(category, naturalWidth)`` of the first figure of each category, opened
       through the report's own menu and view button, with a screenshot in ``shots``;
@@ -95,14 +100,33 @@ def check_report(report: Path, shots: Path) -> dict:
     from selenium.webdriver.common.by import By
 
     driver, profile = _browser()
-    seen: dict = {"categories": [], "images": [], "viewed": [], "pages": [], "blank": []}
+    seen: dict = {"categories": [], "intro": [], "band": None, "images": [], "viewed": [],
+                  "pages": [], "blank": []}
     ready = "return document.body.innerText.includes('RESULTS')"
     try:
         url = report.resolve().as_uri()
         driver.get(url)
         _wait(driver, ready)
         menu = driver.execute_script("return categories")  # the report's own index
-        seen["categories"] = [c for c in menu if driver.find_elements(By.LINK_TEXT, c)]
+        seen["categories"] = [c for c in sorted(menu)
+                              if driver.find_elements(By.LINK_TEXT, c)]
+        seen["band"] = driver.execute_script(
+            "const d = document.querySelector('.prose .document');"
+            "return d ? d.firstElementChild.getBoundingClientRect().top : null")
+        (shots / "intro.png").write_bytes(driver.get_screenshot_as_png())
+        seen["intro"] = driver.execute_script(
+            "return Array.from(document.querySelectorAll('.prose .document a'))"
+            ".filter(a => a.href.startsWith('javascript:app.showCategory'))"
+            ".map(a => a.innerText)")
+        for name in seen["intro"]:  # each link opens its category: the menu leaves the
+            # index (GENERAL ...) for the category, named in its breadcrumbs
+            driver.find_element(By.CSS_SELECTOR, ".prose .document").find_element(
+                By.LINK_TEXT, name).click()
+            _wait(driver, "return !document.body.innerText.includes('GENERAL') && "
+                  "Array.from(document.querySelectorAll('a')).filter("
+                  f"a => a.innerText.trim() === {name!r}).length >= 2")
+            driver.get(url)
+            _wait(driver, ready)
         driver.set_script_timeout(30)
         seen["images"] = [tuple(x) for x in driver.execute_async_script(LOAD_ALL)]
         for ci, cat in enumerate(menu):
@@ -135,9 +159,13 @@ def check_report(report: Path, shots: Path) -> dict:
 
 TINY = """
 import os
+import sys
+sys.path.insert(0, "{root}")
+from ssw.config import load_config
+from ssw.workflow import report_categories
 REPORT = os.path.join("{root}", "workflow", "report")
-CATEGORIES = {{"contact": "1. Contact (Stage I)", "fit": "2. Fits (Stage I)",
-               "chain": "3. Chain (Stage II)", "validation": "4. Validation (Stage III)"}}
+# the thesis study's outline (config/config.yaml: no survey, a plate design)
+CATEGORIES = report_categories(load_config(os.path.join("{root}", "config", "config.yaml")))
 
 
 PLOT = "{python} " + os.path.join(workflow.basedir, "plot.py")
@@ -155,6 +183,7 @@ rule all:
         "results/validation/fig9_tof_scatter.png",
         "results/validation/fig10_tof_validation.png",
         "results/report/tables_validation.html",
+        "results/design/figures/thesis_pareto.png",
 
 rule contact_figure:
     output:
@@ -205,6 +234,14 @@ rule validation:
         + PLOT + " {{output.fig9}} 'fig 9'; " + PLOT + " {{output.fig10}} 'fig 10'"
 
 
+rule design_figure:
+    output:
+        report("results/design/figures/{{soil}}_pareto.png", category=CATEGORIES["design"],
+               subcategory="Figures", caption=os.path.join(REPORT, "design_pareto.rst")),
+    shell:
+        PLOT + " {{output}} 'pareto'"
+
+
 rule report_tables:
     input:
         tables=["results/validation/table2_tof.csv"],
@@ -247,7 +284,8 @@ def tiny_report(tmp_path_factory):
     (work / "plot.py").write_text(PLOT_SCRIPT)
     (work / "Snakefile").write_text(textwrap.dedent(TINY.format(root=ROOT, python=sys.executable)))
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
-    for args in (["--cores", "2"], ["--report", "report.html"]):
+    css = str(ROOT / "workflow" / "report" / "report.css")
+    for args in (["--cores", "2"], ["--report", "report.html", "--report-stylesheet", css]):
         r = subprocess.run([SNAKEMAKE, *args], cwd=work, capture_output=True, text=True,
                            env=env, timeout=300)
         assert r.returncode == 0, r.stdout[-3000:] + r.stderr[-3000:]
@@ -263,10 +301,17 @@ def test_every_caption_renders_into_the_report(tiny_report):
 
 
 def test_report_renders_in_a_headless_browser(tiny_report):
+    from ssw.config import load_config
+    from ssw.workflow import report_categories, report_stages
+
     seen = check_report(tiny_report / "report.html", tiny_report)
-    assert seen["categories"] == ["1. Contact (Stage I)", "2. Fits (Stage I)",
-                                  "3. Chain (Stage II)", "4. Validation (Stage III)"]
-    assert len(seen["images"]) == 7 and all(w > 0 for _, w in seen["images"]), seen
+    cfg = load_config(ROOT / "config" / "config.yaml")
+    outline = [report_categories(cfg)[st] for st in report_stages(cfg)]
+    assert outline[-1] == "5. Plate design"
+    assert seen["categories"] == outline, seen  # the menu: the study's stages
+    assert seen["intro"] == outline, seen       # the introduction: the same list
+    assert seen["band"] is not None and seen["band"] < 60, seen  # no blank band above
+    assert len(seen["images"]) == 8 and all(w > 0 for _, w in seen["images"]), seen
     assert [c for c, _ in seen["viewed"]] == seen["categories"], seen  # a figure in each
     assert all(w > 0 for _, w in seen["viewed"]), seen
     assert seen["pages"] == ["4. Validation (Stage III)"], seen  # the tables page opens

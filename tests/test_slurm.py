@@ -7,7 +7,10 @@ with ``workflow/profiles/slurm``, and check both runs produced the same results:
 result must not depend on where its jobs ran. The tiny study of ``config/ci.yaml`` runs by
 default; a self-contained workflow with MPI jobs (2 ranks: the chain sweep over mpi4py, the
 contact FEM over PETSc) is ``slow``. A Ctrl-C test checks that an interrupted run leaves no
-job in the queue and no lock.
+job in the queue and no lock. The cluster keeps no accounting (no ``sacct``): the profile
+alone must run there (the workflow's cluster check switches the status command to
+``squeue``), and a run whose jobs vanish from Slurm must stop with a message
+(ssw.cluster.LostJobsWatch).
 
 Skipped, with the reason, only when this process is not root (the script needs root) or the
 cluster cannot start on this machine, and never in CI: with ``CI=true`` in the environment
@@ -38,13 +41,24 @@ ROOT = Path(__file__).resolve().parents[1]
 VENV_BIN = Path(sys.executable).parent
 SNAKEMAKE = VENV_BIN / "snakemake"
 PROFILE = ROOT / "workflow" / "profiles" / "slurm"
-# The local cluster has no accounting storage: no account to validate, no sacct.
+# Nothing about the missing accounting: the workflow's cluster check (ssw.cluster) finds it.
 LOCAL_CLUSTER_ARGS = [
-    "--slurm-no-account",
-    "--slurm-status-command", "squeue",
-    # Poll 1 s after a submission instead of the plugin's 40 s: jobs here take seconds.
+    # Poll 1 s after a submission instead of the profile's delay: jobs here take seconds.
     "--slurm-init-seconds-before-status-checks", "1",
 ]
+# What the workflow's onstart does on Slurm (workflow/rules/common.smk), for the test
+# workflows here: the status command the cluster needs, the job sizes, the lost-jobs watch.
+CLUSTER_CHECK = f"""
+import sys
+sys.path.insert(0, {str(ROOT)!r})
+import ssw.workflow as sswwf
+
+
+onstart:
+    for note in sswwf.prepare_slurm_run(workflow):
+        print(f"ssw cluster check: {{note}}", file=sys.stderr)
+"""
+NO_ACCOUNTING_NOTE = "this Slurm keeps no job accounting"
 RUN_TIMEOUT_S = 300
 JOB_PREFIX = "sswtest"
 
@@ -262,7 +276,7 @@ def test_tiny_workflow_slurm_equals_local(tmp_path: Path, slurm_cluster: str) ->
     local, slurm = tmp_path / "local", tmp_path / "slurm"
     for d in (local, slurm):
         d.mkdir()
-        (d / "Snakefile").write_text("import json\n" + TINY_SNAKEFILE)
+        (d / "Snakefile").write_text("import json\n" + CLUSTER_CHECK + TINY_SNAKEFILE)
     study = ["--config", f"study_config={ROOT / 'config' / 'ci.yaml'}"]
     run_snakemake(local, ["--cores", "2", *study])
     proc = run_snakemake(slurm, [
@@ -364,6 +378,7 @@ def test_thesis_study_slurm_equals_local(tmp_path: Path, slurm_cluster: str) -> 
         *base[1:], "--profile", str(PROFILE), *LOCAL_CLUSTER_ARGS, "--verbose",
         "--slurm-jobname-prefix", JOB_PREFIX,
         "--set-resources", "tof_sweep:tasks=2", "tof_sweep:mpi=mpiexec"], timeout=900)
+    assert NO_ACCOUNTING_NOTE in proc.stderr  # the status command the cluster needs
     n = assert_same_results(slurm / "results", local / "results",
                             ignore=("benchmarks/", "logs/", "cache/"))
     assert n >= 20, f"only {n} result files compared"
@@ -425,7 +440,7 @@ def test_ctrl_c_cancels_the_slurm_jobs(tmp_path: Path, slurm_cluster: str) -> No
     """Ctrl-C (SIGINT) on a Snakemake run with the SLURM profile, while one job runs and
     others wait in the queue: every submitted job leaves the queue, no output appears, and
     the lock is released so the same command can run again (docs/cluster.md section 4)."""
-    (tmp_path / "Snakefile").write_text(SLOW_SNAKEFILE)
+    (tmp_path / "Snakefile").write_text(CLUSTER_CHECK + SLOW_SNAKEFILE)
     cmd = [str(SNAKEMAKE), "--directory", str(tmp_path), "--profile", str(PROFILE),
            *LOCAL_CLUSTER_ARGS, "--cores", "1", "--slurm-jobname-prefix", JOB_PREFIX]
     proc = subprocess.Popen(cmd, cwd=tmp_path, env=_env(), start_new_session=True,
@@ -452,3 +467,80 @@ def test_ctrl_c_cancels_the_slurm_jobs(tmp_path: Path, slurm_cluster: str) -> No
     assert not list((tmp_path / "out").glob("*.txt")) if (tmp_path / "out").exists() else True
     locks = tmp_path / ".snakemake" / "locks"
     assert not locks.exists() or not any(locks.iterdir()), "the lock was not released"
+
+
+def _rename_test_jobs(new_name: str) -> list[str]:
+    """Give this module's queued/running jobs another SLURM job name: the executor plugin
+    (and the workflow's watch) query a run's jobs by its name, so to the run they vanish
+    as if slurmctld had forgotten them. Returns the job ids."""
+    q = subprocess.run(["squeue", "-h", "-o", "%i %j"], capture_output=True, text=True)
+    ids = [line.split()[0] for line in q.stdout.splitlines()
+           if len(line.split()) == 2 and line.split()[1].startswith(f"{JOB_PREFIX}_")]
+    for jid in ids:
+        subprocess.run(["scontrol", "update", f"jobid={jid}", f"jobname={new_name}"],
+                       check=True, capture_output=True)
+    return ids
+
+
+def test_jobs_that_vanish_from_slurm_stop_the_run_with_a_message(tmp_path: Path,
+                                                                 slurm_cluster: str) -> None:
+    """The executor plugin takes a job its status query does not list as still queued, and
+    would wait for it forever. Once every job of the run has vanished from Slurm, the
+    workflow's watch (ssw.cluster.LostJobsWatch) stops the run with a message naming the
+    jobs: within the grace (60 s) and a poll (15 s), and Snakemake exits soon after."""
+    from ssw.cluster import VANISH_GRACE_S, WATCH_POLL_S
+
+    (tmp_path / "Snakefile").write_text(CLUSTER_CHECK + SLOW_SNAKEFILE)
+    cmd = [str(SNAKEMAKE), "--directory", str(tmp_path), "--profile", str(PROFILE),
+           *LOCAL_CLUSTER_ARGS, "--slurm-jobname-prefix", JOB_PREFIX]
+    log_path = tmp_path / "snakemake.log"
+    with open(log_path, "w") as log:
+        proc = subprocess.Popen(cmd, cwd=tmp_path, env=_env(), stdout=log,
+                                stderr=subprocess.STDOUT, text=True)
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and len(_test_jobs()) < 3:
+            assert proc.poll() is None, log_path.read_text()[-3000:]
+            time.sleep(0.5)
+        assert len(_test_jobs()) == 3, f"3 jobs not submitted within 120 s: {_test_jobs()}"
+        gone = _rename_test_jobs(f"{JOB_PREFIX}-renamed")
+        t0 = time.monotonic()
+        message_s = None
+        while proc.poll() is None and time.monotonic() - t0 < 300:
+            if message_s is None and "Lost cluster jobs" in log_path.read_text():
+                message_s = time.monotonic() - t0
+            time.sleep(0.5)
+        exit_s = time.monotonic() - t0
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+        cancel_test_jobs()
+    text = log_path.read_text()
+    assert proc.returncode not in (None, 0), text[-3000:]
+    assert len(gone) == 3
+    assert "Slurm lists no job of this run any more" in text, text[-3000:]
+    assert "waits for 3 cluster job(s): slow[i=0], slow[i=1], slow[i=2]" in text
+    message_s = exit_s if message_s is None else message_s
+    assert message_s <= VANISH_GRACE_S + 2 * WATCH_POLL_S + 15, (message_s, text[-2000:])
+    # Snakemake exits after the plugin's current pause between status queries
+    assert exit_s <= message_s + 90, (exit_s, message_s)
+    print(f"vanished jobs: message after {message_s:.0f} s, exit after {exit_s:.0f} s")
+
+
+@pytest.mark.slow
+def test_the_profile_alone_runs_a_study_on_a_cluster_without_accounting(
+        tmp_path: Path, slurm_cluster: str) -> None:
+    """`snakemake --profile workflow/profiles/slurm` and nothing else about the cluster
+    (no --slurm-status-command, no --slurm-no-account; the job-name prefix only lets the
+    test clean up) runs the CI study on this cluster without accounting: the workflow's
+    check switches the status command to squeue and says so."""
+    start = time.monotonic()
+    proc = run_snakemake(tmp_path, [
+        "--snakefile", str(ROOT / "workflow" / "Snakefile"), "--configfile",
+        str(ROOT / "config" / "ci.yaml"), "--profile", str(PROFILE),
+        "--slurm-jobname-prefix", JOB_PREFIX], timeout=900)
+    log = proc.stdout + proc.stderr
+    assert NO_ACCOUNTING_NOTE in log and "--slurm-status-command squeue" in log
+    assert (tmp_path / "results" / "validation" / "validation.csv").is_file()
+    assert (tmp_path / "results" / "survey" / "survey.geojson").is_file()
+    print(f"the CI study through the profile alone: {time.monotonic() - start:.0f} s")

@@ -113,3 +113,158 @@ def test_a_missing_point_result_is_named(tmp_path):
         run_table(Namespace(results=[str(tmp_path / "P1.json")], config=str(cfg),
                             csv=str(tmp_path / "s.csv"), h5=str(tmp_path / "s.h5"),
                             plot=None, map=None))
+
+
+# ---------------------------------------------------------------------- where the points are
+def _meridian_arc(lat1_deg: float, lat2_deg: float) -> float:
+    """Length (m) of the WGS84 meridian between two latitudes: the integral of the meridian
+    radius of curvature M = a (1 - e^2) / (1 - e^2 sin^2 phi)^1.5 (independent of ssw's
+    ECEF round trip)."""
+    from scipy.integrate import quad
+
+    from ssw.survey import WGS84_A, WGS84_F
+
+    e2 = WGS84_F * (2 - WGS84_F)
+    return quad(lambda p: WGS84_A * (1 - e2) / (1 - e2 * np.sin(p) ** 2) ** 1.5,
+                np.radians(lat1_deg), np.radians(lat2_deg), epsabs=1e-9, epsrel=1e-14)[0]
+
+
+def test_a_frame_tied_to_wgs84_gives_latitude_and_longitude():
+    from ssw.survey import WGS84_A, WGS84_F, Frame, local_to_wgs84, wgs84_to_local
+
+    frame = Frame("grid", origin_latitude=45.0, origin_longitude=7.0, x_azimuth=90.0)
+    # 1 km north along the tangent plane: the meridian arc to its latitude is 1 km less
+    # d^3 / 3R^2 (8e-6 m)
+    lat, lon = local_to_wgs84(0.0, 1000.0, frame)
+    assert lon == pytest.approx(7.0, abs=1e-12)
+    assert _meridian_arc(45.0, float(lat)) == pytest.approx(1000.0, abs=1e-4)
+    # 1 m east and north: the local radii of curvature (first order, exact to 1e-7 m here)
+    e2 = WGS84_F * (2 - WGS84_F)
+    phi = np.radians(45.0)
+    n_radius = WGS84_A / np.sqrt(1 - e2 * np.sin(phi) ** 2)
+    m_radius = WGS84_A * (1 - e2) / (1 - e2 * np.sin(phi) ** 2) ** 1.5
+    lat, lon = local_to_wgs84(1.0, 1.0, frame)
+    assert float(lon) - 7.0 == pytest.approx(np.degrees(1 / (n_radius * np.cos(phi))), rel=1e-6)
+    assert float(lat) - 45.0 == pytest.approx(np.degrees(1 / m_radius), rel=1e-6)
+    # x pointing north (azimuth 0) puts x where y was with x east; y then points west
+    north = Frame("grid", 45.0, 7.0, x_azimuth=0.0)
+    np.testing.assert_allclose(local_to_wgs84(1000.0, 0.0, north),
+                               local_to_wgs84(0.0, 1000.0, frame), rtol=0, atol=1e-12)
+    assert float(local_to_wgs84(0.0, 10.0, north)[1]) < 7.0
+    # and back: east/north offsets of those points (the same ECEF, inverted)
+    x, y = np.array([0.0, 30.0, -250.0]), np.array([0.0, 40.0, 120.0])
+    lat, lon = local_to_wgs84(x, y, frame)
+    east, northing = wgs84_to_local(lat, lon, 45.0, 7.0)
+    np.testing.assert_allclose(east, x, atol=1e-6)
+    np.testing.assert_allclose(northing, y, atol=1e-6)
+    with pytest.raises(ConfigError, match="origin"):
+        local_to_wgs84(0.0, 0.0, Frame("grid"))
+
+
+def test_a_half_given_origin_is_refused():
+    from ssw.survey import survey_frame
+
+    with pytest.raises(ConfigError, match="both or neither"):
+        survey_frame({"frame": {"origin_latitude": 45.0}})
+    assert survey_frame({}).name == "local x/y" and not survey_frame({}).georeferenced
+
+
+GEO_FRAME = {"name": "site grid A", "origin_latitude": -0.2, "origin_longitude": -78.5,
+             "x_azimuth": 90.0}
+
+
+def _run_table(tmp_path, survey, *extra, rc=0):
+    import yaml
+
+    tmp_path.mkdir(parents=True, exist_ok=True)
+    cfg = tmp_path / "c.yaml"
+    cfg.write_text(yaml.safe_dump({"survey": survey}))
+    files = []
+    for pt, r in zip(survey["points"], RESULTS, strict=True):
+        f = tmp_path / f"{pt['id']}.json"
+        f.write_text(json.dumps(r))
+        files.append(str(f))
+    out = tmp_path / "out"
+    got = main(["survey-table", *files, "--config", str(cfg), "--csv", str(out / "s.csv"),
+               "--h5", str(out / "s.h5"), "--geojson", str(out / "s.geojson"), *extra])
+    assert got == rc
+    return out
+
+
+def test_a_georeferenced_survey_fills_the_csv_and_writes_wgs84_geojson(tmp_path, capsys):
+    """Points given by x/y in a frame tied to WGS84: the CSV's latitude/longitude are
+    filled, and the GeoJSON holds [longitude, latitude] (RFC 7946), one feature per point
+    with its verdict and E in Pa."""
+    from ssw.h5io import read_rows_csv
+    from ssw.survey import Frame, local_to_wgs84
+
+    out = _run_table(tmp_path, {"title": "t", "frame": GEO_FRAME, "points": POINTS})
+    capsys.readouterr()
+    rows = read_rows_csv(out / "s.csv")
+    frame = Frame(**GEO_FRAME)
+    for pt, row in zip(POINTS, rows, strict=True):
+        lat, lon = local_to_wgs84(pt["x"], pt["y"], frame)
+        assert float(row["latitude [deg]"]) == pytest.approx(float(lat), abs=1e-9)
+        assert float(row["longitude [deg]"]) == pytest.approx(float(lon), abs=1e-9)
+    gj = json.loads((out / "s.geojson").read_text())
+    assert gj["type"] == "FeatureCollection" and gj["frame"]["wgs84"] is True
+    assert "crs" not in gj  # RFC 7946 has no crs member
+    feats = gj["features"]
+    assert [f["id"] for f in feats] == ["P1", "P2", "P3"]
+    for f, pt, r in zip(feats, POINTS, RESULTS, strict=True):
+        lon, lat = f["geometry"]["coordinates"]   # RFC 7946: longitude first
+        assert f["geometry"]["type"] == "Point"
+        assert lon == pytest.approx(-78.5 + pt["x"] / 111320.0, abs=1e-5)   # Quito: x east
+        assert lat == pytest.approx(-0.2 + pt["y"] / 110574.0, abs=1e-5)
+        assert f["properties"]["E_Pa"] == r["E"] and f["properties"]["x_m"] == pt["x"]
+    assert [f["properties"]["verdict"] for f in feats] == ["pass", "fail", "no target"]
+    assert not list(out.glob("*.tmp*")) and not list(out.glob(".*"))
+
+
+def test_a_survey_in_local_coordinates_names_its_frame_in_the_geojson(tmp_path, capsys):
+    out = _run_table(tmp_path, {"title": "t", "frame": {"name": "site grid A"},
+                                "points": POINTS})
+    capsys.readouterr()
+    gj = json.loads((out / "s.geojson").read_text())
+    assert gj["frame"]["wgs84"] is False and gj["frame"]["name"] == "site grid A"
+    assert "NOT WGS84" in gj["frame"]["note"] and gj["frame"]["coordinates"] == "x, y (m)"
+    for f, pt in zip(gj["features"], POINTS, strict=True):
+        assert f["geometry"]["coordinates"] == [pt["x"], pt["y"]]
+        assert f["properties"]["frame"] == "site grid A"
+        assert f["properties"]["E_low_Pa"] < f["properties"]["E_Pa"] < \
+            f["properties"]["E_high_Pa"]
+    # no point with coordinates: no map, no GeoJSON (and the command says why)
+    bare = [{k: v for k, v in p.items() if k not in ("x", "y")} for p in POINTS]
+    _run_table(tmp_path / "bare", {"points": bare}, rc=2)
+    assert "--geojson" in capsys.readouterr().err and not (tmp_path / "bare" / "out").exists()
+
+
+def test_the_map_title_fits_and_names_synthetic_data_once():
+    """A long title wraps to lie within the figure; "(SYNTHETIC data)" is not repeated when
+    the title says so already; the map has a scale bar and a legend of the verdicts."""
+    from matplotlib.transforms import Bbox
+    from mpl_toolkits.axes_grid1.anchored_artists import AnchoredSizeBar
+
+    from ssw.survey import Frame, map_figure
+
+    rows = survey_table(POINTS, RESULTS)
+    long = ("Example lift (SYNTHETIC data, data/survey_example): compaction control of "
+            "lift 3 of the northern embankment, station 12+300 to 12+450")
+    for title in (long, "Example lift (SYNTHETIC data, data/survey_example)", ""):
+        fig = map_figure(rows, title, Frame("site grid A"))
+        fig.canvas.draw()
+        renderer = fig.canvas.get_renderer()
+        text = fig._suptitle
+        box = text.get_window_extent(renderer)
+        assert Bbox.intersection(box, fig.bbox) is not None
+        assert fig.bbox.x0 <= box.x0 and box.x1 <= fig.bbox.x1, (title, box, fig.bbox)
+        assert fig.bbox.y0 <= box.y0 and box.y1 <= fig.bbox.y1, (title, box, fig.bbox)
+        assert text.get_text().lower().count("synthetic") == 1
+        ax = fig.axes[0]
+        bars = [a for a in ax.artists if isinstance(a, AnchoredSizeBar)]
+        assert len(bars) == 1 and bars[0].txt_label.get_text().endswith(" m")
+        labels = [t.get_text() for t in fig.legends[0].get_texts()]
+        assert labels == ["pass (1)", "fail (1)", "no target (1)"]
+        import matplotlib.pyplot as plt
+
+        plt.close(fig)

@@ -84,18 +84,27 @@ THESIS = {"PCF08": (38e6, 1.78e-3, 1.80e-3, 39e6), "PCF15": (123e6, 1.46e-3, 1.4
 
 def test_study_tables_2_and_3_against_the_thesis_and_the_manufacturer(ci_study):
     """Calibrated (striker speed and preload) on the three foams' measured TOFs, the device
-    reproduces them and the moduli, within stated tolerances of independent truth:
+    reproduces them and the moduli. Tables 2 and 3 are IN-SAMPLE: the measured TOFs are the
+    calibration's own references, taken at the manufacturer's moduli, so they show that the
+    calibrated model closes on the data it was fitted to (three TOFs, two parameters: one
+    degree of freedom), not that it predicts; the thesis's simulated TOF and inverted E
+    come from the thesis's own model, compared as such:
 
     * Table 2: the calibrated model's TOF at the manufacturer's E within 1.5 % of the
-      measured TOF and of the thesis's simulated TOF (measured: 0.3-1.0 % and 0.2-0.7 %);
-    * Table 3: the inverted E within 6 % of the manufacturer's (measured 2.1 / 3.5 / 5.5 %:
-      PCF 08 misses the issue's 5 % goal, README "Calibration"), each 95 % interval holding
-      the manufacturer's E, and within 5 % of the thesis's own inverted E (2.6-2.8 %);
-    * leave-one-out (each foam's E from a calibration on the two others): reported, not
-      tuned. PCF 15 and PCF 30 within 20 % (measured -7.7 % and +12.8 %, stable); PCF 08
-      within 40 %: without the softest foam the two stiffer ones barely pin the static load
-      (a curved valley of near-exact fits; measured +10 % to +31 % as numerical settings
-      change, README "Calibration").
+      measured TOF (in-sample) and of the thesis's simulated TOF (measured: 0.3-1.0 % and
+      0.2-0.7 %);
+    * Table 3: the inverted E within 6 % of the manufacturer's (in-sample; measured 2.1 /
+      3.5 / 5.5 %: PCF 08 misses the issue's 5 % goal, README "Calibration"), each 95 %
+      interval holding the manufacturer's E, and within 5 % of the thesis's own inverted E
+      (2.6-2.8 %).
+
+    The one OUT-OF-SAMPLE check is the leave-one-out (each foam's E from a calibration on
+    the two others, which never saw its TOF): reported, not tuned. PCF 15 within 10 % and
+    PCF 30 within 15 % (measured -7.7 % and +12.9 %, stable as numerical settings change:
+    two foams identify both parameters, the fit is exact); PCF 08 within 40 %: without the
+    softest foam the two stiffer ones barely pin the static load (the subset's second
+    singular value 0.16: a curved valley of near-exact fits, not identified; measured +10 %
+    to +31 % as numerical settings change, +14.2 % now, README "Calibration").
     """
     import json
 
@@ -115,7 +124,7 @@ def test_study_tables_2_and_3_against_the_thesis_and_the_manufacturer(ci_study):
     assert cal["parameter_std"] is not None and min(cal["singular_values"]) >= 1.0
     loo = {row["id"]: row for row in cal["loo"]}
     assert list(loo) == list(THESIS)
-    for sid, tol in (("PCF08", 0.40), ("PCF15", 0.20), ("PCF30", 0.20)):
+    for sid, tol in (("PCF08", 0.40), ("PCF15", 0.10), ("PCF30", 0.15)):
         assert loo[sid]["E_predicted"] == pytest.approx(THESIS[sid][0], rel=tol), loo[sid]
         assert loo[sid]["chi2"] < 1.0  # two foams, two parameters: fitted (near) exactly
     t3 = _csv(res / "validation" / "table3_modulus.csv")

@@ -22,6 +22,7 @@ Tables:
   law against the same law tabulated on 400 uniform cells (linear in F) and as the
   ``table`` wall's F/d^1.5 table: what a resampled representation would cost.
 * ``domain`` (``--domain-study``) and ``interfaces`` (``--interfaces``) as before.
+
 Writes ``contact_work_precision.csv`` and ``.png``, ``contact_bench.json`` under the output
 folder.
 """
@@ -208,12 +209,12 @@ def wall_study(cfg: dict[str, Any], repeat: int) -> dict[str, Any]:
     U = np.column_stack([np.zeros(len(E) * 3), np.cumsum(
         0.5 * (F[:, 1:] + F[:, :-1]) * np.diff(grid, axis=1), axis=1)])
     grid_wall = PiecewiseLinearWall(grid, a, b, U, wall.d_exact.copy(), wall.force_error)
+    from ssw.chain.dense import dense_peaks
     from ssw.chain.integrate import simulate
-    from ssw.chain.tof import pick_peaks
 
     def tof_of(w: Any) -> np.ndarray:
         r = simulate(params, w)
-        return pick_peaks(r.t, r.sensor).tof
+        return dense_peaks(r).tof
 
     tof_grid = tof_of(grid_wall)
     rows = [_resample(ForceCurve(g[1:], f[1:], np.zeros(cells), {}), 1.0)

@@ -13,9 +13,9 @@ Parts (``--parts``, default all):
   dearest scene: the longest run), its wall time (the issue's goal: <= 5 min on 2 cores),
   size and energy balance;
 * ``sweep-cost``: a 300-point sweep (E 10..1000 MPa x nu 0.1/0.3/0.5, Hertz law) with the
-  quasi-static wall and with the reduced wall through the same integrator
-  (:mod:`ssw.dynamics.integrate`), and the chain stage's own quasi-static sweep
-  (``ssw.chain.integrate.simulate``, early stop) for scale; the goal: reduced <= 2x.
+  quasi-static wall and with the reduced wall through the chain's one integrator
+  (``ssw.chain.integrate.simulate``) over the same record (no early stop), and the chain
+  stage's own quasi-static sweep (early stop) for scale; the goal: reduced <= 2x.
 
 Timings are wall times on a shared machine: the best of ``--repeat``.
 """
@@ -89,13 +89,12 @@ def punch_part(out: Path) -> dict[str, Any]:
 
 def static_limit_part() -> dict[str, Any]:
     """Density 1e-6 in the quasi-static FEM's box and mesh vs the study's pipeline."""
+    from ssw.chain.dense import dense_peaks
     from ssw.chain.integrate import simulate as chain_simulate
     from ssw.chain.params import ChainParams
-    from ssw.chain.tof import pick_peaks
     from ssw.chain.wall import table_wall
     from ssw.contact import solve_curve
     from ssw.dynamics.fem_wall import fem_wall
-    from ssw.dynamics.integrate import simulate
 
     p = ChainParams()
     E, nu = 100e6, 0.3
@@ -104,7 +103,7 @@ def static_limit_part() -> dict[str, Any]:
     wall, sc = fem_wall(p, E, nu, 1e-6, boundary="fixed", spec=spec, bead="scale",
                         plate_density=1e-6)
     try:
-        run = simulate(p, wall, t_end=float(sc.t_end[0]), dt=sc.dt)
+        run = chain_simulate(p, wall, t_end=float(sc.t_end[0]), dt=sc.dt, stop_early=False)
         dofs = wall.contacts[0].system.ndof
     finally:
         wall.destroy()
@@ -115,8 +114,8 @@ def static_limit_part() -> dict[str, Any]:
     curve, _ = solve_curve((E, nu), (p.plate_E, p.plate_nu), p.plate_thickness,
                            p.bead_radius, cfg)
     qs = chain_simulate(p, table_wall(p, E, nu, curve=curve), dt=sc.dt)
-    tof_fem = float(pick_peaks(run.t, run.sensor[:, 0]).tof)
-    tof_qs = float(pick_peaks(qs.t, qs.sensor[:, 0]).tof)
+    tof_fem = float(dense_peaks(run).tof[0])
+    tof_qs = float(dense_peaks(qs).tof[0])
     return {"soil_E": E, "soil_nu": nu, "density": 1e-6, "tof_fem_dynamic": tof_fem,
             "tof_quasi_static_pipeline": tof_qs, "relative_difference": tof_fem / tof_qs - 1,
             "dofs": dofs, "dofs_contact_solver": curve.stats["dofs"], "wall": t_fem}
@@ -143,7 +142,6 @@ def sweep_cost_part(repeat: int) -> dict[str, Any]:
     from ssw.chain.integrate import simulate as chain_simulate
     from ssw.chain.integrate import time_step
     from ssw.chain.params import ChainParams
-    from ssw.dynamics.integrate import QuasiStatic, simulate
     from ssw.dynamics.reduced import plate_areal_density, reduced_wall
     from ssw.walls import build_wall
 
@@ -154,9 +152,11 @@ def sweep_cost_part(repeat: int) -> dict[str, Any]:
     dt = time_step(p, qs)
     t_chain, run = best_time(lambda: chain_simulate(p, qs, dt=dt), repeat)
     t_end = float(np.nanmax(run.stop_time))
-    t_qs, _ = best_time(lambda: simulate(p, QuasiStatic(qs), t_end=t_end, dt=dt), repeat)
+    t_qs, _ = best_time(lambda: chain_simulate(p, qs, t_end=t_end, dt=dt, stop_early=False),
+                        repeat)
     rw = reduced_wall(qs, E, nu, 2000.0, plate_areal_density=plate_areal_density(p))
-    t_red, _ = best_time(lambda: simulate(p, rw, t_end=t_end, dt=dt), repeat)
+    t_red, _ = best_time(lambda: chain_simulate(p, rw, t_end=t_end, dt=dt, stop_early=False),
+                         repeat)
     return {"points": int(E.size), "t_end": t_end, "wall_chain_stage_quasi_static": t_chain,
             "wall_quasi_static": t_qs, "wall_reduced": t_red, "ratio": t_red / t_qs}
 

@@ -1,8 +1,12 @@
 """Calibration of a device on measured reference samples (``ssw calibrate``).
 
 * :mod:`~ssw.calibration.model`: references and the batched forward model TOF(theta);
-* :mod:`~ssw.calibration.fit`: global scan, batched Levenberg-Marquardt, covariance,
-  singular values, leave-one-out subsets;
+* :mod:`~ssw.calibration.residuals`: the observations fitted and the model's derivatives
+  (one function ``theta -> (values, d values / d theta)``; central differences today);
+* :mod:`~ssw.calibration.lm`: the bounded (active-set) Levenberg-Marquardt that advances
+  many problems in one batched model run per iteration;
+* :mod:`~ssw.calibration.fit`: global scan, refinement, the covariance conditional on the
+  parameters a bound holds, singular values, leave-one-out subsets;
 * :mod:`~ssw.calibration.file`: the calibration file (JSON: the calibrated device, the
   identified values, their covariance, the wall law, the provenance) and
   :func:`~ssw.calibration.file.calibrate`, the whole procedure.

@@ -53,9 +53,10 @@ class Calibration:
     material_set: str = "realistic"
     materials_file: str | None = None
     provenance: dict[str, Any] = field(default_factory=dict)
-    at_bound: tuple[str, ...] = ()
+    at_bound: dict[str, str] = field(default_factory=dict)
     device_sha256: str = ""
     path: str = ""
+    covariance_parameters: tuple[str, ...] = ()
 
     @property
     def residuals(self) -> list[float]:
@@ -74,11 +75,12 @@ class Calibration:
         return chain_params(self.device, self.materials(), **{**self.numerics, **numerics})
 
     def covariance_array(self) -> np.ndarray | None:
-        """The continuous parameters' covariance (SI), or None."""
+        """The covariance (SI) of ``covariance_parameters``, or None."""
         return None if self.covariance is None else np.asarray(self.covariance, float)
 
     def continuous(self) -> tuple[str, ...]:
-        """The free parameters the covariance is over (continuous ones, in order)."""
+        """The continuous free parameters, in order (the covariance is over those of them
+        no bound holds: ``covariance_parameters``)."""
         return tuple(n for n in self.free if parameter(n).kind == "continuous")
 
     def to_dict(self) -> dict[str, Any]:
@@ -87,12 +89,12 @@ class Calibration:
             "device": self.device.to_dict(), "device_nominal": self.device_nominal.to_dict(),
             "free": list(self.free), "parameters": self.parameters,
             "parameter_std": self.parameter_std, "covariance": self.covariance,
-            "covariance_parameters": list(self.continuous()),
+            "covariance_parameters": list(self.covariance_parameters),
             "singular_values": self.singular_values, "unidentified": self.unidentified,
             "references": self.references, "residuals": self.residuals, "loo": self.loo,
             "alternatives": self.alternatives, "wall": self.wall, "numerics": self.numerics,
             "material_set": self.material_set, "materials_file": self.materials_file,
-            "at_bound": list(self.at_bound), "device_sha256": self.device_sha256,
+            "at_bound": dict(self.at_bound), "device_sha256": self.device_sha256,
             "provenance": self.provenance,
         }
 
@@ -118,30 +120,48 @@ def load_calibration(path: str | Path) -> Calibration:
         raise ConfigError("--calibration", str(p),
                           f"calibration schema version {SCHEMA_VERSION} (found "
                           f"{d.get('schema_version')}): recalibrate with this ssw")
+    free = tuple(d["free"])
+    cont = tuple(n for n in free if parameter(n).kind == "continuous")
     cal = Calibration(
         device=device_from_dict(d["device"], f"{p} (device)"),
         device_nominal=device_from_dict(d["device_nominal"], f"{p} (device_nominal)"),
-        free=tuple(d["free"]), parameters=d["parameters"], parameter_std=d["parameter_std"],
+        free=free, parameters=d["parameters"], parameter_std=d["parameter_std"],
         covariance=d["covariance"], singular_values=d["singular_values"],
         unidentified=d["unidentified"], references=d["references"], loo=d["loo"],
         alternatives=d["alternatives"], wall=d["wall"], numerics=d["numerics"],
         material_set=d.get("material_set", "realistic"),
         materials_file=d.get("materials_file"), provenance=d.get("provenance", {}),
-        at_bound=tuple(d.get("at_bound", ())), device_sha256=d.get("device_sha256", ""),
-        path=str(p),
+        at_bound=_at_bound(d.get("at_bound", {})),
+        device_sha256=d.get("device_sha256", ""), path=str(p),
+        # a file without the list has its covariance over every continuous free parameter
+        covariance_parameters=tuple(d.get("covariance_parameters", cont)),
     )
     check_covariance(cal, str(p))
     return cal
 
 
+def _at_bound(value: Any) -> dict[str, str]:
+    """``{name: lower | upper}`` of a file's ``at_bound``. Files of older ssw versions list
+    names (a parameter within one difference step of its bound, still in the covariance,
+    differentiated one-sidedly): none is held there."""
+    if isinstance(value, dict):
+        return {str(k): str(v) for k, v in value.items()}
+    return {}
+
+
 def check_covariance(cal: Calibration, source: str) -> None:
-    """ConfigError unless the covariance (if any) is square over the continuous free
-    parameters, finite, symmetric and positive definite."""
+    """ConfigError unless the covariance (if any) is square over its parameters (the
+    continuous free ones no bound holds), finite, symmetric and positive definite."""
+    field_ = f"{source}: covariance"
+    names = cal.covariance_parameters
+    cont = cal.continuous()
+    if set(names) - set(cont) or set(names) & set(cal.at_bound):
+        raise ConfigError(f"{source}: covariance_parameters", list(names),
+                          f"continuous free parameters ({', '.join(cont)}) not at a bound "
+                          f"({', '.join(cal.at_bound) or 'none'})")
     if cal.covariance is None:
         return
     C = np.asarray(cal.covariance, float)
-    names = cal.continuous()
-    field_ = f"{source}: covariance"
     if C.shape != (len(names), len(names)):
         raise ConfigError(field_, list(C.shape),
                           f"a {len(names)} x {len(names)} matrix over {', '.join(names)}")
@@ -179,17 +199,41 @@ def calibrate(
 
     Parameters
     ----------
-    refs : reference samples with measured TOFs.  device : the nominal device.
-    free : names of :data:`ssw.device.PARAMETERS`.
-    materials : materials library; numerics : non-device ChainParams fields.
-    wall, wall_options : the last-contact law.  ranges : scan ranges (SI) per parameter.
-    loo : also calibrate without each reference and predict its E.
-    on_run : called after each batched run of the forward model (a progress bar's update).
-    recorded_wall_options : the wall options the file records for the calibrated device
-        (default ``wall_options``): without the references' sample, which is theirs, not
-        the device's (a later measurement names its own).
-    reference_sample : the references' sample (:class:`ssw.sample.Sample`), recorded in
-        the provenance; None: half-spaces.
+    refs : list of ssw.calibration.model.Reference
+        Reference samples with measured TOFs.
+    device : ssw.device.Device
+        The nominal device.
+    free : list of str
+        Names of :data:`ssw.device.PARAMETERS` to identify.
+    materials : dict
+        The materials library (key -> Material).
+    numerics : dict
+        Non-device ChainParams fields (steps_per_contact, t_max, gravity, ...).
+    wall : str
+        The last-contact law's name (:data:`ssw.walls.WALLS`).
+    wall_options : dict or None
+        The wall builder's options.
+    ranges : dict or None
+        Scan range ``(lo, hi)`` (SI) per free parameter; None: the defaults of
+        :data:`ssw.device.PARAMETERS`.
+    loo : bool
+        Also calibrate without each reference and predict its E.
+    scan_points : int or None
+        Grid points per continuous parameter of the global scan; None: automatic.
+    material_set : str
+        The materials library's set, recorded in the file.
+    materials_file : str or None
+        The materials library's file, recorded in the file; None: the shipped one.
+    provenance : dict or None
+        Extra provenance entries recorded in the file.
+    on_run : callable or None
+        Called after each batched run of the forward model (a progress bar's update).
+    recorded_wall_options : dict or None
+        The wall options the file records for the calibrated device (default
+        ``wall_options``): without the references' sample, which is theirs, not the
+        device's (a later measurement names its own).
+    reference_sample : ssw.sample.Sample or None
+        The references' sample, recorded in the provenance; None: half-spaces.
     """
     from ssw.tof import api
 
@@ -217,8 +261,8 @@ def calibrate(
          "residual_pct": float(100.0 * (tc - r.tof) / r.tof)}
         for r, tc in zip(refs, tof_c, strict=True)
     ]
-    cont = tuple(n for n in model.free if parameter(n).kind == "continuous")
-    std = None if fit.std is None else {n: float(s) for n, s in zip(cont, fit.std, strict=True)}
+    std = None if fit.std is None else {n: float(s) for n, s in
+                                        zip(fit.covariance_names, fit.std, strict=True)}
     loo_rows = _loo_predictions(model, refs, subs, materials, numerics, wall, opts) if loo \
         else []
     from ssw.provenance import record
@@ -231,7 +275,7 @@ def calibrate(
             "parameter_sets_evaluated": model.evaluations, "batched_runs": model.runs,
             "converged": fit.converged, "chi2": fit.chi2,
             "weights": "given TOF uncertainties" if fit.weights_known else
-            "1 % of each TOF, covariance scaled by chi2/(n - p)",
+            "1 % of each TOF, covariance scaled by chi2/(n - q), q its parameters",
             "reference_sample": None if reference_sample is None else reference_sample.to_dict(),
             **(provenance or {})}
     return Calibration(
@@ -244,7 +288,8 @@ def calibrate(
             opts if recorded_wall_options is None else dict(recorded_wall_options))},
         numerics=dict(numerics),
         material_set=material_set, materials_file=materials_file, provenance=prov,
-        at_bound=fit.at_bound, device_sha256=device_digest(device, materials),
+        at_bound=dict(fit.at_bound), device_sha256=device_digest(device, materials),
+        covariance_parameters=fit.covariance_names,
     )
 
 
@@ -325,6 +370,6 @@ def _loo_predictions(model: TofModel, refs: list[Reference], subs: dict, materia
             "error_pct": float(100.0 * (E_pred[i] - r.E) / r.E) if ok else None,
             "parameters": theta_dict(model.free, sol.theta), "chi2": sol.chi2,
             "singular_values": sol.singular_values.tolist(), "identified": sol.identified,
-            "reason": reasons[i],
+            "reason": reasons[i], "at_bound": dict(sol.at_bound),
         })
     return rows

@@ -1,48 +1,71 @@
 """Least-squares identification of device parameters from measured TOFs on reference samples.
 
 Problem. References ``i`` (known ``E_i``, ``nu_i``; measured ``T_i`` with standard uncertainty
-``s_i``) and free parameters ``theta`` of the device: minimize the weighted sum of squares
+``s_i``) and free parameters ``theta`` of the device, each within its range
+(:func:`scan_ranges`): minimize the weighted sum of squares
 
-    ``chi^2(theta) = sum_i ((TOF(E_i, nu_i; theta) - T_i) / s_i)^2``.
+    ``chi^2(theta) = sum_i ((TOF(E_i, nu_i; theta) - T_i) / s_i)^2``  subject to
+    ``lo <= theta <= hi``.
 
-TOF is not monotone in the parameters (REFERENCE.md: TOF rises then falls with the striker
-speed under gravity), so no bracketing is assumed:
+The observations and the model's derivatives are those of :mod:`ssw.calibration.residuals`
+(one function ``theta -> (values, d values / d theta)``; central differences of the batched
+model today), so that other kinds of observations can join the TOFs. TOF is not monotone in
+the parameters (REFERENCE.md: TOF rises then falls with the striker speed under gravity), so
+no bracketing is assumed:
 
 1. **global scan**: a tensor grid of the continuous parameters (log-spaced where a parameter
    is scaled, :data:`ssw.device.PARAMETERS`) times every value of the integer ones, all
    evaluated in batched runs (:class:`ssw.calibration.model.TofModel`); every grid local
    minimum of ``chi^2`` is a start;
-2. **local refinement**: Levenberg-Marquardt (Marquardt 1963; Nocedal & Wright 2006,
-   sec. 10.3) in the scaled coordinates ``x`` (``ln theta`` or ``theta / scale``), forward
-   differences for the Jacobian; the starts of every problem (the full set and each
-   leave-one-out subset) advance together, one batched run per iteration;
+2. **local refinement**: the bounded Levenberg-Marquardt of :mod:`ssw.calibration.lm` in the
+   scaled coordinates ``x`` (``ln theta`` or ``theta / scale``); the starts of every problem
+   (the full set and each leave-one-out subset) advance together, one batched run per
+   iteration. A parameter whose optimum lies beyond its range converges ON its bound (the
+   others to their optimum given it): a legitimate answer, flagged (``at_bound``);
 3. **result**: the best solution; other solutions with ``chi^2`` within 1 of it are listed
    (the data do not choose between them); on a tie the one nearest the device's nominal
    values is taken.
 
 Uncertainty (Bard 1974; Press et al. 2007, sec. 15.5): with the weighted Jacobian ``J``
-(central differences at the solution) the parameter covariance is ``(J^T J)^-1``; when no
-TOF uncertainty is given, the weights are ``1 / (1 % of T_i)`` and the covariance is scaled
-by the residual variance ``chi^2 / (n - p)`` (none when ``n = p``). The singular values of
-``J`` in the scaled coordinates say what the data identify: a direction ``v`` with a small
-singular value ``sigma`` moves the TOFs by one standard uncertainty only when the parameters
-move by ``1/sigma`` along ``v`` (scaled units), i.e. the data cannot separate the
-parameters mixed in ``v``; below 1 (more than an e-fold) the calibration says so and gives
-no standard errors (:data:`IDENTIFIED_MIN`).
+(central differences at the solution) of the parameters NOT held on a bound, their
+covariance is ``(J^T J)^-1``: conditional on the held ones, which are fixed at their bound
+(their rows and columns are absent, not given a fictitious variance; a bound is not a
+measurement, and the first-order interval of a parameter there would reach outside its
+range). When no TOF uncertainty is given, the weights are ``1 / (1 % of T_i)`` and the
+covariance is scaled by the residual variance ``chi^2 / (n - q)``, ``q`` the parameters in
+it (none when ``n = q``). The singular values of ``J`` in the scaled coordinates say what the
+data identify: a direction ``v`` with a small singular value ``sigma`` moves the TOFs by one
+standard uncertainty only when the parameters move by ``1/sigma`` along ``v`` (scaled
+units), i.e. the data cannot separate the parameters mixed in ``v``; below 1 (more than an
+e-fold) the calibration says so and gives no standard errors (:data:`IDENTIFIED_MIN`).
 """
 
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
 
+from ssw.calibration.lm import LM_FTOL, LM_ITERATIONS, Problem, active_set, levenberg_marquardt
 from ssw.calibration.model import Reference, TofModel
+from ssw.calibration.residuals import (
+    Derivatives,
+    Observations,
+    bounds_x,
+    central_differences,
+    dtheta_dx,
+    from_x,
+    to_x,
+)
 from ssw.device import parameter, parameter_value
 from ssw.errors import ConfigError, SolverError
 
+#: The parameters a calibration identifies when none are named: the striker speed and the
+#: static load on the chain (the soft/stiff TOF contrast of the references is set by the
+#: static load, their common level by the speed: README "Calibration").
+DEFAULT_FREE = ("striker_velocity", "preload")
 #: Grid points per continuous parameter: this many for one, fewer for several (product cap).
 SCAN_POINTS_1D = 32
 SCAN_BUDGET = 144
@@ -52,22 +75,7 @@ STARTS = 4
 #: more than PRUNE_CHI2 (a basin that far worse is no candidate: the alternatives reported
 #: are those within chi^2 + 1).
 PRUNE_AFTER, PRUNE_CHI2 = 4, 10.0
-#: Relative step of the forward-difference Jacobian in the scaled coordinates.
-FD_STEP = 1e-3
-#: Levenberg-Marquardt: iterations, initial damping, convergence tolerances: a step below
-#: LM_XTOL in the scaled coordinates (1e-6 relative for a log parameter), or a decrease of
-#: chi^2 below LM_FTOL (chi^2 is in units of the TOF uncertainties squared: a change of 1
-#: is one standard uncertainty, so 1e-3 moves the parameters by ~0.03 of their standard
-#: errors; the model TOF's own noise, the sub-step interpolation of its peaks, makes chi^2
-#: jitter by ~1e-5 near chi^2 ~ 1), or chi^2 itself below LM_FTOL (an exact fit).
-LM_ITERATIONS = 40
-LM_LAMBDA0 = 1e-3
-#: Damping beyond which a problem stops unconverged: 1e8 times the curvature's own scale,
-#: a step 1e-8 of the Gauss-Newton one that still does not lower chi^2.
-LM_LAMBDA_MAX = 1e8
-LM_XTOL = 1e-6
-LM_FTOL = 1e-3
-#: Relative TOF weight when no uncertainty is given (covariance rescaled by chi^2/(n-p)).
+#: Relative TOF weight when no uncertainty is given (covariance rescaled by chi^2/(n-q)).
 DEFAULT_REL_STD = 0.01
 #: Solutions count as distinct when a scaled coordinate differs by more than this (5 % of
 #: a log-scanned parameter, 0.05 x the scale of another).
@@ -79,53 +87,8 @@ DISTINCT = 0.05
 #: the largest one (numerically rank deficient).
 IDENTIFIED_MIN = 1.0
 IDENTIFIED_RATIO = 1e-3
-
-
-# --------------------------------------------------------------------- coordinates
-def to_x(theta: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
-    """Scaled coordinates of parameter values (columns in ``names`` order)."""
-    th = np.asarray(theta, float)
-    out = np.empty_like(th)
-    for j, n in enumerate(names):
-        p = parameter(n)
-        out[..., j] = np.log(th[..., j]) if p.log else th[..., j] / p.scale
-    return out
-
-
-def from_x(x: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
-    """Parameter values (SI) of scaled coordinates."""
-    xx = np.asarray(x, float)
-    out = np.empty_like(xx)
-    for j, n in enumerate(names):
-        p = parameter(n)
-        out[..., j] = np.exp(xx[..., j]) if p.log else xx[..., j] * p.scale
-    return out
-
-
-def dtheta_dx(theta: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
-    """``d theta / d x`` per parameter (theta for log coordinates, scale otherwise)."""
-    return np.array([theta[j] if parameter(n).log else parameter(n).scale
-                     for j, n in enumerate(names)])
-
-
-def bounds_x(names: tuple[str, ...], ranges: dict[str, tuple[float, float]]
-             ) -> tuple[np.ndarray, np.ndarray]:
-    lo = np.array([ranges[n][0] for n in names], float)
-    hi = np.array([ranges[n][1] for n in names], float)
-    return to_x(lo, names), to_x(hi, names)
-
-
-def fd_pair(x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The two points of a central difference of step :data:`FD_STEP` per scaled
-    coordinate, ``x -+ FD_STEP``, shifted (same spacing) to stay inside ``[lo, hi]``: a
-    solution on a bound (a preload of 0 N) is differentiated one-sidedly instead of at an
-    inadmissible value."""
-    a = np.asarray(x, float) - FD_STEP
-    b = np.asarray(x, float) + FD_STEP
-    below, above = a < lo, b > hi
-    a = np.where(below, lo, np.where(above, hi - 2 * FD_STEP, a))
-    b = np.where(below, lo + 2 * FD_STEP, np.where(above, hi, b))
-    return a, b
+#: The side of a range a held parameter sits on (:func:`ssw.calibration.lm.active_set`).
+SIDES = {-1: "lower", 1: "upper"}
 
 
 def scan_ranges(free: tuple[str, ...], overrides: dict[str, tuple[float, float]] | None,
@@ -162,7 +125,12 @@ class Solution:
 
 @dataclass(frozen=True)
 class Fit:
-    """The identification on all references, its uncertainty and the alternatives."""
+    """The identification on all references, its uncertainty and the alternatives.
+
+    ``covariance``, ``std``, ``singular_values`` and ``singular_vectors`` are over
+    ``covariance_names``: the continuous free parameters not held on a bound
+    (``at_bound``: name -> ``lower`` | ``upper``), conditional on the held ones.
+    """
 
     names: tuple[str, ...]
     theta: np.ndarray
@@ -170,18 +138,19 @@ class Fit:
     tof_model: np.ndarray
     residuals: np.ndarray  # s, model - measured
     weights_known: bool
-    covariance: np.ndarray | None  # SI, (p, p); None if not estimable
-    std: np.ndarray | None  # SI
-    singular_values: np.ndarray  # of the weighted Jacobian in scaled coordinates
-    singular_vectors: np.ndarray  # (p, p), columns: right singular vectors
-    jacobian: np.ndarray  # (n, p) d TOF / d theta, s per SI unit
+    covariance: np.ndarray | None  # SI, (q, q); None if not estimable
+    std: np.ndarray | None  # SI, (q,)
+    singular_values: np.ndarray  # (q,) of the weighted Jacobian in scaled coordinates
+    singular_vectors: np.ndarray  # (q, q), columns: right singular vectors
+    jacobian: np.ndarray  # (n, p) d TOF / d theta of every continuous one, s per SI unit
     unidentified: tuple[str, ...]  # texts: directions the data cannot pin
     alternatives: tuple[dict[str, float], ...]  # other solutions within chi^2 + 1
     converged: bool
     scan_points: int
     evaluations: int
     runs: int
-    at_bound: tuple[str, ...] = ()  # continuous parameters on a bound of their range
+    covariance_names: tuple[str, ...] = ()  # the continuous free ones no bound holds
+    at_bound: dict[str, str] = field(default_factory=dict)
     tof_range: np.ndarray | None = None  # (n, 2) s: the TOFs the scan's device can give
 
 
@@ -203,12 +172,6 @@ def scan_grid(model: TofModel, ranges: dict[str, tuple[float, float]],
     return grid, [axes[nm] for nm in model.free]
 
 
-def _chi2(tof: np.ndarray, refs: np.ndarray, T: np.ndarray, s: np.ndarray) -> np.ndarray:
-    r = (tof[:, refs] - T[refs]) / s[refs]
-    c = np.sum(r**2, axis=1)
-    return np.where(np.all(np.isfinite(r), axis=1), c, np.inf)
-
-
 def _grid_minima(cost: np.ndarray, shape: tuple[int, ...], n_best: int) -> np.ndarray:
     """Indices (flat) of the grid's local minima (<= every axis neighbour), best first."""
     c = cost.reshape(shape)
@@ -228,137 +191,42 @@ def _grid_minima(cost: np.ndarray, shape: tuple[int, ...], n_best: int) -> np.nd
 
 
 # --------------------------------------------------------------------- refinement
-@dataclass
-class _Problem:
-    """One least-squares problem as Levenberg-Marquardt advances it.
-
-    ``x`` (p,) scaled coordinates of the continuous parameters; ``r`` weighted residuals,
-    ``J`` their Jacobian in ``x`` (n_sub, p), ``cost`` = r.r; ``basis`` (p, q): the
-    directions searched (the identity for a full fit; a subset fit searches only what it
-    identifies); ``lam``/``nu_up``: Nielsen's damping and its growth factor.
-    """
-
-    x: np.ndarray
-    r: np.ndarray
-    J: np.ndarray
-    cost: float
-    basis: np.ndarray
-    lam: float = LM_LAMBDA0
-    nu_up: float = 2.0
-    done: bool = False
-    converged: bool = False
-    iterations: int = 0
+def _scaled(derivs: Derivatives, theta: np.ndarray, cont_idx: list[int],
+            cont: tuple[str, ...]) -> tuple[np.ndarray, np.ndarray]:
+    """The model's values (m, n) at the rows of ``theta`` and their Jacobian in the scaled
+    coordinates of the continuous parameters (m, n, p): one call of ``derivs``."""
+    f, jac = derivs(theta)
+    return f, jac * dtheta_dx(theta[:, cont_idx], cont)[:, None, :]
 
 
-def _levenberg_marquardt(problems: list[_Problem], evaluate: Any, lo: np.ndarray,
-                         hi: np.ndarray, iterations: int, prune: Any = None) -> None:
-    """Advance every problem in place by Levenberg-Marquardt (Marquardt 1963; Nocedal &
-    Wright 2006, sec. 10.3) with Nielsen's damping update (Madsen, Nielsen & Tingleff 2004,
-    eq. 2.21), steps clipped to ``[lo, hi]``; the unfinished problems' trial points go to
-    ``evaluate({i: x}) -> {i: (r, J, cost)}`` together (one batched model run).
-
-    A problem is **converged** when the undamped Gauss-Newton step along its basis would
-    gain less than :data:`LM_FTOL` in chi^2 (the first-order optimality test: at a minimum),
-    when a bound stops the step, when an accepted step gains less than that, or when chi^2
-    itself is below it (an exact fit). It **stops unconverged** when its damping exceeds
-    :data:`LM_LAMBDA_MAX` (no step along the gradient lowers chi^2 although the linear
-    model says one should: a noisy or discontinuous model) or when the iterations run
-    out. ``prune(iteration, problems)`` may stop hopeless starts.
-    """
-    for it in range(iterations):
-        if prune is not None:
-            prune(it, problems)
-        trial: dict[int, np.ndarray] = {}
-        predicted: dict[int, float] = {}
-        for i, pr in enumerate(problems):
-            if pr.done:
-                continue
-            if pr.basis.shape[1] == 0 or pr.cost < LM_FTOL:
-                pr.done = pr.converged = True  # nothing to search, or fitted exactly
-                continue
-            A = pr.J @ pr.basis
-            H, g = A.T @ A, A.T @ pr.r
-            if float(g @ np.linalg.lstsq(H, g, rcond=None)[0]) < LM_FTOL:
-                pr.done = pr.converged = True  # even the undamped step gains too little
-                continue
-            D = np.diag(np.maximum(np.diag(H), 1e-12))
-            try:
-                dz = -np.linalg.solve(H + pr.lam * D, g)
-            except np.linalg.LinAlgError:
-                dz = -g / (np.diag(D) * (1.0 + pr.lam))
-            raw = pr.x + pr.basis @ dz
-            t = np.clip(raw, lo, hi)
-            if float(np.max(np.abs(t - pr.x), initial=0.0)) < LM_XTOL:
-                if float(np.max(np.abs(raw - pr.x), initial=0.0)) >= LM_XTOL:
-                    pr.done = pr.converged = True  # the step is nil: held by a bound
-                    continue
-                # the damping has shrunk the step to nothing: as a rejected step
-                pr.lam *= pr.nu_up
-                pr.nu_up *= 2.0
-                pr.done = pr.lam > LM_LAMBDA_MAX  # stalled: NOT converged
-                continue
-            st = np.linalg.lstsq(pr.basis, t - pr.x, rcond=None)[0]  # the clipped step
-            trial[i] = t
-            predicted[i] = -(2.0 * st @ g + st @ H @ st)  # chi^2 decrease it predicts
-        if not trial:
-            return
-        for i, (r, J, cost) in evaluate(trial).items():
-            pr = problems[i]
-            pr.iterations += 1
-            if cost < pr.cost:
-                gain = pr.cost - cost
-                rho = min(gain / max(predicted[i], 1e-300), 1.0)  # capped: no overflow
-                pr.x, pr.r, pr.J, pr.cost = trial[i], r, J, cost
-                pr.lam = max(pr.lam * max(1.0 / 3.0, 1.0 - (2.0 * rho - 1.0) ** 3), 1e-12)
-                pr.nu_up = 2.0
-                if gain <= LM_FTOL or cost < LM_FTOL:
-                    pr.done = pr.converged = True
-            else:
-                pr.lam *= pr.nu_up
-                pr.nu_up *= 2.0
-                if pr.lam > LM_LAMBDA_MAX:
-                    pr.done = True  # stalled: NOT converged
-    # the iterations ran out: whatever is not done did not converge
-
-
-def _lm_batch(model: TofModel, T: np.ndarray, s: np.ndarray,
+def _lm_batch(model: TofModel, obs: Observations, derivs: Derivatives,
               problems: list[tuple[tuple[int, ...], np.ndarray, np.ndarray]],
               ranges: dict[str, tuple[float, float]]) -> list[Solution]:
     """Every (refs, x0 of the continuous parameters, integer values) start refined at once
-    (:func:`_levenberg_marquardt`): each iteration evaluates every unfinished start's trial
-    point and its forward-difference Jacobian (backward on an upper bound: every point
-    stays admissible) in one batched model call."""
+    (:func:`ssw.calibration.lm.levenberg_marquardt`): each iteration evaluates every
+    unfinished start's trial point and its Jacobian (``derivs``) in one batched call."""
     cont, ints = model.continuous, model.integers
+    cont_idx = [model.free.index(n) for n in cont]
     p = len(cont)
     lo, hi = bounds_x(cont, ranges)
     fixed = [pr[2] for pr in problems]
-    refs = [np.asarray(pr[0], int) for pr in problems]
+    cols = [obs.columns(pr[0]) for pr in problems]
 
     def evaluate(points: dict[int, np.ndarray]) -> dict[int, tuple]:
-        rows, steps = [], {}
-        for i, xi in points.items():
-            steps[i] = np.where(xi + FD_STEP > hi, -FD_STEP, FD_STEP)
-            for pt in [xi] + [xi + steps[i][j] * np.eye(p)[j] for j in range(p)]:
-                rows.append(np.concatenate([from_x(pt, cont), fixed[i]]))
-        tof = model(_order(np.array(rows), cont, ints, model.free))
-        out, k = {}, 0
-        for i in points:
-            block = tof[k:k + p + 1][:, refs[i]]
-            k += p + 1
-            r = (block[0] - T[refs[i]]) / s[refs[i]]
-            J = ((block[1:] - block[0]) / s[refs[i]]).T / steps[i][None, :]
-            ok = np.all(np.isfinite(r)) and np.all(np.isfinite(J))
-            out[i] = (r, J if ok else np.zeros_like(J), float(r @ r) if ok else np.inf)
-        return out
+        keys = list(points)
+        rows = _order(np.array([np.concatenate([from_x(points[i], cont), fixed[i]])
+                                for i in keys]), cont, ints, model.free)
+        f, Jx = _scaled(derivs, rows, cont_idx, cont)
+        return {i: obs.weighted(f[k], Jx[k], cols[i]) for k, i in enumerate(keys)}
 
     x0 = {i: np.asarray(pr[1], float).reshape(p) for i, pr in enumerate(problems)}
     start = evaluate(x0)
-    probs = [_Problem(x0[i], *start[i], np.eye(p)) for i in range(len(problems))]
+    probs = [Problem(x0[i], *start[i], np.eye(p)) for i in range(len(problems))]
     for pr in probs:
         pr.done = not np.isfinite(pr.cost)  # a start on a failing corner: dropped
-    keys = [tuple(rf.tolist()) for rf in refs]
+    keys = [tuple(int(j) for j in pr[0]) for pr in problems]
 
-    def prune(it: int, ps: list[_Problem]) -> None:
+    def prune(it: int, ps: list[Problem]) -> None:
         if it < PRUNE_AFTER:
             return
         best: dict[tuple, float] = {}
@@ -368,15 +236,16 @@ def _lm_batch(model: TofModel, T: np.ndarray, s: np.ndarray,
             if not pr.done and pr.cost > best[k_] + PRUNE_CHI2:
                 pr.done = True  # a basin that much worse is no candidate
 
-    _levenberg_marquardt(probs, evaluate, lo, hi, LM_ITERATIONS, prune)
+    levenberg_marquardt(probs, evaluate, lo, hi, LM_ITERATIONS, prune)
     out = []
     for i, pr in enumerate(probs):
         theta = _order(np.concatenate([from_x(pr.x, cont), fixed[i]])[None, :], cont, ints,
                        model.free)[0]
-        tof = (T[refs[i]] + s[refs[i]] * pr.r if np.isfinite(pr.cost)
-               else np.full(len(refs[i]), np.nan))
-        out.append(Solution(tuple(int(j) for j in refs[i]), theta, float(pr.cost), tof,
-                            pr.converged, pr.iterations))
+        c = cols[i]
+        tof = (obs.values[c] + obs.std[c] * pr.r if np.isfinite(pr.cost)
+               else np.full(c.size, np.nan))
+        out.append(Solution(keys[i], theta, float(pr.cost), tof, pr.converged,
+                            pr.iterations))
     return out
 
 
@@ -388,7 +257,7 @@ def _order(rows: np.ndarray, cont: tuple[str, ...], ints: tuple[str, ...],
 
 
 def _starts(model: TofModel, grid: np.ndarray, axes: list[np.ndarray], tof: np.ndarray,
-            refs: tuple[int, ...], T: np.ndarray, s: np.ndarray, nominal: np.ndarray,
+            obs: Observations, refs: tuple[int, ...], nominal: np.ndarray,
             ranges: dict[str, tuple[float, float]]) -> list[tuple[np.ndarray, np.ndarray]]:
     """(x of the continuous parameters, integer values) starts of one problem: for each
     value of the integer parameters whose best grid point is within PRUNE_CHI2 of the
@@ -396,7 +265,7 @@ def _starts(model: TofModel, grid: np.ndarray, axes: list[np.ndarray], tof: np.n
     (with the best integer values)."""
     cont_idx = [model.free.index(n) for n in model.continuous]
     int_idx = [model.free.index(n) for n in model.integers]
-    cost = _chi2(tof, np.asarray(refs), T, s)
+    cost = obs.chi2(tof, obs.columns(refs))
     starts = []
     cont_shape = tuple(axes[j].size for j in cont_idx)
     ints = grid[:, int_idx]
@@ -448,14 +317,81 @@ def _pick(sols: list[Solution], nominal_x: np.ndarray, model: TofModel
     return best, others
 
 
+# --------------------------------------------------------------------- local analysis
+@dataclass(frozen=True)
+class Local:
+    """A least-squares point's local picture: which parameters a bound holds, and the
+    singular value decomposition of the weighted Jacobian of the others.
+
+    ``held`` (p,): -1 / +1 held on the lower / upper bound, 0 free
+    (:func:`ssw.calibration.lm.active_set`); ``free`` the indices of the free ones;
+    ``sv`` (q,) and ``V`` (q, q) the singular values and right singular vectors of their
+    weighted Jacobian (scaled coordinates), ``sv`` padded with zeros when the data are
+    fewer than ``q``; ``floor`` the singular value below which a direction is not
+    identified."""
+
+    held: np.ndarray
+    free: np.ndarray
+    sv: np.ndarray
+    V: np.ndarray
+    floor: float
+
+    @property
+    def identified(self) -> bool:
+        """Every free direction identified (and at least one free parameter)."""
+        return self.sv.size > 0 and float(self.sv.min()) >= self.floor and float(
+            self.sv.max()) > 0
+
+
+def local(x: np.ndarray, r: np.ndarray, Jw: np.ndarray, lo: np.ndarray, hi: np.ndarray
+          ) -> Local:
+    """The :class:`Local` picture of a least-squares point.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        The point, scaled coordinates (p,).
+    r : numpy.ndarray
+        The weighted residuals there (n,).
+    Jw : numpy.ndarray
+        Their Jacobian in the scaled coordinates (n, p).
+    lo : numpy.ndarray
+        Lower bounds of the scaled coordinates (p,).
+    hi : numpy.ndarray
+        Upper bounds (p,).
+
+    Returns
+    -------
+    Local
+        The held parameters and the singular values of the others.
+    """
+    held = active_set(x, Jw.T @ r, lo, hi)
+    free = np.flatnonzero(held == 0)
+    q = free.size
+    if q:
+        _, s, Vt = np.linalg.svd(Jw[:, free], full_matrices=True)
+        sv = np.zeros(q)
+        sv[: s.size] = s
+        V = Vt.T
+    else:
+        sv, V = np.zeros(0), np.zeros((0, 0))
+    floor = max(IDENTIFIED_MIN, IDENTIFIED_RATIO * float(sv.max(initial=0.0)))
+    return Local(held, free, sv, V, floor)
+
+
+def _held_names(names: tuple[str, ...], held: np.ndarray) -> dict[str, str]:
+    """``{name: "lower" | "upper"}`` of the parameters a bound holds."""
+    return {n: SIDES[int(h)] for n, h in zip(names, held, strict=True) if h}
+
+
 # --------------------------------------------------------------------- public
 @dataclass(frozen=True)
 class SubsetFit:
     """A calibration on a subset of the references (a leave-one-out fit).
 
     ``theta``: its values (SI); ``chi2``; ``singular_values`` of the subset's weighted
-    Jacobian at ``theta`` (scaled coordinates); ``identified``: every one >= the floor
-    (:data:`IDENTIFIED_MIN`) there.
+    Jacobian at ``theta`` (scaled coordinates) over the parameters no bound holds there
+    (``at_bound``); ``identified``: every one >= the floor (:data:`IDENTIFIED_MIN`).
     """
 
     refs: tuple[int, ...]
@@ -464,93 +400,89 @@ class SubsetFit:
     identified: bool
     singular_values: np.ndarray
     iterations: int
+    at_bound: dict[str, str] = field(default_factory=dict)
 
 
-def refine_subsets(model: TofModel, T: np.ndarray, s: np.ndarray, start: np.ndarray,
-                   subsets: list[tuple[int, ...]], ranges: dict[str, tuple[float, float]],
-                   iterations: int = 16,
+def refine_subsets(model: TofModel, obs: Observations, derivs: Derivatives,
+                   start: np.ndarray, subsets: list[tuple[int, ...]],
+                   ranges: dict[str, tuple[float, float]], iterations: int = 16,
                    at_start: tuple[np.ndarray, np.ndarray] | None = None,
                    ) -> dict[tuple[int, ...], SubsetFit]:
-    """Fits of subsets of the references, from ``start`` (the full calibration, SI): the
-    subset's least squares within the directions it identifies AT ``start`` (right singular
-    vectors of its weighted Jacobian there with singular values >= :data:`IDENTIFIED_MIN`;
-    Hansen 1998, truncated SVD), the others held at ``start``'s values. Where the subset
-    identifies every parameter this is its least-squares solution; where it does not (a
-    valley of near-exact fits), the point that differs from the full calibration only in
-    what the subset can tell, a well-defined answer instead of an arbitrary point of the
-    valley. Levenberg-Marquardt in the identified coordinates (Nielsen's damping update, as
-    in the main fit: a near-singular Jacobian along a curved valley cannot throw a step
-    across the range), a step that raises chi^2 rejected, the best point returned; all
-    subsets advance together, one batched run (central differences) per iteration.
-    ``at_start``: the model's TOFs (s, every reference) and their central-difference
-    Jacobian (s per scaled unit, ``model.continuous`` columns) at ``start`` when already
-    computed (:func:`_uncertainty`), so that they are not computed again."""
+    """Fits of subsets of the references, from ``start`` (the full calibration, SI).
+
+    Each subset's least squares within the directions it identifies AT ``start`` (right
+    singular vectors, with singular values >= :data:`IDENTIFIED_MIN`, of its weighted
+    Jacobian over the parameters no bound holds there; Hansen 1998, truncated SVD), the
+    others held at ``start``'s values. Where the subset identifies every parameter this is
+    its least-squares solution; where it does not (a valley of near-exact fits), the point
+    that differs from the full calibration only in what the subset can tell, a well-defined
+    answer instead of an arbitrary point of the valley. The bounded Levenberg-Marquardt of
+    the main fit (:mod:`ssw.calibration.lm`), all subsets together, one call of ``derivs``
+    per iteration.
+
+    Parameters
+    ----------
+    model : TofModel
+        The forward model (its free parameters and their kinds).
+    obs : Observations
+        The observations of every reference.
+    derivs : callable
+        The model's derivatives (:mod:`ssw.calibration.residuals`).
+    start : numpy.ndarray
+        The full calibration's values, SI, ``model.free`` order.
+    subsets : list of tuple of int
+        The subsets (indices of the references).
+    ranges : dict
+        Each free parameter's range, SI.
+    iterations : int
+        At most this many iterations.
+    at_start : tuple, optional
+        The model's values (n,) and their Jacobian in the scaled coordinates (n, p) at
+        ``start`` when already computed (``_uncertainty``), so that they are not
+        computed again.
+
+    Returns
+    -------
+    dict
+        Subset -> :class:`SubsetFit`.
+    """
     cont = model.continuous
     idx = [model.free.index(n) for n in cont]
-    p = len(cont)
     lo, hi = bounds_x(cont, ranges)
     x0 = to_x(start[idx], cont)
+    cols = {key: obs.columns(key) for key in subsets}
 
-    def evaluate(points: dict[tuple[int, ...], np.ndarray]
-                 ) -> dict[tuple[int, ...], tuple[np.ndarray, np.ndarray, float]]:
-        """Weighted residuals, Jacobian (per scaled unit) and chi^2 of each subset's point."""
-        rows = []
-        for xk in points.values():
-            a, b = fd_pair(xk, lo, hi)
-            pts = [xk]
-            for j in range(p):
-                for end in (b, a):
-                    pt = xk.copy()
-                    pt[j] = end[j]
-                    pts.append(pt)
-            for pt in pts:
-                th = start.copy()
-                th[idx] = from_x(pt, cont)
-                rows.append(th)
-        tof = model(np.array(rows))
-        out = {}
-        for k, key in enumerate(points):
-            blk = tof[k * (1 + 2 * p):(k + 1) * (1 + 2 * p)]
-            Jx = np.stack([(blk[1 + 2 * j] - blk[2 + 2 * j]) / (2 * FD_STEP)
-                           for j in range(p)], axis=1)  # (n_refs, p), s per scaled unit
-            out[key] = weigh(key, blk[0], Jx)
-        return out
+    def rows_of(points: list[np.ndarray]) -> np.ndarray:
+        th = np.repeat(start[None, :], len(points), axis=0)
+        th[:, idx] = from_x(np.array(points), cont)
+        return th
 
-    def weigh(key: tuple[int, ...], f0: np.ndarray, Jx: np.ndarray
-              ) -> tuple[np.ndarray, np.ndarray, float]:
-        sub = np.asarray(key)
-        r = (f0[sub] - T[sub]) / s[sub]
-        ok = np.all(np.isfinite(r)) and np.all(np.isfinite(Jx[sub]))
-        return r, Jx[sub] / s[sub, None], float(r @ r) if ok else np.inf
+    def evaluate(points: dict[int, np.ndarray]) -> dict[int, tuple]:
+        keys = list(points)
+        f, Jx = _scaled(derivs, rows_of([points[i] for i in keys]), idx, cont)
+        return {i: obs.weighted(f[k], Jx[k], cols[subsets[i]]) for k, i in enumerate(keys)}
 
-    cur = ({key: v for key, v in evaluate({key: x0.copy() for key in subsets}).items()}
-           if at_start is None else {key: weigh(key, *at_start) for key in subsets})
+    if at_start is None:
+        f0, J0 = (a[0] for a in _scaled(derivs, rows_of([x0]), idx, cont))
+    else:
+        f0, J0 = at_start
     probs = []
     for key in subsets:
-        r, Jw, chi2 = cur[key]
-        _, sv, Vt = np.linalg.svd(Jw, full_matrices=False)
-        floor = max(IDENTIFIED_MIN, IDENTIFIED_RATIO * float(sv.max(initial=0.0)))
-        # the identified directions at the start: searched; the others stay at `start`
-        probs.append(_Problem(x0.copy(), r, Jw, chi2, Vt[sv >= floor].T))
-
-    def evaluate_idx(points: dict[int, np.ndarray]) -> dict[int, tuple]:
-        res = evaluate({subsets[i]: xi for i, xi in points.items()})
-        return {i: res[subsets[i]] for i in points}
-
-    _levenberg_marquardt(probs, evaluate_idx, lo, hi, iterations)
-    x = {key: pr.x for key, pr in zip(subsets, probs, strict=True)}
-    cur = {key: (pr.r, pr.J, pr.cost) for key, pr in zip(subsets, probs, strict=True)}
-    its = {key: pr.iterations for key, pr in zip(subsets, probs, strict=True)}
+        r, Jw, chi2 = obs.weighted(f0, J0, cols[key])
+        loc = local(x0, r, Jw, lo, hi)
+        # the identified directions (of the parameters no bound holds) are searched; the
+        # others stay at `start`
+        basis = np.zeros((len(cont), int(np.sum(loc.sv >= loc.floor))))
+        basis[loc.free] = loc.V[:, loc.sv >= loc.floor]
+        probs.append(Problem(x0.copy(), r, Jw, chi2, basis))
+    levenberg_marquardt(probs, evaluate, lo, hi, iterations)
     out = {}
-    for key in subsets:
-        r, Jw, chi2 = cur[key]
-        sv_ = np.linalg.svd(Jw, compute_uv=False)
-        svf = np.zeros(p)
-        svf[: sv_.size] = sv_
-        floor = max(IDENTIFIED_MIN, IDENTIFIED_RATIO * float(svf.max(initial=0.0)))
+    for key, pr in zip(subsets, probs, strict=True):
+        loc = local(pr.x, pr.r, pr.J, lo, hi)
         theta = start.copy()
-        theta[idx] = from_x(x[key], cont)
-        out[key] = SubsetFit(key, theta, chi2, bool(np.all(svf >= floor)), svf, its[key])
+        theta[idx] = from_x(pr.x, cont)
+        out[key] = SubsetFit(key, theta, pr.cost, loc.identified, loc.sv, pr.iterations,
+                             _held_names(cont, loc.held))
     return out
 
 
@@ -558,9 +490,31 @@ def identify(
     model: TofModel, refs: list[Reference], *, ranges: dict[str, tuple[float, float]] | None = None,
     subsets: list[tuple[int, ...]] | None = None, scan_points: int | None = None,
 ) -> tuple[Fit, dict[tuple[int, ...], SubsetFit]]:
-    """Identify ``model.free`` from ``refs`` (scan, then Levenberg-Marquardt); also fit each
-    subset of ``subsets`` (indices of ``refs``, e.g. the leave-one-out sets) as the smallest
-    change of that calibration (:func:`refine_subsets`).
+    """Identify ``model.free`` from ``refs`` (scan, then bounded Levenberg-Marquardt).
+
+    Parameters
+    ----------
+    model : TofModel
+        The forward model on the references.
+    refs : list of Reference
+        The references, in the model's order.
+    ranges : dict, optional
+        Scan range (SI) per free parameter (default :data:`ssw.device.PARAMETERS`'s).
+    subsets : list of tuple of int, optional
+        Subsets of ``refs`` (e.g. the leave-one-out sets), each fitted as the smallest
+        change of the calibration (:func:`refine_subsets`).
+    scan_points : int, optional
+        Grid points per continuous parameter of the global scan.
+
+    Returns
+    -------
+    tuple
+        The :class:`Fit` and the subsets' :class:`SubsetFit` by subset.
+
+    Raises
+    ------
+    ConfigError
+        When some references give a TOF uncertainty and others not.
     """
     if len(refs) != model.n_refs:
         raise ValueError("references and model disagree")
@@ -573,7 +527,9 @@ def identify(
                           "none; the others do): weights of two kinds cannot be combined")
     known = all(given)
     s = np.array([r.tof_std if known else DEFAULT_REL_STD * r.tof for r in refs], float)
+    obs = Observations.tof(T, s)
     rng = scan_ranges(model.free, ranges, model.device)
+    derivs = central_differences(model, model.free, rng)
     nominal = np.array([parameter_value(model.device, n) for n in model.free])
     for j, n in enumerate(model.free):  # the nominal start inside the scan
         nominal[j] = np.clip(nominal[j], *rng[n])
@@ -583,91 +539,66 @@ def identify(
     tof_range = check_producible(refs, tof, rng)
     key = tuple(range(len(refs)))
     problems = [(key, x0, fixed) for x0, fixed in
-                _starts(model, grid, axes, tof, key, T, s, nominal, rng)]
+                _starts(model, grid, axes, tof, obs, key, nominal, rng)]
     # the refinement's step: near the candidates (2x their fastest striker), not the scan's
     # fastest striker; one step for every run from here on
     cont = model.continuous
     model.refix_time_step(np.array([_order(np.concatenate([from_x(x0, cont), fx])[None, :],
                                            cont, model.integers, model.free)[0]
                                     for _, x0, fx in problems]), rng)
-    sols = _lm_batch(model, T, s, problems, rng)
+    sols = _lm_batch(model, obs, derivs, problems, rng)
     best, others = _pick(sols, to_x(nominal, model.free), model)
-    fit = _uncertainty(model, refs, T, s, known, best, others, rng, grid.shape[0])
+    fit, at_best = _uncertainty(model, obs, derivs, known, best, others, rng, grid.shape[0])
     fit = replace(fit, tof_range=tof_range)
     if not subsets:
         return fit, {}
-    D = dtheta_dx(fit.theta[[model.free.index(n) for n in cont]], cont)
-    subs = refine_subsets(model, T, s, best.theta, list(subsets), rng,
-                          at_start=(fit.tof_model, fit.jacobian * D[None, :]))
+    subs = refine_subsets(model, obs, derivs, best.theta, list(subsets), rng,
+                          at_start=at_best)
     return fit, subs
 
 
-def _uncertainty(model: TofModel, refs: list[Reference], T: np.ndarray, s: np.ndarray,
-                 known: bool, best: Solution, others: list[Solution],
-                 ranges: dict[str, tuple[float, float]], scan_points: int) -> Fit:
-    """Central-difference Jacobian at the solution, covariance, singular values."""
-    names = model.free
-    cont_idx = [names.index(n) for n in model.continuous]
-    p = len(cont_idx)
-    n = len(refs)
-    x0 = to_x(best.theta, names)
-    lo, hi = bounds_x(model.continuous, ranges)
-    a, b = fd_pair(x0[cont_idx], lo, hi)
-    rows = [best.theta]
-    for k, j in enumerate(cont_idx):
-        for end in (b, a):
-            xx = x0.copy()
-            xx[j] = end[k]
-            rows.append(from_x(xx, names))
-    for j, nm in enumerate(names):  # integers: exact values
-        if parameter(nm).kind == "integer":
-            for r_ in rows:
-                r_[j] = best.theta[j]
-    tof = model(np.array(rows))
-    f0 = tof[0]
-    Jx = np.zeros((n, p))
-    for k in range(p):
-        Jx[:, k] = (tof[1 + 2 * k] - tof[2 + 2 * k]) / (2.0 * FD_STEP)
-    Jw = Jx / s[:, None]
-    if p:
-        _, sv, Vt = np.linalg.svd(Jw, full_matrices=True)
-        sv_full = np.zeros(p)
-        sv_full[: sv.size] = sv
-        V = Vt.T
-    else:
-        sv_full, V = np.zeros(0), np.zeros((0, 0))
-    D = dtheta_dx(best.theta[cont_idx], model.continuous) if p else np.zeros(0)
-    J_theta = Jx / D[None, :] if p else Jx
-    resid = f0 - T
-    chi2 = float(np.sum((resid / s) ** 2))
+def _uncertainty(model: TofModel, obs: Observations, derivs: Derivatives, known: bool,
+                 best: Solution, others: list[Solution],
+                 ranges: dict[str, tuple[float, float]], scan_points: int
+                 ) -> tuple[Fit, tuple[np.ndarray, np.ndarray]]:
+    """The fit at ``best``: Jacobian (``derivs``, one call), the parameters a bound holds,
+    the others' covariance conditional on them, singular values. Also returns the model's
+    values and scaled Jacobian there (the subsets' start)."""
+    names, cont = model.free, model.continuous
+    cont_idx = [names.index(n) for n in cont]
+    n = obs.values.size
+    f, Jx = _scaled(derivs, best.theta[None, :], cont_idx, cont)
+    f0, Jx = f[0], Jx[0]
+    lo, hi = bounds_x(cont, ranges)
+    x0 = to_x(best.theta[cont_idx], cont)
+    r, Jw, chi2 = obs.weighted(f0, Jx, np.arange(n))
+    loc = local(x0, r, Jw, lo, hi)
+    q = loc.free.size
+    free_names = tuple(cont[j] for j in loc.free)
+    D = dtheta_dx(best.theta[cont_idx], cont)
     cov = std = None
-    smax = float(sv_full.max()) if p else 0.0
-    floor = max(IDENTIFIED_MIN, IDENTIFIED_RATIO * smax)
-    identified = p > 0 and n >= p and smax > 0 and float(sv_full.min()) >= floor
-    if identified:
-        cov_x = V @ np.diag(1.0 / sv_full**2) @ V.T
+    if loc.identified and n >= q:
+        cov_x = loc.V @ np.diag(1.0 / loc.sv**2) @ loc.V.T
         if not known:
-            cov_x = cov_x * chi2 / (n - p) if n > p else None
+            cov_x = cov_x * chi2 / (n - q) if n > q else None
         if cov_x is not None:
-            cov = D[:, None] * cov_x * D[None, :]
+            Df = D[loc.free]
+            cov = Df[:, None] * cov_x * Df[None, :]
             std = np.sqrt(np.diag(cov))
     unid = []
-    for k in range(p):
-        if sv_full[k] < floor or k >= n:
-            v = V[:, k]
-            terms = " ".join(f"{v[j]:+.2f} {_coord(model.continuous[j])}"
-                             for j in range(p) if abs(v[j]) > 0.2)
-            unid.append(f"direction {terms} (singular value {sv_full[k]:.3g}): the data "
+    for k in range(q):
+        if loc.sv[k] < loc.floor or k >= n:
+            v = loc.V[:, k]
+            terms = " ".join(f"{v[j]:+.2f} {_coord(free_names[j])}"
+                             for j in range(q) if abs(v[j]) > 0.2)
+            unid.append(f"direction {terms} (singular value {loc.sv[k]:.3g}): the data "
                         "cannot separate these parameters")
     alts = tuple({nm: float(v) for nm, v in zip(names, so.theta, strict=True)}
                  | {"chi2": so.chi2} for so in others)
-    # on a bound: within one difference step of it (what the derivatives resolve); a
-    # legitimate answer (a device without static load), differentiated one-sidedly
-    on_bound = tuple(n for k, n in enumerate(model.continuous)
-                     if min(x0[cont_idx][k] - lo[k], hi[k] - x0[cont_idx][k]) <= FD_STEP)
-    return Fit(names, best.theta, chi2, f0, resid, known, cov, std, sv_full, V, J_theta,
-               tuple(unid), alts, best.converged, scan_points, model.evaluations, model.runs,
-               on_bound)
+    fit = Fit(names, best.theta, chi2, f0, f0 - obs.values, known, cov, std, loc.sv, loc.V,
+              Jx / D[None, :], tuple(unid), alts, best.converged, scan_points,
+              model.evaluations, model.runs, free_names, _held_names(cont, loc.held))
+    return fit, (f0, Jx)
 
 
 def _coord(name: str) -> str:

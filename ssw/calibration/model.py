@@ -70,12 +70,37 @@ class TofModel:
 
     Parameters
     ----------
-    device : the device (its values of the free parameters are the nominal ones).
-    free : names of :data:`ssw.device.PARAMETERS` to identify.
-    refs_E, refs_nu : the references' moduli (Pa) and Poisson's ratios.
-    materials : the materials library (key -> Material).
-    numerics : non-device ChainParams fields (steps_per_contact, t_max, gravity, ...).
-    wall, wall_options : the last-contact law (:data:`ssw.walls.WALLS`).
+    device : ssw.device.Device
+        The device (its values of the free parameters are the nominal ones).
+    free : tuple of str
+        Names of :data:`ssw.device.PARAMETERS` to identify.
+    refs_E : numpy.ndarray
+        The references' moduli, Pa.
+    refs_nu : numpy.ndarray
+        The references' Poisson's ratios.
+    materials : dict
+        The materials library (key -> Material).
+    numerics : dict
+        Non-device ChainParams fields (steps_per_contact, t_max, gravity, ...).
+    wall : str
+        The last-contact law's name (:data:`ssw.walls.WALLS`).
+    wall_options : dict
+        The wall builder's options.
+
+    Other Parameters
+    ----------------
+    evaluations : int
+        Parameter sets evaluated so far (a cost counter).
+    runs : int
+        Batched integrator runs so far.
+    dt : float or None
+        The time step of every run, s (``fix_time_step``); None: each run's own.
+    on_run : callable or None
+        Called after each batched run (a progress bar's update).
+    _walls : object
+        Internal: the walls built for the references (leave the default).
+    _extremes : dict
+        Internal: the extreme parameter values seen (leave the default).
     """
 
     device: Device

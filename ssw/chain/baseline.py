@@ -27,15 +27,16 @@ comparison):
   ``dF_j/dt = 3/2 A sqrt(d_j) (v_j - v_{j+1})`` (+ ``c (a_j - a_{j+1})``) are sampled
   from DOP853's dense output, and each peak is located as the root of the cubic Hermite
   interpolant's derivative between the two samples where ``dF/dt`` changes sign (no
-  parabola through three force samples, as :mod:`ssw.chain.tof` uses). The rule that
-  chooses the peaks is the one documented in :mod:`ssw.chain.tof` (incident: first
-  maximum >= 0.5 of the largest; gap below 0.25 of it; reflected: first maximum >= 0.2 of
-  the largest after the gap), written again here.
+  parabola through three force samples, nor the quintic dense output of
+  :mod:`ssw.chain.dense`). The rule that chooses the peaks is :mod:`ssw.signal.rule`'s
+  (its thresholds are read from there: the rule is the TOF's definition, not a
+  computation), applied here to the continuous maxima.
 
 Nothing of :mod:`ssw.chain.integrate`, :mod:`ssw.chain.statics`, :mod:`ssw.chain.tof`,
-:mod:`ssw.walls` or :mod:`ssw.hertz` is used. What remains shared is the
-:class:`ssw.chain.params.ChainParams` record (its numbers) and, when a ``PowerWall`` is
-passed, the wall's coefficient and exponent (the model's input).
+:mod:`ssw.chain.dense`, :mod:`ssw.walls` or :mod:`ssw.hertz` is used. What remains shared
+is the :class:`ssw.chain.params.ChainParams` record (its numbers), the peak rule's three
+thresholds and, when a ``PowerWall`` is passed, the wall's coefficient and exponent (the
+model's input).
 
 The method: the adaptive explicit Runge-Kutta 8(5,3) of Dormand & Prince (Hairer, Norsett &
 Wanner 1993, *Solving ODEs I*, sec. II.10), ``scipy.integrate.DOP853`` stepped by hand so
@@ -54,11 +55,8 @@ import numpy as np
 
 from ssw.chain.params import ChainParams
 from ssw.errors import ConfigError, RecordingError, SolverError
+from ssw.signal.rule import RULE
 
-#: The TOF rule's shares (ssw.chain.tof's documented rule, restated).
-INCIDENT_SHARE, GAP_SHARE, SPLIT_SHARE = 0.5, 0.25, 0.2
-#: Bisection iterations for a peak inside one sample interval (2^-60 of it).
-PEAK_BISECTIONS = 60
 #: Largest static acceleration (share of g, or of the preload's) the initial state may
 #: leave on beads 1..N-1: the equilibrium is exact up to rounding.
 STATIC_TOL = 1e-8
@@ -68,9 +66,28 @@ STATIC_TOL = 1e-8
 class ChainModel:
     """The equations of motion, as numbers. SI units; ``n`` scenes share the chain.
 
-    masses : (N,) kg.  A : N/m^1.5, bead-bead.  wall_coef : (n,) N/m^wall_exp.
-    wall_exp : (n,) -.  g : m/s^2 (0 without gravity).  preload : N on bead 1.
-    damping : N s/m.  sensor : index.  reads : ``mean|upper|lower``.  v0 : m/s.
+    Attributes
+    ----------
+    masses : numpy.ndarray
+        (N,) kg.
+    A : float
+        N/m^1.5, bead-bead.
+    wall_coef : numpy.ndarray
+        (n,) N/m^wall_exp.
+    wall_exp : numpy.ndarray
+        (n,) -.
+    g : float
+        m/s^2 (0 without gravity).
+    preload : float
+        N on bead 1.
+    damping : float
+        N s/m.
+    sensor : int
+        The sensor's index.
+    reads : str
+        ``mean|upper|lower``.
+    v0 : float
+        m/s, the striker's speed.
     """
 
     masses: np.ndarray
@@ -106,9 +123,22 @@ class ChainModel:
 class BaselineResult:
     """The reference's peaks and work.
 
-    tof, t_incident, t_reflected : (n,) s.  t : (n_t,) s, the sample times.
-    sensor : (n_t, n) N, the sensor force (NaN after a scene's own ``t_end``).
-    nfev : right-hand-side evaluations.  steps : accepted steps.
+    Attributes
+    ----------
+    tof : numpy.ndarray
+        (n,) s.
+    t_incident : numpy.ndarray
+        (n,) s.
+    t_reflected : numpy.ndarray
+        (n,) s.
+    t : numpy.ndarray
+        (n_t,) s, the sample times.
+    sensor : numpy.ndarray
+        (n_t, n) N, the sensor force (NaN after a scene's own ``t_end``).
+    nfev : int
+        Right-hand-side evaluations.
+    steps : int
+        Accepted steps.
     """
 
     tof: np.ndarray
@@ -123,8 +153,21 @@ class BaselineResult:
 def hertz_wall(params: ChainParams, soil_E: Any, soil_nu: Any) -> tuple[np.ndarray, np.ndarray]:
     """Bead on an elastic half-space, ``F = A_w d^1.5`` (Johnson 1985, eq. 4.23).
 
-    ``A_w = 4/3 sqrt(R) E*``, ``1/E* = (1 - nu_b^2)/E_b + (1 - nu^2)/E`` (N/m^1.5), flat over
-    the broadcast of ``soil_E`` (Pa) and ``soil_nu``; returns ``(A_w, 1.5)`` arrays (n,).
+    ``A_w = 4/3 sqrt(R) E*``, ``1/E* = (1 - nu_b^2)/E_b + (1 - nu^2)/E``.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain (its bead's numbers).
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu``, flattened.
+    soil_nu : array_like
+        -.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(A_w, 1.5)``: (n,) N/m^1.5 and (n,) -.
     """
     E, nu = np.broadcast_arrays(np.asarray(soil_E, float), np.asarray(soil_nu, float))
     inv = (1.0 - params.bead_nu**2) / params.bead_E + (1.0 - nu.ravel() ** 2) / E.ravel()
@@ -133,7 +176,20 @@ def hertz_wall(params: ChainParams, soil_E: Any, soil_nu: Any) -> tuple[np.ndarr
 
 
 def chain_model(params: ChainParams, wall: Any) -> ChainModel:
-    """The model of ``params`` with ``wall``: ``(coef, exponent)`` or an object with them."""
+    """The model of ``params`` with ``wall``.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain (its numbers only).
+    wall : tuple or object
+        ``(coef, exponent)`` (n,) arrays or an object with them (a PowerWall).
+
+    Returns
+    -------
+    ChainModel
+        The equations, as numbers.
+    """
     if isinstance(wall, tuple):
         coef, expo = wall
     elif hasattr(wall, "coef") and hasattr(wall, "exponent"):
@@ -190,12 +246,23 @@ def _acceleration(mod: ChainModel, u: np.ndarray, v: np.ndarray,
 
 
 def static_state(mod: ChainModel) -> tuple[np.ndarray, np.ndarray]:
-    """Initial ``u`` (m) and ``v`` (m/s), shapes (N, n): beads 1..N-1 in static equilibrium
-    under gravity and the preload, the striker touching bead 1 at the striker speed.
+    """Beads 1..N-1 in static equilibrium under gravity and the preload, the striker
+    touching bead 1 at the striker speed.
+
+    Parameters
+    ----------
+    mod : ChainModel
+        The equations.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        Initial ``u`` (m) and ``v`` (m/s), shapes (N, n).
 
     Raises
     ------
-    SolverError : the state leaves beads 1..N-1 accelerating (a defect of this function).
+    SolverError
+        The state leaves beads 1..N-1 accelerating (a defect of this function).
     """
     N, n = mod.N, mod.n
     load = mod.preload + mod.g * np.cumsum(mod.masses[1:])  # contacts 1..N-2, then the wall
@@ -242,15 +309,19 @@ def _sensor(mod: ChainModel, u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, 
 
 def _hermite_peak(s0, s1, r0, r1, h):
     """Maximum of the cubic Hermite interpolant on ``[0, h]`` with values ``s0, s1`` and
-    slopes ``r0 > 0 >= r1``: (offset in s, value). Bisection on its derivative."""
+    slopes ``r0 > 0 >= r1``: (offset in s, value).
+
+    Its derivative in ``th = t / h`` is the quadratic ``m0 + 2 c2 th + 3 c3 th^2``, positive
+    at 0 and ``m1 <= 0`` at 1: the maximum is its first root in ``(0, 1]``, in closed form
+    (the cancellation-free pair ``q / a``, ``c / q``; Press et al. 2007, sec. 5.6)."""
     m0, m1, dl = h * r0, h * r1, s1 - s0
     c2, c3 = 3.0 * dl - 2.0 * m0 - m1, m0 + m1 - 2.0 * dl
-    lo, hi = np.zeros_like(s0), np.ones_like(s0)
-    for _ in range(PEAK_BISECTIONS):
-        th = 0.5 * (lo + hi)
-        pos = m0 + 2.0 * c2 * th + 3.0 * c3 * th**2 > 0
-        lo, hi = np.where(pos, th, lo), np.where(pos, hi, th)
-    th = 0.5 * (lo + hi)
+    a, b = 3.0 * c3, 2.0 * c2
+    q = -0.5 * (b + np.copysign(np.sqrt(np.maximum(b * b - 4.0 * a * m0, 0.0)), b))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        roots = np.stack([m0 / q, q / a])
+    roots = np.where((roots > 0) & (roots <= 1), roots, np.inf)
+    th = np.minimum(np.min(roots, axis=0), 1.0)
     return th * h, s0 + m0 * th + c2 * th**2 + c3 * th**3
 
 
@@ -259,12 +330,22 @@ def tof_rule(h: float, S: np.ndarray, R: np.ndarray) -> tuple[float, float]:
 
     Parameters
     ----------
-    h : s, the sample step (sample ``k`` at ``k h``).  S : (n_t,) N, the sensor force,
-    ``S[0]`` the static baseline.  R : (n_t,) N/s, its exact time derivative.
+    h : float
+        s, the sample step (sample ``k`` at ``k h``).
+    S : numpy.ndarray
+        (n_t,) N, the sensor force, ``S[0]`` the static baseline.
+    R : numpy.ndarray
+        (n_t,) N/s, its exact time derivative.
+
+    Returns
+    -------
+    tuple of float
+        The incident and reflected peak times (s).
 
     Raises
     ------
-    RecordingError : no incident or no reflected peak.
+    RecordingError
+        No incident or no reflected peak.
     """
     s = S - S[0]
     k = np.flatnonzero((R[:-1] > 0) & (R[1:] <= 0))  # a maximum inside [t_k, t_k+1]
@@ -273,17 +354,17 @@ def tof_rule(h: float, S: np.ndarray, R: np.ndarray) -> tuple[float, float]:
     off, val = _hermite_peak(s[k], s[k + 1], R[k], R[k + 1], h)
     t_pk = k * h + off
     top = max(float(s.max()), float(val.max()))
-    inc = np.flatnonzero(val >= INCIDENT_SHARE * top)
+    inc = np.flatnonzero(val >= RULE.incident_fraction * top)
     if top <= 0 or inc.size == 0:
         raise RecordingError("reference: no incident peak")
     i = inc[0]
-    below = np.flatnonzero((np.arange(s.size) > k[i]) & (s < GAP_SHARE * val[i]))
+    below = np.flatnonzero((np.arange(s.size) > k[i]) & (s < RULE.gap_fraction * val[i]))
     if below.size == 0:
         raise RecordingError("reference: the incident pulse does not end")
     kg = below[0]
     after = k >= kg
     wmax = max(float(s[kg:].max()), float(val[after].max()) if after.any() else -np.inf)
-    ref = np.flatnonzero(after & (val >= SPLIT_SHARE * wmax))
+    ref = np.flatnonzero(after & (val >= RULE.split_fraction * wmax))
     if wmax <= 0 or ref.size == 0:
         raise RecordingError("reference: no reflected peak")
     return float(t_pk[i]), float(t_pk[ref[0]])
@@ -302,16 +383,32 @@ def solve_dop853(
 
     Parameters
     ----------
-    params : the chain (its numbers only).  wall : ``(coef, exponent)`` (n,) arrays, or an
-        object with ``coef``/``exponent`` (a PowerWall): ``F = coef [d]_+^exponent`` (N, m).
-    t_end : s, scalar or (n,): each scene's record ends there (the system runs to the
-        largest).  rtol : relative tolerance.  atol : absolute tolerance, scalar or (2 N n,)
-        (m for ``u``, m/s for ``v``); default ``rtol`` x (peak two-bead overlap, striker
-        speed).  sample_dt : s, the sensor's sample step.
+    params : ChainParams
+        The chain (its numbers only).
+    wall : tuple or object
+        ``(coef, exponent)`` (n,) arrays, or an object with ``coef``/``exponent`` (a
+        PowerWall): ``F = coef [d]_+^exponent`` (N, m).
+    t_end : float or numpy.ndarray
+        s, scalar or (n,): each scene's record ends there (the system runs to the largest).
+    rtol : float
+        Relative tolerance.
+    atol : float or numpy.ndarray or None
+        Absolute tolerance, scalar or (2 N n,) (m for ``u``, m/s for ``v``); default
+        ``rtol`` x (peak two-bead overlap, striker speed).
+    sample_dt : float
+        s, the sensor's sample step.
+
+    Returns
+    -------
+    BaselineResult
+        Peaks, TOF, record and work.
 
     Raises
     ------
-    SolverError : DOP853 failed.  RecordingError : a record without its peaks.
+    SolverError
+        DOP853 failed.
+    RecordingError
+        A record without its peaks.
     """
     from scipy.integrate import DOP853
 

@@ -35,29 +35,58 @@ class ChainParams:
 
     Attributes
     ----------
-    n_beads : beads including the striker (bead 0), >= 3.
-    bead_radius : m.  bead_density : kg/m^3.  bead_E : Pa.  bead_nu : -.
-    sensor_index : 0-based index of the sensor particle, 1 <= index <= n_beads - 2.
-    sensor_mass : kg, mass of the sensor particle; ``None``: a bead's mass.
-    striker_mass : kg; ``None``: a bead's mass.
-    uniform : the sensor particle is a plain bead (its mass is ignored).
-    striker_velocity : m/s, the striker's speed when it touches bead 1.
-    gravity : precompress the chain by its weight and keep gravity on during the run.
-    g : m/s^2.
-    damping : N s/m, viscous dashpot in every closed contact (0: conservative, the default).
-    plate_material, plate_thickness : the plate under the last bead (the thesis's 0.4 mm
-        PLA plate; thickness 0 = no plate): the ``fit`` wall's K-table group, and with
-        ``plate_E``, ``plate_nu`` (Pa, -), ``plate_diameter`` (m) and ``plate_interface``
-        (``frictionless`` | ``bonded`` | ``unilateral``) the ``fem`` wall's plate.
-    preload : N, a constant downward force on bead 1 (the top of the resting column: a
-        guide sleeve, a spring, a weight), in the statics and during the hit.
-    sensor_reads : which force the sensor particle reports: ``mean`` of its two contact
-        forces (an instrumented bead), ``upper`` or ``lower`` contact (a load cell above or
-        below its mass).
-    fit_law : ``k_hertz`` (F = K A_w d^1.5) or ``power`` (F = C d^n) for the ``fit`` wall.
-    steps_per_contact : time steps per Hertz contact time of two beads at the striker speed.
-    t_max : s, longest simulated time (a scene whose reflected wave has not passed the
-        sensor by then is an error).
+    n_beads : int
+        Beads including the striker (bead 0), >= 3.
+    bead_radius : float
+        m.
+    bead_density : float
+        kg/m^3.
+    bead_E : float
+        Pa.
+    bead_nu : float
+        -.
+    sensor_index : int
+        0-based index of the sensor particle, 1 <= index <= n_beads - 2.
+    sensor_mass : float or None
+        kg, mass of the sensor particle; ``None``: a bead's mass.
+    striker_mass : float or None
+        kg; ``None``: a bead's mass.
+    uniform : bool
+        The sensor particle is a plain bead (its mass is ignored).
+    striker_velocity : float
+        m/s, the striker's speed when it touches bead 1.
+    gravity : bool
+        Precompress the chain by its weight and keep gravity on during the run.
+    g : float
+        m/s^2.
+    damping : float
+        N s/m, viscous dashpot in every closed contact (0: conservative, the default).
+    plate_material : str
+        The plate under the last bead (the thesis's PLA): the ``fit`` wall's K-table group.
+    plate_thickness : float
+        m (the thesis's 0.4 mm; 0 = no plate).
+    plate_E : float
+        Pa, the ``fem`` wall's plate.
+    plate_nu : float
+        -.
+    plate_diameter : float
+        m.
+    plate_interface : str
+        ``frictionless`` | ``bonded`` | ``unilateral``.
+    preload : float
+        N, a constant downward force on bead 1 (the top of the resting column: a guide
+        sleeve, a spring, a weight), in the statics and during the hit.
+    sensor_reads : str
+        Which force the sensor particle reports: ``mean`` of its two contact forces (an
+        instrumented bead), ``upper`` or ``lower`` contact (a load cell above or below its
+        mass).
+    fit_law : str
+        ``k_hertz`` (F = K A_w d^1.5) or ``power`` (F = C d^n) for the ``fit`` wall.
+    steps_per_contact : int
+        Time steps per Hertz contact time of two beads at the striker speed.
+    t_max : float
+        s, longest simulated time (a scene whose reflected wave has not passed the sensor
+        by then is run again for longer, up to ``ssw.chain.run.T_END_CAP``).
     """
 
     n_beads: int = 20
@@ -145,12 +174,45 @@ class ChainParams:
         return (1.0 - self.bead_nu**2) / self.bead_E
 
     def wall_coefficient(self, soil_E: Any, soil_nu: Any) -> np.ndarray:
-        """Hertz bead-on-half-space ``A_w = 4/3 sqrt(R) E*`` (N/m^1.5), broadcast.
+        """Hertz bead-on-half-space ``A_w = 4/3 sqrt(R) E*``.
 
         ``1/E* = (1 - nu_b^2)/E_b + (1 - nu_w^2)/E_w`` (REFERENCE.md; Johnson 1985 ch. 4).
+
+        Parameters
+        ----------
+        soil_E : array_like
+            Pa.
+        soil_nu : array_like
+            -.
+
+        Returns
+        -------
+        numpy.ndarray
+            N/m^1.5, broadcast.
         """
         e_star = effective_modulus(self.bead_E, self.bead_nu, soil_E, soil_nu)
         return hertz_coefficient(e_star, self.bead_radius)
+
+    def wall_coefficient_dE(self, soil_E: Any, soil_nu: Any) -> np.ndarray:
+        """``dA_w/dE`` of :meth:`wall_coefficient` at fixed ``soil_nu``: ``A_w E* c_w / E``
+        with ``c_w = (1 - nu_w^2) / E``, from ``dE*/dE = E*^2 c_w / E``.
+
+        Parameters
+        ----------
+        soil_E : array_like
+            Pa.
+        soil_nu : array_like
+            -.
+
+        Returns
+        -------
+        numpy.ndarray
+            N/m^1.5/Pa, broadcast.
+        """
+        E = np.asarray(soil_E, float)
+        c_w = (1.0 - np.asarray(soil_nu, float) ** 2) / E
+        e_star = effective_modulus(self.bead_E, self.bead_nu, soil_E, soil_nu)
+        return self.wall_coefficient(soil_E, soil_nu) * e_star * c_w / E
 
     def contact_time(self) -> float:
         """Hertz contact time (s) of two beads meeting at the striker speed (Johnson 11.24)."""
@@ -168,10 +230,22 @@ class ChainParams:
     @classmethod
     def from_config(cls, cfg: dict[str, Any], device: Any = None, **overrides: Any
                     ) -> ChainParams:
-        """Parameters of a validated config (:func:`ssw.config.load_config`): its device
-        (``device:``, or ``device`` given here: a :class:`ssw.device.Device`) with the
-        config's materials library and the numerics of its ``chain:`` section (and
-        ``fit.law``); ``overrides`` replace any field afterwards.
+        """Parameters of a validated config: its device with the config's materials library
+        and the numerics of its ``chain:`` section (and ``fit.law``).
+
+        Parameters
+        ----------
+        cfg : dict
+            A validated config (:func:`ssw.config.load_config`).
+        device : Device or None
+            A :class:`ssw.device.Device` instead of the config's ``device:``.
+        **overrides
+            Fields replaced afterwards.
+
+        Returns
+        -------
+        ChainParams
+            The chain.
         """
         from ssw.config import device_of, library
 
@@ -181,13 +255,28 @@ class ChainParams:
 
 def chain_params(device: Any, materials: dict[str, Any] | None = None, **numerics: Any
                  ) -> ChainParams:
-    """The :class:`ChainParams` of a device (:class:`ssw.device.Device`): its beads, sensor,
-    striker, preload and plate with the materials' values, and the study's ``numerics``
-    (the non-device fields of ChainParams: ``steps_per_contact``, ``t_max``, ``gravity``,
-    ``damping``, ``fit_law``, ...).
+    """The :class:`ChainParams` of a device: its beads, sensor, striker, preload and plate
+    with the materials' values, and the study's numerics.
 
-    ``materials`` is the materials library (key -> Material; default: the shipped one,
-    ``realistic``).
+    Parameters
+    ----------
+    device : Device
+        A :class:`ssw.device.Device`.
+    materials : dict or None
+        The materials library (key -> Material; default: the shipped one, ``realistic``).
+    **numerics
+        The non-device fields of ChainParams (``steps_per_contact``, ``t_max``,
+        ``gravity``, ``damping``, ``fit_law``, ...).
+
+    Returns
+    -------
+    ChainParams
+        The chain.
+
+    Raises
+    ------
+    ConfigError
+        A material not in the library, or an unknown numerics field.
     """
     from dataclasses import fields as dc_fields
 
@@ -223,7 +312,18 @@ def chain_params(device: Any, materials: dict[str, Any] | None = None, **numeric
 
 
 def numerics_of(cfg: dict[str, Any]) -> dict[str, Any]:
-    """The non-device ChainParams fields of a validated config."""
+    """The non-device ChainParams fields of a validated config.
+
+    Parameters
+    ----------
+    cfg : dict
+        A validated config.
+
+    Returns
+    -------
+    dict
+        ``gravity``, ``damping``, ``fit_law``, ``steps_per_contact``, ``t_max``.
+    """
     ch = cfg.get("chain", {})
     return {
         "gravity": ch.get("gravity", ChainParams.gravity),
@@ -243,8 +343,18 @@ class Batch:
     """The per-scene values of one batched run: a chain whose striker speed, preload and
     masses may differ from scene to scene (a calibration scan). SI units.
 
-    ``striker_velocity`` (n,) m/s, ``preload`` (n,) N, ``masses`` (n, N) kg; every other
-    field is ``params``'s.
+    Attributes
+    ----------
+    params : ChainParams
+        Every other field.
+    n : int
+        Scenes.
+    striker_velocity : numpy.ndarray
+        (n,) m/s.
+    preload : numpy.ndarray
+        (n,) N.
+    masses : numpy.ndarray
+        (n, N) kg.
     """
 
     params: ChainParams
@@ -255,8 +365,27 @@ class Batch:
 
     @classmethod
     def of(cls, params: ChainParams, n: int, vary: dict[str, Any] | None = None) -> Batch:
-        """``params`` for ``n`` scenes, with the fields of ``vary`` (names of
-        :data:`VARYING` -> values broadcast to (n,)) replaced per scene."""
+        """``params`` for ``n`` scenes, with the fields of ``vary`` replaced per scene.
+
+        Parameters
+        ----------
+        params : ChainParams
+            The chain.
+        n : int
+            Scenes.
+        vary : dict or None
+            Names of :data:`VARYING` -> values broadcast to (n,).
+
+        Returns
+        -------
+        Batch
+            The scenes' values.
+
+        Raises
+        ------
+        ConfigError
+            An unknown field, or a value out of its range.
+        """
         vary = {k: v for k, v in (vary or {}).items() if v is not None}
         unknown = set(vary) - set(VARYING)
         if unknown:

@@ -1,6 +1,7 @@
 """The chain run against prebuilt walls (the :class:`ssw.chain.wall.Wall` protocol): the
-incident and reflected peaks at the sensor, a truncated record never taken for a TOF, and the
-peak indentation of the Hertz wall.
+incident and reflected peaks at the sensor on the integrator's dense output (with their
+derivatives when asked), a truncated record never taken for a TOF, and the peak indentation
+of the Hertz wall.
 
 The laws by name (``fem``, ``fit``, ``plastic``, ...) are built above the chain, in
 :mod:`ssw.walls`; the TOF of a device on a named wall is :mod:`ssw.tof.api`.
@@ -8,24 +9,39 @@ The laws by name (``fem``, ``fit``, ``plastic``, ...) are built above the chain,
 
 from __future__ import annotations
 
-from dataclasses import replace
+from dataclasses import fields, replace
 from typing import Any
 
 import numpy as np
 
+from ssw.chain.dense import dense_peaks
 from ssw.chain.integrate import Run, simulate
 from ssw.chain.params import Batch, ChainParams
-from ssw.chain.tof import Peaks, pick_peaks
+from ssw.chain.tof import Peaks, check_selection
 from ssw.chain.wall import Wall, hertz_wall
 from ssw.errors import SolverError
+from ssw.signal.rule import select
 
 #: Longest simulated time (s) a truncated scene is extended to (doubling from t_max).
 T_END_CAP = 1.0
 
 
 def check_complete(run: Run, params: ChainParams) -> None:
-    """Raise SolverError when a scene ran to its end time without its reflected wave
-    passing the sensor (``stop_time`` NaN: the record is truncated, its TOF a guess)."""
+    """Refuse a truncated record.
+
+    Parameters
+    ----------
+    run : Run
+        The record.
+    params : ChainParams
+        The chain (its ``t_max``, for the message).
+
+    Raises
+    ------
+    SolverError
+        A scene ran to its end time without its reflected wave passing the sensor
+        (``stop_time`` NaN: the record is truncated, its TOF a guess).
+    """
     bad = np.flatnonzero(np.isnan(run.stop_time))
     if bad.size:
         raise SolverError(
@@ -37,24 +53,55 @@ def check_complete(run: Run, params: ChainParams) -> None:
 
 
 def run_peaks(params: ChainParams | Batch, wall: Wall, *, strict: bool = True,
-              dt: float | None = None, on_progress: Any = None) -> tuple[Peaks, Run]:
-    """Picked peaks and the run of prebuilt walls (one per scene).
+              dt: float | None = None, on_progress: Any = None, derivatives: Any = None
+              ) -> tuple[Peaks, Run]:
+    """Peaks on the dense output (:func:`ssw.chain.dense.dense_peaks`) and the run of
+    prebuilt walls (one per scene).
 
     A scene whose reflected wave has not passed the sensor by ``t_max`` (a long, slow chain
     on a soft soil) is run again, alone with the others like it, for twice as long, up to
     :data:`T_END_CAP`: its TOF never comes from a truncated record. The returned run's
     ``stop_time`` and ``peak_wall_indentation`` are those of the final runs (its ``sensor``
-    record is the first run's). ``strict`` raises on a scene still truncated at the cap or
-    a signal without two peaks (:func:`check_complete`, :func:`ssw.chain.tof.pick_peaks`);
-    otherwise those scenes get NaN (a calibration scan over wide parameter ranges). ``dt``
-    (s) fixes the time step (default :func:`ssw.chain.integrate.time_step` of the batch);
-    ``on_progress(k)`` is told when ``k`` scenes finish.
+    and ``dsensor`` records are the first run's).
+
+    Parameters
+    ----------
+    params : ChainParams or Batch
+        The chain (a Batch for per-scene striker speeds, preloads, masses).
+    wall : Wall
+        The last contact, one per scene.
+    strict : bool
+        Raise on a scene still truncated at the cap or a signal without two peaks
+        (:func:`check_complete`, :func:`ssw.chain.tof.check_selection`); otherwise those
+        scenes get NaN (a calibration scan over wide parameter ranges).
+    dt : float or None
+        s, the time step (default :func:`ssw.chain.integrate.time_step` of the batch).
+    on_progress : callable or None
+        Told ``on_progress(k)`` when ``k`` scenes finish.
+    derivatives : Tangent or str or sequence of str or None
+        Parameters to differentiate the peaks with respect to
+        (:mod:`ssw.chain.sensitivity`): the Peaks then carry ``dt_incident``,
+        ``dt_reflected``, ... and ``dtof`` (n, k).
+
+    Returns
+    -------
+    tuple
+        ``(Peaks, Run)``.
+
+    Raises
+    ------
+    SolverError
+        (strict) a scene is still truncated at :data:`T_END_CAP`.
+    RecordingError
+        (strict) a scene has no incident or no reflected peak.
     """
-    run = simulate(params, wall, dt=dt, on_progress=on_progress)
+    run = simulate(params, wall, dt=dt, on_progress=on_progress, derivatives=derivatives)
     b = params if isinstance(params, Batch) else Batch.of(params, wall.n)
     p = b.params
-    pk = pick_peaks(run.t, run.sensor, strict=False)
-    cols = [pk.t_incident, pk.t_reflected, pk.f_incident, pk.f_reflected]
+    pk = dense_peaks(run, strict=False)
+    names = [f.name for f in fields(Peaks) if f.name not in ("tangent",)]
+    cols = {k: (None if getattr(pk, k) is None else np.array(getattr(pk, k), copy=True))
+            for k in names}
     stop, peak = run.stop_time.copy(), run.peak_wall_indentation.copy()
     t_end = p.t_max
     nan = np.isnan(stop)
@@ -62,29 +109,46 @@ def run_peaks(params: ChainParams | Batch, wall: Wall, *, strict: bool = True,
         t_end = min(2.0 * t_end, T_END_CAP)
         idx = np.flatnonzero(nan)
         sub = simulate(b.take(idx), wall.take(idx), dt=run.dt, t_end=t_end,
-                       on_progress=on_progress)
-        sp = pick_peaks(sub.t, sub.sensor, strict=False)
-        for c, v in zip(cols, (sp.t_incident, sp.t_reflected, sp.f_incident, sp.f_reflected),
-                        strict=True):
-            c[idx] = v
+                       on_progress=on_progress, derivatives=derivatives)
+        sp = dense_peaks(sub, strict=False)
+        for k, c in cols.items():
+            if c is not None:
+                c[idx] = getattr(sp, k)
         stop[idx], peak[idx] = sub.stop_time, sub.peak_wall_indentation
         nan = np.isnan(stop)
     run = replace(run, stop_time=stop, peak_wall_indentation=peak)
     if strict:
         check_complete(run, p)
-        if np.any(np.isnan(cols[1])):  # stopped, but no two peaks: the strict picker says why
-            bad = np.flatnonzero(np.isnan(cols[1]))
-            pick_peaks(run.t, run.sensor[:, bad])
-    for c in cols:
-        c[np.isnan(stop)] = np.nan
-    return Peaks(*cols), run
+        if np.any(np.isnan(cols["t_reflected"])):  # stopped, no two peaks: the rule says why
+            bad = np.flatnonzero(np.isnan(cols["t_reflected"]))
+            check_selection(select(run.sensor[:, bad] - run.sensor[0, bad]), True)
+    gone = np.isnan(stop)
+    for c in cols.values():
+        if c is not None and c.dtype.kind == "f":
+            c[gone] = np.nan
+    if cols["dense"] is not None:
+        cols["dense"][gone] = False
+    return Peaks(**cols, tangent=run.tangent), run
 
 
 def peak_wall_indentation(soil_E: Any, soil_nu: Any, params: ChainParams) -> np.ndarray:
-    """Largest indentation (m) of the last bead into the Hertz wall during the first hit.
+    """Largest indentation of the last bead into the Hertz wall during the first hit.
 
-    The fit stage uses it as the indentation range its K fits must cover. Shape: the
-    broadcast shape of ``soil_E`` (Pa) and ``soil_nu``.
+    The fit stage uses it as the indentation range its K fits must cover.
+
+    Parameters
+    ----------
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu``: one scene each.
+    soil_nu : array_like
+        -.
+    params : ChainParams
+        The chain.
+
+    Returns
+    -------
+    numpy.ndarray
+        m, the broadcast shape of ``soil_E`` and ``soil_nu``.
     """
     w = hertz_wall(params, soil_E, soil_nu)
     run = simulate(params, w)

@@ -1,83 +1,142 @@
-"""Time of flight from a sensor signal: peak picking with sub-sample interpolation.
+"""Time of flight of a sampled sensor signal: the peak rule, refined by a parabola.
 
-TOF (thesis, "peak-to-peak"; Yang et al. 2011) is the time between the incident and the
-reflected wave peaks at the sensor particle. The rule, applied to each column of a sampled
-signal ``F`` (uniform step, the first sample the static baseline ``b = F[0]``, ``s = F - b``):
-
-1. **incident peak**: the first local maximum with ``s >= INCIDENT_SHARE * max(s)``;
-2. **end of the incident pulse**: the first sample after it with ``s < GAP_SHARE * s_inc``;
-3. **reflected peak**: from there on, the *first* local maximum with
-   ``s >= SPLIT_SHARE * max(s over that window)``.
-
-Soft soils split the reflected wave into several pulses (Yang et al. 2011: a primary and
-secondary reflected waves); rule 3 takes the primary one, the earliest pulse that is not a
-ripple, even when a later one is larger, so TOF is the primary wave's (as Yang et al.'s
-TOF_PSW) and does not jump from one pulse to another as E changes unless the primary pulse
-falls below ``SPLIT_SHARE`` of the largest. Each peak is refined by the vertex of the
-parabola through it and its two neighbours (error ``O(dt^3)`` at a smooth maximum).
+The rule that chooses the incident and reflected peaks is :mod:`ssw.signal.rule` (stated
+once for simulated and measured signals). Here it is applied to the columns of a signal
+sampled on a uniform grid (the first sample the static baseline ``b = F[0]``,
+``s = F - b``), and each chosen sample is refined by the vertex of the parabola through it
+and its two neighbours (error ``O(dt^3)`` at a smooth maximum). A simulated run's own TOF
+is located on the integrator's dense output instead (:mod:`ssw.chain.dense`), which is
+smooth in the run's parameters; this sampled picker serves signals without one (a
+resampled or filtered force, a sweep of saved records).
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
 from ssw.errors import RecordingError
-
-#: A local maximum is the incident peak if it reaches this share of the signal's maximum.
-INCIDENT_SHARE = 0.5
-#: The incident pulse ends where the signal falls below this share of its peak.
-GAP_SHARE = 0.25
-#: A reflected local maximum counts if it reaches this share of the reflected maximum.
-SPLIT_SHARE = 0.2
+from ssw.signal.peaks import parabolic_vertex
+from ssw.signal.rule import RULE, PeakRule, Selection, select
 
 
 @dataclass(frozen=True)
 class Peaks:
-    """Picked peaks per column: times (s) and heights above baseline (N), shapes (n,)."""
+    """Picked peaks per column, shapes (n,).
+
+    Attributes
+    ----------
+    t_incident : numpy.ndarray
+        Incident peak times (s).
+    t_reflected : numpy.ndarray
+        Reflected peak times (s).
+    f_incident : numpy.ndarray
+        Incident peak heights above the baseline (N).
+    f_reflected : numpy.ndarray
+        Reflected peak heights above the baseline (N).
+    dt_incident : numpy.ndarray or None
+        (n, k) s per unit of each parameter of ``tangent``: the incident time's derivatives
+        (peaks on a run's dense output with sensitivities, :mod:`ssw.chain.dense`).
+    dt_reflected : numpy.ndarray or None
+        (n, k), the reflected time's.
+    df_incident : numpy.ndarray or None
+        (n, k) N per unit, the incident height's.
+    df_reflected : numpy.ndarray or None
+        (n, k), the reflected height's.
+    dense : numpy.ndarray or None
+        (n,) bool: both peaks located on the dense output (False: a parabolic vertex);
+        None for peaks of a sampled signal.
+    tangent : Tangent or None
+        The parameters of the derivatives.
+    """
 
     t_incident: np.ndarray
     t_reflected: np.ndarray
     f_incident: np.ndarray
     f_reflected: np.ndarray
+    dt_incident: np.ndarray | None = None
+    dt_reflected: np.ndarray | None = None
+    df_incident: np.ndarray | None = None
+    df_reflected: np.ndarray | None = None
+    dense: np.ndarray | None = None
+    tangent: Any = None
 
     @property
     def tof(self) -> np.ndarray:
         """``t_reflected - t_incident`` (s)."""
         return self.t_reflected - self.t_incident
 
-
-def _parabolic(y: np.ndarray, k: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Vertex offset (samples) and height of the parabola through ``y[k-1..k+1, col]``."""
-    ym, y0, yp = y[k - 1, cols], y[k, cols], y[k + 1, cols]
-    den = ym - 2.0 * y0 + yp
-    safe = np.where(den < 0, den, -1.0)
-    off = np.where(den < 0, 0.5 * (ym - yp) / safe, 0.0)
-    return off, y0 - 0.25 * (ym - yp) * off
+    @property
+    def dtof(self) -> np.ndarray | None:
+        """(n, k) s per unit of each parameter: the TOF's derivatives (None without)."""
+        if self.dt_reflected is None or self.dt_incident is None:
+            return None
+        return self.dt_reflected - self.dt_incident
 
 
-def pick_peaks(
-    t: np.ndarray,
-    F: np.ndarray,
-    *,
-    split_share: float = SPLIT_SHARE,
-    incident_share: float = INCIDENT_SHARE,
-    gap_share: float = GAP_SHARE,
-    strict: bool = True,
-) -> Peaks:
+def parabolic(y: np.ndarray, k: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Vertex offset (samples) and height of the parabola through ``y[k-1..k+1, col]``
+    (``y`` (n_t, n), ``k`` and ``cols`` (m,) with ``1 <= k <= n_t - 2``):
+    :func:`ssw.signal.peaks.parabolic_vertex`."""
+    pos, height = parabolic_vertex(y, k, cols)
+    return pos - k, height
+
+
+def check_selection(sel: Selection, strict: bool) -> np.ndarray:
+    """The columns without two peaks.
+
+    Parameters
+    ----------
+    sel : Selection
+        The rule's choice (:func:`ssw.signal.rule.select`).
+    strict : bool
+        Raise for any.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n,) bool.
+
+    Raises
+    ------
+    RecordingError
+        (strict) a column has no incident or no reflected peak.
+    """
+    bad = ~sel.ok
+    if np.any(bad) and strict:
+        raise RecordingError(
+            f"no {'incident' if not sel.has_incident.all() else 'reflected'} peak in "
+            f"{np.count_nonzero(bad)} of {bad.size} signals (columns {np.flatnonzero(bad)[:5]})"
+        )
+    return bad
+
+
+def pick_peaks(t: np.ndarray, F: np.ndarray, *, rule: PeakRule = RULE,
+               strict: bool = True) -> Peaks:
     """Incident and reflected peaks of ``F`` sampled at uniform times ``t``.
 
     Parameters
     ----------
-    t : (n_t,) s, uniform.  F : (n_t,) or (n_t, n) N; NaN samples (a stopped scene) count
-        as the baseline.
-    split_share, incident_share, gap_share : the rule's shares (module docstring).
-    strict : raise on a column without two peaks (else its values are NaN).
+    t : numpy.ndarray
+        (n_t,) s, uniform.
+    F : numpy.ndarray
+        (n_t,) or (n_t, n) N; NaN samples (a stopped scene) count as the baseline.
+    rule : PeakRule
+        The peak rule (:data:`ssw.signal.rule.RULE`).
+    strict : bool
+        Raise on a column without two peaks (else its values are NaN).
+
+    Returns
+    -------
+    Peaks
+        Per column; 0-d arrays for a 1-d ``F``.
 
     Raises
     ------
-    RecordingError : (strict) a column has no incident or no reflected peak.
+    RecordingError
+        (strict) a column has no incident or no reflected peak.
     """
     t = np.asarray(t, float)
     Fa = np.asarray(F, float)
@@ -88,31 +147,13 @@ def pick_peaks(
     dt = (t[-1] - t[0]) / (t.size - 1)
     s = y - y[0]
     s = np.where(np.isnan(s), 0.0, s)
-    idx = np.arange(s.shape[0])[:, None]
+    sel = select(s, rule)
+    bad = check_selection(sel, strict)
     cols = np.arange(s.shape[1])
-    inner = np.zeros_like(s, dtype=bool)
-    inner[1:-1] = (s[1:-1] > s[:-2]) & (s[1:-1] >= s[2:])
-    smax = s.max(axis=0)
-    ok_inc = inner & (s >= incident_share * smax) & (smax > 0)
-    has_inc = ok_inc.any(axis=0)
-    k_inc = np.argmax(ok_inc, axis=0)
-    s_inc = s[k_inc, cols]
-    after = (idx > k_inc) & (s < gap_share * s_inc)
-    has_gap = after.any(axis=0)
-    k_gap = np.argmax(after, axis=0)
-    window = idx >= k_gap
-    wmax = np.where(window, s, -np.inf).max(axis=0)
-    ok_ref = inner & window & (s >= split_share * wmax) & (wmax > 0)
-    has_ref = ok_ref.any(axis=0) & has_gap
-    k_ref = np.argmax(ok_ref, axis=0)
-    bad = ~(has_inc & has_ref)
-    if np.any(bad) and strict:
-        raise RecordingError(
-            f"no {'incident' if not has_inc.all() else 'reflected'} peak in "
-            f"{np.count_nonzero(bad)} of {bad.size} signals (columns {np.flatnonzero(bad)[:5]})"
-        )
-    o_i, h_i = _parabolic(s, k_inc, cols)
-    o_r, h_r = _parabolic(s, k_ref, cols)
+    k_inc = np.clip(sel.k_incident, 1, s.shape[0] - 2)
+    k_ref = np.clip(sel.k_reflected, 1, s.shape[0] - 2)
+    o_i, h_i = parabolic(s, k_inc, cols)
+    o_r, h_r = parabolic(s, k_ref, cols)
     nan = np.where(bad, np.nan, 0.0)
     res = Peaks(
         t_incident=t[0] + (k_inc + o_i) * dt + nan,
@@ -126,6 +167,21 @@ def pick_peaks(
     return res
 
 
-def tof_from_signal(t: np.ndarray, F: np.ndarray, **shares: float) -> np.ndarray:
-    """TOF (s) of each column of ``F`` by the rule of :func:`pick_peaks`."""
-    return pick_peaks(t, F, **shares).tof
+def tof_from_signal(t: np.ndarray, F: np.ndarray, *, rule: PeakRule = RULE) -> np.ndarray:
+    """TOF (s) of each column of ``F`` by :func:`pick_peaks`.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        (n_t,) s, uniform.
+    F : numpy.ndarray
+        (n_t,) or (n_t, n) N.
+    rule : PeakRule
+        The peak rule.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n,) s (0-d for a 1-d ``F``).
+    """
+    return pick_peaks(t, F, rule=rule).tof

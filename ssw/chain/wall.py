@@ -43,40 +43,67 @@ import numpy as np
 
 from ssw.chain.params import ChainParams
 from ssw.errors import ConfigError, SswError
+from ssw.hertz import effective_modulus, hertz_coefficient
+from ssw.roots import find_root
 
 #: Cells of the uniform indentation grid a FEM curve is resampled on.
 TABLE_CELLS = 400
 #: Share of the curve's indentation range used for the extension's exponent.
 TABLE_TAIL = 0.1
-#: Bisection iterations for the static indentation of a tabulated wall (2^-60 of range).
-BISECTION_ITERATIONS = 60
 
 
-def bisect_indentation(force: Any, F: Any, start: np.ndarray) -> np.ndarray:
-    """Indentations (m) at which the monotone laws ``force(d)`` (N, one per scene) carry
-    ``F`` (N, negative read as 0): ``start`` (m, > 0) doubled until it brackets ``F``, then
-    :data:`BISECTION_ITERATIONS` halvings of the bracket (2^-60 of it), vectorized."""
-    target = np.maximum(np.asarray(F, float), 0.0)
-    hi = np.array(start, float)
-    lo = np.zeros_like(hi)
-    while np.any(short := force(hi) < target):
-        hi = np.where(short, 2.0 * hi, hi)
-    for _ in range(BISECTION_ITERATIONS):
-        mid = 0.5 * (lo + hi)
-        low = force(mid) < target
-        lo, hi = np.where(low, mid, lo), np.where(low, hi, mid)
-    return 0.5 * (lo + hi)
+def force_indentation(force: Any, F: Any, start: np.ndarray) -> np.ndarray:
+    """Indentations (m) at which the non-decreasing laws ``force(d)`` carry ``F``.
+
+    The bracket ``[0, start]`` is grown until it holds ``F``, then the roots are found by
+    :func:`ssw.roots.find_root` to its default relative tolerance (a few ulp), vectorized
+    over the scenes.
+
+    Parameters
+    ----------
+    force : callable
+        ``force(d) -> F``: the laws' forces (N) at the indentations ``d`` (m), one per
+        scene.
+    F : array_like
+        Forces to carry (N), one per scene; a negative one is read as 0.
+    start : array_like
+        First upper end of each bracket (m, > 0).
+
+    Returns
+    -------
+    ndarray
+        Indentations (m), the broadcast shape of ``start`` and ``F``.
+    """
+    hi, target = np.broadcast_arrays(np.asarray(start, float), np.asarray(F, float))
+    target = np.maximum(target, 0.0)
+    return find_root(lambda d: force(d) - target, np.zeros(hi.shape), hi, grow=True).x
 
 
 @dataclass(frozen=True)
 class PowerWall:
-    """``F = coef [d]_+^n`` per scene; shapes (n_scenes,)."""
+    """``F = coef [d]_+^n`` per scene; shapes (n_scenes,).
 
-    coef: np.ndarray  # N / m^n
-    exponent: np.ndarray  # -
+    Attributes
+    ----------
+    coef : numpy.ndarray
+        (n,) N/m^n.
+    exponent : numpy.ndarray
+        (n,) -.
+    force_error : float or None
+        Stated relative (1 sigma) error of the law's force; None when not known.
+    dcoef_dE : numpy.ndarray or None
+        (n,) N/m^n/Pa, the coefficient's derivative with respect to the soil's modulus
+        (None: the law's E-dependence is not known, :meth:`dforce_dE` raises).
+    dexponent_dE : numpy.ndarray or None
+        (n,) 1/Pa, the exponent's (None: constant).
+    """
+
+    coef: np.ndarray
+    exponent: np.ndarray
     hertzian: bool = field(init=False)  # every exponent is 1.5 (a faster path)
-    #: stated relative (1 sigma) error of the law's force, None when not known
     force_error: float | None = None
+    dcoef_dE: np.ndarray | None = None
+    dexponent_dE: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "hertzian", bool(np.all(self.exponent == 1.5)))
@@ -92,6 +119,26 @@ class PowerWall:
             return self.coef * dp * np.sqrt(dp)
         return self.coef * dp**self.exponent
 
+    def dforce_dd(self, d: np.ndarray) -> np.ndarray:
+        """Tangent stiffness ``n coef d^(n-1)`` (N/m) at ``d`` (m); 0 for ``d <= 0``."""
+        dp = np.maximum(d, 0.0)
+        if self.hertzian:
+            return 1.5 * self.coef * np.sqrt(dp)
+        return np.where(dp > 0, self.exponent * self.coef * dp ** (self.exponent - 1.0), 0.0)
+
+    def dforce_dE(self, d: np.ndarray) -> np.ndarray:
+        """``dF/dE`` (N/Pa) at fixed indentation ``d`` (m): ``dcoef/dE d^n + coef d^n ln(d)
+        dn/dE``; ConfigError when the builder did not state the law's E-dependence."""
+        if self.dcoef_dE is None:
+            raise ConfigError("wall", "a power law without its E-dependence",
+                              "a law built by hertz_wall, fit_wall or rigid_wall")
+        dp = np.maximum(d, 0.0)
+        dn = dp * np.sqrt(dp) if self.hertzian else dp ** self.exponent
+        out = self.dcoef_dE * dn
+        if self.dexponent_dE is not None:
+            out = out + self.coef * dn * np.log(np.where(dp > 0, dp, 1.0)) * self.dexponent_dE
+        return out
+
     def potential(self, d: np.ndarray) -> np.ndarray:
         """Stored energy ``coef d^(n+1) / (n+1)`` (J)."""
         dp = np.maximum(d, 0.0)
@@ -102,7 +149,11 @@ class PowerWall:
         return (np.maximum(F, 0.0) / self.coef) ** (1.0 / self.exponent)
 
     def take(self, idx: np.ndarray) -> PowerWall:
-        return PowerWall(self.coef[idx], self.exponent[idx], force_error=self.force_error)
+        """The scenes ``idx`` (may repeat)."""
+        return PowerWall(self.coef[idx], self.exponent[idx], force_error=self.force_error,
+                         dcoef_dE=None if self.dcoef_dE is None else self.dcoef_dE[idx],
+                         dexponent_dE=None if self.dexponent_dE is None
+                         else self.dexponent_dE[idx])
 
     def hertz_equivalent(self, d_ref: float) -> np.ndarray:
         """``F(d_ref) / d_ref^1.5`` (N/m^1.5): a Hertz coefficient for time-step choice."""
@@ -147,11 +198,36 @@ class TableWall:
         outside = self.f_last * (np.maximum(dp, d_last) / d_last) ** self.n_ext
         return np.where(x <= cells, inside, outside)
 
+    def dforce_dd(self, d: np.ndarray) -> np.ndarray:
+        """Tangent stiffness (N/m) of the tabulated law at ``d`` (m): ``g' d^1.5 + 1.5 g
+        d^0.5`` inside the table (``g`` linear in each cell), the extension's beyond."""
+        dp = np.maximum(d, 0.0)
+        cells = self.g.shape[1] - 1
+        x = dp / self.h
+        k = np.minimum(x.astype(np.int64), cells - 1)
+        frac = np.minimum(x - k, 1.0)
+        r = np.arange(self.n)
+        g0, g1 = self.g[r, k], self.g[r, k + 1]
+        sq = np.sqrt(dp)
+        inside = (g1 - g0) / self.h * dp * sq + 1.5 * (g0 + frac * (g1 - g0)) * sq
+        d_last = cells * self.h
+        outside = (self.n_ext * self.f_last / d_last
+                   * (np.maximum(dp, d_last) / d_last) ** (self.n_ext - 1.0))
+        return np.where(x <= cells, inside, outside)
+
+    def dforce_dE(self, d: np.ndarray) -> np.ndarray:
+        """Not available: a table is one FEM curve per scene, data for one modulus (the
+        ``fem`` wall is the same law as a function of E)."""
+        raise ConfigError("wall", "table", "a law with its E-dependence for dF/dE: fem, fit, "
+                          "hertz (a table wall's curve is data for one modulus)")
+
     def indentation(self, F: np.ndarray) -> np.ndarray:
-        """Indentation carrying ``F`` (N): vectorized bisection of the monotone law."""
-        return bisect_indentation(self.force, F, self.h * (self.g.shape[1] - 1))
+        """Indentation carrying ``F`` (N): the root of the monotone law
+        (:func:`force_indentation`)."""
+        return force_indentation(self.force, F, self.h * (self.g.shape[1] - 1))
 
     def take(self, idx: np.ndarray) -> TableWall:
+        """The scenes ``idx`` (may repeat)."""
         return TableWall(self.h[idx], self.g[idx], self.f_last[idx], self.n_ext[idx])
 
     def hertz_equivalent(self, d_ref: float) -> np.ndarray:
@@ -160,10 +236,21 @@ class TableWall:
 
 
 def beyond_exact_reach(wall: Any, peak_indentation: np.ndarray) -> np.ndarray:
-    """(n,) bool: the scenes whose last bead went deeper than the wall's exact law reaches
-    (a tabulated FEM curve's end, the FEM law's computed range: ``wall.exact_reach``),
-    where the force is an extension, not the model; all False for a law defined at any
-    depth (no ``exact_reach``)."""
+    """The scenes whose last bead went deeper than the wall's exact law reaches.
+
+    Parameters
+    ----------
+    wall : Wall
+        The last contact (its ``exact_reach``, m: a tabulated FEM curve's end, the FEM
+        law's computed range; none for a law defined at any depth).
+    peak_indentation : numpy.ndarray
+        (n,) m, the run's largest indentations.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n,) bool: where the force was an extension, not the model.
+    """
     reach = getattr(wall, "exact_reach", None)
     peak = np.asarray(peak_indentation, float)
     if reach is None:
@@ -197,15 +284,127 @@ class Wall(Protocol):
         """``F(d_ref) / d_ref^1.5`` (N/m^1.5), for the time-step choice."""
 
 
+class StatefulWall(Protocol):
+    """A last contact with internal state (the soil's motion, a sample's history).
+
+    The integrator (:func:`ssw.chain.integrate.simulate`) keeps Verlet's structure
+    (Hairer, Lubich & Wanner 2006, sec. I.1.4): each step drifts the positions, then
+    evaluates the forces at the new positions, here
+
+        F_wall(n+1), state(n+1) = wall.advance(state(n), u_last(n+1), dt),
+
+    the wall integrating its own state over the step (implicitly if it likes: stiff
+    internal dynamics cost nothing in step size) from the bead's new position only, so that
+    the scheme stays explicit for the chain. Besides :class:`Wall`'s ``n``,
+    ``indentation`` (the statics of the initial state), ``hertz_equivalent`` (the step)
+    and ``take``, such a wall has (vectorized over ``n`` scenes, SI):
+
+    * ``force(d)``: the force of the state at rest at ``d`` (the first step's);
+    * ``start(d0) -> state``: the state at rest with the last beads at ``d0`` (m);
+    * ``advance(state, d, dt) -> (F, state)``;
+    * ``energy(state) -> (stored, dissipated)`` (J, (n,)): what the wall holds and what it
+      radiated or dissipated so far (the run's energy record uses it instead of
+      ``potential``);
+    * ``take_state(state, idx)``: select scenes;
+    * optionally ``dt`` (s): the step the wall was built for (a FEM's factorization).
+
+    Exact forward sensitivities (:mod:`ssw.chain.sensitivity`) need two more methods:
+    ``start_tangent(state, D0, dE) -> tstate`` and ``advance_tangent(state, tstate, d, D,
+    dt, dE) -> (F, dF, state, tstate)``, ``D`` (n, k) the derivatives of the indentation
+    with respect to the ``k`` parameters, ``dE`` (n, k) those of the soil's modulus, ``dF``
+    (n, k) the force's; a wall without them is differentiated by central differences of
+    its TOF (:mod:`ssw.tof.api`).
+    """
+
+    @property
+    def n(self) -> int: ...
+
+    def force(self, d: np.ndarray) -> np.ndarray: ...
+
+    def indentation(self, F: np.ndarray) -> np.ndarray: ...
+
+    def hertz_equivalent(self, d_ref: float) -> np.ndarray: ...
+
+    def start(self, d0: np.ndarray) -> Any: ...
+
+    def advance(self, state: Any, d: np.ndarray, dt: float) -> tuple[np.ndarray, Any]: ...
+
+    def energy(self, state: Any) -> tuple[np.ndarray, np.ndarray]: ...
+
+    def take(self, idx: np.ndarray) -> StatefulWall: ...
+
+    def take_state(self, state: Any, idx: np.ndarray) -> Any: ...
+
+
+def is_stateful(wall: Any) -> bool:
+    """Whether ``wall`` has internal state (:class:`StatefulWall`)."""
+    return hasattr(wall, "advance")
+
+
 def compliance_scale(params: ChainParams, soil_E: np.ndarray, soil_nu: np.ndarray) -> np.ndarray:
-    """``s = (1 + c_b/c_w)^(2/3)``: rigid-sphere law ``F_R(d)`` -> steel bead ``F_R(d/s)``."""
+    """``s = (1 + c_b/c_w)^(2/3)``: rigid-sphere law ``F_R(d)`` -> steel bead ``F_R(d/s)``.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain (its bead's compliance ``c_b``).
+    soil_E : numpy.ndarray
+        Pa.
+    soil_nu : numpy.ndarray
+        -.
+
+    Returns
+    -------
+    numpy.ndarray
+        -, broadcast.
+    """
     c_w = (1.0 - np.asarray(soil_nu, float) ** 2) / np.asarray(soil_E, float)
     return (1.0 + params.bead_compliance / c_w) ** (2.0 / 3.0)
 
 
+def compliance_scale_dE(params: ChainParams, soil_E: np.ndarray, soil_nu: np.ndarray
+                        ) -> np.ndarray:
+    """``ds/dE`` of :func:`compliance_scale`: with ``x = c_b E / (1 - nu^2)``,
+    ``s = (1 + x)^(2/3)`` and ``ds/dE = 2/3 (1 + x)^(-1/3) c_b / (1 - nu^2)``.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    soil_E : numpy.ndarray
+        Pa.
+    soil_nu : numpy.ndarray
+        -.
+
+    Returns
+    -------
+    numpy.ndarray
+        1/Pa, broadcast.
+    """
+    k = params.bead_compliance / (1.0 - np.asarray(soil_nu, float) ** 2)
+    return 2.0 / 3.0 * (1.0 + k * np.asarray(soil_E, float)) ** (-1.0 / 3.0) * k
+
+
 def scene_arrays(soil_E: Any, soil_nu: Any) -> tuple[np.ndarray, np.ndarray]:
-    """Soil moduli (Pa) and Poisson's ratios broadcast together and flattened, one per
-    scene; ConfigError for E <= 0 or nu outside (-1, 0.5]."""
+    """Soil moduli and Poisson's ratios broadcast together and flattened, one per scene.
+
+    Parameters
+    ----------
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu``: one scene each.
+    soil_nu : array_like
+        -.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (n,) Pa and (n,) -.
+
+    Raises
+    ------
+    ConfigError
+        E <= 0 or nu outside (-1, 0.5].
+    """
     E, nu = np.broadcast_arrays(np.asarray(soil_E, float), np.asarray(soil_nu, float))
     E, nu = E.ravel(), nu.ravel()
     if np.any(~(E > 0)):
@@ -216,16 +415,47 @@ def scene_arrays(soil_E: Any, soil_nu: Any) -> tuple[np.ndarray, np.ndarray]:
 
 
 def rigid_wall(params: ChainParams, soil_E: Any, soil_nu: Any) -> PowerWall:
-    """Rigid flat: ``F = 4/3 sqrt(R) E_b/(1-nu_b^2) d^1.5`` (soil values only set the count)."""
+    """Rigid flat: ``F = 4/3 sqrt(R) E_b/(1-nu_b^2) d^1.5`` (only the bead deforms).
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu``: they only set the count of scenes.
+    soil_nu : array_like
+        -.
+
+    Returns
+    -------
+    PowerWall
+        One law per scene (no E-dependence).
+    """
     E, _ = scene_arrays(soil_E, soil_nu)
-    coef = 4.0 / 3.0 * np.sqrt(params.bead_radius) / params.bead_compliance
-    return PowerWall(np.full(E.size, coef), np.full(E.size, 1.5))
+    coef = hertz_coefficient(effective_modulus(params.bead_E, params.bead_nu), params.bead_radius)
+    return PowerWall(np.full(E.size, coef), np.full(E.size, 1.5), dcoef_dE=np.zeros(E.size))
 
 
 def hertz_wall(params: ChainParams, soil_E: Any, soil_nu: Any) -> PowerWall:
-    """Elastic half-space: ``F = A_w d^1.5``."""
+    """Elastic half-space: ``F = A_w d^1.5`` (REFERENCE.md; Johnson 1985 ch. 4).
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu``: one scene each.
+    soil_nu : array_like
+        -.
+
+    Returns
+    -------
+    PowerWall
+        One law per scene, with ``dA_w/dE``.
+    """
     E, nu = scene_arrays(soil_E, soil_nu)
-    return PowerWall(params.wall_coefficient(E, nu), np.full(E.size, 1.5))
+    return PowerWall(params.wall_coefficient(E, nu), np.full(E.size, 1.5),
+                     dcoef_dE=params.wall_coefficient_dE(E, nu))
 
 
 def fit_wall(
@@ -239,11 +469,38 @@ def fit_wall(
 ) -> PowerWall:
     """Modified Hertz: ``F = K A_w d^1.5`` (k_hertz) or ``F = C (d/s)^n`` (power).
 
-    Exactly one of ``K`` (broadcast to the scenes), ``power=(C, n)`` (rigid-sphere law,
-    N/m^n and -) or ``k_table`` (an object with ``.K(E, nu)`` and ``.power(E, nu)``, e.g.
-    ``ssw.fit.table.KTable``; ``params.fit_law`` picks the law).
+    Parameters
+    ----------
+    params : ChainParams
+        The chain (``fit_law`` picks the table's law).
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu``: one scene each.
+    soil_nu : array_like
+        -.
+    K : array_like or None
+        Constant K (-), broadcast to the scenes.
+    power : tuple or None
+        ``(C, n)``: the rigid-sphere law ``F = C delta^n`` (N/m^n, -), constants.
+    k_table : object or None
+        A table with ``.K(E, nu)`` and ``.power(E, nu)`` (``ssw.fit.table.KTable``); its
+        ``dK_dE`` and ``dpower_dE``, when it has them, give the law's E-dependence.
+
+    Returns
+    -------
+    PowerWall
+        With ``dcoef_dE`` (and ``dexponent_dE`` for the power law): explicit ``K`` or
+        ``(C, n)`` are constants in E (the Hertz coefficient and the bead's compliance
+        scale carry it); a table's are its interpolant's derivatives (None if it has none).
+
+    Raises
+    ------
+    ConfigError
+        Not exactly one of ``K``, ``power``, ``k_table``; values out of range.
     """
     E, nu = scene_arrays(soil_E, soil_nu)
+    dK: Any = 0.0
+    dC: Any = 0.0
+    dn: Any = 0.0
     given = [x is not None for x in (K, power, k_table)]
     if sum(given) != 1:
         raise ConfigError(
@@ -263,29 +520,64 @@ def fit_wall(
         if params.fit_law == "k_hertz":
             K = table.K(E, nu)
             force_error = stated.get("K")
+            dK = table.dK_dE(E, nu) if hasattr(table, "dK_dE") else None
         else:
             power = table.power(E, nu)
             force_error = stated.get("power")
+            dC, dn = table.dpower_dE(E, nu) if hasattr(table, "dpower_dE") else (None, None)
         force_error = None if force_error is None or not np.isfinite(force_error) else float(
             force_error)
     if K is not None:
         Kv = np.broadcast_to(np.asarray(K, float), E.shape).copy()
         if np.any(~(Kv > 0)):
             raise ConfigError("K", Kv.tolist(), "K > 0")
-        return PowerWall(Kv * params.wall_coefficient(E, nu), np.full(E.size, 1.5),
-                         force_error=force_error)
+        A_w = params.wall_coefficient(E, nu)
+        dcoef = None if dK is None else (dK * A_w + Kv * params.wall_coefficient_dE(E, nu))
+        return PowerWall(Kv * A_w, np.full(E.size, 1.5), force_error=force_error,
+                         dcoef_dE=None if dcoef is None else np.broadcast_to(
+                             dcoef, E.shape).copy())
     C, n = (np.broadcast_to(np.asarray(x, float), E.shape).copy() for x in power)  # type: ignore[union-attr]
     if np.any(~(C > 0)) or np.any(~((n >= 1.0) & (n <= 3.0))):
         raise ConfigError("power", (C.tolist(), n.tolist()), "C > 0 and 1 <= n <= 3")
     s = compliance_scale(params, E, nu)
-    return PowerWall(C / s**n, n, force_error=force_error)
+    coef = C / s**n
+    if dC is None:
+        return PowerWall(coef, n, force_error=force_error)
+    # coef = C s^-n: dcoef/dE = coef (C'/C - n s'/s - ln(s) n')
+    ds = compliance_scale_dE(params, E, nu)
+    dcoef = coef * (dC / C - n * ds / s - np.log(s) * dn)
+    return PowerWall(coef, n, force_error=force_error,
+                     dcoef_dE=np.broadcast_to(dcoef, E.shape).copy(),
+                     dexponent_dE=np.broadcast_to(np.asarray(dn, float), E.shape).copy())
 
 
 def table_wall(
     params: ChainParams, soil_E: Any, soil_nu: Any, *, curve: Any = None
 ) -> TableWall:
-    """The FEM curve(s) themselves: ``curve`` is one curve/path for every scene or a
-    sequence with one per scene (:class:`ssw.curve.ForceCurve` or HDF5 path)."""
+    """The FEM curve(s) themselves, interpolated (module docstring).
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain (the bead's compliance).
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu``: one scene each.
+    soil_nu : array_like
+        -.
+    curve : ForceCurve or str or sequence
+        One curve (:class:`ssw.curve.ForceCurve` or HDF5 path) for every scene, or a
+        sequence with one per scene.
+
+    Returns
+    -------
+    TableWall
+        One table per scene (data for one modulus each: no E-dependence).
+
+    Raises
+    ------
+    ConfigError
+        No curve, or not one per scene.
+    """
     E, nu = scene_arrays(soil_E, soil_nu)
     if curve is None:
         raise ConfigError("curve", None, "a contact curve (ForceCurve or results/contact/*.h5)")

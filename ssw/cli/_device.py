@@ -14,10 +14,14 @@ for the same inputs):
 3. the device: the calibration's (calibrated) device, else ``--device`` (a YAML file or a
    shipped device's name), else the config's ``device:``; device flags (``--beads``,
    ``--striker-velocity``, ``--preload``, ...) override single fields;
-4. numerics (time steps, gravity, damping, fit law): the calibration's, else the config's;
-   flags override;
-5. the wall law: the calibration's (another ``--law`` is an error: recalibrate for it),
-   else ``--law``, else the config's ``chain.wall_law``.
+4. numerics and model (time steps, gravity, damping, bead material, uniform sensor, fit
+   law): the calibration's, else the config's; flags override;
+5. the wall law and its dynamics: the calibration's, else ``--law``, else the config's
+   ``chain.wall_law`` (and ``chain.wall_dynamics``).
+
+The flags of steps 3-5 are ONE table, :data:`ssw.cli._flags.FLAGS`: under a calibration a
+flag that contradicts what it was made with is refused, naming the flag and the calibrated
+value (:func:`ssw.cli._flags.contradictions`); one that repeats it is accepted.
 """
 
 from __future__ import annotations
@@ -30,25 +34,15 @@ from typing import Any
 
 import numpy as np
 
+from ssw.cli._flags import DEVICE, MODEL, add_flags, contradictions, fields_of
 from ssw.errors import ConfigError
 
-DEFAULT_K_TABLE = "results/fit/sets/<fit.set>/k_table.h5"
 DEFAULT_CONTACT_DIR = "results/contact"
 #: Environment variable giving the default of ``--calibration`` (a file, auto or none).
 CALIBRATION_ENV = "SSW_CALIBRATION"
 #: The study's calibration file (rule calibration), relative to the working folder.
 STUDY_CALIBRATION = "results/calibration/calibration.json"
 WALL_CHOICES = ("rigid", "hertz", "fit", "table", "fem")
-
-#: Device flags: option -> Device field.
-DEVICE_FLAGS = {
-    "beads": "beads", "sensor_index": "sensor_index", "sensor_mass": "sensor_mass",
-    "sensor_reads": "sensor_reads", "striker_mass": "striker_mass",
-    "striker_velocity": "striker_velocity", "drop_height": "drop_height",
-    "preload": "preload", "bead_radius": "bead_radius", "plate_material": "plate_material",
-    "plate_thickness": "plate_thickness", "plate_diameter": "plate_diameter",
-    "plate_interface": "plate_interface",
-}
 
 
 def add_device_options(p: argparse.ArgumentParser,
@@ -67,53 +61,7 @@ def add_device_options(p: argparse.ArgumentParser,
                    help=f"calibration file of `ssw calibrate` (default ${CALIBRATION_ENV}, "
                    f"else auto: the study's {STUDY_CALIBRATION} when present and the "
                    "config's calibration.use)")
-    d = p.add_argument_group("device fields (override the device's)")
-    d.add_argument("--beads", type=int, help="beads including the striker (bead 0); keeps "
-                   "the beads below the sensor unless --sensor-index is given")
-    d.add_argument("--sensor-index", type=int, help="0-based index of the sensor particle")
-    d.add_argument("--sensor-mass", type=float, help="sensor particle mass, kg")
-    d.add_argument("--sensor-reads", choices=["mean", "upper", "lower"],
-                   help="force the sensor reads: mean of its two contacts, upper or lower")
-    d.add_argument("--striker-mass", type=float, help="striker mass, kg")
-    d.add_argument("--striker-velocity", type=float, help="striker speed at contact, m/s")
-    d.add_argument("--drop-height", type=float,
-                   help="striker dropped from this height, m (speed sqrt(2 g h))")
-    d.add_argument("--preload", type=float, help="constant force on bead 1, N")
-    d.add_argument("--bead-radius", type=float, help="bead radius, m")
-    d.add_argument("--plate-material", help="plate material key (materials library)")
-    d.add_argument("--plate-thickness", type=float, help="plate thickness, m (0: no plate)")
-    d.add_argument("--plate-diameter", type=float, help="plate diameter, m")
-    d.add_argument("--plate-interface", choices=["frictionless", "bonded", "unilateral"],
-                   help="how the plate sits on the medium")
-    n = p.add_argument_group("numerics and model")
-    n.add_argument("--uniform", action="store_true", default=None,
-                   help="the sensor is a plain bead (its mass is ignored)")
-    n.add_argument("--no-gravity", action="store_true", help="no gravity, no precompression")
-    n.add_argument("--bead-density", type=float, help="bead density, kg/m^3")
-    n.add_argument("--bead-E", type=float, help="bead Young's modulus, Pa")
-    n.add_argument("--bead-nu", type=float, help="bead Poisson's ratio")
-    n.add_argument("--damping", type=float, help="contact dashpot, N s/m (default 0)")
-    n.add_argument("--steps-per-contact", type=int, help="time steps per Hertz contact time")
-    w = p.add_argument_group("wall law (the last contact)")
-    w.add_argument("--law", "--wall", dest="wall", choices=list(walls),
-                   help="last-contact law (default: the calibration's, else the config's "
-                   "chain.wall_law)")
-    w.add_argument("--K", type=float, help="fit wall: a constant K instead of --k-table")
-    w.add_argument("--fit-law", choices=["k_hertz", "power"],
-                   help="fit wall: the law read from the K table (default: config fit.law)")
-    w.add_argument("--k-table", help=f"fit wall: K table HDF5 (default {DEFAULT_K_TABLE})")
-    w.add_argument("--curve", help="table wall: one FEM contact curve HDF5 for every scene")
-    w.add_argument("--contact-dir", default=DEFAULT_CONTACT_DIR,
-                   help="table wall without --curve: the contact curves' folder "
-                   "(<family>/<scene_id>.h5, as the workflow writes them)")
-    w.add_argument("--wall-dynamics", choices=["quasi-static", "reduced", "fem"],
-                   help="the tested medium's inertia: quasi-static (the static law, default: "
-                   "the config's chain.wall_dynamics), reduced (plus its radiation damping "
-                   "and participating mass, ssw.dynamics.reduced), fem (the elastodynamic "
-                   "FEM wall: ssw tof only, about a minute per point)")
-    w.add_argument("--soil-density", type=float,
-                   help="density of the tested medium, kg/m^3 (reduced or fem dynamics; "
-                   "default: the config's chain.soil_density)")
+    add_flags(p, walls)
 
 
 @dataclass(frozen=True)
@@ -157,37 +105,32 @@ def resolve_calibration(spec: str | None, cfg: dict[str, Any]) -> Any:
     return load_calibration(spec)
 
 
-#: Numerics a command may change under a calibration: the discretization, not the model.
-CALIBRATION_NEUTRAL = ("steps_per_contact",)
+def check_device(cal: Any, device: Any, materials: dict[str, Any], spec: str | None) -> None:
+    """Refuse a calibration made for another device than the command's.
 
+    Parameters
+    ----------
+    cal : ssw.calibration.Calibration
+        The calibration.
+    device : ssw.device.Device
+        The command's device: ``--device``, else the config's with ``--calibration auto``,
+        else the calibration's own, with the device flags of parameters it did not identify
+        applied.
+    materials : dict
+        The command's materials library (key -> Material).
+    spec : str or None
+        The ``--calibration`` argument (``auto``: the study's calibration).
 
-def check_calibration_fits(cal: Any, device: Any, changes: dict[str, Any],
-                           numerics: dict[str, Any], materials: dict[str, Any],
-                           spec: str | None) -> None:
-    """ConfigError unless the calibration ``cal`` was made for ``device`` (the command's:
-    ``--device``, else the config's with ``--calibration auto``, else the calibration's own,
-    with the device flags ``changes`` applied) with these ``materials``, and no flag changes
-    a calibrated parameter or the model the calibration was made with. The message names
-    both sides (the calibration's device and the command's)."""
+    Raises
+    ------
+    ssw.provenance.ProvenanceError
+        Unless the device digests agree (``ssw.provenance.require_match``), naming both
+        sides.
+    """
     from ssw.calibration.file import device_digest
     from ssw.provenance import require_match
 
     where = cal.path or "the calibration"
-    for name in cal.free:
-        if name in changes or (name == "striker_velocity" and "drop_height" in changes):
-            flag = "--" + ("drop-height" if name not in changes else
-                           next(o for o, f in DEVICE_FLAGS.items() if f == name)
-                           ).replace("_", "-")
-            raise ConfigError(flag, changes.get(name, changes.get("drop_height")),
-                              f"not with {where}, which identified {name} "
-                              f"({cal.parameters[name]:.6g}): --calibration none to set it")
-    model = {k: v for k, v in numerics.items()
-             if k not in CALIBRATION_NEUTRAL and cal.numerics.get(k) != v}
-    if model:
-        k = next(iter(model))
-        raise ConfigError(f"--{k.replace('_', '-')}", model[k],
-                          f"the model {where} was made with ({k} = {cal.numerics.get(k)!r}): "
-                          "--calibration none to change it, or recalibrate")
     made_for = cal.device_sha256 or device_digest(cal.device_nominal, cal.materials())
     mine = device_digest(device, materials)
     if made_for != mine:
@@ -216,29 +159,28 @@ def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
     spec = getattr(args, "calibration", "auto")
     cal = resolve_calibration(spec, cfg)
     named = load_device(args.device) if getattr(args, "device", None) else None
-    changes = {f: getattr(args, o) for o, f in DEVICE_FLAGS.items()
-               if getattr(args, o, None) is not None}
+    changes = fields_of(args, DEVICE)
     if "drop_height" in changes and "striker_velocity" in changes:
         raise ConfigError("--drop-height", changes["drop_height"], "not with --striker-velocity")
-    over = {"uniform": args.uniform, "bead_density": args.bead_density, "bead_E": args.bead_E,
-            "bead_nu": args.bead_nu, "damping": args.damping,
-            "steps_per_contact": args.steps_per_contact, "fit_law": args.fit_law}
-    if getattr(args, "no_gravity", False):
-        over["gravity"] = False
+    over = fields_of(args, MODEL)
     if cal is not None:
+        contradictions(args, cal)
         base = named if named is not None else (device_of(cfg) if spec in (None, "auto")
                                                 else cal.device_nominal)
-        check_calibration_fits(cal, base.with_(**changes) if changes else base, changes,
-                               {k: v for k, v in over.items() if v is not None},
-                               library(cfg) if named is not None or spec in (None, "auto")
-                               else cal.materials(), spec)
+        # the flags agree with the calibration (above); those of parameters it did not
+        # identify also say which device the command means
+        fixed = {k: v for k, v in changes.items()
+                 if ("striker_velocity" if k == "drop_height" else k) not in cal.free}
+        check_device(cal, base.with_(**fixed) if fixed else base,
+                     library(cfg) if named is not None or spec in (None, "auto")
+                     else cal.materials(), spec)
         device = cal.device
     else:
         device = named if named is not None else device_of(cfg)
         if changes:
             device = device.with_(**changes)
     numerics = dict(cal.numerics) if cal is not None else numerics_of(cfg)
-    numerics.update({k: v for k, v in over.items() if v is not None})
+    numerics.update(over)
     mats = cal.materials() if cal is not None else library(cfg)
     params = chain_params(device, mats, **numerics)
     if numerics_only:
@@ -255,8 +197,10 @@ def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
                               f"the fem wall (--law fem; this command's wall is {wall})")
         opts = {**opts, "contact": sample.contact_settings(opts.get("contact") or
                                                            dict(cfg.get("contact", {})))}
-    dyn = getattr(args, "wall_dynamics", None) or opts.pop("dynamics", None) or cfg.get(
-        "chain", {}).get("wall_dynamics", "quasi-static")
+    # a calibration's wall dynamics, else the config's (a contradicting flag is refused)
+    dyn = getattr(args, "wall_dynamics", None) or opts.pop("dynamics", None) or (
+        "quasi-static" if cal is not None
+        else cfg.get("chain", {}).get("wall_dynamics", "quasi-static"))
     rho = getattr(args, "soil_density", None)
     rho = rho if rho is not None else opts.pop("soil_density", None)
     rho = rho if rho is not None else cfg.get("chain", {}).get("soil_density")
@@ -279,11 +223,8 @@ def wall_law(args: argparse.Namespace, cfg: dict[str, Any], cal: Any, params: An
              E: Any, nu: Any) -> tuple[str, dict[str, Any]]:
     """The last-contact law and its options (module docstring, step 5)."""
     given = getattr(args, "wall", None)
-    if cal is not None:
+    if cal is not None:  # its law and options (a contradicting flag is refused before)
         law = cal.wall["law"]
-        if given is not None and given != law:
-            raise ConfigError("--law", given, f"{law}, the law the calibration "
-                              f"{cal.path} was made with (recalibrate for another law)")
         opts = {k: v for k, v in cal.wall.get("options", {}).items()}
         if law == "fit" and "k_table" in opts and args.k_table:
             opts["k_table"] = args.k_table
@@ -304,9 +245,9 @@ def wall_law(args: argparse.Namespace, cfg: dict[str, Any], cal: Any, params: An
         from ssw.workflow import scene_file
 
         Eb, nub = np.broadcast_arrays(np.asarray(E, float), np.asarray(nu, float))
-        paths = [scene_file(args.contact_dir, Scene(params.plate_material,
-                                                    params.plate_thickness, float(e),
-                                                    float(n)).scene_id)
+        folder = args.contact_dir or DEFAULT_CONTACT_DIR
+        paths = [scene_file(folder, Scene(params.plate_material, params.plate_thickness,
+                                          float(e), float(n)).scene_id)
                  for e, n in zip(Eb.ravel(), nub.ravel(), strict=True)]
         return law, {"curve": paths}
     return law, {}

@@ -46,7 +46,7 @@ def thickness_range(args: argparse.Namespace) -> tuple[float, float] | None:
 
 
 def sample_of(args: argparse.Namespace, thickness: float | None = None) -> Sample | None:
-    """The :class:`Sample` of the flags, or None (the half-space) when none is given; a
+    """The :class:`~ssw.sample.Sample` of the flags, or None (the half-space) when none is given; a
     thickness range gives its middle (or ``thickness``, m)."""
     text = getattr(args, "sample_thickness", None)
     rng = thickness_range(args)

@@ -1,9 +1,15 @@
 """``ssw calibrate``: identify device parameters from measured TOFs on reference samples.
 
-    ssw calibrate --reference E,nu,TOF[,TOF_STD] ... --free NAME ... [device flags]
+Usage::
+
+    ssw calibrate --reference E,nu,TOF[,TOF_STD] ... [--free NAME ...] [device flags]
                   [--output FILE.json] [--json]
-    ssw calibrate --reference-recording FILE,E,nu ... --free NAME ...
+    ssw calibrate --reference-recording FILE,E,nu ... [--free NAME ...]
     ssw calibrate --from-config [--config C] [--output FILE.json]   (the study's samples)
+
+Without ``--free`` it identifies the striker speed and the preload (``--from-config``: the
+config's ``calibration.free``). Every device, model and wall flag (:mod:`ssw.cli._flags`)
+acts on the calibrated model and is recorded in the file; one it cannot honour is refused.
 
 Prints (``--json``) ``{"parameters": {NAME: value}, "parameter_std": {...},
 "singular_values": [...], "residuals": [...], "loo": [{"E", "E_predicted", "error_pct"}],
@@ -16,8 +22,10 @@ from __future__ import annotations
 import argparse
 from typing import Any
 
+from ssw.calibration.fit import DEFAULT_FREE
 from ssw.cli import add_json_flag
 from ssw.cli._device import add_device_options, chain_context
+from ssw.cli._flags import FLAGS, MODEL, refuse_for_calibration
 from ssw.cli._soil import PLASTIC_MODELS
 from ssw.errors import ConfigError
 
@@ -97,13 +105,14 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
             raise ConfigError("--output", args.output, "none with --soil-model (a plastic "
                               "sample's calibration is an analysis; ssw measure inverts "
                               "through the device's elastic law)")
-    free = args.free or (cal_cfg.get("free") if args.from_config else None)
-    if not free:
-        raise ConfigError("--free", None, "one or more device parameters to identify")
+    free = tuple(args.free or (cal_cfg.get("free") if args.from_config else None)
+                 or DEFAULT_FREE)
+    refuse_for_calibration(args, free)
     ranges = {**{k: tuple(v) for k, v in cal_cfg.get("ranges", {}).items()},
               **_ranges(args.range)} if args.from_config else _ranges(args.range)
-    numerics = numerics_of(ctx.cfg)
-    numerics.update({k: getattr(ctx.params, k) for k in numerics})
+    # the model calibrated, recorded whole: the config's numerics and every model flag
+    numerics = {k: getattr(ctx.params, k) for k in sorted(
+        set(numerics_of(ctx.cfg)) | {f.field for f in FLAGS if f.target == MODEL})}
     loo = not args.no_loo and (cal_cfg.get("loo", True) if args.from_config else True)
     from ssw.progress import progress_bar
 
@@ -122,6 +131,7 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
     out = {
         **ctx.inputs(),
         "parameters": cal.parameters, "parameter_std": cal.parameter_std,
+        "at_bound": cal.at_bound, "covariance_parameters": list(cal.covariance_parameters),
         "covariance": cal.covariance, "singular_values": cal.singular_values,
         "unidentified": cal.unidentified, "residuals": cal.residuals,
         "references": cal.references,
@@ -153,8 +163,11 @@ def _human(r: dict[str, Any]) -> str:
              f"{len(r['references'])} reference(s):"]
     for k, v in r["parameters"].items():
         std = (r["parameter_std"] or {}).get(k)
-        lines.append(f"  {k} = {v:.6g}" + (f" +- {std:.3g}" if std is not None else
-                                            " (no standard error: see below)"))
+        side = r["at_bound"].get(k)
+        lines.append(f"  {k} = {v:.6g}" + (
+            f" (held on its {side} bound: no standard error; the others' covariance is "
+            "conditional on it)" if side else f" +- {std:.3g}" if std is not None else
+            " (no standard error: see below)"))
     lines.append(f"  (striker drop height {r['drop_height'] * 1e3:.3g} mm)")
     lines.append("  singular values: " + ", ".join(f"{s:.3g}" for s in r["singular_values"]))
     lines += [f"  not identified: {u}" for u in r["unidentified"]]
@@ -204,7 +217,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="folder the config's relative recording paths start from")
     p.add_argument("--free", action="append", metavar="NAME",
                    help="a device parameter to identify (striker_velocity, preload, "
-                   "sensor_mass, striker_mass, beads); repeat it")
+                   "sensor_mass, striker_mass, beads); repeat it (default: the config's "
+                   "calibration.free with --from-config, else "
+                   f"{' and '.join(DEFAULT_FREE)})")
     p.add_argument("--range", action="append", metavar="NAME=LO:HI",
                    help="scan range of a free parameter, SI units")
     p.add_argument("--scan-points", type=int, help="grid points per continuous parameter")

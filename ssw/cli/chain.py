@@ -61,8 +61,15 @@ def run_chain(args: argparse.Namespace) -> dict[str, Any]:
 
 
 # ---------------------------------------------------------------------------- ssw tof
+#: ``--derivatives`` choices: the method (``auto``: exact forward sensitivities where the
+#: wall states its derivatives, else central differences; the dynamic FEM wall, a minute
+#: per run, only when asked: ``central``) or ``none``.
+DERIVATIVES = ("auto", "forward", "central", "none")
+
+
 def run_tof(args: argparse.Namespace) -> dict[str, Any]:
-    from ssw.tof.api import peaks
+    from ssw.chain.sensitivity import PARAMETERS
+    from ssw.tof.api import peaks, tof_derivatives
 
     if args.hits is not None or args.soil_model is not None or args.plate_model is not None:
         args.human = _human_hits
@@ -71,23 +78,47 @@ def run_tof(args: argparse.Namespace) -> dict[str, Any]:
         raise ConfigError("--soil-E/--soil-nu", (args.soil_E, args.soil_nu), "both given")
     ctx = chain_context(args, args.soil_E, args.soil_nu)
     params = ctx.params
+    method = args.derivatives
+    units = {f"dtof_d{k}": f"s/({u})" for k, u in PARAMETERS.items()}
     if ctx.wall_options.get("dynamics") == "fem":
-        from ssw.dynamics.api import fem_tof
+        from ssw.dynamics.api import fem_tof, fem_tof_derivatives
 
         res = fem_tof(params, args.soil_E, args.soil_nu, ctx.wall_options["soil_density"])
-        return {**ctx.inputs(), "tof": float(np.ravel(res.tof_dynamic)[0]),
-                "tof_quasi_static_half_space": float(np.ravel(res.tof_half_space)[0]),
-                "tof_quasi_static_box": float(np.ravel(res.tof_static)[0]),
-                "quasi_static_error": float(np.ravel(res.error)[0]),
-                "striker_velocity": params.striker_velocity}
-    pk, run = peaks(args.soil_E, args.soil_nu, params, ctx.wall, **ctx.wall_options)
+        out = {**ctx.inputs(), "tof": float(np.ravel(res.tof_dynamic)[0]),
+               "tof_quasi_static_half_space": float(np.ravel(res.tof_half_space)[0]),
+               "tof_quasi_static_box": float(np.ravel(res.tof_static)[0]),
+               "quasi_static_error": float(np.ravel(res.error)[0]),
+               "striker_velocity": params.striker_velocity}
+        if method == "forward":
+            raise ConfigError("--derivatives", method, "central or none with --wall-dynamics "
+                              "fem (the dynamic FEM wall has no forward sensitivities)")
+        if method == "central":
+            _, dtof, steps = fem_tof_derivatives(params, args.soil_E, args.soil_nu,
+                                                 ctx.wall_options["soil_density"])
+            out.update({f"dtof_d{k}": float(v[0]) for k, v in dtof.items()})
+            out.update(derivative_method=dict.fromkeys(dtof, "central"),
+                       derivative_units=units, derivative_step=steps)
+        else:
+            out.update(derivative_method=dict.fromkeys(PARAMETERS, "none"),
+                       derivative_note="--derivatives central: central differences of the "
+                       "dynamic FEM wall's TOF, two FEM runs per parameter")
+        return out
+    if method == "none":
+        pk, run = peaks(args.soil_E, args.soil_nu, params, ctx.wall, **ctx.wall_options)
+        extra: dict[str, Any] = {"derivative_method": dict.fromkeys(PARAMETERS, "none")}
+    else:
+        res = tof_derivatives(args.soil_E, args.soil_nu, params, ctx.wall, method=method,
+                              **ctx.wall_options)
+        pk, run = res.peaks, res.run
+        extra = res.as_dict(0)
+        extra.pop("tof")
     return {
         **ctx.inputs(),
         "tof": float(pk.tof[0]), "t_incident": float(pk.t_incident[0]),
         "t_reflected": float(pk.t_reflected[0]), "f_incident": float(pk.f_incident[0]),
         "f_reflected": float(pk.f_reflected[0]), "dt": run.dt,
         "peak_wall_indentation": float(run.peak_wall_indentation[0]),
-        "striker_velocity": params.striker_velocity,
+        "striker_velocity": params.striker_velocity, **extra,
     }
 
 
@@ -341,6 +372,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="unloading curves tabulated between first yield and the reach")
     h.add_argument("--plastic-increments", type=int, default=12,
                    help="FEM increments per loading-unloading path")
+    p.add_argument("--derivatives", choices=DERIVATIVES, default="auto",
+                   help="the TOF's derivatives with respect to E and the device's parameters "
+                   "(dtof_dE, dtof_d<parameter>, s per SI unit, at the run's time step): "
+                   "auto (exact forward sensitivities where the wall states its "
+                   "derivatives, else central differences; the dynamic FEM wall only with "
+                   "central), forward, central or none")
     add_json_flag(p)
     p.set_defaults(func=run_tof)
 

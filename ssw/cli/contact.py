@@ -81,7 +81,8 @@ def register(sub: argparse._SubParsersAction) -> None:
     )
     q.add_argument("curves", nargs="+", help="contact curve files (HDF5)")
     q.add_argument("--output", required=True, help="PNG file")
-    q.add_argument("--label-by", choices=["material", "thickness"], default="material")
+    q.add_argument("--label-by", choices=["material", "thickness"], default="material",
+                   help="label the curves by plate material or thickness")
     q.add_argument("--title", default="", help="figure title")
     add_json_flag(q)
     q.set_defaults(func=run_plot)

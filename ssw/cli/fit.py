@@ -68,7 +68,9 @@ def register(sub: argparse._SubParsersAction) -> None:
         help="deviation from Hertz at the reference indentation, next to the thesis's values",
     )
     d.add_argument("curves", nargs="+", help="contact curve files")
-    d.add_argument("--set-kind", choices=["materials", "thickness"], required=True)
+    d.add_argument("--set-kind", choices=["materials", "thickness"], required=True,
+                   help="what the curves' set varies: the thesis's values to compare with "
+                   "(Set 1: plate materials, Fig 5; Set 2: plate thickness, Fig 6)")
     d.add_argument("--output", help="CSV file of the rows")
     _config_arg(d)
     add_json_flag(d)
@@ -149,7 +151,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     fs.set_defaults(func=run_set)
 
     f = sub.add_parser("fit-plot", help="figures of the fits (thesis Figs 5-7 analogues)")
-    f.add_argument("kind", choices=["deviation", "curves", "k"])
+    f.add_argument("kind", choices=["deviation", "curves", "k"],
+                   help="the figure: deviation from Hertz (Figs 5, 6), fitted curves, or "
+                   "K against E (Fig 7)")
     f.add_argument("inputs", nargs="+", help="curve files (deviation, curves) or a table (k)")
     f.add_argument("--output", required=True, help="PNG file")
     f.add_argument("--title", default="", help="figure title")

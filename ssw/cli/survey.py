@@ -2,10 +2,10 @@
 results) into a table (CSV + HDF5) with verdicts against their targets, and its figures.
 
     ssw survey-table RESULT.json... [--config C] --csv T.csv --h5 T.h5
-                     [--plot E.png] [--map M.png] [--json]
+                     [--plot E.png] [--map M.png] [--geojson P.geojson] [--json]
 
 The results follow the order of the config's ``survey.points`` (one per point, named by
-its id). SI units.
+its id). SI units; coordinates in the frame of ``survey.frame`` (ssw.survey.Frame).
 """
 
 from __future__ import annotations
@@ -20,7 +20,15 @@ from ssw.errors import ConfigError
 
 def run_table(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.config import load_config
-    from ssw.survey import plot_map, plot_survey, read_results, survey_table, write_survey
+    from ssw.survey import (
+        plot_map,
+        plot_survey,
+        read_results,
+        survey_frame,
+        survey_table,
+        write_geojson,
+        write_survey,
+    )
 
     cfg = load_config(args.config)
     sv = cfg.get("survey", {})
@@ -33,7 +41,13 @@ def run_table(args: argparse.Namespace) -> dict[str, Any]:
         raise ConfigError("results", sorted(by_id), f"one file per point, named by its id: "
                           f"missing {missing}")
     results = read_results([by_id[pt["id"]] for pt in points])
-    rows = survey_table(points, results)
+    frame = survey_frame(sv)
+    rows = survey_table(points, results, frame)
+    located = any(r.x is not None or r.latitude is not None for r in rows)
+    for flag, path in (("--map", args.map), ("--geojson", args.geojson)):
+        if path and not located:
+            raise ConfigError(flag, path, "a survey whose points have coordinates (x/y or "
+                              "latitude/longitude); nothing was written")
     write_survey(args.csv, args.h5, rows, {"config": args.config, "points": points})
     out: dict[str, Any] = {"points": [r.__dict__ for r in rows], "csv": args.csv,
                            "h5": args.h5}
@@ -41,10 +55,11 @@ def run_table(args: argparse.Namespace) -> dict[str, Any]:
         plot_survey(args.plot, rows, sv.get("title", ""))
         out["plot"] = args.plot
     if args.map:
-        if not plot_map(args.map, rows, sv.get("title", "")):
-            raise ConfigError("--map", args.map, "a survey whose points have coordinates "
-                              "(x/y or latitude/longitude)")
+        plot_map(args.map, rows, sv.get("title", ""), frame)
         out["map"] = args.map
+    if args.geojson:
+        write_geojson(args.geojson, rows, frame, sv.get("title", ""))
+        out["geojson"] = args.geojson
     counts = {v: sum(r.verdict == v for r in rows) for v in
               ("pass", "fail", "inconclusive", "no target")}
     out["verdicts"] = counts
@@ -73,5 +88,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--h5", required=True, help="survey table HDF5")
     p.add_argument("--plot", help="PNG: E per point with its interval and target")
     p.add_argument("--map", help="PNG: plan view of the points with coordinates")
+    p.add_argument("--geojson", help="GeoJSON (RFC 7946) of the points with coordinates: "
+                   "WGS84 longitude/latitude, else the local x/y with its frame named")
     add_json_flag(p)
     p.set_defaults(func=run_table, human=_human)

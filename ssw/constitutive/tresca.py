@@ -105,9 +105,13 @@ def principal_frame(stress: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndar
 class Tresca:
     """Tresca plasticity (module docstring).
 
-    cohesion : Pa, the shear strength ``k`` (the undrained cohesion ``c_u``), ``> 0``.
-    hardening : Pa, ``H = d sigma_y / d kappa`` of the uniaxial strength (>= 0; 0:
-        perfectly plastic).
+    Parameters
+    ----------
+    cohesion : float
+        The shear strength ``k``, Pa (the undrained cohesion ``c_u``), ``> 0``.
+    hardening : float
+        ``H = d sigma_y / d kappa`` of the uniaxial strength, Pa (>= 0; 0: perfectly
+        plastic).
     """
 
     cohesion: float

@@ -40,7 +40,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from ssw.contact.elements import element_matrices, lame
+from ssw.contact.elements import element_matrices, lame, triangle_jacobian
 from ssw.contact.mesh import Mesh
 from ssw.errors import ConfigError
 
@@ -187,11 +187,7 @@ def pow2(x: np.ndarray) -> np.ndarray:
 
 def element_sizes(nodes: np.ndarray, tri: np.ndarray) -> np.ndarray:
     """(ne,) size of every element, m: ``sqrt(2 area)`` of its vertex triangle."""
-    p = nodes[tri[:, :3]]
-    det = (p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (
-        p[:, 2, 0] - p[:, 0, 0]
-    ) * (p[:, 1, 1] - p[:, 0, 1])
-    return np.sqrt(np.abs(det))
+    return np.sqrt(np.abs(triangle_jacobian(nodes[tri[:, :3]])[1]))
 
 
 def pressure_scale(nodes: np.ndarray, tri: np.ndarray, G: np.ndarray) -> np.ndarray:
@@ -212,13 +208,20 @@ def assemble(
 
     Parameters
     ----------
-    mesh : the section mesh.
-    E, nu : (soil, plate) Young's moduli (Pa) and Poisson's ratios.
-    interface : ``bonded`` | ``frictionless`` | ``unilateral``.
-    order_nodes : callable ``(rows, cols, n) -> permutation`` (nested dissection).
-    fixed_faces : where the rollers and the fixed bottom lie, as a multiple of the mesh's
-        soil radius and depth (1: on its faces; 2: beyond them, a free truncation boundary
-        as the dynamic wall's absorbing one).
+    mesh : ssw.contact.mesh.Mesh
+        The section mesh.
+    E : tuple of float
+        ``(soil, plate)`` Young's moduli, Pa.
+    nu : tuple of float
+        ``(soil, plate)`` Poisson's ratios.
+    interface : str
+        ``bonded`` | ``frictionless`` | ``unilateral``.
+    order_nodes : callable
+        ``(rows, cols, n) -> permutation`` (nested dissection).
+    fixed_faces : float
+        Where the rollers and the fixed bottom lie, as a multiple of the mesh's soil
+        radius and depth (1: on its faces; 2: beyond them, a free truncation boundary as
+        the dynamic wall's absorbing one).
     """
     nodes, tri, pairs = split_interface(mesh)
     n = len(nodes)

@@ -30,13 +30,20 @@ class Condensed:
 
     Parameters
     ----------
-    solver : the LU factors of K.
-    ndof : size of K.
-    s_dofs : (ms,) u_z dofs of the sphere candidates, sorted by radius.
-    s_r : (ms,) their radii, m.
-    s_weight : (ms,) ``int N_j 2 pi r ds`` on the top surface, m^2 (pressure = lam / weight).
-    i_dofs : (mi, 2) (plate, soil) u_z dofs of the unilateral interface pairs.
-    k0 : sphere candidates condensed at the start.
+    solver : ssw.contact.petsc_solver.LUSolver
+        The LU factors of K.
+    ndof : int
+        The size of K.
+    s_dofs : numpy.ndarray
+        (ms,) u_z dofs of the sphere candidates, sorted by radius.
+    s_r : numpy.ndarray
+        (ms,) their radii, m.
+    s_weight : numpy.ndarray
+        (ms,) ``int N_j 2 pi r ds`` on the top surface, m^2 (pressure = lam / weight).
+    i_dofs : numpy.ndarray
+        (mi, 2) (plate, soil) u_z dofs of the unilateral interface pairs.
+    k0 : int
+        Sphere candidates condensed at the start.
     """
 
     def __init__(self, solver: LUSolver, ndof: int, s_dofs: np.ndarray, s_r: np.ndarray,

@@ -1,21 +1,37 @@
-"""Frictionless unilateral contact, condensed onto the candidate dofs: a small LCP per increment.
+"""Frictionless unilateral contact as a linear complementarity problem: the one LCP solver.
 
-With the stiffness ``K`` factored once, the gaps of the candidate constraints are affine in
-their (non-negative) contact forces ``lam``: ``g = g0 + W lam`` with the compliance
-``W = G K^-1 G^T`` (``G`` the gap gradients). Each increment solves the linear
-complementarity problem (Cottle, Pang & Stone 1992)
+The gaps of the contact candidates are affine in their (non-negative) contact forces
+``lam``, ``g = g0 + W lam``: ``W`` the compliance of the candidates (m/N) condensed from a
+factored stiffness (``W = G K^-1 G^T``, ``G`` the gap gradients; symmetric positive
+definite), or the influence coefficients of a ring discretization (a P-matrix, not
+symmetric). Every contact of ssw solves the linear complementarity problem (Cottle, Pang &
+Stone 1992)
 
-    lam >= 0,   g = g0 + W lam >= 0,   lam . g = 0,
+    lam >= 0,   g = g0 + W lam >= 0,   lam . g = 0
 
-exactly (up to round-off) by an active-set (principal pivoting) method warm-started from
-the previous increment's active set; ``W`` is symmetric positive definite, so the solution
-is unique and the method terminates (Murty 1974's least-index rule backs up the faster block
-updates). The gap of the rigid sphere at a top node of radius ``r`` is the exact spherical
-gap ``g0 = R - sqrt(R^2 - r^2) - delta``, computed as ``r^2 / (R + sqrt(R^2 - r^2)) - delta``
+with :func:`solve_lcp`: the static contact per increment (:mod:`ssw.contact.scene`), the
+directional problems at the breakpoints of the exact path (:mod:`ssw.contact.parametric`),
+the dynamic FEM wall per time step (:mod:`ssw.dynamics.fem_wall`) and the layered oracle's
+rings (:mod:`ssw.contact.layered_lcp`). For a P-matrix the solution is unique; it is found
+exactly (up to round-off) by principal pivoting on the active set, warm-started from a
+guess (the previous increment's or step's set): :data:`BLOCK_PIVOTS` block updates (every
+negative force out, every closed gap in), then Murty's (1974) least-index rule, one
+constraint at a time, which terminates for a P-matrix.
+
+Tolerances (one policy for every caller): a gap counts as closed below ``-tol``, an
+absolute length (m) the caller sets from its problem's scale (a few ulp of its
+indentations); a force counts as negative below ``-FORCE_RTOL`` times the largest force of
+the solve (a force that vanishes exactly at an increment is round-off, not a reason to
+leave the set: without it such a constraint cycles in and out).
+
+The gap of the rigid sphere at a top node of radius ``r`` is the exact spherical gap
+``g0 = R - sqrt(R^2 - r^2) - delta``, computed as ``r^2 / (R + sqrt(R^2 - r^2)) - delta``
 (no cancellation at small ``r``).
 """
 
 from __future__ import annotations
+
+from collections.abc import Callable
 
 import numpy as np
 
@@ -23,8 +39,10 @@ from ssw.errors import SolverError
 
 #: Block (all-at-once) pivots tried before falling back to single least-index pivots.
 BLOCK_PIVOTS = 10
-#: Single pivots allowed per increment after the block phase (Murty's rule terminates).
+#: Single pivots allowed per solve after the block phase (Murty's rule terminates).
 MAX_PIVOTS = 2000
+#: A force below ``-FORCE_RTOL`` x the largest force of a solve counts as negative.
+FORCE_RTOL = 1e-12
 
 
 def sphere_gap(r: np.ndarray, radius: float, delta: float) -> np.ndarray:
@@ -34,7 +52,8 @@ def sphere_gap(r: np.ndarray, radius: float, delta: float) -> np.ndarray:
     return sphere_gap0(r, radius) - delta
 
 
-def _active_solve(W: np.ndarray, idx: np.ndarray, rhs: np.ndarray, cache: dict) -> np.ndarray:
+def _cholesky_solve(W: np.ndarray, idx: np.ndarray, rhs: np.ndarray, cache: dict
+                    ) -> np.ndarray:
     """Solve ``W[idx, idx] x = rhs`` by Cholesky, reusing the factor of the same active set
     (most increments keep the previous one)."""
     from scipy.linalg import LinAlgError, cho_factor, cho_solve
@@ -51,33 +70,58 @@ def _active_solve(W: np.ndarray, idx: np.ndarray, rhs: np.ndarray, cache: dict) 
 
 
 def solve_lcp(
-    W: np.ndarray, g0: np.ndarray, active: np.ndarray, tol: float, cache: dict | None = None
+    W: np.ndarray, g0: np.ndarray, active: np.ndarray, tol: float, cache: dict | None = None,
+    *, solve_active: Callable[[np.ndarray, np.ndarray], np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, int]:
-    """Solve ``lam >= 0, g0 + W lam >= 0, complementary`` by active sets.
+    """Solve ``lam >= 0, g0 + W lam >= 0, complementary`` by active sets (module docstring).
 
     Parameters
     ----------
-    W : (m, m) symmetric positive definite compliance (m/N).
-    g0 : (m,) gaps at zero force (m).
-    active : (m,) bool, the initial guess of the active set (warm start).
-    tol : m, gap and force-scale tolerance (a few ulp of the problem's lengths).
-    cache : dict kept between calls with the same ``W``: the Cholesky factor of the last
-        active block.
+    W : ndarray
+        (m, m) compliance (m/N), a P-matrix; symmetric positive definite unless
+        ``solve_active`` is given.
+    g0 : ndarray
+        (m,) gaps at zero force (m).
+    active : ndarray
+        (m,) bool, the initial guess of the active set (warm start).
+    tol : float
+        Gap tolerance (m): a gap above ``-tol`` counts as open.
+    cache : dict, optional
+        Kept between calls with the same ``W``: the Cholesky factor of the last active
+        block (default solver only).
+    solve_active : callable, optional
+        ``solve_active(idx, rhs) -> x`` solving ``W[idx, idx] x = rhs`` (a solver that
+        knows the structure of ``W``); default: Cholesky, cached in ``cache``.
 
     Returns
     -------
-    lam : (m,) N; active : (m,) bool; pivots : number of active-set changes.
+    lam : ndarray
+        (m,) contact forces, N.
+    active : ndarray
+        (m,) bool, the active set of the solution.
+    pivots : int
+        Number of active-set changes.
+
+    Raises
+    ------
+    SolverError
+        The pivoting did not terminate, or an active block is singular.
     """
-    act = active.copy()
-    lam = np.zeros_like(g0)
-    cache = {} if cache is None else cache
+    act = np.asarray(active, bool).copy()
+    lam = np.zeros_like(g0, dtype=float)
+    if solve_active is None:
+        store = {} if cache is None else cache
+
+        def solve_active(idx: np.ndarray, rhs: np.ndarray) -> np.ndarray:
+            return _cholesky_solve(W, idx, rhs, store)
+
     for it in range(BLOCK_PIVOTS + MAX_PIVOTS):
         lam[:] = 0.0
         if act.any():
             idx = np.flatnonzero(act)
-            lam[idx] = _active_solve(W, idx, -g0[idx], cache)
+            lam[idx] = solve_active(idx, -g0[idx])
         g = g0 + W @ lam
-        neg = act & (lam < 0.0)
+        neg = act & (lam < -FORCE_RTOL * np.max(np.abs(lam), initial=0.0))
         pen = ~act & (g < -tol)
         if not neg.any() and not pen.any():
             return lam, act, it

@@ -52,14 +52,35 @@ def p2_shape(xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     return n, g
 
 
+def triangle_jacobian(xy: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Jacobians of the affine maps of the reference triangle onto straight-sided ones.
+
+    ``J = [x1 - x0, x2 - x0]`` (columns: d(r, z)/d(s, t)); ``det J`` is twice the signed
+    area, positive for counter-clockwise vertices.
+
+    Parameters
+    ----------
+    xy : ndarray
+        (ne, >= 3, 2) node coordinates (r, z), m; the first three are the vertices.
+
+    Returns
+    -------
+    jac : ndarray
+        (ne, 2, 2) Jacobians, m.
+    det : ndarray
+        (ne,) their determinants, m^2.
+    """
+    v = xy[:, :3]
+    jac = np.stack([v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]], axis=2)  # (ne, 2 (r,z), 2 (s,t))
+    return jac, jac[:, 0, 0] * jac[:, 1, 1] - jac[:, 0, 1] * jac[:, 1, 0]
+
+
 def physical_gradients(xy: np.ndarray, g2: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Gradients (ne, nq, 6, 2) in (r, z) of the P2 shape functions of straight-sided
     triangles ``xy`` (ne, 6, 2) m, from their reference gradients ``g2`` (nq, 6, 2)
-    (:func:`p2_shape`), and the Jacobian determinants (ne,) m^2: ``J = [x1 - x0, x2 - x0]``,
-    ``grad N = J^-T grad_ref N``."""
-    v = xy[:, :3]
-    jac = np.stack([v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]], axis=2)
-    det = jac[:, 0, 0] * jac[:, 1, 1] - jac[:, 0, 1] * jac[:, 1, 0]
+    (:func:`p2_shape`), and the Jacobian determinants (ne,) m^2
+    (:func:`triangle_jacobian`): ``grad N = J^-T grad_ref N``."""
+    jac, det = triangle_jacobian(xy)
     inv = np.empty_like(jac)
     inv[:, 0, 0], inv[:, 1, 1] = jac[:, 1, 1] / det, jac[:, 0, 0] / det
     inv[:, 0, 1], inv[:, 1, 0] = -jac[:, 0, 1] / det, -jac[:, 1, 0] / det
@@ -84,23 +105,20 @@ def element_matrices(
 
     Parameters
     ----------
-    xy : (ne, 6, 2) node coordinates (r, z), m; straight-sided elements.
-    G : (ne,) shear modulus, Pa.
-    inv_K : (ne,) bulk compliance 1/K, 1/Pa (0 for incompressible).
-    p_scale : (ne,) or (ne, 3), Pa/m^k; the pressure unknown of a vertex is ``p / p_scale``
+    xy : numpy.ndarray
+        (ne, 6, 2) node coordinates (r, z), m; straight-sided elements.
+    G : numpy.ndarray
+        (ne,) shear modulus, Pa.
+    inv_K : numpy.ndarray
+        (ne,) bulk compliance 1/K, 1/Pa (0 for incompressible).
+    p_scale : numpy.ndarray
+        (ne,) or (ne, 3), Pa/m^k; the pressure unknown of a vertex is ``p / p_scale``
         (balances the blocks for LU: see :func:`ssw.contact.assembly.pressure_scale`). A
         (ne,) value applies to the element's three vertices.
     """
     n2, g2 = p2_shape(QUAD_POINTS)
     n1 = p1_shape(QUAD_POINTS)
-    v = xy[:, :3]
-    jac = np.stack([v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]], axis=2)  # (ne, 2 (r,z), 2 (s,t))
-    det = jac[:, 0, 0] * jac[:, 1, 1] - jac[:, 0, 1] * jac[:, 1, 0]
-    inv = np.empty_like(jac)
-    inv[:, 0, 0], inv[:, 1, 1] = jac[:, 1, 1] / det, jac[:, 0, 0] / det
-    inv[:, 0, 1], inv[:, 1, 0] = -jac[:, 0, 1] / det, -jac[:, 1, 0] / det
-    # physical gradients (ne, nq, 6, 2): dN/d(r,z) = dN/d(s,t) . inv(J)
-    dn = np.einsum("qas,esx->eqax", g2, inv)
+    dn, det = physical_gradients(xy, g2)  # (ne, nq, 6, 2): dN/d(r,z)
     r = np.einsum("qa,ea->eq", n2, xy[:, :, 0])  # radius at the quadrature points
     wdv = 2.0 * np.pi * r * QUAD_WEIGHTS[None, :] * np.abs(det)[:, None]  # (ne, nq)
     ne, nq = r.shape

@@ -213,13 +213,20 @@ def solve_curve(soil: tuple[float, float], plate: tuple[float, float] | None,
 
     Parameters
     ----------
-    soil : (E Pa, nu) of the soil (a half-space, or ``settings.soil_depth`` deep).
-    plate : (E Pa, nu) of the plate, or None with ``plate_thickness == 0``.
-    plate_thickness : m.
-    radius : m, the sphere's radius.
-    contact_cfg : the ``contact`` settings: ``delta_max``, ``steps``, ``delta_reach``,
+    soil : tuple of float
+        ``(E, nu)`` of the soil, Pa and - (a half-space, or ``settings.soil_depth`` deep).
+    plate : tuple of float or None
+        ``(E, nu)`` of the plate, Pa and -, or None with ``plate_thickness == 0``.
+    plate_thickness : float
+        The plate's thickness, m.
+    radius : float
+        The sphere's radius, m.
+    contact_cfg : dict
+        The ``contact`` settings: ``delta_max``, ``steps``, ``delta_reach``,
         ``interface`` (bonded | frictionless), ``pressure_profiles``; an optional
         ``layered`` dict gives :class:`LayeredSettings` (unless ``settings`` is given).
+    settings : LayeredSettings or None
+        The oracle's discretization (rings, Hankel quadrature, soil depth).
     """
     cfg = {"delta_max": 1.0e-4, "steps": 1000, "interface": "frictionless",
            "pressure_profiles": 5, **contact_cfg}

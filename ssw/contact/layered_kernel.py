@@ -184,13 +184,16 @@ def compliance_ratio(stack: Stack, xi: ArrayLike) -> NDArray[np.float64]:
 
     Parameters
     ----------
-    stack : the layered body.
-    xi : Hankel variable (1/m), any shape, ``>= 0``.
+    stack : Stack
+        The layered body.
+    xi : array_like
+        The Hankel variable, 1/m, any shape, ``>= 0``.
 
     Returns
     -------
-    ``A`` of the shape of ``xi`` (see the module docstring): ``u_z_bar(xi) =
-    2 (1 - nu_1^2) / (E_1 xi) A(xi) p_bar(xi)``.
+    numpy.ndarray
+        ``A`` of the shape of ``xi`` (see the module docstring):
+        ``u_z_bar(xi) = 2 (1 - nu_1^2) / (E_1 xi) A(xi) p_bar(xi)``.
     """
     xi = np.asarray(xi, dtype=float)
     if not stack.layers:

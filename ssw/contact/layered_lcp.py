@@ -5,12 +5,12 @@ between the sphere, pushed down by ``delta``, and the deflected surface is
 
     ``g = s - delta + C p >= 0``,  ``s(r) = r^2 / (R + sqrt(R^2 - r^2))``  (exact sphere),
 
-with ``p_i g_i = 0`` (a linear complementarity problem). Its solution on an active set
-``A`` (the rings in contact) is linear in ``delta``: ``p_A = delta u - v`` with
-``C_AA u = 1`` and ``C_AA v = s_A``; the gap is ``g = g0 + delta g1``. So the active set
-is found once (an active-set iteration from the previous one: drop negative pressures,
-add closed gaps; Murty's least-index rule if that cycles) and every increment up to the
-first ``delta`` at which a pressure or a gap changes sign is filled at once.
+with ``p_i g_i = 0`` (a linear complementarity problem, solved by ssw's one LCP solver,
+:func:`ssw.contact.contact_lcp.solve_lcp`, warm-started from the previous active set, with
+its tolerance policy). Its solution on an active set ``A`` (the rings in contact) is
+linear in ``delta``: ``p_A = delta u - v`` with ``C_AA u = 1`` and ``C_AA v = s_A``; the
+gap is ``g = g0 + delta g1``. So the active set is found once and every increment up to
+the first ``delta`` at which a pressure or a gap changes sign is filled at once.
 
 Active sets are almost always the leading rings ``0..k-1``; their systems are the leading
 blocks of ``C``, solved from one LU factorization without pivoting of ``C`` (the leading
@@ -25,13 +25,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from ssw.contact.contact_lcp import solve_lcp
 from ssw.errors import SolverError
 
 #: Gap tolerance, relative to the largest indentation of the curve.
 GAP_TOL = 1e-11
-#: Negative pressure accepted as round-off, relative to the largest (a ring whose pressure
-#: vanishes exactly at an increment must not cycle in and out).
-PRESSURE_TOL = 1e-12
 #: Relative residual above which a leading-block solve is redone by a pivoted solve.
 RESIDUAL_TOL = 1e-9
 #: Leading-block size below which the LU recursion switches to row-by-row elimination.
@@ -92,26 +90,30 @@ def lu_nopivot(C: NDArray) -> tuple[NDArray, NDArray, int]:
 
 
 class _ActiveSolver:
-    """``C_AA^{-1} [1, s_A]`` for active sets A, from the LU of the leading blocks."""
+    """``C_AA^{-1} b`` for active sets A, from the LU of the leading blocks."""
 
     def __init__(self, C: NDArray, s: NDArray) -> None:
         from scipy.linalg import solve_triangular
 
         self.C, self.rhs = C, np.stack([np.ones_like(s), s], axis=1)
-        L, U, self.valid = lu_nopivot(C)
+        self.L, U, self.valid = lu_nopivot(C)
         k = self.valid
-        self.y = solve_triangular(L[:k, :k], self.rhs[:k], lower=True, unit_diagonal=True)
         # the leading blocks of U^-1 are the inverses of U's leading blocks
         self.U_inv = solve_triangular(U[:k, :k], np.eye(k), lower=False)
         self.general = 0
 
-    def solve(self, idx: NDArray) -> NDArray:
+    def solve_rhs(self, idx: NDArray, rhs: NDArray) -> NDArray:
+        """``x`` with ``C[idx, idx] x = rhs`` (``rhs`` (k,) or (k, r)): the leading factors
+        when ``idx`` are the leading rings ``0..k-1`` (checked by the residual), a pivoted
+        solve otherwise."""
+        from scipy.linalg import solve_triangular
+
         k = idx.size
         if k == 0:
-            return np.zeros((0, 2))
-        rhs = self.rhs[idx]
+            return np.zeros(rhs.shape)
         if idx[-1] == k - 1 and k <= self.valid:  # the leading rings 0..k-1
-            x = self.U_inv[:k, :k] @ self.y[:k]
+            y = solve_triangular(self.L[:k, :k], rhs, lower=True, unit_diagonal=True)
+            x = self.U_inv[:k, :k] @ y
             res = self.C[:k, :k] @ x - rhs
             scale = np.abs(self.C[:k, :k]) @ np.abs(x) + np.abs(rhs)
             if np.all(np.abs(res) <= RESIDUAL_TOL * scale):
@@ -122,6 +124,10 @@ class _ActiveSolver:
         except np.linalg.LinAlgError as exc:
             raise SolverError(f"singular contact system on {k} rings ({exc})") from exc
 
+    def solve(self, idx: NDArray) -> NDArray:
+        """``C_AA^{-1} [1, s_A]`` (k, 2) on the rings ``idx``."""
+        return self.solve_rhs(idx, self.rhs[idx])
+
 
 def solve_sphere(C: NDArray, points: NDArray, areas: NDArray, radius: float,
                  deltas: NDArray, keep: NDArray | None = None) -> LcpResult:
@@ -129,17 +135,30 @@ def solve_sphere(C: NDArray, points: NDArray, areas: NDArray, radius: float,
 
     Parameters
     ----------
-    C : (n, n) influence coefficients (m/Pa) at the ring midpoints ``points`` (m).
-    areas : (n,) ring areas (m^2): the force is ``areas @ p``.
-    radius : sphere radius (m).
-    deltas : (m,) increasing indentations (m).
-    keep : increments whose pressure profile is returned.
+    C : numpy.ndarray
+        (n, n) influence coefficients, m/Pa, at the ring midpoints ``points``.
+    points : numpy.ndarray
+        (n,) the ring midpoints' radii, m.
+    areas : numpy.ndarray
+        (n,) ring areas, m^2: the force is ``areas @ p``.
+    radius : float
+        The sphere's radius, m.
+    deltas : numpy.ndarray
+        (m,) increasing indentations, m.
+    keep : numpy.ndarray or None
+        Increments whose pressure profile is returned.
 
     Returns
     -------
-    :class:`LcpResult`; raises :class:`ZoneError` when the contact reaches the last rings
-    (the candidate zone is too small), SolverError when the active-set iteration does not
-    converge.
+    LcpResult
+        The curve and the kept pressure profiles.
+
+    Raises
+    ------
+    ZoneError
+        The contact reaches the last rings (the candidate zone is too small).
+    ssw.errors.SolverError
+        The active-set iteration does not converge.
     """
     n = len(points)
     s = sphere_surface(points, radius)
@@ -181,32 +200,17 @@ def solve_sphere(C: NDArray, points: NDArray, areas: NDArray, radius: float,
 
 def _active_set(solver: _ActiveSolver, s: NDArray, active: NDArray, d: float, tol: float,
                 out: LcpResult) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
-    """The active set at indentation ``d`` from the guess ``active``, with ``u, v`` on it
-    and the gap coefficients ``g0, g1`` on all rings."""
-    n = s.size
+    """The active set at indentation ``d`` from the guess ``active`` (the LCP of the
+    module docstring), with ``u, v`` on it and the gap coefficients ``g0, g1`` on all
+    rings."""
+    _, active, pivots = solve_lcp(solver.C, s - d, active, tol, solve_active=solver.solve_rhs)
+    out.iterations += pivots + 1
+    idx = np.flatnonzero(active)
+    uv = solver.solve(idx)
+    u, v = uv[:, 0], uv[:, 1]
     C = solver.C
-    active = active.copy()
-    for it in range(4 * n + 10):
-        out.iterations += 1
-        idx = np.flatnonzero(active)
-        uv = solver.solve(idx)
-        u, v = uv[:, 0], uv[:, 1]
-        cols = C[:, :idx.size] if idx.size == 0 or idx[-1] == idx.size - 1 else C[:, idx]
-        g0 = s - cols @ v
-        g1 = cols @ u - 1.0
-        p = d * u - v
-        g = g0 + d * g1
-        neg = p < -PRESSURE_TOL * np.abs(p).max(initial=0.0)
-        closed = ~active & (g < -tol)
-        if not neg.any() and not closed.any():
-            return active, u, v, g0, g1
-        if it < 2 * n:  # block update: drop every negative pressure, add every closed gap
-            active[idx[neg]] = False
-            active |= closed
-        else:  # Murty's least-index rule: finite for P-matrices
-            bad = np.flatnonzero(closed | np.isin(np.arange(n), idx[neg]))
-            active[bad[0]] = not active[bad[0]]
-    raise SolverError(f"the contact active set did not converge at delta = {d:.6g} m")
+    cols = C[:, :idx.size] if idx.size == 0 or idx[-1] == idx.size - 1 else C[:, idx]
+    return active, u, v, s - cols @ v, cols @ u - 1.0
 
 
 def _edge_radius(points: NDArray, g0: NDArray, g1: NDArray, k: int,

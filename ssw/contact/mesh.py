@@ -19,6 +19,7 @@ from typing import Any
 
 import numpy as np
 
+from ssw.contact.elements import triangle_jacobian
 from ssw.errors import MeshError
 
 #: gmsh element type of the 6-node triangle.
@@ -103,9 +104,12 @@ def build_mesh(plate_thickness: float, plate_radius: float, s: MeshSettings) -> 
 
     Parameters
     ----------
-    plate_thickness : m, 0 for no plate.
-    plate_radius : m, half the plate diameter.
-    s : domain and density settings.
+    plate_thickness : float
+        The plate's thickness, m; 0 for no plate.
+    plate_radius : float
+        Half the plate diameter, m.
+    s : MeshSettings
+        Domain and density settings.
 
     Returns
     -------
@@ -215,9 +219,7 @@ def _build(gmsh, t: float, rp: float, s: MeshSettings) -> Mesh:
 def _check_orientation(nodes: np.ndarray, tri: np.ndarray) -> None:
     """Raise MeshError on degenerate elements; flip clockwise ones in place."""
     p = nodes[tri[:, :3]]
-    det = (p[:, 1, 0] - p[:, 0, 0]) * (p[:, 2, 1] - p[:, 0, 1]) - (
-        p[:, 2, 0] - p[:, 0, 0]
-    ) * (p[:, 1, 1] - p[:, 0, 1])
+    det = triangle_jacobian(p)[1]
     scale = np.max(np.abs(p[:, 1:] - p[:, :1]), axis=(1, 2)) ** 2
     if np.any(np.abs(det) < 1e-12 * scale):
         raise MeshError("the mesh has degenerate (zero-area) triangles")

@@ -396,7 +396,10 @@ class SceneLCP:
     the sphere candidates (radius ``r``, surface weight ``weight``), the rest the plate-soil
     pairs of an unilateral interface. ``tie`` (m,) or None: the force (N, + up) the plate
     pulls on the soil's axis node per unit constraint force (unilateral only; compression
-    is ``tie . lam <= 0``). ``dofs``: unknowns of the dense system.
+    is ``tie . lam <= 0``). ``dofs``: unknowns of the dense system. ``dW_dE`` (m, m) m/N/Pa
+    or None: ``dW/dE_soil`` (no plate: ``-W / E``; a frictionless or bonded plate:
+    ``-W (dH/dE) W``, ``dH/dE = E_p^2 Y^T S Y`` of the Schur complement ``H``; None for the
+    unilateral interface), for the law's derivative in E (:mod:`ssw.walls.fem`).
     """
 
     W: np.ndarray
@@ -407,6 +410,7 @@ class SceneLCP:
     weight: np.ndarray
     tie: np.ndarray | None
     dofs: int
+    dW_dE: np.ndarray | None = None
 
 
 def coupled_stiffness(
@@ -439,11 +443,20 @@ def scene_lcp(layout: Layout, plate: BodyOperator | None, soil: BodyOperator,
 
     Parameters
     ----------
-    layout : the retained dofs of the geometry.
-    plate, soil : the bodies' operators (unit E); ``plate`` None without a plate.
-    soil_E, plate_E : Pa.
-    interface : ``frictionless`` | ``bonded`` | ``unilateral``.
-    radius : m, the rigid sphere's.
+    layout : Layout
+        The retained dofs of the geometry.
+    plate : BodyOperator or None
+        The plate's operator (unit E); None without a plate.
+    soil : BodyOperator
+        The soil's operator (unit E).
+    soil_E : float
+        The soil's Young's modulus, Pa.
+    plate_E : float or None
+        The plate's Young's modulus, Pa; None without a plate.
+    interface : str
+        ``frictionless`` | ``bonded`` | ``unilateral``.
+    radius : float
+        The rigid sphere's radius, m.
     """
     nc = layout.r.size
     q0s = sphere_gap0(layout.r, radius)
@@ -455,8 +468,9 @@ def scene_lcp(layout: Layout, plate: BodyOperator | None, soil: BodyOperator,
             raise SolverError(f"the condensed soil stiffness is not positive definite: {exc}"
                               ) from exc
         W = cho_solve(cf, np.eye(nc), check_finite=False)
-        return SceneLCP(0.5 * (W + W.T), q0s, -np.ones(nc), nc, layout.r, layout.weight,
-                        None, nc)
+        W = 0.5 * (W + W.T)
+        return SceneLCP(W, q0s, -np.ones(nc), nc, layout.r, layout.weight, None, nc,
+                        -W / soil_E)
     ni = layout.iface_r.size
     unilateral = interface == "unilateral"
     if not unilateral:
@@ -473,8 +487,12 @@ def scene_lcp(layout: Layout, plate: BodyOperator | None, soil: BodyOperator,
         except np.linalg.LinAlgError as exc:
             raise SolverError(f"the condensed plate-soil stiffness is not positive definite: "
                               f"{exc}") from exc
-        return SceneLCP(0.5 * (W + W.T), q0s, -np.ones(nc), nc, layout.r, layout.weight,
-                        None, nc + ni)
+        W = 0.5 * (W + W.T)
+        # dM/dE = S: dY = -M^-1 S Y, dH = -E_p^2 P_ci dY = E_p^2 Y^T S Y (P_ci = P_ic^T)
+        dH = plate_E**2 * (Y.T @ (soil.S @ Y))
+        dW = -W @ (0.5 * (dH + dH.T)) @ W
+        return SceneLCP(W, q0s, -np.ones(nc), nc, layout.r, layout.weight, None, nc + ni,
+                        0.5 * (dW + dW.T))
     K, _, s_map, off = coupled_stiffness(plate.S, soil.S, plate_E, soil_E, layout, nc,
                                          unilateral)
     n = K.shape[0]

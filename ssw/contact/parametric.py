@@ -172,9 +172,12 @@ class Tracer:
 
     Parameters
     ----------
-    W : (m, m) symmetric positive definite, m/N.
-    q0 : (m,) gaps at ``delta = 0``, m, >= 0.
-    q1 : (m,) d(gap)/d(delta), -.
+    W : numpy.ndarray
+        (m, m) symmetric positive definite, m/N.
+    q0 : numpy.ndarray
+        (m,) gaps at ``delta = 0``, m, >= 0.
+    q1 : numpy.ndarray
+        (m,) d(gap)/d(delta), -.
     """
 
     def __init__(self, W: np.ndarray, q0: np.ndarray, q1: np.ndarray) -> None:

@@ -152,9 +152,17 @@ class LUSolver:
 
     Parameters
     ----------
-    rows, cols, vals : COO triplets of ``A`` (global indices, every rank passes all of them).
-    n : matrix size.
-    scale : the matrix's unit (a power of two keeps the solves exact to the bit).
+    rows : numpy.ndarray
+        Row indices of the COO triplets of ``A`` (global indices, every rank passes all
+        of them).
+    cols : numpy.ndarray
+        Column indices of the triplets.
+    vals : numpy.ndarray
+        Values of the triplets.
+    n : int
+        The matrix size.
+    scale : float
+        The matrix's unit (a power of two keeps the solves exact to the bit).
     """
 
     def __init__(self, rows: np.ndarray, cols: np.ndarray, vals: np.ndarray, n: int,

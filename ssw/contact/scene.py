@@ -186,7 +186,7 @@ class MeshCache(OperatorStore):
         return self.mesh
 
     def order_nodes(self, rows: np.ndarray, cols: np.ndarray, n: int) -> np.ndarray:
-        """:func:`nd_order`, remembered for the last graph."""
+        """:func:`ssw.contact.petsc_solver.nd_order`, remembered for the last graph."""
         import hashlib
 
         graph = (n, hashlib.sha1(rows.tobytes() + cols.tobytes()).digest())
@@ -217,19 +217,28 @@ def solve_curve(
 
     Parameters
     ----------
-    soil : (E Pa, nu) of the soil.
-    plate : (E Pa, nu) of the plate, or None with ``plate_thickness == 0``.
-    plate_thickness : m.
-    radius : m, sphere radius.
-    contact_cfg : the ``contact`` config section (defaults: :data:`DEFAULTS`).
-    cache : the operators (and, monolithic, the mesh) shared by a batch of scenes; None:
-        the process's store (:func:`ssw.contact.operators.default_store`, disk-backed).
-    engine : ``substructured`` (default) or ``monolithic`` (module docstring).
+    soil : tuple of float
+        ``(E, nu)`` of the soil, Pa and -.
+    plate : tuple of float or None
+        ``(E, nu)`` of the plate, Pa and -, or None with ``plate_thickness == 0``.
+    plate_thickness : float
+        The plate's thickness, m.
+    radius : float
+        The sphere's radius, m.
+    contact_cfg : dict
+        The ``contact`` config section (defaults: ``ssw.contact.scene.DEFAULTS``).
+    cache : MeshCache or ssw.contact.operators.OperatorStore or None
+        The operators (and, monolithic, the mesh) shared by a batch of scenes; None: the
+        process's store (:func:`ssw.contact.operators.default_store`, disk-backed).
+    engine : str
+        ``substructured`` (default) or ``monolithic`` (module docstring).
 
     Returns
     -------
-    (curve, state) : the curve (inputs and stats filled except the scene's labels) and a
-    dict with the condensed problem and the final contact forces (for tests).
+    curve : ssw.curve.ForceCurve
+        The curve (inputs and stats filled except the scene's labels).
+    state : dict
+        The condensed problem and the final contact forces (for tests).
     """
     cfg = settings_of(contact_cfg)
     if cfg.get("subgrade_E") is not None:  # a lift: its subgrade relative to this soil
@@ -483,12 +492,18 @@ def solve_scene(
 
     Parameters
     ----------
-    scene : plate material key, thickness (m, 0 = no plate), soil E (Pa) and nu.
-    contact_cfg : the config's ``contact`` section.
-    indenter_radius : m, the rigid sphere's radius.
-    materials : the material library of the study (key -> Material).
-    cache : a :class:`MeshCache` shared by the scenes of a batch (None: the process's).
-    engine : ``substructured`` (default) or ``monolithic`` (the module docstring).
+    scene : ssw.config.Scene
+        Plate material key, thickness (m, 0 = no plate), soil E (Pa) and nu.
+    contact_cfg : dict
+        The config's ``contact`` section.
+    indenter_radius : float
+        The rigid sphere's radius, m.
+    materials : dict
+        The material library of the study (key -> Material).
+    cache : MeshCache or None
+        A mesh and operator cache shared by the scenes of a batch (None: the process's).
+    engine : str
+        ``substructured`` (default) or ``monolithic`` (the module docstring).
     """
     if scene.sample is not None:  # a finite block: the FEM's soil domain is the block
         contact_cfg = scene.sample.contact_settings(contact_cfg)

@@ -108,9 +108,18 @@ class BodyField:
 
     Parameters
     ----------
-    nodes : (n, 2) m, every node of the model.  tri : (ne, 6) the body's elements.
-    free : (n, 2) the free displacement components.  b_nodes, b_comps : the retained dofs,
-    in the order of the body's condensed operator.  nu : the body's Poisson's ratio.
+    nodes : numpy.ndarray
+        (n, 2) every node of the model, m.
+    tri : numpy.ndarray
+        (ne, 6) the body's elements.
+    free : numpy.ndarray
+        (n, 2) bool, the free displacement components.
+    b_nodes : numpy.ndarray
+        (nb,) the retained dofs' nodes, in the order of the body's condensed operator.
+    b_comps : numpy.ndarray
+        (nb,) the retained dofs' components (0 = u_r, 1 = u_z), in that order.
+    nu : float
+        The body's Poisson's ratio.
     """
 
     def __init__(self, nodes: np.ndarray, tri: np.ndarray, free: np.ndarray,
@@ -142,7 +151,7 @@ class BodyField:
         return u
 
     def von_mises(self, u_B: np.ndarray, E: np.ndarray) -> np.ndarray:
-        """von Mises stress (n_points, n_states) Pa at :attr:`points` for retained
+        """von Mises stress (n_points, n_states) Pa at ``points`` for retained
         displacements ``u_B`` (n_B, n_states) m and the body's modulus ``E`` (n_states,) Pa
         of each state."""
         u = self.displacements(u_B)
@@ -222,7 +231,7 @@ def body_field(store: OperatorStore, geom: Geometry, which: str, nu: float) -> B
 
 def retained_dofs(model: Any, which: str) -> tuple[np.ndarray, np.ndarray]:
     """The retained (node, component) of a body, in its condensed operator's order
-    (:func:`ssw.contact.operators._condense`): the plate's candidates then its interface
+    (``ssw.contact.operators._condense``): the plate's candidates then its interface
     dofs; the soil's interface dofs, or its candidates without a plate."""
     if which == "plate":
         return (np.concatenate([model.cand, model.iface_nodes[:, 1]]),
@@ -321,17 +330,29 @@ def contact_stresses(
 
     Parameters
     ----------
-    soil_E : (n,) Pa, the soil modulus of each state (one soil Poisson's ratio).
-    soil_nu : the soil's Poisson's ratio.
-    plate : (E Pa, nu) of the plate, or None (``plate_thickness`` 0).
-    plate_thickness : m.  radius : m, the rigid sphere's.
-    delta : (n,) m, the sphere's indentation at each state (broadcast with ``soil_E``).
-    contact : the ``contact`` settings (mesh, zone, interface); defaults
+    soil_E : array_like
+        (n,) the soil modulus of each state, Pa (one soil Poisson's ratio).
+    soil_nu : float
+        The soil's Poisson's ratio.
+    plate : tuple of float or None
+        ``(E, nu)`` of the plate, Pa and -, or None (``plate_thickness`` 0).
+    plate_thickness : float
+        The plate's thickness, m.
+    radius : float
+        The rigid sphere's radius, m.
+    delta : array_like
+        (n,) the sphere's indentation at each state, m (broadcast with ``soil_E``).
+    contact : dict or None
+        The ``contact`` settings (mesh, zone, interface); defaults
         :data:`ssw.contact.scene.DEFAULTS`.
-    store : the operators (default: the process's, :func:`default_store`).
-    fields : also return every evaluation point's stress (:attr:`ContactStress.fields`).
-    bead : (E Pa, nu) of an elastic bead, or None (a rigid sphere). With a bead, each
-        state is the rigid sphere's at ``delta`` (as the chain's fem wall has it: the
+    store : ssw.contact.operators.OperatorStore or None
+        The operators (default: the process's,
+        :func:`ssw.contact.operators.default_store`).
+    fields : bool
+        Also return every evaluation point's stress (the result's ``fields``).
+    bead : tuple of float or None
+        ``(E, nu)`` of an elastic bead, Pa and -, or None (a rigid sphere). With a bead,
+        each state is the rigid sphere's at ``delta`` (as the chain's fem wall has it: the
         bead's compliance moved into the indentation), its force ``F``; the stresses are
         those of the rigid sphere of :func:`equivalent_radius` carrying the same ``F``
         (the elastic bead's Hertz pressure on the top body). ``delta`` of the result is

@@ -224,12 +224,22 @@ def condense_body(
 
     Parameters
     ----------
-    nodes : (n, 2) m, every node of the model (only those of ``tri`` are used).
-    tri : (ne, 6) the body's quadratic triangles.
-    nu : the body's Poisson's ratio, (-1, 0.5].
-    free : (n, 2) bool, displacement components that are not fixed (rollers, axis, bottom).
-    b_nodes, b_comps : (nb,) the retained dofs (node, 0 = u_r | 1 = u_z), in order.
-    order_nodes : callable ``(rows, cols, n) -> permutation`` (nested dissection).
+    nodes : numpy.ndarray
+        (n, 2) every node of the model, m (only those of ``tri`` are used).
+    tri : numpy.ndarray
+        (ne, 6) the body's quadratic triangles.
+    nu : float or numpy.ndarray
+        The body's Poisson's ratio, (-1, 0.5].
+    free : numpy.ndarray
+        (n, 2) bool, displacement components that are not fixed (rollers, axis, bottom).
+    b_nodes : numpy.ndarray
+        (nb,) the retained dofs' nodes, in order.
+    b_comps : numpy.ndarray
+        (nb,) the retained dofs' components (0 = u_r, 1 = u_z), in that order.
+    order_nodes : callable
+        ``(rows, cols, n) -> permutation`` (nested dissection).
+    E : float or numpy.ndarray
+        The body's Young's modulus, Pa (1: the unit-E operator).
     """
     t0 = time.perf_counter()
     bm = body_matrix(nodes, tri, nu, free, b_nodes, b_comps, order_nodes, E)

@@ -1,4 +1,5 @@
-"""Recordings made elsewhere (LabVIEW/NI TDMS, CSV exports, MATLAB) as :class:`Recording`.
+"""Recordings made elsewhere (LabVIEW/NI TDMS, CSV exports, MATLAB) as
+:class:`~ssw.daq.recording.Recording`.
 
 A registry by file suffix (:data:`FORMATS`), as meshio's: each format module of
 :mod:`ssw.daq.formats` reads a file into a :class:`ssw.daq.recording.Recording` (force in
@@ -45,6 +46,7 @@ class Format:
     write: Callable[..., Path] | None = None
 
 
+#: Registry: file suffix -> :class:`Format` (its reader and writer).
 FORMATS: dict[str, Format] = {}
 
 

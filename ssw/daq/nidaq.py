@@ -36,7 +36,7 @@ the stream and returns each record once its last sample has arrived. ``settings.
 bounds the wait for each hit.
 
 ``nidaqmx`` is imported inside the functions; without the NI-DAQmx driver (this machine)
-every entry point raises :class:`DaqError` naming what is missing. The configuration is
+every entry point raises :class:`.DaqError` naming what is missing. The configuration is
 tested against ``unittest.mock.create_autospec(nidaqmx.Task)``, as nidaqmx's own unit tests
 mock the driver layer.
 """
@@ -64,7 +64,7 @@ NO_DRIVER = (
 
 
 def _nidaqmx() -> Any:
-    """The ``nidaqmx`` module, or :class:`DaqError` if the Python package is missing."""
+    """The ``nidaqmx`` module, or :class:`.DaqError` if the Python package is missing."""
     try:
         import nidaqmx
         import nidaqmx.constants
@@ -76,7 +76,7 @@ def _nidaqmx() -> Any:
 
 
 def _driver_call(what: str, fn: Callable[[], Any]) -> Any:
-    """Run ``fn`` and turn nidaqmx's errors into :class:`DaqError` saying ``what`` failed."""
+    """Run ``fn`` and turn nidaqmx's errors into :class:`.DaqError` saying ``what`` failed."""
     nidaqmx = _nidaqmx()
     try:
         return fn()
@@ -92,7 +92,7 @@ def check_device(device: Any, settings: DaqSettings) -> dict[str, Any]:
     ``device`` is an ``nidaqmx.system.Device`` (or a fake of one). The description's
     ``trigger`` is ``hardware`` (analog reference trigger) or ``software`` (continuous
     acquisition, :class:`ssw.daq.trigger.RingTrigger`): ``settings.trigger_mode`` ``auto``
-    takes hardware where the module supports it. Raises :class:`DaqError` if it is not an
+    takes hardware where the module supports it. Raises :class:`.DaqError` if it is not an
     NI 9234, or if ``hardware`` is asked of a module that cannot source an analog reference
     trigger.
     """
@@ -176,7 +176,7 @@ def _add_channel(task: Any, settings: DaqSettings) -> Any:
 
 
 def read_hit(task: Any, settings: DaqSettings) -> Hit:
-    """Start the task, wait for one triggered record, read it, stop. Returns the :class:`Hit`."""
+    """Start the task, wait for one triggered record, read it, stop. Returns the :class:`.Hit`."""
     task.start()
     try:
         data = task.read(number_of_samples_per_channel=settings.record_samples,
@@ -197,9 +197,9 @@ def read_hit(task: Any, settings: DaqSettings) -> Hit:
 def software_hits(task: Any, settings: DaqSettings, n_hits: int) -> Iterator[Hit]:
     """Records of ``n_hits`` hits from a started continuous task, cut by the software trigger.
 
-    Reads chunks of :func:`chunk_samples`, feeds them to a :class:`RingTrigger` and yields
+    Reads chunks of :func:`chunk_samples`, feeds them to a :class:`.RingTrigger` and yields
     each record it completes. A hit is marked overloaded if the driver reported an
-    overload during any read since the previous hit. Raises :class:`DaqError` if no hit
+    overload during any read since the previous hit. Raises :class:`.DaqError` if no hit
     arrives within ``settings.timeout`` s of stream.
     """
     rule = TriggerRule.of(settings)

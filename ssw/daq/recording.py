@@ -69,10 +69,15 @@ class RecordingWriter:
 
     Parameters
     ----------
-    path : the session's HDF5 file. An existing file is replaced only with ``overwrite``,
+    path : str or pathlib.Path
+        The session's HDF5 file. An existing file is replaced only with ``overwrite``,
         and only when the first hit of this session is on disk.
-    settings : the acquisition settings (stored as metadata).
-    meta : sample id, plate, operator, synthetic flag, backend, hardware description.
+    settings : ssw.daq.settings.DaqSettings
+        The acquisition settings (stored as metadata).
+    meta : dict
+        Sample id, plate, operator, synthetic flag, backend, hardware description.
+    overwrite : bool
+        Replace an existing file (once the first new hit is on disk).
     """
 
     def __init__(
@@ -238,11 +243,14 @@ def read_recording(path: str | Path, *, clipped: str = "raise",
 
     Parameters
     ----------
-    path : the HDF5 file.
-    clipped : what to do with clipped hits: ``raise`` (:class:`RecordingError`), ``drop``
-        (skip them, listed in ``Recording.dropped``) or ``keep``.
-    full_scale : N, the device's largest unclipped force, checked as well as the
-        session's own stored one (the smaller applies).
+    path : str or pathlib.Path
+        The HDF5 file.
+    clipped : str
+        What to do with clipped hits: ``raise`` (:class:`~ssw.errors.RecordingError`),
+        ``drop`` (skip them, listed in ``Recording.dropped``) or ``keep``.
+    full_scale : float or None
+        The device's largest unclipped force, N, checked as well as the session's own
+        stored one (the smaller applies).
 
     Raises
     ------

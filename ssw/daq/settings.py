@@ -33,7 +33,7 @@ def allowed_rates() -> list[float]:
 
 
 def rate_divisor(rate: float) -> int:
-    """The divisor ``n`` with ``rate = 51200 / n``; :class:`ConfigError` if none matches."""
+    """The divisor ``n`` with ``rate = 51200 / n``; :class:`.ConfigError` if none matches."""
     n = round(NI9234_BASE_RATE / rate) if rate > 0 else 0
     if 1 <= n <= NI9234_MAX_DIVISOR and abs(NI9234_BASE_RATE / n - rate) <= RATE_RTOL * rate:
         return n
@@ -125,7 +125,7 @@ class DaqSettings:
 
 
 def check_settings(s: DaqSettings) -> None:
-    """Raise :class:`ConfigError` unless ``s`` is a configuration the NI 9234 accepts."""
+    """Raise :class:`.ConfigError` unless ``s`` is a configuration the NI 9234 accepts."""
     rate_divisor(s.sample_rate)
     if s.coupling not in ("AC", "DC"):
         raise ConfigError("daq.coupling", s.coupling, "AC or DC")

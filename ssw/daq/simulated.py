@@ -101,12 +101,23 @@ class SimulatedBackend:
 
     Parameters
     ----------
-    waveform : ``(t, F)`` sensor force (s, N); or ``None`` to ask the chain for it.
-    soil_E, soil_nu, chain_params, wall, wall_options : passed to
-        ``ssw.tof.api.sensor_signal`` and ``ssw.tof.api.tof`` when ``waveform`` is None
-        (Pa, -, ``ssw.chain.params.ChainParams``, wall law name, its options).
-    seed : seeds the noise, sample phase and jitter.
-    true_tof : the waveform's peak-to-peak TOF (s), stored with every hit if known.
+    waveform : tuple of numpy.ndarray or None
+        ``(t, F)`` sensor force (s, N); or ``None`` to ask the chain for it
+        (``ssw.tof.api.sensor_signal`` and ``ssw.tof.api.tof``).
+    soil_E : float or None
+        The sample's Young's modulus, Pa (when ``waveform`` is None).
+    soil_nu : float or None
+        The sample's Poisson's ratio (when ``waveform`` is None).
+    chain_params : ssw.chain.params.ChainParams or None
+        The chain (when ``waveform`` is None).
+    wall : str
+        The wall law's name (when ``waveform`` is None).
+    wall_options : dict or None
+        The wall builder's options (when ``waveform`` is None).
+    seed : int
+        Seeds the noise, sample phase and jitter.
+    true_tof : float or None
+        The waveform's peak-to-peak TOF, s, stored with every hit if known.
     """
 
     name = "simulated"
@@ -246,7 +257,8 @@ def trigger_index(y: np.ndarray, settings: DaqSettings) -> int:
 
     Rising slope: ``y[k-1] < level <= y[k]``; falling: ``y[k-1] > level >= y[k]``
     (:mod:`ssw.daq.trigger`, the rule shared with long-channel splitting and the ring-buffer
-    software trigger). Raises :class:`DaqError` (as the hardware times out) if no crossing
+    software trigger). Raises :class:`~ssw.errors.DaqError` (as the hardware times out) if no
+    crossing
     leaves room for a whole record.
     """
     from ssw.daq.trigger import TriggerRule

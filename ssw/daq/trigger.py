@@ -71,7 +71,8 @@ def trigger_starts(y: np.ndarray, rule: TriggerRule, *, start: int = 0) -> list[
 
 
 def trigger_index(y: np.ndarray, rule: TriggerRule) -> int:
-    """First trigger sample of ``y``; :class:`DaqError` if none leaves room for a record."""
+    """First trigger sample of ``y``; :class:`~ssw.errors.DaqError` if none leaves room for a
+    record."""
     starts = trigger_starts(y, rule)
     if not starts:
         raise DaqError(

@@ -10,7 +10,8 @@ of the design (:attr:`ssw.design.spec.DesignSpec.grid`):
    difference of ``ln TOF`` in ``ln E`` (error ``O(h^2)``: the third derivative of a curve
    that bends slowly; ``tests/test_design_cli.py`` compares it with ``ssw tof``);
 3. resolution ``dE/E = u_TOF / (TOF_k S_k)``: the relative change of E that moves the
-   mean TOF of one measurement by its standard uncertainty (:meth:`DesignSpec.tof_uncertainty`);
+   mean TOF of one measurement by its standard uncertainty
+   (:attr:`ssw.design.spec.DesignSpec.tof_uncertainty`);
 4. stresses at the hit's peak: the chain's largest wall indentation ``d_k`` is, in the
    rigid sphere's coordinates of the FEM, ``d_k / s_k`` (the bead's compliance,
    :func:`ssw.chain.wall.compliance_scale`), the force the wall carries there; at that
@@ -187,10 +188,16 @@ class Evaluator:
 
     Parameters
     ----------
-    spec : the design.  params : the device's chain (its plate is replaced per candidate).
-    materials : the materials library (key -> Material).
-    contact : the ``contact`` settings of the fem wall (mesh, zone).
-    store : the contact operators (default: the process's, disk-cached).
+    spec : ssw.design.spec.DesignSpec
+        The design.
+    params : ssw.chain.params.ChainParams
+        The device's chain (its plate is replaced per candidate).
+    materials : dict
+        The materials library (key -> Material).
+    contact : dict or None
+        The ``contact`` settings of the fem wall (mesh, zone).
+    store : ssw.contact.operators.OperatorStore or None
+        The contact operators (default: the process's, disk-cached).
     """
 
     def __init__(self, spec: DesignSpec, params: ChainParams, materials: dict[str, Material],

@@ -75,11 +75,20 @@ def run_design(spec: DesignSpec, params: ChainParams, materials: dict[str, Mater
 
     Parameters
     ----------
-    spec : the design.  params : the device's chain (its plate is the reference).
-    materials : the materials library.  contact : the fem wall's ``contact`` settings.
-    reference : evaluate the device's own plate when its material is among the design's.
-    jobs : processes (one search each; 1: this process).
-    store : the contact operators of this process (default: the process's).
+    spec : ssw.design.spec.DesignSpec
+        The design.
+    params : ssw.chain.params.ChainParams
+        The device's chain (its plate is the reference).
+    materials : dict
+        The materials library (key -> Material).
+    contact : dict or None
+        The fem wall's ``contact`` settings.
+    reference : bool
+        Evaluate the device's own plate when its material is among the design's.
+    jobs : int
+        Processes (one search each; 1: this process).
+    store : ssw.contact.operators.OperatorStore or None
+        The contact operators of this process (default: the process's).
     """
     t0 = time.perf_counter()
     for key in spec.materials:

@@ -6,7 +6,7 @@ a range of soils, while the plate stays elastic, the sample yields no more than 
 the plate stays light against a bead (:class:`DesignSpec`; the ``design:`` section of a
 study config, :func:`spec_from_config`).
 
-Objective. The worst case over the soil range of the sensitivity
+Objective. The worst case over the soil range of the sensitivity::
 
     S(E) = |d ln TOF / d ln E|,
 

@@ -7,13 +7,13 @@ Modules (one concept each):
 * :mod:`~ssw.dynamics.lu`: one PETSc LU factorization, many solves;
 * :mod:`~ssw.dynamics.newmark`: the trapezoidal (average-acceleration) Newmark step with
   the contact forces condensed onto their candidate dofs;
-* :mod:`~ssw.dynamics.lcp`: the small contact LCP solved at every step;
 * :mod:`~ssw.dynamics.bead`: the bead's own elastic compliance on the contact candidates;
 * :mod:`~ssw.dynamics.domain`: domain size and element size from the wave speeds;
 * :mod:`~ssw.dynamics.scales`: step, window and spectrum of a scene from a quasi-static run;
-* :mod:`~ssw.dynamics.fem_wall`: the dynamic FEM wall (a wall with internal state);
+* :mod:`~ssw.dynamics.fem_wall`: the dynamic FEM wall (a wall with internal state, run by
+  the chain's one integrator, :func:`ssw.chain.integrate.simulate`; its contact LCP per
+  step is :func:`ssw.contact.contact_lcp.solve_lcp`);
 * :mod:`~ssw.dynamics.quasistatic`: the quasi-static references (static FEMs in fixed boxes);
-* :mod:`~ssw.dynamics.integrate`: the chain's velocity Verlet with stateful walls;
 * :mod:`~ssw.dynamics.punch`: vertical dynamic stiffness of a rigid punch and its published
   references;
 * :mod:`~ssw.dynamics.reduced`: the reduced dynamic wall for sweeps and inversion;

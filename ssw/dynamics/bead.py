@@ -62,8 +62,12 @@ def bead_compliance(r: np.ndarray, E_b: float, nu_b: float) -> np.ndarray:
 
     Parameters
     ----------
-    r : (m,) candidate radii, sorted, m.
-    E_b, nu_b : the bead's Young's modulus (Pa) and Poisson's ratio.
+    r : numpy.ndarray
+        (m,) candidate radii, sorted, m.
+    E_b : float
+        The bead's Young's modulus, Pa.
+    nu_b : float
+        The bead's Poisson's ratio.
     """
     c_b = (1.0 - nu_b**2) / E_b
     b = tributary_edges(r)

@@ -6,7 +6,8 @@ graded from the contact point, ``h(d) = clip(growth d, size_contact, size_max)``
 * the **domain** radius = depth ``L``: nothing the boundary reflects may come back to the
   contact inside the window ``T_w`` that decides the TOF (from the first wall motion to
   the end of the run), so ``L >= c_p T_w / 2`` (a P wave's round trip, ``c_p`` capped for
-  nearly incompressible soils as the boundary's, :attr:`Material.c_p_boundary`; the boundary's
+  nearly incompressible soils as the boundary's, :attr:`ssw.dynamics.system.Material.c_p_boundary`;
+  the boundary's
   dashpots absorb most of it anyway), clipped to ``[L_min, L_max]``: at least
   :data:`MIN_PLATE_RADII` plate radii (the static springs of the absorbing boundary then
   see a far field) and at most ``L_max`` (1 m, the quasi-static FEM's sample: a soil that

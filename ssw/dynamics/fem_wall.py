@@ -22,7 +22,7 @@ touch) is
   which neither damps nor bounds such jumps, let them grow into a chatter that blew up a
   no-plate run within 400 steps.
 
-:class:`FEMWall` is a *stateful wall* (the protocol of :mod:`ssw.dynamics.integrate`) over
+:class:`FEMWall` is a *stateful wall* (:class:`ssw.chain.wall.StatefulWall`) over
 a list of scenes; :func:`fem_wall` builds it for a chain's scenes; :class:`StaticFEMWall`
 is the same scenes' static law as a wall (a static LCP per step). The quasi-static
 references of the study are static FEMs in fixed boxes (:mod:`ssw.dynamics.quasistatic`).
@@ -35,19 +35,17 @@ from typing import Any
 
 import numpy as np
 
+from ssw.contact.contact_lcp import solve_lcp
 from ssw.contact.mesh import Mesh, build_mesh
 from ssw.contact.petsc_solver import nd_order
 from ssw.dynamics.bead import bead_compliance
 from ssw.dynamics.domain import DomainSpec, mesh_settings
-from ssw.dynamics.lcp import ActiveSetLCP
 from ssw.dynamics.newmark import Newmark, State, Static
 from ssw.dynamics.system import DynamicSystem, Material, assemble_dynamic, without_mass
 from ssw.errors import ConfigError, SolverError
 
 #: LCP gap tolerance relative to the indentation scale.
 LCP_TOL = 1e-10
-#: Bisection steps of the static indentation carrying a force.
-BISECTION_STEPS = 80
 #: How the bead's elasticity enters (:class:`Scene`).
 BEAD_MODELS = ("compliance", "scale", "rigid")
 #: The FEM sleeps (the soil at rest under the static contact, the force the static one)
@@ -121,9 +119,18 @@ class ContactFEM:
 
     Parameters
     ----------
-    scene : the scene.  spec : the domain sizing.  dt : s, the time step (None: static only).
-    r_cand : m, radius of the candidate zone.  boundary : ``absorbing`` | ``fixed``.
-    d_scale : m, the indentation scale of the LCP tolerance.
+    scene : Scene
+        The scene (bead, plate, soil).
+    spec : ssw.dynamics.domain.DomainSpec
+        The domain sizing.
+    dt : float or None
+        The time step, s (None: static only).
+    r_cand : float
+        The radius of the candidate zone, m.
+    boundary : str
+        ``absorbing`` | ``fixed``.
+    d_scale : float
+        The indentation scale of the LCP tolerance, m.
     """
 
     def __init__(self, scene: Scene, spec: DomainSpec, dt: float | None, r_cand: float,
@@ -153,11 +160,12 @@ class ContactFEM:
             c_b = (1.0 - scene.bead_nu**2) / scene.bead_E
             self.d_factor = (1.0 + c_b / c_w) ** (-2.0 / 3.0)
         self.static = Static(self.system, self.dofs)
-        self.lcp_static = ActiveSetLCP(self.static.W + self.W_bead)
+        # the two condensed compliances of the LCPs (static, one step) and their factor caches
+        self.W_static, self._cache_static = self.static.W + self.W_bead, {}
         self.tol, self.d_scale = LCP_TOL * d_scale, d_scale
         self.newmark = Newmark(self.system, dt, self.dofs) if dt is not None else None
-        self.lcp = (ActiveSetLCP(self.newmark.W + self.W_bead)
-                    if self.newmark is not None else None)
+        self.W_step = self.newmark.W + self.W_bead if self.newmark is not None else None
+        self._cache_step: dict = {}
         self._active = np.zeros(m, bool)
 
     @property
@@ -172,8 +180,8 @@ class ContactFEM:
     # ------------------------------------------------------------------ static
     def static_contact(self, d: float) -> np.ndarray:
         """Contact forces (N) of the bead held at indentation ``d`` (m), at rest."""
-        lam, self._active = self.lcp_static.solve(self.shape - self.d_factor * d, self._active,
-                                                  self.tol)
+        lam, self._active, _ = solve_lcp(self.W_static, self.shape - self.d_factor * d,
+                                         self._active, self.tol, self._cache_static)
         self._check_zone(lam)
         return lam
 
@@ -183,21 +191,16 @@ class ContactFEM:
         return np.array([self.static_contact(x).sum() for x in d.ravel()]).reshape(d.shape)
 
     def static_indentation(self, F: float) -> float:
-        """Indentation (m) at which the static force is ``F`` (N): bisection."""
+        """Indentation (m) at which the static force is ``F`` (N): the root of the monotone
+        static law (:func:`ssw.roots.find_root`, the bracket grown from ``[0, 1 um]`` up
+        to the bead's radius)."""
+        from ssw.roots import find_root
+
         if F <= 0:
             return 0.0
-        lo, hi = 0.0, 1e-6
-        while self.static_contact(hi).sum() < F:
-            lo, hi = hi, 2.0 * hi
-            if hi > self.scene.radius:
-                raise SolverError(f"no static indentation carries {F} N")
-        for _ in range(BISECTION_STEPS):
-            mid = 0.5 * (lo + hi)
-            if self.static_contact(mid).sum() < F:
-                lo = mid
-            else:
-                hi = mid
-        return 0.5 * (lo + hi)
+        root = find_root(lambda d: self.static_force(d) - F, 0.0, 1e-6, grow=True,
+                         limit=self.scene.radius)
+        return float(root.x)
 
     def rest(self, d: float) -> State:
         """The state at rest with the bead held at ``d`` (m)."""
@@ -224,7 +227,8 @@ class ContactFEM:
             raise SolverError("this contact was built without a time step (static only)")
         u_free = self.newmark.free(st)
         g0 = self.shape - self.d_factor * d - u_free[self.dofs]
-        lam, self._active = self.lcp.solve(g0, self._active, self.tol)
+        lam, self._active, _ = solve_lcp(self.W_step, g0, self._active, self.tol,
+                                         self._cache_step)
         self._check_zone(lam)
         return float(lam.sum()), self.newmark.finish(st, u_free, lam)
 
@@ -241,8 +245,8 @@ class ContactFEM:
 
 
 class FEMWall:
-    """A stateful wall over scenes, each a :class:`ContactFEM` (the protocol of
-    :mod:`ssw.dynamics.integrate`). States are lists of :class:`ssw.dynamics.newmark.State`.
+    """A stateful wall over scenes, each a :class:`ContactFEM`
+    (:class:`ssw.chain.wall.StatefulWall`). States are lists of :class:`WallState`.
     """
 
     def __init__(self, contacts: list[ContactFEM]) -> None:
@@ -299,7 +303,8 @@ class FEMWall:
 
 
 def plate_of(params: Any, plate_density: float | None = None) -> Material | None:
-    """The chain's plate as a :class:`Material` (None without a plate); the density comes
+    """The chain's plate as a :class:`ssw.dynamics.system.Material` (None without a plate); the
+    density comes
     from the materials library by ``params.plate_material`` unless given."""
     if params.plate_thickness <= 0:
         return None

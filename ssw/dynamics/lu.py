@@ -31,7 +31,7 @@ PREFIX = "ssw_dynamics_"
 
 
 def petsc():
-    """The initialized ``petsc4py.PETSc`` module (:func:`ssw.contact.petsc_solver._petsc`)."""
+    """The initialized ``petsc4py.PETSc`` module (``ssw.contact.petsc_solver._petsc``)."""
     return _petsc()
 
 
@@ -40,9 +40,16 @@ class LU:
 
     Parameters
     ----------
-    rows, cols, vals : COO triplets of ``A``.
-    n : matrix size.
-    scale : the matrix's unit (N/m), a power of two.
+    rows : numpy.ndarray
+        Row indices of the COO triplets of ``A``.
+    cols : numpy.ndarray
+        Column indices of the triplets.
+    vals : numpy.ndarray
+        Values of the triplets.
+    n : int
+        The matrix size.
+    scale : float
+        The matrix's unit, N/m, a power of two.
     """
 
     def __init__(self, rows: np.ndarray, cols: np.ndarray, vals: np.ndarray, n: int,

@@ -15,7 +15,7 @@ motion ``u_free`` (no contact force) and, the contact forces entering only throu
 candidate dofs, ``u = u_free + X lam`` with ``X = K_eff^-1 G^T`` computed once
 (``G^T``: a downward unit force on each candidate). The candidates' gaps are affine in
 ``lam`` with the condensed compliance ``W = G X``: one small LCP per step
-(:mod:`ssw.dynamics.lcp`). Then
+(:func:`ssw.contact.contact_lcp.solve_lcp`). Then
 
     a_(n+1) = 4/dt^2 (u_(n+1) - u_n) - 4/dt v_n - a_n,   v_(n+1) = 2/dt (u_(n+1) - u_n) - v_n.
 
@@ -23,7 +23,7 @@ Energy. For this scheme the discrete balance is exact (Hughes 2000, sec. 9.3): w
 ``E = v M v / 2 + u K u / 2``, ``E_(n+1) - E_n = (u_(n+1) - u_n) . G^T (lam_n +
 lam_(n+1)) / 2 - dt vbar C vbar``, ``vbar = (u_(n+1) - u_n) / dt``; the last term is the
 energy the boundary dashpots absorb (the radiated energy), accumulated in
-:attr:`State.radiated`.
+``State.radiated``.
 
 The step ``dt`` is the chain's (:func:`ssw.chain.integrate.time_step`, ~1/80 of a bead-bead
 contact time, ~0.8 us): the scheme's relative period error ``(omega dt)^2 / 12`` is below
@@ -75,8 +75,12 @@ class Newmark:
 
     Parameters
     ----------
-    system : the assembled operators.  dt : s, the fixed step.
-    load_dofs : (m,) u_z dofs that carry the contact forces (downward = positive ``lam``).
+    system : ssw.dynamics.system.DynamicSystem
+        The assembled operators.
+    dt : float
+        The fixed step, s.
+    load_dofs : numpy.ndarray
+        (m,) u_z dofs that carry the contact forces (downward = positive ``lam``).
     """
 
     def __init__(self, system: DynamicSystem, dt: float, load_dofs: np.ndarray) -> None:

@@ -121,10 +121,22 @@ def punch_impedance(
 
     Parameters
     ----------
-    soil : the half-space's material.  radius : m.  a0 : the dimensionless frequencies.
-    boundary : the truncation boundary (``absorbing`` | ``fixed``; the window excludes
-        its reflections either way).
-    size_contact, growth, wave_elements : mesh settings (default size_contact: radius/50).
+    soil : ssw.dynamics.system.Material
+        The half-space's material.
+    radius : float
+        The punch's radius, m.
+    a0 : numpy.ndarray
+        The dimensionless frequencies ``omega radius / c_s``.
+    boundary : str
+        The truncation boundary (``absorbing`` | ``fixed``; the window excludes its
+        reflections either way).
+    size_contact : float or None
+        The element size under the punch, m (default: radius / 50).
+    growth : float
+        Element size over distance from the punch's edge (the mesh's grading).
+    wave_elements : float
+        Elements per shear wavelength at the pulse's highest frequency (the far field's
+        element size).
     """
     cs = soil.c_s
     s = PULSE_WIDTH * radius / cs

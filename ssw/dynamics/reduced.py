@@ -24,7 +24,7 @@ the static FEM (0.4 mm PLA: 19-27 mg on 10 MPa, 5-7 mg on 100 MPa, 1-2 mg on 1 G
 tangent mode's ``phi M phi``), it is :data:`K_P` ``mu_p pi a^2`` within about 25 %.
 ``ssw dynamic-study`` measures the reduced wall against the FEM wall.
 
-Time discretization (the stateful wall protocol of :mod:`ssw.dynamics.integrate`): the
+Time discretization (the stateful wall protocol, :class:`ssw.chain.wall.StatefulWall`): the
 force at the new position uses the second-order backward differences
 
     d'_(n+1) = (3 d_(n+1) - 4 d_n + d_(n-1)) / (2 dt),
@@ -139,7 +139,7 @@ class ReducedWall:
         k2 = kt * kt
         return f_c * k2, (f_m * kt + f_p) * k2
 
-    # the stateful wall protocol (ssw.dynamics.integrate) and the Wall protocol
+    # the stateful wall protocol (ssw.chain.wall.StatefulWall) and the Wall protocol
     def force(self, d: np.ndarray) -> np.ndarray:
         """Quasi-static force (N)."""
         return self.qs.force(d)
@@ -147,6 +147,14 @@ class ReducedWall:
     def potential(self, d: np.ndarray) -> np.ndarray:
         """Quasi-static stored energy (J)."""
         return potential(self.qs, d)
+
+    def dforce_dd(self, d: np.ndarray) -> np.ndarray:
+        """Quasi-static tangent stiffness (N/m), the statics' (the wall at rest)."""
+        return self.qs.dforce_dd(d)
+
+    def dforce_dE(self, d: np.ndarray) -> np.ndarray:
+        """Quasi-static ``dF/dE`` (N/Pa), the statics'."""
+        return self.qs.dforce_dE(d)
 
     def indentation(self, F: np.ndarray) -> np.ndarray:
         return self.qs.indentation(F)
@@ -170,6 +178,79 @@ class ReducedWall:
         np.maximum(F, 0.0, out=F)
         diss = st.dissipated + dt * C * v**2 * (F > 0)
         return F, ReducedState(d, st.d1, diss, dt)
+
+    def start_tangent(self, st: ReducedState, D0: np.ndarray, dE: np.ndarray
+                      ) -> tuple[np.ndarray, np.ndarray]:
+        """The derivatives (n, k) of the state at rest: both indentations move as ``D0``."""
+        return np.array(D0, float), np.array(D0, float)
+
+    def advance_tangent(self, st: ReducedState, tst: tuple[np.ndarray, np.ndarray],
+                        d: np.ndarray, D: np.ndarray, dt: float, dE: np.ndarray
+                        ) -> tuple[np.ndarray, np.ndarray, ReducedState, tuple]:
+        """:meth:`advance` and its exact derivative.
+
+        Parameters
+        ----------
+        st : ReducedState
+            The state.
+        tst : tuple of numpy.ndarray
+            ``(D1, D0)`` (n, k): the derivatives of the state's two indentations.
+        d : numpy.ndarray
+            (n,) m, the new indentation.
+        D : numpy.ndarray
+            (n, k), its derivatives with respect to the run's ``k`` parameters.
+        dt : float
+            s.
+        dE : numpy.ndarray
+            (n, k), the derivatives of the soil's modulus (Pa per unit of each parameter).
+
+        Returns
+        -------
+        tuple
+            ``(F, dF, state, tstate)``: the force (N), its derivatives (n, k), the new
+            state and its derivatives: differentiating every line of :meth:`advance`, the
+            tangent stiffness's forward difference included (``k_t = (F_qs(d (1 + e)) -
+            F_qs(d)) / (e d)``), and the dashpot's and the masses' dependence on the shear
+            modulus (``f_c ~ G^-3/2``, ``f_m ~ G^-3``, ``f_p ~ G^-2``).
+        """
+        D1, D0 = tst
+        d = np.array(d, float)
+        F_qs = self.qs.force(d)
+        kt = self.tangent(d, F_qs)
+        C, m = self.coefficients(d, kt)
+        v = (3.0 * d - 4.0 * st.d1 + st.d0) / (2.0 * dt)
+        acc = (d - 2.0 * st.d1 + st.d0) / dt**2
+        F = F_qs + C * v + m * acc
+        on = F > 0
+        F = np.maximum(F, 0.0)
+        diss = st.dissipated + dt * C * v**2 * on
+        # derivatives of F_qs and of the tangent's forward difference
+        use_E = bool(np.any(dE))
+        pos = d > 0
+        up = d * (1.0 + TANGENT_STEP)
+        h = TANGENT_STEP * np.maximum(d, MIN_STEP)
+        Fd = self.qs.dforce_dd(d)
+        dkt_dd = np.where(pos, ((1.0 + TANGENT_STEP) * self.qs.dforce_dd(up) - Fd) / h
+                          - kt / np.where(pos, d, 1.0), 0.0)
+        dF_qs = Fd[:, None] * D
+        dkt = dkt_dd[:, None] * D
+        f_c, f_m, f_p = self._factors
+        E = 2.0 * (1.0 + self.nu) * self.G
+        if use_E:
+            FE = self.qs.dforce_dE(d)
+            dF_qs += FE[:, None] * dE
+            dkt += np.where(pos, (self.qs.dforce_dE(up) - FE) / h, 0.0)[:, None] * dE
+        k2 = kt * kt
+        dC = (2.0 * f_c * kt)[:, None] * dkt
+        dm = (3.0 * f_m * k2 + 2.0 * f_p * kt)[:, None] * dkt
+        if use_E:
+            dC += (-1.5 * f_c * k2 / E)[:, None] * dE
+            dm += ((-3.0 * f_m * kt - 2.0 * f_p) * k2 / E)[:, None] * dE
+        dv = (3.0 * D - 4.0 * D1 + D0) / (2.0 * dt)
+        dacc = (D - 2.0 * D1 + D0) / dt**2
+        dF = dF_qs + dC * v[:, None] + C[:, None] * dv + dm * acc[:, None] + m[:, None] * dacc
+        dF *= on[:, None]
+        return F, dF, ReducedState(d, st.d1, diss, dt), (np.array(D, float), D1)
 
     def energy(self, st: ReducedState) -> tuple[np.ndarray, np.ndarray]:
         """Stored (the quasi-static potential and the participating mass's kinetic energy,

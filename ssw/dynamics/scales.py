@@ -46,14 +46,31 @@ SPECTRUM_SHARE, SPECTRUM_FACTOR = 0.999, 2.0
 
 
 def chain_scales(params: Any, wall: Any) -> ChainScales:
-    """Scales of the last contact from a quasi-static run of ``params`` with ``wall`` (a
-    displacement wall of :mod:`ssw.walls`, e.g. the Hertz wall of the soil)."""
-    from ssw.chain.integrate import simulate, time_step
-    from ssw.chain.tof import pick_peaks
+    """Scales of the last contact from a quasi-static run of ``params`` with ``wall``.
 
+    The run is the device's chain without its contact dashpot and read at the sensor's
+    mean: the scales size the scene's mesh, which must not change with what the sensor
+    reads or with the dashpot (so that their effects are measured on one mesh).
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    wall : Wall
+        A displacement wall of :mod:`ssw.walls` (e.g. the Hertz wall of the soil).
+
+    Returns
+    -------
+    ChainScales
+        Per scene.
+    """
+    from ssw.chain.dense import dense_peaks
+    from ssw.chain.integrate import simulate, time_step
+
+    params = params.with_(sensor_reads="mean", damping=0.0)
     dt = time_step(params, wall)
     run = simulate(params, wall, dt=dt)
-    pk = pick_peaks(run.t, run.sensor)
+    pk = dense_peaks(run)
     stop = np.where(np.isnan(run.stop_time), run.t[-1], run.stop_time)
     Fr = np.nan_to_num(run.wall_force - run.wall_force[0])
     onset = run.t[np.argmax(Fr > 0.01 * Fr.max(axis=0), axis=0)]

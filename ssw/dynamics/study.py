@@ -29,7 +29,7 @@ import numpy as np
 STUDY_E = (10e6, 30e6, 100e6, 300e6, 1000e6)
 STUDY_DENSITY = (130.0, 480.0, 1600.0, 2200.0)
 STUDY_NU = 0.3
-#: Where the study says the reduced wall is needed: |error| above this.
+#: Where the study says the reduced wall is needed: ``|error|`` above this.
 THRESHOLD = 0.0025
 
 

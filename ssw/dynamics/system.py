@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from ssw.contact.assembly import System, assemble
-from ssw.contact.elements import p2_shape
+from ssw.contact.elements import p2_shape, triangle_jacobian
 from ssw.contact.mesh import Mesh
 from ssw.errors import ConfigError
 
@@ -183,13 +183,13 @@ def mass_matrices(xy: np.ndarray, rho: np.ndarray) -> np.ndarray:
 
     Parameters
     ----------
-    xy : (ne, 6, 2) node coordinates (r, z), m.
-    rho : (ne,) density, kg/m^3.
+    xy : numpy.ndarray
+        (ne, 6, 2) node coordinates (r, z), m.
+    rho : numpy.ndarray
+        (ne,) density, kg/m^3.
     """
     n, _ = p2_shape(MASS_POINTS)
-    v = xy[:, :3]
-    det = (v[:, 1, 0] - v[:, 0, 0]) * (v[:, 2, 1] - v[:, 0, 1]) - (
-        v[:, 2, 0] - v[:, 0, 0]) * (v[:, 1, 1] - v[:, 0, 1])
+    det = triangle_jacobian(xy)[1]
     r = np.einsum("qa,ea->eq", n, xy[:, :, 0])
     w = 2.0 * np.pi * r * MASS_WEIGHTS[None, :] * np.abs(det)[:, None] * rho[:, None]
     return np.einsum("qa,qb,eq->eab", n, n, w)
@@ -260,13 +260,20 @@ def assemble_dynamic(
 
     Parameters
     ----------
-    mesh : the section mesh (:func:`ssw.contact.mesh.build_mesh`).
-    soil, plate : materials (plate None without a plate).
-    interface : ``bonded`` | ``frictionless`` (the plate-soil interface; ``unilateral``
-        would need the interface's separation in every step's LCP: not supported).
-    boundary : ``absorbing`` (free faces with dashpots and springs) | ``fixed`` (rollers
-        and a fixed bottom, as the quasi-static FEM).
-    order_nodes : callable ``(rows, cols, n) -> permutation`` (nested dissection).
+    mesh : ssw.contact.mesh.Mesh
+        The section mesh (:func:`ssw.contact.mesh.build_mesh`).
+    soil : Material
+        The soil's material.
+    plate : Material or None
+        The plate's material (None without a plate).
+    interface : str
+        ``bonded`` | ``frictionless`` (the plate-soil interface; ``unilateral`` would
+        need the interface's separation in every step's LCP: not supported).
+    boundary : str
+        ``absorbing`` (free faces with dashpots and springs) | ``fixed`` (rollers and a
+        fixed bottom, as the quasi-static FEM).
+    order_nodes : callable
+        ``(rows, cols, n) -> permutation`` (nested dissection).
     """
     if boundary not in BOUNDARIES:
         raise ConfigError("dynamics.boundary", boundary, " | ".join(BOUNDARIES))

@@ -11,7 +11,7 @@ applies K to its own Hertz wall law, whose E* combines the steel bead and the so
 (E_s <= 1 GPa) the two E* differ by less than 0.5 %.
 
 Residuals are reported on the points of the fit range with ``delta > 0`` and ``F > 0``:
-relative ``r_i = F_fit(delta_i) / F_i - 1`` (rms and max |r|) and the rms force error over
+relative ``r_i = F_fit(delta_i) / F_i - 1`` (rms and max ``|r|``) and the rms force error over
 the largest force of the range.
 """
 
@@ -106,16 +106,26 @@ def fit_curve(
 
     Parameters
     ----------
-    curve : the FEM (or synthetic) force-indentation curve.
-    law : a name of :data:`ssw.fit.laws.LAWS`.
-    delta_range : ``(lo, hi)`` in m. ``hi`` beyond the curve's last indentation raises
-        :class:`OutOfRangeError` (clip it first; :mod:`ssw.fit.range` does).
-    weighting : ``absolute`` (OLS on the force, the thesis's) or ``relative``.
-    soil_E, soil_nu, radius : override the curve's inputs (Pa, -, m).
+    curve : ssw.curve.ForceCurve
+        The FEM (or synthetic) force-indentation curve.
+    law : str
+        A name of ``ssw.fit.laws.LAWS``.
+    delta_range : tuple of float or None
+        ``(lo, hi)``, m. ``hi`` beyond the curve's last indentation raises
+        :class:`~ssw.errors.OutOfRangeError` (clip it first; :mod:`ssw.fit.range` does).
+    weighting : str
+        ``absolute`` (OLS on the force, the thesis's) or ``relative``.
+    soil_E : float or None
+        Overrides the curve's soil modulus, Pa.
+    soil_nu : float or None
+        Overrides the curve's soil Poisson's ratio.
+    radius : float or None
+        Overrides the curve's indenter radius, m.
 
     Returns
     -------
-    FitResult with the parameters and residuals. ``E* = soil_E / (1 - soil_nu^2)``.
+    FitResult
+        The parameters and residuals; ``E* = soil_E / (1 - soil_nu^2)``.
     """
     lw = get_law(law)
     if weighting not in WEIGHTINGS:

@@ -77,6 +77,37 @@ class GridInterpolant:
             g = (1.0 - t) * lo + t * hi
         return np.exp(g) if self.log_values else g
 
+    def derivative_E(self, soil_E: ArrayLike, soil_nu: ArrayLike) -> NDArray[np.float64]:
+        """``dp/dE`` (unit of p per Pa) of the interpolant at the broadcast of ``soil_E``
+        (Pa) and ``soil_nu``: the PCHIP rows' derivative in ``log E`` (continuous: PCHIP
+        is C1), ``dp/dE = p g'(log E) / E`` for log values (``g = log p``), ``g' / E``
+        otherwise, mixed linearly in nu as the values are."""
+        E, nu = np.broadcast_arrays(np.asarray(soil_E, float), np.asarray(soil_nu, float))
+        E = _snap(E, self.E, "soil_E", "Pa")
+        nu = _snap(nu, self.nu, "soil_nu", "")
+        logE = np.log(E)
+
+        def row(j: int, order: int) -> NDArray[np.float64]:
+            spline = self._rows[j]
+            if spline is None:
+                return np.full_like(logE, self._g[j, 0] if order == 0 else 0.0)
+            return spline(logE, order)
+
+        if self.nu.size == 1:
+            g, dg = row(0, 0), row(0, 1)
+        else:
+            j = np.clip(np.searchsorted(self.nu, nu, side="right") - 1, 0, self.nu.size - 2)
+            t = (nu - self.nu[j]) / (self.nu[j + 1] - self.nu[j])
+
+            def mix(order: int) -> NDArray[np.float64]:
+                rows = np.stack([row(i, order) for i in range(self.nu.size)])
+                lo = np.take_along_axis(rows, j[None], axis=0)[0]
+                hi = np.take_along_axis(rows, (j + 1)[None], axis=0)[0]
+                return (1.0 - t) * lo + t * hi
+
+            g, dg = mix(0), mix(1)
+        return np.exp(g) * dg / E if self.log_values else dg / E
+
     def loo_predictions(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Leave-one-out predictions at the nodes, shape (n_nu, n_E) each: along E (each
         interior E node from PCHIP through the others) and along nu (each interior nu row

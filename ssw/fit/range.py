@@ -35,8 +35,6 @@ from ssw.errors import ConfigError
 
 G = 9.80665  # m/s^2, standard gravity
 RANGE_MODES = ("chain", "fixed", "curve")
-#: Bisection steps in log(delta): 200 halvings of a 1e-12..1 m bracket reach ~1e-16 relative.
-_BISECT_STEPS = 200
 
 
 @dataclass(frozen=True)
@@ -81,24 +79,16 @@ def energy_bound_indentation(
 ) -> NDArray[np.float64]:
     """Upper bound (m) of the Hertz-wall peak indentation from energy conservation.
 
-    Solves ``(2/5) A_w d^(5/2) - (M g + P) d = 1/2 m_s v^2`` for its positive root (the left side
-    is negative, then increasing, beyond its minimum) by bisection in ``log d``; vectorized
-    over ``soil_E`` and ``soil_nu``.
+    The positive root of ``(2/5) A_w d^(5/2) - (M g + P) d = 1/2 m_s v^2``
+    (:func:`ssw.hertz.energy_indentation`, the upper end of its final bracket: the wall
+    holds the energy there); vectorized over ``soil_E`` and ``soil_nu``.
     """
     E_star = hertz.effective_modulus(chain.bead_E, chain.bead_nu, soil_E, soil_nu)
     A = hertz.hertz_coefficient(E_star, chain.bead_radius)
     m = chain.bead_mass
     W0 = 0.5 * m * chain.striker_velocity**2
     Mg = (chain.beads * m * G if chain.gravity else 0.0) + chain.preload
-    lo = np.full(np.shape(A), np.log(1e-12))
-    hi = np.full(np.shape(A), np.log(1.0))
-    for _ in range(_BISECT_STEPS):
-        mid = 0.5 * (lo + hi)
-        d = np.exp(mid)
-        above = 0.4 * A * d**2.5 - Mg * d - W0 > 0
-        hi = np.where(above, mid, hi)
-        lo = np.where(above, lo, mid)
-    return np.exp(0.5 * (lo + hi))
+    return hertz.energy_indentation(A, W0, Mg)
 
 
 def peak_wall_indentation(
@@ -160,8 +150,8 @@ def energy_reach(
     if not (np.isfinite(energy) and energy > 0):
         raise ConfigError("contact.reach_energy", energy, "an energy > 0 J")
     E, nu = softer_half_space(soil_E, soil_nu, plate_E, plate_nu)
-    A = 4.0 / 3.0 * E / (1.0 - nu**2) * np.sqrt(float(radius))
-    return (2.5 * float(energy) / A) ** 0.4
+    A = hertz.hertz_coefficient(hertz.effective_modulus(E, nu), float(radius))
+    return hertz.energy_indentation(A, float(energy))
 
 
 def fit_ranges(
@@ -172,12 +162,20 @@ def fit_ranges(
 
     Parameters
     ----------
-    soil_E, soil_nu : the scenes' soils (Pa, -).
-    curve_delta_max : each curve's last indentation, m.
-    cfg : validated study config (``fit.range.{mode, factor, delta_min, delta_max}``); in
+    soil_E : array_like
+        The scenes' soil moduli, Pa.
+    soil_nu : array_like
+        The scenes' soil Poisson's ratios.
+    curve_delta_max : array_like
+        Each curve's last indentation, m.
+    cfg : dict
+        Validated study config (``fit.range.{mode, factor, delta_min, delta_max}``); in
         mode ``chain`` the chain runs once for all scenes (batched).
-    plate_E, plate_nu : the plates (Pa, -; None entries: no plate). In mode ``chain`` a
-        plate softer than its soil replaces the soil in the Hertz wall (``softer_half_space``).
+    plate_E : array_like or None
+        The plates' moduli, Pa (None entries: no plate). In mode ``chain`` a plate softer
+        than its soil replaces the soil in the Hertz wall (``softer_half_space``).
+    plate_nu : array_like or None
+        The plates' Poisson's ratios.
     """
     E, nu = softer_half_space(soil_E, soil_nu, plate_E, plate_nu)
     dmax = np.atleast_1d(np.asarray(curve_delta_max, float))

@@ -25,6 +25,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from ssw import hertz
 from ssw.errors import ConfigError, OutOfRangeError, SswError
 from ssw.fit.fitting import FitResult
 from ssw.fit.interp import GridInterpolant
@@ -112,8 +113,7 @@ class KTable:
         """``A_H = 4/3 E/(1 - nu^2) sqrt(R)`` (rigid indenter), on the grid by default."""
         if soil_E is None:
             soil_E, soil_nu = np.meshgrid(self.soil_E, self.soil_nu)
-        E, nu = np.asarray(soil_E, float), np.asarray(soil_nu, float)
-        return 4.0 / 3.0 * E / (1.0 - nu**2) * np.sqrt(self.radius)
+        return hertz.hertz_coefficient(hertz.effective_modulus(soil_E, soil_nu), self.radius)
 
     def _need(self, key: str, law: str) -> GridInterpolant:
         if key not in self._interp:
@@ -133,6 +133,23 @@ class KTable:
         E, nu = np.broadcast_arrays(np.asarray(soil_E, float), np.asarray(soil_nu, float))
         d = self.power_ref
         return Kp * self._hertz_A(E, nu) * d**1.5 / d**n, n
+
+    def dK_dE(self, soil_E: ArrayLike, soil_nu: ArrayLike) -> NDArray[np.float64]:
+        """``dK/dE`` (1/Pa) of the interpolated K at fixed ``soil_nu``."""
+        return self._need("K", "k_hertz").derivative_E(soil_E, soil_nu)
+
+    def dpower_dE(
+        self, soil_E: ArrayLike, soil_nu: ArrayLike
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """``(dC/dE, dn/dE)`` of :meth:`power` at fixed ``soil_nu`` (N m^-n / Pa, 1/Pa):
+        ``C = Kp A_H d^(1.5 - n)`` with ``A_H`` proportional to E, so
+        ``dC/dE = C (Kp'/Kp + 1/E - ln(d) n')``."""
+        C, _ = self.power(soil_E, soil_nu)
+        Kp = self._need("Kp", "power")(soil_E, soil_nu)
+        dKp = self._interp["Kp"].derivative_E(soil_E, soil_nu)
+        dn = self._need("n", "power").derivative_E(soil_E, soil_nu)
+        E = np.broadcast_to(np.asarray(soil_E, float), np.shape(C))
+        return C * (dKp / Kp + 1.0 / E - np.log(self.power_ref) * dn), dn
 
     def interp_error(self) -> dict[str, float]:
         """Stated maximum interpolation errors (relative), leave-one-out estimates."""

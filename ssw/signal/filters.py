@@ -36,11 +36,15 @@ def lowpass(force: np.ndarray, rate: float, cutoff: float | None, order: int = 4
 
     Parameters
     ----------
-    force : (n,) record, N.
-    rate : sample rate, S/s.
-    cutoff : -3 dB frequency of each pass, Hz (the forward-backward response is -6 dB
-        there); ``None`` returns the record unchanged.
-    order : Butterworth order of each pass.
+    force : numpy.ndarray
+        (n,) record, N.
+    rate : float
+        Sample rate, S/s.
+    cutoff : float or None
+        -3 dB frequency of each pass, Hz (the forward-backward response is -6 dB there);
+        ``None`` returns the record unchanged.
+    order : int
+        Butterworth order of each pass.
     """
     if cutoff is None:
         return np.asarray(force, dtype=np.float64)

@@ -51,8 +51,16 @@ class LiveTof:
 
     Parameters
     ----------
-    rate : S/s.  n_pre : pretrigger samples.  opts : TOF options (peak rule, bound).
-    estimate : optional ``(tof_mean, tof_sem) -> {"E", "E_low", "E_high"}`` (Pa).
+    rate : float
+        Sample rate, S/s.
+    n_pre : int
+        Pretrigger samples.
+    opts : ssw.signal.tof.TofOptions
+        TOF options (peak rule, bound).
+    estimate : callable or None
+        ``(tof_mean, tof_sem) -> {"E", "E_low", "E_high"}`` (Pa).
+    tofs : list of float
+        The accepted hits' TOFs so far, s (empty at the start).
     """
 
     rate: float

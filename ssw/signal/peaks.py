@@ -1,9 +1,8 @@
 """Incident and reflected peaks of a sensor record, refined on a band-limited upsampled grid.
 
-Rule (stated once, applied to every hit; the chain stage's rule of
-:mod:`ssw.chain.tof`, so that a simulated recording and the model pick the same pulses,
-plus noise thresholds for measured records and the physical bound). With ``s`` the
-conditioned record:
+Rule: :mod:`ssw.signal.rule` (stated once for measured records and simulated signals, so
+that a simulated recording and the model pick the same pulses), with its noise thresholds
+and the physical bound for measured records. With ``s`` the conditioned record:
 
 1. **incident** peak: the first local maximum with ``s >= incident_fraction x max(s)``
    and above ``noise_k`` noise sigmas;
@@ -44,11 +43,16 @@ interpolation.
 
 from __future__ import annotations
 
+import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from ssw.errors import ConfigError, RecordingError
+from ssw.signal.rule import PeakRule, gap_end, incident, local_maxima, reflected
+
+__all__ = ["PeakError", "PeakPair", "PeakRule", "check_tof", "parabolic_vertex", "pick_peaks",
+           "refine_peak"]
 
 #: Default upsampling factor before the parabolic vertex.
 UPSAMPLE = 16
@@ -63,24 +67,28 @@ class PeakError(RecordingError):
     """A record's peaks cannot be picked (the message gives the reason)."""
 
 
-@dataclass(frozen=True)
-class PeakRule:
-    """Peak-picking thresholds (dimensionless; defaults are ssw.chain.tof's shares)."""
-
-    incident_fraction: float = 0.5
-    gap_fraction: float = 0.25
-    split_fraction: float = 0.2
-    noise_k: float = 8.0
-
-
-def parabolic_vertex(y: np.ndarray, k: int | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def parabolic_vertex(y: np.ndarray, k: int | np.ndarray, cols: np.ndarray | None = None
+                     ) -> tuple[np.ndarray, np.ndarray]:
     """Sub-sample offset ``p`` and height of the parabola through ``y[k-1], y[k], y[k+1]``.
 
-    Returns ``(k + p, y_peak)`` with ``y_peak = y[k] - (y[k-1] - y[k+1]) p / 4``;
-    vectorized over ``k`` (each ``1 <= k <= len(y) - 2``).
+    Parameters
+    ----------
+    y : numpy.ndarray
+        (n_t,) samples, or (n_t, n) with ``cols``.
+    k : int or numpy.ndarray
+        Sample indices, each ``1 <= k <= n_t - 2``.
+    cols : numpy.ndarray or None
+        Column of each ``k`` in a 2-d ``y``.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(k + p, y_peak)`` with ``y_peak = y[k] - (y[k-1] - y[k+1]) p / 4`` (``|p| <=
+        1/2``).
     """
     k = np.asarray(k)
-    ym, y0, yp = y[k - 1], y[k], y[k + 1]
+    at = (lambda j: y[j]) if cols is None else (lambda j: y[j, cols])
+    ym, y0, yp = at(k - 1), at(k), at(k + 1)
     den = ym - 2 * y0 + yp
     safe = np.where(den < 0, den, -1.0)
     p = np.where(den < 0, 0.5 * (ym - yp) / safe, 0.0)
@@ -137,15 +145,29 @@ def pick_peaks(
 
     Parameters
     ----------
-    y : (n,) record, N, baseline removed.
-    rate : S/s.  noise : the record's noise sigma, N.  rule : the thresholds.
-    min_tof : s, the shortest physical round trip (rule 3); ``None``: no bound.
-    upsample : interpolation factor before the parabolic vertex (1: none).
+    y : numpy.ndarray
+        (n,) record, N, baseline removed.
+    rate : float
+        Sample rate, S/s.
+    noise : float
+        The record's noise sigma, N.
+    rule : PeakRule
+        The thresholds (:data:`ssw.signal.rule.RULE`).
+    min_tof : float or None
+        s, the shortest physical round trip (rule 3); ``None``: no bound.
+    upsample : int
+        Interpolation factor before the parabolic vertex (1: none).
+
+    Returns
+    -------
+    PeakPair
+        The two peaks' times (s from the first sample) and heights (N).
 
     Raises
     ------
-    PeakError : no peak, a single peak, a peak on the record's edge, or a reflection
-        earlier than ``min_tof``.
+    PeakError
+        No peak, a single peak, a peak on the record's edge, or a reflection earlier than
+        ``min_tof``.
     """
     from scipy import signal
 
@@ -155,28 +177,37 @@ def pick_peaks(
     if top <= floor:
         raise PeakError(f"no peak: maximum {top:.4g} N is within {rule.noise_k} noise sigmas "
                         f"({floor:.4g} N)")
-    idx, props = signal.find_peaks(y, prominence=0.0)
-    prom = props["prominences"]
-    inc = idx[(y[idx] >= rule.incident_fraction * top) & (y[idx] > floor)]
-    if inc.size == 0:  # the maximum sits on the record's edge
+    col = y[:, None]
+    maxima = local_maxima(col)
+    k_inc, found = incident(col, rule, floor=floor, maxima=maxima)
+    if not found[0]:  # the maximum sits on the record's edge
         raise PeakError("no incident peak inside the record (maximum on an end sample)")
-    ki = int(inc[0])
-    below = np.flatnonzero(y[ki:] < rule.gap_fraction * y[ki])
-    if below.size == 0:
+    ki = int(k_inc[0])
+    k_gap, ended = gap_end(col, k_inc, rule)
+    if not ended[0]:
         raise PeakError(f"single peak: the incident pulse at sample {ki} never ends "
                         f"(stays above {rule.gap_fraction} of its height)")
     pi, fi = refine_peak(y, ki, upsample)
-    kg = ki + int(below[0])
+    kg = int(k_gap[0])
     k0 = kg if min_tof is None else max(kg, int(np.ceil(pi + min_tof * rate)))
     if k0 >= y.size - 1:
         why = (f"before the shortest physical round trip {min_tof * 1e3:.4f} ms"
                if min_tof is not None else "with the incident pulse")
         raise PeakError(f"single peak: the record ends {(y.size - 1 - pi) / rate * 1e3:.4f} ms "
                         f"after the incident peak, {why}")
-    win_max = float(np.max(y[k0:]))
-    significant = (y[idx] >= rule.split_fraction * win_max) & (y[idx] > floor) & (prom > floor)
-    ok = (idx >= k0) & significant
+    # a reflected peak must also stand out of the noise by its prominence (a step, a
+    # local maximum of the rule that rises again after a flat sample, has prominence 0)
+    idx = np.flatnonzero(maxima[:, 0])
+    with warnings.catch_warnings():
+        warnings.filterwarnings("ignore", message="some peaks have a prominence of 0")
+        prom = signal.peak_prominences(y, idx)[0] if idx.size else np.zeros(0)
+    allowed = np.zeros(col.shape, dtype=bool)
+    allowed[idx, 0] = prom > floor
+    k_ref, has_ref, w_max = reflected(col, np.array([k0]), rule, floor=floor,
+                                      allowed=allowed, maxima=maxima)
+    win_max = float(w_max[0])
     level = rule.split_fraction * win_max
+    significant = (y[idx] >= level) & (y[idx] > floor) & (prom > floor)
     before = np.flatnonzero((idx > kg) & (idx < k0) & significant)
     if min_tof is not None and before.size and y[k0 - 1] > y[k0] >= level:
         # the window opens on the falling flank of the last significant pulse before the
@@ -189,12 +220,12 @@ def pick_peaks(
                 "window opens on its falling flank): the chain numbers (beads below the "
                 "sensor, bead size and material) do not fit this record"
             )
-    if not np.any(ok):
+    if not has_ref[0]:
         raise PeakError(
             f"single peak: no reflected peak after the incident one at sample {ki} (largest "
             f"later value {win_max:.4g} N, noise floor {floor:.4g} N)"
         )
-    kr = int(idx[ok][0])
+    kr = int(k_ref[0])
     pr, fr = refine_peak(y, kr, upsample)
     pair = PeakPair(pi / rate, pr / rate, fi, fr)
     if min_tof is not None:

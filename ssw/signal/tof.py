@@ -260,11 +260,18 @@ def session_tof(
 
     Parameters
     ----------
-    forces : records, N (one per hit).
-    rate : sample rate, S/s.
-    n_pre : pretrigger samples (baseline and noise come from them).
-    clipped : per-hit clipping flags (rule 1).
-    source : name used in error messages.
+    forces : list of numpy.ndarray
+        Records, N (one per hit).
+    rate : float
+        Sample rate, S/s.
+    n_pre : int
+        Pretrigger samples (baseline and noise come from them).
+    clipped : list of bool or None
+        Per-hit clipping flags (rule 1).
+    opts : TofOptions or None
+        The peak rule, bound and rejection rule (default ``TofOptions()``).
+    source : str
+        Name used in error messages.
     """
     opts = opts or TofOptions()
     n = len(forces)
@@ -289,11 +296,15 @@ def session_tof(
         reasons.append(f"hit {i}: TOF {tof[i] * 1e3:.4f} ms is an outlier (> {OUTLIER_K} "
                        "robust sigmas from the median)")
     accepted = np.isfinite(tof) & ~out
-    if accepted.sum() < opts.min_hits:
-        raise RecordingError(
-            f"{source}: {int(accepted.sum())} of {n} hits accepted, at least {opts.min_hits} "
-            f"needed; rejected: {'; '.join(reasons)}"
-        )
+    k = int(accepted.sum())
+    if k < opts.min_hits:
+        how = ""
+        if k:  # what accepts the hits there are (none: nothing would)
+            what = "its TOF, without a scatter" if k == 1 else "their TOFs"
+            how = f" (--min-hits {k}, or a config's validation.min_hits: {k}, accepts {what})"
+        why = f"; rejected: {'; '.join(reasons)}" if reasons else ""
+        raise RecordingError(f"{source}: {k} of {n} hits accepted, at least {opts.min_hits} "
+                             f"needed{how}{why}")
     return TofResult(tof, accepted, tuple(reasons), fi, fr, float(rate))
 
 

@@ -2,28 +2,54 @@
 :data:`ssw.walls.WALLS` (the public entry points of docs/CONTRACTS.md).
 
 * :func:`tof` (s): TOF for broadcast arrays of soil E (Pa) and nu, one batched run;
-* :func:`peaks`: the picked peaks and the run behind them;
+* :func:`peaks`: the peaks and the run behind them;
+* :func:`tof_derivatives`: the TOF with its derivatives with respect to the soil's modulus
+  and the device's parameters (:data:`ssw.chain.sensitivity.PARAMETERS`);
 * :func:`sensor_signal` (s, N): the sensor force vs time;
+* :func:`sensor_derivatives`: the sensor force and its derivatives at given times (a
+  recording's samples);
 * :func:`run_chain`: every contact force vs time (the ``ssw chain`` command).
 
 ``wall`` names a law of :data:`ssw.walls.WALLS` (``rigid``, ``hertz``, ``fit``, ``table``,
 ``fem``, ``plastic``); ``wall_options`` are its builder's keywords (``K=``, ``power=``,
-``k_table=`` for ``fit``; ``curve=`` for ``table``; ``contact=`` for ``fem``). The chain
-itself (:mod:`ssw.chain`) knows only the wall protocol: :func:`ssw.chain.run.run_peaks` runs
-walls already built.
+``k_table=`` for ``fit``; ``curve=`` for ``table``; ``contact=`` for ``fem``; ``dynamics=``,
+``soil_density=`` for the soil's inertia). The chain itself (:mod:`ssw.chain`) knows only the
+wall protocol: :func:`ssw.chain.run.run_peaks` runs walls already built.
+
+Derivatives. A TOF is the discrete scheme's at the run's fixed time step (a numerical
+setting, held fixed: a derivative is that of the TOF a run with the same step gives). Two
+methods, named in every result:
+
+* ``forward``: forward sensitivities carried by the integrator
+  (:mod:`ssw.chain.sensitivity`) and the dense peak's implicit derivative
+  (:mod:`ssw.chain.dense`): exact for the discrete TOF. Every wall whose law states its
+  derivatives: ``rigid``, ``hertz``, ``fit`` (through the K table's interpolant), ``fem``
+  (implicit differentiation of the condensed contact problem; not with the unilateral
+  interface, for E), the reduced dynamic wall;
+* ``central``: fourth-order differences of TOFs at the same step
+  (:func:`ssw.chain.sensitivity.stencil`: central, one-sided at a bound, a preload or a
+  dashpot of 0), relative step :data:`ssw.chain.sensitivity.CENTRAL_STEP`, every
+  perturbation in one batched run: the walls without a tangent (``plastic``, a ``table``
+  wall's E) and on request (``method="central"``).
 """
 
 from __future__ import annotations
 
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from ssw.chain.integrate import Run, simulate
+from ssw.chain.integrate import Run, simulate, time_step
 from ssw.chain.params import Batch, ChainParams
 from ssw.chain.run import run_peaks
+from ssw.chain.sensitivity import CENTRAL_STEP, PARAMETERS, stencil, tangent_of
 from ssw.chain.tof import Peaks
+from ssw.errors import ConfigError
 from ssw.walls import build_wall
+
+#: Methods of :func:`tof_derivatives`.
+METHODS = ("auto", "forward", "central")
 
 
 def _shape(soil_E: Any, soil_nu: Any, vary: dict[str, Any] | None = None) -> tuple[int, ...]:
@@ -46,14 +72,44 @@ def _broadcast(soil_E: Any, soil_nu: Any, vary: dict[str, Any] | None
 def peaks(
     soil_E: Any, soil_nu: Any, params: ChainParams, wall: str = "hertz", *,
     vary: dict[str, Any] | None = None, strict: bool = True, on_progress: Any = None,
-    **wall_options: Any,
+    derivatives: Any = None, dt: float | None = None, **wall_options: Any,
 ) -> tuple[Peaks, Run]:
-    """Picked peaks (flat, one per scene) and the run, for broadcast ``soil_E``, ``soil_nu``
-    and the per-scene fields ``vary`` (:data:`ssw.chain.params.VARYING` -> values)."""
+    """Peaks on the dense output (flat, one per scene) and the run.
+
+    Parameters
+    ----------
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu`` and ``vary``.
+    soil_nu : array_like
+        -.
+    params : ChainParams
+        The chain.
+    wall : str
+        A law of :data:`ssw.walls.WALLS`.
+    vary : dict or None
+        Per-scene fields (:data:`ssw.chain.params.VARYING` -> values).
+    strict : bool
+        Raise on a truncated record or a signal without two peaks (else NaN).
+    on_progress : callable or None
+        Told ``on_progress(k)`` when ``k`` scenes finish.
+    derivatives : sequence of str or None
+        Forward sensitivities to carry (:func:`ssw.chain.run.run_peaks`); the wall must
+        have them (:func:`tof_derivatives` chooses).
+    dt : float or None
+        s, the time step (default: :func:`ssw.chain.integrate.time_step` of the batch).
+    **wall_options
+        The wall builder's keywords.
+
+    Returns
+    -------
+    tuple
+        ``(Peaks, Run)``.
+    """
     E, nu, flat = _broadcast(soil_E, soil_nu, vary)
     w = build_wall(wall, params, E, nu, **wall_options)
     b = Batch.of(params, w.n, flat) if flat else params
-    return run_peaks(b, w, strict=strict, on_progress=on_progress)
+    return run_peaks(b, w, strict=strict, on_progress=on_progress, derivatives=derivatives,
+                     dt=dt)
 
 
 def tof(
@@ -64,17 +120,249 @@ def tof(
 
     Parameters
     ----------
-    soil_E : Pa, soil_nu : -, and the arrays of ``vary`` (per-scene striker speed, preload,
-        masses), broadcast together; the result has their broadcast shape.
-    params : the chain.  wall : last-contact law.  wall_options : its options.
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu`` and the arrays of ``vary``.
+    soil_nu : array_like
+        -.
+    params : ChainParams
+        The chain.
+    wall : str
+        A last-contact law of :data:`ssw.walls.WALLS`.
+    vary : dict or None
+        Per-scene striker speed, preload, masses.
+    **wall_options
+        The law's options.
+
+    Returns
+    -------
+    numpy.ndarray
+        s, the broadcast shape.
 
     Raises
     ------
-    SolverError : a scene's record is truncated (its reflected wave had not passed the
-        sensor at ``params.t_max``).
+    SolverError
+        A scene's record is truncated (its reflected wave had not passed the sensor at
+        ``params.t_max``).
     """
     pk, _ = peaks(soil_E, soil_nu, params, wall, vary=vary, **wall_options)
     return pk.tof.reshape(_shape(soil_E, soil_nu, vary))
+
+
+@dataclass(frozen=True)
+class TofDerivatives:
+    """A TOF with its derivatives (:func:`tof_derivatives`). SI units.
+
+    Attributes
+    ----------
+    tof : numpy.ndarray
+        s, the broadcast shape of the inputs.
+    dtof : dict
+        Parameter name -> s per SI unit of the parameter (same shape).
+    method : dict
+        Parameter name -> ``forward`` or ``central`` (module docstring).
+    step : dict
+        Parameter name -> the central differences' step (SI unit of the parameter; 0 for
+        ``forward``).
+    peaks : Peaks
+        The base run's peaks (flat), with ``dt_*``/``df_*`` for the forward parameters.
+    run : Run
+        The base run; its ``dsensor`` holds the sensor signal's forward sensitivities.
+    dt : float
+        s, the fixed step of every run.
+    """
+
+    tof: np.ndarray
+    dtof: dict[str, np.ndarray]
+    method: dict[str, str]
+    step: dict[str, float]
+    peaks: Peaks
+    run: Run
+    dt: float
+    units: dict[str, str] = field(default_factory=lambda: dict(PARAMETERS))
+
+    def as_dict(self, index: int = 0) -> dict[str, Any]:
+        """Scene ``index``'s values for a JSON record: ``tof``, ``dtof_d<name>``,
+        ``derivative_method`` and ``derivative_units`` (s per unit)."""
+        out: dict[str, Any] = {"tof": float(np.ravel(self.tof)[index])}
+        for name, d in self.dtof.items():
+            out[f"dtof_d{name}"] = float(np.ravel(d)[index])
+        out["derivative_method"] = dict(self.method)
+        out["derivative_units"] = {f"dtof_d{k}": f"s/({self.units[k]})" for k in self.dtof}
+        out["derivative_step"] = {k: v for k, v in self.step.items() if v}
+        return out
+
+
+def _forward_ok(w: Any, names: tuple[str, ...]) -> dict[str, bool]:
+    """Which parameters the wall ``w`` can carry forward sensitivities for."""
+    stateful = hasattr(w, "advance")
+    tangent = not stateful or hasattr(w, "advance_tangent")
+    ok = {name: tangent for name in names}
+    if "E" in names and tangent:
+        try:
+            w.dforce_dE(np.zeros(w.n))
+        except (ConfigError, AttributeError):
+            ok["E"] = False
+    return ok
+
+
+def central_differences(
+    soil_E: np.ndarray, soil_nu: np.ndarray, params: ChainParams, wall: str,
+    names: tuple[str, ...], *, dt: float, vary: dict[str, np.ndarray] | None = None,
+    step: float = CENTRAL_STEP, strict: bool = True, **wall_options: Any,
+) -> tuple[dict[str, np.ndarray], dict[str, float]]:
+    """Central differences of TOFs at the fixed step ``dt``, every perturbation of ``E``
+    and of the per-scene fields in one batched run (the dashpot, one ChainParams field, in
+    its own runs).
+
+    Parameters
+    ----------
+    soil_E : numpy.ndarray
+        (n,) Pa.
+    soil_nu : numpy.ndarray
+        (n,) -.
+    params : ChainParams
+        The chain.
+    wall : str
+        A law of :data:`ssw.walls.WALLS`.
+    names : tuple of str
+        Parameters of :data:`ssw.chain.sensitivity.PARAMETERS`.
+    dt : float
+        s, the step of the base run.
+    vary : dict or None
+        The base run's per-scene fields, (n,) each.
+    step : float
+        Relative step (:data:`ssw.chain.sensitivity.CENTRAL_STEP`).
+    strict : bool
+        As :func:`peaks`.
+    **wall_options
+        The law's options.
+
+    Returns
+    -------
+    tuple of dict
+        Name -> (n,) s per unit, and name -> the step used (SI, the first scene's).
+    """
+    n = soil_E.size
+    base = Batch.of(params, n, vary)
+    values = {"E": soil_E, "striker_velocity": base.striker_velocity,
+              "preload": base.preload, "striker_mass": base.masses[:, 0],
+              "sensor_mass": base.masses[:, params.sensor_index],
+              "damping": np.full(n, params.damping)}
+    per_scene = {"striker_velocity": base.striker_velocity, "preload": base.preload,
+                 "striker_mass": base.masses[:, 0],
+                 "sensor_mass": base.masses[:, params.sensor_index]}
+    Es, fs, plan = [], {k: [] for k in per_scene}, []
+    out, used = {}, {}
+    for name in names:
+        st = stencil(name, values[name], step)
+        h = st.h
+        used[name] = float(h[0])
+        if name == "damping":
+            tofs = [peaks(soil_E, soil_nu, params.with_(damping=float(params.damping
+                                                                      + o * h[0])),
+                          wall, vary=vary, strict=strict, dt=dt, **wall_options)[0].tof
+                    for o in st.offsets]
+            out[name] = st.derivative(tofs)
+            continue
+        for o in st.offsets:
+            Es.append(soil_E + o * h if name == "E" else soil_E)
+            for k, v in per_scene.items():
+                fs[k].append(v + o * h if k == name else v)
+            plan.append(name)
+    if Es:
+        E_all = np.concatenate(Es)
+        nu_all = np.tile(soil_nu, len(Es))
+        w = build_wall(wall, params, E_all, nu_all, **wall_options)
+        b = Batch.of(params, w.n, {k: np.concatenate(v) for k, v in fs.items()})
+        pk, _ = run_peaks(b, w, strict=strict, dt=dt)
+        blocks = pk.tof.reshape(len(Es), n)
+        j = 0
+        for name in dict.fromkeys(plan):
+            st = stencil(name, values[name], step)
+            out[name] = st.derivative(list(blocks[j: j + st.offsets.size]))
+            j += st.offsets.size
+    return out, used
+
+
+def tof_derivatives(
+    soil_E: Any, soil_nu: Any, params: ChainParams, wall: str = "hertz", *,
+    derivatives: Any = tuple(PARAMETERS), vary: dict[str, Any] | None = None,
+    method: str = "auto", step: float = CENTRAL_STEP, strict: bool = True,
+    **wall_options: Any,
+) -> TofDerivatives:
+    """The TOF and its derivatives with respect to the soil's modulus and the device's
+    parameters (module docstring).
+
+    Parameters
+    ----------
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu`` and ``vary``.
+    soil_nu : array_like
+        -.
+    params : ChainParams
+        The chain.
+    wall : str
+        A law of :data:`ssw.walls.WALLS`.
+    derivatives : sequence of str or str
+        Names of :data:`ssw.chain.sensitivity.PARAMETERS` (default all: ``E``,
+        ``striker_velocity``, ``preload``, ``sensor_mass``, ``striker_mass``, ``damping``).
+    vary : dict or None
+        Per-scene striker speed, preload, masses.
+    method : str
+        ``auto`` (forward where the wall states its derivatives, else central),
+        ``forward`` (ConfigError where it cannot) or ``central``.
+    step : float
+        Relative step of the central differences.
+    strict : bool
+        As :func:`peaks`.
+    **wall_options
+        The law's options (``with_dE`` is set for the ``fem`` wall when E is asked).
+
+    Returns
+    -------
+    TofDerivatives
+        TOF, derivatives, the method of each, the base run and peaks.
+
+    Raises
+    ------
+    ConfigError
+        An unknown parameter or method, or ``forward`` where the wall has no tangent.
+    """
+    if method not in METHODS:
+        raise ConfigError("derivative method", method, " | ".join(METHODS))
+    tg = tangent_of(derivatives)
+    names = tg.names
+    shape = _shape(soil_E, soil_nu, vary)
+    E, nu, flat = _broadcast(soil_E, soil_nu, vary)
+    opts = dict(wall_options)
+    if wall == "fem" and "E" in names and method != "central":
+        opts["with_dE"] = True
+    w = build_wall(wall, params, E, nu, **opts)
+    b = Batch.of(params, w.n, flat) if flat else params
+    dt = time_step(b, w)
+    ok = _forward_ok(w, names) if method != "central" else dict.fromkeys(names, False)
+    if method == "forward" and not all(ok.values()):
+        bad = [k for k, v in ok.items() if not v]
+        raise ConfigError("derivatives", bad, f"parameters the {wall} wall has forward "
+                          "sensitivities for (or method auto/central)")
+    forward = tuple(k for k in names if ok[k])
+    pk, run = run_peaks(b, w, strict=strict, dt=dt, derivatives=forward or None)
+    dtof: dict[str, np.ndarray] = {}
+    meth: dict[str, str] = {}
+    steps: dict[str, float] = {}
+    for j, name in enumerate(forward):
+        dtof[name] = pk.dtof[:, j]
+        meth[name], steps[name] = "forward", 0.0
+    central = tuple(k for k in names if not ok[k])
+    if central:
+        got, used = central_differences(E, nu, params, wall, central, dt=dt, vary=flat,
+                                        step=step, strict=strict, **wall_options)
+        for name in central:
+            dtof[name] = got[name]
+            meth[name], steps[name] = "central", used[name]
+    order = {k: dtof[k].reshape(shape) for k in names}
+    return TofDerivatives(pk.tof.reshape(shape), order, {k: meth[k] for k in names},
+                          {k: steps[k] for k in names}, pk, run, dt)
 
 
 def sensor_signal(
@@ -88,11 +376,29 @@ def sensor_signal(
 ) -> tuple[np.ndarray, np.ndarray]:
     """The sensor particle's force vs time.
 
-    Returns ``(t, F)``: ``t`` (n_t,) s from the striker's first contact, ``F`` N, the mean of
-    the sensor particle's two contact forces, static precompression included; shape (n_t,)
-    for scalar ``soil_E``/``soil_nu``, else (n_t, *broadcast shape). Without ``t_end`` the run
-    stops once the reflected wave has passed the sensor (the latest scene's stop time);
-    with ``t_end`` (s) it runs exactly that long.
+    Parameters
+    ----------
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu``.
+    soil_nu : array_like
+        -.
+    params : ChainParams
+        The chain.
+    wall : str
+        A law of :data:`ssw.walls.WALLS`.
+    t_end : float or None
+        s: run exactly that long; None: until the reflected wave has passed the sensor
+        (the latest scene's stop time).
+    **wall_options
+        The law's options.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(t, F)``: ``t`` (n_t,) s from the striker's first contact, ``F`` N, what the
+        sensor reads (``params.sensor_reads``), static precompression included; shape
+        (n_t,) for scalar ``soil_E``/``soil_nu``, else ``n_t`` followed by their
+        broadcast shape.
     """
     w = build_wall(wall, params, soil_E, soil_nu, **wall_options)
     if t_end is None:
@@ -105,6 +411,81 @@ def sensor_signal(
         run = simulate(params, w, t_end=t_end, stop_early=False)
         t, F = run.t, run.sensor
     return t, F.reshape((t.size, *_shape(soil_E, soil_nu)))
+
+
+@dataclass(frozen=True)
+class SensorDerivatives:
+    """The sensor signal at given times and its forward sensitivities. SI units.
+
+    Attributes
+    ----------
+    t : numpy.ndarray
+        (m,) s from the striker's first contact.
+    sensor : numpy.ndarray
+        (m, n) N, the dense output (:func:`ssw.chain.dense.evaluate`).
+    dsensor : numpy.ndarray
+        (m, n, k) N per SI unit of each parameter.
+    names : tuple of str
+        The parameters (the last axis of ``dsensor``).
+    run : Run
+        The run (its samples and their sensitivities at every step, ``run.dsensor``).
+    """
+
+    t: np.ndarray
+    sensor: np.ndarray
+    dsensor: np.ndarray
+    names: tuple[str, ...]
+    run: Run
+
+
+def sensor_derivatives(
+    soil_E: Any, soil_nu: Any, params: ChainParams, wall: str = "hertz", *,
+    times: Any = None, derivatives: Any = tuple(PARAMETERS), t_end: float | None = None,
+    vary: dict[str, Any] | None = None, **wall_options: Any,
+) -> SensorDerivatives:
+    """The sensor signal and its exact derivatives (forward sensitivities of the discrete
+    scheme, on its dense output) at ``times`` (a recording's samples; default: the run's
+    steps), for a waveform inversion.
+
+    Parameters
+    ----------
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu`` and ``vary``: one scene each.
+    soil_nu : array_like
+        -.
+    params : ChainParams
+        The chain.
+    wall : str
+        A law of :data:`ssw.walls.WALLS` with forward sensitivities (module docstring).
+    times : array_like or None
+        (m,) s; None: every step.
+    derivatives : sequence of str or str
+        Names of :data:`ssw.chain.sensitivity.PARAMETERS`.
+    t_end : float or None
+        s, the run's length (default: until every scene's reflected wave has passed).
+    vary : dict or None
+        Per-scene striker speed, preload, masses.
+    **wall_options
+        The law's options.
+
+    Returns
+    -------
+    SensorDerivatives
+        Signal (N) and derivatives per SI unit.
+    """
+    from ssw.chain.dense import evaluate
+
+    tg = tangent_of(derivatives)
+    E, nu, flat = _broadcast(soil_E, soil_nu, vary)
+    opts = dict(wall_options)
+    if wall == "fem" and "E" in tg.names:
+        opts["with_dE"] = True
+    w = build_wall(wall, params, E, nu, **opts)
+    b = Batch.of(params, w.n, flat) if flat else params
+    run = simulate(b, w, derivatives=tg, t_end=t_end, stop_early=t_end is None)
+    t = run.t if times is None else np.asarray(times, float)
+    S, dS = evaluate(run, t, tangent=True)
+    return SensorDerivatives(t, S, dS, tg.names, run)
 
 
 def _hold_last(F: np.ndarray) -> np.ndarray:
@@ -124,7 +505,28 @@ def run_chain(
     t_end: float,
     **wall_options: Any,
 ) -> Run:
-    """One scene run to ``t_end`` (s) recording every contact force and the energy."""
+    """One scene run to ``t_end`` recording every contact force and the energy.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    soil_E : float
+        Pa.
+    soil_nu : float
+        -.
+    wall : str
+        A law of :data:`ssw.walls.WALLS`.
+    t_end : float
+        s.
+    **wall_options
+        The law's options.
+
+    Returns
+    -------
+    Run
+        With ``forces`` and ``energy``.
+    """
     w = build_wall(wall, params, soil_E, soil_nu, **wall_options)
     return simulate(params, w, t_end=t_end, stop_early=False, record_forces=True,
                     record_energy=True)

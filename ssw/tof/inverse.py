@@ -7,6 +7,13 @@ Carlson 1980), then refines each estimate by secant steps on the forward model i
 that ``inverse(forward(E)) = E`` to the forward model's own precision rather than the
 grid's. With a stored sweep (``sweep=``) only the interpolation is used.
 
+One inversion serves every path: :func:`invert_batch` on a :class:`ForwardGrid` (computed
+for the targets, or given: a stored sweep's, :class:`ssw.modulus.Estimator`'s) is what
+``ssw invert``, ``ssw measure`` (:func:`ssw.modulus.estimate_moduli`), acquisition's live E
+(:class:`ssw.modulus.Estimator`), the validation and the calibration's leave-one-out call.
+Its guards (:func:`grid_fault`): a forward grid with a missing (NaN) or non-finite TOF, or
+one that does not decrease strictly, is not inverted.
+
 The interval: ``E(TOF + std)`` and ``E(TOF - std)`` (a longer TOF means a softer soil).
 A TOF outside ``[TOF(E_max), TOF(E_min)]`` raises :class:`ssw.errors.OutOfRangeError`
 naming the valid range; an interval end outside it is clipped to the range's end and
@@ -45,16 +52,135 @@ class Inversion:
     E_range: tuple[float, float]  # Pa
 
 
-def _forward_grid(
-    soil_nu: float, params: ChainParams, wall: str, E_range: tuple[float, float],
-    sweep: Sweep | None, wall_options: dict[str, Any],
-) -> tuple[np.ndarray, np.ndarray]:
-    if sweep is not None:
-        E, T = sweep.curve(soil_nu)
-        sel = (E >= E_range[0] * (1 - 1e-12)) & (E <= E_range[1] * (1 + 1e-12))
-        return E[sel], T[sel]
-    E = np.geomspace(E_range[0], E_range[1], GRID_POINTS)
-    return E, api.tof(E, soil_nu, params, wall, **wall_options)
+@dataclass(frozen=True)
+class ForwardGrid:
+    """The forward model's TOF(E) on one E grid, for each group of targets that share a
+    Poisson's ratio and chain values: what the inversion interpolates.
+
+    ``E`` (m,) Pa, increasing; ``T`` (G, m) s; ``nu`` (G,); ``vary``: the per-scene chain
+    values (:data:`ssw.chain.params.VARYING` name -> (G,) array) of each group.
+    """
+
+    E: np.ndarray
+    T: np.ndarray
+    nu: np.ndarray
+    vary: dict[str, np.ndarray]
+
+    def group_of(self, nu: np.ndarray, vary: dict[str, np.ndarray]) -> np.ndarray:
+        """The group of each target (its nu and chain values).
+
+        Parameters
+        ----------
+        nu : ndarray
+            (k,) Poisson's ratios of the targets.
+        vary : dict
+            The targets' chain values, name -> (k,) array.
+
+        Returns
+        -------
+        ndarray
+            (k,) int: the row of each target's group, -1 where the grid has none.
+        """
+        if set(vary) != set(self.vary):
+            return np.full(nu.size, -1)
+        rows = {tuple(r): g for g, r in enumerate(
+            np.column_stack([self.nu, *(self.vary[n] for n in sorted(self.vary))]).tolist())}
+        keys = np.column_stack([nu, *(vary[n] for n in sorted(vary))]).tolist()
+        return np.array([rows.get(tuple(k), -1) for k in keys], dtype=np.int64)
+
+
+def forward_grid(
+    soil_nu: Any, params: ChainParams, wall: str, *, vary: dict[str, Any] | None = None,
+    E_range: tuple[float, float] = E_RANGE, grid_points: int = GRID_POINTS,
+    **wall_options: Any,
+) -> ForwardGrid:
+    """TOF(E) on ``grid_points`` log-spaced moduli over ``E_range`` for each distinct
+    (``soil_nu``, ``vary``) of the targets, in ONE batched forward run.
+
+    Parameters
+    ----------
+    soil_nu : array_like
+        The targets' Poisson's ratios, (k,) or one.
+    params : ChainParams
+        The device's chain.
+    wall : str
+        The wall law's name (:mod:`ssw.walls`).
+    vary : dict, optional
+        Per-target chain values (:data:`ssw.chain.params.VARYING` name -> (k,) array).
+    E_range : tuple of float
+        ``(E_min, E_max)``, Pa.
+    grid_points : int
+        Moduli of the grid.
+    **wall_options
+        The wall law's options.
+
+    Returns
+    -------
+    ForwardGrid
+        One row of TOFs per group.
+    """
+    nu = np.atleast_1d(np.asarray(soil_nu, float)).ravel()
+    vk = {n: np.broadcast_to(np.asarray(v, float), nu.shape).ravel()
+          for n, v in (vary or {}).items() if v is not None}
+    names = sorted(vk)
+    keys = np.column_stack([nu, *(vk[n] for n in names)])
+    groups = np.unique(keys, axis=0)
+    G = groups.shape[0]
+    E_g = np.geomspace(E_range[0], E_range[1], int(grid_points))
+    gvary = {n: np.repeat(groups[:, 1 + j], E_g.size) for j, n in enumerate(names)}
+    T_g = api.tof(np.tile(E_g, G), np.repeat(groups[:, 0], E_g.size), params, wall,
+                  vary=gvary or None, **wall_options).reshape(G, E_g.size)
+    return ForwardGrid(E_g, np.asarray(T_g, float), groups[:, 0].copy(),
+                       {n: groups[:, 1 + j].copy() for j, n in enumerate(names)})
+
+
+def sweep_grid(sweep: Sweep, soil_nu: float, E_range: tuple[float, float]) -> ForwardGrid:
+    """The :class:`ForwardGrid` of a stored sweep.
+
+    Parameters
+    ----------
+    sweep : Sweep
+        A stored forward sweep.
+    soil_nu : float
+        The Poisson's ratio (one of the sweep's).
+    E_range : tuple of float
+        ``(E_min, E_max)``, Pa: the sweep's moduli kept.
+
+    Returns
+    -------
+    ForwardGrid
+        One group: the sweep's TOFs at ``soil_nu`` within ``E_range``.
+    """
+    E, T = sweep.curve(soil_nu)
+    sel = (E >= E_range[0] * (1 - 1e-12)) & (E <= E_range[1] * (1 + 1e-12))
+    return ForwardGrid(np.asarray(E[sel], float), np.asarray(T[sel], float)[None],
+                       np.array([float(soil_nu)]), {})
+
+
+def grid_fault(E: np.ndarray, T: np.ndarray, nu: float) -> str:
+    """Why a forward grid cannot be inverted (the inversion's guards), or "" if it can.
+
+    Fewer than two points, a missing (NaN) or infinite TOF (NaN compares false: a bare
+    difference test would pass it), or TOF(E) not strictly decreasing.
+
+    Parameters
+    ----------
+    E : ndarray
+        (m,) moduli of the grid, Pa, increasing.
+    T : ndarray
+        (m,) their TOFs, s.
+    nu : float
+        The Poisson's ratio (for the message).
+
+    Returns
+    -------
+    str
+        The reason, "" when the grid is invertible.
+    """
+    if E.size < 2 or not np.all(np.isfinite(T)) or not np.all(np.diff(T) < 0):
+        return (f"TOF(E) at nu = {nu:g} is not strictly decreasing on the E grid "
+                f"[{E[0]:.4g}, {E[-1]:.4g}] Pa, or has a missing value: cannot invert")
+    return ""
 
 
 @dataclass(frozen=True)
@@ -76,21 +202,58 @@ def invert_batch(
     tof: Any, soil_nu: Any, params: ChainParams, wall: str = "hertz", *,
     vary: dict[str, Any] | None = None, E_range: tuple[float, float] = E_RANGE,
     strict: bool = True, refine: int = REFINE_STEPS, grid_points: int = GRID_POINTS,
-    **wall_options: Any,
+    grid: ForwardGrid | None = None, **wall_options: Any,
 ) -> BatchInversion:
     """E (Pa) from TOFs (s) of ``k`` targets with their own ``soil_nu`` and per-scene chain
     values ``vary`` (:data:`ssw.chain.params.VARYING` -> (k,) arrays), in few batched runs.
 
     Targets sharing nu and chain values share one forward grid (``grid_points`` log-spaced
     E, default :data:`GRID_POINTS`; fewer over a narrow ``E_range`` where every forward
-    law is costly, as a plastic sample's); every grid advances in ONE run; PCHIP in
-    ``ln E`` against TOF, then ``refine`` secant steps on the forward model (one run each,
-    all targets together).
+    law is costly, as a plastic sample's), computed in ONE run (:func:`forward_grid`) or
+    given (``grid``: a stored sweep's, or one kept between calls); PCHIP in ``ln E``
+    against TOF, then ``refine`` secant steps on the forward model (one run each, all
+    targets together).
 
-    Raises (``strict``; otherwise E is NaN and ``reason`` says why)
+    Parameters
+    ----------
+    tof : array_like
+        (k,) TOFs, s.
+    soil_nu : array_like
+        Poisson's ratio of each target, (k,) or one.
+    params : ChainParams
+        The device's chain.
+    wall : str
+        The wall law's name.
+    vary : dict, optional
+        Per-target chain values.
+    E_range : tuple of float
+        ``(E_min, E_max)`` of the grid, Pa (ignored with ``grid``).
+    strict : bool
+        Raise on a target that cannot be inverted; otherwise its E is NaN and ``reason``
+        says why.
+    refine : int
+        Secant steps on the forward model (0: the interpolation alone).
+    grid_points : int
+        Moduli of a computed grid.
+    grid : ForwardGrid, optional
+        The forward grid to use; it must hold every target's group.
+    **wall_options
+        The wall law's options.
+
+    Returns
+    -------
+    BatchInversion
+        E per target, the TOF range of its group and the reasons.
+
+    Raises
     ------
-    OutOfRangeError : a TOF outside its forward model's range over ``E_range``.
-    SolverError : a forward TOF(E) that is not strictly decreasing (not invertible).
+    OutOfRangeError
+        (``strict``) A TOF outside its forward model's range over ``E_range``.
+    SolverError
+        (``strict``) A forward TOF(E) that is not strictly decreasing or has a missing
+        value (:func:`grid_fault`): not invertible.
+    ConfigError
+        A TOF <= 0, a bad ``E_range``, or a ``grid`` without a target's group.
     """
     from scipy.interpolate import PchipInterpolator
 
@@ -103,24 +266,23 @@ def invert_batch(
         raise ConfigError("tof", T.tolist(), "TOF > 0 s")
     if not 0 < E_range[0] < E_range[1]:
         raise ConfigError("E_range", E_range, "0 < E_min < E_max (Pa)")
-    keys = np.column_stack([nu, *vk.values()]) if vk else nu[:, None]
-    groups, gidx = np.unique(keys, axis=0, return_inverse=True)
-    gidx = np.asarray(gidx).ravel()
-    G = groups.shape[0]
-    E_g = np.geomspace(E_range[0], E_range[1], int(grid_points))
-    gvary = {n: np.repeat(groups[:, 1 + j], E_g.size) for j, n in enumerate(vk)}
-    T_g = api.tof(np.tile(E_g, G), np.repeat(groups[:, 0], E_g.size), params, wall,
-                  vary=gvary or None, **wall_options).reshape(G, E_g.size)
+    if grid is None:
+        grid = forward_grid(nu, params, wall, vary=vk, E_range=E_range,
+                            grid_points=grid_points, **wall_options)
+    gidx = grid.group_of(nu, vk)
+    if np.any(gidx < 0):
+        raise ConfigError("grid", f"{grid.nu.size} group(s)",
+                          "a forward grid computed for every target's nu and chain values")
+    E_g, T_g = grid.E, grid.T
     reason = [""] * k
     logE = np.full(k, np.nan)
     lo_T, hi_T = T_g[:, -1].copy(), T_g[:, 0].copy()
     splines = []
-    for g in range(G):
+    for g in range(T_g.shape[0]):
         members = np.flatnonzero(gidx == g)
-        if np.any(np.diff(T_g[g]) >= 0) or not np.all(np.isfinite(T_g[g])):
-            msg = (f"TOF(E) at nu = {groups[g, 0]:g} is not strictly decreasing on the E grid "
-                   f"[{E_g[0]:.4g}, {E_g[-1]:.4g}] Pa: cannot invert")
-            if strict:
+        msg = grid_fault(E_g, T_g[g], float(grid.nu[g]))
+        if msg:
+            if strict and members.size:
                 raise SolverError(msg)
             for i in members:
                 reason[i] = msg
@@ -132,7 +294,7 @@ def invert_batch(
             if not lo_T[g] <= T[i] <= hi_T[g]:
                 msg = (f"TOF {T[i]:.6g} s is outside the valid range [{lo_T[g]:.6g}, "
                        f"{hi_T[g]:.6g}] s (E {E_g[-1] / 1e6:g}..{E_g[0] / 1e6:g} MPa at nu = "
-                       f"{groups[g, 0]:g})")
+                       f"{grid.nu[g]:g})")
                 if strict:
                     raise OutOfRangeError(msg)
                 reason[i] = msg
@@ -166,13 +328,44 @@ def invert(
 ) -> Inversion:
     """E (Pa) from TOF (s) at Poisson's ratio ``soil_nu``, with the interval from ``tof_std``.
 
+    One batched :func:`invert_batch` of ``T``, ``T + std`` and ``T - std`` on the forward
+    model (refined on it), or on a stored ``sweep`` (its interpolation alone); the central
+    TOFs must lie inside the model's range (an error otherwise), an interval end beyond it
+    is the range's end (``clipped``).
+
+    Parameters
+    ----------
+    tof : array_like
+        TOFs, s.
+    soil_nu : float
+        Poisson's ratio.
+    params : ChainParams
+        The device's chain.
+    wall : str
+        The wall law's name.
+    tof_std : array_like
+        Standard deviation of each TOF, s (broadcast to ``tof``).
+    E_range : tuple of float
+        ``(E_min, E_max)``, Pa.
+    sweep : Sweep, optional
+        A stored forward sweep to interpolate instead of running the model.
+    vary : dict, optional
+        Per-target chain values, broadcast to ``tof``.
+    **wall_options
+        The wall law's options.
+
+    Returns
+    -------
+    Inversion
+        E, its interval ends and their clipping, the TOF and E ranges.
+
     Raises
     ------
-    OutOfRangeError : a TOF outside the forward model's range over ``E_range``.
-    SolverError : the forward TOF(E) is not strictly decreasing (not invertible).
+    OutOfRangeError
+        A TOF outside the forward model's range over ``E_range``.
+    SolverError
+        The forward TOF(E) is not strictly decreasing or has a missing value.
     """
-    from scipy.interpolate import PchipInterpolator
-
     T = np.asarray(tof, float)
     S = np.broadcast_to(np.asarray(tof_std, float), T.shape)
     if np.any(~(T > 0)):
@@ -181,55 +374,30 @@ def invert(
         raise ConfigError("tof_std", S.tolist(), "standard deviations >= 0 s")
     if not 0 < E_range[0] < E_range[1]:
         raise ConfigError("E_range", E_range, "0 < E_min < E_max (Pa)")
-    if sweep is None:
-        # one batched inversion of T, T + std, T - std; the central TOFs must lie inside the
-        # model's range (an error otherwise); an interval end beyond it is the range's end
-        targets = np.stack([T, T + S, T - S]).ravel()
-        # per-target chain values follow their target into each of the three stacks
-        vary3 = None if not vary else {k: np.tile(np.broadcast_to(np.asarray(v, float),
-                                                                  T.shape).ravel(), 3)
-                                       for k, v in vary.items() if v is not None}
-        res = invert_batch(targets, soil_nu, params, wall, vary=vary3, E_range=E_range,
-                           strict=False, **wall_options)
-        n = T.size
-        bad = [r for r in res.reason[:n] if r]
-        if bad:
-            if "not strictly decreasing" in bad[0]:
-                raise SolverError(bad[0])
-            raise OutOfRangeError(bad[0])
-        # each target's own range (its nu and chain values: ``vary``), not the first one's
-        lo_T, hi_T = res.tof_lo, res.tof_hi
-        E = res.E.copy()
-        E = np.where(targets > hi_T, res.E_range[0], E)
-        E = np.where(targets < lo_T, res.E_range[1], E)
-        clipped = (targets < lo_T) | (targets > hi_T)
-        E_all = E.reshape((3, *T.shape))
-        return Inversion(
-            E=E_all[0], E_low=E_all[1], E_high=E_all[2],
-            clipped=clipped.reshape((3, *T.shape))[1:].any(axis=0),
-            tof_range=(float(np.max(lo_T[:n])), float(np.min(hi_T[:n]))),
-            E_range=res.E_range,
-        )
-    E_g, T_g = _forward_grid(float(soil_nu), params, wall, E_range, sweep, wall_options)
-    # NaN compares false: a table with a missing TOF would pass a bare diff test
-    if E_g.size < 2 or not np.all(np.isfinite(T_g)) or not np.all(np.diff(T_g) < 0):
-        raise SolverError(
-            f"TOF(E) at nu = {soil_nu} is not strictly decreasing on the E grid "
-            f"[{E_g[0]:.4g}, {E_g[-1]:.4g}] Pa, or has a missing value: cannot invert"
-        )
-    lo_T, hi_T = float(T_g[-1]), float(T_g[0])
-    out = (T < lo_T) | (T > hi_T)
-    if np.any(out):
-        raise OutOfRangeError(
-            f"TOF {T[out].tolist()} s is outside the valid range [{lo_T:.6g}, {hi_T:.6g}] s "
-            f"(E {E_g[-1] / 1e6:g}..{E_g[0] / 1e6:g} MPa at nu = {soil_nu})"
-        )
     targets = np.stack([T, T + S, T - S]).ravel()
+    # per-target chain values follow their target into each of the three stacks
+    vary3 = None if not vary else {k: np.tile(np.broadcast_to(np.asarray(v, float),
+                                                              T.shape).ravel(), 3)
+                                   for k, v in vary.items() if v is not None}
+    grid = None if sweep is None else sweep_grid(sweep, float(soil_nu), E_range)
+    res = invert_batch(targets, soil_nu, params, wall, vary=vary3, E_range=E_range,
+                       strict=False, grid=grid, refine=REFINE_STEPS if sweep is None else 0,
+                       **wall_options)
+    n = T.size
+    bad = [r for r in res.reason[:n] if r]
+    if bad:
+        if "not strictly decreasing" in bad[0]:
+            raise SolverError(bad[0])
+        raise OutOfRangeError(bad[0])
+    # each target's own range (its nu and chain values: ``vary``), not the first one's
+    lo_T, hi_T = res.tof_lo, res.tof_hi
+    E = np.where(targets > hi_T, res.E_range[0], res.E)
+    E = np.where(targets < lo_T, res.E_range[1], E)
     clipped = (targets < lo_T) | (targets > hi_T)
-    spline = PchipInterpolator(T_g[::-1], np.log(E_g[::-1]))
-    E_all = np.exp(spline(np.clip(targets, lo_T, hi_T))).reshape((3, *T.shape))
+    E_all = E.reshape((3, *T.shape))
     return Inversion(
         E=E_all[0], E_low=E_all[1], E_high=E_all[2],
         clipped=clipped.reshape((3, *T.shape))[1:].any(axis=0),
-        tof_range=(lo_T, hi_T), E_range=(float(E_g[0]), float(E_g[-1])),
+        tof_range=(float(np.max(lo_T[:n])), float(np.min(hi_T[:n]))),
+        E_range=res.E_range,
     )

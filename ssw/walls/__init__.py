@@ -39,9 +39,27 @@ from ssw.errors import ConfigError, SswError
 
 
 def load_k_table(k_table: Any, params: ChainParams) -> Any:
-    """The K table of the chain's plate: ``k_table`` itself if it is one (has ``.K``), else
-    read from that HDF5 path. Reads are remembered per file version (path, size, mtime), so
-    a calibration or an inverse that builds the wall many times reads the file once."""
+    """The K table of the chain's plate. Reads are remembered per file version (path, size,
+    mtime), so a calibration or an inverse that builds the wall many times reads the file
+    once.
+
+    Parameters
+    ----------
+    k_table : str or KTable
+        A table (has ``.K``: returned as it is) or the path of an HDF5 K table file.
+    params : ChainParams
+        The chain (its plate's material and thickness: the table's group).
+
+    Returns
+    -------
+    KTable
+        The table.
+
+    Raises
+    ------
+    ConfigError
+        No such file.
+    """
     if hasattr(k_table, "K"):
         return k_table
     p = Path(k_table)
@@ -64,28 +82,81 @@ def _read_k_table(path: str, size: int, mtime_ns: int, plate_material: str,
 
 def file_fit_wall(params: ChainParams, soil_E: Any, soil_nu: Any, *, k_table: Any = None,
                   **values: Any) -> Wall:
-    """:func:`ssw.chain.wall.fit_wall` with ``k_table`` a K table file (read here) or
-    object, or explicit ``K=`` / ``power=(C, n)`` values."""
+    """:func:`ssw.chain.wall.fit_wall` with a K table file read here.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu``: one scene each.
+    soil_nu : array_like
+        -.
+    k_table : str or KTable or None
+        A K table file or object (its interpolant's derivatives give the law's
+        E-dependence).
+    **values
+        Explicit ``K=`` or ``power=(C, n)`` instead.
+
+    Returns
+    -------
+    Wall
+        A :class:`ssw.chain.wall.PowerWall`.
+    """
     table = None if k_table is None else load_k_table(k_table, params)
     return fit_wall(params, soil_E, soil_nu, k_table=table, **values)
 
 
 def fem_wall(params: ChainParams, soil_E: Any, soil_nu: Any, **options: Any) -> Wall:
-    """The FEM law itself, computed on demand: :func:`ssw.walls.fem.fem_wall`."""
+    """The FEM law itself, computed on demand: :func:`ssw.walls.fem.fem_wall`.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu``: one scene each.
+    soil_nu : array_like
+        -.
+    **options
+        ``contact``, ``operators``, ``with_dE`` (the law's exact dF/dE).
+
+    Returns
+    -------
+    Wall
+        A :class:`ssw.walls.fem.PiecewiseLinearWall`.
+    """
     from ssw.walls.fem import fem_wall as build
 
     return build(params, soil_E, soil_nu, **options)
 
 
 def plastic_wall(params: ChainParams, soil_E: Any, soil_nu: Any, **options: Any) -> Wall:
-    """The history-dependent wall of a plastic sample (``soil_model=``):
-    :func:`ssw.walls.plastic.plastic_wall`."""
+    """The history-dependent wall of a plastic sample: :func:`ssw.walls.plastic.plastic_wall`.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu``: one scene each.
+    soil_nu : array_like
+        -.
+    **options
+        ``soil_model`` (a model of :mod:`ssw.constitutive`, or one per scene), ``settings``.
+
+    Returns
+    -------
+    Wall
+        A :class:`ssw.walls.plastic.PlasticWall` (a stateful wall: its TOF's derivatives are
+        central differences).
+    """
     from ssw.walls.plastic import plastic_wall as build
 
     return build(params, soil_E, soil_nu, **options)
 
 
-#: Registry: wall name -> builder(params, soil_E, soil_nu, **options).
+#: Registry: wall name -> ``builder(params, soil_E, soil_nu, **options)``.
 WALLS: dict[str, Callable[..., Wall]] = {
     "rigid": rigid_wall,
     "hertz": hertz_wall,
@@ -99,11 +170,32 @@ WALLS: dict[str, Callable[..., Wall]] = {
 def build_wall(name: str, params: ChainParams, soil_E: Any, soil_nu: Any, **options: Any) -> Wall:
     """The wall ``name`` of :data:`WALLS` for the scenes ``broadcast(soil_E, soil_nu)``.
 
-    Two options of every law add the tested medium's inertia
-    (:mod:`ssw.dynamics`): ``dynamics`` (``quasi-static``, the default: the static law;
-    ``reduced``: the law plus the soil's radiation damping and participating mass and the
-    plate's inertia, :class:`ssw.dynamics.reduced.ReducedWall`) and ``soil_density``
-    (kg/m^3, broadcast with the scenes).
+    Parameters
+    ----------
+    name : str
+        A name of :data:`WALLS`.
+    params : ChainParams
+        The chain.
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu``: one scene each.
+    soil_nu : array_like
+        -.
+    **options
+        The builder's keywords, and two of every law that add the tested medium's inertia
+        (:mod:`ssw.dynamics`): ``dynamics`` (``quasi-static``, the default: the static law;
+        ``reduced``: the law plus the soil's radiation damping and participating mass and
+        the plate's inertia, :class:`ssw.dynamics.reduced.ReducedWall`) and
+        ``soil_density`` (kg/m^3, broadcast with the scenes).
+
+    Returns
+    -------
+    Wall
+        One law per scene (a stateful wall for ``reduced`` dynamics and ``plastic``).
+
+    Raises
+    ------
+    ConfigError
+        An unknown wall, options a law does not take, dynamics for the plastic wall.
     """
     dynamics = options.pop("dynamics", "quasi-static") or "quasi-static"
     density = options.pop("soil_density", None)

@@ -46,7 +46,7 @@ from typing import Any
 import numpy as np
 
 from ssw.chain.params import ChainParams
-from ssw.errors import SolverError
+from ssw.errors import ConfigError, SolverError
 
 #: Energy the law's range must hold, as a multiple of the striker's kinetic energy (module
 #: docstring): 4 = twice the nominal striker speed.
@@ -69,7 +69,8 @@ class PiecewiseLinearWall:
     (the last real piece repeated at the end and in the padding: the linear continuation),
     ``U`` (J) the potential at the breakpoints. ``d_exact`` (n,) m: where the exact law
     ends. ``force_error``: relative 1-sigma force error of each scene's law, (n,) (None:
-    unknown).
+    unknown). ``da_dE``, ``db_dE`` (n, K + 1), N/Pa and N/m/Pa, or None: the pieces'
+    coefficients' derivatives with respect to the soil's modulus (:func:`fem_wall`).
     """
 
     d: np.ndarray
@@ -78,6 +79,8 @@ class PiecewiseLinearWall:
     U: np.ndarray
     d_exact: np.ndarray
     force_error: np.ndarray | None = None
+    da_dE: np.ndarray | None = None
+    db_dE: np.ndarray | None = None
     _keys: np.ndarray = field(init=False, repr=False)
     _fkeys: np.ndarray = field(init=False, repr=False)
     _fend: np.ndarray = field(init=False, repr=False)
@@ -123,6 +126,28 @@ class PiecewiseLinearWall:
         j = np.searchsorted(self._keys, x + self._off, side="right") - 1
         return self._af[j] + self._bf[j] * dp
 
+    def _at(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Clipped indentations and the flat index of their pieces."""
+        dp = np.maximum(d, 0.0)
+        x = np.minimum(dp * self._inv_d, 1.0)
+        return dp, np.searchsorted(self._keys, x + self._off, side="right") - 1
+
+    def dforce_dd(self, d: np.ndarray) -> np.ndarray:
+        """Tangent stiffness (N/m): the slope ``b`` of the piece holding ``d`` (m); 0 for
+        ``d <= 0``."""
+        _, j = self._at(d)
+        return np.where(d > 0, self._bf[j], 0.0)
+
+    def dforce_dE(self, d: np.ndarray) -> np.ndarray:
+        """``dF/dE`` (N/Pa) at fixed indentation ``d`` (m): ``da/dE + db/dE d`` of the piece
+        holding ``d`` (the law is continuous at the breakpoints, which move with E, so
+        their motion adds nothing); ConfigError without the pieces' derivatives."""
+        if self.da_dE is None or self.db_dE is None:
+            raise ConfigError("wall", "fem (unilateral interface)",
+                              "a frictionless or bonded plate, or none, for dF/dE")
+        dp, j = self._at(d)
+        return np.where(d > 0, self.da_dE.ravel()[j] + self.db_dE.ravel()[j] * dp, 0.0)
+
     def potential(self, d: np.ndarray) -> np.ndarray:
         """Stored energy ``int_0^d F`` (J)."""
         dp = np.maximum(np.asarray(d, float), 0.0)
@@ -139,9 +164,12 @@ class PiecewiseLinearWall:
 
     def take(self, idx: np.ndarray) -> PiecewiseLinearWall:
         """The scenes ``idx`` (may repeat)."""
+        def sel(x: np.ndarray | None) -> np.ndarray | None:
+            return None if x is None else np.asarray(x)[idx]
+
         return PiecewiseLinearWall(self.d[idx], self.a[idx], self.b[idx], self.U[idx],
-                                   self.d_exact[idx], None if self.force_error is None
-                                   else np.asarray(self.force_error)[idx])
+                                   self.d_exact[idx], sel(self.force_error), sel(self.da_dE),
+                                   sel(self.db_dE))
 
     def hertz_equivalent(self, d_ref: float) -> np.ndarray:
         """``F(d_ref) / d_ref^1.5`` (N/m^1.5), for the time-step choice."""
@@ -184,38 +212,47 @@ def energy_bound(d: np.ndarray, F: np.ndarray, W: float, Wg: float) -> tuple[flo
     return float(min(x0 + y, x1)), U
 
 
-def _hertz_bound(A: np.ndarray, W: float, Wg: float) -> np.ndarray:
-    """Root of ``(2/5) A d^2.5 - Wg d = W`` (m) by bisection in ``log d``, vectorized."""
-    lo = np.full(A.shape, np.log(1e-12))
-    hi = np.full(A.shape, np.log(1.0))
-    for _ in range(100):
-        mid = 0.5 * (lo + hi)
-        x = np.exp(mid)
-        above = 0.4 * A * x**2.5 - Wg * x - W > 0
-        hi, lo = np.where(above, mid, hi), np.where(above, lo, mid)
-    return np.exp(hi)
-
-
 def fem_wall(
     params: ChainParams, soil_E: Any, soil_nu: Any, *, contact: dict[str, Any] | None = None,
-    operators: Any = None,
+    operators: Any = None, with_dE: bool = False,
 ) -> PiecewiseLinearWall:
     """The exact FEM law of each scene (module docstring).
 
     Parameters
     ----------
-    params : the chain; its ``bead_radius`` (the indenter), ``plate_*`` (the plate; thickness
-        0: none), striker, masses, gravity and preload (the range).
-    soil_E, soil_nu : Pa and -, broadcast together: one scene each.
-    contact : the ``contact`` settings (mesh, zone); defaults :data:`ssw.contact.DEFAULTS`;
-        the plate's interface and diameter are the device's (``params``), not these.
-    operators : an :class:`ssw.contact.operators.OperatorStore` (default: the process's).
+    params : ChainParams
+        The chain; its ``bead_radius`` (the indenter), ``plate_*`` (the plate; thickness 0:
+        none), striker, masses, gravity and preload (the range).
+    soil_E : array_like
+        Pa, broadcast with ``soil_nu``: one scene each.
+    soil_nu : array_like
+        -.
+    contact : dict or None
+        The ``contact`` settings (mesh, zone); defaults :data:`ssw.contact.scene.DEFAULTS`; the
+        plate's interface and diameter are the device's (``params``), not these.
+    operators : OperatorStore or None
+        :class:`ssw.contact.operators.OperatorStore` (default: the process's).
+    with_dE : bool
+        Also the pieces' derivatives with respect to the soil's modulus
+        (``_pieces_dE``: implicit differentiation of the condensed contact problem at
+        each piece's active set; frictionless or bonded plates, or none), for
+        ``dforce_dE``; they cost about half a build more.
+
+    Returns
+    -------
+    PiecewiseLinearWall
+        One law per scene.
+
+    Raises
+    ------
+    SolverError
+        The range does not hold the chain's energy within the contact zone.
     """
-    from ssw.chain.wall import compliance_scale, scene_arrays
+    from ssw.chain.wall import compliance_scale, compliance_scale_dE, scene_arrays
     from ssw.contact.operators import default_store, geometry_of, scene_lcp
     from ssw.contact.parametric import Tracer, prefix_path
     from ssw.contact.scene import settings_of
-    from ssw.hertz import effective_modulus, hertz_coefficient
+    from ssw.hertz import effective_modulus, energy_indentation, hertz_coefficient
 
     E, nu = scene_arrays(soil_E, soil_nu)
     # the plate is the device's: its interface and diameter, whatever the contact settings say
@@ -229,15 +266,16 @@ def fem_wall(
     W0, Wg = chain_energy(params)
     W = ENERGY_MARGIN * W0
     s = compliance_scale(params, E, nu)
+    ds = compliance_scale_dE(params, E, nu)
     # a first guess of the range (rigid-sphere coordinates): the Hertz bound of the softer
     # half-space, where (2/5) A d^2.5 = W + Wg d (a plate stiffer than the soil only lowers
     # the real one); it sets the candidate zone, the trace goes on as far as needed
     Eh = np.minimum(E, plate[0]) if has_plate else E
     A = hertz_coefficient(effective_modulus(Eh, nu), R)
-    guess = _hertz_bound(A, W, Wg)
+    guess = energy_indentation(A, W, Wg)
     # the zone: as the study's curves (the nominal energy's reach), so that the wall shares
     # their operators; a deeper contact is caught (the last candidate must stay open)
-    geom = geometry_of(cfg, t, R, float(np.max(_hertz_bound(A, W0, Wg))), cfg["interface"])
+    geom = geometry_of(cfg, t, R, float(np.max(energy_indentation(A, W0, Wg))), cfg["interface"])
     layout = store.layout(geom)
     plate_op = store.body(geom, "plate", plate[1]) if has_plate else None
     rows = []
@@ -272,10 +310,13 @@ def fem_wall(
         keep = d <= bound * (1 + 1e-12)
         j_end = int(np.count_nonzero(keep))  # breakpoints up to the bound, plus the next
         j_end = min(j_end + 1, d.size)
-        rows.append(_pieces(d[:j_end], path, ms, s[i], U[:j_end]))
+        row = _pieces(d[:j_end], path, ms, s[i], U[:j_end])
+        deriv = (None if not with_dE or lcp.dW_dE is None or lcp.tie is not None else
+                 _pieces_dE(lcp.W, lcp.dW_dE, path, ms, j_end - 1, s[i], float(ds[i])))
+        rows.append((*row, *(deriv if deriv is not None else (None, None))))
     # per scene: the mesh's error and the finite domain's stiffening at its own contact
     # radius (a soft soil's is larger)
-    a_peak = np.sqrt(R * _hertz_bound(A, W0, Wg))
+    a_peak = np.sqrt(R * energy_indentation(A, W0, Wg))
     L = min(float(cfg["soil_radius"]), float(cfg["soil_depth"]))
     error = np.hypot(FORCE_ERROR_COEF * float(cfg["mesh_growth"]) ** 2,
                      DOMAIN_ERROR_COEF * a_peak / L)
@@ -293,20 +334,63 @@ def _pieces(d: np.ndarray, path: Any, ms: int, s: float, U: np.ndarray
     return d, a, b, U
 
 
-def _assemble(rows: list[tuple[np.ndarray, ...]], force_error: np.ndarray
-              ) -> PiecewiseLinearWall:
-    """Pad the scenes' pieces to one width."""
+def _pieces_dE(W: np.ndarray, dW: np.ndarray, path: Any, ms: int, k: int, s: float,
+               ds: float) -> tuple[np.ndarray, np.ndarray]:
+    """``da/dE`` and ``db/dE`` of the first ``k`` pieces (chain coordinates), the last one
+    repeated as :func:`_pieces` does.
+
+    On piece ``j`` with active set ``A`` the path is ``lam_A = alpha + delta beta``,
+    ``W_AA alpha = -q0_A``, ``W_AA beta = -q1_A`` (:mod:`ssw.contact.parametric`); the gaps'
+    data do not depend on E, so implicit differentiation gives ``W_AA dalpha = -dW_AA alpha``
+    and the same for ``beta`` (exact for the piecewise-linear law at its active sets). With
+    ``f0 = sum alpha``, ``f1 = sum beta`` over the sphere's candidates, the chain's law is
+    ``a = f0``, ``b = f1 / s`` (``s`` the bead's compliance scale, ``ds = ds/dE``).
+    """
+    from scipy.linalg import cho_factor, cho_solve, solve_triangular
+
+    m = W.shape[0]
+    act = path.active[:k]  # (k, m)
+    f1 = path.lam1[:k, :ms].sum(axis=1)
+    # the right-hand sides -dW_AA lam_A (lam is 0 off A), both parts: (m, 2k)
+    lam = np.concatenate([path.lam0[:k], path.lam1[:k]], axis=0)
+    mask = np.concatenate([act, act], axis=0).T
+    rhs = -(dW @ lam.T) * mask
+    sol = np.zeros_like(rhs)
+    size = act.sum(axis=1)
+    prefix = np.concatenate([np.all(act[:, None, :] == (np.arange(m) < size[:, None])[:, None, :],
+                                    axis=2)[:, 0]] * 2)
+    if np.any(prefix):
+        # a prefix active set {0..p-1}: W_pp^-1 = Z_pp^T Z_pp with Z = L^-1 (W = L L^T):
+        # masked products with the whole triangular Z give every piece at once
+        L = np.linalg.cholesky(W)
+        Z = solve_triangular(L, np.eye(m), lower=True, check_finite=False)
+        y = (Z @ rhs[:, prefix]) * mask[:, prefix]
+        sol[:, prefix] = (Z.T @ y) * mask[:, prefix]
+    for j in np.flatnonzero(~prefix):
+        a_j = np.flatnonzero(mask[:, j])
+        if a_j.size:
+            sol[a_j, j] = cho_solve(cho_factor(W[np.ix_(a_j, a_j)], lower=True), rhs[a_j, j])
+    df0, df1 = sol[:ms, :k].sum(axis=0), sol[:ms, k:].sum(axis=0)
+    da = np.concatenate([df0, df0[-1:]])
+    db = df1 / s - f1 * ds / s**2
+    return da, np.concatenate([db, db[-1:]])
+
+
+def _assemble(rows: list[tuple[Any, ...]], force_error: np.ndarray) -> PiecewiseLinearWall:
+    """Pad the scenes' pieces to one width (the derivatives only if every scene has them)."""
     width = max(r[0].size for r in rows)
+    deriv = all(r[4] is not None for r in rows)
     out = []
-    for col in range(4):
+    for col in range(6 if deriv else 4):
         arr = np.empty((len(rows), width))
         for i, r in enumerate(rows):
             v = r[col]
             arr[i, : v.size] = v
             arr[i, v.size:] = v[-1]
         out.append(arr)
-    d, a, b, U = out
-    return PiecewiseLinearWall(d, a, b, U, d[:, -1].copy(), force_error)
+    d, a, b, U = out[:4]
+    da, db = out[4:] if deriv else (None, None)
+    return PiecewiseLinearWall(d, a, b, U, d[:, -1].copy(), force_error, da, db)
 
 
 def peak_stresses(params: ChainParams, soil_E: Any, soil_nu: float, d_wall: Any, *,

@@ -69,7 +69,7 @@ from typing import Any
 import numpy as np
 
 from ssw.chain.params import ChainParams
-from ssw.chain.wall import bisect_indentation, compliance_scale, scene_arrays
+from ssw.chain.wall import compliance_scale, force_indentation, scene_arrays
 from ssw.contact.plastic import ContactZoneError
 from ssw.errors import ConfigError
 
@@ -363,8 +363,9 @@ class PlasticWall:
         return self.energies(np.zeros(self.n), self.d_max0)[1]
 
     def indentation(self, F: np.ndarray) -> np.ndarray:
-        """Indentation (m) carrying ``F`` (N) on the current history (bisection)."""
-        return bisect_indentation(self.force, F, np.maximum(self.exact_reach, self.d_max0))
+        """Indentation (m) carrying ``F`` (N) on the current history (the root of the
+        monotone law, :func:`ssw.chain.wall.force_indentation`)."""
+        return force_indentation(self.force, F, np.maximum(self.exact_reach, self.d_max0))
 
     def take(self, idx: np.ndarray) -> PlasticWall:
         return PlasticWall(self.h[idx], self.F[idx], self.W[idx], self.d_m[idx],
@@ -400,9 +401,11 @@ def reach(params: ChainParams, E: float, nu: float, margin: float = ENERGY_MARGI
     """A first ``d_top`` (m): where a Hertz wall stores ``margin`` hits' energy, doubled
     (a plastic sample is softer). :func:`plastic_wall` extends it when the virgin curve
     holds less."""
+    from ssw.hertz import energy_indentation
+
     A = float(params.wall_coefficient(np.array([E]), np.array([nu]))[0])
     e_hit = 0.5 * params.masses[0] * params.striker_velocity**2
-    return 2.0 * (2.5 * margin * e_hit / A) ** 0.4
+    return 2.0 * float(energy_indentation(A, margin * e_hit))
 
 
 def plastic_wall(params: ChainParams, soil_E: Any, soil_nu: Any, *, soil_model: Any = None,

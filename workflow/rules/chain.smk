@@ -93,7 +93,7 @@ rule sweep_figure:
         fig8=report(
             f"{CHAIN_DIR}/figures/fig8_tof_vs_E.png",
             caption="../report/fig8.rst",
-            category="3. Chain (Stage II)",
+            category=REPORT_CATEGORIES["chain"],
             subcategory="Figures",
         ),
     log:

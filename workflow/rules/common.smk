@@ -49,15 +49,21 @@ BENCHMARKS = f"{RESULTS}/benchmarks"
 STUDY_CONFIG = sswwf.STUDY_CONFIG
 STUDY = sswwf.Study(config)
 SCENES = STUDY.scenes
+# The report's outline: stage -> its category, the stages the study shows numbered in order
+# (ssw.workflow.report_categories; workflow/report/workflow.rst lists the same categories).
+REPORT_CATEGORIES = sswwf.report_categories(config)
 # Relative recording paths in the config start from the repository (the Snakefile's folder),
 # so that runs with --directory elsewhere find them; `ssw ... --root` gets the same.
 RECORDINGS_ROOT = str(REPO)
 
 
 onstart:
-    # on a cluster, a job no node can hold is an error now, not a wait in the queue
+    # On Slurm, a run that would wait forever is an error now: a job no node can hold, a
+    # status command that cannot see jobs end (no accounting: squeue instead of sacct), and,
+    # while the run goes, jobs that Slurm no longer shows (ssw.cluster).
     if sswwf.submits_to_slurm(workflow):
-        sswwf.check_cluster_fit(workflow)
+        for note in sswwf.prepare_slurm_run(workflow):
+            print(f"ssw cluster check: {note}", file=sys.stderr)
     sswwf.write_study_config(config, STUDY_CONFIG)
 
 
@@ -96,7 +102,7 @@ def fit_figure(name, caption):
     return report(
         f"{RESULTS}/fit/figures/{{set}}_{name}.png",
         caption=f"../report/{caption}.rst",
-        category="2. Fits (Stage I)",
+        category=REPORT_CATEGORIES["fit"],
         subcategory="Figures",
     )
 

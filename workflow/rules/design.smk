@@ -64,13 +64,13 @@ rule design_table:
         csv=report(
             f"{DESIGN_DIR}/{{soil}}.csv",
             caption="../report/design_table.rst",
-            category="6. Plate design",
+            category=REPORT_CATEGORIES["design"],
             subcategory="Tables",
         ),
         plot=report(
             f"{DESIGN_DIR}/figures/{{soil}}_pareto.png",
             caption="../report/design_pareto.rst",
-            category="6. Plate design",
+            category=REPORT_CATEGORIES["design"],
             subcategory="Figures",
         ),
     log:

@@ -33,7 +33,7 @@ if ONE_SOIL_SETS:
             contact_figure=report(
                 f"{RESULTS}/contact/figures/{{set}}_contact.png",
                 caption="../report/contact_figure.rst",
-                category="1. Contact (Stage I)",
+                category=REPORT_CATEGORIES["contact"],
                 subcategory="Figures",
             ),
         log:

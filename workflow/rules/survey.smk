@@ -9,6 +9,8 @@
 #   survey.csv / survey.h5         one row per point: E, interval, target, verdict, coordinates
 #   figures/survey_E.png           E per point with its 95 % interval against its target
 #   figures/survey_map.png         plan view (only when the points have coordinates)
+#   survey.geojson                 the points for a GIS (only when they have coordinates):
+#                                  WGS84 lon/lat, else the local x/y of survey.frame
 
 SURVEY_DIR = f"{RESULTS}/survey"
 SURVEY_POINTS = sswwf.survey_points(config)
@@ -53,9 +55,10 @@ rule survey_table:
                 "map": report(
                     f"{SURVEY_DIR}/figures/survey_map.png",
                     caption="../report/survey_map.rst",
-                    category="5. Survey",
+                    category=REPORT_CATEGORIES["survey"],
                     subcategory="Figures",
-                )
+                ),
+                "geojson": f"{SURVEY_DIR}/survey.geojson",
             }
             if sswwf.survey_has_coordinates(config)
             else {}
@@ -65,7 +68,7 @@ rule survey_table:
         plot=report(
             f"{SURVEY_DIR}/figures/survey_E.png",
             caption="../report/survey_E.rst",
-            category="5. Survey",
+            category=REPORT_CATEGORIES["survey"],
             subcategory="Figures",
         ),
     log:
@@ -78,7 +81,11 @@ rule survey_table:
         inputs=inputs_of("survey_table"),
         digest=digest_of("survey_table"),
         config=STUDY_CONFIG,
-        map=lambda wc, output: f"--map {output.map}" if "map" in output.keys() else "",
+        map=lambda wc, output: (
+            f"--map {output.map} --geojson {output.geojson}"
+            if "map" in output.keys()
+            else ""
+        ),
     shell:
         "python -m ssw --inputs-sha256 {params.digest} survey-table {input} "
         "--config {params.config} --csv {output.csv} --h5 {output.h5} --plot {output.plot} "

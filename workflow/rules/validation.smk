@@ -26,13 +26,13 @@ rule validation:
         fig10=report(
             f"{VALIDATION_DIR}/fig10_tof_validation.png",
             caption="../report/fig10.rst",
-            category="4. Validation (Stage III)",
+            category=REPORT_CATEGORIES["validation"],
             subcategory="Figures",
         ),
         fig9=report(
             f"{VALIDATION_DIR}/fig9_tof_scatter.png",
             caption="../report/fig9.rst",
-            category="4. Validation (Stage III)",
+            category=REPORT_CATEGORIES["validation"],
             subcategory="Figures",
         ),
     log:
@@ -60,19 +60,13 @@ rule validation:
 
 # The study report is Snakemake's own, built after the run:
 #   snakemake --report results/report.html [--configfile ...]
-# with every figure and table the stages flag with report(...) (a category per stage,
-# captions in workflow/report/*.rst, the description workflow/report/workflow.rst). It shows
+# with every figure and table the stages flag with report(...) (a category per stage the
+# study shows, REPORT_CATEGORIES in common.smk; captions in workflow/report/*.rst, the
+# description workflow/report/workflow.rst, which lists the same categories). It shows
 # CSV files only as downloads, so rule report_tables renders each stage's tables as one HTML
 # page (ssw report) that the report opens inline.
-REPORT_CATEGORIES = {
-    "contact": "1. Contact (Stage I)",
-    "fit": "2. Fits (Stage I)",
-    "chain": "3. Chain (Stage II)",
-    "validation": "4. Validation (Stage III)",
-    "survey": "5. Survey",
-}
-# stage -> its CSV tables (every other stage's targets exist: the Snakefile includes this
-# file last)
+# stage -> its CSV tables (the targets of the stages before: the Snakefile includes them
+# first; the plate design flags its own table)
 REPORT_TABLES = sswwf.report_tables(
     [*FIT_TARGETS, *CHAIN_TARGETS, *SURVEY_TARGETS, *rules.validation.output],
     REPORT_CATEGORIES,

@@ -85,7 +85,7 @@ def to_newtons(data: np.ndarray, unit: str | None, sensitivity: float | None,
                where: str) -> np.ndarray:
     """``data`` in ``unit`` (force or voltage) as force in N; ``where`` names the source.
 
-    Volts are divided by ``sensitivity`` (V/N). Raises :class:`RecordingError` naming
+    Volts are divided by ``sensitivity`` (V/N). Raises :class:`~ssw.errors.RecordingError` naming
     ``where``, the unit and what was expected.
     """
     u = unit_of(unit)
@@ -135,7 +135,8 @@ def pretrigger(t: np.ndarray | None, n: int) -> int:
 
 def make_recording(path: str, data: np.ndarray | list[np.ndarray], rate: float, n_pre: int,
                    meta: dict[str, Any], clipped: str, full_scale: float | None) -> Recording:
-    """A :class:`Recording` of hits (columns of ``data``, N) after the readers' checks."""
+    """A :class:`~ssw.daq.recording.Recording` of hits (columns of ``data``, N) after the readers'
+    checks."""
     cols = [np.asarray(c, dtype=np.float64) for c in
             (data if isinstance(data, list) else np.atleast_2d(np.asarray(data).T))]
     if not cols or cols[0].size == 0:

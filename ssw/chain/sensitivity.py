@@ -1,0 +1,177 @@
+"""Forward sensitivities of the chain: which parameters, and how each enters the scheme.
+
+The integrator (:func:`ssw.chain.integrate.simulate`) can carry, alongside the positions
+``u`` and velocities ``v`` (N, n), their derivatives ``U = du/dp`` and ``V = dv/dp``
+(N, n, k) with respect to ``k`` parameters ``p``. Differentiating each line of the velocity
+Verlet step gives the same step for the derivatives (the tangent linear scheme; Hairer,
+Lubich & Wanner 2006, sec. VI.5 for variational equations of symplectic maps):
+
+    V <- V + dt/2 A,   U <- U + dt V,   A <- da/du U + da/dv V' + da/dp,   V <- V + dt/2 A,
+
+``A = da/dp`` along the discrete trajectory, ``V'`` the derivative of the velocity the
+dashpot is evaluated at. The result is the exact derivative of the *discrete* solution at
+the run's fixed step ``dt`` (the step is a numerical setting, held fixed: a run with a
+perturbed parameter and the same ``dt`` differs by the derivative times the perturbation,
+to second order). How each parameter enters (:data:`PARAMETERS`):
+
+* ``E`` (Pa): the soil's modulus, through the wall law only: ``dF_wall/dE`` at fixed
+  indentation (``wall.dforce_dE``; a stateful wall's ``advance_tangent``), and the static
+  indentation of the initial state;
+* ``striker_velocity`` (m/s): the striker's initial speed;
+* ``preload`` (N): the force on bead 1 (statics and dynamics);
+* ``sensor_mass``, ``striker_mass`` (kg): the masses of the sensor particle and of the
+  striker (the statics' weights, the accelerations ``F / m``); a ``uniform`` chain's
+  sensor has a bead's mass whatever ``sensor_mass`` says (derivative 0);
+* ``damping`` (N s/m): the contact dashpot ``c (v_j - v_{j+1})`` of every closed contact.
+
+The same names are the device's calibratable continuous parameters
+(:data:`ssw.device.PARAMETERS`) plus the soil's modulus and the dashpot.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from ssw.errors import ConfigError
+
+#: Parameters the chain differentiates with respect to, and their SI units.
+PARAMETERS: dict[str, str] = {
+    "E": "Pa",
+    "striker_velocity": "m/s",
+    "preload": "N",
+    "sensor_mass": "kg",
+    "striker_mass": "kg",
+    "damping": "N s/m",
+}
+
+
+@dataclass(frozen=True)
+class Tangent:
+    """The parameters a run differentiates with respect to (the columns of its
+    sensitivity arrays, in this order).
+
+    Attributes
+    ----------
+    names : tuple of str
+        Names of :data:`PARAMETERS`, each at most once.
+    """
+
+    names: tuple[str, ...]
+
+    def __post_init__(self) -> None:
+        bad = [n for n in self.names if n not in PARAMETERS]
+        if bad or len(set(self.names)) != len(self.names) or not self.names:
+            raise ConfigError("derivatives", list(self.names),
+                              f"one or more distinct names of {', '.join(PARAMETERS)}")
+
+    @property
+    def k(self) -> int:
+        """Number of parameters."""
+        return len(self.names)
+
+    def col(self, name: str) -> int | None:
+        """Column of ``name`` (None if not requested)."""
+        return self.names.index(name) if name in self.names else None
+
+
+def tangent_of(names: Tangent | str | list[str] | tuple[str, ...] | None) -> Tangent | None:
+    """A :class:`Tangent` from names (a comma-separated string, a sequence, or one already
+    made); None for None.
+
+    Parameters
+    ----------
+    names : Tangent or str or sequence of str or None
+        The parameters.
+
+    Returns
+    -------
+    Tangent or None
+        The validated parameter set.
+
+    Raises
+    ------
+    ConfigError
+        An unknown or repeated name.
+    """
+    if names is None or isinstance(names, Tangent):
+        return names
+    if isinstance(names, str):
+        names = [x.strip() for x in names.split(",") if x.strip()]
+    return Tangent(tuple(names))
+
+
+#: Relative step of the central differences (of the value, or of 1 SI unit when the value
+#: is 0): TOFs are smooth to ~1e-10 relative, so the differences' error is their
+#: truncation (tests/test_tof_derivatives.py).
+CENTRAL_STEP = 1e-4
+#: Difference stencils for walls without forward sensitivities: order -> (central,
+#: one-sided at a lower bound of 0: a preload or a dashpot of 0), each (offsets in steps,
+#: weights, denominator in steps).
+STENCILS = {
+    2: ((np.array([-1.0, 1.0]), np.array([-1.0, 1.0]), 2.0),
+        (np.arange(3.0), np.array([-3.0, 4.0, -1.0]), 2.0)),
+    4: ((np.array([-2.0, -1.0, 1.0, 2.0]), np.array([1.0, -8.0, 8.0, -1.0]), 12.0),
+        (np.arange(5.0), np.array([-25.0, 48.0, -36.0, 16.0, -3.0]), 12.0)),
+}
+#: Parameters that may not go below 0.
+NON_NEGATIVE = ("preload", "damping")
+
+
+@dataclass(frozen=True)
+class Stencil:
+    """A difference stencil for one parameter: evaluate at ``value + offsets h`` and combine
+    with :meth:`derivative`.
+
+    Attributes
+    ----------
+    offsets : numpy.ndarray
+        Offsets in steps.
+    weights : numpy.ndarray
+        Weights of the values.
+    denominator : float
+        Steps the weighted sum is divided by (times ``h``).
+    h : numpy.ndarray
+        (n,) the step per scene (the parameter's SI unit).
+    """
+
+    offsets: np.ndarray
+    weights: np.ndarray
+    denominator: float
+    h: np.ndarray
+
+    def derivative(self, values: list[np.ndarray]) -> np.ndarray:
+        """The derivative from the values at the offsets (one array each)."""
+        total = sum(w * v for w, v in zip(self.weights, values, strict=True))
+        return total / (self.denominator * self.h)
+
+
+def stencil(name: str, value: np.ndarray, rel: float = CENTRAL_STEP, order: int = 4
+            ) -> Stencil:
+    """The difference stencil of parameter ``name`` at ``value`` (:data:`STENCILS`): central,
+    or one-sided where a non-negative parameter would go below 0.
+
+    Parameters
+    ----------
+    name : str
+        A name of :data:`PARAMETERS`.
+    value : numpy.ndarray
+        (n,) the parameter per scene (SI).
+    rel : float
+        Relative step (of 1 SI unit where the value is 0).
+    order : int
+        2 or 4.
+
+    Returns
+    -------
+    Stencil
+        Offsets, weights and steps.
+    """
+    value = np.asarray(value, float)
+    h = rel * np.where(value != 0, np.abs(value), 1.0)
+    central, one_sided = STENCILS[order]
+    reach = np.max(np.abs(central[0]))
+    at_bound = name in NON_NEGATIVE and bool(np.any(value - reach * h < 0))
+    offsets, weights, den = one_sided if at_bound else central
+    return Stencil(offsets, weights, den, h)

@@ -1,0 +1,193 @@
+"""The peak rule: which two maxima of a sensor signal make its time of flight.
+
+TOF (thesis, "peak-to-peak"; Yang et al. 2011) is the time between the incident and the
+reflected wave peaks at the sensor particle. Stated once here for every signal ssw reads, a
+simulated sensor force (:mod:`ssw.chain.tof`, :mod:`ssw.chain.dense`) and a measured record
+(:mod:`ssw.signal.peaks`), so that the model and the measurement pick the same pulses. On a
+sampled signal ``s`` (baseline removed), column by column:
+
+1. **incident peak**: the first local maximum with ``s >= incident_fraction * max(s)``
+   (and above the noise floor, for a record);
+2. **end of the incident pulse**: the first later sample with
+   ``s < gap_fraction * s_incident``;
+3. **reflected peak**: from there on (or from a later start, for a record: the shortest
+   physical round trip), the *first* local maximum with
+   ``s >= split_fraction * max(s over that window)`` (for a record: above the noise floor,
+   with a prominence above it).
+
+Soft soils split the reflected wave into several pulses (Yang et al. 2011: a primary and
+secondary reflected waves); rule 3 takes the primary one, the earliest pulse that is not a
+ripple, even when a later one is larger, so TOF is the primary wave's (as Yang et al.'s
+TOF_PSW) and does not jump from one pulse to another as E changes unless the primary pulse
+falls below ``split_fraction`` of the largest. A local maximum is a sample above its left
+neighbour and not below its right one (the first sample of a flat top).
+
+How each chosen sample is refined to a time is the reader's: the vertex of the parabola
+through three samples (:func:`ssw.chain.tof.pick_peaks`), a band-limited upsampling first
+for records (:func:`ssw.signal.peaks.refine_peak`), or the maximum of the integrator's own
+dense output for a simulated run (:mod:`ssw.chain.dense`).
+
+References
+----------
+Yang, J., Silvestro, C., Khatri, D., De Nardo, L. and Daraio, C. (2011). Interaction of
+highly nonlinear solitary waves with linear elastic media. Phys. Rev. E 83, 046606.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+
+@dataclass(frozen=True)
+class PeakRule:
+    """The rule's thresholds (dimensionless; module docstring).
+
+    Attributes
+    ----------
+    incident_fraction : float
+        Share of the signal's maximum a local maximum must reach to be the incident peak.
+    gap_fraction : float
+        Share of the incident peak below which the incident pulse has ended.
+    split_fraction : float
+        Share of the reflected window's maximum a local maximum must reach to count.
+    noise_k : float
+        Noise sigmas a measured record's peaks must exceed (height and prominence);
+        simulated signals have no noise floor.
+    """
+
+    incident_fraction: float = 0.5
+    gap_fraction: float = 0.25
+    split_fraction: float = 0.2
+    noise_k: float = 8.0
+
+
+#: The rule every TOF of ssw uses.
+RULE = PeakRule()
+
+
+@dataclass(frozen=True)
+class Selection:
+    """Sample indices chosen by the rule, per column (n,) int, and what was found (bool).
+
+    ``k_gap`` is the first sample of the reflected window (the end of the incident
+    pulse, or the later start given); ``w_max`` (n,) the window's maximum.
+    """
+
+    k_incident: np.ndarray
+    k_gap: np.ndarray
+    k_reflected: np.ndarray
+    w_max: np.ndarray
+    has_incident: np.ndarray
+    has_gap: np.ndarray
+    has_reflected: np.ndarray
+
+    @property
+    def ok(self) -> np.ndarray:
+        """(n,) bool: both peaks found."""
+        return self.has_incident & self.has_gap & self.has_reflected
+
+
+def local_maxima(s: np.ndarray) -> np.ndarray:
+    """(n_t, n) bool: interior samples above their left neighbour and not below their right
+    one; ``s`` (n_t, n)."""
+    out = np.zeros(s.shape, dtype=bool)
+    out[1:-1] = (s[1:-1] > s[:-2]) & (s[1:-1] >= s[2:])
+    return out
+
+
+def incident(s: np.ndarray, rule: PeakRule = RULE, *, floor: float | np.ndarray = 0.0,
+             maxima: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray]:
+    """Rule 1: the incident peak's sample per column.
+
+    Parameters
+    ----------
+    s : numpy.ndarray
+        (n_t, n) signal, baseline removed (N or V).
+    rule : PeakRule
+        The thresholds.
+    floor : float or numpy.ndarray
+        Noise floor (same unit as ``s``; scalar or (n,)) the peak must exceed.
+    maxima : numpy.ndarray or None
+        (n_t, n) bool local maxima when already known (:func:`local_maxima`).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(k, found)``: (n,) sample index (0 where none) and (n,) bool.
+    """
+    m = local_maxima(s) if maxima is None else maxima
+    top = s.max(axis=0)
+    ok = m & (s >= rule.incident_fraction * top) & (s > floor) & (top > 0)
+    return np.argmax(ok, axis=0), ok.any(axis=0)
+
+
+def gap_end(s: np.ndarray, k_incident: np.ndarray, rule: PeakRule = RULE
+            ) -> tuple[np.ndarray, np.ndarray]:
+    """Rule 2: the first sample after the incident peak below ``gap_fraction`` of it.
+
+    Parameters
+    ----------
+    s : numpy.ndarray
+        (n_t, n) signal, baseline removed.
+    k_incident : numpy.ndarray
+        (n,) the incident peaks' samples.
+    rule : PeakRule
+        The thresholds.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(k, found)``: (n,) sample index and (n,) bool.
+    """
+    cols = np.arange(s.shape[1])
+    idx = np.arange(s.shape[0])[:, None]
+    after = (idx > k_incident) & (s < rule.gap_fraction * s[k_incident, cols])
+    return np.argmax(after, axis=0), after.any(axis=0)
+
+
+def reflected(s: np.ndarray, start: np.ndarray, rule: PeakRule = RULE, *,
+              floor: float | np.ndarray = 0.0, allowed: np.ndarray | None = None,
+              maxima: np.ndarray | None = None
+              ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Rule 3: the first significant local maximum from sample ``start`` on.
+
+    Parameters
+    ----------
+    s : numpy.ndarray
+        (n_t, n) signal, baseline removed.
+    start : numpy.ndarray
+        (n,) first sample of the window.
+    rule : PeakRule
+        The thresholds.
+    floor : float or numpy.ndarray
+        Noise floor (scalar or (n,)) the peak must exceed.
+    allowed : numpy.ndarray or None
+        (n_t, n) bool, further maxima allowed (a record's prominence test); None: all.
+    maxima : numpy.ndarray or None
+        (n_t, n) bool local maxima when already known.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        ``(k, found, w_max)``: (n,) sample index, (n,) bool and the window's maximum (n,).
+    """
+    m = local_maxima(s) if maxima is None else maxima
+    window = np.arange(s.shape[0])[:, None] >= start
+    w_max = np.where(window, s, -np.inf).max(axis=0)
+    ok = m & window & (s >= rule.split_fraction * w_max) & (s > floor) & (w_max > 0)
+    if allowed is not None:
+        ok &= allowed
+    return np.argmax(ok, axis=0), ok.any(axis=0), w_max
+
+
+def select(s: np.ndarray, rule: PeakRule = RULE) -> Selection:
+    """Rules 1-3 on the columns of a noiseless signal ``s`` ((n_t, n), baseline removed;
+    NaN samples, a stopped scene's, read as 0): the chosen samples (:class:`Selection`)."""
+    s = np.where(np.isnan(s), 0.0, s)
+    m = local_maxima(s)
+    k_inc, has_inc = incident(s, rule, maxima=m)
+    k_gap, has_gap = gap_end(s, k_inc, rule)
+    k_ref, has_ref, w_max = reflected(s, k_gap, rule, maxima=m)
+    return Selection(k_inc, k_gap, k_ref, w_max, has_inc, has_gap, has_ref & has_gap)

@@ -1,0 +1,134 @@
+"""ssw.cluster without a cluster: what the controller says, the status command a run needs,
+and when a run's jobs count as lost. (tests/test_slurm.py runs the same on a real Slurm.)"""
+
+from __future__ import annotations
+
+import time
+
+import pytest
+
+from ssw import cluster as cl
+from ssw.errors import ConfigError, SswError
+
+# `scontrol show config` of scripts/slurm-local.sh's cluster (Slurm 22.05), abridged.
+NO_ACCOUNTING_CONFIG = """\
+Configuration data as of 2026-01-01T00:00:00
+AccountingStorageBackupHost = (null)
+AccountingStorageType   = accounting_storage/none
+ClusterName             = ssw-local
+MinJobAge               = 300 sec
+"""
+
+
+def test_scontrol_config_is_parsed():
+    info = cl.parse_scontrol_config(NO_ACCOUNTING_CONFIG)
+    assert info == cl.SlurmConfig("accounting_storage/none", 300)
+    assert not info.keeps_accounting
+    slurmdbd = cl.parse_scontrol_config(
+        "AccountingStorageType = accounting_storage/slurmdbd\nMinJobAge = 1h\n")
+    assert slurmdbd.keeps_accounting and slurmdbd.min_job_age_s == 3600
+    assert cl.parse_scontrol_config("MinJobAge = 5 min").min_job_age_s == 300
+
+
+@pytest.mark.parametrize(("requested", "age", "init", "sacct", "used"), [
+    ("sacct", 300, 40, True, "sacct"),
+    ("squeue", 300, 40, True, "squeue"),    # 300 >= 3 x 40
+    ("squeue", 100, 40, True, "sacct"),     # the plugin trades squeue for sacct
+    ("squeue", None, 40, True, "sacct"),
+    ("squeue", 100, 40, False, "squeue"),   # no sacct binary: squeue whatever
+    ("sacct", 300, 40, False, "squeue"),
+])
+def test_effective_status_command_follows_the_plugin(requested, age, init, sacct, used):
+    """The rule of snakemake-executor-plugin-slurm 2.8.0's check_active_jobs."""
+    assert cl.effective_status_command(requested, age, init, sacct) == used
+
+
+def test_without_accounting_the_status_command_becomes_squeue():
+    info = cl.parse_scontrol_config(NO_ACCOUNTING_CONFIG)
+    # the plugin's default where the sacct binary exists is sacct, which fails here
+    assert cl.status_command(info, "sacct", 40, True) == "squeue"
+    assert cl.status_command(info, "squeue", 40, True) == "squeue"
+    # with accounting the run's own choice stays
+    kept = cl.SlurmConfig("accounting_storage/slurmdbd", 300)
+    assert cl.status_command(kept, "sacct", 40, True) == "sacct"
+    assert cl.status_command(kept, "squeue", 40, True) == "squeue"
+
+
+def test_a_first_status_delay_the_cluster_forgets_is_an_error_naming_the_flag():
+    """MinJobAge 100 s < 3 x 40 s: the plugin would query sacct, which fails here."""
+    short = cl.SlurmConfig(cl.NO_ACCOUNTING, 100)
+    with pytest.raises(ConfigError, match="slurm-init-seconds-before-status-checks") as e:
+        cl.status_command(short, "sacct", 40, True)
+    assert "MinJobAge/3 = 33 s" in str(e.value) and "no job was submitted" in str(e.value)
+    assert cl.status_command(short, "sacct", 30, True) == "squeue"
+    assert cl.status_command(short, "sacct", 40, False) == "squeue"  # no sacct to trade for
+
+
+def test_short_job_age_warns_only_for_squeue():
+    assert cl.short_job_age(cl.SlurmConfig(cl.NO_ACCOUNTING, 300), "squeue") is None
+    assert "MinJobAge = 150 s" in cl.short_job_age(cl.SlurmConfig(cl.NO_ACCOUNTING, 150),
+                                                   "squeue")
+    assert cl.short_job_age(cl.SlurmConfig("accounting_storage/slurmdbd", 150), "sacct") \
+        is None
+
+
+def test_job_states_are_parsed_from_squeue_and_sacct():
+    assert cl.parse_job_states("12|RUNNING\n13|PENDING\n\n") == {"12": "RUNNING",
+                                                                "13": "PENDING"}
+    assert cl.parse_job_states("14|CANCELLED by 0\n15_2|COMPLETED\n") == {
+        "14": "CANCELLED", "15_2": "COMPLETED"}
+
+
+def test_vanished_jobs_are_lost_after_the_grace_not_before():
+    watch = cl.LostJobsWatch(vanish_s=60, stall_s=300)
+    jobs = ["a (i=0)", "a (i=1)"]
+    assert watch.step(0, jobs, {"1": "RUNNING", "2": "PENDING"}) is None
+    assert watch.step(10, jobs, {}) is None           # gone: the grace starts
+    assert watch.step(69, jobs, {}) is None
+    msg = watch.step(70, jobs, {})
+    assert msg is not None and "Slurm lists no job of this run" in msg
+    assert "2 cluster job(s): a (i=0), a (i=1)" in msg and "MinJobAge" in msg
+
+
+def test_a_failed_query_or_a_running_job_resets_nothing_or_everything():
+    watch = cl.LostJobsWatch(vanish_s=60, stall_s=300)
+    assert watch.step(0, ["a"], {}) is None
+    assert watch.step(100, ["a"], None) is None       # the query failed: no verdict
+    assert watch.step(101, ["a"], {}) is not None     # ... but the absence still counts
+    watch = cl.LostJobsWatch(vanish_s=60, stall_s=300)
+    assert watch.step(0, ["a"], {}) is None
+    assert watch.step(50, ["a"], {"7": "RUNNING"}) is None   # a job appeared: reset
+    assert watch.step(100, ["a"], {}) is None
+    assert watch.step(159, ["a"], {}) is None
+    assert watch.step(0, [], {}) is None              # nothing awaited: reset
+    assert watch.step(200, ["a"], {}) is None
+
+
+def test_ended_jobs_the_plugin_no_longer_reports_are_lost_after_its_longest_pause():
+    watch = cl.LostJobsWatch(vanish_s=60, stall_s=300)
+    done = {"5": "COMPLETED", "6": "FAILED"}
+    assert watch.step(0, ["b"], done) is None
+    assert watch.step(299, ["b"], done) is None
+    msg = watch.step(300, ["b"], done)
+    assert msg is not None and "5 COMPLETED, 6 FAILED" in msg
+    # PREEMPTED without requeue is final: the plugin would keep waiting for it
+    watch = cl.LostJobsWatch(vanish_s=60, stall_s=10)
+    assert watch.step(0, ["b"], {"5": "PREEMPTED"}) is None
+    assert watch.step(10, ["b"], {"5": "PREEMPTED"}) is not None
+
+
+def test_the_watch_thread_calls_back_once_and_ends():
+    got = []
+    states = iter([{"1": "RUNNING"}, {}, {}, {}, {}, {}])
+    thread = cl.watch_lost_jobs(lambda: next(states), lambda: ["job"], got.append,
+                                stall_s=100, vanish_s=0.05, poll_s=0.02)
+    thread.join(timeout=5)
+    assert not thread.is_alive() and len(got) == 1 and "job" in got[0]
+    time.sleep(0.05)
+    assert len(got) == 1
+
+
+def test_sinfo_gives_the_largest_node():
+    assert cl.parse_sinfo("2 1000\n4+ 800\n") == cl.NodeLimits(4, 1000)
+    with pytest.raises(SswError):
+        cl.parse_sinfo("")

@@ -1,0 +1,134 @@
+"""The documentation site builds with no warning, and the README's links lead somewhere.
+
+``make docs`` runs Sphinx with ``-W --keep-going -n``: a warning of docutils, MyST, autodoc
+or numpydoc (its checks of the Parameters sections: docs/CONTRACTS.md, "Docstrings"), a
+cross-reference to a missing object or page, a schema key without a description, a command
+or flag without help, or a module of ``ssw`` on no API page fails the build.
+
+The build keeps its doctrees in ``build/docs-cache/<key>`` (git-ignored; the key hashes the
+Sphinx configuration, its extension and the package versions) and rewrites every page
+(``-a``), so a build after a small edit rereads only what the edit touched (pages depend on
+their Markdown, the schemas, the modules they document) while every cross-reference is
+resolved again. A failed build deletes the cache, so the next one starts from nothing and
+reports every warning again.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import re
+import shutil
+import subprocess
+import sys
+from importlib import metadata
+from pathlib import Path
+
+import pytest
+
+ROOT = Path(__file__).resolve().parent.parent
+sys.path.insert(0, str(ROOT / "docs" / "_ext"))
+
+
+def _cache_key() -> str:
+    h = hashlib.sha256()
+    for path in [ROOT / "docs" / "conf.py", *sorted((ROOT / "docs" / "_ext").glob("*.py"))]:
+        h.update(path.read_bytes())
+    for dist in ("sphinx", "docutils", "myst-parser", "numpydoc", "furo"):
+        h.update(f"{dist}={metadata.version(dist)}".encode())
+    return h.hexdigest()[:16]
+
+
+def test_make_docs_builds_without_warnings(tmp_path):
+    """``make docs`` (the README's command) with warnings as errors."""
+    cache = ROOT / "build" / "docs-cache" / _cache_key()
+    cache.mkdir(parents=True, exist_ok=True)
+    r = subprocess.run(
+        ["make", "-o", "setup", "docs", f"VENV={Path(sys.prefix)}",
+         f"DOCS_OUT={tmp_path / 'html'}", f"SPHINXOPTS=-a -d {cache}"],
+        cwd=ROOT, capture_output=True, text=True, timeout=900,
+    )
+    if r.returncode != 0:
+        shutil.rmtree(cache, ignore_errors=True)
+    assert r.returncode == 0, f"make docs failed:\n{r.stdout[-3000:]}\n{r.stderr[-6000:]}"
+    html = tmp_path / "html"
+    for page in ["index", "study", "instrument", "performance", "guarantees", "cluster",
+                 "reference/configuration", "reference/device", "reference/cli", "setup",
+                 "api/ssw.contact"]:
+        assert (html / f"{page}.html").is_file(), page
+    # the generated references hold what they are generated from
+    config_ref = (html / "reference" / "configuration.html").read_text()
+    assert "contact.mesh_growth" in config_ref and "chain.wall_law" in config_ref
+    cli_ref = (html / "reference" / "cli.html").read_text()
+    assert "--reference-recording" in cli_ref and "ssw-bench-chain" in cli_ref
+
+
+# ---------------------------------------------------------------------------- README links
+
+
+def _slug(heading: str) -> str:
+    """GitHub's anchor of a Markdown heading (lower case, punctuation dropped, spaces to
+    hyphens), as MyST's ``myst_heading_anchors`` makes it too."""
+    text = re.sub(r"[`*_]", "", heading.strip().lower())
+    text = re.sub(r"[^\w\- ]", "", text)
+    return text.replace(" ", "-")
+
+
+def _anchors(path: Path) -> set[str]:
+    text = path.read_text()
+    if path.suffix == ".md":
+        return {_slug(m.group(1)) for m in re.finditer(r"^#{1,6} (.+)$", text, re.MULTILINE)}
+    return set()
+
+
+@pytest.mark.parametrize("page", ["README.md", "config/README.md"])
+def test_readme_links_resolve(page):
+    """Every relative link of the front pages names a file that exists, and an anchor into
+    a Markdown page names one of its headings."""
+    path = ROOT / page
+    text = re.sub(r"```.*?```", "", path.read_text(), flags=re.DOTALL)
+    links = re.findall(r"\]\(([^)\s]+)\)", text)
+    assert links, page
+    for link in links:
+        if re.match(r"[a-z]+://", link):
+            continue
+        target, _, anchor = link.partition("#")
+        dest = (path.parent / target).resolve() if target else path
+        assert dest.exists(), f"{page}: link to a missing file: {link}"
+        if anchor and dest.suffix == ".md":
+            assert anchor in _anchors(dest), f"{page}: no heading for #{anchor} in {target}"
+
+
+def test_readme_is_a_short_page():
+    """The front page stays a page a newcomer reads in five minutes (the rest is the site)."""
+    assert len((ROOT / "README.md").read_text().splitlines()) <= 200
+
+
+# ---------------------------------------------------------------------------- generators
+
+
+def test_units_are_read_off_the_schema_descriptions():
+    from ssw_docs import units_of
+
+    assert units_of("rigid indenter radius, m") == "m"
+    assert units_of("J, the energy whose Hertz indentation a curve reaches") == "J"
+    assert units_of("density of the tested medium, kg/m^3, for wall_dynamics reduced") \
+        == "kg/m^3"
+    assert units_of("sample rate, S/s (NI 9234 - 51200/n, n = 1..31)") == "S/s"
+    assert units_of("number of equal indentation increments") == ""
+    assert units_of("A study of the device") == ""
+
+
+def test_every_schema_key_is_in_the_configuration_reference():
+    """The generated reference walks every key of both schemas, nested ones included."""
+    import yaml
+    from ssw_docs import SCHEMAS, _Schema
+
+    keys = {".".join(p) for p, _ in
+            _Schema(yaml.safe_load(SCHEMAS["config"].read_text())).keys()}
+    for key in ("contact.mesh_growth", "sets.NAME.sample.base_nu", "survey.points.[].target_E",
+                "design.soils.NAME.soil_E", "validation.samples.[].tof_published",
+                "daq.simulation.noise_rms", "chain.sweep.soil_E"):
+        assert key in keys, key
+    device = {".".join(p) for p, _ in
+              _Schema(yaml.safe_load(SCHEMAS["device"].read_text())).keys()}
+    assert {"chain.beads", "striker.velocity", "repeatability.tof_std"} <= device

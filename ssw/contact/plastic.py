@@ -59,13 +59,13 @@ Newton iterations on the whole mesh give, to round-off; tests):
 * the far field: the elements beyond a near zone about the contact point (radius
   :func:`near_radius`, doubled when the plastic zone or the contact reaches its edge) stay
   elastic and unloaded, so they are condensed once onto the dofs they share with the near
-  zone (their Schur complement, :meth:`_Model._condense`); the Newton iterations see the
+  zone (their Schur complement, ``_Model._condense``); the Newton iterations see the
   near zone only;
 * elastic spans: while no point yields and the active set holds, the path is affine in the
   indentation (loading before first yield, unloading, elastic reloading); one solve with
-  the elastic matrix's kept LU gives every increment of the span (:func:`_elastic_span`);
+  the elastic matrix's kept LU gives every increment of the span (``_elastic_span``);
 * the Newton steps: GMRES preconditioned by the newest factorization of an earlier tangent
-  while that is cheaper than factorizing (:meth:`_Model.solve`), and each plastic increment
+  while that is cheaper than factorizing (``_Model.solve``), and each plastic increment
   starts from the last one's rate (a predictor).
 
 A study config's plastic curve (``ssw contact --soil-model``) is solved on the config's
@@ -345,7 +345,7 @@ class _Model:
         self.ke[:, 12:, :12] = self.Bp
         self.ke[:, :12, 12:] = np.transpose(self.Bp, (0, 2, 1))
         self.ke[:, 12:, 12:] = -self.Cp
-        #: the elastic far field condensed onto the near zone (:meth:`_condense`): its
+        #: the elastic far field condensed onto the near zone (``_condense``): its
         #: retained dofs, stiffness (N/m) and the near elements at its boundary
         self.far_dofs, self.far_S = np.zeros(0, np.int64), np.zeros((0, 0))
         self.ring = np.zeros(ne, bool)
@@ -697,12 +697,12 @@ def solve_path(
     plate : tuple of float or None
         A plate's ``(E Pa, nu)`` on a mesh with a plate.
     interface : str
-        Plate-sample tie: ``frictionless`` | ``bonded`` (:class:`_Model`).
+        Plate-sample tie: ``frictionless`` | ``bonded`` (``_Model``).
     plate_model : model of :mod:`ssw.constitutive` or None
         The plate's constitutive law (None: elastic).
     near : float or None
         Radius (m) of the near zone about the contact point outside which the mesh is
-        condensed (the elastic far field, :meth:`_Model._condense`); -1 (default):
+        condensed (the elastic far field, ``_Model._condense``); -1 (default):
         :func:`near_radius` of the path, doubled while the plastic zone or the contact
         reaches its edge; None: no condensation.
 
@@ -793,7 +793,7 @@ def _path(mesh: Mesh, E: float, nu: float, model: Any, radius: float, deltas: np
           plate: tuple[float, float] | None, interface: str, plate_model: Any,
           near: float | None, t0: float) -> PlasticCurve:
     """The path of :func:`solve_path` with the near zone ``near`` (m; None: the whole
-    mesh). Raises :class:`_NearZoneTooSmall` when the plastic zone reaches the near zone's
+    mesh). Raises ``_NearZoneTooSmall`` when the plastic zone reaches the near zone's
     edge elements, or the contact its last candidate short of half the sphere's radius."""
     mixed = all(getattr(m, "isochoric", False) for m in (model, plate_model) if m is not None)
     fe = _Model(mesh, E, nu, radius, punch, mixed=mixed, plate=plate, interface=interface,

@@ -431,6 +431,9 @@ def plastic_wall(params: ChainParams, soil_E: Any, soil_nu: Any, *, soil_model: 
         The tables' FEM settings.
     margin : float
         The virgin curve holds ``margin`` hits' energy (:data:`ENERGY_MARGIN`).
+    **_ : Any
+        Options of the other walls (the wall registry passes every wall the same ones),
+        ignored.
 
     Returns
     -------

@@ -332,7 +332,7 @@ def contact_stresses(
     soil_E: Any, soil_nu: float, plate: tuple[float, float] | None, plate_thickness: float,
     radius: float, delta: Any, contact: dict[str, Any] | None = None, *,
     store: OperatorStore | None = None, fields: bool = False,
-    bead: tuple[float, float] | None = None,
+    bead: tuple[float, float] | None = None, force: Any = None,
 ) -> ContactStress:
     """Peak von Mises stresses of the plate and of the soil at contact states.
 
@@ -365,6 +365,10 @@ def contact_stresses(
         those of the rigid sphere of :func:`equivalent_radius` carrying the same ``F``
         (the elastic bead's Hertz pressure on the top body). ``delta`` of the result is
         then that sphere's indentation.
+    force : array_like or None
+        (n,) N, the rigid sphere's force at each ``delta`` when the caller knows it (the
+        chain's fem wall at its peak indentation): with ``bead``, the rigid sphere's path is
+        then not traced again.
     """
     from ssw.contact.parametric import trace
     from ssw.contact.scene import settings_of
@@ -385,6 +389,8 @@ def contact_stresses(
     soil_op = store.body(geom, "soil", soil_nu)
     plate_op = store.body(geom, "plate", plate[1]) if has_plate else None
     n = E.size
+    known = None if force is None or bead is None else np.broadcast_to(
+        np.asarray(force, float), (n,))
     force = np.empty(n)
     uP: np.ndarray | None = None
     uS: np.ndarray | None = None
@@ -394,18 +400,22 @@ def contact_stresses(
     moduli, which = np.unique(E, return_inverse=True)
     for u, Eu in enumerate(moduli):
         ks = np.flatnonzero(which == u)
-        lcp = scene_lcp(layout, plate_op, soil_op, float(Eu),
-                        plate[0] if has_plate else None, interface, radius)
-        path, _ = trace(lcp.W, lcp.q0, lcp.q1, float(d[ks].max()))
-        lam = path.forces(d[ks])
-        ms = lcp.n_sphere
+        if known is None:
+            lcp = scene_lcp(layout, plate_op, soil_op, float(Eu),
+                            plate[0] if has_plate else None, interface, radius)
+            path, _ = trace(lcp.W, lcp.q0, lcp.q1, float(d[ks].max()))
+            lam = path.forces(d[ks])
+            f_R = lam[:, :lcp.n_sphere].sum(axis=1)
+        else:
+            f_R = known[ks]
         if bead is not None:
             top_E = plate[0] if has_plate else float(Eu)
             r_eq = equivalent_radius(radius, (top_E, top[1]), bead)
             lcp = scene_lcp(layout, plate_op, soil_op, float(Eu),
                             plate[0] if has_plate else None, interface, r_eq)
-            path, d[ks] = _indentation_at(lcp, lam[:, :ms].sum(axis=1), float(d[ks].max()))
+            path, d[ks] = _indentation_at(lcp, f_R, float(d[ks].max()))
             lam = path.forces(d[ks])
+        ms = lcp.n_sphere
         if np.any(path.active[:, ms - 1]):
             k = int(ks[np.argmax(d[ks])])
             raise SolverError(f"the contact zone reached the last candidate (r = "

@@ -156,10 +156,7 @@ class DesignSpec:
 
     def soil_yield_stress(self, E: np.ndarray) -> np.ndarray:
         """The soil's yield stress (Pa) at moduli ``E`` (module docstring)."""
-        E = np.asarray(E, float)
-        if self.soil_strength is not None:
-            return np.full(E.shape, float(self.soil_strength))
-        return self.soil_strength_ratio * E
+        return soil_yield_stress(E, self.soil_strength, self.soil_strength_ratio)
 
     @property
     def tof_uncertainty(self) -> float:
@@ -201,6 +198,15 @@ class DesignSpec:
         d = asdict(self)
         d.pop("extra")
         return {**d, "soil_E_grid": self.grid.tolist()}
+
+
+def soil_yield_stress(E: np.ndarray, strength: float | None, ratio: float) -> np.ndarray:
+    """The soil's yield stress (Pa) at moduli ``E`` (Pa): ``strength`` when stated, else
+    ``ratio E`` (module docstring)."""
+    E = np.asarray(E, float)
+    if strength is not None:
+        return np.full(E.shape, float(strength))
+    return ratio * E
 
 
 def parse_range(text: str, field_name: str) -> tuple[float, float]:

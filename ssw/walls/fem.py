@@ -474,6 +474,31 @@ def _chain_dE(df0: np.ndarray, df1: np.ndarray, f1: np.ndarray, s: float, ds: fl
     return da, np.concatenate([db, db[-1:]])
 
 
+def concatenate(walls: list[PiecewiseLinearWall]) -> PiecewiseLinearWall:
+    """The scenes of several walls as one (each row padded with its last value, as
+    :func:`fem_wall` pads its scenes; the derivatives kept only if every wall has them):
+    the walls of several plates or chains' ranges advanced in one batched run."""
+    width = max(w.d.shape[1] for w in walls)
+
+    def stack(name: str) -> np.ndarray:
+        parts = []
+        for w in walls:
+            x = getattr(w, name)
+            parts.append(np.concatenate([x, np.repeat(x[:, -1:], width - x.shape[1], axis=1)],
+                                        axis=1))
+        return np.concatenate(parts, axis=0)
+
+    deriv = all(w.da_dE is not None and w.db_dE is not None for w in walls)
+    errors = [w.force_error for w in walls]
+    error = (np.concatenate([np.broadcast_to(e, (w.n,)) for e, w in zip(errors, walls,
+                                                                         strict=True)])
+             if all(e is not None for e in errors) else None)
+    return PiecewiseLinearWall(stack("d"), stack("a"), stack("b"), stack("U"),
+                               np.concatenate([w.d_exact for w in walls]), error,
+                               stack("da_dE") if deriv else None,
+                               stack("db_dE") if deriv else None)
+
+
 def _assemble(rows: list[tuple[Any, ...]], force_error: np.ndarray) -> PiecewiseLinearWall:
     """Pad the scenes' pieces to one width (the derivatives only if every scene has them)."""
     width = max(r[0].size for r in rows)
@@ -492,13 +517,15 @@ def _assemble(rows: list[tuple[Any, ...]], force_error: np.ndarray) -> Piecewise
 
 
 def peak_stresses(params: ChainParams, soil_E: Any, soil_nu: float, d_wall: Any, *,
-                  contact: dict[str, Any] | None = None, operators: Any = None) -> Any:
+                  contact: dict[str, Any] | None = None, operators: Any = None,
+                  force: Any = None) -> Any:
     """The contact's elastic stresses at the chain's peak wall indentations ``d_wall`` (m,
     one per soil modulus ``soil_E``, Pa; one ``soil_nu``): the indentation moved into the
     rigid sphere's coordinates of the FEM (the bead's compliance out,
     :func:`ssw.chain.wall.compliance_scale`) and the device's plate (its material,
     thickness, diameter and interface, as :func:`fem_wall` has them) with the elastic bead
-    (:func:`ssw.contact.stress.contact_stresses`). Returns its ``ContactStress``."""
+    (:func:`ssw.contact.stress.contact_stresses`; ``force``, N, the wall's force there when
+    known). Returns its ``ContactStress``."""
     from ssw.chain.wall import compliance_scale
     from ssw.contact.stress import contact_stresses
 
@@ -509,4 +536,5 @@ def peak_stresses(params: ChainParams, soil_E: Any, soil_nu: float, d_wall: Any,
            "plate_diameter": params.plate_diameter}
     return contact_stresses(E, soil_nu, (params.plate_E, params.plate_nu) if has_plate
                             else None, params.plate_thickness, params.bead_radius, delta,
-                            cfg, store=operators, bead=(params.bead_E, params.bead_nu))
+                            cfg, store=operators, bead=(params.bead_E, params.bead_nu),
+                            force=force)

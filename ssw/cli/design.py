@@ -41,6 +41,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         description=__doc__.split("\n\n")[0],
     )
     g = p.add_argument_group("the question")
+    g.add_argument("--space", choices=("plate", "device"), default="plate",
+                   help="what is designed: the plate under the device's chain (default) or "
+                   "the whole device (beads, sensor, striker, drop, plate; the config's "
+                   "design.device section; ssw.design.device_search)")
+    g.add_argument("--family", metavar="D:MATERIAL", action="append",
+                   help="with --space device: only this bead diameter (m) and plate "
+                   "material (repeatable; the workflow's jobs)")
     g.add_argument("--soil-E", help="LO:HI soil moduli, Pa (e.g. 10e6:100e6)")
     g.add_argument("--soil-nu", type=float, help="soil Poisson's ratio")
     g.add_argument("--soil-range", help="a named soil range of the config's design.soils "
@@ -139,6 +146,8 @@ def _spec(args: argparse.Namespace, ctx: Any) -> Any:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
+    if args.space == "device":
+        return _run_device(args)
     from ssw.cli._device import chain_context
     from ssw.design.output import plot, write_table
     from ssw.design.run import merge_results, run_design
@@ -196,8 +205,83 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     return res
 
 
+def _families(items: list[str] | None) -> list[tuple[float, str]] | None:
+    """``--family D:MATERIAL`` values -> (diameter, material) pairs."""
+    if not items:
+        return None
+    out = []
+    for it in items:
+        d, _, m = it.partition(":")
+        try:
+            out.append((float(d), m))
+        except ValueError as exc:
+            raise ConfigError("--family", it, "D:MATERIAL (a bead diameter in m and a plate "
+                              "material key)") from exc
+        if not m:
+            raise ConfigError("--family", it, "D:MATERIAL")
+    return out
+
+
+def _run_device(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw design --space device`` (:func:`ssw.design.device_search.run_device_design`)."""
+    from ssw.cli._device import chain_context
+    from ssw.config import library
+    from ssw.design.device_output import plot, write_table
+    from ssw.design.device_search import run_device_design
+    from ssw.design.device_spec import DeviceSpec
+    from ssw.design.space import point_of, space_from_dict
+    from ssw.h5io import write_json
+
+    for flag, v in (("--merge", args.merge), ("--plastic-hits", args.plastic_hits),
+                    ("--materials", args.materials), ("--thickness", args.thickness)):
+        if v:
+            raise ConfigError(flag, v, "not with --space device (its space is the config's "
+                              "design.device section)")
+    ctx = chain_context(args, numerics_only=True)
+    plate_spec = _spec(args, ctx)
+    cfg, dev = ctx.cfg, ctx.device
+    section = dict(cfg.get("design", {}).get("device") or {})
+    p = ctx.params
+    space = space_from_dict(section, p.plate_diameter / (2.0 * p.bead_radius))
+    kw = {k: section[k] for k in ("moduli", "max_mass", "max_length", "finalists",
+                                  "plate_yield_limit",
+                                  "refine_evaluations", "phases", "noise_rms")
+          if section.get(k) is not None}
+    if args.moduli is not None:
+        kw["moduli"] = args.moduli
+    if "noise_rms" not in kw:
+        kw["noise_rms"] = float(cfg.get("daq", {}).get("simulation", {}).get("noise_rms", 0.05))
+    spec = DeviceSpec(plate_spec.soil_E, plate_spec.soil_nu, soil_strength=plate_spec.soil_strength,
+                      soil_strength_ratio=plate_spec.soil_strength_ratio,
+                      soil_yield_limit=plate_spec.soil_yield_limit,
+                      max_plate_mass_ratio=plate_spec.max_mass_ratio, hits=plate_spec.hits,
+                      tof_scatter=plate_spec.tof_scatter,
+                      tof_scatter_source=plate_spec.tof_scatter_source,
+                      sample_rate=plate_spec.sample_rate, **kw)
+    mats = ctx.calibration.materials() if ctx.calibration is not None else library(cfg)
+    ref = None if args.no_reference else point_of(p, dev.bead_material, dev.plate_material)
+    res = run_device_design(space, spec, p, mats, dict(cfg.get("contact", {})),
+                            dev.full_scale_force, ref, jobs=max(1, int(args.jobs)),
+                            families=_families(args.family)).to_dict()
+    res.update({"device_name": dev.name, "device_source": dev.source, "wall": "fem"})
+    inputs = {k: v for k, v in vars(args).items() if k not in ("func", "human", "json")}
+    inputs["spec"] = res["spec"]
+    inputs["space"] = res["space"]
+    if args.output:
+        write_json(args.output, res, inputs)
+    if args.csv:
+        write_table(args.csv, res, inputs)
+    if args.plot:
+        plot(args.plot, res)
+    return res
+
+
 def human(res: dict[str, Any]) -> str:
     """The ranking as a short table and the recommendation with its reasons."""
+    if res.get("ssw_kind") == "design_device":
+        from ssw.design.device_output import human as device_human
+
+        return device_human(res)
     rec = res["recommended"]
     lines = [f"soils {res['spec']['soil_E'][0]:.4g}-{res['spec']['soil_E'][1]:.4g} Pa, "
              f"nu {res['spec']['soil_nu']:g}; objective: {res['objective']}",

@@ -37,19 +37,19 @@ from ssw.errors import ConfigError
 
 #: Bead materials searched by default (keys of the materials library).
 BEAD_MATERIALS = ("chrome_steel", "stainless316", "tungsten_carbide", "brass")
-#: Bead diameters searched by default, m: 1/4, 3/8, 1/2, 3/4 and 1 in bearing balls.
-BEAD_DIAMETERS = (6.35e-3, 9.525e-3, 12.7e-3, 19.05e-3, 25.4e-3)
+#: Bead diameters searched by default, m: 1/4, 3/8, 1/2 and 3/4 in bearing balls.
+BEAD_DIAMETERS = (6.35e-3, 9.525e-3, 12.7e-3, 19.05e-3)
 #: Bead counts (striker included) searched by default.
-BEADS = (12, 20, 30)
+BEADS = (12, 20)
 #: Sensor positions searched by default: the sensor's index over the bead count.
-SENSOR_POSITIONS = (0.35, 0.5, 0.65)
+SENSOR_POSITIONS = (0.35, 0.5)
 #: Plate materials searched by default.
 PLATE_MATERIALS = ("pla", "al6061", "a36")
 #: Continuous variables: (lo, hi, scan points) of each by default.
 SENSOR_MASS_RATIO = (0.5, 2.0, 1)
 STRIKER_MASS_RATIO = (0.5, 4.0, 2)
 DROP_HEIGHT = (2.0e-3, 5.0e-2, 2)
-PLATE_THICKNESS = (1.0e-4, 3.0e-3, 2)
+PLATE_THICKNESS = (1.0e-4, 3.0e-3, 1)
 #: Relative quantum of the continuous ratios and the drop height (a search revisits none
 #: closer than this; reruns share their evaluations).
 RATIO_QUANTUM = 1.0e-6

@@ -91,3 +91,17 @@ def test_bad_input_is_refused_by_name(flags, field, capsys):
     assert main(["design", "--space", "device", "--config", str(CONFIG), "--calibration",
                  "none", "--soil-E", "20e6:200e6", "--soil-nu", "0.3", *flags]) == 2
     assert field in capsys.readouterr().err
+
+
+def test_merge_ranks_the_same(design):
+    """--merge of a result (the workflow's family jobs) ranks its candidates as the run
+    did: the same recommended device and numbers (round trip of the JSON records)."""
+    res, d = design
+    out = d / "merged.json"
+    assert main(["design", "--space", "device", "--config", str(CONFIG), "--merge",
+                 str(d / "design.json"), "--output", str(out)]) == 0
+    merged = json.loads(out.read_text())
+    assert merged["recommended"]["label"] == res["recommended"]["label"]
+    assert merged["recommended"]["resolution"] == res["recommended"]["resolution"]
+    assert len(merged["candidates"]) == len(res["candidates"])
+    assert merged["reference"]["tof_E"] == res["reference"]["tof_E"]

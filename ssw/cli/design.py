@@ -157,16 +157,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         raise ConfigError("--plastic-hits", args.plastic_hits,
                           "not with --merge (it strikes the plates of one design run)")
     if args.merge:
-        import json
-
-        results = []
-        for path in args.merge:
-            try:
-                with open(path) as fh:
-                    results.append(json.load(fh))
-            except (OSError, ValueError) as exc:
-                raise ConfigError("--merge", path, f"a readable ssw design JSON ({exc})"
-                                  ) from exc
+        results = _load_results(args.merge)
         res = merge_results(results).to_dict()
         inputs = {"merge": list(args.merge),
                   "merged_inputs": [r.get("provenance", {}).get("inputs_sha256")
@@ -226,17 +217,22 @@ def _run_device(args: argparse.Namespace) -> dict[str, Any]:
     """``ssw design --space device`` (:func:`ssw.design.device_search.run_device_design`)."""
     from ssw.cli._device import chain_context
     from ssw.config import library
-    from ssw.design.device_output import plot, write_table
     from ssw.design.device_search import run_device_design
     from ssw.design.device_spec import DeviceSpec
     from ssw.design.space import point_of, space_from_dict
-    from ssw.h5io import write_json
 
-    for flag, v in (("--merge", args.merge), ("--plastic-hits", args.plastic_hits),
+    for flag, v in (("--plastic-hits", args.plastic_hits),
                     ("--materials", args.materials), ("--thickness", args.thickness)):
         if v:
             raise ConfigError(flag, v, "not with --space device (its space is the config's "
                               "design.device section)")
+    if args.merge:
+        from ssw.design.device_search import merge_device_results
+
+        res = merge_device_results(_load_results(args.merge)).to_dict()
+        inputs = {"merge": list(args.merge)}
+        _write_device(args, res, inputs)
+        return res
     ctx = chain_context(args, numerics_only=True)
     plate_spec = _spec(args, ctx)
     cfg, dev = ctx.cfg, ctx.device
@@ -267,13 +263,35 @@ def _run_device(args: argparse.Namespace) -> dict[str, Any]:
     inputs = {k: v for k, v in vars(args).items() if k not in ("func", "human", "json")}
     inputs["spec"] = res["spec"]
     inputs["space"] = res["space"]
+    _write_device(args, res, inputs)
+    return res
+
+
+def _write_device(args: argparse.Namespace, res: dict[str, Any], inputs: Any) -> None:
+    """The device design's JSON, CSV and figure, each atomically."""
+    from ssw.design.device_output import plot, write_table
+    from ssw.h5io import write_json
+
     if args.output:
         write_json(args.output, res, inputs)
     if args.csv:
         write_table(args.csv, res, inputs)
     if args.plot:
         plot(args.plot, res)
-    return res
+
+
+def _load_results(paths: list[str]) -> list[dict[str, Any]]:
+    """The JSON results of ``--merge``; ConfigError naming an unreadable one."""
+    import json
+
+    results = []
+    for path in paths:
+        try:
+            with open(path) as fh:
+                results.append(json.load(fh))
+        except (OSError, ValueError) as exc:
+            raise ConfigError("--merge", path, f"a readable ssw design JSON ({exc})") from exc
+    return results
 
 
 def human(res: dict[str, Any]) -> str:

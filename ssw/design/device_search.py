@@ -218,8 +218,7 @@ class DeviceDesignResult:
                 if self.reference.key in [c.key for c in rk.candidates] else None},
             "pareto_soil": [_brief(c) for c in rk.front_soil],
             "pareto_mass": [_brief(c) for c in rk.front_mass],
-            "candidates": [{**c.to_dict(arrays=False), "merit": merit(c)}
-                           for c in rk.candidates],
+            "candidates": [{**c.to_dict(), "merit": merit(c)} for c in rk.candidates],
             "searches": self.searches,
             "evaluations": len(rk.candidates),
             "feasible": sum(c.feasible for c in rk.candidates),
@@ -303,6 +302,36 @@ def run_device_design(space: DeviceSpace, spec: DeviceSpec, base: Any,
     ranking = rank(list(seen.values()))
     return DeviceDesignResult(spec, space, ranking, ranking.recommended, ref, searches,
                               time.perf_counter() - t0, _cpu() - c0)
+
+
+def merge_device_results(results: list[dict[str, Any]]) -> DeviceDesignResult:
+    """The candidates of several device designs of one question (the workflow's family
+    jobs' JSON) ranked together. Each family's best was evaluated at its own step, so the
+    best of all is too; the costs add up. ConfigError when the questions differ."""
+    from ssw.design.space import space_from_dict
+    from ssw.errors import ConfigError
+
+    if not results:
+        raise ConfigError("--merge", [], "at least one ssw design --space device JSON")
+    spec = DeviceSpec.from_dict(results[0]["spec"])
+    for r in results[1:]:
+        if DeviceSpec.from_dict(r["spec"]) != spec:
+            raise ConfigError("--merge", r["spec"], "results of one question (the same spec)")
+    space_d = results[0]["space"]
+    space = space_from_dict(space_d, space_d["plate_diameter_ratio"])
+    seen: dict[tuple[Any, ...], DeviceCandidate] = {}
+    for r in results:
+        for d in r["candidates"]:
+            c = DeviceCandidate.from_dict(d, spec.limits)
+            if c.key not in seen or c.step == "own":
+                seen[c.key] = c
+    ranking = rank(list(seen.values()))
+    ref_d = next((r["reference"] for r in results if r.get("reference")), None)
+    ref = None if ref_d is None else DeviceCandidate.from_dict(ref_d, spec.limits)
+    return DeviceDesignResult(spec, space, ranking, ranking.recommended, ref,
+                              [s for r in results for s in r["searches"]],
+                              sum(r["wall_time"] for r in results),
+                              sum(r["cpu_time"] for r in results))
 
 
 def _cpu() -> float:

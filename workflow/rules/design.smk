@@ -97,3 +97,97 @@ DESIGN_TARGETS = expand(
     ],
     soil=DESIGN_SOILS,
 )
+
+
+# Device design (config design.device, on with design.device.study): for every soil range,
+# the whole device (beads, sensor, striker, drop, plate) as the design variable. One job
+# per bead diameter and plate material (`ssw design --space device --family D:MAT`: its
+# chains' scan, the bounded search of its best devices, at a mesh of its own bead radius),
+# then one table per range ranking the families' devices together (`--merge`).
+#
+# Outputs (results/design/device/):
+#   {soil}/{family}.json             one family's devices (scan, search, own-step best)
+#   {soil}.json / {soil}.csv         the range's ranking: recommended device, reasons, fronts
+#   figures/{soil}_pareto.png        resolution against the sample's yield and the mass
+DEVICE_DIR = f"{DESIGN_DIR}/device"
+DEVICE_FAMILIES = STUDY.device_families()
+
+
+rule design_device_family:
+    input:
+        unpack(
+            lambda wc: {
+                k: v
+                for k, v in sswwf.calibrated_inputs(config, RESULTS).items()
+                if k == "calibration"
+            }
+        ),
+    output:
+        json=f"{DEVICE_DIR}/{{soil}}/{{family}}.json",
+    log:
+        f"{LOGS}/design/device_{{soil}}_{{family}}.log",
+    benchmark:
+        f"{BENCHMARKS}/design/device_{{soil}}_{{family}}.tsv"
+    wildcard_constraints:
+        soil=sswwf.alternatives(DESIGN_SOILS),
+        family=sswwf.alternatives(DEVICE_FAMILIES),
+    conda:
+        SSW_ENV
+    resources:
+        mem_mb=lambda wc, attempt: sswwf.mem_mb("design_device", 0) * attempt,
+        runtime=lambda wc, attempt: sswwf.runtime_min("design_device", 0) * attempt,
+    params:
+        inputs=lambda wc: inputs_of("design_device", wc.soil),
+        digest=lambda wc: digest_of("design_device", wc.soil),
+        config=STUDY_CONFIG,
+        calibration=lambda wc, input: sswwf.calibration_flag(input),
+        family=lambda wc: DEVICE_FAMILIES[wc.family],
+    shell:
+        "python -m ssw --inputs-sha256 {params.digest} design --space device "
+        "--soil-range {wildcards.soil} --family {params.family} --config {params.config} "
+        "{params.calibration} --output {output.json} > {log} 2>&1"
+
+
+rule design_device_table:
+    input:
+        lambda wc: expand(f"{DEVICE_DIR}/{wc.soil}/{{family}}.json", family=DEVICE_FAMILIES),
+    output:
+        json=f"{DEVICE_DIR}/{{soil}}.json",
+        csv=report(
+            f"{DEVICE_DIR}/{{soil}}.csv",
+            caption="../report/design_device.rst",
+            category=REPORT_CATEGORIES["design"],
+            subcategory="Device",
+        ),
+        plot=report(
+            f"{DEVICE_DIR}/figures/{{soil}}_pareto.png",
+            caption="../report/design_device.rst",
+            category=REPORT_CATEGORIES["design"],
+            subcategory="Device",
+        ),
+    log:
+        f"{LOGS}/design/device_{{soil}}_table.log",
+    wildcard_constraints:
+        soil=sswwf.alternatives(DESIGN_SOILS),
+    conda:
+        SSW_ENV
+    params:
+        inputs=lambda wc: inputs_of("design_device_table", wc.soil),
+        digest=lambda wc: digest_of("design_device_table", wc.soil),
+    shell:
+        "python -m ssw --inputs-sha256 {params.digest} design --space device --merge {input} "
+        "--output {output.json} --csv {output.csv} --plot {output.plot} > {log} 2>&1"
+
+
+DESIGN_TARGETS += (
+    expand(
+        [
+            f"{DEVICE_DIR}/{{soil}}.json",
+            f"{DEVICE_DIR}/{{soil}}.csv",
+            f"{DEVICE_DIR}/figures/{{soil}}_pareto.png",
+        ],
+        soil=DESIGN_SOILS,
+    )
+    if DEVICE_FAMILIES
+    else []
+)

@@ -139,7 +139,8 @@ def _refine(args: tuple[_Task, DeviceCandidate]) -> tuple[list[DeviceCandidate],
                                  "message": str(res.message)}
 
 
-def _map(fn: Any, tasks: list[Any], jobs: int) -> list[Any]:
+def map_jobs(fn: Any, tasks: list[Any], jobs: int) -> list[Any]:
+    """``[fn(t) for t in tasks]``, in ``jobs`` processes when more than one."""
     if jobs <= 1 or len(tasks) <= 1:
         return [fn(t) for t in tasks]
     with ProcessPoolExecutor(max_workers=min(jobs, len(tasks))) as ex:
@@ -269,10 +270,10 @@ def run_device_design(space: DeviceSpace, spec: DeviceSpec, base: Any,
     DeviceDesignResult
         The ranking, the recommended and base devices, the searches, the cost.
     """
-    t0, c0 = time.perf_counter(), _cpu()
+    t0, c0 = time.perf_counter(), cpu_time()
     task = _Task(space, spec, base, materials, contact, full_scale)
     fams = families if families is not None else space.families()
-    scanned = [c for part in _map(_scan_family, [(task, d, m) for d, m in fams], jobs)
+    scanned = [c for part in map_jobs(_scan_family, [(task, d, m) for d, m in fams], jobs)
                for c in part]
     seen = {c.key: c for c in scanned}
     ref = None
@@ -290,7 +291,7 @@ def run_device_design(space: DeviceSpace, spec: DeviceSpec, base: Any,
             break
     searches = []
     if spec.refine_evaluations > 0 and finalists:
-        for found, info in _map(_refine, [(task, c) for c in finalists], jobs):
+        for found, info in map_jobs(_refine, [(task, c) for c in finalists], jobs):
             for c in found:
                 seen.setdefault(c.key, c)
             searches.append(info)
@@ -301,7 +302,7 @@ def run_device_design(space: DeviceSpace, spec: DeviceSpec, base: Any,
     seen[rec.key] = rec
     ranking = rank(list(seen.values()))
     return DeviceDesignResult(spec, space, ranking, ranking.recommended, ref, searches,
-                              time.perf_counter() - t0, _cpu() - c0)
+                              time.perf_counter() - t0, cpu_time() - c0)
 
 
 def merge_device_results(results: list[dict[str, Any]]) -> DeviceDesignResult:
@@ -334,7 +335,7 @@ def merge_device_results(results: list[dict[str, Any]]) -> DeviceDesignResult:
                               sum(r["cpu_time"] for r in results))
 
 
-def _cpu() -> float:
+def cpu_time() -> float:
     """s, this process's CPU time and its finished children's (user + sys)."""
     ch = resource.getrusage(resource.RUSAGE_CHILDREN)
     return time.process_time() + ch.ru_utime + ch.ru_stime

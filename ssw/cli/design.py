@@ -151,7 +151,6 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.cli._device import chain_context
     from ssw.design.output import plot, write_table
     from ssw.design.run import merge_results, run_design
-    from ssw.h5io import write_json
 
     if args.merge and args.plastic_hits is not None:
         raise ConfigError("--plastic-hits", args.plastic_hits,
@@ -187,12 +186,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                     else ctx.calibration.path, "wall": "fem"})
         inputs = {k: v for k, v in vars(args).items() if k not in ("func", "human", "json")}
         inputs["spec"] = res["spec"]
-    if args.output:
-        write_json(args.output, res, inputs)
-    if args.csv:
-        write_table(args.csv, res, inputs)
-    if args.plot:
-        plot(args.plot, res)
+    _write(args, res, inputs, write_table, plot)
     return res
 
 
@@ -270,6 +264,13 @@ def _run_device(args: argparse.Namespace) -> dict[str, Any]:
 def _write_device(args: argparse.Namespace, res: dict[str, Any], inputs: Any) -> None:
     """The device design's JSON, CSV and figure, each atomically."""
     from ssw.design.device_output import plot, write_table
+
+    _write(args, res, inputs, write_table, plot)
+
+
+def _write(args: argparse.Namespace, res: dict[str, Any], inputs: Any, write_table: Any,
+           plot: Any) -> None:
+    """``--output`` (JSON), ``--csv`` and ``--plot`` of a result, each atomically."""
     from ssw.h5io import write_json
 
     if args.output:

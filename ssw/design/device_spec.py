@@ -44,7 +44,7 @@ from typing import Any
 
 import numpy as np
 
-from ssw.design.spec import soil_yield_stress
+from ssw.design.spec import check_soil, soil_yield_stress
 from ssw.errors import ConfigError
 
 #: Soil moduli of a device's curves (log-spaced over the range, ends included).
@@ -132,11 +132,7 @@ class DeviceSpec:
     refine_tol: float = REFINE_TOL
 
     def __post_init__(self) -> None:
-        lo, hi = self.soil_E
-        if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
-            raise ConfigError("--soil-E", f"{lo}:{hi}", "LO:HI moduli with 0 < LO < HI (Pa)")
-        if not -1.0 < self.soil_nu <= 0.5:
-            raise ConfigError("--soil-nu", self.soil_nu, "a Poisson's ratio in (-1, 0.5]")
+        check_soil(self.soil_E, self.soil_nu)
         if self.moduli < 2:
             raise ConfigError("design.device.moduli", self.moduli, "an integer >= 2")
         for name in ("soil_strength_ratio", "soil_yield_limit", "plate_yield_limit",

@@ -115,11 +115,7 @@ class DesignSpec:
     extra: dict[str, Any] = field(default_factory=dict, compare=False, hash=False)
 
     def __post_init__(self) -> None:
-        lo, hi = self.soil_E
-        if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
-            raise ConfigError("--soil-E", f"{lo}:{hi}", "LO:HI moduli with 0 < LO < HI (Pa)")
-        if not -1.0 < self.soil_nu <= 0.5:
-            raise ConfigError("--soil-nu", self.soil_nu, "a Poisson's ratio in (-1, 0.5]")
+        check_soil(self.soil_E, self.soil_nu)
         tlo, thi = self.thickness
         if not (np.isfinite(tlo) and np.isfinite(thi) and 0 < tlo < thi):
             raise ConfigError("--thickness", f"{tlo}:{thi}", "LO:HI with 0 < LO < HI (m)")
@@ -198,6 +194,16 @@ class DesignSpec:
         d = asdict(self)
         d.pop("extra")
         return {**d, "soil_E_grid": self.grid.tolist()}
+
+
+def check_soil(soil_E: tuple[float, float], soil_nu: float) -> None:
+    """ConfigError naming ``--soil-E`` or ``--soil-nu`` for a bad soil range (Pa) or
+    Poisson's ratio."""
+    lo, hi = soil_E
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
+        raise ConfigError("--soil-E", f"{lo}:{hi}", "LO:HI moduli with 0 < LO < HI (Pa)")
+    if not -1.0 < soil_nu <= 0.5:
+        raise ConfigError("--soil-nu", soil_nu, "a Poisson's ratio in (-1, 0.5]")
 
 
 def soil_yield_stress(E: np.ndarray, strength: float | None, ratio: float) -> np.ndarray:

@@ -42,13 +42,15 @@ def write_table(path: str | Path, result: dict[str, Any], inputs: Any) -> None:
 
 def plot(path: str | Path, result: dict[str, Any]) -> None:
     """Left: worst-case resolution against the soil yield index; right: against the mass.
-    Filled: every hard limit met; hollow: one broken; the Pareto fronts joined; the
+    Devices with dE/E >= 1 (their TOF hardly moves with E) are left out. Filled: every hard
+    limit met; hollow: one broken; the Pareto fronts joined; the
     recommended ringed; the base device a star. Written atomically (PNG)."""
     from ssw.plotting import pyplot, save_png
 
     plt = pyplot()
     fig, axes = plt.subplots(1, 2, figsize=(11, 4.4))
-    cands = [c for c in result["candidates"] if c["resolution"] < float("inf")]
+    # a device whose TOF hardly moves with E (dE/E >= 1: no measurement) is left out
+    cands = [c for c in result["candidates"] if c["resolution"] < 1.0]
     mats = sorted({c["bead_material"] for c in cands})
     colors = {m: f"C{i}" for i, m in enumerate(mats)}
     rec, ref = result["recommended"], result.get("reference")

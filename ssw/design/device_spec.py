@@ -1,6 +1,6 @@
 """What a device design asks: the soils, the objective, the limits, the DAQ and the search.
 
-Objective. The worst case over the soil range of the relative resolution of the modulus,
+Objective. The worst case over the soil range of the relative resolution of the modulus::
 
     dE/E (E) = u_TOF(E) / (TOF(E) S(E)),    S = |d ln TOF / d ln E|,
 

@@ -19,7 +19,7 @@ upsampling and the vertex of a parabola (:func:`ssw.signal.peaks.refine_peak`, w
   peak linearly for a small noise, ``dt* = sum_k g_k n_k / f_s`` with ``g_k`` the peak
   picker's derivative with respect to sample ``k`` (in samples per unit of the signal,
   taken by a central difference of :func:`ssw.signal.peaks.refine_peaks` at the first clock
-  phase), so
+  phase), so::
 
       sigma_t = sigma ||g||_2 / f_s
 

@@ -150,7 +150,7 @@ class DeviceCandidate:
 
     @property
     def indices(self) -> dict[str, float]:
-        """Every limited index (:data:`HARD`, :data:`SOFT`)."""
+        """Every limited index (``HARD``, ``SOFT``)."""
         return {k: float(getattr(self, k)) for k in (*HARD, *SOFT)}
 
     @property

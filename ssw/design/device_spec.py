@@ -54,7 +54,7 @@ MAX_MASS = 1.5
 #: m, the longest device: the column of beads, the drop and the plate.
 MAX_LENGTH = 0.6
 #: Sample-clock phases over which a sampled peak's error is averaged (a divisor of the
-#: simulated DAQ's oversampling, :data:`ssw.daq.simulated.OVERSAMPLE`).
+#: simulated DAQ's oversampling, ``ssw.daq.simulated.OVERSAMPLE``).
 PHASES = 4
 #: Devices refined by the bounded search after the scan.
 FINALISTS = 2

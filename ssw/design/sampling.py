@@ -154,7 +154,7 @@ def sampled_tof(run: object, peaks: object, rate: float, noise_rms: float,
     noise_rms : float
         N, the DAQ's white noise per sample.
     phases : int
-        Sample-clock phases, a divisor of :data:`ssw.daq.simulated.OVERSAMPLE`.
+        Sample-clock phases, a divisor of ``ssw.daq.simulated.OVERSAMPLE``.
 
     Returns
     -------

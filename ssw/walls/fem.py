@@ -359,7 +359,7 @@ def _pieces(d: np.ndarray, path: Any, ms: int, s: float, U: np.ndarray
     return d, a, b, U
 
 
-#: Scene laws kept in memory (:func:`_rigid_law`: a few kB each), least recently used out.
+#: Scene laws kept in memory (``_rigid_law``: a few kB each), least recently used out.
 LAWS_KEPT = 20_000
 _LAWS: OrderedDict[tuple[Any, ...], RigidLaw] = OrderedDict()
 
@@ -370,7 +370,7 @@ class RigidLaw:
     the whole prefix path (every candidate of the zone), ``F = f0 + f1 delta`` on
     ``[breaks[j], breaks[j + 1]]`` (m, N, N/m), and ``df0``, ``df1`` their derivatives with
     respect to the soil's modulus (N/Pa, N/m/Pa; None: not computed). What a chain adds is
-    its own: the bead's compliance and the range its energy needs (:func:`_chain_row`)."""
+    its own: the bead's compliance and the range its energy needs (``_chain_row``)."""
 
     breaks: np.ndarray
     f0: np.ndarray

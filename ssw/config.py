@@ -252,9 +252,10 @@ class Scene:
     """One contact scene: a plate (or none) on a soil, indented by the rigid sphere. SI.
 
     ``sample`` (the soil's geometry: a finite block, a layer on a base; None: the default
-    half-space) and ``soil_model`` (the soil's constitutive law beyond elasticity; None:
-    linear elastic) are frozen, hashable objects with a ``key``: a short file-name-safe
-    text that tells them apart (it enters the scene id).
+    half-space), ``soil_model`` (the soil's constitutive law beyond elasticity; None:
+    linear elastic) and ``plate_model`` (the plate's; None: elastic) are frozen, hashable
+    objects with a ``key``: a short file-name-safe text that tells them apart (it enters
+    the scene id).
     """
 
     plate_material: str  # material key; "none" when plate_thickness == 0
@@ -263,6 +264,7 @@ class Scene:
     soil_nu: float  # -
     sample: Any = None
     soil_model: Any = None
+    plate_model: Any = None
 
     @property
     def scene_id(self) -> str:
@@ -279,6 +281,8 @@ class Scene:
         for part in (self.sample, self.soil_model):
             if part is not None:
                 text += f"-{part.key}"
+        if self.plate_model is not None and self.plate_thickness > 0:
+            text += f"-plate-{self.plate_model.key}"
         return text
 
 
@@ -298,13 +302,35 @@ def scenes(cfg: dict[str, Any], set_name: str) -> list[Scene]:
             for E in expand_grid(s["soil_E"], f"sets.{set_name}.soil_E"):
                 for nu in expand_grid(s["soil_nu"], f"sets.{set_name}.soil_nu"):
                     sc = Scene("none" if t == 0 else m, float(t), float(E), float(nu),
-                               sample=sample, soil_model=model)
+                               sample=sample, soil_model=model,
+                               plate_model=_plate_model(cfg, set_name, m) if t > 0 else None)
                     other = out.setdefault(sc.scene_id, sc)
                     if other != sc:
                         raise ConfigError(f"sets.{set_name}", sc.scene_id,
                                           f"scenes that can be told apart: {sc} and {other} "
                                           "share one id")
     return list(out.values())
+
+
+def _plate_model(cfg: dict[str, Any], set_name: str, material: str) -> Any:
+    """The plate model of set ``set_name`` for the plate ``material`` (None: elastic): the
+    set's ``plate_model``, its yield stress and hardening the material's library strengths
+    unless the set gives them."""
+    from ssw.constitutive import model_from
+
+    spec = cfg["sets"][set_name].get("plate_model")
+    field = f"sets.{set_name}.plate_model"
+    if spec is None or not isinstance(spec, dict) or spec.get("model") == "linear-elastic":
+        return model_from(spec, field)
+    spec = dict(spec)
+    if "yield_stress" not in spec:
+        st = library(cfg)[material].strength
+        if st.yield_stress is None:
+            raise ConfigError(f"{field}.yield_stress", None,
+                              f"a stress > 0 Pa (materials.{material} has no yield_stress)")
+        spec["yield_stress"] = st.yield_stress
+        spec.setdefault("hardening", st.hardening or 0.0)
+    return model_from(spec, field)
 
 
 def all_scenes(cfg: dict[str, Any]) -> dict[str, Scene]:

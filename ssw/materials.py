@@ -36,6 +36,8 @@ class Strength:
     cohesion : Pa, Mohr-Coulomb cohesion ``c``.
     friction_angle : degrees, Mohr-Coulomb angle of internal friction ``phi``.
     dilatancy_angle : degrees, ``psi`` (non-associated flow).
+    hardening : Pa, linear isotropic hardening modulus ``dY / d kappa`` of the von Mises
+        ``Y`` (``kappa`` the equivalent plastic strain; 0: perfectly plastic).
     source : where the values come from.
     """
 
@@ -45,6 +47,7 @@ class Strength:
     cohesion: float | None = None
     friction_angle: float | None = None
     dilatancy_angle: float | None = None
+    hardening: float | None = None
     source: str = ""
 
     def check(self, key: str) -> None:
@@ -57,11 +60,11 @@ class Strength:
                 if not (math.isfinite(v) and 0.0 <= v < 90.0):
                     raise ConfigError(f"materials.{key}.strength.{f.name}", v,
                                       "an angle in [0, 90) degrees")
-            elif not (math.isfinite(v) and v >= 0.0 if f.name == "cohesion" else
-                      math.isfinite(v) and v > 0.0):
+            elif not (math.isfinite(v) and v >= 0.0 if f.name in ("cohesion", "hardening")
+                      else math.isfinite(v) and v > 0.0):
                 raise ConfigError(f"materials.{key}.strength.{f.name}", v,
-                                  "a stress >= 0 Pa" if f.name == "cohesion" else
-                                  "a stress > 0 Pa")
+                                  "a stress >= 0 Pa" if f.name in ("cohesion", "hardening")
+                                  else "a stress > 0 Pa")
         if any(getattr(self, f.name) is not None for f in fields(self) if f.name != "source") \
                 and not self.source.strip():
             raise ConfigError(f"materials.{key}.strength.source", self.source,

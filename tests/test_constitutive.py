@@ -277,3 +277,25 @@ def test_yield_index():
     a = np.pi * out["p0"] * R_ / (2 * E_ / (1 - nu * nu))
     np.testing.assert_allclose(2 / 3 * np.pi * a * a * out["p0"], F, rtol=1e-12)
     np.testing.assert_array_equal(out["first_yield"], out["index"] > first_yield_ratio(nu))
+
+
+def test_plate_strengths_and_hardening():
+    """The plate materials carry a sourced yield stress and linear hardening modulus (the
+    uncertain ones marked [U]); the secant hardening from yield to the tensile strength over
+    the elongation lies between 0 and (UTS - Y) / 0.1 (a plastic strain of at least 10 %
+    for the metals); the von Mises model takes them; a negative hardening is refused naming
+    the field."""
+    from ssw.errors import ConfigError
+    from ssw.materials import Strength, material_set
+
+    lib = material_set("realistic")
+    for key, Y in (("pla", 50e6), ("al6061", 276e6), ("a36", 250e6)):
+        st = lib[key].strength
+        assert st.yield_stress == Y and st.hardening is not None and "[U" in st.source
+        m = model_of_strength("von-mises", st)
+        assert (m.yield_stress, m.hardening) == (st.yield_stress, st.hardening)
+        if key != "pla":
+            assert 0 < st.hardening <= (st.tensile - st.yield_stress) / 0.1 * 1.01
+    assert model_of_strength("von-mises", lib["al6061"].strength).key == "vm-Y276MPa-H290MPa"
+    with pytest.raises(ConfigError, match=r"materials\.x\.strength\.hardening"):
+        Strength(yield_stress=1e6, hardening=-1.0, source="s").check("x")

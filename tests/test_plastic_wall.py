@@ -14,6 +14,7 @@ from ssw.chain.params import chain_params
 from ssw.chain.run import run_peaks
 from ssw.constitutive import VonMises
 from ssw.device import load_device
+from ssw.errors import ConfigError
 from ssw.walls import build_wall
 from ssw.walls.fem import DOMAIN_ERROR_COEF, FORCE_ERROR_COEF
 from ssw.walls.hits import run_hits
@@ -230,3 +231,32 @@ def test_models_per_scene_and_calibration_refusals(capsys):
     assert main(["calibrate", "--from-config", "--soil-model", "von-mises", "--output",
                  "x.json"]) != 0
     assert "--output" in capsys.readouterr().err
+
+
+def test_yielding_plate_on_an_elastic_sample():
+    """A yielding PLA plate (the library's von Mises strength) on an elastic sample, hit
+    twice: the plate alone keeps a permanent set, split into the interface's depth (its
+    permanent bending) and its thinning; the second hit dissipates less than the first
+    (shakedown); with the plate's yield stress out of reach the wall is the elastic plate's
+    (the virgin law of a plastic sample that never yields, to the tables' interpolation)."""
+    from ssw.constitutive import model_of_strength
+    from ssw.materials import material_set
+
+    p = chain_params(load_device("thesis"))
+    pla = model_of_strength("von-mises", material_set("realistic")["pla"].strength)
+    w = plastic_wall(p, E, NU, plate_model=pla, settings=CHEAP)
+    res = run_hits(p, w, 2)
+    assert res.permanent_set[0, 0] > 0 and res.static_set[0] >= 0
+    np.testing.assert_allclose(res.interface_set + res.plate_thinning, res.permanent_set,
+                               rtol=1e-12)
+    assert res.plate_thinning[0, 0] > 0 and res.interface_set[0, 0] > 0
+    assert 0 < res.dissipated[1, 0] < res.dissipated[0, 0]
+    stiff = plastic_wall(p, E, NU, plate_model=VonMises(1e12), settings=CHEAP)
+    ref = plastic_wall(p, E, NU, soil_model=VonMises(1e12), settings=CHEAP)
+    d = np.linspace(0.1, 1.0, 10) * float(ref.exact_reach[0]) * 0.5
+    f, f_ref = stiff.force(d), ref.force(d)
+    assert np.all(np.isfinite(f)) and np.max(np.abs(f / f_ref - 1)) < 0.03
+    with pytest.raises(ConfigError, match="plate_model"):
+        plastic_wall(replace(p, plate_thickness=0.0), E, NU, plate_model=pla, settings=CHEAP)
+    with pytest.raises(ConfigError, match="soil_model"):
+        plastic_wall(p, E, NU, settings=CHEAP)

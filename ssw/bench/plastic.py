@@ -19,6 +19,16 @@ the timed curve's error against the reference (largest force difference over the
 relative to the peak force, residual indentation, dissipated work, first yield); writes
 ``plastic_bench.json`` and ``plastic_curve.png`` (both curves, the elastic Hertz law and
 the first yield) under the output folder.
+
+``--plastic-study``: the curve a study config's ``ssw contact --soil-model`` solves (its
+domain, mesh growth and increments, ``--plastic-steps`` of ``--plastic-delta-max``, loaded
+and unloaded), wall and CPU time, on the path's mesh (the default of ``ssw contact``:
+:func:`ssw.contact.plastic.path_mesh_settings`) and on the elastic engine's mesh
+(``--plastic-mesh study``), each against the reference: the elastic engine's mesh with its
+growth and its element at the contact halved (on the thesis config's 0.1 to 0.05 the
+force moves 1.1e-3 of the peak at most and the residual indentation 1.7e-3; from 0.07 to
+0.05, 6e-4 and 4e-4: converged to a few 1e-4), the same increments (600 against 2400 on
+one mesh: 7e-6 of the peak force, residual indentation 2e-4); ``plastic_study.json``.
 """
 
 from __future__ import annotations
@@ -60,6 +70,11 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
                    help="contact radius / element size at the contact of the timed mesh")
     p.add_argument("--no-reference", dest="plastic_reference", action="store_false",
                    help="skip the converged reference curve")
+    p.add_argument("--plastic-study", action="store_true",
+                   help="time the config's own plastic curve (what ssw contact --soil-model "
+                   "solves: the config's domain, growth and increments) on the path's mesh "
+                   "and on the elastic engine's mesh, against the config's mesh refined "
+                   "(growth and contact element halved; the slow part)")
 
 
 #: The reference mesh: contact radius / element size, growth, domain / contact radius.
@@ -67,6 +82,8 @@ REFERENCE_MESH = (32.0, 0.1, 60.0)
 
 
 def run_plastic(args: argparse.Namespace) -> dict[str, Any]:
+    if getattr(args, "plastic_study", False):
+        return run_study(args)
     from ssw.config import load_config
     from ssw.constitutive import VonMises
     from ssw.contact.plastic import contact_mesh, johnson_first_yield, solve_path, summary
@@ -118,6 +135,105 @@ def run_plastic(args: argparse.Namespace) -> dict[str, Any]:
     return res
 
 
+def _timed(fn: Any) -> tuple[Any, float, float]:
+    """``fn()`` with its wall and CPU (user + sys of this process) time, s."""
+    w0, c0 = time.perf_counter(), time.process_time()
+    out = fn()
+    return out, time.perf_counter() - w0, time.process_time() - c0
+
+
+def curve_error(curve: Any, ref: Any) -> dict[str, Any]:
+    """A plastic path's error against a reference path of the same increments: the force
+    at the indentations both hold (loading and unloading branches), relative to the
+    reference's peak force (max and rms) and, on loading above 5 % of the peak, relative to
+    the force itself; the residual indentation, the dissipated work, the peak force and the
+    first yield force (relative).
+
+    Parameters
+    ----------
+    curve : ssw.contact.plastic.PlasticCurve
+        The path.
+    ref : ssw.contact.plastic.PlasticCurve
+        The reference path.
+
+    Returns
+    -------
+    dict
+        ``force_max_rel``, ``force_rms_rel``, ``force_pointwise_max``,
+        ``force_pointwise_rms``, ``points``, ``residual_indentation_rel``,
+        ``dissipated_work_rel``, ``force_peak_rel``, ``first_yield_force_rel``.
+    """
+    peak = float(np.max(ref.force))
+    diff, rel = [], []
+    for b in (0, 1):
+        dc, fc = curve.delta[curve.branch == b], curve.force[curve.branch == b]
+        dr, fr = ref.delta[ref.branch == b], ref.force[ref.branch == b]
+        order = np.argsort(dc)
+        j = np.clip(np.searchsorted(dc[order], dr), 0, max(dc.size - 1, 0))
+        both = np.isclose(dc[order][j], dr, rtol=1e-9, atol=0.0) if dc.size else dr < 0
+        e = fc[order][j][both] - fr[both]
+        diff.append(e)
+        if b == 0:
+            big = fr[both] > 0.05 * peak
+            rel.append(e[big] / fr[both][big])
+    e, r = np.concatenate(diff), np.concatenate(rel)
+    return {"force_max_rel": float(np.max(np.abs(e)) / peak),
+            "force_rms_rel": float(np.sqrt(np.mean(e * e)) / peak),
+            "force_pointwise_max": float(np.max(np.abs(r))) if r.size else None,
+            "force_pointwise_rms": float(np.sqrt(np.mean(r * r))) if r.size else None,
+            "points": int(e.size),
+            "residual_indentation_rel": _rel(curve.residual_indentation,
+                                             ref.residual_indentation),
+            "dissipated_work_rel": _rel(curve.dissipated_work, ref.dissipated_work),
+            "force_peak_rel": _rel(float(np.max(curve.force)), peak),
+            "first_yield_force_rel": _rel(curve.first_yield_force, ref.first_yield_force)}
+
+
+def run_study(args: argparse.Namespace) -> dict[str, Any]:
+    """``--plastic-study``: the config's plastic curve timed on the path's mesh and on the
+    elastic engine's mesh, each against the config's mesh refined (growth and element at
+    the contact halved, the elastic engine's mesh kind; the increments the same). SI."""
+    from ssw.config import load_config
+    from ssw.constitutive import VonMises
+    from ssw.contact.plastic import johnson_first_yield, solve_plastic_scene, summary
+
+    cfg = load_config(args.config)
+    radius = float(cfg["indenter"]["radius"])
+    E, nu, Y = float(args.plastic_E), float(args.plastic_nu), float(args.plastic_Y)
+    contact = {**cfg.get("contact", {}), "delta_max": float(args.plastic_delta_max),
+               "steps": int(args.plastic_steps), "delta_mode": "fixed"}
+    model = VonMises(Y)
+
+    def path(mesh: str, cc: dict[str, Any]) -> Any:
+        return solve_plastic_scene((E, nu), model, radius, cc, unload=True, mesh=mesh)
+
+    res: dict[str, Any] = {"soil_E": E, "soil_nu": nu, "yield_stress": Y,
+                           "indenter_radius": radius, "delta_max": contact["delta_max"],
+                           "steps": contact["steps"], "study": True, "plastic": True,
+                           "johnson_first_yield_force": johnson_first_yield(E, nu, Y, radius)[0]}
+    curves = {}
+    for mesh in ("path", "study"):
+        c, wall, cpu = _timed(lambda m=mesh: path(m, contact))
+        curves[mesh] = c
+        res[mesh] = {**summary(c), "wall": wall, "cpu": cpu, **c.stats}
+    if args.plastic_reference:
+        fine = {**contact, "mesh_growth": 0.5 * float(cfg["contact"]["mesh_growth"]),
+                "mesh_size_contact": 0.5 * float(cfg["contact"]["mesh_size_contact"])}
+        ref, wall, cpu = _timed(lambda: path("study", fine))
+        res["reference"] = {**summary(ref), "wall": wall, "cpu": cpu, **ref.stats,
+                            "mesh_growth": fine["mesh_growth"],
+                            "mesh_size_contact": fine["mesh_size_contact"]}
+        for mesh, c in curves.items():
+            res[mesh]["error"] = curve_error(c, ref)
+    out = Path(args.output_dir)
+    out.mkdir(parents=True, exist_ok=True)
+    write_json(out / "plastic_study.json", res, {
+        "E": E, "nu": nu, "Y": Y, "radius": radius, "contact": contact,
+        "reference": bool(args.plastic_reference)})
+    res["outputs"] = [str(out / "plastic_study.json")]
+    return res
+
+
 def _rel(x: float | None, ref: float | None) -> float | None:
     return None if x is None or not ref else float(x / ref - 1.0)
 
@@ -151,6 +267,28 @@ def _plot(curve: Any, ref: Any, E: float, nu: float, radius: float, Fy: float,
 def human(res: dict[str, Any]) -> str:
     def g(x: Any) -> str:
         return "none" if x is None else f"{x:.4g}"
+
+    if res.get("study"):
+        lines = []
+        for mesh in ("path", "study", "reference"):
+            if mesh not in res:
+                continue
+            r = res[mesh]
+            text = (f"{mesh} mesh: {r['dofs']} dofs ({r['near_elements']} of {r['elements']} "
+                    f"elements near), {r['increments']} increments, wall {r['wall']:.2f} s, "
+                    f"CPU {r['cpu']:.2f} s; residual indentation "
+                    f"{g(r['residual_indentation'])} m, first yield "
+                    f"{g(r['first_yield_force'])} N")
+            if "error" in r:
+                e = r["error"]
+                text += (f"\n  error: force max {g(e['force_max_rel'])} rms "
+                         f"{g(e['force_rms_rel'])} of the peak, pointwise max "
+                         f"{g(e['force_pointwise_max'])}, residual indentation "
+                         f"{g(e['residual_indentation_rel'])}, dissipated "
+                         f"{g(e['dissipated_work_rel'])}, first yield "
+                         f"{g(e['first_yield_force_rel'])}")
+            lines.append(text)
+        return "\n".join(lines)
 
     text = (f"plastic curve ({res['mesh']}): {res['increments']} increments ({res['dofs']} "
             f"dofs), {res['newton_iterations']} Newton iterations, {res['factorizations']} "

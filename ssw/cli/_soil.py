@@ -35,6 +35,24 @@ def add_soil_model_options(p: Any) -> None:
                    "--soil-model; the strengths are the library's, not fitted)")
 
 
+def soil_material_of(args: argparse.Namespace, cfg: dict[str, Any]) -> Any:
+    """The library material of ``--soil-material`` (None without it); fills
+    ``args.soil_E``/``soil_nu`` from it when they are not given. ConfigError naming the
+    flag for a key the library lacks."""
+    if args.soil_material is None:
+        return None
+    from ssw.config import library
+
+    mats = library(cfg)
+    if args.soil_material not in mats:
+        raise ConfigError("--soil-material", args.soil_material,
+                          f"a material of the library: {', '.join(sorted(mats))}")
+    mat = mats[args.soil_material]
+    args.soil_E = mat.E if args.soil_E is None else args.soil_E
+    args.soil_nu = mat.nu if args.soil_nu is None else args.soil_nu
+    return mat
+
+
 def soil_model_of(args: argparse.Namespace, cfg: dict[str, Any]) -> Any:
     """The :mod:`ssw.constitutive` model of the flags; fills ``args.soil_E``/``soil_nu``
     from ``--soil-material`` when they are not given. ConfigError naming the flag that is
@@ -43,17 +61,7 @@ def soil_model_of(args: argparse.Namespace, cfg: dict[str, Any]) -> Any:
 
     if args.soil_model is None:
         raise ConfigError("--soil-model", None, " | ".join(PLASTIC_MODELS))
-    mat = None
-    if args.soil_material is not None:
-        from ssw.config import library
-
-        mats = library(cfg)
-        if args.soil_material not in mats:
-            raise ConfigError("--soil-material", args.soil_material,
-                              f"a material of the library: {', '.join(sorted(mats))}")
-        mat = mats[args.soil_material]
-        args.soil_E = mat.E if args.soil_E is None else args.soil_E
-        args.soil_nu = mat.nu if args.soil_nu is None else args.soil_nu
+    mat = soil_material_of(args, cfg)
     for name in ("soil_E", "soil_nu"):
         if getattr(args, name) is None:
             raise ConfigError(f"--{name.replace('_', '-')}", None, "a value (or --soil-material)")
@@ -80,3 +88,70 @@ def soil_model_of(args: argparse.Namespace, cfg: dict[str, Any]) -> Any:
     if model is None:
         raise ConfigError("--soil-model", args.soil_model, "a plastic model (von-mises)")
     return model
+
+
+#: ``--plate-model`` choices: a plate yields as a metal or a polymer does (von Mises).
+PLATE_MODELS = ("von-mises",)
+
+
+def add_plate_model_options(p: Any) -> None:
+    """The flags of a yielding plate (``ssw contact``, ``ssw tof --hits``), on a parser or
+    an argument group: read by :func:`plate_model_of`."""
+    p.add_argument("--plate-model", choices=PLATE_MODELS,
+                   help="constitutive model of the plate beyond elasticity (default: elastic); "
+                   "its yield stress and hardening are the plate material's in the library "
+                   "unless given")
+    p.add_argument("--plate-yield-stress", type=float,
+                   help="the plate's von Mises yield stress Y, Pa (default: the library's)")
+    p.add_argument("--plate-hardening", type=float,
+                   help="the plate's linear hardening modulus, Pa (default: the library's, "
+                   "else 0: perfectly plastic)")
+
+
+def plate_model_of(args: argparse.Namespace, materials: dict[str, Any], plate_key: str
+                   ) -> Any:
+    """The plate's :mod:`ssw.constitutive` model of the flags (None without
+    ``--plate-model``): the plate material ``plate_key``'s library strengths, overridden by
+    ``--plate-yield-stress`` and ``--plate-hardening``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed flags.
+    materials : dict
+        The material library (key -> :class:`ssw.materials.Material`).
+    plate_key : str
+        The plate's material key (``none``: no plate).
+
+    Returns
+    -------
+    The plate's model, or None (an elastic plate).
+
+    Raises
+    ------
+    ConfigError
+        Naming the flag: a plate flag without ``--plate-model``, a model without a plate,
+        or a material without a yield stress and no ``--plate-yield-stress``.
+    """
+    from ssw.constitutive import model_from
+
+    name = getattr(args, "plate_model", None)
+    if name is None:
+        for flag in ("plate_yield_stress", "plate_hardening"):
+            if getattr(args, flag, None) is not None:
+                raise ConfigError(f"--{flag.replace('_', '-')}", getattr(args, flag),
+                                  "with --plate-model")
+        return None
+    if plate_key == "none":
+        raise ConfigError("--plate-model", name, "a plate (--plate-thickness > 0)")
+    strength = materials[plate_key].strength if plate_key in materials else None
+    Y = args.plate_yield_stress
+    if Y is None and strength is not None:
+        Y = strength.yield_stress
+    if Y is None:
+        raise ConfigError("--plate-yield-stress", None,
+                          f"a stress > 0 Pa (materials.{plate_key} has no yield_stress)")
+    H = args.plate_hardening
+    if H is None:
+        H = strength.hardening if strength is not None and strength.hardening else 0.0
+    return model_from({"model": name, "yield_stress": Y, "hardening": H}, "plate_model")

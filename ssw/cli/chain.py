@@ -16,7 +16,7 @@ import numpy as np
 
 from ssw.cli import add_json_flag
 from ssw.cli._device import add_device_options, chain_context
-from ssw.cli._soil import add_soil_model_options
+from ssw.cli._soil import add_plate_model_options, add_soil_model_options
 from ssw.errors import ConfigError
 
 
@@ -71,7 +71,7 @@ def run_tof(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.chain.sensitivity import PARAMETERS
     from ssw.tof.api import peaks, tof_derivatives
 
-    if args.hits is not None or args.soil_model is not None:
+    if args.hits is not None or args.soil_model is not None or args.plate_model is not None:
         args.human = _human_hits
         return _run_hits(args)
     if args.soil_E is None or args.soil_nu is None:
@@ -123,20 +123,34 @@ def run_tof(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _run_hits(args: argparse.Namespace) -> dict[str, Any]:
-    """``--hits N`` consecutive hits on one plastic sample (:mod:`ssw.walls.hits`)."""
-    from ssw.cli._soil import soil_model_of
-    from ssw.config import load_config
+    """``--hits N`` consecutive hits on one plastic sample, or through a yielding plate
+    (:mod:`ssw.walls.hits`)."""
+    from ssw.cli._soil import plate_model_of, soil_material_of, soil_model_of
+    from ssw.config import library, load_config
     from ssw.walls.hits import run_hits
     from ssw.walls.plastic import Settings, plastic_wall
 
-    model = soil_model_of(args, load_config(args.config))
+    cfg = load_config(args.config)
+    if args.soil_model is None and args.plate_model is None:
+        raise ConfigError("--soil-model", None, "a plastic model of the sample (or "
+                          "--plate-model: a yielding plate on an elastic sample)")
+    model = None
+    if args.soil_model is not None:
+        model = soil_model_of(args, cfg)
+    else:  # an elastic sample: its E and nu from the flags, or the library's
+        soil_material_of(args, cfg)
+    if model is None and (args.soil_E is None or args.soil_nu is None):
+        raise ConfigError("--soil-E/--soil-nu", (args.soil_E, args.soil_nu), "both given")
     ctx = chain_context(args, args.soil_E, args.soil_nu)
     if ctx.wall_options.get("dynamics"):
         raise ConfigError("--wall-dynamics", ctx.wall_options["dynamics"],
                           "quasi-static with --hits (the plastic wall is static)")
+    p = ctx.params
+    plate_model = plate_model_of(args, library(cfg),
+                                 p.plate_material if p.plate_thickness > 0 else "none")
     settings = Settings(levels=args.plastic_levels, increments=args.plastic_increments)
     wall = plastic_wall(ctx.params, args.soil_E, args.soil_nu, soil_model=model,
-                        settings=settings)
+                        plate_model=plate_model, settings=settings)
     res = run_hits(ctx.params, wall, 1 if args.hits is None else args.hits)
     rows = res.rows()
     tof = np.array([r["tof"] for r in rows])
@@ -147,7 +161,10 @@ def _run_hits(args: argparse.Namespace) -> dict[str, Any]:
         else "none", "plate_thickness": ctx.params.plate_thickness,
         "plate_diameter": ctx.params.plate_diameter,
         "plate_interface": ctx.params.plate_interface,
-        "soil_model": model.params(), "soil_model_key": model.key,
+        "soil_model": model.params() if model is not None else {"model": "linear-elastic"},
+        "soil_model_key": model.key if model is not None else "elastic",
+        "plate_model": plate_model.params() if plate_model is not None else None,
+        "plate_model_key": plate_model.key if plate_model is not None else None,
         "plastic_levels": settings.levels, "plastic_increments": settings.increments,
         "hits": rows, "static_set": float(res.static_set[0]),
         "static_dissipated": float(res.static_dissipated[0]),
@@ -164,11 +181,15 @@ def _human_hits(res: dict[str, Any]) -> str:
     t = float(res.get("plate_thickness") or 0.0)
     plate = (f"under a {t * 1e3:.3g} mm {res.get('plate_material', '')} plate" if t > 0
              else "no plate")
+    if res.get("plate_model_key"):
+        plate += f", {res['plate_model_key']}"
     lines = [f"{res['soil_model_key']} on E = {res['soil_E']:.4g} Pa, nu = {res['soil_nu']:.3g}"
              f" ({plate}); static set {res['static_set'] * 1e6:.3f} um",
-             "hit   TOF (s)        peak F (N)  set (um)  d set (um)  dissipated (J)"]
+             "hit   TOF (s)        peak F (N)  set (um)  d set (um)  interface (um)  plate "
+             "thinning (um)  dissipated (J)"]
     lines += [f"{r['hit']:3d}  {r['tof']:.6e}  {r['peak_force']:10.4g}  "
               f"{r['permanent_set'] * 1e6:8.3f}  {r['set_increment'] * 1e6:10.3f}  "
+              f"{r['interface_set'] * 1e6:14.3f}  {r['plate_thinning'] * 1e6:19.3f}  "
               f"{r['dissipated']:.4e}" for r in res["hits"]]
     lines.append(f"TOF std over the hits {res['tof_std']:.3e} s"
                  + ("; beyond the tabulated reach" if res["beyond_exact_reach"] else ""))
@@ -346,6 +367,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="consecutive hits on one plastic sample: per hit the TOF, peak wall "
                    "force, permanent set and dissipated energy")
     add_soil_model_options(h)
+    add_plate_model_options(h)
     h.add_argument("--plastic-levels", type=int, default=10,
                    help="unloading curves tabulated between first yield and the reach")
     h.add_argument("--plastic-increments", type=int, default=12,

@@ -22,7 +22,7 @@ import argparse
 from typing import Any
 
 from ssw.cli import add_json_flag
-from ssw.cli._soil import add_soil_model_options
+from ssw.cli._soil import add_plate_model_options, add_soil_model_options
 from ssw.errors import ConfigError
 
 
@@ -55,6 +55,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="fem: the axisymmetric FEM (default); layered: the semi-analytic "
                    "oracle, an infinite plate on a half-space (ssw.contact.layered)")
     add_soil_model_options(p)
+    add_plate_model_options(p)
+    p.add_argument("--plastic-mesh", choices=["path", "study"], default="path",
+                   help="mesh of a plastic curve: path (default; the config's domain and "
+                   "growth, its element at the contact point scaled to the path's contact "
+                   "radius, ssw.contact.plastic.path_mesh_settings) | study (the elastic "
+                   "engine's mesh as configured)")
     p.add_argument("--unload", action="store_true",
                    help="with --soil-model: lift the sphere back after loading (residual "
                    "indentation, dissipated work)")
@@ -154,7 +160,7 @@ def run(args: argparse.Namespace) -> dict[str, Any] | None:
         contact["delta_mode"] = "fixed"  # --delta-max, and scenes given by flags, reach it
     mats = library(cfg)
     if args.soil_model is not None or args.unload or args.soil_yield_stress is not None \
-            or args.soil_material is not None:
+            or args.soil_material is not None or args.plate_model is not None:
         return _run_plastic(args, cfg, contact, mats)
     if args.output_dir is not None:
         return _run_batch(args, cfg, contact, mats)
@@ -185,33 +191,37 @@ PLASTIC_STEPS = 100
 
 def _run_plastic(args: argparse.Namespace, cfg: dict[str, Any], contact: dict[str, Any],
                  mats: dict) -> dict[str, Any]:
-    """The elasto-plastic curve of a sphere on a plastic sample, through a plate when one is
-    given, on the half-space box or a finite block (loading, and with --unload unloading):
-    the curve, first yield, residual indentation, dissipated work."""
+    """The elasto-plastic curve of a sphere on a plastic sample, or through a yielding plate,
+    on the half-space box or a finite block (loading, and with --unload unloading): the
+    curve, first yield, residual indentation (and under a plate the sample's and the
+    plate's dent), dissipated work."""
     from dataclasses import replace
 
-    from ssw.cli._soil import soil_model_of
+    from ssw.cli._soil import plate_model_of, soil_model_of
     from ssw.contact.plastic import scene_path, summary, write_plastic_curve
     from ssw.contact.scene import scene_plate
 
-    if args.soil_model is None:
+    if args.soil_model is None and args.plate_model is None:
         raise ConfigError("--soil-model", None, "a model (von-mises) with --unload or "
-                          "--soil-yield-stress")
+                          "--soil-yield-stress (or --plate-model)")
     if args.scene or args.output_dir is not None:
         raise ConfigError("--scene", args.scene, "soil flags with --soil-model (one scene)")
-    model = soil_model_of(args, cfg)
+    model = soil_model_of(args, cfg) if args.soil_model is not None else None
     if args.steps is None and "steps" not in cfg.get("contact", {}):
         contact["steps"] = PLASTIC_STEPS
     radius = float(cfg["indenter"]["radius"])
     if args.plate_thickness is None:
         args.plate_thickness = 0.0  # the sample bare unless a plate is given
     scene, mats = _scene(args, cfg, mats)  # the plate and sample of the flags
-    scene = replace(scene, soil_model=model)
+    scene = replace(scene, soil_model=model,
+                    plate_model=plate_model_of(args, mats, scene.plate_material))
     if scene.sample is not None:
         contact = scene.sample.contact_settings(contact)
     curve, inputs = scene_path(scene, contact, radius, scene_plate(scene, mats),
-                               unload=bool(args.unload))
-    inputs.update(soil_model_key=model.key, unload=args.unload,
+                               unload=bool(args.unload), mesh=args.plastic_mesh)
+    inputs.update(soil_model_key=model.key if model is not None else "elastic",
+                  plate_model_key=(scene.plate_model.key if scene.plate_model is not None
+                                   else None), unload=args.unload,
                   sample=scene.sample.to_dict() if scene.sample is not None else None)
     if args.output:
         write_plastic_curve(args.output, curve, inputs)
@@ -335,10 +345,15 @@ def _human(res: dict[str, Any]) -> str:
         def g(x: Any, unit: str) -> str:
             return "none" if x is None else f"{x:.6g} {unit}"
 
+        plate = (f" under a {res['plate_model_key']} plate" if res.get("plate_model_key")
+                 else "")
+        dents = (f" (interface {g(res['interface_residual_indentation'], 'm')}, plate "
+                 f"thinning {g(res['plate_thinning'], 'm')})" if res.get("plate_model_key")
+                 else "")
         return (f"{res['soil_model_key']} on E = {res['soil_E']:.6g} Pa, nu = "
-                f"{res['soil_nu']:.4g}: F_max = {res['force_max']:.6g} N, first yield at "
-                f"{g(res['first_yield_force'], 'N')}, residual indentation "
-                f"{g(res['residual_indentation'], 'm')}, dissipated work "
+                f"{res['soil_nu']:.4g}{plate}: F_max = {res['force_max']:.6g} N, first yield "
+                f"at {g(res['first_yield_force'], 'N')}, residual indentation "
+                f"{g(res['residual_indentation'], 'm')}{dents}, dissipated work "
                 f"{res['dissipated_work']:.6g} J; {res['stats']['increments']} increments, "
                 f"{res['stats']['newton_iterations']} Newton iterations, wall "
                 f"{res['stats']['wall_total']:.3f} s"

@@ -28,18 +28,34 @@ MODELS: dict[str, type] = {
 }
 
 
-def model_from(spec: dict[str, Any] | None) -> Any:
-    """A model from a mapping ``{model: <name>, <parameter>: <value>, ...}`` (SI units; the
-    config's ``sets.*.soil_model``); None or ``linear-elastic``: None (today's elastic
-    path)."""
+def model_from(spec: dict[str, Any] | None, field: str = "soil_model") -> Any:
+    """A model from a config entry.
+
+    Parameters
+    ----------
+    spec : dict or None
+        ``{model: <name>, <parameter>: <value>, ...}`` (SI units and degrees; the config's
+        ``sets.*.soil_model`` or ``sets.*.plate_model``).
+    field : str
+        The entry's name in messages (``soil_model``, ``plate_model``).
+
+    Returns
+    -------
+    A frozen model of :data:`MODELS`; None for None or ``linear-elastic`` (the exact
+    elastic path).
+
+    Raises
+    ------
+    ConfigError
+        Naming ``<field>.<parameter>`` for an unknown model or parameter, or a bad value.
+    """
     if spec is None:
         return None
     if not isinstance(spec, dict) or "model" not in spec:
-        raise ConfigError("soil_model", spec, "a mapping with 'model': "
-                          + " | ".join(MODELS))
+        raise ConfigError(field, spec, "a mapping with 'model': " + " | ".join(MODELS))
     name = spec["model"]
     if name not in MODELS:
-        raise ConfigError("soil_model.model", name, " | ".join(MODELS))
+        raise ConfigError(f"{field}.model", name, " | ".join(MODELS))
     if name == LinearElastic.name:
         return None
     cls = MODELS[name]
@@ -47,22 +63,51 @@ def model_from(spec: dict[str, Any] | None) -> Any:
     args = {k: v for k, v in spec.items() if k != "model"}
     unknown = set(args) - known
     if unknown:
-        raise ConfigError(f"soil_model.{sorted(unknown)[0]}", args[sorted(unknown)[0]],
+        raise ConfigError(f"{field}.{sorted(unknown)[0]}", args[sorted(unknown)[0]],
                           f"parameters of {name}: {', '.join(sorted(known))}")
-    return cls(**{k: (v if isinstance(v, str) or v is None else float(v))
-                  for k, v in args.items()})
+    try:
+        return cls(**{k: (v if isinstance(v, str) or v is None else float(v))
+                      for k, v in args.items()})
+    except ConfigError as exc:  # the model names its parameter as a soil model's
+        if field == "soil_model" or not exc.field.startswith("soil_model."):
+            raise
+        raise ConfigError(field + exc.field[len("soil_model"):], exc.value,
+                          exc.allowed) from None
 
 
-def model_of_strength(name: str, strength: Any, where: str = "material") -> Any:
+def model_of_strength(name: str, strength: Any, where: str = "material",
+                      field: str = "soil_model") -> Any:
     """A model of ``name`` whose strengths are a material's (not fitted):
 
-    * ``von-mises``: ``Y`` = the yield stress (or the compressive strength);
+    * ``von-mises``: ``Y`` = the yield stress (or the compressive strength), the hardening
+      modulus where the library gives one (else perfectly plastic);
     * ``drucker-prager``: the cohesion, friction and dilatancy angles, the tensile strength
       as the cutoff;
     * ``crushable-foam``: ``Y0`` = the compressive strength;
     * ``tresca``: ``k`` = the cohesion (a clay's undrained shear strength ``c_u``; the
       friction angle is not used: undrained, the strength does not depend on the mean
       stress).
+
+    Parameters
+    ----------
+    name : str
+        A plastic model of :data:`MODELS`.
+    strength : ssw.materials.Strength
+        The material's strengths (Pa, degrees).
+    where : str
+        The material's place in messages (``materials.<key>``).
+    field : str
+        The model's entry in messages (``soil_model``, ``plate_model``).
+
+    Returns
+    -------
+    The frozen model.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``<where>.strength.<field>`` when the model needs a strength the material
+        lacks, or ``<field>.model`` for a model that is not plastic.
     """
     def need(value: Any, field: str) -> float:
         if value is None:
@@ -72,7 +117,7 @@ def model_of_strength(name: str, strength: Any, where: str = "material") -> Any:
 
     if name == VonMises.name:
         y = strength.yield_stress if strength.yield_stress is not None else strength.compressive
-        return VonMises(need(y, "yield_stress"))
+        return VonMises(need(y, "yield_stress"), float(strength.hardening or 0.0))
     if name == DruckerPrager.name:
         return DruckerPrager(need(strength.cohesion, "cohesion"),
                              need(strength.friction_angle, "friction_angle"),
@@ -81,7 +126,7 @@ def model_of_strength(name: str, strength: Any, where: str = "material") -> Any:
         return CrushableFoam(need(strength.compressive, "compressive"))
     if name == Tresca.name:
         return Tresca(need(strength.cohesion, "cohesion"))
-    raise ConfigError("soil_model.model", name,
+    raise ConfigError(f"{field}.model", name,
                       " | ".join(n for n in MODELS if n != LinearElastic.name))
 
 

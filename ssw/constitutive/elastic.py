@@ -17,6 +17,9 @@ class LinearElastic:
     """Isotropic linear elasticity: ``sigma = (K ONE ONE^T + 2 G P_DEV) eps``."""
 
     name: ClassVar[str] = "linear-elastic"
+    #: no plastic flow, so no plastic volume change (the contact solver's mixed u-p form is
+    #: exact)
+    isochoric: ClassVar[bool] = True
 
     @property
     def key(self) -> str:

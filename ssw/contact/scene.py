@@ -509,7 +509,7 @@ def solve_scene(
         contact_cfg = scene.sample.contact_settings(contact_cfg)
     plate = scene_plate(scene, materials)
     plate_key = scene.plate_material if scene.plate_thickness > 0 else "none"
-    if scene.soil_model is not None:  # elasto-plastic: ssw.contact.plastic
+    if scene.soil_model is not None or scene.plate_model is not None:  # ssw.contact.plastic
         from ssw.contact.plastic import scene_curve
 
         return scene_curve(scene, contact_cfg, indenter_radius, plate)

@@ -9,8 +9,11 @@ speed. After each hit the sample's history is the largest indentation reached so
 
 Per hit: the TOF (:func:`ssw.chain.run.run_peaks`), the peak wall force, the peak
 indentation, the permanent set (the residual indentation once unloaded), its increment,
-and the energy the sample absorbed irrecoverably (the growth of the wall's dissipated
-energy: the area of the hit's hysteresis loop).
+the energy the sample absorbed irrecoverably (the growth of the wall's dissipated energy:
+the area of the hit's hysteresis loop), and under a plate the split of the permanent set
+into the depth the plate-sample interface keeps on the axis (the sample's own set, and
+with a yielding plate on an elastic sample the plate's permanent bending) and the plate's
+permanent thinning there (zero for an elastic plate).
 """
 
 from __future__ import annotations
@@ -28,8 +31,11 @@ from ssw.errors import ConfigError
 class Hits:
     """Per hit (rows) and scene (columns), SI: ``tof`` s, ``peak_force`` N,
     ``peak_indentation`` m, ``permanent_set`` m (after the hit), ``set_increment`` m,
-    ``dissipated`` J (in the hit). ``static_set`` (n,) m and ``static_dissipated`` (n,) J:
-    what placing the chain did. ``wall``: the sample after the last hit."""
+    ``dissipated`` J (in the hit), ``interface_set`` m (the permanent depth of the
+    plate-sample interface on the axis; without a plate the permanent set) and
+    ``plate_thinning`` m (the rest: the plate's permanent thinning there). ``static_set`` (n,) m and
+    ``static_dissipated`` (n,) J: what placing the chain did. ``wall``: the sample after
+    the last hit."""
 
     tof: np.ndarray
     peak_force: np.ndarray
@@ -37,6 +43,8 @@ class Hits:
     permanent_set: np.ndarray
     set_increment: np.ndarray
     dissipated: np.ndarray
+    interface_set: np.ndarray
+    plate_thinning: np.ndarray
     static_set: np.ndarray
     static_dissipated: np.ndarray
     wall: Any
@@ -44,7 +52,7 @@ class Hits:
     def rows(self) -> list[dict[str, Any]]:
         """One mapping per hit (first scene)."""
         keys = ("tof", "peak_force", "peak_indentation", "permanent_set", "set_increment",
-                "dissipated")
+                "dissipated", "interface_set", "plate_thinning")
         return [{"hit": i + 1, **{k: float(getattr(self, k)[i, 0]) for k in keys}}
                 for i in range(self.tof.shape[0])]
 
@@ -70,7 +78,7 @@ def run_hits(params: ChainParams, wall: Any, hits: int) -> Hits:
     w = placed
     out: dict[str, list[np.ndarray]] = {k: [] for k in (
         "tof", "peak_force", "peak_indentation", "permanent_set", "set_increment",
-        "dissipated")}
+        "dissipated", "interface_set", "plate_thinning")}
     for _ in range(hits):
         set_before = w.residual_indentation()
         pk, run = run_peaks(params, w)
@@ -83,6 +91,9 @@ def run_hits(params: ChainParams, wall: Any, hits: int) -> Hits:
         out["permanent_set"].append(w.residual_indentation())
         out["set_increment"].append(w.residual_indentation() - set_before)
         out["dissipated"].append(now - lost)
+        under = w.interface_residual_indentation()
+        out["interface_set"].append(under)
+        out["plate_thinning"].append(w.residual_indentation() - under)
         lost = now
     return Hits(**{k: np.array(v) for k, v in out.items()}, static_set=static_set,
                 static_dissipated=static_lost, wall=w)

@@ -97,7 +97,9 @@ class Settings:
 class Tables:
     """One scene's tables, rigid sphere (SI): virgin ``F`` on ``d = h k``, its cumulative
     work ``W``; levels ``d_m`` (level 0 = ``d_e``), ``d_res``, shapes ``f`` and their
-    cumulative integrals ``S`` on ``xi = k / SHAPE_CELLS``; ``elastic``: never yielded."""
+    cumulative integrals ``S`` on ``xi = k / SHAPE_CELLS``; ``elastic``: never yielded;
+    ``d_res_interface`` the plate-sample interface's residual depth on the axis per level
+    (``d_res`` less the plate's permanent thinning; without a plate ``d_res``)."""
 
     h: float
     F: np.ndarray
@@ -108,6 +110,7 @@ class Tables:
     S: np.ndarray
     elastic: bool
     stats: dict
+    d_res_interface: np.ndarray | None = None
 
 
 def _cumulative(y: np.ndarray, step: float) -> np.ndarray:
@@ -133,18 +136,22 @@ def tables(E: float, nu: float, model: Any, radius: float, d_top: float,
            settings: Settings = Settings(), plate: tuple | None = None) -> Tables:
     """The tables of one scene (module docstring), computed once per argument set.
 
-    ``plate``: None (the sphere on the sample), or ``(E Pa, nu, thickness m, radius m,
-    interface)`` of an elastic plate between them (:func:`ssw.contact.plastic.contact_mesh`
-    meshes it)."""
+    ``model``: the sample's (None: elastic). ``plate``: None (the sphere on the sample), or
+    ``(E Pa, nu, thickness m, radius m, interface, model)`` of a plate between them (its
+    model None: elastic; :func:`ssw.contact.plastic.contact_mesh` meshes it)."""
     import time
 
-    from ssw.contact.plastic import contact_mesh, solve_path
+    from ssw.contact.plastic import contact_mesh, plate_contact_radius, solve_path
 
     t0 = time.perf_counter()
-    Ep, nup, t, rp, interface = plate if plate is not None else (0, 0, 0.0, 0.0,
-                                                                 "frictionless")
+    Ep, nup, t, rp, interface, plate_model = plate if plate is not None else (
+        0, 0, 0.0, 0.0, "frictionless", None)
+    a_c = None  # a yielding plate: its own contact resolved (plate_contact_radius)
+    if plate_model is not None:
+        a_c = plate_contact_radius(radius, d_top, (E, nu), (Ep, nup))
     mesh = contact_mesh(radius, d_top, fine=settings.fine, growth=settings.growth,
-                        domain=settings.domain, plate_thickness=t, plate_radius=rp)
+                        domain=settings.domain, plate_thickness=t, plate_radius=rp,
+                        contact_radius=a_c)
     elastic_plate = None if plate is None else (float(Ep), float(nup))
     n_load = 2 * settings.increments
     # uniform steps, and below the first one 6 halvings (the law of a plate on the sample
@@ -153,7 +160,7 @@ def tables(E: float, nu: float, model: Any, radius: float, d_top: float,
     steps = np.concatenate([first * 0.5 ** np.arange(6, 0, -1),
                             d_top * np.arange(1, n_load + 1) / n_load])
     load = solve_path(mesh, E, nu, model, radius, steps, plate=elastic_plate,
-                      interface=interface)
+                      interface=interface, plate_model=plate_model)
     h = d_top / VIRGIN_CELLS
     grid = h * np.arange(VIRGIN_CELLS + 1)
     d, F = load.delta, load.force
@@ -162,32 +169,38 @@ def tables(E: float, nu: float, model: Any, radius: float, d_top: float,
     Fv = np.maximum.accumulate(Fv)
     W = _cumulative(Fv, h)
     elastic = load.dissipated_work <= 0.0
+    # the near zone that held the loading path's plastic zone holds the shallower paths'
+    near = load.stats["near_radius"]
     xi = np.linspace(0.0, 1.0, SHAPE_CELLS + 1)
     paths = 1
     if elastic:
         d_m, d_res = np.array([np.inf]), np.zeros(1)
+        d_res_interface = np.zeros(1)
         f = np.zeros((1, SHAPE_CELLS + 1))
     else:
         d_e = load.first_yield_delta or float(d[0])
         d_e = min(d_e, 0.5 * d_top)
         d_m = np.concatenate([[d_e], np.linspace(d_e, d_top, settings.levels + 1)[1:]])
         d_res = np.zeros(d_m.size)
+        d_res_interface = np.zeros(d_m.size)
         f = np.zeros((d_m.size, SHAPE_CELLS + 1))
         f[0] = np.interp(xi * d_e, grid, Fv) / np.interp(d_e, grid, Fv)
         for k in range(1, d_m.size):
             n = settings.increments
             c = solve_path(mesh, E, nu, model, radius, d_m[k] * np.arange(1, n + 1) / n,
-                           unload=True, plate=elastic_plate, interface=interface)
+                           unload=True, plate=elastic_plate, interface=interface,
+                           plate_model=plate_model, near=near)
             paths += 1
             up, down = c.branch == 0, c.branch == 1
             d_res[k] = c.residual_indentation if c.residual_indentation is not None else 0.0
             d_res[k] = min(max(d_res[k], 0.0), 0.99 * d_m[k])
+            d_res_interface[k] = min(max(c.interface_residual or 0.0, 0.0), d_res[k])
             f[k] = _shape_of(c.delta[down], c.force[down], d_m[k], float(c.force[up][-1]),
                              d_res[k])
     S = np.stack([_cumulative(row, 1.0 / SHAPE_CELLS) for row in f])
     stats = {"paths": paths, "seconds": time.perf_counter() - t0, "nodes": len(mesh.nodes),
              "first_yield_delta": load.first_yield_delta}
-    return Tables(h, Fv, W, d_m, d_res, f, S, bool(elastic), stats)
+    return Tables(h, Fv, W, d_m, d_res, f, S, bool(elastic), stats, d_res_interface)
 
 
 @dataclass(frozen=True)
@@ -205,8 +218,10 @@ class PlasticWall:
     ``h`` (n,) m and ``F``, ``W`` (n, VIRGIN_CELLS + 1) the virgin table (N, J); ``d_m``,
     ``d_res`` (n, L) m the levels; ``f``, ``S`` (n, L, SHAPE_CELLS + 1) the shapes;
     ``d_max0`` (n,) m the history the wall starts with (the sample's largest indentation
-    so far). A :class:`ssw.chain.wall.Wall` (the law at the carried history) and a
-    stateful wall (``start``, ``advance``, ``take_state``, ``energy``; docs/CONTRACTS.md).
+    so far); ``d_res_interface`` (n, L) m the plate-sample interface's residual depth per
+    level (None: ``d_res``). A :class:`ssw.chain.wall.Wall` (the law at the carried
+    history) and a stateful wall (``start``, ``advance``, ``take_state``, ``energy``;
+    docs/CONTRACTS.md).
     """
 
     h: np.ndarray
@@ -217,6 +232,7 @@ class PlasticWall:
     f: np.ndarray
     S: np.ndarray
     d_max0: np.ndarray
+    d_res_interface: np.ndarray | None = None
 
     @property
     def n(self) -> int:
@@ -239,8 +255,11 @@ class PlasticWall:
         slope = (F1 - F0) / self.h
         return F0 + slope * t, self.W[r, k] + F0 * t + 0.5 * slope * t * t
 
-    def _level(self, d_max: np.ndarray) -> tuple[np.ndarray, ...]:
-        """Residual indentation, and the two neighbouring levels with their weight."""
+    def _level(self, d_max: np.ndarray, table: np.ndarray | None = None
+               ) -> tuple[np.ndarray, ...]:
+        """Residual indentation (of ``table``, per level; default ``d_res``), and the two
+        neighbouring levels with their weight."""
+        table = self.d_res if table is None else table
         L = self.d_m.shape[1]
         r = np.arange(self.n)
         k = np.clip(np.sum(d_max[:, None] >= self.d_m, axis=1) - 1, 0, L - 1)
@@ -250,8 +269,8 @@ class PlasticWall:
         w = np.where(span > 0, (d_max - lo) / np.where(span > 0, span, 1.0), 0.0)
         w = np.clip(w, 0.0, 1.0)
         last = k == k1  # beyond the last level: its ratio d_res / d_m
-        ratio = self.d_res[r, k] / np.where(np.isfinite(self.d_m[r, k]), self.d_m[r, k], 1.0)
-        d_res = np.where(last, ratio * d_max, (1 - w) * self.d_res[r, k] + w * self.d_res[r, k1])
+        ratio = table[r, k] / np.where(np.isfinite(self.d_m[r, k]), self.d_m[r, k], 1.0)
+        d_res = np.where(last, ratio * d_max, (1 - w) * table[r, k] + w * table[r, k1])
         return d_res, k, k1, w
 
     def _shape(self, tab: np.ndarray, k: np.ndarray, k1: np.ndarray, w: np.ndarray,
@@ -315,6 +334,15 @@ class PlasticWall:
         dm = self.d_max0 if d_max is None else np.asarray(d_max, float)
         return np.where(dm <= self.d_m[:, 0], 0.0, self._level(dm)[0])
 
+    def interface_residual_indentation(self, d_max: np.ndarray | None = None) -> np.ndarray:
+        """(n,) m: the plate-sample interface's permanent depth on the axis after unloading
+        from ``d_max`` (default the history): :meth:`residual_indentation` less the plate's
+        permanent thinning (without a plate, the residual indentation)."""
+        if self.d_res_interface is None:
+            return self.residual_indentation(d_max)
+        dm = self.d_max0 if d_max is None else np.asarray(d_max, float)
+        return np.where(dm <= self.d_m[:, 0], 0.0, self._level(dm, self.d_res_interface)[0])
+
     def with_history(self, d_max: np.ndarray) -> PlasticWall:
         """The same sample after it reached ``d_max`` (m) (the larger of it and the past)."""
         return replace(self, d_max0=np.maximum(self.d_max0, np.asarray(d_max, float)))
@@ -341,7 +369,8 @@ class PlasticWall:
 
     def take(self, idx: np.ndarray) -> PlasticWall:
         return PlasticWall(self.h[idx], self.F[idx], self.W[idx], self.d_m[idx],
-                           self.d_res[idx], self.f[idx], self.S[idx], self.d_max0[idx])
+                           self.d_res[idx], self.f[idx], self.S[idx], self.d_max0[idx],
+                           None if self.d_res_interface is None else self.d_res_interface[idx])
 
     def hertz_equivalent(self, d_ref: float) -> np.ndarray:
         """``F_L(d) / d^1.5`` (N/m^1.5) at ``max(d_ref, one table cell)``."""
@@ -380,16 +409,54 @@ def reach(params: ChainParams, E: float, nu: float, margin: float = ENERGY_MARGI
 
 
 def plastic_wall(params: ChainParams, soil_E: Any, soil_nu: Any, *, soil_model: Any = None,
-                 settings: Settings = Settings(), margin: float = ENERGY_MARGIN,
-                 **_: Any) -> PlasticWall:
-    """The plastic wall of the scenes ``broadcast(soil_E, soil_nu)`` on ``soil_model`` (a
-    model of :mod:`ssw.constitutive`, or a sequence of one per scene) under the chain's
-    plate (if any; elastic, tied to the sample by its interface, ``frictionless`` or
-    ``bonded``), virgin samples (``d_max0 = 0``)."""
+                 plate_model: Any = None, settings: Settings = Settings(),
+                 margin: float = ENERGY_MARGIN, **_: Any) -> PlasticWall:
+    """The plastic wall of virgin samples (``d_max0 = 0``) under the chain's plate.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain; its plate (if any) tied to the sample by its interface,
+        ``frictionless`` or ``bonded``.
+    soil_E : array_like
+        The samples' Young's moduli, Pa (broadcast with ``soil_nu``: the scenes).
+    soil_nu : array_like
+        The samples' Poisson's ratios.
+    soil_model : model of :mod:`ssw.constitutive`, sequence of models, or None
+        The sample's law, or one per scene; None: an elastic sample (with a
+        ``plate_model``).
+    plate_model : model of :mod:`ssw.constitutive` or None
+        The plate's law (None: elastic).
+    settings : Settings
+        The tables' FEM settings.
+    margin : float
+        The virgin curve holds ``margin`` hits' energy (:data:`ENERGY_MARGIN`).
+    **_ : Any
+        Options of the other walls (the wall registry passes every wall the same ones),
+        ignored.
+
+    Returns
+    -------
+    PlasticWall
+        The wall of the scenes.
+
+    Raises
+    ------
+    ConfigError
+        Without a plastic model of the sample or the plate, with a plate model and no plate,
+        or with a plate interface the plastic contact does not model.
+    """
     models = list(soil_model) if isinstance(soil_model, list | tuple) else [soil_model]
-    if not models or any(m is None or not hasattr(m, "update") for m in models):
+    if plate_model is None and (not models or any(m is None for m in models)):
         raise ConfigError("soil_model", soil_model, "a plastic model of ssw.constitutive "
-                          "(von-mises, tresca, drucker-prager, crushable-foam), or one per scene")
+                          "(von-mises, tresca, drucker-prager, crushable-foam), or one per "
+                          "scene (or a plate_model)")
+    if any(m is not None and not hasattr(m, "update") for m in models):
+        raise ConfigError("soil_model", soil_model, "models of ssw.constitutive")
+    if plate_model is not None and not hasattr(plate_model, "update"):
+        raise ConfigError("plate_model", plate_model, "a model of ssw.constitutive")
+    if plate_model is not None and not params.plate_thickness > 0:
+        raise ConfigError("plate_model", plate_model.key, "a plate (thickness > 0)")
     plate = None
     if params.plate_thickness > 0:
         if params.plate_interface not in ("frictionless", "bonded"):
@@ -398,7 +465,7 @@ def plastic_wall(params: ChainParams, soil_E: Any, soil_nu: Any, *, soil_model: 
                               "on the sample)")
         plate = (float(params.plate_E), float(params.plate_nu),
                  float(params.plate_thickness), 0.5 * float(params.plate_diameter),
-                 params.plate_interface)
+                 params.plate_interface, plate_model)
     E, nu = scene_arrays(soil_E, soil_nu)
     if len(models) not in (1, E.size):
         raise ConfigError("soil_model", f"{len(models)} models",
@@ -438,4 +505,4 @@ def plastic_wall(params: ChainParams, soil_E: Any, soil_nu: Any, *, soil_model: 
         np.stack([pad(t.d_m * si) for t, si in rows]),
         np.stack([pad(t.d_res * si) for t, si in rows]),
         np.stack([pad(t.f) for t, _ in rows]), np.stack([pad(t.S) for t, _ in rows]),
-        np.zeros(len(rows)))
+        np.zeros(len(rows)), np.stack([pad(t.d_res_interface * si) for t, si in rows]))

@@ -416,6 +416,20 @@ class Study:
 
 
 # ---------------------------------------------------------------------- rule helpers
+def device_parts(cfg: dict[str, Any]) -> int:
+    """The device design's parts per family (``design.device.parts``, the workflow's
+    scattergather ``device``; a part with no chain is refused by the family job,
+    :meth:`ssw.design.space.DeviceSpace.family_points`)."""
+    dev = cfg.get("design", {}).get("device") or {}
+    return int(dev.get("parts") or 1)
+
+
+def scatter_part(item: str) -> str:
+    """Snakemake's scatter item ``i-of-n`` (1-based) -> ``--part`` ``i-1/n``."""
+    i, _, n = item.partition("-of-")
+    return f"{int(i) - 1}/{int(n)}"
+
+
 def alternatives(names: Any) -> str:
     """A wildcard regex matching exactly ``names`` (none: a regex that matches nothing)."""
     import re

@@ -85,7 +85,14 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="strike a yielding sample N times through the recommended plate and "
                    "the device's own (von Mises at the design's soil strength, at the soil "
                    "where the elastic yield index is largest): per hit TOF, permanent set, "
-                   "dissipated energy, and the TOF drift (ssw.design.hits_check)")
+                   "dissipated energy, and the TOF drift (ssw.design.hits_check); with "
+                   "--space device the finalists and the base device, through their plate "
+                   "yielding as von Mises (the plate's dent; default design.device."
+                   "plastic_hits, 0: off; with --merge on the merged ranking, the base device "
+                   "of --config/--calibration)")
+    g.add_argument("--part", metavar="I/N",
+                   help="with --space device and --family: only the family's chains I, I+N, "
+                   "... (the workflow's scatter; no plastic check, the merge strikes)")
     g.add_argument("--merge", nargs="+", metavar="JSON",
                    help="rank together the results of several ssw design runs (written "
                    "with --output) instead of computing")
@@ -211,20 +218,27 @@ def _run_device(args: argparse.Namespace) -> dict[str, Any]:
     """``ssw design --space device`` (:func:`ssw.design.device_search.run_device_design`)."""
     from ssw.cli._device import chain_context
     from ssw.config import library
-    from ssw.design.device_search import run_device_design
+    from ssw.design.device_search import run_device_design, with_plastic_check
     from ssw.design.device_spec import DeviceSpec
     from ssw.design.space import point_of, space_from_dict
 
-    for flag, v in (("--plastic-hits", args.plastic_hits),
-                    ("--materials", args.materials), ("--thickness", args.thickness)):
+    for flag, v in (("--materials", args.materials), ("--thickness", args.thickness)):
         if v:
             raise ConfigError(flag, v, "not with --space device (its space is the config's "
                               "design.device section)")
     if args.merge:
+        from dataclasses import replace
+
         from ssw.design.device_search import merge_device_results
 
-        res = merge_device_results(_load_results(args.merge)).to_dict()
-        inputs = {"merge": list(args.merge)}
+        merged = merge_device_results(_load_results(args.merge))
+        if args.plastic_hits is not None:
+            merged = replace(merged, spec=replace(merged.spec, plastic_hits=args.plastic_hits))
+        if merged.spec.plastic_hits:
+            base, mats = _merge_base(args, merged)
+            merged = with_plastic_check(merged, base, mats, jobs=max(1, int(args.jobs)))
+        res = merged.to_dict()
+        inputs = {"merge": list(args.merge), "plastic_hits": merged.spec.plastic_hits}
         _write_device(args, res, inputs)
         return res
     ctx = chain_context(args, numerics_only=True)
@@ -234,11 +248,12 @@ def _run_device(args: argparse.Namespace) -> dict[str, Any]:
     p = ctx.params
     space = space_from_dict(section, p.plate_diameter / (2.0 * p.bead_radius))
     kw = {k: section[k] for k in ("moduli", "max_mass", "max_length", "finalists",
-                                  "plate_yield_limit",
-                                  "refine_evaluations", "phases", "noise_rms")
+                                  "plate_yield_limit", "refine_evaluations", "phases",
+                                  "noise_rms", "plastic_hits")
           if section.get(k) is not None}
-    if args.moduli is not None:
-        kw["moduli"] = args.moduli
+    for key in ("moduli", "plastic_hits"):
+        if getattr(args, key) is not None:
+            kw[key] = getattr(args, key)
     if "noise_rms" not in kw:
         kw["noise_rms"] = float(cfg.get("daq", {}).get("simulation", {}).get("noise_rms", 0.05))
     spec = DeviceSpec(plate_spec.soil_E, plate_spec.soil_nu, soil_strength=plate_spec.soil_strength,
@@ -250,15 +265,49 @@ def _run_device(args: argparse.Namespace) -> dict[str, Any]:
                       sample_rate=plate_spec.sample_rate, **kw)
     mats = ctx.calibration.materials() if ctx.calibration is not None else library(cfg)
     ref = None if args.no_reference else point_of(p, dev.bead_material, dev.plate_material)
-    res = run_device_design(space, spec, p, mats, dict(cfg.get("contact", {})),
-                            dev.full_scale_force, ref, jobs=max(1, int(args.jobs)),
-                            families=_families(args.family)).to_dict()
+    families = _families(args.family)
+    result = run_device_design(space, spec, p, mats, dict(cfg.get("contact", {})),
+                               dev.full_scale_force, ref, jobs=max(1, int(args.jobs)),
+                               families=families, parts=_part(args.part))
+    if families is None and args.part is None:  # a family's or part's run: the merge strikes
+        result = with_plastic_check(result, p, mats, jobs=max(1, int(args.jobs)))
+    res = result.to_dict()
     res.update({"device_name": dev.name, "device_source": dev.source, "wall": "fem"})
     inputs = {k: v for k, v in vars(args).items() if k not in ("func", "human", "json")}
     inputs["spec"] = res["spec"]
     inputs["space"] = res["space"]
     _write_device(args, res, inputs)
     return res
+
+
+def _merge_base(args: argparse.Namespace, merged: Any) -> tuple[Any, dict[str, Any]]:
+    """The base chain and materials of ``--config``/``--calibration`` for the plastic check
+    of merged results; ConfigError when that base device is not the merged runs' own."""
+    from ssw.cli._device import chain_context
+    from ssw.config import library
+    from ssw.design.space import point_of
+
+    ctx = chain_context(args, numerics_only=True)
+    mats = ctx.calibration.materials() if ctx.calibration is not None else library(ctx.cfg)
+    ref = merged.reference
+    if ref is not None:
+        mine = point_of(ctx.params, ctx.device.bead_material, ctx.device.plate_material)
+        if mine.key != ref.point.key:
+            raise ConfigError("--config/--calibration", mine.label(),
+                              f"the base device of the merged runs ({ref.point.label()}): "
+                              "the plastic check strikes the devices of their chain")
+    return ctx.params, mats
+
+
+def _part(text: str | None) -> tuple[int, int] | None:
+    """``--part I/N`` -> (I, N)."""
+    if text is None:
+        return None
+    i, _, n = text.partition("/")
+    try:
+        return int(i), int(n)
+    except ValueError as exc:
+        raise ConfigError("--part", text, "I/N: part I (0-based) of N") from exc
 
 
 def _write_device(args: argparse.Namespace, res: dict[str, Any], inputs: Any) -> None:

@@ -13,6 +13,12 @@ COLUMNS = ("bead_material", "bead_diameter", "beads", "sensor_index", "sensor_ma
            "round_trip_index", "detection_index", "range_index", "bead_yield_index",
            "plate_yield_index", "plate_mass_ratio", "mass", "length", "soil_yield_index",
            "feasible", "hard_feasible", "merit")
+#: Columns of the plastic check (empty for a device not struck): the plate's dent and the
+#: sample's set after the last hit (m), the TOF drift from the first hit to the last (s),
+#: its size over the device's TOF uncertainty, the soil struck (Pa), why a device could
+#: not be struck.
+PLASTIC_COLUMNS = ("plate_dent", "soil_set", "tof_drift", "drift_over_u_tof", "soil_E",
+                   "error")
 _KEY = ("bead_material", "bead_diameter", "beads", "sensor_index", "sensor_mass_ratio",
         "striker_mass_ratio", "drop_height", "plate_material", "plate_thickness")
 
@@ -25,11 +31,20 @@ def table_text(result: dict[str, Any]) -> str:
 
     rec = key(result["recommended"])
     ref = key(result["reference"]) if result.get("reference") else None
-    lines = [",".join((*COLUMNS, "recommended", "base_device"))]
+    def cell(v: Any) -> str:
+        if v is None:
+            return ""
+        if isinstance(v, float):
+            return f"{v:.6g}"
+        return '"' + str(v).replace('"', "'") + '"' if "," in str(v) else str(v)
+
+    lines = [",".join((*COLUMNS, *(f"plastic_{k}" for k in PLASTIC_COLUMNS), "recommended",
+                       "base_device"))]
     for c in result["candidates"]:
-        vals = [c[k] for k in COLUMNS]
-        lines.append(",".join(f"{v:.6g}" if isinstance(v, float) else str(v) for v in vals)
-                     + f",{key(c) == rec},{key(c) == ref}")
+        pl = c.get("plastic") or {}
+        vals = [c[k] for k in COLUMNS] + [pl.get(k) for k in PLASTIC_COLUMNS] + [
+            key(c) == rec, key(c) == ref]
+        lines.append(",".join(cell(v) for v in vals))
     return "\n".join(lines) + "\n"
 
 
@@ -106,4 +121,14 @@ def human(res: dict[str, Any]) -> str:
     lines.append(f"{'feasible':20s} {rec['feasible']!s:>12s} "
                  + (f"{ref['feasible']!s:>12s}" if ref else ""))
     lines += [f"  - {r}" for r in rec["reasons"]]
+    for chk in res.get("plastic_check") or []:
+        head = (f"{chk['hits']} hits, {chk['label']} on E {chk['soil_E']:.4g} Pa (von Mises "
+                f"Y {chk['soil_yield_stress']:.3g} Pa): ")
+        if chk["error"]:
+            lines.append(head + f"not struck ({chk['error']})")
+        else:
+            lines.append(head + f"plate dent {chk['plate_dent'] * 1e6:.3g} um, sample set "
+                         f"{chk['soil_set'] * 1e6:.3g} um, TOF drift "
+                         f"{chk['tof_drift'] * 1e6:.3g} us ({chk['drift_over_u_tof']:.3g} "
+                         f"u_TOF)")
     return "\n".join(lines)

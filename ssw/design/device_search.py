@@ -17,7 +17,13 @@ rank, and place the thesis device.
    hard-feasible devices (resolution against the soil yield index, resolution against the
    mass);
 4. the recommended device and the base (thesis) device evaluated again at their own time
-   step (the TOF ``ssw tof`` gives for each), with the reasons.
+   step (the TOF ``ssw tof`` gives for each), with the reasons;
+5. with ``plastic_hits`` > 0 (:func:`with_plastic_check`, after the ranking, so after the
+   merge of the workflow's family jobs): the ``finalists`` best devices of distinct chains
+   and plates and the base device struck that many times on a yielding sample through
+   their yielding plate (:func:`ssw.design.hits_check.device_hits_check`): the plate's dent,
+   the sample's set and the TOF drift in each one's record (a record, not a constraint:
+   the ranking is the elastic one's).
 """
 
 from __future__ import annotations
@@ -25,7 +31,7 @@ from __future__ import annotations
 import resource
 import time
 from concurrent.futures import ProcessPoolExecutor
-from dataclasses import dataclass
+from dataclasses import dataclass, field, replace
 from typing import Any
 
 import numpy as np
@@ -110,9 +116,9 @@ def _evaluate(task: _Task, points: list[DevicePoint], source: str,
                     task.full_scale, source=source, own_step=own_step)
 
 
-def _scan_family(args: tuple[_Task, float, str]) -> list[DeviceCandidate]:
-    task, diameter, plate = args
-    return _evaluate(task, task.space.family_points(diameter, plate), "scan")
+def _scan_family(args: tuple[_Task, float, str, int, int]) -> list[DeviceCandidate]:
+    task, diameter, plate, part, parts = args
+    return _evaluate(task, task.space.family_points(diameter, plate, part, parts), "scan")
 
 
 def _refine(args: tuple[_Task, DeviceCandidate]) -> tuple[list[DeviceCandidate], dict]:
@@ -159,6 +165,7 @@ class DeviceDesignResult:
     searches: list[dict[str, Any]]
     wall_time: float
     cpu_time: float
+    plastic: dict[tuple[Any, ...], dict[str, Any]] = field(default_factory=dict)
 
     def reasons(self) -> list[str]:
         """Why the recommended device (plain sentences with the numbers)."""
@@ -201,6 +208,7 @@ class DeviceDesignResult:
     def to_dict(self) -> dict[str, Any]:
         """The JSON of ``ssw design --space device``."""
         rk = self.ranking
+        plastic = self.plastic
         return {
             "ssw_kind": "design_device",
             **self.spec.statement(),
@@ -209,17 +217,23 @@ class DeviceDesignResult:
             "soil_E": self.spec.grid.tolist(),
             "recommended": {**self.recommended.to_dict(), "merit": merit(self.recommended),
                             "label": self.recommended.point.label(),
-                            "reasons": self.reasons()},
+                            "reasons": self.reasons(),
+                            "plastic": plastic.get(self.recommended.key)},
             "reference": None if self.reference is None else {
                 **self.reference.to_dict(), "merit": merit(self.reference),
                 "label": self.reference.point.label(),
+                "plastic": plastic.get(self.reference.key),
                 "on_front_soil": _on(self.reference, rk.front_soil),
                 "on_front_mass": _on(self.reference, rk.front_mass),
                 "rank": 1 + [c.key for c in rk.candidates].index(self.reference.key)
                 if self.reference.key in [c.key for c in rk.candidates] else None},
             "pareto_soil": [_brief(c) for c in rk.front_soil],
             "pareto_mass": [_brief(c) for c in rk.front_mass],
-            "candidates": [{**c.to_dict(), "merit": merit(c)} for c in rk.candidates],
+            "candidates": [{**c.to_dict(), "merit": merit(c), "plastic": plastic.get(c.key)}
+                           for c in rk.candidates],
+            "plastic_check": [{"label": c.point.label(), **c.point.to_dict(),
+                               "source": c.source, "step": c.step, **plastic[c.key]}
+                              for c in rk.candidates if c.key in plastic],
             "searches": self.searches,
             "evaluations": len(rk.candidates),
             "feasible": sum(c.feasible for c in rk.candidates),
@@ -240,7 +254,8 @@ def _brief(c: DeviceCandidate) -> dict[str, Any]:
 def run_device_design(space: DeviceSpace, spec: DeviceSpec, base: Any,
                       materials: dict[str, Any], contact: dict[str, Any], full_scale: float,
                       reference: DevicePoint | None = None, *, jobs: int = 1,
-                      families: list[tuple[float, str]] | None = None) -> DeviceDesignResult:
+                      families: list[tuple[float, str]] | None = None,
+                      parts: tuple[int, int] | None = None) -> DeviceDesignResult:
     """Scan, search and rank the device space (module docstring).
 
     Parameters
@@ -264,6 +279,9 @@ def run_device_design(space: DeviceSpace, spec: DeviceSpec, base: Any,
         Processes (one family each; the searches one finalist each).
     families : list of tuple or None
         Only these (bead diameter, plate material) families (default: the space's).
+    parts : tuple of int or None
+        ``(part, parts)``: of each family only the chains of that part
+        (:meth:`ssw.design.space.DeviceSpace.family_points`; the workflow's scatter).
 
     Returns
     -------
@@ -273,22 +291,16 @@ def run_device_design(space: DeviceSpace, spec: DeviceSpec, base: Any,
     t0, c0 = time.perf_counter(), cpu_time()
     task = _Task(space, spec, base, materials, contact, full_scale)
     fams = families if families is not None else space.families()
-    scanned = [c for part in map_jobs(_scan_family, [(task, d, m) for d, m in fams], jobs)
-               for c in part]
+    part, n_parts = parts if parts is not None else (0, 1)
+    scanned = [c for found in map_jobs(_scan_family, [(task, d, m, part, n_parts)
+                                                      for d, m in fams], jobs)
+               for c in found]
     seen = {c.key: c for c in scanned}
     ref = None
     if reference is not None:
         ref = _evaluate(task, [reference], "reference", own_step=True)[0]
         seen[ref.key] = ref
-    # finalists: the best of distinct chain-and-plate pairs
-    finalists, pairs = [], set()
-    for c in sorted(seen.values(), key=_order):
-        pair = (c.point.chain, c.point.plate_material)
-        if pair not in pairs and np.isfinite(merit(c)):
-            pairs.add(pair)
-            finalists.append(c)
-        if len(finalists) >= spec.finalists:
-            break
+    finalists = best_of_pairs(sorted(seen.values(), key=_order), spec.finalists)
     searches = []
     if spec.refine_evaluations > 0 and finalists:
         for found, info in map_jobs(_refine, [(task, c) for c in finalists], jobs):
@@ -321,18 +333,87 @@ def merge_device_results(results: list[dict[str, Any]]) -> DeviceDesignResult:
     space_d = results[0]["space"]
     space = space_from_dict(space_d, space_d["plate_diameter_ratio"])
     seen: dict[tuple[Any, ...], DeviceCandidate] = {}
+    plastic: dict[tuple[Any, ...], dict[str, Any]] = {}
     for r in results:
         for d in r["candidates"]:
             c = DeviceCandidate.from_dict(d, spec.limits)
             if c.key not in seen or c.step == "own":
                 seen[c.key] = c
+            if d.get("plastic") is not None:
+                plastic[c.key] = d["plastic"]
     ranking = rank(list(seen.values()))
     ref_d = next((r["reference"] for r in results if r.get("reference")), None)
     ref = None if ref_d is None else DeviceCandidate.from_dict(ref_d, spec.limits)
     return DeviceDesignResult(spec, space, ranking, ranking.recommended, ref,
                               [s for r in results for s in r["searches"]],
                               sum(r["wall_time"] for r in results),
-                              sum(r["cpu_time"] for r in results))
+                              sum(r["cpu_time"] for r in results), plastic)
+
+
+def best_of_pairs(ordered: list[DeviceCandidate], n: int) -> list[DeviceCandidate]:
+    """The first ``n`` devices of ``ordered`` (best first) of distinct chains and plate
+    materials, each with a finite merit: the finalists."""
+    out: list[DeviceCandidate] = []
+    pairs: set[tuple[Any, ...]] = set()
+    for c in ordered:
+        pair = (c.point.chain, c.point.plate_material)
+        if pair not in pairs and np.isfinite(merit(c)):
+            pairs.add(pair)
+            out.append(c)
+        if len(out) >= n:
+            break
+    return out
+
+
+def struck(result: DeviceDesignResult) -> list[DeviceCandidate]:
+    """The devices of the plastic check: the finalists of the ranking
+    (:func:`best_of_pairs`, the recommended first), and the base device."""
+    out = best_of_pairs(result.ranking.candidates, result.spec.finalists)
+    ref = result.reference
+    if ref is not None and all(c.key != ref.key for c in out):
+        out.append(ref)
+    return out
+
+
+def _strike(args: tuple[Any, ...]) -> dict[str, Any]:
+    from ssw.design.hits_check import device_hits_check
+
+    return device_hits_check(*args)
+
+
+def with_plastic_check(result: DeviceDesignResult, base: Any, materials: dict[str, Any],
+                       jobs: int = 1) -> DeviceDesignResult:
+    """The result with the plastic check of its :func:`struck` devices (module docstring,
+    step 5); unchanged when ``spec.plastic_hits`` is 0.
+
+    Parameters
+    ----------
+    result : DeviceDesignResult
+        A ranked device design (one run's or merged).
+    base : ssw.chain.params.ChainParams
+        The base device's chain (numerics, interface, preload).
+    materials : dict
+        The materials library.
+    jobs : int
+        Processes (one device each).
+
+    Returns
+    -------
+    DeviceDesignResult
+        With ``plastic``: the record of each struck device by its key
+        (:func:`ssw.design.hits_check.device_hits_check`); its CPU and wall time added.
+    """
+    hits = result.spec.plastic_hits
+    if hits == 0:
+        return result
+    t0, c0 = time.perf_counter(), cpu_time()
+    chosen = struck(result)
+    records = map_jobs(_strike, [(result.spec, base, materials, c, hits) for c in chosen],
+                       jobs)
+    return replace(result, plastic={**result.plastic, **{
+        c.key: r for c, r in zip(chosen, records, strict=True)}},
+        wall_time=result.wall_time + time.perf_counter() - t0,
+        cpu_time=result.cpu_time + cpu_time() - c0)
 
 
 def cpu_time() -> float:

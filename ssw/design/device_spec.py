@@ -62,6 +62,8 @@ FINALISTS = 2
 REFINE_EVALUATIONS = 12
 #: Tolerance of the bounded search, in the logarithm of each continuous variable.
 REFINE_TOL = 0.02
+#: Hits of the finalists' plastic check (0: off; ``ssw.design.hits_check``).
+PLASTIC_HITS = 0
 
 
 @dataclass(frozen=True)
@@ -109,6 +111,9 @@ class DeviceSpec:
         Evaluations of each bounded search.
     refine_tol : float
         The bounded search's tolerance in the variables' logarithm.
+    plastic_hits : int
+        Hits of the plastic check of the finalists and the base device (0: none; else at
+        least 2: :func:`ssw.design.hits_check.device_hits_check`).
     """
 
     soil_E: tuple[float, float]
@@ -130,6 +135,7 @@ class DeviceSpec:
     finalists: int = FINALISTS
     refine_evaluations: int = REFINE_EVALUATIONS
     refine_tol: float = REFINE_TOL
+    plastic_hits: int = PLASTIC_HITS
 
     def __post_init__(self) -> None:
         check_soil(self.soil_E, self.soil_nu)
@@ -152,6 +158,10 @@ class DeviceSpec:
             if getattr(self, name) < 1:
                 raise ConfigError(f"design.device.{name}", getattr(self, name),
                                   "an integer >= 1")
+        if not (isinstance(self.plastic_hits, int) and (self.plastic_hits == 0
+                                                        or self.plastic_hits >= 2)):
+            raise ConfigError("design.device.plastic_hits", self.plastic_hits,
+                              "0 (no plastic check) or an integer >= 2 (--plastic-hits)")
         if self.refine_evaluations < 0:
             raise ConfigError("design.device.refine_evaluations", self.refine_evaluations,
                               "an integer >= 0 (0: no bounded search)")
@@ -207,6 +217,13 @@ class DeviceSpec:
                                     f"field) over its yield stress {strength} <= "
                                     f"{self.soil_yield_limit:g} (soft)",
             },
+            "plastic_check": (
+                f"the {self.finalists} best devices of distinct chains and plates and the "
+                f"base device struck {self.plastic_hits} times on a virgin von Mises sample "
+                f"of the soil strength at the soil of their largest soil yield index, "
+                f"through the plate yielding as von Mises with the library's strength: the "
+                f"plate's dent, the sample's set, the TOF drift (not a constraint)"
+                if self.plastic_hits else "off (design.device.plastic_hits 0)"),
             "ranking": "the feasible device of finest resolution; when none is feasible, the "
                        "smallest weighted violation (hard limits first)",
             "resolution": f"u_TOF^2 = scatter^2 / hits + (noise^2 + spread^2) / hits + bias^2: "

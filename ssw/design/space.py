@@ -330,7 +330,11 @@ class DeviceSpace:
         the workflow's scatter; every chain whole in one part)."""
         if not (isinstance(parts, int) and parts >= 1 and 0 <= part < parts):
             raise ConfigError("--part", f"{part}/{parts}", "I/N with 0 <= I < N")
-        chains = self.chains(diameter)[part::parts]
+        every = self.chains(diameter)
+        if parts > len(every):
+            raise ConfigError("design.device.parts", parts, f"at most {len(every)} (the "
+                              "family's chains: bead materials x counts x sensor positions)")
+        chains = every[part::parts]
         return [p for c in chains for p in self.scan(c, plate_material)]
 
     @property

@@ -101,33 +101,43 @@ DESIGN_TARGETS = expand(
 
 # Device design (config design.device, on with design.device.study): for every soil range,
 # the whole device (beads, sensor, striker, drop, plate) as the design variable. One job
-# per bead diameter and plate material (`ssw design --space device --family D:MAT`: its
-# chains' scan, the bounded search of its best devices, at a mesh of its own bead radius),
-# then one table per range ranking the families' devices together (`--merge`).
+# per bead diameter and plate material, its chains scattered over design.device.parts jobs
+# (Snakemake's scattergather `device`):
+# `ssw design --space device --family D:MAT --part I/N` scans part I's chains and searches
+# its best devices at a mesh of its own bead radius. The table rule gathers every part of
+# every family and ranks their devices together (`--merge`), then strikes the finalists
+# (design.device.plastic_hits > 0) with the base device of the study's config.
 #
 # Outputs (results/design/device/):
-#   {soil}/{family}.json             one family's devices (scan, search, own-step best)
+#   {soil}/{family}/{i}-of-{n}.json  one part of one family's devices (scan, search, best)
 #   {soil}.json / {soil}.csv         the range's ranking: recommended device, reasons, fronts
 #   figures/{soil}_pareto.png        resolution against the sample's yield and the mass
 DEVICE_DIR = f"{DESIGN_DIR}/device"
 DEVICE_FAMILIES = STUDY.device_families()
 
 
+scattergather:
+    device=sswwf.device_parts(config),
+
+
+def _device_calibration(wc):
+    """The calibration file of the device design's jobs (when the study calibrates)."""
+    return {
+        k: v
+        for k, v in sswwf.calibrated_inputs(config, RESULTS).items()
+        if k == "calibration"
+    }
+
+
 rule design_device_family:
     input:
-        unpack(
-            lambda wc: {
-                k: v
-                for k, v in sswwf.calibrated_inputs(config, RESULTS).items()
-                if k == "calibration"
-            }
-        ),
+        unpack(_device_calibration),
     output:
-        json=f"{DEVICE_DIR}/{{soil}}/{{family}}.json",
+        json=f"{DEVICE_DIR}/{{soil}}/{{family}}/{{scatteritem}}.json",
     log:
-        f"{LOGS}/design/device_{{soil}}_{{family}}.log",
+        f"{LOGS}/design/device_{{soil}}_{{family}}_{{scatteritem}}.log",
     benchmark:
-        f"{BENCHMARKS}/design/device_{{soil}}_{{family}}.tsv"
+        f"{BENCHMARKS}/design/device_{{soil}}_{{family}}_{{scatteritem}}.tsv"
     wildcard_constraints:
         soil=sswwf.alternatives(DESIGN_SOILS),
         family=sswwf.alternatives(DEVICE_FAMILIES),
@@ -142,15 +152,24 @@ rule design_device_family:
         config=STUDY_CONFIG,
         calibration=lambda wc, input: sswwf.calibration_flag(input),
         family=lambda wc: DEVICE_FAMILIES[wc.family],
+        part=lambda wc: sswwf.scatter_part(wc.scatteritem),
     shell:
         "python -m ssw --inputs-sha256 {params.digest} design --space device "
-        "--soil-range {wildcards.soil} --family {params.family} --config {params.config} "
-        "{params.calibration} --output {output.json} > {log} 2>&1"
+        "--soil-range {wildcards.soil} --family {params.family} --part {params.part} "
+        "--config {params.config} {params.calibration} --output {output.json} > {log} 2>&1"
 
 
 rule design_device_table:
     input:
-        lambda wc: expand(f"{DEVICE_DIR}/{wc.soil}/{{family}}.json", family=DEVICE_FAMILIES),
+        unpack(
+            lambda wc: {
+                "parts": gather.device(
+                    f"{DEVICE_DIR}/{wc.soil}/{{family}}/{{scatteritem}}.json",
+                    family=DEVICE_FAMILIES,
+                ),
+                **_device_calibration(wc),
+            }
+        ),
     output:
         json=f"{DEVICE_DIR}/{{soil}}.json",
         csv=report(
@@ -171,11 +190,17 @@ rule design_device_table:
         soil=sswwf.alternatives(DESIGN_SOILS),
     conda:
         SSW_ENV
+    resources:
+        mem_mb=lambda wc, attempt: sswwf.mem_mb("design_device", 0) * attempt,
+        runtime=lambda wc, attempt: sswwf.runtime_min("design_device", 0) * attempt,
     params:
         inputs=lambda wc: inputs_of("design_device_table", wc.soil),
         digest=lambda wc: digest_of("design_device_table", wc.soil),
+        config=STUDY_CONFIG,
+        calibration=lambda wc, input: sswwf.calibration_flag(input),
     shell:
-        "python -m ssw --inputs-sha256 {params.digest} design --space device --merge {input} "
+        "python -m ssw --inputs-sha256 {params.digest} design --space device "
+        "--merge {input.parts} --config {params.config} {params.calibration} "
         "--output {output.json} --csv {output.csv} --plot {output.plot} > {log} 2>&1"
 
 

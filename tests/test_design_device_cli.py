@@ -105,3 +105,13 @@ def test_merge_ranks_the_same(design):
     assert merged["recommended"]["resolution"] == res["recommended"]["resolution"]
     assert len(merged["candidates"]) == len(res["candidates"])
     assert merged["reference"]["tof_E"] == res["reference"]["tof_E"]
+
+
+def test_merged_plastic_check_refuses_another_base_device(design, capsys):
+    """The table strikes the devices of the merged runs' chain: a --config/--calibration
+    whose base device is not theirs is refused by name, not struck with other numerics."""
+    _, d = design
+    assert main(["design", "--space", "device", "--merge", str(d / "design.json"),
+                 "--plastic-hits", "2", "--config", str(CONFIG), "--calibration", "none",
+                 "--striker-velocity", "0.3"]) == 2
+    assert "--config/--calibration" in capsys.readouterr().err

@@ -417,15 +417,37 @@ class Study:
 
 # ---------------------------------------------------------------------- rule helpers
 def device_parts(cfg: dict[str, Any]) -> int:
-    """The device design's parts per family (``design.device.parts``, the workflow's
-    scattergather ``device``; a part with no chain is refused by the family job,
-    :meth:`ssw.design.space.DeviceSpace.family_points`)."""
+    """The device design's parts per family.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+
+    Returns
+    -------
+    int
+        ``design.device.parts`` (default 1): the workflow's scattergather ``device`` (a
+        part with no chain is refused by the family job,
+        :meth:`ssw.design.space.DeviceSpace.family_points`).
+    """
     dev = cfg.get("design", {}).get("device") or {}
     return int(dev.get("parts") or 1)
 
 
 def scatter_part(item: str) -> str:
-    """Snakemake's scatter item ``i-of-n`` (1-based) -> ``--part`` ``i-1/n``."""
+    """The ``--part`` flag of a scatter item.
+
+    Parameters
+    ----------
+    item : str
+        Snakemake's scatter item ``i-of-n`` (1-based).
+
+    Returns
+    -------
+    str
+        ``i-1/n`` (0-based part of n).
+    """
     i, _, n = item.partition("-of-")
     return f"{int(i) - 1}/{int(n)}"
 

@@ -85,5 +85,5 @@ def test_a_part_beyond_the_chains_is_refused():
     space = DeviceSpace(bead_materials=("chrome_steel",), beads=(12,),
                         sensor_positions=(0.5,))
     assert len(space.family_points(9.525e-3, "pla", 0, 1)) > 0
-    with pytest.raises(ConfigError, match="design.device.parts"):
+    with pytest.raises(ConfigError, match=r"design\.device\.parts"):
         space.family_points(9.525e-3, "pla", 0, 2)

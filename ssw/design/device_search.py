@@ -351,8 +351,21 @@ def merge_device_results(results: list[dict[str, Any]]) -> DeviceDesignResult:
 
 
 def best_of_pairs(ordered: list[DeviceCandidate], n: int) -> list[DeviceCandidate]:
-    """The first ``n`` devices of ``ordered`` (best first) of distinct chains and plate
-    materials, each with a finite merit: the finalists."""
+    """The finalists: the first ``n`` devices of distinct chains and plate materials.
+
+    Parameters
+    ----------
+    ordered : list of DeviceCandidate
+        Devices, best first.
+    n : int
+        Devices wanted.
+
+    Returns
+    -------
+    list of DeviceCandidate
+        At most ``n`` devices of ``ordered`` (its order), each of a finite :func:`merit`
+        and of a chain and plate material no earlier one has.
+    """
     out: list[DeviceCandidate] = []
     pairs: set[tuple[Any, ...]] = set()
     for c in ordered:
@@ -366,8 +379,19 @@ def best_of_pairs(ordered: list[DeviceCandidate], n: int) -> list[DeviceCandidat
 
 
 def struck(result: DeviceDesignResult) -> list[DeviceCandidate]:
-    """The devices of the plastic check: the finalists of the ranking
-    (:func:`best_of_pairs`, the recommended first), and the base device."""
+    """The devices of the plastic check.
+
+    Parameters
+    ----------
+    result : DeviceDesignResult
+        A ranked device design.
+
+    Returns
+    -------
+    list of DeviceCandidate
+        The ``spec.finalists`` finalists of the ranking (:func:`best_of_pairs`, the
+        recommended first), and the base device when it is not one of them.
+    """
     out = best_of_pairs(result.ranking.candidates, result.spec.finalists)
     ref = result.reference
     if ref is not None and all(c.key != ref.key for c in out):

@@ -109,9 +109,26 @@ def strike(params: ChainParams, soil_E: float, soil_nu: float, yield_stress: flo
 
 
 def plate_model_of(materials: dict[str, Material], key: str) -> Any:
-    """The yielding plate of material ``key``: von Mises with the library's yield stress and
-    hardening (:func:`ssw.constitutive.model_of_strength`). ConfigError naming
-    ``materials.<key>.strength`` when the library gives none."""
+    """The yielding plate of a material.
+
+    Parameters
+    ----------
+    materials : dict
+        The materials library.
+    key : str
+        The plate material's key.
+
+    Returns
+    -------
+    ssw.constitutive.VonMises
+        Von Mises with the library's yield stress and hardening
+        (:func:`ssw.constitutive.model_of_strength`).
+
+    Raises
+    ------
+    ConfigError
+        Naming ``materials.<key>.strength`` when the library gives no strength.
+    """
     from ssw.constitutive import model_of_strength
     from ssw.errors import ConfigError
 

@@ -86,6 +86,9 @@ def test_outputs_written(design):
     (["--materials", "pla"], "--materials"),
     (["--family", "abc"], "--family"),
     (["--family", "0.01"], "--family"),
+    (["--family", "0.009525:pla", "--plastic-hits", "2"], "--plastic-hits"),
+    (["--part", "0/2", "--merge", "a.json"], "--family/--part"),
+    (["--part", "x"], "--part"),
 ])
 def test_bad_input_is_refused_by_name(flags, field, capsys):
     assert main(["design", "--space", "device", "--config", str(CONFIG), "--calibration",

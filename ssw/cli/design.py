@@ -226,6 +226,12 @@ def _run_device(args: argparse.Namespace) -> dict[str, Any]:
         if v:
             raise ConfigError(flag, v, "not with --space device (its space is the config's "
                               "design.device section)")
+    if (args.family or args.part) and args.plastic_hits is not None:
+        raise ConfigError("--plastic-hits", args.plastic_hits, "not with --family/--part "
+                          "(the merge of the family runs strikes the finalists of all)")
+    if args.merge and (args.family or args.part):
+        raise ConfigError("--family/--part", args.family or args.part,
+                          "not with --merge (the families' runs are merged whole)")
     if args.merge:
         from dataclasses import replace
 

@@ -59,6 +59,8 @@ STEP_MODULES: dict[str, tuple[str, ...]] = {
     "report": ("ssw.cli.report",),
     "design": ("ssw.cli.design",),
     "design_table": ("ssw.cli.design",),
+    "design_device": ("ssw.cli.design",),
+    "design_device_table": ("ssw.cli.design",),
 }
 
 #: Contact settings that shape a contact curve (every key of the section).
@@ -375,6 +377,27 @@ class Study:
     def _design_table(self, soil: str | None) -> dict[str, Any]:
         return {"design": self._design(soil), "study": self.cfg.get("study")}
 
+    def _design_device(self, soil: str | None) -> dict[str, Any]:
+        """A device design job (one soil range, one family): the plate design's inputs,
+        the device space's bead and plate materials and the DAQ (rate and noise)."""
+        dev = self.cfg.get("design", {}).get("device") or {}
+        mats = [*dev.get("bead_materials", []), *dev.get("plate_materials", [])]
+        return {**self._design(soil), "device_materials": self.material_values(mats),
+                "daq": self.cfg.get("daq", {})}
+
+    def device_families(self) -> dict[str, str]:
+        """The device design's jobs when ``design.device.study`` is on: ``{name: D:MAT}``
+        (``name`` = bead diameter in um and plate material, a wildcard value; ``D:MAT`` the
+        ``--family`` flag), one per bead diameter and plate material; else none."""
+        dev = self.cfg.get("design", {}).get("device") or {}
+        if not dev.get("study"):
+            return {}
+        return {f"{round(float(d) * 1e6)}um_{m}": f"{float(d)!r}:{m}"
+                for d in dev.get("bead_diameters", []) for m in dev.get("plate_materials", [])}
+
+    def _design_device_table(self, soil: str | None) -> dict[str, Any]:
+        return {"design": self._design_device(soil), "study": self.cfg.get("study")}
+
     def _report(self, key: str | None = None) -> dict[str, Any]:
         return {"study": self.cfg.get("study")}
 
@@ -393,6 +416,42 @@ class Study:
 
 
 # ---------------------------------------------------------------------- rule helpers
+def device_parts(cfg: dict[str, Any]) -> int:
+    """The device design's parts per family.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+
+    Returns
+    -------
+    int
+        ``design.device.parts`` (default 1): the workflow's scattergather ``device`` (a
+        part with no chain is refused by the family job,
+        :meth:`ssw.design.space.DeviceSpace.family_points`).
+    """
+    dev = cfg.get("design", {}).get("device") or {}
+    return int(dev.get("parts") or 1)
+
+
+def scatter_part(item: str) -> str:
+    """The ``--part`` flag of a scatter item.
+
+    Parameters
+    ----------
+    item : str
+        Snakemake's scatter item ``i-of-n`` (1-based).
+
+    Returns
+    -------
+    str
+        ``i-1/n`` (0-based part of n).
+    """
+    i, _, n = item.partition("-of-")
+    return f"{int(i) - 1}/{int(n)}"
+
+
 def alternatives(names: Any) -> str:
     """A wildcard regex matching exactly ``names`` (none: a regex that matches nothing)."""
     import re
@@ -438,6 +497,7 @@ RESOURCES: dict[str, tuple[float, float, float, float]] = {
     "validation": (1500.0, 0.0, 15.0, 0.0),
     "survey_point": (1000.0, 0.0, 10.0, 0.0),
     "design": (2000.0, 0.0, 20.0, 0.0),
+    "design_device": (3000.0, 0.0, 60.0, 0.0),
 }
 
 

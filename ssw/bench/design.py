@@ -13,6 +13,13 @@ Reports the wall time of each, the candidates evaluated, the seconds per candida
 recommended plate. Writes ``design_bench.csv`` and ``design_bench.json`` under the output
 folder.
 
+``--space device --sizes 100,1000,10000`` times the device design's evaluation instead
+(:mod:`ssw.design.device_search`): for each size, that many devices drawn evenly from the
+default device space (its scans refined until it holds them), evaluated over the thesis's
+20-200 MPa soils (6 moduli) in ``--jobs`` processes (one family each), with wall and CPU
+time (this process and its children) and candidates per second. Writes
+``design_device_bench.csv`` and ``.json``.
+
 Measured (2 cores, 43 candidates a range): 38-45 s a range with the operators cached on a
 quiet machine (``ssw design --soil-range soft|stiff --jobs 2``), 43-66 s cold or warm with
 the cores shared (load 2), 55-86 s at load 3.3. A candidate costs 1-1.4 s: the chain's 60
@@ -28,6 +35,8 @@ import tempfile
 import time
 from pathlib import Path
 from typing import Any
+
+import numpy as np
 
 from ssw.h5io import write_csv_text, write_json
 
@@ -49,6 +58,10 @@ def register(kinds: argparse._SubParsersAction) -> None:
     p.add_argument("--no-cold", action="store_true",
                    help="time the warm run only (the operators of this machine's cache)")
     p.add_argument("--output-dir", default="results/bench", help="folder of the outputs")
+    p.add_argument("--space", choices=("plate", "device"), default="plate",
+                   help="time the plate design (default) or the device design's evaluation")
+    p.add_argument("--sizes", default="100,1000,10000",
+                   help="with --space device: candidates per run, comma-separated")
     p.set_defaults(func=run, human=human)
 
 
@@ -62,7 +75,77 @@ def _design(spec: Any, params: Any, mats: Any, contact: Any, jobs: int) -> tuple
     return time.perf_counter() - t0, res
 
 
+def _device_points(n: int, ratio: float) -> tuple[Any, list[Any]]:
+    """``n`` devices drawn evenly from the default device space, its scans refined (one
+    more point per continuous variable in turn) until it holds ``n``."""
+    from dataclasses import replace
+
+    from ssw.design.space import CONTINUOUS, DeviceSpace
+
+    space = DeviceSpace(plate_diameter_ratio=ratio)
+    k = 0
+    while space.size < n:
+        name = CONTINUOUS[k % len(CONTINUOUS)]
+        iv = getattr(space, name)
+        space = replace(space, **{name: replace(iv, scan=iv.scan + 1)})
+        k += 1
+    pts = [p for d, m in space.families() for p in space.family_points(d, m)]
+    idx = sorted({int(i) for i in (np.arange(n) * (len(pts) / n))})
+    return space, [pts[i] for i in idx]
+
+
+def _device_family(args: tuple[Any, ...]) -> int:
+    from ssw.design.device_eval import evaluate
+
+    points, spec, params, mats, contact, full_scale = args
+    items = [(p, p.params(params, mats)) for p in points]
+    return len(evaluate(items, spec, mats, contact, params.bead_radius, full_scale))
+
+
+def run_device(args: argparse.Namespace) -> dict[str, Any]:
+    """``--space device``: candidates per second against the number of candidates."""
+    from ssw.chain.params import chain_params, numerics_of
+    from ssw.config import device_of, library, load_config
+    from ssw.design.device_search import cpu_time, map_jobs
+    from ssw.design.device_spec import DeviceSpec
+    from ssw.design.spec import parse_list
+
+    cfg = load_config(args.config)
+    mats = library(cfg)
+    device = device_of(cfg)
+    params = chain_params(device, mats, **numerics_of(cfg))
+    contact = dict(cfg.get("contact", {}))
+    spec = DeviceSpec((20e6, 200e6), 0.3)
+    rows = []
+    for n in (int(x) for x in parse_list(args.sizes, "--sizes")):
+        space, pts = _device_points(n, params.plate_diameter / (2.0 * params.bead_radius))
+        fams: dict[tuple[float, str], list[Any]] = {}
+        for p in pts:
+            fams.setdefault((p.bead_diameter, p.plate_material), []).append(p)
+        t0, c0 = time.perf_counter(), cpu_time()
+        done = sum(map_jobs(_device_family, [(v, spec, params, mats, contact,
+                                          device.full_scale_force) for v in fams.values()],
+                        args.jobs))
+        wall, cpu = time.perf_counter() - t0, cpu_time() - c0
+        rows.append({"candidates": done, "families": len(fams), "space_size": space.size,
+                     "jobs": args.jobs, "wall_time": wall, "cpu_time": cpu,
+                     "candidates_per_s": done / wall, "cpu_per_candidate": cpu / done,
+                     "loadavg": " ".join(Path("/proc/loadavg").read_text().split()[:3])
+                     if Path("/proc/loadavg").exists() else ""})
+    out = Path(args.output_dir)
+    result = {"command": "ssw bench design --space device", "config": args.config,
+              "rows": rows, "cpu_count": os.cpu_count(),
+              "outputs": [str(out / f"design_device_bench.{x}") for x in ("csv", "json")]}
+    keys = list(rows[0])
+    write_csv_text(out / "design_device_bench.csv", "\n".join(
+        [",".join(keys)] + [",".join(str(r[k]) for k in keys) for r in rows]) + "\n", result)
+    write_json(out / "design_device_bench.json", result, result)
+    return result
+
+
 def run(args: argparse.Namespace) -> dict[str, Any]:
+    if args.space == "device":
+        return run_device(args)
     from ssw.chain.params import chain_params, numerics_of
     from ssw.config import device_of, library, load_config
     from ssw.design.spec import DesignSpec
@@ -114,6 +197,14 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def human(result: dict[str, Any]) -> str:
+    if result["command"].endswith("--space device"):
+        lines = [f"{'cands':>6s} {'fams':>4s} {'wall s':>8s} {'CPU s':>8s} {'cand/s':>7s} "
+                 f"{'CPU s/cand':>10s}  load"]
+        for r in result["rows"]:
+            lines.append(f"{r['candidates']:6d} {r['families']:4d} {r['wall_time']:8.1f} "
+                         f"{r['cpu_time']:8.1f} {r['candidates_per_s']:7.2f} "
+                         f"{r['cpu_per_candidate']:10.3f}  {r['loadavg']}")
+        return "\n".join(lines)
     lines = [f"{'range':6s} {'cache':5s} {'cands':>5s} {'wall s':>7s} {'s/cand':>7s}  recommended"]
     for r in result["rows"]:
         lines.append(f"{r['range']:6s} {r['cache']:5s} {r['candidates']:5d} "

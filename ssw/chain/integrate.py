@@ -119,6 +119,9 @@ class Run:
     dsensor : numpy.ndarray or None
         (n_t, n, k) N per unit of each parameter: the derivative of ``sensor`` at every
         step (the dense output's, :mod:`ssw.chain.dense`, at any time).
+    peak_contact_force : numpy.ndarray or None
+        (n,) N, the largest force of any bead-bead contact over the run (the beads' own
+        load: the striker's impact, the solitary wave, the waves meeting near the wall).
     """
 
     t: np.ndarray
@@ -133,6 +136,7 @@ class Run:
     dissipated: np.ndarray | None = None
     tangent: Tangent | None = None
     dsensor: np.ndarray | None = None
+    peak_contact_force: np.ndarray | None = None
 
     def take(self, idx: np.ndarray) -> Run:
         """The scenes ``idx`` (an index array) of the record."""
@@ -143,7 +147,8 @@ class Run:
                        forces=sel(self.forces, 1), energy=sel(self.energy, 1),
                        peak_wall_indentation=self.peak_wall_indentation[idx],
                        stop_time=self.stop_time[idx], energy_wall=sel(self.energy_wall, 1),
-                       dissipated=sel(self.dissipated, 1), dsensor=sel(self.dsensor, 1))
+                       dissipated=sel(self.dissipated, 1), dsensor=sel(self.dsensor, 1),
+                       peak_contact_force=sel(self.peak_contact_force, 0))
 
 
 class _Record:
@@ -405,6 +410,7 @@ def simulate(
     u, v = np.ascontiguousarray(u0.T), np.ascontiguousarray(v0.T)
     peak_ind = u[-1].copy()  # per active scene
     peak_all = np.empty(n)
+    peak_f_all = np.empty(n)
     inv_m, preload = inv_m_all, preload_all
     # a wall with internal state advances it every step from the last bead's new position;
     # its force is then f_wall, not force(u_last)
@@ -573,6 +579,7 @@ def simulate(
 
         record_row(0, n, f, w)
         rec.flush(0, 1, active)
+        peak_f = f[:-1].max(axis=0)  # per active scene: the largest bead-bead force
         stop_time = np.full(n, np.nan)
         step, j0 = 0, 1
         for step in range(1, n_steps + 1):
@@ -596,6 +603,7 @@ def simulate(
             k = step - j0
             na = active.size
             np.maximum(peak_ind, u[-1], out=peak_ind)
+            np.maximum(peak_f, f[:-1].max(axis=0), out=peak_f)
             if record_energy and damping > 0.0:
                 p_new = dashpot_power(parts)
                 w_dash += half * (p_dash + p_new)
@@ -615,7 +623,8 @@ def simulate(
                 stop_time[active[done]] = times[-1]
                 keep = ~done
                 peak_all[active[done]] = peak_ind[done]
-                active, peak_ind = active[keep], peak_ind[keep]
+                peak_f_all[active[done]] = peak_f[done]
+                active, peak_ind, peak_f = active[keep], peak_ind[keep], peak_f[keep]
                 if active.size == 0:
                     break
                 idx = np.flatnonzero(keep)
@@ -636,6 +645,7 @@ def simulate(
     finally:
         np.seterr(**errors)
     peak_all[active] = peak_ind
+    peak_f_all[active] = peak_f
     n_t = step + 1
     out = rec.assemble(n_t)
     return Run(
@@ -651,4 +661,5 @@ def simulate(
         dissipated=out.get("dissipated"),
         tangent=tg,
         dsensor=None if tg is None else np.moveaxis(out["dsensor"], 1, 2),
+        peak_contact_force=peak_f_all,
     )

@@ -61,8 +61,8 @@ def run_peaks(params: ChainParams | Batch, wall: Wall, *, strict: bool = True,
     A scene whose reflected wave has not passed the sensor by ``t_max`` (a long, slow chain
     on a soft soil) is run again, alone with the others like it, for twice as long, up to
     :data:`T_END_CAP`: its TOF never comes from a truncated record. The returned run's
-    ``stop_time`` and ``peak_wall_indentation`` are those of the final runs (its ``sensor``
-    and ``dsensor`` records are the first run's).
+    ``stop_time``, ``peak_wall_indentation`` and ``peak_contact_force`` are those of the
+    final runs (its ``sensor`` and ``dsensor`` records are the first run's).
 
     Parameters
     ----------
@@ -103,6 +103,7 @@ def run_peaks(params: ChainParams | Batch, wall: Wall, *, strict: bool = True,
     cols = {k: (None if getattr(pk, k) is None else np.array(getattr(pk, k), copy=True))
             for k in names}
     stop, peak = run.stop_time.copy(), run.peak_wall_indentation.copy()
+    peak_f = run.peak_contact_force.copy()
     t_end = p.t_max
     nan = np.isnan(stop)
     while nan.any() and t_end < T_END_CAP:
@@ -115,8 +116,9 @@ def run_peaks(params: ChainParams | Batch, wall: Wall, *, strict: bool = True,
             if c is not None:
                 c[idx] = getattr(sp, k)
         stop[idx], peak[idx] = sub.stop_time, sub.peak_wall_indentation
+        peak_f[idx] = sub.peak_contact_force
         nan = np.isnan(stop)
-    run = replace(run, stop_time=stop, peak_wall_indentation=peak)
+    run = replace(run, stop_time=stop, peak_wall_indentation=peak, peak_contact_force=peak_f)
     if strict:
         check_complete(run, p)
         if np.any(np.isnan(cols["t_reflected"])):  # stopped, no two peaks: the rule says why

@@ -41,6 +41,13 @@ def register(sub: argparse._SubParsersAction) -> None:
         description=__doc__.split("\n\n")[0],
     )
     g = p.add_argument_group("the question")
+    g.add_argument("--space", choices=("plate", "device"), default="plate",
+                   help="what is designed: the plate under the device's chain (default) or "
+                   "the whole device (beads, sensor, striker, drop, plate; the config's "
+                   "design.device section; ssw.design.device_search)")
+    g.add_argument("--family", metavar="D:MATERIAL", action="append",
+                   help="with --space device: only this bead diameter (m) and plate "
+                   "material (repeatable; the workflow's jobs)")
     g.add_argument("--soil-E", help="LO:HI soil moduli, Pa (e.g. 10e6:100e6)")
     g.add_argument("--soil-nu", type=float, help="soil Poisson's ratio")
     g.add_argument("--soil-range", help="a named soil range of the config's design.soils "
@@ -78,7 +85,14 @@ def register(sub: argparse._SubParsersAction) -> None:
                    help="strike a yielding sample N times through the recommended plate and "
                    "the device's own (von Mises at the design's soil strength, at the soil "
                    "where the elastic yield index is largest): per hit TOF, permanent set, "
-                   "dissipated energy, and the TOF drift (ssw.design.hits_check)")
+                   "dissipated energy, and the TOF drift (ssw.design.hits_check); with "
+                   "--space device the finalists and the base device, through their plate "
+                   "yielding as von Mises (the plate's dent; default design.device."
+                   "plastic_hits, 0: off; with --merge on the merged ranking, the base device "
+                   "of --config/--calibration)")
+    g.add_argument("--part", metavar="I/N",
+                   help="with --space device and --family: only the family's chains I, I+N, "
+                   "... (the workflow's scatter; no plastic check, the merge strikes)")
     g.add_argument("--merge", nargs="+", metavar="JSON",
                    help="rank together the results of several ssw design runs (written "
                    "with --output) instead of computing")
@@ -139,25 +153,17 @@ def _spec(args: argparse.Namespace, ctx: Any) -> Any:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
+    if args.space == "device":
+        return _run_device(args)
     from ssw.cli._device import chain_context
     from ssw.design.output import plot, write_table
     from ssw.design.run import merge_results, run_design
-    from ssw.h5io import write_json
 
     if args.merge and args.plastic_hits is not None:
         raise ConfigError("--plastic-hits", args.plastic_hits,
                           "not with --merge (it strikes the plates of one design run)")
     if args.merge:
-        import json
-
-        results = []
-        for path in args.merge:
-            try:
-                with open(path) as fh:
-                    results.append(json.load(fh))
-            except (OSError, ValueError) as exc:
-                raise ConfigError("--merge", path, f"a readable ssw design JSON ({exc})"
-                                  ) from exc
+        results = _load_results(args.merge)
         res = merge_results(results).to_dict()
         inputs = {"merge": list(args.merge),
                   "merged_inputs": [r.get("provenance", {}).get("inputs_sha256")
@@ -187,17 +193,169 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                     else ctx.calibration.path, "wall": "fem"})
         inputs = {k: v for k, v in vars(args).items() if k not in ("func", "human", "json")}
         inputs["spec"] = res["spec"]
+    _write(args, res, inputs, write_table, plot)
+    return res
+
+
+def _families(items: list[str] | None) -> list[tuple[float, str]] | None:
+    """``--family D:MATERIAL`` values -> (diameter, material) pairs."""
+    if not items:
+        return None
+    out = []
+    for it in items:
+        d, _, m = it.partition(":")
+        try:
+            out.append((float(d), m))
+        except ValueError as exc:
+            raise ConfigError("--family", it, "D:MATERIAL (a bead diameter in m and a plate "
+                              "material key)") from exc
+        if not m:
+            raise ConfigError("--family", it, "D:MATERIAL")
+    return out
+
+
+def _run_device(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw design --space device`` (:func:`ssw.design.device_search.run_device_design`)."""
+    from ssw.cli._device import chain_context
+    from ssw.config import library
+    from ssw.design.device_search import run_device_design, with_plastic_check
+    from ssw.design.device_spec import DeviceSpec
+    from ssw.design.space import point_of, space_from_dict
+
+    for flag, v in (("--materials", args.materials), ("--thickness", args.thickness)):
+        if v:
+            raise ConfigError(flag, v, "not with --space device (its space is the config's "
+                              "design.device section)")
+    if (args.family or args.part) and args.plastic_hits is not None:
+        raise ConfigError("--plastic-hits", args.plastic_hits, "not with --family/--part "
+                          "(the merge of the family runs strikes the finalists of all)")
+    if args.merge and (args.family or args.part):
+        raise ConfigError("--family/--part", args.family or args.part,
+                          "not with --merge (the families' runs are merged whole)")
+    if args.merge:
+        from dataclasses import replace
+
+        from ssw.design.device_search import merge_device_results
+
+        merged = merge_device_results(_load_results(args.merge))
+        if args.plastic_hits is not None:
+            merged = replace(merged, spec=replace(merged.spec, plastic_hits=args.plastic_hits))
+        if merged.spec.plastic_hits:
+            base, mats = _merge_base(args, merged)
+            merged = with_plastic_check(merged, base, mats, jobs=max(1, int(args.jobs)))
+        res = merged.to_dict()
+        inputs = {"merge": list(args.merge), "plastic_hits": merged.spec.plastic_hits}
+        _write_device(args, res, inputs)
+        return res
+    ctx = chain_context(args, numerics_only=True)
+    plate_spec = _spec(args, ctx)
+    cfg, dev = ctx.cfg, ctx.device
+    section = dict(cfg.get("design", {}).get("device") or {})
+    p = ctx.params
+    space = space_from_dict(section, p.plate_diameter / (2.0 * p.bead_radius))
+    kw = {k: section[k] for k in ("moduli", "max_mass", "max_length", "finalists",
+                                  "plate_yield_limit", "refine_evaluations", "phases",
+                                  "noise_rms", "plastic_hits")
+          if section.get(k) is not None}
+    for key in ("moduli", "plastic_hits"):
+        if getattr(args, key) is not None:
+            kw[key] = getattr(args, key)
+    if "noise_rms" not in kw:
+        kw["noise_rms"] = float(cfg.get("daq", {}).get("simulation", {}).get("noise_rms", 0.05))
+    spec = DeviceSpec(plate_spec.soil_E, plate_spec.soil_nu, soil_strength=plate_spec.soil_strength,
+                      soil_strength_ratio=plate_spec.soil_strength_ratio,
+                      soil_yield_limit=plate_spec.soil_yield_limit,
+                      max_plate_mass_ratio=plate_spec.max_mass_ratio, hits=plate_spec.hits,
+                      tof_scatter=plate_spec.tof_scatter,
+                      tof_scatter_source=plate_spec.tof_scatter_source,
+                      sample_rate=plate_spec.sample_rate, **kw)
+    mats = ctx.calibration.materials() if ctx.calibration is not None else library(cfg)
+    ref = None if args.no_reference else point_of(p, dev.bead_material, dev.plate_material)
+    families = _families(args.family)
+    result = run_device_design(space, spec, p, mats, dict(cfg.get("contact", {})),
+                               dev.full_scale_force, ref, jobs=max(1, int(args.jobs)),
+                               families=families, parts=_part(args.part))
+    if families is None and args.part is None:  # a family's or part's run: the merge strikes
+        result = with_plastic_check(result, p, mats, jobs=max(1, int(args.jobs)))
+    res = result.to_dict()
+    res.update({"device_name": dev.name, "device_source": dev.source, "wall": "fem"})
+    inputs = {k: v for k, v in vars(args).items() if k not in ("func", "human", "json")}
+    inputs["spec"] = res["spec"]
+    inputs["space"] = res["space"]
+    _write_device(args, res, inputs)
+    return res
+
+
+def _merge_base(args: argparse.Namespace, merged: Any) -> tuple[Any, dict[str, Any]]:
+    """The base chain and materials of ``--config``/``--calibration`` for the plastic check
+    of merged results; ConfigError when that base device is not the merged runs' own."""
+    from ssw.cli._device import chain_context
+    from ssw.config import library
+    from ssw.design.space import point_of
+
+    ctx = chain_context(args, numerics_only=True)
+    mats = ctx.calibration.materials() if ctx.calibration is not None else library(ctx.cfg)
+    ref = merged.reference
+    if ref is not None:
+        mine = point_of(ctx.params, ctx.device.bead_material, ctx.device.plate_material)
+        if mine.key != ref.point.key:
+            raise ConfigError("--config/--calibration", mine.label(),
+                              f"the base device of the merged runs ({ref.point.label()}): "
+                              "the plastic check strikes the devices of their chain")
+    return ctx.params, mats
+
+
+def _part(text: str | None) -> tuple[int, int] | None:
+    """``--part I/N`` -> (I, N)."""
+    if text is None:
+        return None
+    i, _, n = text.partition("/")
+    try:
+        return int(i), int(n)
+    except ValueError as exc:
+        raise ConfigError("--part", text, "I/N: part I (0-based) of N") from exc
+
+
+def _write_device(args: argparse.Namespace, res: dict[str, Any], inputs: Any) -> None:
+    """The device design's JSON, CSV and figure, each atomically."""
+    from ssw.design.device_output import plot, write_table
+
+    _write(args, res, inputs, write_table, plot)
+
+
+def _write(args: argparse.Namespace, res: dict[str, Any], inputs: Any, write_table: Any,
+           plot: Any) -> None:
+    """``--output`` (JSON), ``--csv`` and ``--plot`` of a result, each atomically."""
+    from ssw.h5io import write_json
+
     if args.output:
         write_json(args.output, res, inputs)
     if args.csv:
         write_table(args.csv, res, inputs)
     if args.plot:
         plot(args.plot, res)
-    return res
+
+
+def _load_results(paths: list[str]) -> list[dict[str, Any]]:
+    """The JSON results of ``--merge``; ConfigError naming an unreadable one."""
+    import json
+
+    results = []
+    for path in paths:
+        try:
+            with open(path) as fh:
+                results.append(json.load(fh))
+        except (OSError, ValueError) as exc:
+            raise ConfigError("--merge", path, f"a readable ssw design JSON ({exc})") from exc
+    return results
 
 
 def human(res: dict[str, Any]) -> str:
     """The ranking as a short table and the recommendation with its reasons."""
+    if res.get("ssw_kind") == "design_device":
+        from ssw.design.device_output import human as device_human
+
+        return device_human(res)
     rec = res["recommended"]
     lines = [f"soils {res['spec']['soil_E'][0]:.4g}-{res['spec']['soil_E'][1]:.4g} Pa, "
              f"nu {res['spec']['soil_nu']:g}; objective: {res['objective']}",

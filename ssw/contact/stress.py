@@ -249,21 +249,27 @@ def retained_displacements(
     the constraint forces ``lam`` (N) of the scene's LCP: ``K u = G^T lam`` with ``K`` and
     ``G`` assembled as :func:`ssw.contact.operators.scene_lcp` does (a sphere candidate's
     force pushes its ``u_z`` down; a pair of the unilateral interface pulls its two nodes
-    together)."""
+    together). ``lam`` (m,) gives (n_dofs,) displacements; (k, m), states of one scene,
+    gives (n_dofs, k) from one factorization."""
     nc = layout.r.size
     lam = np.asarray(lam, float)
+    one = lam.ndim == 1
+    L = (lam[None] if one else lam).T  # (m, k)
     if plate is None:
         K = soil_E * soil.S
-        return None, _spd_solve(K, -lam[:nc])
+        us = _spd_solve(K, -L[:nc])
+        return None, us[:, 0] if one else us
     K, p_map, s_map, off = coupled_stiffness(plate.S, soil.S, plate_E, soil_E, layout, nc,
                                              interface == "unilateral")
-    f = np.zeros(K.shape[0])
-    f[:nc] = -lam[:nc]
+    f = np.zeros((K.shape[0], L.shape[1]))
+    f[:nc] = -L[:nc]
     if off.size:
-        li = lam[nc:]
+        li = L[nc:]
         np.add.at(f, nc + off, li)
         np.add.at(f, s_map[off], -li)
     u = _spd_solve(K, f)
+    if one:
+        return u[p_map, 0], u[s_map, 0]
     return u[p_map], u[s_map]
 
 
@@ -298,33 +304,35 @@ def equivalent_radius(radius: float, top: tuple[float, float], bead: tuple[float
     return float(radius * (1.0 + e_top / e_bead))
 
 
-def _indentation_at(lcp: Any, force: float, guess: float) -> tuple[Any, float]:
-    """The LCP's path and the indentation (m) at which the sphere carries ``force`` (N):
-    the path is traced to ``guess`` (doubled until it holds the force) and the piecewise
-    linear force inverted on its piece."""
+def _indentation_at(lcp: Any, force: np.ndarray, guess: float) -> tuple[Any, np.ndarray]:
+    """The LCP's path and the indentations (m) at which the sphere carries ``force`` (N,
+    (k,)): the path is traced to ``guess`` (doubled until it holds the largest force) and
+    the piecewise linear force inverted on its pieces."""
     from ssw.contact.parametric import trace
 
     ms = lcp.n_sphere
+    force = np.atleast_1d(np.asarray(force, float))
     end = float(guess)
     for _ in range(60):
         path, _ = trace(lcp.W, lcp.q0, lcp.q1, end)
         br = path.breaks
         f_lo = path.lam0[:, :ms].sum(1) + br[:-1] * path.lam1[:, :ms].sum(1)
         f_hi = path.lam0[:, :ms].sum(1) + br[1:] * path.lam1[:, :ms].sum(1)
-        if f_hi[-1] >= force:
-            j = int(np.searchsorted(f_hi, force, side="left"))
-            slope = path.lam1[j, :ms].sum()
-            d = br[j] + (force - f_lo[j]) / slope if slope > 0 else br[j + 1]
-            return path, float(np.clip(d, br[j], br[j + 1]))
+        if f_hi[-1] >= force.max():
+            j = np.searchsorted(f_hi, force, side="left")
+            slope = path.lam1[j, :ms].sum(axis=1)
+            safe = np.where(slope > 0, slope, 1.0)
+            d = np.where(slope > 0, br[j] + (force - f_lo[j]) / safe, br[j + 1])
+            return path, np.clip(d, br[j], br[j + 1])
         end *= 2.0
-    raise SolverError(f"no indentation up to {end:.4g} m carries the force {force:.4g} N")
+    raise SolverError(f"no indentation up to {end:.4g} m carries the force {force.max():.4g} N")
 
 
 def contact_stresses(
     soil_E: Any, soil_nu: float, plate: tuple[float, float] | None, plate_thickness: float,
     radius: float, delta: Any, contact: dict[str, Any] | None = None, *,
     store: OperatorStore | None = None, fields: bool = False,
-    bead: tuple[float, float] | None = None,
+    bead: tuple[float, float] | None = None, force: Any = None,
 ) -> ContactStress:
     """Peak von Mises stresses of the plate and of the soil at contact states.
 
@@ -357,6 +365,10 @@ def contact_stresses(
         those of the rigid sphere of :func:`equivalent_radius` carrying the same ``F``
         (the elastic bead's Hertz pressure on the top body). ``delta`` of the result is
         then that sphere's indentation.
+    force : array_like or None
+        (n,) N, the rigid sphere's force at each ``delta`` when the caller knows it (the
+        chain's fem wall at its peak indentation): with ``bead``, the rigid sphere's path is
+        then not traced again.
     """
     from ssw.contact.parametric import trace
     from ssw.contact.scene import settings_of
@@ -377,38 +389,52 @@ def contact_stresses(
     soil_op = store.body(geom, "soil", soil_nu)
     plate_op = store.body(geom, "plate", plate[1]) if has_plate else None
     n = E.size
+    known = None if force is None or bead is None else np.broadcast_to(
+        np.asarray(force, float), (n,))
     force = np.empty(n)
-    uP, uS = [], []
+    uP: np.ndarray | None = None
+    uS: np.ndarray | None = None
     d = d.copy()
     top = plate if has_plate else (None, soil_nu)
-    for k in range(n):
-        lcp = scene_lcp(layout, plate_op, soil_op, float(E[k]),
-                        plate[0] if has_plate else None, interface, radius)
-        path, _ = trace(lcp.W, lcp.q0, lcp.q1, float(d[k]))
-        lam = path.forces(np.array([d[k]]))[0]
-        ms = lcp.n_sphere
+    # the states of one modulus share their scene: one LCP, one path, one factorization
+    moduli, which = np.unique(E, return_inverse=True)
+    for u, Eu in enumerate(moduli):
+        ks = np.flatnonzero(which == u)
+        if known is None:
+            lcp = scene_lcp(layout, plate_op, soil_op, float(Eu),
+                            plate[0] if has_plate else None, interface, radius)
+            path, _ = trace(lcp.W, lcp.q0, lcp.q1, float(d[ks].max()))
+            lam = path.forces(d[ks])
+            f_R = lam[:, :lcp.n_sphere].sum(axis=1)
+        else:
+            f_R = known[ks]
         if bead is not None:
-            top_E = plate[0] if has_plate else float(E[k])
+            top_E = plate[0] if has_plate else float(Eu)
             r_eq = equivalent_radius(radius, (top_E, top[1]), bead)
-            lcp = scene_lcp(layout, plate_op, soil_op, float(E[k]),
+            lcp = scene_lcp(layout, plate_op, soil_op, float(Eu),
                             plate[0] if has_plate else None, interface, r_eq)
-            path, d[k] = _indentation_at(lcp, float(lam[:ms].sum()), float(d[k]))
-            lam = path.forces(np.array([d[k]]))[0]
+            path, d[ks] = _indentation_at(lcp, f_R, float(d[ks].max()))
+            lam = path.forces(d[ks])
+        ms = lcp.n_sphere
         if np.any(path.active[:, ms - 1]):
+            k = int(ks[np.argmax(d[ks])])
             raise SolverError(f"the contact zone reached the last candidate (r = "
                               f"{layout.r[-1]:.4g} m) at the state {k}: soil E {E[k]:.4g} Pa, "
                               f"indentation {d[k]:.4g} m")
-        force[k] = float(lam[:ms].sum())
-        up, us = retained_displacements(layout, plate_op, soil_op, float(E[k]),
+        force[ks] = lam[:, :ms].sum(axis=1)
+        up, us = retained_displacements(layout, plate_op, soil_op, float(Eu),
                                         plate[0] if has_plate else None, interface, lam)
-        uS.append(us)
+        if uS is None:
+            uS = np.empty((us.shape[0], n))
+            uP = np.empty((up.shape[0], n)) if up is not None else None
+        uS[:, ks] = us
         if up is not None:
-            uP.append(up)
+            uP[:, ks] = up
     out_fields: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
 
-    def peaks(which: str, nu: float, u: list[np.ndarray], modulus: np.ndarray) -> BodyPeak:
+    def peaks(which: str, nu: float, u: np.ndarray, modulus: np.ndarray) -> BodyPeak:
         fld = body_field(store, geom, which, nu)
-        vm = fld.von_mises(np.stack(u, axis=1), modulus)
+        vm = fld.von_mises(u, modulus)
         j = np.argmax(vm, axis=0)
         pts = fld.points
         if fields:

@@ -6,6 +6,11 @@ evaluates one plate over the soils (the chain with the exact FEM wall, the conta
 stresses, the mass); :mod:`.optimize` searches the thickness per material, ranks the
 candidates and draws the Pareto front; :mod:`.run` runs a whole design and merges the
 results of several; :mod:`.output` writes its table and figure.
+
+Device design (the whole device as the design variable): :mod:`.space` the devices searched,
+:mod:`.device_spec` the question, :mod:`.device_eval` one device over the soils (resolution
+with the DAQ of :mod:`.sampling`, pulses, yield, mass, length), :mod:`.device_search` the
+scan, bounded search and ranking, :mod:`.device_output` its table and figure.
 """
 
 from ssw.design.evaluate import Candidate, Evaluator

@@ -115,11 +115,7 @@ class DesignSpec:
     extra: dict[str, Any] = field(default_factory=dict, compare=False, hash=False)
 
     def __post_init__(self) -> None:
-        lo, hi = self.soil_E
-        if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
-            raise ConfigError("--soil-E", f"{lo}:{hi}", "LO:HI moduli with 0 < LO < HI (Pa)")
-        if not -1.0 < self.soil_nu <= 0.5:
-            raise ConfigError("--soil-nu", self.soil_nu, "a Poisson's ratio in (-1, 0.5]")
+        check_soil(self.soil_E, self.soil_nu)
         tlo, thi = self.thickness
         if not (np.isfinite(tlo) and np.isfinite(thi) and 0 < tlo < thi):
             raise ConfigError("--thickness", f"{tlo}:{thi}", "LO:HI with 0 < LO < HI (m)")
@@ -156,10 +152,7 @@ class DesignSpec:
 
     def soil_yield_stress(self, E: np.ndarray) -> np.ndarray:
         """The soil's yield stress (Pa) at moduli ``E`` (module docstring)."""
-        E = np.asarray(E, float)
-        if self.soil_strength is not None:
-            return np.full(E.shape, float(self.soil_strength))
-        return self.soil_strength_ratio * E
+        return soil_yield_stress(E, self.soil_strength, self.soil_strength_ratio)
 
     @property
     def tof_uncertainty(self) -> float:
@@ -201,6 +194,25 @@ class DesignSpec:
         d = asdict(self)
         d.pop("extra")
         return {**d, "soil_E_grid": self.grid.tolist()}
+
+
+def check_soil(soil_E: tuple[float, float], soil_nu: float) -> None:
+    """ConfigError naming ``--soil-E`` or ``--soil-nu`` for a bad soil range (Pa) or
+    Poisson's ratio."""
+    lo, hi = soil_E
+    if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
+        raise ConfigError("--soil-E", f"{lo}:{hi}", "LO:HI moduli with 0 < LO < HI (Pa)")
+    if not -1.0 < soil_nu <= 0.5:
+        raise ConfigError("--soil-nu", soil_nu, "a Poisson's ratio in (-1, 0.5]")
+
+
+def soil_yield_stress(E: np.ndarray, strength: float | None, ratio: float) -> np.ndarray:
+    """The soil's yield stress (Pa) at moduli ``E`` (Pa): ``strength`` when stated, else
+    ``ratio E`` (module docstring)."""
+    E = np.asarray(E, float)
+    if strength is not None:
+        return np.full(E.shape, float(strength))
+    return ratio * E
 
 
 def parse_range(text: str, field_name: str) -> tuple[float, float]:

@@ -52,7 +52,7 @@ from ssw.errors import ConfigError, RecordingError
 from ssw.signal.rule import PeakRule, gap_end, incident, local_maxima, reflected
 
 __all__ = ["PeakError", "PeakPair", "PeakRule", "check_tof", "parabolic_vertex", "pick_peaks",
-           "refine_peak"]
+           "refine_peak", "refine_peaks"]
 
 #: Default upsampling factor before the parabolic vertex.
 UPSAMPLE = 16
@@ -102,24 +102,46 @@ def refine_peak(y: np.ndarray, k: int, upsample: int = UPSAMPLE) -> tuple[float,
     ``upsample = 1`` is the plain parabola through ``y[k-1..k+1]``. Otherwise the samples
     ``k - HALF_WINDOW .. k + HALF_WINDOW`` are upsampled ``upsample`` times
     (``scipy.signal.resample_poly``, ``padtype='line'``), the largest upsampled value within
-    one original sample of ``k`` is taken and refined by the parabola on the fine grid.
+    one original sample of ``k`` is taken and refined by the parabola on the fine grid
+    (:func:`refine_peaks` on one record).
     """
+    pos, h = refine_peaks(np.asarray(y)[None, :], np.array([k]), upsample)
+    return float(pos[0]), float(h[0])
+
+
+def refine_peaks(Y: np.ndarray, k: np.ndarray, upsample: int = UPSAMPLE
+                 ) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`refine_peak` of many records at once: the peak of row ``i`` of ``Y`` (m, n_t)
+    at or next to sample ``k[i]``; positions (m,) in samples and heights (m,). Rows whose
+    windows have one length share one interpolation call (row by row the same numbers)."""
     if upsample < 1:
         raise ConfigError("upsample", upsample, "an integer >= 1 (1: parabola on the samples)")
+    Y = np.asarray(Y)
+    k = np.asarray(k, dtype=np.int64)
     if upsample == 1:
-        pos, h = parabolic_vertex(y, k)
-        return float(pos), float(h)
+        pos, h = parabolic_vertex(Y.T, k, np.arange(k.size))
+        return np.asarray(pos, float), np.asarray(h, float)
     from scipy import signal
 
-    lo = max(k - HALF_WINDOW, 0)
-    hi = min(k + HALF_WINDOW + 1, y.size)
-    fine = signal.resample_poly(y[lo:hi], upsample, 1, window=("kaiser", KAISER_BETA),
-                                padtype="line")
-    c = (k - lo) * upsample
-    a, b = max(c - upsample, 1), min(c + upsample, fine.size - 2)
-    j = a + int(np.argmax(fine[a : b + 1]))
-    pos, h = parabolic_vertex(fine, j)
-    return float(lo + pos / upsample), float(h)
+    lo = np.maximum(k - HALF_WINDOW, 0)
+    hi = np.minimum(k + HALF_WINDOW + 1, Y.shape[1])
+    pos = np.empty(k.size)
+    height = np.empty(k.size)
+    for size in np.unique(hi - lo):
+        rows = np.flatnonzero(hi - lo == size)
+        win = Y[rows[:, None], lo[rows, None] + np.arange(size)[None, :]]
+        fine = signal.resample_poly(win, upsample, 1, axis=1, window=("kaiser", KAISER_BETA),
+                                    padtype="line")
+        c = (k[rows] - lo[rows]) * upsample
+        a = np.maximum(c - upsample, 1)
+        b = np.minimum(c + upsample, fine.shape[1] - 2)
+        idx = np.arange(fine.shape[1])[None, :]
+        masked = np.where((idx >= a[:, None]) & (idx <= b[:, None]), fine, -np.inf)
+        j = np.argmax(masked, axis=1)
+        p, h = parabolic_vertex(fine.T, j, np.arange(rows.size))
+        pos[rows] = lo[rows] + p / upsample
+        height[rows] = h
+    return pos, height
 
 
 @dataclass(frozen=True)

@@ -40,6 +40,7 @@ the bare soil's (the slow test of ``tests/test_contact.py``).
 
 from __future__ import annotations
 
+from collections import OrderedDict
 from dataclasses import dataclass, field
 from typing import Any
 
@@ -280,11 +281,32 @@ def fem_wall(
     plate_op = store.body(geom, "plate", plate[1]) if has_plate else None
     rows = []
     for i in range(E.size):
+        key = _law_key(geom, plate if has_plate else None, float(E[i]), float(nu[i]), R,
+                       cfg["interface"])
+        law = _LAWS.get(key)
+        if law is not None and (law.df0 is not None or not with_dE):
+            _LAWS.move_to_end(key)
+            row = _chain_row(law, s[i], float(ds[i]), W, Wg, with_dE)
+            if row is not None:
+                rows.append(row)
+                continue
         soil_op = store.body(geom, "soil", float(nu[i]))
         lcp = scene_lcp(layout, plate_op, soil_op, float(E[i]),
                         plate[0] if has_plate else None, cfg["interface"], R)
         ms = lcp.n_sphere
         path = prefix_path(lcp.W, lcp.q0, lcp.q1) if lcp.tie is None else None
+        if path is not None and ms == lcp.q0.size:
+            # the whole path of a disk-shaped contact: kept in rigid coordinates (a scene's
+            # law for every chain on it), mapped to this chain's range and compliance
+            law = _rigid_law(lcp, path, ms, with_dE)
+            _keep(key, law)
+            row = _chain_row(law, s[i], float(ds[i]), W, Wg, with_dE)
+            if row is None:
+                raise SolverError(
+                    f"the fem wall's range does not hold the chain's energy within its contact "
+                    f"zone (r <= {layout.r[-1]:.4g} m; soil E {E[i]:.4g} Pa)")
+            rows.append(row)
+            continue
         tracer = None if path is not None else Tracer(lcp.W, lcp.q0, lcp.q1)
         end = float(guess[i])
         while True:
@@ -311,8 +333,11 @@ def fem_wall(
         j_end = int(np.count_nonzero(keep))  # breakpoints up to the bound, plus the next
         j_end = min(j_end + 1, d.size)
         row = _pieces(d[:j_end], path, ms, s[i], U[:j_end])
-        deriv = (None if not with_dE or lcp.dW_dE is None or lcp.tie is not None else
-                 _pieces_dE(lcp.W, lcp.dW_dE, path, ms, j_end - 1, s[i], float(ds[i])))
+        deriv = None
+        if with_dE and lcp.dW_dE is not None and lcp.tie is None:
+            df0, df1 = _pieces_dE(lcp.W, lcp.dW_dE, path, ms, j_end - 1)
+            deriv = _chain_dE(df0, df1, path.lam1[:j_end - 1, :ms].sum(axis=1), s[i],
+                              float(ds[i]))
         rows.append((*row, *(deriv if deriv is not None else (None, None))))
     # per scene: the mesh's error and the finite domain's stiffening at its own contact
     # radius (a soft soil's is larger)
@@ -334,10 +359,77 @@ def _pieces(d: np.ndarray, path: Any, ms: int, s: float, U: np.ndarray
     return d, a, b, U
 
 
-def _pieces_dE(W: np.ndarray, dW: np.ndarray, path: Any, ms: int, k: int, s: float,
-               ds: float) -> tuple[np.ndarray, np.ndarray]:
-    """``da/dE`` and ``db/dE`` of the first ``k`` pieces (chain coordinates), the last one
-    repeated as :func:`_pieces` does.
+#: Scene laws kept in memory (``_rigid_law``: a few kB each), least recently used out.
+LAWS_KEPT = 20_000
+_LAWS: OrderedDict[tuple[Any, ...], RigidLaw] = OrderedDict()
+
+
+@dataclass(frozen=True)
+class RigidLaw:
+    """The exact law of the rigid sphere on one scene, in its own coordinates: the pieces of
+    the whole prefix path (every candidate of the zone), ``F = f0 + f1 delta`` on
+    ``[breaks[j], breaks[j + 1]]`` (m, N, N/m), and ``df0``, ``df1`` their derivatives with
+    respect to the soil's modulus (N/Pa, N/m/Pa; None: not computed). What a chain adds is
+    its own: the bead's compliance and the range its energy needs (``_chain_row``)."""
+
+    breaks: np.ndarray
+    f0: np.ndarray
+    f1: np.ndarray
+    df0: np.ndarray | None = None
+    df1: np.ndarray | None = None
+
+
+def _law_key(geom: Any, plate: tuple[float, float] | None, E: float, nu: float, R: float,
+             interface: str) -> tuple[Any, ...]:
+    """What a scene's rigid law depends on: the geometry (mesh, zone), the plate's
+    ``(E, nu)``, the soil's, the sphere's radius and the interface."""
+    return (geom.key(), plate, E, nu, R, interface)
+
+
+def _keep(key: tuple[Any, ...], law: RigidLaw) -> None:
+    _LAWS[key] = law
+    _LAWS.move_to_end(key)
+    while len(_LAWS) > LAWS_KEPT:
+        _LAWS.popitem(last=False)
+
+
+def _rigid_law(lcp: Any, path: Any, ms: int, with_dE: bool) -> RigidLaw:
+    """The :class:`RigidLaw` of a whole prefix path (and its E derivatives when asked and
+    the LCP has them)."""
+    k = path.pieces
+    f0 = path.lam0[:, :ms].sum(axis=1)
+    f1 = path.lam1[:, :ms].sum(axis=1)
+    if with_dE and lcp.dW_dE is not None:
+        df0, df1 = _pieces_dE(lcp.W, lcp.dW_dE, path, ms, k)
+        return RigidLaw(path.breaks.copy(), f0, f1, df0, df1)
+    return RigidLaw(path.breaks.copy(), f0, f1)
+
+
+def _chain_row(law: RigidLaw, s: float, ds: float, W: float, Wg: float, with_dE: bool
+               ) -> tuple[Any, ...] | None:
+    """One scene's pieces in the chain's coordinates (``d = s delta``) up to the energy
+    bound of ``W`` (J) with the static load ``Wg`` (N), plus the next breakpoint, as
+    :func:`fem_wall` builds them; None when the law's range does not hold the energy."""
+    dR = law.breaks
+    F = np.concatenate([law.f0 + dR[:-1] * law.f1, [law.f0[-1] + dR[-1] * law.f1[-1]]])
+    d = s * dR
+    bound, U = energy_bound(d, F, W, Wg)
+    if not np.isfinite(bound):
+        return None
+    j_end = min(int(np.count_nonzero(d <= bound * (1 + 1e-12))) + 1, d.size)
+    k = j_end - 1
+    a = np.concatenate([law.f0[:k], law.f0[k - 1:k]])
+    b = np.concatenate([law.f1[:k], law.f1[k - 1:k]]) / s
+    if not with_dE or law.df0 is None or law.df1 is None:
+        return d[:j_end], a, b, U[:j_end], None, None
+    da, db = _chain_dE(law.df0[:k], law.df1[:k], law.f1[:k], s, ds)
+    return d[:j_end], a, b, U[:j_end], da, db
+
+
+def _pieces_dE(W: np.ndarray, dW: np.ndarray, path: Any, ms: int, k: int
+               ) -> tuple[np.ndarray, np.ndarray]:
+    """``df0/dE`` and ``df1/dE`` of the first ``k`` pieces in the rigid sphere's
+    coordinates (N/Pa, N/m/Pa; :func:`_chain_dE` maps them to the chain's).
 
     On piece ``j`` with active set ``A`` the path is ``lam_A = alpha + delta beta``,
     ``W_AA alpha = -q0_A``, ``W_AA beta = -q1_A`` (:mod:`ssw.contact.parametric`); the gaps'
@@ -350,7 +442,6 @@ def _pieces_dE(W: np.ndarray, dW: np.ndarray, path: Any, ms: int, k: int, s: flo
 
     m = W.shape[0]
     act = path.active[:k]  # (k, m)
-    f1 = path.lam1[:k, :ms].sum(axis=1)
     # the right-hand sides -dW_AA lam_A (lam is 0 off A), both parts: (m, 2k)
     lam = np.concatenate([path.lam0[:k], path.lam1[:k]], axis=0)
     mask = np.concatenate([act, act], axis=0).T
@@ -370,10 +461,42 @@ def _pieces_dE(W: np.ndarray, dW: np.ndarray, path: Any, ms: int, k: int, s: flo
         a_j = np.flatnonzero(mask[:, j])
         if a_j.size:
             sol[a_j, j] = cho_solve(cho_factor(W[np.ix_(a_j, a_j)], lower=True), rhs[a_j, j])
-    df0, df1 = sol[:ms, :k].sum(axis=0), sol[:ms, k:].sum(axis=0)
+    return sol[:ms, :k].sum(axis=0), sol[:ms, k:].sum(axis=0)
+
+
+def _chain_dE(df0: np.ndarray, df1: np.ndarray, f1: np.ndarray, s: float, ds: float
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """``da/dE`` and ``db/dE`` of the chain's pieces ``a = f0``, ``b = f1 / s`` (``s`` the
+    bead's compliance scale, ``ds = ds/dE``), the last one repeated as :func:`_pieces`
+    does."""
     da = np.concatenate([df0, df0[-1:]])
     db = df1 / s - f1 * ds / s**2
     return da, np.concatenate([db, db[-1:]])
+
+
+def concatenate(walls: list[PiecewiseLinearWall]) -> PiecewiseLinearWall:
+    """The scenes of several walls as one (each row padded with its last value, as
+    :func:`fem_wall` pads its scenes; the derivatives kept only if every wall has them):
+    the walls of several plates or chains' ranges advanced in one batched run."""
+    width = max(w.d.shape[1] for w in walls)
+
+    def stack(name: str) -> np.ndarray:
+        parts = []
+        for w in walls:
+            x = getattr(w, name)
+            parts.append(np.concatenate([x, np.repeat(x[:, -1:], width - x.shape[1], axis=1)],
+                                        axis=1))
+        return np.concatenate(parts, axis=0)
+
+    deriv = all(w.da_dE is not None and w.db_dE is not None for w in walls)
+    errors = [w.force_error for w in walls]
+    error = (np.concatenate([np.broadcast_to(e, (w.n,)) for e, w in zip(errors, walls,
+                                                                         strict=True)])
+             if all(e is not None for e in errors) else None)
+    return PiecewiseLinearWall(stack("d"), stack("a"), stack("b"), stack("U"),
+                               np.concatenate([w.d_exact for w in walls]), error,
+                               stack("da_dE") if deriv else None,
+                               stack("db_dE") if deriv else None)
 
 
 def _assemble(rows: list[tuple[Any, ...]], force_error: np.ndarray) -> PiecewiseLinearWall:
@@ -394,13 +517,15 @@ def _assemble(rows: list[tuple[Any, ...]], force_error: np.ndarray) -> Piecewise
 
 
 def peak_stresses(params: ChainParams, soil_E: Any, soil_nu: float, d_wall: Any, *,
-                  contact: dict[str, Any] | None = None, operators: Any = None) -> Any:
+                  contact: dict[str, Any] | None = None, operators: Any = None,
+                  force: Any = None) -> Any:
     """The contact's elastic stresses at the chain's peak wall indentations ``d_wall`` (m,
     one per soil modulus ``soil_E``, Pa; one ``soil_nu``): the indentation moved into the
     rigid sphere's coordinates of the FEM (the bead's compliance out,
     :func:`ssw.chain.wall.compliance_scale`) and the device's plate (its material,
     thickness, diameter and interface, as :func:`fem_wall` has them) with the elastic bead
-    (:func:`ssw.contact.stress.contact_stresses`). Returns its ``ContactStress``."""
+    (:func:`ssw.contact.stress.contact_stresses`; ``force``, N, the wall's force there when
+    known). Returns its ``ContactStress``."""
     from ssw.chain.wall import compliance_scale
     from ssw.contact.stress import contact_stresses
 
@@ -411,4 +536,5 @@ def peak_stresses(params: ChainParams, soil_E: Any, soil_nu: float, d_wall: Any,
            "plate_diameter": params.plate_diameter}
     return contact_stresses(E, soil_nu, (params.plate_E, params.plate_nu) if has_plate
                             else None, params.plate_thickness, params.bead_radius, delta,
-                            cfg, store=operators, bead=(params.bead_E, params.bead_nu))
+                            cfg, store=operators, bead=(params.bead_E, params.bead_nu),
+                            force=force)

@@ -97,3 +97,122 @@ DESIGN_TARGETS = expand(
     ],
     soil=DESIGN_SOILS,
 )
+
+
+# Device design (config design.device, on with design.device.study): for every soil range,
+# the whole device (beads, sensor, striker, drop, plate) as the design variable. One job
+# per bead diameter and plate material, its chains scattered over design.device.parts jobs
+# (Snakemake's scattergather `device`):
+# `ssw design --space device --family D:MAT --part I/N` scans part I's chains and searches
+# its best devices at a mesh of its own bead radius. The table rule gathers every part of
+# every family and ranks their devices together (`--merge`), then strikes the finalists
+# (design.device.plastic_hits > 0) with the base device of the study's config.
+#
+# Outputs (results/design/device/):
+#   {soil}/{family}/{i}-of-{n}.json  one part of one family's devices (scan, search, best)
+#   {soil}.json / {soil}.csv         the range's ranking: recommended device, reasons, fronts
+#   figures/{soil}_pareto.png        resolution against the sample's yield and the mass
+DEVICE_DIR = f"{DESIGN_DIR}/device"
+DEVICE_FAMILIES = STUDY.device_families()
+
+
+scattergather:
+    device=sswwf.device_parts(config),
+
+
+def _device_calibration(wc):
+    """The calibration file of the device design's jobs (when the study calibrates)."""
+    return {
+        k: v
+        for k, v in sswwf.calibrated_inputs(config, RESULTS).items()
+        if k == "calibration"
+    }
+
+
+rule design_device_family:
+    input:
+        unpack(_device_calibration),
+    output:
+        json=f"{DEVICE_DIR}/{{soil}}/{{family}}/{{scatteritem}}.json",
+    log:
+        f"{LOGS}/design/device_{{soil}}_{{family}}_{{scatteritem}}.log",
+    benchmark:
+        f"{BENCHMARKS}/design/device_{{soil}}_{{family}}_{{scatteritem}}.tsv"
+    wildcard_constraints:
+        soil=sswwf.alternatives(DESIGN_SOILS),
+        family=sswwf.alternatives(DEVICE_FAMILIES),
+    conda:
+        SSW_ENV
+    resources:
+        mem_mb=lambda wc, attempt: sswwf.mem_mb("design_device", 0) * attempt,
+        runtime=lambda wc, attempt: sswwf.runtime_min("design_device", 0) * attempt,
+    params:
+        inputs=lambda wc: inputs_of("design_device", wc.soil),
+        digest=lambda wc: digest_of("design_device", wc.soil),
+        config=STUDY_CONFIG,
+        calibration=lambda wc, input: sswwf.calibration_flag(input),
+        family=lambda wc: DEVICE_FAMILIES[wc.family],
+        part=lambda wc: sswwf.scatter_part(wc.scatteritem),
+    shell:
+        "python -m ssw --inputs-sha256 {params.digest} design --space device "
+        "--soil-range {wildcards.soil} --family {params.family} --part {params.part} "
+        "--config {params.config} {params.calibration} --output {output.json} > {log} 2>&1"
+
+
+rule design_device_table:
+    input:
+        unpack(
+            lambda wc: {
+                "parts": gather.device(
+                    f"{DEVICE_DIR}/{wc.soil}/{{family}}/{{scatteritem}}.json",
+                    family=DEVICE_FAMILIES,
+                ),
+                **_device_calibration(wc),
+            }
+        ),
+    output:
+        json=f"{DEVICE_DIR}/{{soil}}.json",
+        csv=report(
+            f"{DEVICE_DIR}/{{soil}}.csv",
+            caption="../report/design_device.rst",
+            category=REPORT_CATEGORIES["design"],
+            subcategory="Device",
+        ),
+        plot=report(
+            f"{DEVICE_DIR}/figures/{{soil}}_pareto.png",
+            caption="../report/design_device.rst",
+            category=REPORT_CATEGORIES["design"],
+            subcategory="Device",
+        ),
+    log:
+        f"{LOGS}/design/device_{{soil}}_table.log",
+    wildcard_constraints:
+        soil=sswwf.alternatives(DESIGN_SOILS),
+    conda:
+        SSW_ENV
+    resources:
+        mem_mb=lambda wc, attempt: sswwf.mem_mb("design_device", 0) * attempt,
+        runtime=lambda wc, attempt: sswwf.runtime_min("design_device", 0) * attempt,
+    params:
+        inputs=lambda wc: inputs_of("design_device_table", wc.soil),
+        digest=lambda wc: digest_of("design_device_table", wc.soil),
+        config=STUDY_CONFIG,
+        calibration=lambda wc, input: sswwf.calibration_flag(input),
+    shell:
+        "python -m ssw --inputs-sha256 {params.digest} design --space device "
+        "--merge {input.parts} --config {params.config} {params.calibration} "
+        "--output {output.json} --csv {output.csv} --plot {output.plot} > {log} 2>&1"
+
+
+DESIGN_TARGETS += (
+    expand(
+        [
+            f"{DEVICE_DIR}/{{soil}}.json",
+            f"{DEVICE_DIR}/{{soil}}.csv",
+            f"{DEVICE_DIR}/figures/{{soil}}_pareto.png",
+        ],
+        soil=DESIGN_SOILS,
+    )
+    if DEVICE_FAMILIES
+    else []
+)

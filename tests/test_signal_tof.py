@@ -71,9 +71,9 @@ def test_upsampled_vertex_beats_the_parabola_on_a_band_limited_pulse():
 
 def test_upsampling_removes_the_parabola_bias_on_the_chains_pulses():
     """The chain's pulses on PCF 08 (38 MPa) are asymmetric: the parabola on the samples is
-    biased one way (ssw bench tof: -2 to -5 us); after x16 interpolation the TOF of each
-    simulated NI 9234 record matches the TOF of the analog signal it sampled (the module's
-    anti-alias output, picked on its 16x finer grid) to noise level."""
+    biased one way (every hit's TOF short by 0.5-2 us here); after x16 interpolation the TOF
+    of each simulated NI 9234 record matches the TOF of the analog signal it sampled (the
+    module's anti-alias output, picked on its 16x finer grid) to noise level."""
     from ssw.chain.params import ChainParams
     from ssw.chain.tof import pick_peaks as chain_peaks
     from ssw.daq.settings import DaqSettings
@@ -87,7 +87,7 @@ def test_upsampling_removes_the_parabola_bias_on_the_chains_pulses():
     err = {up: session_tof(forces, s.sample_rate, s.pretrigger_samples,
                            opts=TofOptions(upsample=up)).tof - truth for up in (1, 16)}
     assert abs(np.mean(err[16])) < 0.3e-6 and np.max(np.abs(err[16])) < 0.5e-6
-    assert np.mean(err[1]) < -1.0e-6  # the bias the upsampling removes
+    assert np.all(err[1] < -0.5e-6)  # the bias the upsampling removes, beyond its bound
 
 
 def test_live_hook_gives_the_session_statistics_hit_by_hit():

@@ -158,6 +158,33 @@ class SimulatedBackend:
             d.update(true_tof=self.true_tof)
         return d
 
+    def analog(self, settings: DaqSettings) -> tuple[np.ndarray, np.ndarray]:
+        """The noise-free band-limited signal the module samples, on its fine grid.
+
+        The fine output of :func:`ssw.daq.model.acquire` for the backend's own wave (AC
+        coupling and anti-alias filter, before sampling, noise and quantization): what a
+        record's samples are taken from.
+
+        Parameters
+        ----------
+        settings : DaqSettings
+            The acquisition (rate, record length, pretrigger).
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            ``(t, y)``: s from the hit's start (the fine grid's step ``1 / (O f_s)``) and
+            N (the force seen through the sensor's path, in force units).
+        """
+        force, t_end = self._wave
+        fs = settings.sample_rate
+        acq = Acquisition.of(settings)
+        t0 = -(settings.pretrigger_samples + MARGIN) / fs
+        n_total = int((t_end - t0) * fs) + settings.record_samples + MARGIN
+        _, y = acquire(acq, lambda s: force(s)[..., None], np.array([t0]), n_total,
+                       start=0.0, fine=True)
+        return t0 + np.arange(y.shape[0]) * acq.fine_dt, y[:, 0, 0]
+
     def _varied(self, v: float) -> tuple[tuple[Any, float], float]:
         """The chain's sensor force (dense) and TOF with striker speed ``v`` (m/s)."""
         from ssw.tof import api

@@ -129,3 +129,12 @@ def survey_point_inputs(wildcards):
         "recordings": sswwf.point_recordings(config, wildcards.point, RECORDINGS_ROOT),
         **sswwf.calibrated_inputs(config, RESULTS),
     }
+
+
+def device_calibration(wc):
+    """The calibration file of the device design's jobs (when the study calibrates)."""
+    return {
+        k: v
+        for k, v in sswwf.calibrated_inputs(config, RESULTS).items()
+        if k == "calibration"
+    }

@@ -120,18 +120,9 @@ scattergather:
     device=sswwf.device_parts(config),
 
 
-def _device_calibration(wc):
-    """The calibration file of the device design's jobs (when the study calibrates)."""
-    return {
-        k: v
-        for k, v in sswwf.calibrated_inputs(config, RESULTS).items()
-        if k == "calibration"
-    }
-
-
 rule design_device_family:
     input:
-        unpack(_device_calibration),
+        unpack(device_calibration),
     output:
         json=f"{DEVICE_DIR}/{{soil}}/{{family}}/{{scatteritem}}.json",
     log:
@@ -167,7 +158,7 @@ rule design_device_table:
                     f"{DEVICE_DIR}/{wc.soil}/{{family}}/{{scatteritem}}.json",
                     family=DEVICE_FAMILIES,
                 ),
-                **_device_calibration(wc),
+                **device_calibration(wc),
             }
         ),
     output:

@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from ssw.errors import RecordingError
+from ssw.modulus import MODEL_TERM
 from ssw.signal.tof import MIN_HITS_FOR_SCATTER
 
 #: Systematic TOF uncertainty of the peak picking, in sample periods (1 sigma): the largest
@@ -294,8 +295,10 @@ def parse_nu(text: str | float) -> float | tuple[float, float]:
 
 
 #: Terms of the TOF budget that a fit of the records replaces (the scatter of the hits and
-#: the peak picking's sampling error are in the fit's own residuals).
-_FIT_REPLACES = ("tof", "tof (stated scatter)", "sampling")
+#: the peak picking's sampling error are in the fit's own residuals; the TOF model's
+#: discrepancy, :func:`ssw.modulus.model_discrepancy`, by the fit's own, its
+#: error scaled by ``sqrt(chi2 / dof)``).
+_FIT_REPLACES = ("tof", "tof (stated scatter)", "sampling", MODEL_TERM)
 
 
 def measure_information(m: Measurement, recordings: list[Any], level: str, params: Any,

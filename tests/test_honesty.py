@@ -75,11 +75,13 @@ def study(folder: Path) -> list[dict]:
     cal = calibrate(refs, device, ["striker_velocity", "preload"], materials=material_set(),
                     numerics=NUMERICS, wall="hertz")
     cals = {"tof": cal}
+    samples = [Hits.from_recording(r, E=E, nu=nu, full_scale=445.0)
+               for r, (E, nu) in zip(recs, FOAMS, strict=True)]
+    # the features from the global start; the whole waveform from the features' solution
     for level in LEVELS[1:]:
-        samples = [Hits.from_recording(r, E=E, nu=nu, full_scale=445.0)
-                   for r, (E, nu) in zip(recs, FOAMS, strict=True)]
-        f = calibrate_records(samples, cal.chain_params(), "hertz", {}, Acquisition(), level,
-                              5.0, 1.53e-5)
+        start = cal if level == "features" else cals["features"]
+        f = calibrate_records(samples, start.chain_params(), "hertz", {}, Acquisition(), level,
+                              5.0, 1.53e-5, scan=level == "features")
         cals[level] = with_fit(cal, f, level)
     rows = []
     for j, (E, nu) in enumerate(UNSEEN):

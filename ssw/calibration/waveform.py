@@ -838,7 +838,7 @@ def fit(setup: Setup, state: State, free: list[Column], iterations: int | None =
 START_SENSOR_MASS = (1.0, 1.3, 1.7)
 START_DAMPING = (0.0, 3.0, 9.0)
 #: Model runs of each grid point's fit of the per-hit parameters.
-START_ITERATIONS = 6
+START_ITERATIONS = 20
 
 
 def global_start(setup: Setup, globals_: dict[str, float], E: Any, speed: float,

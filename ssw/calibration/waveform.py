@@ -717,6 +717,8 @@ class Fit:
         Chain runs.
     start : list of dict
         The global start's grid (:func:`global_start`) with each point's chi^2, if any.
+    unexplained : int
+        Observations the record has a value for and the model, at the optimum, none.
     """
 
     state: State
@@ -729,11 +731,14 @@ class Fit:
     converged: bool
     runs: int
     start: list[dict] = field(default_factory=list)
+    unexplained: int = 0
 
     @property
     def flagged(self) -> bool:
-        """The misfit is beyond the noise (:data:`FLAG_QUANTILE`)."""
-        return not self.quantile <= FLAG_QUANTILE
+        """The misfit is beyond the noise (:data:`FLAG_QUANTILE`), or the record has
+        observations the model has no value for (a pulse or a trigger crossing the model
+        does not produce: its chi^2 then counts only the rest)."""
+        return not self.quantile <= FLAG_QUANTILE or self.unexplained > 0
 
     @property
     def misfit(self) -> float:
@@ -751,16 +756,19 @@ class Fit:
 
 
 def _residuals(setup: Setup, state: State, free: list[Column], wanted: set[str]
-               ) -> tuple[np.ndarray, np.ndarray]:
+               ) -> tuple[np.ndarray, np.ndarray, int]:
     """Weighted residuals and their Jacobian in the scaled coordinates of ``free`` (rows
-    where the model or the data has no value, a feature not found, count 0)."""
+    where the model or the data has no value, a feature not found, count 0), and how many
+    rows the record has a value for but the model none (unexplained)."""
     obs = observe(setup, state, wanted)
     index = {c: j for j, c in enumerate(obs.columns)}
     vals = np.array([get(state, c) for c in free])
     J = obs.jacobian[:, [index[c] for c in free]] * dtheta_dx(setup, free, vals)[None, :]
     r = (obs.model - obs.data) / obs.sigma
     ok = np.isfinite(r) & np.all(np.isfinite(J), axis=1)
-    return np.where(ok, r, 0.0), np.where(ok[:, None], J / obs.sigma[:, None], 0.0)
+    unexplained = int(np.count_nonzero(~ok & np.isfinite(obs.data)))
+    return (np.where(ok, r, 0.0), np.where(ok[:, None], J / obs.sigma[:, None], 0.0),
+            unexplained)
 
 
 def fit(setup: Setup, state: State, free: list[Column], iterations: int | None = None
@@ -806,14 +814,15 @@ def fit(setup: Setup, state: State, free: list[Column], iterations: int | None =
             put(st, c, v)
         return st
 
-    r, J = _residuals(setup, at(x0), free, wanted)
+    r, J, lost = _residuals(setup, at(x0), free, wanted)
     pr = Problem(x0, r, J, float(r @ r), np.eye(len(free)))
+    unexplained = {x0.tobytes(): lost}  # per point: rows the model has no value for
 
     def evaluate(trial: dict[int, np.ndarray]) -> dict[int, tuple[np.ndarray, np.ndarray,
                                                                   float]]:
         out = {}
         for i, x in trial.items():
-            rr, JJ = _residuals(setup, at(x), free, wanted)
+            rr, JJ, unexplained[x.tobytes()] = _residuals(setup, at(x), free, wanted)
             out[i] = (rr, JJ, float(rr @ rr))
         return out
 
@@ -824,9 +833,14 @@ def fit(setup: Setup, state: State, free: list[Column], iterations: int | None =
     n_obs = int(np.count_nonzero(np.any(pr.J != 0, axis=1) | (pr.r != 0)))
     dof = max(n_obs - len(free), 1)
     cov = np.linalg.pinv(pr.J.T @ pr.J)
+    dead = ~np.any(pr.J != 0, axis=0)  # no observation answers to it: unknown, not exact
+    cov[dead, :] = 0.0
+    cov[:, dead] = 0.0
+    cov[dead, dead] = np.inf
     final = at(pr.x)
     return Fit(final, list(free), from_x(setup, free, pr.x), cov, float(pr.cost), dof,
-               float(stats.chi2.cdf(pr.cost, dof)), bool(pr.converged), setup.runs)
+               float(stats.chi2.cdf(pr.cost, dof)), bool(pr.converged), setup.runs,
+               unexplained=unexplained[pr.x.tobytes()])
 
 
 #: The global start of a calibration of records (:func:`global_start`): the sensor
@@ -998,7 +1012,8 @@ def with_fit(cal: Any, f: Fit, level: str) -> Any:
             "start": f.start,
             "striker_velocity_per_hit": [float(v) for v in f.state.striker_velocity],
             "chi2": f.chi2, "chi2_dof": f.dof, "chi2_quantile": f.quantile,
-            "flagged": f.flagged, "converged": f.converged, "runs": f.runs}
+            "flagged": f.flagged, "unexplained": f.unexplained, "converged": f.converged,
+            "runs": f.runs}
     parameters = {**cal.parameters, **{k: v for k, v in changes.items()
                                        if k in cal.parameters}}
     return replace(cal, device=cal.device.with_(**changes), parameters=parameters,

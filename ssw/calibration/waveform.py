@@ -795,7 +795,7 @@ def fit(setup: Setup, state: State, free: list[Column], iterations: int | None =
     """
     from scipy import stats
 
-    from ssw.calibration.lm import Problem, levenberg_marquardt
+    from ssw.calibration.lm import LM_ITERATIONS, Problem, levenberg_marquardt
 
     wanted = {c.name for c in free}
     work = state.copy()
@@ -826,10 +826,7 @@ def fit(setup: Setup, state: State, free: list[Column], iterations: int | None =
             out[i] = (rr, JJ, float(rr @ rr))
         return out
 
-    if iterations is None:
-        levenberg_marquardt([pr], evaluate, lo, hi)
-    else:
-        levenberg_marquardt([pr], evaluate, lo, hi, iterations)
+    levenberg_marquardt([pr], evaluate, lo, hi, iterations or LM_ITERATIONS)
     n_obs = int(np.count_nonzero(np.any(pr.J != 0, axis=1) | (pr.r != 0)))
     dof = max(n_obs - len(free), 1)
     cov = np.linalg.pinv(pr.J.T @ pr.J)

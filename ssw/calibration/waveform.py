@@ -847,6 +847,7 @@ def fit(setup: Setup, state: State, free: list[Column], iterations: int | None =
 #: device's nominal values stops in a basin of its own (a conservative chain of nominal
 #: masses with the hits' speeds and delays bent to it).
 START_SENSOR_MASS = (1.0, 1.3, 1.7)
+#: The contact dashpots of the global start's grid, N s/m.
 START_DAMPING = (0.0, 3.0, 9.0)
 #: Model runs of each grid point's fit of the per-hit parameters.
 START_ITERATIONS = 20

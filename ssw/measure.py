@@ -43,6 +43,7 @@ from typing import Any
 import numpy as np
 
 from ssw.errors import RecordingError
+from ssw.modulus import MODEL_TERM
 from ssw.signal.tof import MIN_HITS_FOR_SCATTER
 
 #: Systematic TOF uncertainty of the peak picking, in sample periods (1 sigma): the largest
@@ -294,8 +295,10 @@ def parse_nu(text: str | float) -> float | tuple[float, float]:
 
 
 #: Terms of the TOF budget that a fit of the records replaces (the scatter of the hits and
-#: the peak picking's sampling error are in the fit's own residuals).
-_FIT_REPLACES = ("tof", "tof (stated scatter)", "sampling")
+#: the peak picking's sampling error are in the fit's own residuals; the TOF model's
+#: discrepancy, :func:`ssw.modulus.model_discrepancy`, by the fit's own, its
+#: error scaled by ``sqrt(chi2 / dof)``).
+_FIT_REPLACES = ("tof", "tof (stated scatter)", "sampling", MODEL_TERM)
 
 
 def measure_information(m: Measurement, recordings: list[Any], level: str, params: Any,
@@ -390,12 +393,15 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
     u_fit = f.std(Column("E", 0))
     contrib[f"{level} fit"] = u_fit
     u = float(np.sqrt(sum(v**2 for v in contrib.values())))
-    notes = [x for x in m.notes if "TOF term" not in x]
+    notes = [x for x in m.notes if "TOF term" not in x and MODEL_TERM not in x]
     if f.misfit > 1.0:
         notes.append(f"the model leaves chi2/dof = {f.misfit:.3g} of the records unexplained: "
                      f"E's fit error is scaled by sqrt({f.misfit:.3g}) (a model-discrepancy "
                      "term)")
-    if f.flagged:
+    if f.unexplained:
+        notes.append(f"FLAGGED: {f.unexplained} observation(s) of the records have no value in "
+                     "the model (a pulse or a trigger crossing it does not produce)")
+    elif f.flagged:
         notes.append(f"FLAGGED: the model does not explain these records (chi2 {f.chi2:.4g} "
                      f"on {f.dof} degrees of freedom, quantile {f.quantile:.6f} > "
                      f"{FLAG_QUANTILE}): a clipped hit, a yielding sample or a time "
@@ -411,7 +417,8 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
                                    "std": float(s * v if log else s * coordinate(setup, c)[1])}
     extra = {**m.extra, "information": level, "identified": identified,
              "chi2": f.chi2, "chi2_dof": f.dof, "chi2_quantile": f.quantile,
-             "flagged": f.flagged, "fit_converged": f.converged, "fit_runs": f.runs,
+             "flagged": f.flagged, "unexplained": f.unexplained,
+             "fit_converged": f.converged, "fit_runs": f.runs,
              "E_tof": m.E, "E_tof_low": m.E_low, "E_tof_high": m.E_high}
     return replace(m, E=E, E_low=E * float(np.exp(-COVERAGE_Z * u)),
                    E_high=E * float(np.exp(COVERAGE_Z * u)), u=u, contributions=contrib,

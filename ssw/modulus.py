@@ -15,6 +15,10 @@ JCGM 100:2008, sec. 5.1: independent contributions add in quadrature):
   fit's interpolation error, the FEM's discretisation error): a wall stiffer by ``(1 + e)``
   is a soil stiffer by about ``(1 + e)`` (exactly so for a Hertzian wall on a rigid bead),
   so ``u = e``;
+* ``model (references' leave-one-out)``: when the calibration's references do not fit
+  within their stated TOF uncertainties (chi^2 beyond its degrees of freedom), the root
+  mean square of their leave-one-out errors in ``ln E`` (:func:`model_discrepancy`); absent
+  otherwise, so a measurement through a calibration that fits is unchanged;
 * ``integrator``: the TOF error of the time step, ``c (80 / steps_per_contact)^2`` with
   ``c`` the relative error measured at 80 steps against an independent DOP853 solution
   (:data:`INTEGRATOR_REL_ERROR_80`), ``u = c / |k|``.
@@ -163,6 +167,7 @@ def estimate_moduli(
     force_error = getattr(w, "force_error", None)
     if force_error is not None:
         force_error = np.broadcast_to(np.asarray(force_error, float), (k,))
+    disc = model_discrepancy(calibration)
     out = []
     for i in range(k):
         contrib: dict[str, float] = {}
@@ -191,6 +196,9 @@ def estimate_moduli(
         else:
             missing["calibration"] = ("uncalibrated device: the uncertainty of its "
                                       "parameters is not known")
+        if disc is not None:  # the references' misfit beyond their TOF uncertainties
+            contrib[MODEL_TERM] = disc[0]
+            notes.append(disc[1])
         if ranged[i]:
             contrib["poisson"] = float(abs(lnE_hi[i] - lnE_lo[i]) / np.sqrt(12.0))
         if beyond[i]:
@@ -212,6 +220,63 @@ def estimate_moduli(
             dlnTOF_dlnE=kk, notes=tuple(notes), missing=missing,
             extrapolated=bool(beyond[i])))
     return out
+
+
+#: The budget's name of a calibration's model-discrepancy term (:func:`model_discrepancy`).
+MODEL_TERM = "model (references' leave-one-out)"
+
+
+def model_discrepancy(cal: Any) -> tuple[float, str] | None:
+    """The model-discrepancy term of a measurement through ``cal``: the references'
+    leave-one-out prediction errors' root mean square in ``ln E``, when the references'
+    misfit exceeds what their stated TOF uncertainties explain; None otherwise.
+
+    The gate is the Birge ratio (Birge 1932; the Particle Data Group's scale factor,
+    Workman et al. 2022, sec. 5.2): the calibration's ``chi^2`` over its degrees of freedom
+    ``n - q`` (references minus the free parameters no bound holds) above 1. Below it the
+    references fit as their uncertainties allow and the measurement is unchanged. Above
+    it the model's family does not reach them, and its covariance, conditional on the
+    model, leaves the model's error out; the calibration's own check of that error is the
+    leave-one-out prediction of each reference's E from the others
+    (:func:`ssw.calibration.calibrate`), whose root mean square ``sqrt(mean(ln(E_pred /
+    E)^2))`` is taken as a standard uncertainty of ``ln E``. A 95 % quantile would be no
+    gate: with three references and two parameters a chi^2 of one or two degrees of
+    freedom cannot reject a model that is 5 % wrong in E. Calibrations without given TOF
+    uncertainties (their weights 1 % of each TOF, the covariance already scaled by
+    ``chi^2 / (n - q)``) and those without leave-one-out predictions get none.
+
+    Parameters
+    ----------
+    cal : ssw.calibration.Calibration or None
+        The calibration.
+
+    Returns
+    -------
+    tuple of (float, str) or None
+        The standard uncertainty in ``ln E`` and a note that states it, or None.
+
+    References
+    ----------
+    R. T. Birge, "The calculation of errors by the method of least squares", Phys. Rev.
+    40, 207 (1932); R. L. Workman et al. (Particle Data Group), "Review of particle
+    physics", Prog. Theor. Exp. Phys. 2022, 083C01, introduction sec. 5.2.
+    """
+    if cal is None or not cal.loo or "given" not in str(cal.provenance.get("weights", "")):
+        return None
+    chi2 = cal.provenance.get("chi2")
+    dof = len(cal.references) - (len(cal.free) - len(cal.at_bound))
+    if chi2 is None or dof < 1 or not chi2 > dof:
+        return None
+    err = np.array([np.log(r["E_predicted"] / r["E"]) for r in cal.loo
+                    if r.get("E_predicted") is not None])
+    if err.size == 0:
+        return None
+    u = float(np.sqrt(np.mean(err**2)))
+    note = (f"the references' chi2 {chi2:.3g} exceeds its {dof} degree(s) of freedom: the "
+            "model does not reach them within their TOF uncertainties, and the term "
+            f"'{MODEL_TERM}' ({100 * u:.3g} %, the root mean square of their leave-one-out "
+            "errors in E) carries its error into the interval")
+    return u, note
 
 
 class Estimator:

@@ -75,11 +75,13 @@ def study(folder: Path) -> list[dict]:
     cal = calibrate(refs, device, ["striker_velocity", "preload"], materials=material_set(),
                     numerics=NUMERICS, wall="hertz")
     cals = {"tof": cal}
+    samples = [Hits.from_recording(r, E=E, nu=nu, full_scale=445.0)
+               for r, (E, nu) in zip(recs, FOAMS, strict=True)]
+    # the features from the global start; the whole waveform from the features' solution
     for level in LEVELS[1:]:
-        samples = [Hits.from_recording(r, E=E, nu=nu, full_scale=445.0)
-                   for r, (E, nu) in zip(recs, FOAMS, strict=True)]
-        f = calibrate_records(samples, cal.chain_params(), "hertz", {}, Acquisition(), level,
-                              5.0, 1.53e-5)
+        start = cal if level == "features" else cals["features"]
+        f = calibrate_records(samples, start.chain_params(), "hertz", {}, Acquisition(), level,
+                              5.0, 1.53e-5, scan=level == "features")
         cals[level] = with_fit(cal, f, level)
     rows = []
     for j, (E, nu) in enumerate(UNSEEN):
@@ -109,17 +111,30 @@ def study(folder: Path) -> list[dict]:
 
 @pytest.mark.slow
 @pytest.mark.xfail(strict=True, reason=(
-    "measured 2026-11-26: the TOF level puts 20 and 80 MPa outside their 95 % intervals "
-    "(errors -3.9 %, -2.3 %, intervals 0.9 % and 4.5 % wide; +5.03 % at 800 MPa) without "
-    "a flag; the features "
-    "and waveform calibrations stop in a local minimum (sensor mass not found 1.5x, chi2 "
-    "per degree of freedom ~1e6): every features/waveform measurement is flagged"))
-def test_every_unseen_modulus_is_inside_its_interval_or_flagged(tmp_path):
-    rows = study(tmp_path)
-    for r in rows[:-len(LEVELS)]:
+    "measured 2026-11-26: the TOF level puts every unseen E inside its 95 % interval (the "
+    "references' leave-one-out term, 3.7 %; intervals 15.6-21.0 % wide) with errors -3.95, "
+    "-2.30, -0.73, +5.03 %; the features and waveform calibrations do not reach the true "
+    "basin from the grid of sensor mass and dashpot (best point 1.7x, 9 N s/m; chi2 per "
+    "degree of freedom ~1e8): every features and waveform measurement is flagged (errors "
+    "9-78 %; two waveform fits for the model's lack of most of the records' samples), none "
+    "is the narrower honest answer the issue asks for"))
+def test_every_unseen_modulus_is_inside_its_interval_and_the_records_narrow_it(tmp_path):
+    """At every level each unseen E is inside its interval or flagged; the TOF within 5 %;
+    and the features or the waveform give, unflagged, every E inside an interval at least
+    2x narrower than the TOF's and within 5 %."""
+    rows = study(tmp_path)[:-len(LEVELS)]
+    for r in rows:
         assert r["inside"] or r["flagged"], r
         if r["level"] == "tof":
             assert abs(r["error_pct"]) < 5.0, r
+    tof = {r["E_true"]: r["width_pct"] for r in rows if r["level"] == "tof"}
+
+    def honest(level: str) -> bool:
+        return all(not r["flagged"] and r["inside"] and abs(r["error_pct"]) < 5.0
+                   and 2.0 * r["width_pct"] <= tof[r["E_true"]]
+                   for r in rows if r["level"] == level)
+
+    assert honest("features") or honest("waveform")
 
 
 if __name__ == "__main__":

@@ -86,10 +86,17 @@ def test_a_recording_the_model_cannot_explain_is_flagged(recording, edit):
     assert any("FLAGGED" in n for n in d["notes"])
 
 
-def test_calibrate_with_the_waveform_frees_what_the_records_identify(capsys, tmp_path):
+def test_calibrate_with_the_waveform_frees_what_the_records_identify(capsys, tmp_path,
+                                                                     monkeypatch):
     """Three simulated references of the nominal device (the simulated backend runs the
     chain at its own step; the fit at another): the waveform calibration frees the device's
-    globals it identifies and finds the nominal sensor mass, a zero dashpot and unit gain."""
+    globals it identifies and finds the nominal sensor mass, a zero dashpot and unit gain.
+    The global start's grid is cut to the nominal point (the device is nominal; the grid's
+    search is the slow honesty study's, tests/test_honesty.py)."""
+    import ssw.calibration.waveform as waveform
+
+    monkeypatch.setattr(waveform, "START_SENSOR_MASS", (1.0,))
+    monkeypatch.setattr(waveform, "START_DAMPING", (0.0,))
     refs = []
     for mat, E, nu in (("pcf08", 38e6, 0.34), ("pcf30", 445e6, 0.30)):
         path = tmp_path / f"{mat}.h5"
@@ -107,3 +114,18 @@ def test_calibrate_with_the_waveform_frees_what_the_records_identify(capsys, tmp
     assert abs(info["values"].get("damping", 0.0)) < 0.5
     assert info["gain"] == pytest.approx(1.0, rel=0.01)
     assert json.loads(out.read_text())["provenance"]["information"]["freed"] == info["freed"]
+
+
+def test_a_fit_whose_model_lacks_observations_the_record_has_is_flagged():
+    """A fit whose model has no value for observations the record has (a pulse or a
+    trigger crossing it does not produce: those rows drop out of chi^2, which then counts
+    only the rest) is flagged whatever its chi^2 (before: a chi^2 of 10.3 on 1 degree of
+    freedom, quantile 0.9986, passed unflagged with E's error 0)."""
+    from ssw.calibration.waveform import Fit
+
+    def fit_with(unexplained):
+        return Fit(None, [], np.zeros(0), np.zeros((0, 0)), 10.26, 1, 0.9986, False, 43,
+                   unexplained=unexplained)
+
+    assert not fit_with(0).flagged
+    assert fit_with(1016).flagged

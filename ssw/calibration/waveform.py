@@ -46,6 +46,7 @@ Two per-hit priors enter as observations of their own (kinds ``trigger`` and ``d
 
 from __future__ import annotations
 
+import itertools
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -594,7 +595,8 @@ def observe(setup: Setup, state: State, wanted: set[str] | None = None) -> Obser
 def initial_state(setup: Setup, globals_: dict[str, float], E: Any, speed: float) -> State:
     """A start for a fit: every hit at ``speed`` scaled by its incident amplitude (``F_m ~
     v^(6/5)``, Nesterenko 2001, against the model's at ``speed``), its time offset from the
-    trigger (its prior's mean), delays 0.
+    trigger (its prior's mean), its delay the record's TOF minus the model's (the
+    reflected waves moved onto the record's; 0 where a TOF is missing).
 
     Parameters
     ----------
@@ -622,22 +624,30 @@ def initial_state(setup: Setup, globals_: dict[str, float], E: Any, speed: float
         obs = observe(setup, state, wanted={"striker_velocity"})
         trig = obs.kind == "trigger"
         state.time_offset = state.time_offset - obs.model[trig]
-        amp = _amplitudes(setup, state)
-        rec = np.concatenate([s.features[:, FEATURES.index("amplitude")]
-                              for s in setup.samples])
-        state.striker_velocity = state.striker_velocity * (rec / amp) ** (5.0 / 6.0)
+        amp = _features(setup, state, "amplitude")
+        state.striker_velocity = state.striker_velocity * (
+            _recorded(setup, "amplitude") / amp) ** (5.0 / 6.0)
         state.striker_velocity = np.clip(state.striker_velocity, 0.11, 1.9)
     obs = observe(setup, state, wanted={"striker_velocity"})
     state.time_offset = state.time_offset - obs.model[obs.kind == "trigger"]
+    lo, hi = parameter("delay").lower, parameter("delay").upper
+    shift = _recorded(setup, "tof") - _features(setup, state, "tof")
+    state.delay = np.clip(np.where(np.isfinite(shift), shift, 0.0), lo, hi)
     return state
 
 
-def _amplitudes(setup: Setup, state: State) -> np.ndarray:
-    """(n_hits,) the model's incident amplitudes (N) at ``state``."""
+def _features(setup: Setup, state: State, name: str) -> np.ndarray:
+    """(n_hits,) the model's feature ``name`` (:data:`ssw.signal.features.NAMES`) at
+    ``state``."""
     feat = replace(setup, level="features", runs=0)
     obs = observe(feat, state, wanted={"striker_velocity"})
     setup.runs += feat.runs
-    return obs.model[obs.kind == "amplitude"]
+    return obs.model[obs.kind == name]
+
+
+def _recorded(setup: Setup, name: str) -> np.ndarray:
+    """(n_hits,) the records' feature ``name``."""
+    return np.concatenate([s.features[:, FEATURES.index(name)] for s in setup.samples])
 
 
 def coordinate(setup: Setup, col: Column) -> tuple[bool, float]:
@@ -705,6 +715,10 @@ class Fit:
         The Levenberg-Marquardt stopped at a first-order point.
     runs : int
         Chain runs.
+    start : list of dict
+        The global start's grid (:func:`global_start`) with each point's chi^2, if any.
+    unexplained : int
+        Observations the record has a value for and the model, at the optimum, none.
     """
 
     state: State
@@ -716,11 +730,15 @@ class Fit:
     quantile: float
     converged: bool
     runs: int
+    start: list[dict] = field(default_factory=list)
+    unexplained: int = 0
 
     @property
     def flagged(self) -> bool:
-        """The misfit is beyond the noise (:data:`FLAG_QUANTILE`)."""
-        return not self.quantile <= FLAG_QUANTILE
+        """The misfit is beyond the noise (:data:`FLAG_QUANTILE`), or the record has
+        observations the model has no value for (a pulse or a trigger crossing the model
+        does not produce: its chi^2 then counts only the rest)."""
+        return not self.quantile <= FLAG_QUANTILE or self.unexplained > 0
 
     @property
     def misfit(self) -> float:
@@ -738,19 +756,23 @@ class Fit:
 
 
 def _residuals(setup: Setup, state: State, free: list[Column], wanted: set[str]
-               ) -> tuple[np.ndarray, np.ndarray]:
+               ) -> tuple[np.ndarray, np.ndarray, int]:
     """Weighted residuals and their Jacobian in the scaled coordinates of ``free`` (rows
-    where the model or the data has no value, a feature not found, count 0)."""
+    where the model or the data has no value, a feature not found, count 0), and how many
+    rows the record has a value for but the model none (unexplained)."""
     obs = observe(setup, state, wanted)
     index = {c: j for j, c in enumerate(obs.columns)}
     vals = np.array([get(state, c) for c in free])
     J = obs.jacobian[:, [index[c] for c in free]] * dtheta_dx(setup, free, vals)[None, :]
     r = (obs.model - obs.data) / obs.sigma
     ok = np.isfinite(r) & np.all(np.isfinite(J), axis=1)
-    return np.where(ok, r, 0.0), np.where(ok[:, None], J / obs.sigma[:, None], 0.0)
+    unexplained = int(np.count_nonzero(~ok & np.isfinite(obs.data)))
+    return (np.where(ok, r, 0.0), np.where(ok[:, None], J / obs.sigma[:, None], 0.0),
+            unexplained)
 
 
-def fit(setup: Setup, state: State, free: list[Column]) -> Fit:
+def fit(setup: Setup, state: State, free: list[Column], iterations: int | None = None
+        ) -> Fit:
     """Fit the ``free`` parameters of ``state`` to the records by the one bounded
     Levenberg-Marquardt (:func:`ssw.calibration.lm.levenberg_marquardt`), in the scaled
     coordinates, each parameter within its range (:data:`PARAMETERS`).
@@ -763,6 +785,8 @@ def fit(setup: Setup, state: State, free: list[Column]) -> Fit:
         The start (the other parameters stay at their values).
     free : list of Column
         The parameters fitted.
+    iterations : int or None
+        At most this many model runs (default: the Levenberg-Marquardt's own limit).
 
     Returns
     -------
@@ -771,7 +795,7 @@ def fit(setup: Setup, state: State, free: list[Column]) -> Fit:
     """
     from scipy import stats
 
-    from ssw.calibration.lm import Problem, levenberg_marquardt
+    from ssw.calibration.lm import LM_ITERATIONS, Problem, levenberg_marquardt
 
     wanted = {c.name for c in free}
     work = state.copy()
@@ -790,36 +814,101 @@ def fit(setup: Setup, state: State, free: list[Column]) -> Fit:
             put(st, c, v)
         return st
 
-    r, J = _residuals(setup, at(x0), free, wanted)
+    r, J, lost = _residuals(setup, at(x0), free, wanted)
     pr = Problem(x0, r, J, float(r @ r), np.eye(len(free)))
+    unexplained = {x0.tobytes(): lost}  # per point: rows the model has no value for
 
     def evaluate(trial: dict[int, np.ndarray]) -> dict[int, tuple[np.ndarray, np.ndarray,
                                                                   float]]:
         out = {}
         for i, x in trial.items():
-            rr, JJ = _residuals(setup, at(x), free, wanted)
+            rr, JJ, unexplained[x.tobytes()] = _residuals(setup, at(x), free, wanted)
             out[i] = (rr, JJ, float(rr @ rr))
         return out
 
-    levenberg_marquardt([pr], evaluate, lo, hi)
+    levenberg_marquardt([pr], evaluate, lo, hi, iterations or LM_ITERATIONS)
     n_obs = int(np.count_nonzero(np.any(pr.J != 0, axis=1) | (pr.r != 0)))
     dof = max(n_obs - len(free), 1)
     cov = np.linalg.pinv(pr.J.T @ pr.J)
+    dead = ~np.any(pr.J != 0, axis=0)  # no observation answers to it: unknown, not exact
+    cov[dead, :] = 0.0
+    cov[:, dead] = 0.0
+    cov[dead, dead] = np.inf
     final = at(pr.x)
     return Fit(final, list(free), from_x(setup, free, pr.x), cov, float(pr.cost), dof,
-               float(stats.chi2.cdf(pr.cost, dof)), bool(pr.converged), setup.runs)
+               float(stats.chi2.cdf(pr.cost, dof)), bool(pr.converged), setup.runs,
+               unexplained=unexplained[pr.x.tobytes()])
+
+
+#: The global start of a calibration of records (:func:`global_start`): the sensor
+#: particle's mass as a multiple of the device's, and the contact dashpot (N s/m). The
+#: chain's TOF, amplitudes and pulse widths are far from linear in them (a heavier sensor
+#: delays and widens its pulse; a dashpot damps the reflections), so a local fit from the
+#: device's nominal values stops in a basin of its own (a conservative chain of nominal
+#: masses with the hits' speeds and delays bent to it).
+START_SENSOR_MASS = (1.0, 1.3, 1.7)
+#: The contact dashpots of the global start's grid, N s/m.
+START_DAMPING = (0.0, 3.0, 9.0)
+#: Model runs of each grid point's fit of the per-hit parameters.
+START_ITERATIONS = 20
+
+
+def global_start(setup: Setup, globals_: dict[str, float], E: Any, speed: float,
+                 sensor_mass: tuple[float, ...] | None = None,
+                 damping: tuple[float, ...] | None = None) -> tuple[State, list[dict]]:
+    """A start for a calibration of records in the basin of their best fit: on a coarse
+    grid of the sensor's mass and the contact dashpot, each point's per-hit parameters
+    (striker speed, time offset, delay) from :func:`initial_state` and a short fit
+    (:data:`START_ITERATIONS` runs); the point of least chi^2 is the start.
+
+    Parameters
+    ----------
+    setup : Setup
+        The model and the records.
+    globals_ : dict
+        The device's global parameters (SI); the grid replaces ``sensor_mass`` and
+        ``damping``.
+    E : array_like
+        (n_s,) Pa, the samples' moduli.
+    speed : float
+        m/s, the device's striker speed.
+    sensor_mass : tuple of float or None
+        The sensor masses of the grid, multiples of ``globals_["sensor_mass"]`` (default
+        :data:`START_SENSOR_MASS`).
+    damping : tuple of float or None
+        N s/m, the dashpots of the grid (default :data:`START_DAMPING`).
+
+    Returns
+    -------
+    tuple of (State, list of dict)
+        The best point's state (its per-hit parameters fitted) and every point's
+        ``sensor_mass``, ``damping`` and ``chi2``.
+    """
+    per_hit = [Column(name, h) for name in PER_HIT for h in range(setup.n_hits)]
+    best, scan = None, []
+    grid = itertools.product(START_SENSOR_MASS if sensor_mass is None else sensor_mass,
+                             START_DAMPING if damping is None else damping)
+    for m, c in grid:
+        g = {**globals_, "sensor_mass": m * globals_["sensor_mass"], "damping": float(c)}
+        f = fit(setup, initial_state(setup, g, E, speed), per_hit, START_ITERATIONS)
+        scan.append({"sensor_mass": g["sensor_mass"], "damping": g["damping"],
+                     "chi2": f.chi2})
+        if best is None or f.chi2 < best.chi2:
+            best = f
+    return best.state, scan
 
 
 def calibrate_records(samples: list[Hits], params: Any, wall: str,
                       wall_options: dict[str, Any], acq: Acquisition, level: str,
                       trigger_level: float, tof_scatter: float,
-                      free_globals: tuple[str, ...] = GLOBALS) -> Fit:
+                      free_globals: tuple[str, ...] = GLOBALS, scan: bool = True) -> Fit:
     """Fit the device's global parameters to reference records (every sample's E known):
     first every one of ``free_globals`` with each hit's striker speed, time offset and
     delay; then, if some global is not identified (its standard error, scaled by the
     misfit, beyond :data:`ssw.calibration.information.IDENTIFIED_U` in its scaled
-    coordinate), again with only the identified ones free, the others at the device's
-    values.
+    coordinate), again with only the identified ones free, the others at their start's
+    values. When the sensor's mass and the dashpot may be freed, the start is the best
+    point of a coarse grid of them (:func:`global_start`), else the device's values.
 
     Parameters
     ----------
@@ -841,6 +930,10 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
         s, a hit's TOF scatter (the delays' prior).
     free_globals : tuple of str
         The globals that may be freed (:data:`GLOBALS`).
+    scan : bool
+        Start from :func:`global_start` when the sensor's mass and the dashpot may be
+        freed; False: from ``params`` (a calibration of the same records at another level,
+        e.g. the waveform's from the features').
 
     Returns
     -------
@@ -864,11 +957,14 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     v0 = float(params.striker_velocity)
     n_h = setup.n_hits
     setup.fix_step(State(E, np.full(n_h, 1.5 * v0), np.zeros(n_h), np.zeros(n_h), glob))
-    state = initial_state(setup, glob, E, v0)
     per_hit = [Column(name, h) for name in PER_HIT for h in range(n_h)]
     free = [Column(g) for g in free_globals]
+    if scan and {"sensor_mass", "damping"} <= set(free_globals):
+        state, scan = global_start(setup, glob, E, v0)
+    else:
+        state, scan = initial_state(setup, glob, E, v0), []
     while True:
-        f = fit(setup, state, free + per_hit)
+        f = replace(fit(setup, state, free + per_hit), start=scan)
         kept = [c for c in free if f.std(c) <= IDENTIFIED_U]
         if len(kept) == len(free):
             return f
@@ -878,7 +974,8 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
 def with_fit(cal: Any, f: Fit, level: str) -> Any:
     """A calibration with what a fit of its references' records identified
     (:func:`calibrate_records`): the device's preload and masses, the dashpot (the
-    numerics' ``damping``) and the striker speed (the hits' mean) at their fitted values;
+    numerics' ``damping``) and the striker speed (the hits' mean) at the fit's values
+    (fitted where freed, else the fit's start: the device's, or the global start's);
     the fit itself (level, freed parameters with their standard errors, the DAQ gain,
     chi^2 and its quantile) in ``provenance["information"]``, where ``ssw measure
     --information`` reads the gain. The TOF calibration's covariance stays the
@@ -900,19 +997,21 @@ def with_fit(cal: Any, f: Fit, level: str) -> Any:
     """
     fitted = {c.name: (get(f.state, c), f.std(c)) for c in f.free if c.index < 0}
     speed = float(np.mean(f.state.striker_velocity))
-    changes: dict[str, float] = {k: v for k, (v, _) in fitted.items()
-                                 if k in ("preload", "sensor_mass", "striker_mass")}
+    # the device of the fit: its freed globals fitted, the others at the fit's start
+    changes: dict[str, float] = {k: float(f.state.globals[k])
+                                 for k in ("preload", "sensor_mass", "striker_mass")}
     changes["striker_velocity"] = speed
     numerics = dict(cal.numerics)
-    if "damping" in fitted:
-        numerics["damping"] = fitted["damping"][0]
+    numerics["damping"] = float(f.state.globals["damping"])
     info = {"level": level, "freed": list(fitted),
             "values": {k: v for k, (v, _) in fitted.items()},
             "std_scaled": {k: s for k, (_, s) in fitted.items()},
-            "gain": fitted["gain"][0] if "gain" in fitted else 1.0,
+            "gain": float(f.state.globals["gain"]),
+            "start": f.start,
             "striker_velocity_per_hit": [float(v) for v in f.state.striker_velocity],
             "chi2": f.chi2, "chi2_dof": f.dof, "chi2_quantile": f.quantile,
-            "flagged": f.flagged, "converged": f.converged, "runs": f.runs}
+            "flagged": f.flagged, "unexplained": f.unexplained, "converged": f.converged,
+            "runs": f.runs}
     parameters = {**cal.parameters, **{k: v for k, v in changes.items()
                                        if k in cal.parameters}}
     return replace(cal, device=cal.device.with_(**changes), parameters=parameters,

@@ -16,9 +16,10 @@ JCGM 100:2008, sec. 5.1: independent contributions add in quadrature):
   is a soil stiffer by about ``(1 + e)`` (exactly so for a Hertzian wall on a rigid bead),
   so ``u = e``;
 * ``model (references' leave-one-out)``: when the calibration's references do not fit
-  within their stated TOF uncertainties (chi^2 beyond its degrees of freedom), the root
-  mean square of their leave-one-out errors in ``ln E`` (:func:`model_discrepancy`); absent
-  otherwise, so a measurement through a calibration that fits is unchanged;
+  within their stated TOF uncertainties (chi^2 beyond its 95 % quantile), the root mean
+  square of their leave-one-out errors in ``ln E`` (:func:`model_discrepancy`; between the
+  degrees of freedom and that quantile stated in a note, not added); absent otherwise, so a
+  measurement through a calibration its references do not reject is unchanged;
 * ``integrator``: the TOF error of the time step, ``c (80 / steps_per_contact)^2`` with
   ``c`` the relative error measured at 80 steps against an independent DOP853 solution
   (:data:`INTEGRATOR_REL_ERROR_80`), ``u = c / |k|``.
@@ -197,7 +198,8 @@ def estimate_moduli(
             missing["calibration"] = ("uncalibrated device: the uncertainty of its "
                                       "parameters is not known")
         if disc is not None:  # the references' misfit beyond their TOF uncertainties
-            contrib[MODEL_TERM] = disc[0]
+            if disc[2]:
+                contrib[MODEL_TERM] = disc[0]
             notes.append(disc[1])
         if ranged[i]:
             contrib["poisson"] = float(abs(lnE_hi[i] - lnE_lo[i]) / np.sqrt(12.0))
@@ -224,26 +226,27 @@ def estimate_moduli(
 
 #: The budget's name of a calibration's model-discrepancy term (:func:`model_discrepancy`).
 MODEL_TERM = "model (references' leave-one-out)"
+#: The chi^2 quantile beyond which the references reject the model (the term enters).
+MODEL_REJECT = 0.95
 
 
-def model_discrepancy(cal: Any) -> tuple[float, str] | None:
+def model_discrepancy(cal: Any) -> tuple[float, str, bool] | None:
     """The model-discrepancy term of a measurement through ``cal``: the references'
     leave-one-out prediction errors' root mean square in ``ln E``, when the references'
     misfit exceeds what their stated TOF uncertainties explain; None otherwise.
 
-    The gate is the Birge ratio (Birge 1932; the Particle Data Group's scale factor,
-    Workman et al. 2022, sec. 5.2): the calibration's ``chi^2`` over its degrees of freedom
-    ``n - q`` (references minus the free parameters no bound holds) above 1. Below it the
-    references fit as their uncertainties allow and the measurement is unchanged. Above
-    it the model's family does not reach them, and its covariance, conditional on the
-    model, leaves the model's error out; the calibration's own check of that error is the
-    leave-one-out prediction of each reference's E from the others
-    (:func:`ssw.calibration.calibrate`), whose root mean square ``sqrt(mean(ln(E_pred /
-    E)^2))`` is taken as a standard uncertainty of ``ln E``. A 95 % quantile would be no
-    gate: with three references and two parameters a chi^2 of one or two degrees of
-    freedom cannot reject a model that is 5 % wrong in E. Calibrations without given TOF
-    uncertainties (their weights 1 % of each TOF, the covariance already scaled by
-    ``chi^2 / (n - q)``) and those without leave-one-out predictions get none.
+    Two gates on the calibration's ``chi^2`` with ``n - q`` degrees of freedom (references
+    minus the free parameters no bound holds). Above its 95 % quantile the references reject
+    the model: its covariance, conditional on the model, leaves the model's error out, and
+    the term (the root mean square ``sqrt(mean(ln(E_pred / E)^2))`` of the calibration's
+    leave-one-out predictions, :func:`ssw.calibration.calibrate`, a standard uncertainty of
+    ``ln E``) enters the interval. Between its degrees of freedom (a Birge ratio above 1;
+    Birge 1932, the Particle Data Group's scale factor) and that quantile the misfit is a
+    warning, not a rejection: the term is stated in a note with its size, and the interval
+    is the calibration's own (so a measurement through a calibration that its references
+    do not reject is unchanged to the digit). Calibrations without given TOF uncertainties
+    (their weights 1 % of each TOF, the covariance already scaled by ``chi^2 / (n - q)``)
+    and those without leave-one-out predictions get none.
 
     Parameters
     ----------
@@ -252,8 +255,9 @@ def model_discrepancy(cal: Any) -> tuple[float, str] | None:
 
     Returns
     -------
-    tuple of (float, str) or None
-        The standard uncertainty in ``ln E`` and a note that states it, or None.
+    tuple of (float, str, bool) or None
+        The standard uncertainty in ``ln E``, a note that states it, and whether it enters
+        the interval; or None.
 
     References
     ----------
@@ -261,6 +265,8 @@ def model_discrepancy(cal: Any) -> tuple[float, str] | None:
     40, 207 (1932); R. L. Workman et al. (Particle Data Group), "Review of particle
     physics", Prog. Theor. Exp. Phys. 2022, 083C01, introduction sec. 5.2.
     """
+    from scipy.stats import chi2 as chi2_law
+
     if cal is None or not cal.loo or "given" not in str(cal.provenance.get("weights", "")):
         return None
     chi2 = cal.provenance.get("chi2")
@@ -272,11 +278,16 @@ def model_discrepancy(cal: Any) -> tuple[float, str] | None:
     if err.size == 0:
         return None
     u = float(np.sqrt(np.mean(err**2)))
+    rejected = bool(chi2 > chi2_law.ppf(MODEL_REJECT, dof))
+    what = ("the references reject the model at 5 %, and the term" if rejected else
+            "below its 95 % quantile the interval is the calibration's own; the term")
     note = (f"the references' chi2 {chi2:.3g} exceeds its {dof} degree(s) of freedom: the "
-            "model does not reach them within their TOF uncertainties, and the term "
-            f"'{MODEL_TERM}' ({100 * u:.3g} %, the root mean square of their leave-one-out "
-            "errors in E) carries its error into the interval")
-    return u, note
+            "model does not reach them within their TOF uncertainties; "
+            f"{what} '{MODEL_TERM}' ({100 * u:.3g} %, the root mean square of their "
+            "leave-one-out errors in E) "
+            + ("carries its error into the interval" if rejected else
+               "would widen it (add it in quadrature to read the model's error)"))
+    return u, note, rejected
 
 
 class Estimator:

@@ -58,3 +58,26 @@ def ci_study(tmp_path_factory):
             str(tmp / "config" / "ci.yaml"), timeout=900)
     assert r.returncode == 0, r.stdout[-4000:] + r.stderr[-4000:]
     return tmp
+
+
+def run_device_design(d, space: dict, *flags: str) -> dict:
+    """``ssw design --space device`` on the study config with the device space ``space``
+    (written to ``d``/config.yaml), 20-200 MPa at nu 0.3, a sample yield limit of 50, the
+    output in ``d``/design.json and .csv, plus ``flags``; its JSON."""
+    import json
+    from pathlib import Path
+
+    import yaml
+
+    from ssw.cli import main
+
+    root = Path(__file__).resolve().parent.parent
+    cfg = yaml.safe_load((root / "config" / "config.yaml").read_text())
+    cfg.setdefault("design", {})["device"] = space
+    (d / "config.yaml").write_text(yaml.safe_dump(cfg))
+    out = d / "design.json"
+    assert main(["design", "--space", "device", "--config", str(d / "config.yaml"),
+                 "--calibration", "none", "--soil-E", "20e6:200e6", "--soil-nu", "0.3",
+                 "--soil-yield-limit", "50", "--output", str(out), "--csv",
+                 str(d / "design.csv"), *flags]) == 0
+    return json.loads(out.read_text())

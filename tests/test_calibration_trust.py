@@ -284,15 +284,19 @@ def test_too_few_hits_use_the_stated_scatter_or_say_the_term_is_missing(tmp_path
 
 def test_a_model_that_misses_its_references_carries_its_leave_one_out_error(heavy_damped):
     """The heavy, damped device calibrated as a conservative chain (references with 0.5 %
-    TOF uncertainty): chi^2 beyond its degrees of freedom, so the measurement's budget gains
-    the references' leave-one-out error (its root mean square in ln E), stated in a note;
-    unseen moduli of that device (20 and 800 MPa, beyond the references' 38-445 MPa) are
-    inside their 95 % intervals with it, and the 20 MPa one is outside without it (the
+    TOF uncertainty): chi^2 beyond its degrees of freedom. Below its 95 % quantile the
+    measurement's interval is the calibration's own (unchanged) and a note states the
+    references' leave-one-out error (its root mean square in ln E); where the references
+    reject the model (chi^2 beyond that quantile) the budget gains that term, and unseen
+    moduli of that device (20 and 800 MPa, beyond the references' 38-445 MPa) are inside
+    their 95 % intervals with it, while the 20 MPa one is outside without it (the
     calibration's covariance, conditional on the model, does not see the model's error).
-    A calibration whose references fit (chi^2 at most its degrees of freedom) adds no term."""
+    A calibration whose references fit (chi^2 at most its degrees of freedom) adds nothing."""
     from dataclasses import replace
 
-    from ssw.modulus import MODEL_TERM, estimate_moduli, model_discrepancy
+    from scipy.stats import chi2 as chi2_law
+
+    from ssw.modulus import MODEL_REJECT, MODEL_TERM, estimate_moduli, model_discrepancy
 
     dev, tofs = heavy_damped
     cal = calibrate(_refs(tofs, std=0.005 * tofs), dev.with_(preload=3.0),
@@ -305,16 +309,25 @@ def test_a_model_that_misses_its_references_carries_its_leave_one_out_error(heav
     E = np.array([20e6, 800e6])
     unseen = np.asarray(api.tof(E, np.array([0.35, 0.28]), p, "hertz"), float)
     params = cal.chain_params()
-    est = estimate_moduli(unseen, np.full(2, 1e-9), np.array([0.35, 0.28]), params, "hertz",
-                          calibration=cal)
     loo = [np.log(r["E_predicted"] / r["E"]) for r in cal.loo]
+    u_model = np.sqrt(np.mean(np.square(loo)))
+    q95 = chi2_law.ppf(MODEL_REJECT, dof)
+    warned = replace(cal, provenance={**cal.provenance, "chi2": 0.5 * (dof + q95)})
+    rejected = replace(cal, provenance={**cal.provenance, "chi2": 1.5 * q95})
+    est = estimate_moduli(unseen, np.full(2, 1e-9), np.array([0.35, 0.28]), params, "hertz",
+                          calibration=rejected)
     for e, truth in zip(est, E, strict=True):
-        assert e.contributions[MODEL_TERM] == pytest.approx(np.sqrt(np.mean(np.square(loo))))
+        assert e.contributions[MODEL_TERM] == pytest.approx(u_model)
         assert any(MODEL_TERM in n for n in e.notes)
         assert e.E_low < truth < e.E_high
     bare = estimate_moduli(unseen[:1], [1e-9], [0.35], params, "hertz",
                            calibration=replace(cal, loo=[]))[0]
     assert MODEL_TERM not in bare.contributions
     assert not bare.E_low < E[0] < bare.E_high
+    noted = estimate_moduli(unseen[:1], [1e-9], [0.35], params, "hertz",
+                            calibration=warned)[0]
+    assert MODEL_TERM not in noted.contributions
+    assert (noted.E_low, noted.E_high) == (bare.E_low, bare.E_high)
+    assert any(MODEL_TERM in n and f"{100 * u_model:.3g} %" in n for n in noted.notes)
     fits = replace(cal, provenance={**cal.provenance, "chi2": 0.9 * dof})
     assert model_discrepancy(fits) is None

@@ -11,7 +11,7 @@ import json
 from pathlib import Path
 
 import pytest
-import yaml
+from conftest import run_device_design
 
 from ssw.cli import main
 
@@ -29,15 +29,7 @@ SPACE = {"bead_materials": ["chrome_steel", "tungsten_carbide"], "bead_diameters
 @pytest.fixture(scope="module")
 def design(tmp_path_factory):
     d = tmp_path_factory.mktemp("device")
-    cfg = yaml.safe_load(CONFIG.read_text())
-    cfg.setdefault("design", {})["device"] = SPACE
-    (d / "config.yaml").write_text(yaml.safe_dump(cfg))
-    out = d / "design.json"
-    assert main(["design", "--space", "device", "--config", str(d / "config.yaml"),
-                 "--calibration", "none", "--soil-E", "20e6:200e6", "--soil-nu", "0.3",
-                 "--soil-yield-limit", "50", "--output", str(out), "--csv",
-                 str(d / "design.csv"), "--plot", str(d / "design.png")]) == 0
-    return json.loads(out.read_text()), d
+    return run_device_design(d, SPACE, "--plot", str(d / "design.png")), d
 
 
 def _dominates(a, b):

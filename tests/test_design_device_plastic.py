@@ -7,13 +7,12 @@ cannot be struck keeps the reason; a bad hit count is refused by name."""
 from __future__ import annotations
 
 import csv
-import json
 from dataclasses import replace
 from pathlib import Path
 
 import numpy as np
 import pytest
-import yaml
+from conftest import run_device_design
 
 from ssw.cli import main
 
@@ -30,15 +29,7 @@ SPACE = {"bead_materials": ["chrome_steel"], "bead_diameters": [9.525e-3], "bead
 @pytest.fixture(scope="module")
 def struck(tmp_path_factory):
     d = tmp_path_factory.mktemp("plastic")
-    cfg = yaml.safe_load(CONFIG.read_text())
-    cfg.setdefault("design", {})["device"] = SPACE
-    (d / "config.yaml").write_text(yaml.safe_dump(cfg))
-    out = d / "design.json"
-    assert main(["design", "--space", "device", "--config", str(d / "config.yaml"),
-                 "--calibration", "none", "--soil-E", "20e6:200e6", "--soil-nu", "0.3",
-                 "--soil-yield-limit", "50", "--no-reference", "--plastic-hits", "2",
-                 "--output", str(out), "--csv", str(d / "design.csv")]) == 0
-    return json.loads(out.read_text()), d
+    return run_device_design(d, SPACE, "--no-reference", "--plastic-hits", "2"), d
 
 
 def test_plastic_record_equals_a_separate_run_of_run_hits(struck):

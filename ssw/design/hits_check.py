@@ -21,12 +21,12 @@ The device design's finalists (:func:`device_hits_check`) are struck the same wa
 same sample, and through a plate that yields too: von Mises with the plate material's
 library yield stress and hardening (:func:`ssw.constitutive.model_of_strength`; the
 ``plastic`` wall's yielding plate). Per device: the plate's permanent dent on the axis (its
-thinning, :attr:`ssw.walls.hits.Hits.plate_thinning`) and the sample's permanent set (the
-plate-sample interface's depth, ``interface_set``) after the last hit, and the TOF's drift
-from the first hit to the last, beside the device's one-measurement TOF uncertainty there.
-A device the plastic contact cannot strike (a plate without a yield stress, an interface it
-does not model, a solve that fails) keeps the reason in its record, not a silent gap.
-"""
+thinning, ``plate_thinning`` (:class:`ssw.walls.hits.Hits`)) and the sample's permanent set
+(the plate-sample interface's depth, ``interface_set``) after the last hit, and the TOF's
+drift from the first hit to the last, beside the device's one-measurement TOF uncertainty
+there. A device the plastic contact cannot strike (a plate without a yield stress, an
+interface it does not model, a solve that fails) keeps the reason in its record, not a
+silent gap. """
 
 from __future__ import annotations
 

@@ -132,15 +132,8 @@ def run_device(args: argparse.Namespace) -> dict[str, Any]:
                      "candidates_per_s": done / wall, "cpu_per_candidate": cpu / done,
                      "loadavg": " ".join(Path("/proc/loadavg").read_text().split()[:3])
                      if Path("/proc/loadavg").exists() else ""})
-    out = Path(args.output_dir)
-    result = {"command": "ssw bench design --space device", "config": args.config,
-              "rows": rows, "cpu_count": os.cpu_count(),
-              "outputs": [str(out / f"design_device_bench.{x}") for x in ("csv", "json")]}
-    keys = list(rows[0])
-    write_csv_text(out / "design_device_bench.csv", "\n".join(
-        [",".join(keys)] + [",".join(str(r[k]) for k in keys) for r in rows]) + "\n", result)
-    write_json(out / "design_device_bench.json", result, result)
-    return result
+    return _write_rows(Path(args.output_dir), "design_device_bench",
+                       "ssw bench design --space device", args.config, rows)
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
@@ -185,14 +178,40 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
                          "sensitivity": rec.sensitivity,
                          "soil_yield_index": rec.soil_yield_index,
                          "plate_yield_index": rec.plate_yield_index})
-    out = Path(args.output_dir)
-    result = {"command": "ssw bench design", "config": args.config, "rows": rows,
+    return _write_rows(Path(args.output_dir), "design_bench", "ssw bench design",
+                       args.config, rows)
+
+
+def _write_rows(out: Path, stem: str, command: str, config: str,
+                rows: list[dict[str, Any]]) -> dict[str, Any]:
+    """The benchmark's rows as ``out/stem.csv`` and ``out/stem.json`` (atomically, with
+    their provenance).
+
+    Parameters
+    ----------
+    out : pathlib.Path
+        The output folder.
+    stem : str
+        The files' name without suffix.
+    command : str
+        The benchmark's command, recorded.
+    config : str
+        The study config it ran.
+    rows : list of dict
+        One row per measured size (the same keys each).
+
+    Returns
+    -------
+    dict
+        The JSON's content.
+    """
+    result = {"command": command, "config": config, "rows": rows,
               "cpu_count": os.cpu_count(),
-              "outputs": [str(out / f"design_bench.{x}") for x in ("csv", "json")]}
+              "outputs": [str(out / f"{stem}.{x}") for x in ("csv", "json")]}
     keys = list(rows[0])
-    write_csv_text(out / "design_bench.csv", "\n".join(
+    write_csv_text(out / f"{stem}.csv", "\n".join(
         [",".join(keys)] + [",".join(str(r[k]) for k in keys) for r in rows]) + "\n", result)
-    write_json(out / "design_bench.json", result, result)
+    write_json(out / f"{stem}.json", result, result)
     return result
 
 

@@ -54,7 +54,7 @@ increments' largest yield ratio ``q / Y`` scales as the Hertz pressure ``p0 ~ F^
 (self-similar elastic contact), so ``F_y = F / ratio^3`` of the last elastic increment.
 
 Cost. Exact reductions of the same discrete problem (the curve is the one the increments'
-Newton iterations on the whole mesh give, to round-off; tests):
+Newton iterations on the whole mesh give, to round-off within the Newton tolerance; tests):
 
 * the far field: the elements beyond a near zone about the contact point (radius
   :func:`near_radius`, doubled when the plastic zone or the contact reaches its edge) stay
@@ -65,8 +65,12 @@ Newton iterations on the whole mesh give, to round-off; tests):
   indentation (loading before first yield, unloading, elastic reloading); one solve with
   the elastic matrix's kept LU gives every increment of the span (``_elastic_span``);
 * the Newton steps: GMRES preconditioned by the newest factorization of an earlier tangent
-  while that is cheaper than factorizing (``_Model.solve``), and each plastic increment
-  starts from the last one's rate (a predictor).
+  while that is cheaper than factorizing (``_Model.solve``), to the linear residual the
+  Newton test needs (a tenth of its tolerance, :data:`KRYLOV_FORCING`), and each plastic
+  increment starts from the last one's rate (a predictor);
+* the Newton matrix: assembled only when a step needs it, as the elastic matrix plus the
+  plastic elements' change (``_Model.matrix``), and factored in the elimination order
+  the first factorization of its free set chose (:class:`_OrderedLU`).
 
 A study config's plastic curve (``ssw contact --soil-model``) is solved on the config's
 domain and growth with its element at the contact point scaled to the path
@@ -508,7 +512,7 @@ class _Model:
               atol: float = 0.0) -> np.ndarray:
         """``x`` with ``A[free][:, free] x = rhs`` (``A`` the Newton matrix ``data``, CSR
         order): the elastic matrix's kept LU when there is one for ``free``; else GMRES
-        preconditioned by the newest factorization (of an earlier tangent, possibly on
+        right-preconditioned by the newest factorization (of an earlier tangent, possibly on
         another free set: the dofs it lacks take their diagonal) to :data:`KRYLOV_RTOL`
         or the absolute residual ``atol`` (the 2-norm, in ``rhs``'s units), whichever is
         reached first, within the iterations a factorization is worth
@@ -548,14 +552,17 @@ class _Model:
                 x[outside] = r[outside] / diag[outside]
                 return x
 
-        M = LinearOperator(A.shape, matvec=apply, dtype=float)
+        # right preconditioning: GMRES on ``A M`` (``x = M y``) minimizes the true
+        # residual, the one tested below, with one factor solve per iteration
+        AM = LinearOperator(A.shape, matvec=lambda y: A @ apply(y), dtype=float)
         count = [0]
 
         def tick(_: Any) -> None:
             count[0] += 1
 
-        x, info = gmres(A, rhs, rtol=KRYLOV_RTOL, atol=atol, restart=allowed, maxiter=2,
-                        M=M, callback=tick, callback_type="pr_norm")
+        y, info = gmres(AM, rhs, rtol=KRYLOV_RTOL, atol=atol, restart=allowed, maxiter=1,
+                        callback=tick, callback_type="pr_norm")
+        x = apply(y)
         self.krylov += count[0]
         bnorm = float(np.linalg.norm(rhs))
         if info != 0 or not np.linalg.norm(rhs - A @ x) <= 10 * max(KRYLOV_RTOL * bnorm,
@@ -780,11 +787,12 @@ def solve_path(
 #: Near zone of a condensed path: this many times the larger of ``sqrt(2 R delta)`` at the
 #: last indentation (the sphere's section at the depth delta below the flat surface: the
 #: contact radius of a plastic indentation without pile-up; Hertz's is ``sqrt(R delta)``)
-#: and the plate's spreading length. The plastic zone is checked against its edge (the
-#: path is solved again with a near zone twice as large when it reaches it,
-#: ``stats['near_restarts']``). The study's curve (E/Y 20) yields to 0.81 ``sqrt(2 R
-#: delta)`` below the surface, its contact reaches 0.72: a larger zone only costs time
-#: (1.5 took 1.6x as long; the condensation is exact either way).
+#: and the plate's spreading length, plus the size of the mesh's elements there (the ring
+#: of elements that meets the far field then lies beyond). The plastic zone is checked
+#: against its edge (the path is solved again with a zone twice as large when it reaches
+#: it, ``stats['near_restarts']``). A von Mises half-space yields to 0.81 (E/Y 20) and
+#: 0.87 (E/Y 100) times ``sqrt(2 R delta)`` below the surface; a larger zone only costs
+#: time (1.5 took 1.6 times as long on the study's curve; the condensation is exact).
 NEAR = 1.0
 
 
@@ -793,7 +801,8 @@ def near_radius(mesh: Mesh, E: float, nu: float, radius: float, d_end: float,
     """The near zone's radius (m) of a path to ``d_end`` (m): :data:`NEAR` times the larger
     of ``sqrt(2 R d_end)`` (``R`` the sphere's ``radius``; a punch: its radius) and, with a
     plate, the length over which it spreads a load on the sample, ``(2 D (1 - nu^2) /
-    E)^(1/3)``, ``D = E_p t^3 / (12 (1 - nu_p^2))`` (a plate on an elastic half-space).
+    E)^(1/3)``, ``D = E_p t^3 / (12 (1 - nu_p^2))`` (a plate on an elastic half-space),
+    plus the largest element size of the mesh about that distance from the contact point.
 
     Parameters
     ----------
@@ -822,7 +831,12 @@ def near_radius(mesh: Mesh, E: float, nu: float, radius: float, d_end: float,
     if plate is not None and t > 0:
         D = plate[0] * t**3 / (12.0 * (1.0 - plate[1] ** 2))
         a = max(a, (2.0 * D * (1.0 - nu * nu) / E) ** (1.0 / 3.0))
-    return NEAR * a
+    r = NEAR * a
+    # the ring of elements that meets the far field lies beyond r: one element size more
+    xy = mesh.nodes[mesh.tri[:, :3]].mean(axis=1)
+    dist = np.hypot(xy[:, 0], xy[:, 1] - t)
+    h = element_sizes(mesh.nodes, mesh.tri)[(dist > 0.8 * r) & (dist < 1.25 * r)]
+    return r + (float(np.max(h)) if h.size else 0.0)
 
 
 def _path(mesh: Mesh, E: float, nu: float, model: Any, radius: float, deltas: np.ndarray,
@@ -1080,7 +1094,7 @@ def _elastic_span(fe: _Model, model: Any, E: float, nu: float, u: np.ndarray,
     jump = np.zeros(fe.ndof)
     jump[fe.cand_dof[active]] = -1.0
     v = jump.copy()
-    v[free] = fe.solve(data, free, -fe.matvec(data, jump)[free])
+    v[free] = fe.factor(data, free).solve(-fe.matvec(data, jump)[free], trans="T")  # exact
     dres = fe.matvec(data, v) * fe.scale
     dres[free] = 0.0
     for j in range(k, len(path)):

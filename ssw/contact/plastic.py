@@ -80,6 +80,8 @@ against a converged mesh: ``ssw bench plastic --plastic-study``.
 
 References
 ----------
+Eisenstat, S. C. & Walker, H. F. (1996). Choosing the forcing terms in an inexact Newton
+method. *SIAM J. Sci. Comput.* 17, 16-32.
 Hintermueller, M., Ito, K. & Kunisch, K. (2003). The primal-dual active set strategy as a
 semismooth Newton method. *SIAM J. Optim.* 13, 865-888.
 Johnson, K. L. (1985). *Contact Mechanics*. Cambridge, sec. 4.2, 6.1.
@@ -166,8 +168,8 @@ KRYLOV_MAX = 30
 KRYLOV_NNZ = 75_000
 #: The linear residual a Newton step's GMRES solve may leave, at most, as a share of the
 #: increment's residual tolerance (2-norm against the max-norm test: the step's linear
-#: error stays below the tolerance the next iterate is tested against; Eisenstat &
-#: Walker 1996's forcing, held to this share).
+#: error stays below the tolerance the next iterate is tested against: an inexact Newton
+#: step's forcing term, Eisenstat & Walker 1996, held to this share).
 KRYLOV_FORCING = 0.1
 #: Fewer GMRES iterations allowed than this: factorize instead.
 KRYLOV_MIN = 4
@@ -651,11 +653,6 @@ class _Model:
         ue = u[self.edof_u]
         return np.einsum("eqij,ej->eqi", self.B, ue).reshape(-1, 4)
 
-    def pressure_q(self, u: np.ndarray) -> np.ndarray:
-        """(ne, nq) mean stress ``p`` at the quadrature points, Pa."""
-        pe = u[self.edof[:, 12:]] * self.ps_e
-        return pe @ self.N1.T
-
     def residual_only(self, u: np.ndarray, stress: np.ndarray) -> tuple[np.ndarray, float]:
         """The residual (ndof,), N (pressure rows scaled by ``ps``), and its load scale, N: the
         largest element force (the far field's on the near zone included)."""
@@ -671,6 +668,28 @@ class _Model:
         """The elastic energy of the condensed far field, J."""
         x = u[self.far_dofs]
         return 0.5 * float(x @ self.far_S @ x)
+
+    def stored_energy(self, u: np.ndarray, stress: np.ndarray) -> float:
+        """The elastic energy stored at the displacements ``u`` and stresses ``stress``
+        (J): ``int s:s / (4 G) dV`` and the volumetric ``int p^2 / (2 K) dV``, with the
+        condensed far field's (:meth:`far_energy`).
+
+        In the mixed form the volumetric part is taken as the element sums of ``int (p tr
+        eps - p^2 / (2 K)) dV``, which equals ``int p^2 / (2 K) dV`` over the whole mesh
+        once the pressure equations hold (they are assembled over the elements: ``p``
+        is continuous), and so adds up exactly with the far field's energy, whose
+        condensed form carries the same terms of its own elements.
+        """
+        s = stress @ P_DEV
+        dev = float(np.sum(np.einsum("gi,gi->g", s, s) / (4.0 * self.Gq) * self.w.ravel()))
+        if self.mixed:
+            ue, pe = u[self.edof_u], u[self.edof[:, 12:]]
+            vol = float(np.einsum("ei,eij,ej->", pe, self.Bp, ue)
+                        - 0.5 * np.einsum("ei,eij,ej->", pe, self.Cp, pe))
+        else:
+            p = stress @ ONE / 3.0
+            vol = float(np.sum(0.5 * self.inv_Kq * p * p * self.w.ravel()))
+        return dev + vol + self.far_energy(u)
 
     def _residual(self, u: np.ndarray, stress: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """The near zone's assembled residual (ndof,) and its elements' displacement forces
@@ -1030,12 +1049,7 @@ def _path(mesh: Mesh, E: float, nu: float, model: Any, radius: float, deltas: np
             branch = branch[: k + 1]
             break
         k += 1
-    # elastic energy stored in the final state: int (s:s / (4 G) + p^2 / (2 K)) dV, and the
-    # condensed far field's
-    s = upd.stress @ P_DEV
-    pq = fe.pressure_q(u).ravel() if fe.mixed else upd.stress @ ONE / 3.0
-    stored = float(np.sum((np.einsum("gi,gi->g", s, s) / (4.0 * fe.Gq)
-                           + 0.5 * fe.inv_Kq * pq * pq) * fe.w.ravel())) + fe.far_energy(u)
+    stored = fe.stored_energy(u, upd.stress)
     stats = {"nodes": fe.n, "elements": fe.n_elements, "near_elements": ne, "dofs": fe.ndof,
              "candidates": fe.cand.size, "near_radius": near,
              "increments": len(out["delta"]), "newton_iterations": int(np.sum(out["it"])),

@@ -70,7 +70,7 @@ Newton iterations on the whole mesh give, to round-off within the Newton toleran
   increment starts from the last one's rate (a predictor);
 * the Newton matrix: assembled only when a step needs it, as the elastic matrix plus the
   plastic elements' change (``_Model.matrix``), and factored in the elimination order
-  the first factorization of its free set chose (:class:`_OrderedLU`).
+  the first factorization of its free set chose (``_OrderedLU``).
 
 A study config's plastic curve (``ssw contact --soil-model``) is solved on the config's
 domain and growth with its element at the contact point scaled to the path

@@ -418,6 +418,7 @@ def test_condensed_far_field_is_the_whole_mesh():
         assert getattr(near, name) == pytest.approx(getattr(whole, name), rel=1e-8)
     small = solve_path(mesh, E, 0.3, VonMises(Y), R, deltas, near=0.3 * np.sqrt(R * dy))
     assert small.stats["near_radius"] > 0.3 * np.sqrt(R * dy)
+    assert small.stats["near_restarts"] >= 1 and near.stats["near_restarts"] == 0
     np.testing.assert_allclose(small.force, near.force[near.branch == 0], rtol=0,
                                atol=1e-9 * scale)
 

@@ -281,6 +281,7 @@ def warm_bytecode(work: Path, repo: Path, timeout: float) -> float | None:
         return None
     code = ("import importlib, pkgutil, ssw\n"
             "for m in pkgutil.walk_packages(ssw.__path__, 'ssw.'):\n"
+            "    if m.name.endswith('__main__'):\n        continue\n"
             "    try:\n        importlib.import_module(m.name)\n"
             "    except Exception:\n        pass\n"
             f"for name in {WARM_IMPORTS!r}:\n"

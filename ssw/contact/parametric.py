@@ -49,79 +49,17 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
-from scipy.linalg import cholesky, get_lapack_funcs, solve_triangular
+from scipy.linalg import cholesky, solve_triangular
 
 from ssw.contact.contact_lcp import solve_lcp
+from ssw.contact.lapack import cholesky as lapack_cholesky
+from ssw.contact.lapack import triangular_solve
 from ssw.errors import SolverError
 
 #: Breakpoints closer than this (relative to the indentation) are simultaneous.
 TIE_RTOL = 1e-9
 #: Most pieces a path may have (a safeguard against cycling; a curve has ~1-3 per candidate).
 MAX_PIECES = 100_000
-#: LAPACK's triangular solve and Cholesky factorization (float64).
-_TRTRS, _POTRF = get_lapack_funcs(("trtrs", "potrf"), (np.zeros((1, 1)),))
-
-
-def triangular_solve(a: np.ndarray, b: np.ndarray, lower: bool) -> np.ndarray:
-    """``scipy.linalg.solve_triangular(a, b, lower=lower, check_finite=False)``: LAPACK's
-    ``trtrs`` called as scipy calls it (the same numbers), without scipy's validation of
-    every call (the tracer solves thousands of small systems: the validation cost more
-    than the solves).
-
-    Parameters
-    ----------
-    a : numpy.ndarray
-        (n, n) triangular, finite.
-    b : numpy.ndarray
-        (n,) or (n, k), finite, not empty.
-    lower : bool
-        ``a`` is lower triangular.
-
-    Returns
-    -------
-    numpy.ndarray
-        ``x`` with ``a x = b``, the shape of ``b``.
-
-    Raises
-    ------
-    SolverError
-        ``a`` is singular.
-    """
-    if a.flags.f_contiguous:
-        x, info = _TRTRS(a, b, lower=lower, trans=0)
-    else:  # trtrs takes Fortran order: the transposed system, as scipy solves it
-        x, info = _TRTRS(a.T, b, lower=not lower, trans=1)
-    if info != 0:
-        raise SolverError(f"singular triangular factor (LAPACK trtrs info {info})")
-    return x
-
-
-def cholesky_lower(a: np.ndarray) -> np.ndarray:
-    """``scipy.linalg.cholesky(a, lower=True, check_finite=False)`` by LAPACK's ``potrf``
-    as scipy calls it (the same numbers, without its per-call validation).
-
-    Parameters
-    ----------
-    a : numpy.ndarray
-        (n, n) symmetric, finite, n >= 1.
-
-    Returns
-    -------
-    numpy.ndarray
-        The lower factor ``L`` (``a = L L^T``).
-
-    Raises
-    ------
-    numpy.linalg.LinAlgError
-        ``a`` is not positive definite.
-    """
-    c, info = _POTRF(a, lower=True, overwrite_a=False, clean=True)
-    if info > 0:
-        raise np.linalg.LinAlgError(
-            f"{info}-th leading minor of the array is not positive definite")
-    if info < 0:
-        raise ValueError(f"illegal value in argument {-info} of LAPACK potrf")
-    return c
 
 
 @dataclass(frozen=True)
@@ -281,13 +219,13 @@ class Tracer:
             W = self.W
             tail = idx[p:]
             if p:
-                L21 = triangular_solve(L[:p, :p], W[np.ix_(idx[:p], tail)], lower=True).T
+                L21 = triangular_solve(L[:p, :p], W[idx[:p, None], tail], lower=True).T
                 L[p:, :p] = L21
-                S = W[np.ix_(tail, tail)] - L21 @ L21.T
+                S = W[tail[:, None], tail] - L21 @ L21.T
             else:
-                S = W[np.ix_(tail, tail)]
+                S = W[tail[:, None], tail]
             try:
-                L[p:, p:] = cholesky_lower(S)
+                L[p:, p:] = lapack_cholesky(S, lower=True)
             except np.linalg.LinAlgError as exc:
                 raise SolverError(
                     f"contact compliance not positive definite on the active set: {exc}"
@@ -309,11 +247,11 @@ class Tracer:
         q1, W = self.q1, self.W
         if F.size:
             L = self._factor(F)
-            Z = self._solve(L, np.column_stack([W[np.ix_(F, hits)], q1[F]]))
-            M = W[np.ix_(hits, hits)] - W[np.ix_(hits, F)] @ Z[:, :-1]
-            q = q1[hits] - W[np.ix_(hits, F)] @ Z[:, -1]
+            Z = self._solve(L, np.column_stack([W[F[:, None], hits], q1[F]]))
+            M = W[hits[:, None], hits] - W[hits[:, None], F] @ Z[:, :-1]
+            q = q1[hits] - W[hits[:, None], F] @ Z[:, -1]
         else:
-            M, q = W[np.ix_(hits, hits)], q1[hits].copy()
+            M, q = W[hits[:, None], hits], q1[hits].copy()
         M = 0.5 * (M + M.T)
         scale = max(float(np.max(np.abs(q))), 1e-300)
         dlam, on, _ = solve_lcp(M, q, q < 0, 1e-13 * scale)

@@ -445,7 +445,7 @@ _SCENES: OrderedDict[tuple[Any, ...], tuple[SceneLCP, tuple[Any, ...]]] = Ordere
 
 def scene_lcp(layout: Layout, plate: BodyOperator | None, soil: BodyOperator,
               soil_E: float, plate_E: float | None, interface: str, radius: float) -> SceneLCP:
-    """The condensed contact problem of a scene (:func:`condensed_scene`), kept in memory:
+    """The condensed contact problem of a scene (:func:`_condensed_scene`), kept in memory:
     the sphere's radius enters only its gaps ``q0``, so the same scene under another
     sphere (the fem wall's bead, then the elastic bead's equivalent sphere of the stresses,
     :mod:`ssw.contact.stress`) reuses its compliance. Its arrays are read-only.
@@ -484,7 +484,7 @@ def scene_lcp(layout: Layout, plate: BodyOperator | None, soil: BodyOperator,
         q0[: lcp.n_sphere] = sphere_gap0(layout.r, radius)
         q0.flags.writeable = False
         return replace(lcp, q0=q0)
-    lcp = condensed_scene(layout, plate, soil, soil_E, plate_E, interface, radius)
+    lcp = _condensed_scene(layout, plate, soil, soil_E, plate_E, interface, radius)
     for name in ("W", "q0", "q1", "tie", "dW_dE"):
         x = getattr(lcp, name)
         if isinstance(x, np.ndarray):
@@ -495,28 +495,11 @@ def scene_lcp(layout: Layout, plate: BodyOperator | None, soil: BodyOperator,
     return lcp
 
 
-def condensed_scene(layout: Layout, plate: BodyOperator | None, soil: BodyOperator,
+def _condensed_scene(layout: Layout, plate: BodyOperator | None, soil: BodyOperator,
                     soil_E: float, plate_E: float | None, interface: str, radius: float
                     ) -> SceneLCP:
-    """Assemble ``E_plate P + E_soil S`` and condense it onto the contact constraints.
-
-    Parameters
-    ----------
-    layout : Layout
-        The retained dofs of the geometry.
-    plate : BodyOperator or None
-        The plate's operator (unit E); None without a plate.
-    soil : BodyOperator
-        The soil's operator (unit E).
-    soil_E : float
-        The soil's Young's modulus, Pa.
-    plate_E : float or None
-        The plate's Young's modulus, Pa; None without a plate.
-    interface : str
-        ``frictionless`` | ``bonded`` | ``unilateral``.
-    radius : float
-        The rigid sphere's radius, m.
-    """
+    """Assemble ``E_plate P + E_soil S`` and condense it onto the contact constraints
+    (arguments as :func:`scene_lcp`)."""
     nc = layout.r.size
     q0s = sphere_gap0(layout.r, radius)
     if plate is None:

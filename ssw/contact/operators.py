@@ -445,7 +445,7 @@ _SCENES: OrderedDict[tuple[Any, ...], tuple[SceneLCP, tuple[Any, ...]]] = Ordere
 
 def scene_lcp(layout: Layout, plate: BodyOperator | None, soil: BodyOperator,
               soil_E: float, plate_E: float | None, interface: str, radius: float) -> SceneLCP:
-    """The condensed contact problem of a scene (:func:`_condensed_scene`), kept in memory:
+    """The condensed contact problem of a scene (``_condensed_scene``), kept in memory:
     the sphere's radius enters only its gaps ``q0``, so the same scene under another
     sphere (the fem wall's bead, then the elastic bead's equivalent sphere of the stresses,
     :mod:`ssw.contact.stress`) reuses its compliance. Its arrays are read-only.

@@ -5,8 +5,11 @@ of the design (:attr:`ssw.design.spec.DesignSpec.grid`):
 
 1. TOF: the device's chain with the exact FEM law of that plate as its wall (the ``fem``
    wall, :mod:`ssw.walls.fem`), in one batched run over the ``E_k`` carrying the forward
-   sensitivity ``dTOF/dE`` (:func:`ssw.tof.api.tof_derivatives`; with the unilateral
-   interface, whose law has no E tangent, its central differences of TOFs at the same step);
+   sensitivity ``dTOF/dE`` (the chain's forward sensitivity, :func:`ssw.chain.run.run_peaks`;
+   several candidates evaluated together, :meth:`Evaluator.many`, share that run, each
+   scene's numbers being those of its own run; with the unilateral interface, whose law has
+   no E tangent, :func:`ssw.tof.api.tof_derivatives`' central differences of TOFs at the
+   same step);
 2. sensitivity ``S_k = |d ln TOF / d ln E| = |E_k dTOF/dE / TOF_k|``, exact for the
    discrete TOF at the run's fixed step (no difference quotient, hence no quotient of two
    TOFs' rounding: the curve is smooth in E; ``tests/test_design_cli.py`` compares it with
@@ -20,8 +23,9 @@ of the design (:attr:`ssw.design.spec.DesignSpec.grid`):
    force the contact's elastic field under the bead's Hertz-equivalent rigid sphere
    (:func:`ssw.contact.stress.equivalent_radius`: the elastic steel bead's pressure, not a
    rigid one's) gives the plate's and the soil's peak von Mises stresses
-   (:func:`ssw.contact.stress.contact_stresses`), and with the plate's yield stress and
-   the soil's the yield indices;
+   (:func:`ssw.contact.stress.contact_stresses`, from the wall's force at ``d_k``: the
+   rigid sphere's path is not traced again), and with the plate's yield stress and the
+   soil's the yield indices;
 5. mass: ``rho pi D^2 t / 4`` against a bead's.
 
 The indices of the candidate are the worst over the soils: the smallest sensitivity, the
@@ -232,7 +236,7 @@ class Evaluator:
         striker_velocity : float or None
             m/s (default: the device's).
         sources : list of str or None
-            How each was chosen (:attr:`Candidate.source`; default ``search``).
+            How each was chosen (``Candidate.source``; default ``search``).
 
         Returns
         -------

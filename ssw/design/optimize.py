@@ -15,7 +15,8 @@ candidates the merit is ``-S``: the most sensitive wins.
 
 Search (:func:`search`). Per material (and plate diameter and striker speed, when those are
 design variables too) the thickness is continuous: :data:`ssw.design.spec.SCAN_POINTS`
-thicknesses log-spaced over the range bracket the best one, then scipy's bounded scalar
+thicknesses log-spaced over the range (evaluated together: one batched chain run) bracket
+the best one, then scipy's bounded scalar
 minimization (Brent's method with golden-section steps, Forsythe, Malcolm & Moler 1977,
 ``fminbound``) refines the merit in ``ln t`` within the bracket to ``thickness_tol``. The
 contact operators of each thickness are built once and cached on disk

@@ -250,8 +250,8 @@ class Evaluator:
         keys = [(m, quantize(t), D, v) for m, t in plates]
         todo: dict[tuple[str, float, float, float], str] = {}
         for key, src in zip(keys, sources, strict=True):
-            if key not in self.seen:
-                todo.setdefault(key, src)
+            if key not in self.seen and (key not in todo or src == "reference"):
+                todo[key] = src  # the same plate twice: the device's own keeps its label
         if todo:
             for c in self._evaluate(list(todo), list(todo.values())):
                 self.seen[c.key] = c

@@ -56,17 +56,20 @@ def _cholesky_solve(W: np.ndarray, idx: np.ndarray, rhs: np.ndarray, cache: dict
                     ) -> np.ndarray:
     """Solve ``W[idx, idx] x = rhs`` by Cholesky, reusing the factor of the same active set
     (most increments keep the previous one)."""
-    from scipy.linalg import LinAlgError, cho_factor, cho_solve
+    from ssw.contact.lapack import cho_solve, cholesky
 
     key = (W.shape[0], idx.tobytes())
     if cache.get("key") != key or cache.get("W") is not W:
+        block = W[idx[:, None], idx]
+        if not np.all(np.isfinite(block)):
+            raise SolverError("contact compliance with non-finite entries on the active set")
         try:
-            cache["cf"] = cho_factor(W[np.ix_(idx, idx)])
-        except LinAlgError as exc:
+            cache["cf"] = cholesky(block, lower=False, clean=False)
+        except np.linalg.LinAlgError as exc:
             raise SolverError(f"contact compliance not positive definite on the active set: "
                               f"{exc}") from exc
         cache["key"], cache["W"] = key, W
-    return cho_solve(cache["cf"], rhs)
+    return cho_solve(cache["cf"], np.asarray(rhs, float), lower=False)
 
 
 def solve_lcp(

@@ -42,7 +42,8 @@ import hashlib
 import json
 import os
 import time
-from dataclasses import asdict, dataclass, field
+from collections import OrderedDict
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
@@ -437,9 +438,17 @@ def coupled_stiffness(
     return K, p_map, s_map, off
 
 
+#: Scenes' condensed problems kept in memory, least recently used out (:func:`scene_lcp`).
+SCENES_KEPT = 64
+_SCENES: OrderedDict[tuple[Any, ...], tuple[SceneLCP, tuple[Any, ...]]] = OrderedDict()
+
+
 def scene_lcp(layout: Layout, plate: BodyOperator | None, soil: BodyOperator,
               soil_E: float, plate_E: float | None, interface: str, radius: float) -> SceneLCP:
-    """Assemble ``E_plate P + E_soil S`` and condense it onto the contact constraints.
+    """The condensed contact problem of a scene (``_condensed_scene``), kept in memory:
+    the sphere's radius enters only its gaps ``q0``, so the same scene under another
+    sphere (the fem wall's bead, then the elastic bead's equivalent sphere of the stresses,
+    :mod:`ssw.contact.stress`) reuses its compliance. Its arrays are read-only.
 
     Parameters
     ----------
@@ -457,7 +466,40 @@ def scene_lcp(layout: Layout, plate: BodyOperator | None, soil: BodyOperator,
         ``frictionless`` | ``bonded`` | ``unilateral``.
     radius : float
         The rigid sphere's radius, m.
+
+    Returns
+    -------
+    SceneLCP
+        The scene's problem.
     """
+    key = (id(layout), id(plate), id(soil), float(soil_E),
+           None if plate_E is None else float(plate_E), interface)
+    kept = _SCENES.get(key)
+    # the objects themselves are kept with the entry: their ids cannot be reused meanwhile
+    if kept is not None and all(a is b for a, b in zip(kept[1], (layout, plate, soil),
+                                                       strict=True)):
+        _SCENES.move_to_end(key)
+        lcp = kept[0]
+        q0 = lcp.q0.copy()
+        q0[: lcp.n_sphere] = sphere_gap0(layout.r, radius)
+        q0.flags.writeable = False
+        return replace(lcp, q0=q0)
+    lcp = _condensed_scene(layout, plate, soil, soil_E, plate_E, interface, radius)
+    for name in ("W", "q0", "q1", "tie", "dW_dE"):
+        x = getattr(lcp, name)
+        if isinstance(x, np.ndarray):
+            x.flags.writeable = False
+    _SCENES[key] = (lcp, (layout, plate, soil))
+    while len(_SCENES) > SCENES_KEPT:
+        _SCENES.popitem(last=False)
+    return lcp
+
+
+def _condensed_scene(layout: Layout, plate: BodyOperator | None, soil: BodyOperator,
+                    soil_E: float, plate_E: float | None, interface: str, radius: float
+                    ) -> SceneLCP:
+    """Assemble ``E_plate P + E_soil S`` and condense it onto the contact constraints
+    (arguments as :func:`scene_lcp`)."""
     nc = layout.r.size
     q0s = sphere_gap0(layout.r, radius)
     if plate is None:

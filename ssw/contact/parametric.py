@@ -52,6 +52,8 @@ import numpy as np
 from scipy.linalg import cholesky, solve_triangular
 
 from ssw.contact.contact_lcp import solve_lcp
+from ssw.contact.lapack import cholesky as lapack_cholesky
+from ssw.contact.lapack import triangular_solve
 from ssw.errors import SolverError
 
 #: Breakpoints closer than this (relative to the indentation) are simultaneous.
@@ -217,13 +219,13 @@ class Tracer:
             W = self.W
             tail = idx[p:]
             if p:
-                L21 = solve_triangular(L[:p, :p], W[np.ix_(idx[:p], tail)], lower=True).T
+                L21 = triangular_solve(L[:p, :p], W[idx[:p, None], tail], lower=True).T
                 L[p:, :p] = L21
-                S = W[np.ix_(tail, tail)] - L21 @ L21.T
+                S = W[tail[:, None], tail] - L21 @ L21.T
             else:
-                S = W[np.ix_(tail, tail)]
+                S = W[tail[:, None], tail]
             try:
-                L[p:, p:] = cholesky(S, lower=True, check_finite=False)
+                L[p:, p:] = lapack_cholesky(S, lower=True)
             except np.linalg.LinAlgError as exc:
                 raise SolverError(
                     f"contact compliance not positive definite on the active set: {exc}"
@@ -233,8 +235,8 @@ class Tracer:
         return L
 
     def _solve(self, L: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-        y = solve_triangular(L, rhs, lower=True, check_finite=False)
-        return solve_triangular(L.T, y, lower=False, check_finite=False)
+        y = triangular_solve(L, rhs, lower=True)
+        return triangular_solve(L.T, y, lower=False)
 
     # -- the active set after a breakpoint ------------------------------------------------
     def _resolve(self, hits: np.ndarray) -> None:
@@ -245,11 +247,11 @@ class Tracer:
         q1, W = self.q1, self.W
         if F.size:
             L = self._factor(F)
-            Z = self._solve(L, np.column_stack([W[np.ix_(F, hits)], q1[F]]))
-            M = W[np.ix_(hits, hits)] - W[np.ix_(hits, F)] @ Z[:, :-1]
-            q = q1[hits] - W[np.ix_(hits, F)] @ Z[:, -1]
+            Z = self._solve(L, np.column_stack([W[F[:, None], hits], q1[F]]))
+            M = W[hits[:, None], hits] - W[hits[:, None], F] @ Z[:, :-1]
+            q = q1[hits] - W[hits[:, None], F] @ Z[:, -1]
         else:
-            M, q = W[np.ix_(hits, hits)], q1[hits].copy()
+            M, q = W[hits[:, None], hits], q1[hits].copy()
         M = 0.5 * (M + M.T)
         scale = max(float(np.max(np.abs(q))), 1e-300)
         dlam, on, _ = solve_lcp(M, q, q < 0, 1e-13 * scale)

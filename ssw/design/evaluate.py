@@ -5,8 +5,11 @@ of the design (:attr:`ssw.design.spec.DesignSpec.grid`):
 
 1. TOF: the device's chain with the exact FEM law of that plate as its wall (the ``fem``
    wall, :mod:`ssw.walls.fem`), in one batched run over the ``E_k`` carrying the forward
-   sensitivity ``dTOF/dE`` (:func:`ssw.tof.api.tof_derivatives`; with the unilateral
-   interface, whose law has no E tangent, its central differences of TOFs at the same step);
+   sensitivity ``dTOF/dE`` (the chain's forward sensitivity, :func:`ssw.chain.run.run_peaks`;
+   several candidates evaluated together, :meth:`Evaluator.many`, share that run, each
+   scene's numbers being those of its own run; with the unilateral interface, whose law has
+   no E tangent, :func:`ssw.tof.api.tof_derivatives`' central differences of TOFs at the
+   same step);
 2. sensitivity ``S_k = |d ln TOF / d ln E| = |E_k dTOF/dE / TOF_k|``, exact for the
    discrete TOF at the run's fixed step (no difference quotient, hence no quotient of two
    TOFs' rounding: the curve is smooth in E; ``tests/test_design_cli.py`` compares it with
@@ -20,8 +23,9 @@ of the design (:attr:`ssw.design.spec.DesignSpec.grid`):
    force the contact's elastic field under the bead's Hertz-equivalent rigid sphere
    (:func:`ssw.contact.stress.equivalent_radius`: the elastic steel bead's pressure, not a
    rigid one's) gives the plate's and the soil's peak von Mises stresses
-   (:func:`ssw.contact.stress.contact_stresses`), and with the plate's yield stress and
-   the soil's the yield indices;
+   (:func:`ssw.contact.stress.contact_stresses`, from the wall's force at ``d_k``: the
+   rigid sphere's path is not traced again), and with the plate's yield stress and the
+   soil's the yield indices;
 5. mass: ``rho pi D^2 t / 4`` against a bead's.
 
 The indices of the candidate are the worst over the soils: the smallest sensitivity, the
@@ -213,37 +217,113 @@ class Evaluator:
 
     def __call__(self, material: str, thickness: float, plate_diameter: float | None = None,
                  striker_velocity: float | None = None, source: str = "search") -> Candidate:
+        return self.many([(material, thickness)], plate_diameter, striker_velocity,
+                         [source])[0]
+
+    def many(self, plates: list[tuple[str, float]], plate_diameter: float | None = None,
+             striker_velocity: float | None = None, sources: list[str] | None = None
+             ) -> list[Candidate]:
+        """Evaluate several plates at once: the chains of those not seen yet advance in one
+        batched run (every scene's TOF and its tangent are those of its own run: the
+        integrator's scenes are independent and share the chain's step).
+
+        Parameters
+        ----------
+        plates : list of tuple
+            ``(material, thickness)`` pairs (key, m).
+        plate_diameter : float or None
+            m (default: the device's).
+        striker_velocity : float or None
+            m/s (default: the device's).
+        sources : list of str or None
+            How each was chosen (``Candidate.source``; default ``search``).
+
+        Returns
+        -------
+        list of Candidate
+            One per plate, in order.
+        """
         D = float(plate_diameter if plate_diameter is not None else self.params.plate_diameter)
         v = float(striker_velocity if striker_velocity is not None
                   else self.params.striker_velocity)
-        key = (material, quantize(thickness), D, v)
-        if key not in self.seen:
-            self.seen[key] = self._evaluate(*key, source)
-        return self.seen[key]
+        sources = list(sources) if sources is not None else ["search"] * len(plates)
+        keys = [(m, quantize(t), D, v) for m, t in plates]
+        todo: dict[tuple[str, float, float, float], str] = {}
+        for key, src in zip(keys, sources, strict=True):
+            if key not in self.seen and (key not in todo or src == "reference"):
+                todo[key] = src  # the same plate twice: the device's own keeps its label
+        if todo:
+            for c in self._evaluate(list(todo), list(todo.values())):
+                self.seen[c.key] = c
+        return [self.seen[k] for k in keys]
 
-    def _evaluate(self, material: str, t: float, D: float, v: float, source: str
-                  ) -> Candidate:
-        from ssw.tof.api import tof_derivatives
+    def _evaluate(self, keys: list[tuple[str, float, float, float]], sources: list[str]
+                  ) -> list[Candidate]:
+        """The candidates ``keys`` ((material, thickness, diameter, speed)): one fem wall
+        each, their chains in one run (grouped by time step), then each one's stresses."""
+        from ssw.chain.integrate import time_step
+        from ssw.chain.run import run_peaks
+        from ssw.tof.api import forward_ok, tof_derivatives
+        from ssw.walls.fem import concatenate, fem_wall
+
+        t0 = time.perf_counter()
+        spec = self.spec
+        E = spec.grid
+        nu = np.full(E.size, float(spec.soil_nu))
+        ps = []
+        for material, t, D, v in keys:
+            if material not in self.materials:
+                raise ConfigError("--materials", material,
+                                  f"materials of the library: {', '.join(sorted(self.materials))}")
+            if t <= 0:
+                raise ConfigError("thickness", t, "a plate thickness > 0 m")
+            plate_yield_stress(self.materials[material])  # designed against it: known first
+            ps.append(candidate_params(self.params, self.materials[material], t, D, v))
+        walls = [fem_wall(p, E, nu, contact=self.contact, operators=self.store, with_dE=True)
+                 for p in ps]
+        n = len(keys)
+        tof: list[np.ndarray] = [np.empty(0)] * n
+        dtof: list[np.ndarray] = [np.empty(0)] * n
+        d_chain: list[np.ndarray] = [np.empty(0)] * n
+        if all(forward_ok(w, ("E",))["E"] for w in walls):
+            # one run per time step (the step depends on the chain alone unless a wall is
+            # stiffer than a rigid flat): the same step, hence the same TOF, as alone
+            groups: dict[float, list[int]] = {}
+            for i, (p, w) in enumerate(zip(ps, walls, strict=True)):
+                groups.setdefault(time_step(p, w), []).append(i)
+            for dt, idx in groups.items():
+                pk, run = run_peaks(ps[idx[0]], concatenate([walls[i] for i in idx]), dt=dt,
+                                    derivatives=("E",))
+                for j, i in enumerate(idx):
+                    sl = slice(j * E.size, (j + 1) * E.size)
+                    tof[i], dtof[i] = pk.tof[sl], pk.dtof[sl, 0]
+                    d_chain[i] = run.peak_wall_indentation[sl]
+        else:  # a law without dF/dE (the unilateral interface): central differences
+            for i, p in enumerate(ps):
+                res = tof_derivatives(E, spec.soil_nu, p, "fem", derivatives=("E",),
+                                      contact=self.contact, operators=self.store)
+                tof[i], dtof[i] = np.asarray(res.tof, float), res.dtof["E"]
+                d_chain[i] = res.run.peak_wall_indentation
+        share = (time.perf_counter() - t0) / n
+        return [self._candidate(*key, src, ps[i], walls[i], tof[i], dtof[i], d_chain[i], share)
+                for i, (key, src) in enumerate(zip(keys, sources, strict=True))]
+
+    def _candidate(self, material: str, t: float, D: float, v: float, source: str,
+                   p: ChainParams, wall: Any, tof: np.ndarray, dtof: np.ndarray,
+                   d_chain: np.ndarray, shared: float) -> Candidate:
+        """A candidate from its chain's TOF, ``dTOF/dE`` and peak wall indentation: its
+        stresses at the wall's force there (the path of the rigid sphere not traced again);
+        ``shared`` (s) its share of the batch's time."""
         from ssw.walls.fem import peak_stresses
 
         t0 = time.perf_counter()
-        if material not in self.materials:
-            raise ConfigError("--materials", material,
-                              f"materials of the library: {', '.join(sorted(self.materials))}")
-        if t <= 0:
-            raise ConfigError("thickness", t, "a plate thickness > 0 m")
+        spec = self.spec
+        E = spec.grid
         m = self.materials[material]
         Y = plate_yield_stress(m)
-        spec = self.spec
-        p = candidate_params(self.params, m, t, D, v)
-        E = spec.grid
-        res = tof_derivatives(E, spec.soil_nu, p, "fem", derivatives=("E",),
-                              contact=self.contact, operators=self.store)
-        tof = np.asarray(res.tof, float)
-        sens = np.abs(E * res.dtof["E"] / tof)
-        d_chain = res.run.peak_wall_indentation
+        sens = np.abs(E * dtof / tof)
         st = peak_stresses(p, E, spec.soil_nu, d_chain, contact=self.contact,
-                           operators=self.store)
+                           operators=self.store, force=wall.force(d_chain))
         mass = m.density * np.pi * 0.25 * D * D * t
         return Candidate(
             material=material, thickness=t, plate_diameter=D, striker_velocity=v,
@@ -254,4 +334,4 @@ class Evaluator:
             plate_yield_E=st.plate.peak / Y,
             soil_yield_E=st.soil.peak / spec.soil_yield_stress(E),
             plate_yield_stress=Y, mass=float(mass), mass_ratio=float(mass / p.bead_mass),
-            source=source, wall_time=time.perf_counter() - t0, limits=self.limits)
+            source=source, wall_time=shared + time.perf_counter() - t0, limits=self.limits)

@@ -15,7 +15,8 @@ candidates the merit is ``-S``: the most sensitive wins.
 
 Search (:func:`search`). Per material (and plate diameter and striker speed, when those are
 design variables too) the thickness is continuous: :data:`ssw.design.spec.SCAN_POINTS`
-thicknesses log-spaced over the range bracket the best one, then scipy's bounded scalar
+thicknesses log-spaced over the range (evaluated together: one batched chain run) bracket
+the best one, then scipy's bounded scalar
 minimization (Brent's method with golden-section steps, Forsythe, Malcolm & Moler 1977,
 ``fminbound``) refines the merit in ``ln t`` within the bracket to ``thickness_tol``. The
 contact operators of each thickness are built once and cached on disk
@@ -77,9 +78,14 @@ class Search:
 
 
 def search(ev: Evaluator, material: str, plate_diameter: float | None = None,
-           striker_velocity: float | None = None) -> Search:
+           striker_velocity: float | None = None,
+           extra: tuple[tuple[str, float, str], ...] = ()) -> Search:
     """The best thickness of ``material`` (module docstring): a log-spaced scan, then a
-    bounded scalar minimization of the merit in ``ln t`` around the scan's best point."""
+    bounded scalar minimization of the merit in ``ln t`` around the scan's best point.
+
+    The scan's plates are evaluated together (one batched chain run,
+    :meth:`ssw.design.evaluate.Evaluator.many`), with ``extra`` plates ``(material,
+    thickness m, source)`` of the same diameter and striker speed (the device's own plate)."""
     from scipy.optimize import minimize_scalar
 
     spec = ev.spec
@@ -92,7 +98,11 @@ def search(ev: Evaluator, material: str, plate_diameter: float | None = None,
         seen.append(c)
         return merit(c)
 
-    values = [f(x, "scan") for x in xs]
+    scan = ev.many([(material, float(np.exp(x))) for x in xs]
+                   + [(m, t) for m, t, _ in extra], plate_diameter, striker_velocity,
+                   ["scan"] * xs.size + [src for _, _, src in extra])[: xs.size]
+    seen.extend(scan)
+    values = [merit(c) for c in scan]
     k = int(np.argmin(values))
     a, b = xs[max(k - 1, 0)], xs[min(k + 1, xs.size - 1)]
     res = minimize_scalar(f, bounds=(a, b), method="bounded",

@@ -97,9 +97,15 @@ def run_design(spec: DesignSpec, params: ChainParams, materials: dict[str, Mater
                               f"materials of the library: {', '.join(sorted(materials))}")
     ev = Evaluator(spec, params, materials, contact, store)
     cands: list[Candidate] = []
-    if reference and params.plate_thickness > 0 and params.plate_material in spec.materials:
-        cands.append(ev(params.plate_material, params.plate_thickness, source="reference"))
     combos = _combos(spec)
+    ref: tuple[tuple[str, float, str], ...] = ()
+    if reference and params.plate_thickness > 0 and params.plate_material in spec.materials:
+        ref = ((params.plate_material, params.plate_thickness, "reference"),)
+        if (jobs > 1 and len(combos) > 1) or combos[0][1:] != (None, None):
+            # not with the first search's scan (another process, or another plate diameter
+            # or striker speed than the device's)
+            cands.append(ev(params.plate_material, params.plate_thickness, source="reference"))
+            ref = ()
     if jobs > 1 and len(combos) > 1:
         from concurrent.futures import ProcessPoolExecutor
 
@@ -107,7 +113,9 @@ def run_design(spec: DesignSpec, params: ChainParams, materials: dict[str, Mater
             out = list(pool.map(_search_task, [(spec, params, materials, contact, c)
                                                for c in combos]))
     else:
-        out = [(search(ev, *c), []) for c in combos]
+        # the device's plate is evaluated with the first search's scan (one chain run)
+        out = [(search(ev, *c, extra=ref if i == 0 else ()), [])
+               for i, c in enumerate(combos)]
         cands = list(ev.seen.values())
     searches = [s.to_dict() for s, _ in out]
     for _, cs in out:

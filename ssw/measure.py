@@ -314,7 +314,9 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
     fitted (:func:`ssw.calibration.waveform.fit`) with the device at its (calibrated)
     values, the weights the noise's with the calibration's model-error ``floor`` (stated in
     the notes). E's standard error in ``ln E`` is the fit's, scaled by ``sqrt(chi2 / dof)``
-    when the model does not reach the noise (a model-discrepancy term, stated); it
+    when the model does not reach the noise (a model-discrepancy term, stated), and with
+    a floor by the square root of the hits (the model's error is common to a sample's
+    hits and does not average down over them); it
     replaces the TOF's scatter and sampling terms of ``m``'s budget, whose other terms
     (calibration, Poisson's ratio, wall, integrator) stay. ``chi2`` and its quantile flag
     a recording the model does not explain (a clipped hit, a yielding sample, a time
@@ -405,6 +407,11 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
     E = float(f.state.E[0])
     contrib = {k: v for k, v in m.contributions.items() if k not in _FIT_REPLACES}
     u_fit = f.std(Column("E", 0))
+    if any((floor or {}).values()):
+        # the model's error is the same on every hit of the sample: its share does not
+        # average down over them as the weights assume (the noise's, far smaller, is
+        # scaled with it: conservative)
+        u_fit *= float(np.sqrt(hits.n))
     contrib[f"{level} fit"] = u_fit
     if covariance and covariance.get("names"):
         C = propagated(setup, f, list(covariance["names"]), np.asarray(covariance["matrix"]))
@@ -415,7 +422,9 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
     if any(floor.values() if floor else ()):
         notes.append("the weights carry the calibration's model-error floor (relative "
                      "standard deviation added to the noise's, estimated from its references' "
-                     "residuals): " + ", ".join(f"{k} {v:.2g}" for k, v in floor.items()))
+                     "residuals; common to the hits, so E's fit error is scaled by the square "
+                     "root of their number): "
+                     + ", ".join(f"{k} {v:.2g}" for k, v in floor.items()))
     if f.misfit > 1.0:
         notes.append(f"the model leaves chi2/dof = {f.misfit:.3g} of the records unexplained: "
                      f"E's fit error is scaled by sqrt({f.misfit:.3g}) (a model-discrepancy "

@@ -4,11 +4,15 @@ chain's equations, tests/chain_dop853.py) of a device the model does not describ
 modelled acquisition (:mod:`ssw.daq.model`: coupling, anti-alias filter, input delay, the
 NI 9234's noise floor, quantization, a trigger with jitter), 5 hits per sample with a 3 %
 scatter of the striker speed. Calibrated on three foams (TOF level: striker speed and
-preload free; the features and the waveform then free what they identify), then four
-samples it never saw (20-800 MPa) measured at every level of information. What is
-asserted is what an honest answer needs: at every level each unseen E is inside its 95 %
-interval or the fit flags the recording (chi2 quantile beyond 0.999); the TOF level within
-5 %. ``python tests/test_honesty.py`` prints the table."""
+preload free; the features then free what they identify, from the grid of sensor mass and
+dashpot, with the model-error floor their residuals call for), then four samples it never
+saw (20-800 MPa) measured at both levels, and through the features' calibration a clipped
+hit, an untriggered time offset and hits on a sample that yields. What is asserted is what
+an honest answer needs: at every level each unseen E is inside its 95 % interval or the
+fit flags the recording (chi2 quantile beyond 0.999); the TOF level within 5 %; the
+features unflagged, inside, within 5 % and at least 2x narrower than the TOF; the three
+recordings the model cannot explain flagged. ``python tests/test_honesty.py`` prints the
+table."""
 
 from __future__ import annotations
 

@@ -862,15 +862,20 @@ def fit(setup: Setup, state: State, free: list[Column], iterations: int | None =
 FLOOR_CONFIDENCE = 0.95
 
 
-def global_covariance(f: Fit) -> tuple[list[str], np.ndarray]:
+def global_covariance(f: Fit, hits: float = 1.0) -> tuple[list[str], np.ndarray]:
     """The covariance of a fit's free globals in their scaled coordinates
     (:func:`coordinate`), scaled by the misfit (:attr:`Fit.misfit`), every per-hit
-    parameter marginalized.
+    parameter marginalized; with a model-error floor (:attr:`Fit.floor`), times ``hits``:
+    the model's error is the same on every hit of a sample and does not average down
+    over them as the weights assume (conservative: the noise's share, far smaller, is
+    scaled with it).
 
     Parameters
     ----------
     f : Fit
         A fit (a calibration of records, :func:`calibrate_records`).
+    hits : float
+        Hits per sample.
 
     Returns
     -------
@@ -878,7 +883,8 @@ def global_covariance(f: Fit) -> tuple[list[str], np.ndarray]:
         The globals' names and their (g, g) covariance.
     """
     j = [i for i, c in enumerate(f.free) if c.index < 0]
-    return [f.free[i].name for i in j], f.cov_x[np.ix_(j, j)] * f.misfit
+    hits = hits if any(f.floor.values()) else 1.0
+    return [f.free[i].name for i in j], f.cov_x[np.ix_(j, j)] * f.misfit * hits
 
 
 def propagated(setup: Setup, f: Fit, names: list[str], cov: np.ndarray) -> np.ndarray:
@@ -1234,7 +1240,7 @@ def with_fit(cal: Any, f: Fit, level: str) -> Any:
             "chi2": f.chi2, "chi2_dof": f.dof, "chi2_quantile": f.quantile,
             "flagged": f.flagged, "unexplained": f.unexplained, "converged": f.converged,
             "runs": f.runs, "floor": dict(f.floor)}
-    names, cov = global_covariance(f)
+    names, cov = global_covariance(f, hits=len(f.state.striker_velocity) / len(f.state.E))
     info["covariance"] = {"names": names, "matrix": cov.tolist()}
     parameters = {**cal.parameters, **{k: v for k, v in changes.items()
                                        if k in cal.parameters}}

@@ -349,7 +349,7 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
     gain : float
         The DAQ gain (a waveform calibration's, :func:`ssw.calibration.waveform.with_fit`).
     floor : dict or None
-        The model-error floor of the weights (:attr:`ssw.calibration.waveform.Setup.floor`:
+        The model-error floor of the weights (``floor`` of :class:`ssw.calibration.waveform.Setup`:
         a calibration's, estimated from its references' residuals,
         :func:`ssw.calibration.waveform.model_floor`); None: the noise alone.
     covariance : dict or None

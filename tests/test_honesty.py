@@ -10,9 +10,9 @@ saw (20-800 MPa) measured at both levels, and through the features' calibration 
 hit, an untriggered time offset and hits on a sample that yields. What is asserted is what
 an honest answer needs: at every level each unseen E is inside its 95 % interval or the
 fit flags the recording (chi2 quantile beyond 0.999); the TOF level within 5 %; the
-features unflagged, inside, within 5 % and at least 2x narrower than the TOF; the three
-recordings the model cannot explain flagged. ``python tests/test_honesty.py`` prints the
-table."""
+features unflagged, inside, within 5 % and at least 2x narrower than the TOF; the clipped
+and the yielding recordings flagged, the offset one flagged or without effect on E.
+``python tests/test_honesty.py`` prints the table."""
 
 from __future__ import annotations
 
@@ -171,6 +171,7 @@ def study(folder: Path) -> list[dict]:
             d = fitted(cals[level], b, level).to_dict()
             rows.append({"case": name, "level": level, "E": d["E"],
                          "flagged": bool(d["flagged"]),
+                         "inside": bool(d["E_low"] <= UNSEEN[-1][0] <= d["E_high"]),
                          "chi2_per_dof": d["chi2"] / d["chi2_dof"]})
     for level, c in cals.items():
         rows.append({"calibration": level, "parameters": dict(c.parameters),
@@ -183,8 +184,9 @@ def study(folder: Path) -> list[dict]:
 def test_every_unseen_modulus_is_inside_its_interval_and_the_records_narrow_it(tmp_path):
     """At every level each unseen E is inside its interval or flagged; the TOF within 5 %;
     the features or the waveform give, unflagged, every E inside an interval at least 2x
-    narrower than the TOF's and within 5 %; through those calibrations a clipped hit, an
-    untriggered time offset and hits on a yielding sample are flagged."""
+    narrower than the TOF's and within 5 %; through those calibrations a clipped hit and
+    hits on a yielding sample are flagged, an untriggered time offset flagged or without
+    effect on E."""
     out = study(tmp_path)
     rows = [r for r in out if "E_true" in r]
     for r in rows:
@@ -202,7 +204,10 @@ def test_every_unseen_modulus_is_inside_its_interval_and_the_records_narrow_it(t
     assert good, rows
     for r in out:
         if "case" in r and r["level"] in good:
-            assert r["flagged"], r
+            # the features are differences of times within a record: a time offset the
+            # trigger did not remove does not change them (nor E); the waveform flags it
+            # (tests/test_measure_information.py)
+            assert r["flagged"] or (r["case"] == "offset" and r["inside"]), r
 
 
 if __name__ == "__main__":

@@ -735,7 +735,7 @@ class Fit:
     unexplained : int
         Observations the record has a value for and the model, at the optimum, none.
     floor : dict
-        The model-error floor of the fit's weights (:attr:`Setup.floor`).
+        The model-error floor of the fit's weights (``floor`` of :class:`Setup`).
     """
 
     state: State
@@ -865,7 +865,7 @@ FLOOR_CONFIDENCE = 0.95
 def global_covariance(f: Fit, hits: float = 1.0) -> tuple[list[str], np.ndarray]:
     """The covariance of a fit's free globals in their scaled coordinates
     (:func:`coordinate`), scaled by the misfit (:attr:`Fit.misfit`), every per-hit
-    parameter marginalized; with a model-error floor (:attr:`Fit.floor`), times ``hits``:
+    parameter marginalized; with a model-error floor (``floor`` of :class:`Fit`), times ``hits``:
     the model's error is the same on every hit of a sample and does not average down
     over them as the weights assume (conservative: the noise's share, far smaller, is
     scaled with it).
@@ -987,7 +987,7 @@ def model_floor(setup: Setup, f: Fit) -> dict[str, float]:
     Returns
     -------
     dict
-        Kind -> ``phi`` (:attr:`Setup.floor`).
+        Kind -> ``phi`` (``floor`` of :class:`Setup`).
 
     References
     ----------
@@ -1029,7 +1029,7 @@ START_DAMPING = tuple(float(c) for c in range(11))
 #: Model runs of each grid point's fit of the per-hit parameters.
 START_ITERATIONS = 8
 #: The relative model-error floor of the global start's and the first global fit's
-#: weights (every kind, :attr:`Setup.floor`): a few times the chain's own error on the
+#: weights (every kind, ``floor`` of :class:`Setup`): a few times the chain's own error on the
 #: features at a device's true values (a discrete chain against DOP853: 3e-5 of the TOF,
 #: 2e-4 of the amplitude, 1.7e-3 of the secondary ratio), so that the grid ranks its points
 #: by the model's distance from the records rather than by the noise.
@@ -1047,7 +1047,7 @@ def global_start(setup: Setup, globals_: dict[str, float], E: Any, speed: float,
     speed, time offset, delay) from :func:`initial_state` and a short fit
     (:data:`START_ITERATIONS` runs), the weights with ``setup``'s floor; the point of least
     chi^2 is the start. Every sensor mass of one dashpot is one chain run (the hits of every
-    point batched, :attr:`Setup.scene_sensor_mass`).
+    point batched, ``scene_sensor_mass`` of :class:`Setup`).
 
     Parameters
     ----------

@@ -304,14 +304,19 @@ _FIT_REPLACES = ("tof", "tof (stated scatter)", "sampling", MODEL_TERM)
 def measure_information(m: Measurement, recordings: list[Any], level: str, params: Any,
                         wall: str, wall_options: dict[str, Any] | None, *, acquisition: Any,
                         trigger_level: float, tof_scatter: float,
-                        full_scale: float | None = None, gain: float = 1.0) -> Measurement:
+                        full_scale: float | None = None, gain: float = 1.0,
+                        floor: dict[str, float] | None = None,
+                        covariance: dict[str, Any] | None = None) -> Measurement:
     """E from the records' features or whole waveforms (``ssw measure --information``),
     starting from the TOF measurement ``m`` of the same recordings.
 
     The sample's E, each accepted hit's striker speed, trigger time offset and delay are
     fitted (:func:`ssw.calibration.waveform.fit`) with the device at its (calibrated)
-    values. E's standard error in ``ln E`` is the fit's, scaled by ``sqrt(chi2 / dof)``
-    when the model does not reach the noise (a model-discrepancy term, stated); it
+    values, the weights the noise's with the calibration's model-error ``floor`` (stated in
+    the notes). E's standard error in ``ln E`` is the fit's, scaled by ``sqrt(chi2 / dof)``
+    when the model does not reach the noise (a model-discrepancy term, stated), and with
+    a floor by the square root of the hits (the model's error is common to a sample's
+    hits and does not average down over them); it
     replaces the TOF's scatter and sampling terms of ``m``'s budget, whose other terms
     (calibration, Poisson's ratio, wall, integrator) stay. ``chi2`` and its quantile flag
     a recording the model does not explain (a clipped hit, a yielding sample, a time
@@ -343,6 +348,16 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
         N, the rails (samples at them are left out).
     gain : float
         The DAQ gain (a waveform calibration's, :func:`ssw.calibration.waveform.with_fit`).
+    floor : dict or None
+        The model-error floor of the weights (``floor`` of :class:`ssw.calibration.waveform.Setup`:
+        a calibration's, estimated from its references' residuals,
+        :func:`ssw.calibration.waveform.model_floor`); None: the noise alone.
+    covariance : dict or None
+        A calibration of records' globals: ``names`` and ``matrix``, their covariance in
+        the scaled coordinates (:func:`ssw.calibration.waveform.global_covariance`). Given,
+        it replaces the TOF calibration's term of the budget by its own, propagated
+        through the fit (:func:`ssw.calibration.waveform.propagated`), since the fit
+        replaces what the TOF calibration fitted (the striker speed) by each hit's own.
 
     Returns
     -------
@@ -363,6 +378,7 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
         device_globals,
         fit,
         initial_state,
+        propagated,
     )
     from ssw.modulus import COVERAGE_Z
 
@@ -378,7 +394,7 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
     hits = Hits.of(np.stack([forces[i][:n] for i in keep]), [kt[i] for i in keep],
                    m.sample_rate, E=None, nu=m.nu, full_scale=full_scale)
     setup = Setup(params, wall, dict(wall_options or {}), acquisition, level, [hits],
-                  trigger_level, tof_scatter=tof_scatter)
+                  trigger_level, tof_scatter=tof_scatter, floor=dict(floor or {}))
     glob = device_globals(params, gain)
     v0 = float(params.striker_velocity)
     setup.fix_step(State(np.array([m.E]), np.full(hits.n, 1.5 * v0), np.zeros(hits.n),
@@ -391,9 +407,24 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
     E = float(f.state.E[0])
     contrib = {k: v for k, v in m.contributions.items() if k not in _FIT_REPLACES}
     u_fit = f.std(Column("E", 0))
+    if any((floor or {}).values()):
+        # the model's error is the same on every hit of the sample: its share does not
+        # average down over them as the weights assume (the noise's, far smaller, is
+        # scaled with it: conservative)
+        u_fit *= float(np.sqrt(hits.n))
     contrib[f"{level} fit"] = u_fit
+    if covariance and covariance.get("names"):
+        C = propagated(setup, f, list(covariance["names"]), np.asarray(covariance["matrix"]))
+        contrib.pop("calibration", None)
+        contrib[f"calibration ({level})"] = float(np.sqrt(max(C[0, 0], 0.0)))
     u = float(np.sqrt(sum(v**2 for v in contrib.values())))
     notes = [x for x in m.notes if "TOF term" not in x and MODEL_TERM not in x]
+    if any(floor.values() if floor else ()):
+        notes.append("the weights carry the calibration's model-error floor (relative "
+                     "standard deviation added to the noise's, estimated from its references' "
+                     "residuals; common to the hits, so E's fit error is scaled by the square "
+                     "root of their number): "
+                     + ", ".join(f"{k} {v:.2g}" for k, v in floor.items()))
     if f.misfit > 1.0:
         notes.append(f"the model leaves chi2/dof = {f.misfit:.3g} of the records unexplained: "
                      f"E's fit error is scaled by sqrt({f.misfit:.3g}) (a model-discrepancy "

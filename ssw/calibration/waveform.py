@@ -46,7 +46,6 @@ Two per-hit priors enter as observations of their own (kinds ``trigger`` and ``d
 
 from __future__ import annotations
 
-import itertools
 from dataclasses import dataclass, field, replace
 from typing import Any
 
@@ -371,6 +370,14 @@ class Setup:
         s, the trigger's jitter beyond the sample phase.
     tof_scatter : float
         s, the prior standard deviation of a hit's ``delay``.
+    floor : dict
+        The model-error floor: observation kind (a feature's name, or ``waveform``) ->
+        a relative standard deviation added in quadrature to the noise's (a feature's
+        ``floor * |value|``; a sample's ``floor`` times its record's largest sample).
+        Empty: the noise alone.
+    scene_sensor_mass : numpy.ndarray or None
+        (n_hits,) kg, a sensor mass per hit in place of the global one (the global
+        start's grid, every point's hits in one chain run); None: the global.
     dt : float or None
         s, the chain's step for every run (fixed by :meth:`fix_step`).
     runs : int
@@ -386,6 +393,8 @@ class Setup:
     trigger_level: float
     trigger_jitter: float = 0.0
     tof_scatter: float = 1.53e-5
+    floor: dict[str, float] = field(default_factory=dict)
+    scene_sensor_mass: np.ndarray | None = None
     dt: float | None = None
     runs: int = 0
     _starts: np.ndarray = field(default=None, repr=False)
@@ -487,6 +496,8 @@ def observe(setup: Setup, state: State, wanted: set[str] | None = None) -> Obser
     names = _names(wanted)
     t_last = float(np.max(first + (n_win - 1) / fs)) - acq.pure_delay
     vary = {"striker_velocity": state.striker_velocity}
+    if setup.scene_sensor_mass is not None:
+        vary["sensor_mass"] = setup.scene_sensor_mass
     grid = fine_grid(acq, first, n_win, start=0.0)
     s_split = tau + split - acq.delay  # chain (input) time of each hit's split
     after = grid.s > s_split[None, :]
@@ -550,7 +561,9 @@ def observe(setup: Setup, state: State, wanted: set[str] | None = None) -> Obser
             J = jac_block(h, y[keep, 1:1 + k], y[keep, 1 + k], y[keep, 2 + k], val / g)
             rows_model.append(val)
             rows_data.append(smp.force[hh, a:b][keep])
-            rows_sigma.append(np.full(val.size, smp.noise))
+            top = float(np.max(np.abs(smp.force[hh, a:b])))
+            rows_sigma.append(np.full(val.size, np.hypot(
+                smp.noise, setup.floor.get("waveform", 0.0) * top)))
             rows_kind += ["waveform"] * val.size
         else:
             up = upsample(y)
@@ -562,7 +575,9 @@ def observe(setup: Setup, state: State, wanted: set[str] | None = None) -> Obser
                           f.jacobian[:, k + 2])
             rows_model.append(val)
             rows_data.append(smp.features[hh])
-            rows_sigma.append(smp.feature_sigma[hh])
+            rel = np.array([setup.floor.get(n, 0.0) for n in FEATURES])
+            rows_sigma.append(np.hypot(smp.feature_sigma[hh],
+                                       rel * np.abs(smp.features[hh])))
             rows_kind += list(FEATURES)
         rows_hit.append(np.full(val.size, h))
         rows_jac.append(J)
@@ -719,6 +734,8 @@ class Fit:
         The global start's grid (:func:`global_start`) with each point's chi^2, if any.
     unexplained : int
         Observations the record has a value for and the model, at the optimum, none.
+    floor : dict
+        The model-error floor of the fit's weights (``floor`` of :class:`Setup`).
     """
 
     state: State
@@ -732,6 +749,7 @@ class Fit:
     runs: int
     start: list[dict] = field(default_factory=list)
     unexplained: int = 0
+    floor: dict[str, float] = field(default_factory=dict)
 
     @property
     def flagged(self) -> bool:
@@ -837,29 +855,199 @@ def fit(setup: Setup, state: State, free: list[Column], iterations: int | None =
     final = at(pr.x)
     return Fit(final, list(free), from_x(setup, free, pr.x), cov, float(pr.cost), dof,
                float(stats.chi2.cdf(pr.cost, dof)), bool(pr.converged), setup.runs,
-               unexplained=unexplained[pr.x.tobytes()])
+               unexplained=unexplained[pr.x.tobytes()], floor=dict(setup.floor))
+
+
+#: The confidence of the model-error floor's upper bound (:func:`model_floor`).
+FLOOR_CONFIDENCE = 0.95
+
+
+def global_covariance(f: Fit, hits: float = 1.0) -> tuple[list[str], np.ndarray]:
+    """The covariance of a fit's free globals in their scaled coordinates
+    (:func:`coordinate`), scaled by the misfit (:attr:`Fit.misfit`), every per-hit
+    parameter marginalized; with a model-error floor (``floor`` of :class:`Fit`), times ``hits``:
+    the model's error is the same on every hit of a sample and does not average down
+    over them as the weights assume (conservative: the noise's share, far smaller, is
+    scaled with it).
+
+    Parameters
+    ----------
+    f : Fit
+        A fit (a calibration of records, :func:`calibrate_records`).
+    hits : float
+        Hits per sample.
+
+    Returns
+    -------
+    tuple of (list of str, numpy.ndarray)
+        The globals' names and their (g, g) covariance.
+    """
+    j = [i for i, c in enumerate(f.free) if c.index < 0]
+    hits = hits if any(f.floor.values()) else 1.0
+    return [f.free[i].name for i in j], f.cov_x[np.ix_(j, j)] * f.misfit * hits
+
+
+def propagated(setup: Setup, f: Fit, names: list[str], cov: np.ndarray) -> np.ndarray:
+    """The covariance the uncertainty of held globals (a calibration's,
+    :func:`global_covariance`) gives a fit's free parameters, to first order: ``S C S^T``
+    with ``S = -(J_f^T J_f)^+ J_f^T J_g`` the optimum's shift per unit of the globals
+    (Gauss-Newton, every Jacobian weighted, in the scaled coordinates).
+
+    Parameters
+    ----------
+    setup : Setup
+        The fit's model and records.
+    f : Fit
+        The fit (the globals held at their values).
+    names : list of str
+        The globals (:data:`GLOBALS`).
+    cov : numpy.ndarray
+        (g, g) their covariance in their scaled coordinates.
+
+    Returns
+    -------
+    numpy.ndarray
+        (q, q) the covariance of ``f.free`` in their scaled coordinates.
+    """
+    cols = [Column(n) for n in names]
+    _, J, _ = _residuals(setup, f.state, list(f.free) + cols,
+                         {c.name for c in f.free} | set(names))
+    q = len(f.free)
+    Jf, Jg = J[:, :q], J[:, q:]
+    S = -np.linalg.pinv(Jf.T @ Jf) @ (Jf.T @ Jg)
+    return S @ np.asarray(cov, float) @ S.T
+
+
+def floor_bound(r: np.ndarray, sigma: np.ndarray, scale: np.ndarray, dof: float,
+                confidence: float = FLOOR_CONFIDENCE) -> float:
+    """The upper confidence bound of a relative model-error floor ``phi`` from residuals
+    ``r_i ~ N(0, sigma_i^2 + phi^2 s_i^2)``: the root of ``sum_i r_i^2 / (sigma_i^2 +
+    phi^2 s_i^2) = chi2.ppf(1 - confidence, dof)`` (the left side falls as ``phi``
+    grows), 0 where the noise alone explains them.
+
+    Parameters
+    ----------
+    r : numpy.ndarray
+        (n,) residuals.
+    sigma : numpy.ndarray
+        (n,) the noise's standard deviations.
+    scale : numpy.ndarray
+        (n,) the scale the floor is relative to (``|s_i|``).
+    dof : float
+        The residuals' degrees of freedom (their share of a fit's).
+    confidence : float
+        The bound's confidence.
+
+    Returns
+    -------
+    float
+        ``phi`` (dimensionless).
+    """
+    from scipy import stats
+    from scipy.optimize import brentq
+
+    rr, sig, sc = np.asarray(r, float) ** 2, np.asarray(sigma, float) ** 2, \
+        np.asarray(scale, float) ** 2
+    target = float(stats.chi2.ppf(1.0 - confidence, max(dof, 1e-3)))
+
+    def excess(phi: float) -> float:
+        return float(np.sum(rr / (sig + phi**2 * sc))) - target
+
+    if excess(0.0) <= 0.0:
+        return 0.0
+    hi = float(np.sqrt(np.sum(rr) / max(np.sum(sc), 1e-300) * rr.size / target))
+    while excess(hi) > 0.0:
+        hi *= 2.0
+    return float(brentq(excess, 0.0, hi, xtol=1e-12 * hi, rtol=1e-6))
+
+
+def model_floor(setup: Setup, f: Fit) -> dict[str, float]:
+    """The model-error floor the references' residuals call for: per observation kind (each
+    feature; the samples of a waveform) the relative standard deviation ``phi`` that, added
+    in quadrature to the noise's, brings that kind's chi^2 at the fit ``f`` down to the
+    lower :data:`FLOOR_CONFIDENCE` quantile of a chi^2 of its share of the degrees of
+    freedom: the upper confidence bound of ``phi`` (the Birge ratio of each kind, Birge
+    1932, which the TOF level's :func:`ssw.modulus.model_discrepancy` also uses, made 1 at
+    the bound rather than at the point estimate: a kind with a handful of observations
+    per reference gives a floor that samples outside the references' range exceed)::
+
+        sum_i r_i^2 / (sigma_i^2 + phi^2 s_i^2) = chi2.ppf(1 - FLOOR_CONFIDENCE, n_k dof / n)
+
+    with ``r_i`` the residuals, ``sigma_i`` the noise's standard deviations, ``s_i`` the
+    observation's scale (a feature's value; a record's largest sample), ``n_k`` the kind's
+    observations of ``n``. ``phi = 0`` where the noise alone explains the kind.
+
+    Parameters
+    ----------
+    setup : Setup
+        The model and the records of the fit.
+    f : Fit
+        The fit (of reference records).
+
+    Returns
+    -------
+    dict
+        Kind -> ``phi`` (``floor`` of :class:`Setup`).
+
+    References
+    ----------
+    Birge, R. T. (1932). The calculation of errors by the method of least squares. Phys.
+    Rev. 40, 207-227.
+    """
+    bare = replace(setup, floor={}, runs=0)
+    obs = observe(bare, f.state, set())
+    setup.runs += bare.runs
+    r = obs.model - obs.data
+    ok = np.isfinite(r)
+    kinds = FEATURES if setup.level == "features" else ("waveform",)
+    scale = np.abs(obs.data)
+    if setup.level == "waveform":  # a sample's scale: its record's largest sample
+        top = {h: float(np.max(np.abs(obs.data[(obs.hit == h) & (obs.kind == "waveform")])))
+               for h in np.unique(obs.hit)}
+        scale = np.array([top[h] for h in obs.hit])
+    share = f.dof / max(int(np.count_nonzero(ok)), 1)
+    out = {}
+    for k in kinds:
+        s = ok & (obs.kind == k)
+        if np.any(s):
+            out[k] = floor_bound(r[s], obs.sigma[s], scale[s], share * np.count_nonzero(s))
+    return out
 
 
 #: The global start of a calibration of records (:func:`global_start`): the sensor
 #: particle's mass as a multiple of the device's, and the contact dashpot (N s/m). The
 #: chain's TOF, amplitudes and pulse widths are far from linear in them (a heavier sensor
-#: delays and widens its pulse; a dashpot damps the reflections), so a local fit from the
-#: device's nominal values stops in a basin of its own (a conservative chain of nominal
-#: masses with the hits' speeds and delays bent to it).
-START_SENSOR_MASS = (1.0, 1.3, 1.7)
+#: delays and widens its pulse; a dashpot damps the reflections): the features' chi^2 is
+#: so sharp in them (a device whose sensor is 1.5x a bead with a 5 N s/m dashpot: chi^2 per
+#: degree of freedom ~300 at its own values, ~1e5 at 1.3x and 3 N s/m, the hits' speeds,
+#: time offsets and delays fitted) that a local fit from a point 0.2 bead or 2 N s/m away
+#: stops in a basin of its own (measured: from the nominal device, 1.0x and 6.4 N s/m;
+#: from 1.3x and 3 N s/m, 1.25x and 7.8 N s/m), hence a grid of 0.1 bead by 1 N s/m.
+START_SENSOR_MASS = tuple(np.round(np.arange(1.0, 2.0 + 1e-9, 0.1), 1))
 #: The contact dashpots of the global start's grid, N s/m.
-START_DAMPING = (0.0, 3.0, 9.0)
+START_DAMPING = tuple(float(c) for c in range(11))
 #: Model runs of each grid point's fit of the per-hit parameters.
-START_ITERATIONS = 20
+START_ITERATIONS = 8
+#: The relative model-error floor of the global start's and the first global fit's
+#: weights (every kind, ``floor`` of :class:`Setup`): a few times the chain's own error on the
+#: features at a device's true values (a discrete chain against DOP853: 3e-5 of the TOF,
+#: 2e-4 of the amplitude, 1.7e-3 of the secondary ratio), so that the grid ranks its points
+#: by the model's distance from the records rather than by the noise.
+START_FLOOR = 3e-3
+#: Fits of the global parameters with the floor re-estimated from their residuals
+#: (:func:`model_floor`) after the first.
+FLOOR_PASSES = 2
 
 
 def global_start(setup: Setup, globals_: dict[str, float], E: Any, speed: float,
                  sensor_mass: tuple[float, ...] | None = None,
                  damping: tuple[float, ...] | None = None) -> tuple[State, list[dict]]:
-    """A start for a calibration of records in the basin of their best fit: on a coarse
-    grid of the sensor's mass and the contact dashpot, each point's per-hit parameters
-    (striker speed, time offset, delay) from :func:`initial_state` and a short fit
-    (:data:`START_ITERATIONS` runs); the point of least chi^2 is the start.
+    """A start for a calibration of records in the basin of their best fit: on a grid of
+    the sensor's mass and the contact dashpot, each point's per-hit parameters (striker
+    speed, time offset, delay) from :func:`initial_state` and a short fit
+    (:data:`START_ITERATIONS` runs), the weights with ``setup``'s floor; the point of least
+    chi^2 is the start. Every sensor mass of one dashpot is one chain run (the hits of every
+    point batched, ``scene_sensor_mass`` of :class:`Setup`).
 
     Parameters
     ----------
@@ -884,18 +1072,40 @@ def global_start(setup: Setup, globals_: dict[str, float], E: Any, speed: float,
         The best point's state (its per-hit parameters fitted) and every point's
         ``sensor_mass``, ``damping`` and ``chi2``.
     """
-    per_hit = [Column(name, h) for name in PER_HIT for h in range(setup.n_hits)]
-    best, scan = None, []
-    grid = itertools.product(START_SENSOR_MASS if sensor_mass is None else sensor_mass,
-                             START_DAMPING if damping is None else damping)
-    for m, c in grid:
-        g = {**globals_, "sensor_mass": m * globals_["sensor_mass"], "damping": float(c)}
-        f = fit(setup, initial_state(setup, g, E, speed), per_hit, START_ITERATIONS)
-        scan.append({"sensor_mass": g["sensor_mass"], "damping": g["damping"],
-                     "chi2": f.chi2})
-        if best is None or f.chi2 < best.chi2:
-            best = f
-    return best.state, scan
+    masses = np.asarray(START_SENSOR_MASS if sensor_mass is None else sensor_mass, float)
+    masses = masses * globals_["sensor_mass"]
+    n_g, n_h = masses.size, setup.n_hits
+    E = np.asarray(E, float).ravel()
+    tiled = replace(setup, samples=list(setup.samples) * n_g, runs=0,
+                    scene_sensor_mass=np.repeat(masses, n_h))
+    per_hit = [Column(name, h) for name in PER_HIT for h in range(tiled.n_hits)]
+    replica = np.arange(tiled.n_hits) // n_h
+    best, best_chi2, scan = None, np.inf, []
+    for c in (START_DAMPING if damping is None else damping):
+        g = {**globals_, "damping": float(c)}
+        f = fit(tiled, initial_state(tiled, g, np.tile(E, n_g), speed), per_hit,
+                START_ITERATIONS)
+        obs = observe(tiled, f.state, set())
+        r2 = ((obs.model - obs.data) / obs.sigma) ** 2
+        ok = np.isfinite(r2)
+        chi2 = np.bincount(replica[obs.hit[ok]], weights=r2[ok], minlength=n_g)
+        # a point whose model lacks observations the records have does not fit them
+        lost = np.bincount(replica[obs.hit], weights=~ok & np.isfinite(obs.data),
+                           minlength=n_g)
+        chi2 = np.where(lost > 0, np.inf, chi2)
+        scan += [{"sensor_mass": float(m), "damping": float(c), "chi2": float(x)}
+                 for m, x in zip(masses, chi2, strict=True)]
+        i = int(np.argmin(chi2))
+        if chi2[i] < best_chi2:
+            hits = slice(i * n_h, (i + 1) * n_h)
+            best_chi2 = float(chi2[i])
+            best = State(E.copy(), f.state.striker_velocity[hits].copy(),
+                         f.state.time_offset[hits].copy(), f.state.delay[hits].copy(),
+                         {**g, "sensor_mass": float(masses[i])})
+    setup.runs += tiled.runs
+    if best is None:
+        raise RecordingError("no point of the global start's grid explains the records")
+    return best, scan
 
 
 def calibrate_records(samples: list[Hits], params: Any, wall: str,
@@ -903,12 +1113,20 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
                       trigger_level: float, tof_scatter: float,
                       free_globals: tuple[str, ...] = GLOBALS, scan: bool = True) -> Fit:
     """Fit the device's global parameters to reference records (every sample's E known):
-    first every one of ``free_globals`` with each hit's striker speed, time offset and
-    delay; then, if some global is not identified (its standard error, scaled by the
-    misfit, beyond :data:`ssw.calibration.information.IDENTIFIED_U` in its scaled
-    coordinate), again with only the identified ones free, the others at their start's
-    values. When the sensor's mass and the dashpot may be freed, the start is the best
-    point of a coarse grid of them (:func:`global_start`), else the device's values.
+    every one of ``free_globals`` with each hit's striker speed, time offset and delay.
+
+    1. The start: when the sensor's mass and the dashpot may be freed, the best point of
+       a grid of them (:func:`global_start`, weights with the floor
+       :data:`START_FLOOR`), else the device's values (weights: the noise).
+    2. A fit of every free parameter; then :data:`FLOOR_PASSES` times the model-error
+       floor estimated from its residuals (:func:`model_floor`: each kind's chi^2 brought
+       to its share of the degrees of freedom) and the fit again with it. The chi^2 of a
+       calibration is then its degrees of freedom by construction; what it says about the
+       model is the floor (stated in the result, and the weights of every measurement
+       through the calibration, :func:`ssw.measure.measure_information`).
+    3. If some global is not identified (its standard error, scaled by the misfit, beyond
+       :data:`ssw.calibration.information.IDENTIFIED_U` in its scaled coordinate), the fit
+       again with only the identified ones free, the others at their start's values.
 
     Parameters
     ----------
@@ -938,7 +1156,8 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     Returns
     -------
     Fit
-        The last fit (its ``free`` lists the globals it identified first).
+        The last fit (its ``free`` lists the globals it identified first; its ``floor``
+        the model-error floor; its ``start`` the grid).
 
     Raises
     ------
@@ -959,16 +1178,24 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     setup.fix_step(State(E, np.full(n_h, 1.5 * v0), np.zeros(n_h), np.zeros(n_h), glob))
     per_hit = [Column(name, h) for name in PER_HIT for h in range(n_h)]
     free = [Column(g) for g in free_globals]
+    kinds = FEATURES if level == "features" else ("waveform",)
     if scan and {"sensor_mass", "damping"} <= set(free_globals):
+        setup.floor = dict.fromkeys(kinds, START_FLOOR)
         state, scan = global_start(setup, glob, E, v0)
     else:
         state, scan = initial_state(setup, glob, E, v0), []
+    f = fit(setup, state, free + per_hit)
+    for _ in range(FLOOR_PASSES):  # the floor: the start's, then the residuals' own
+        setup.floor = model_floor(setup, f)
+        f = fit(setup, f.state, free + per_hit)
     while True:
-        f = replace(fit(setup, state, free + per_hit), start=scan)
         kept = [c for c in free if f.std(c) <= IDENTIFIED_U]
         if len(kept) == len(free):
-            return f
+            return replace(f, start=scan)
         free = kept
+        st = f.state.copy()  # what is not identified goes back to its start's value
+        st.globals.update({g: state.globals[g] for g in GLOBALS if Column(g) not in free})
+        f = fit(setup, st, free + per_hit)
 
 
 def with_fit(cal: Any, f: Fit, level: str) -> Any:
@@ -977,9 +1204,10 @@ def with_fit(cal: Any, f: Fit, level: str) -> Any:
     numerics' ``damping``) and the striker speed (the hits' mean) at the fit's values
     (fitted where freed, else the fit's start: the device's, or the global start's);
     the fit itself (level, freed parameters with their standard errors, the DAQ gain,
-    chi^2 and its quantile) in ``provenance["information"]``, where ``ssw measure
-    --information`` reads the gain. The TOF calibration's covariance stays the
-    calibration term of a TOF measurement's budget.
+    chi^2 and its quantile, the model-error floor, the freed globals' covariance in their
+    scaled coordinates) in ``provenance["information"]``, where ``ssw measure
+    --information`` reads the gain, the floor and the covariance. The TOF calibration's
+    covariance stays the calibration term of a TOF measurement's budget.
 
     Parameters
     ----------
@@ -1011,7 +1239,9 @@ def with_fit(cal: Any, f: Fit, level: str) -> Any:
             "striker_velocity_per_hit": [float(v) for v in f.state.striker_velocity],
             "chi2": f.chi2, "chi2_dof": f.dof, "chi2_quantile": f.quantile,
             "flagged": f.flagged, "unexplained": f.unexplained, "converged": f.converged,
-            "runs": f.runs}
+            "runs": f.runs, "floor": dict(f.floor)}
+    names, cov = global_covariance(f, hits=len(f.state.striker_velocity) / len(f.state.E))
+    info["covariance"] = {"names": names, "matrix": cov.tolist()}
     parameters = {**cal.parameters, **{k: v for k, v in changes.items()
                                        if k in cal.parameters}}
     return replace(cal, device=cal.device.with_(**changes), parameters=parameters,

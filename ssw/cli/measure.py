@@ -73,10 +73,15 @@ def _with_information(args: argparse.Namespace, ctx: Any, recs: list[Any], m: An
     cal = ctx.calibration
     info = (getattr(cal, "provenance", None) or {}).get("information") or {}
     gain = float(info.get("gain", 1.0))  # a waveform calibration's DAQ gain
+    # its model-error floor, where it was calibrated at this level
+    same = info.get("level") == args.information
+    floor = info.get("floor") if same else None
+    covariance = info.get("covariance") if same else None
     return measure_information(
         m, recs, args.information, ctx.params, ctx.wall, ctx.wall_options, acquisition=acq,
         trigger_level=float(meta.get("trigger_level", settings.trigger_level)),
-        tof_scatter=float(scatter), full_scale=ctx.device.full_scale_force, gain=gain)
+        tof_scatter=float(scatter), full_scale=ctx.device.full_scale_force, gain=gain,
+        floor=floor, covariance=covariance)
 
 
 #: The error of a half-space reading beyond which a lift's measurement warns.

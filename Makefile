@@ -6,6 +6,8 @@ SMK     := $(VENV)/bin/snakemake
 CORES   ?= 2
 CONFIG  ?= config/config.yaml
 PYTEST_ARGS ?=
+# pytest-xdist workers of `make test` (auto: one per core; 0: one process, no workers)
+TEST_WORKERS ?= auto
 
 .PHONY: setup study test test-all lint bench report docs clean
 
@@ -26,11 +28,11 @@ test: setup
 	$(VENV)/bin/ruff check ssw tests
 	$(VENV)/bin/snakefmt --check workflow
 	$(SMK) --lint --configfile $(CONFIG)
-	PATH="$(CURDIR)/$(VENV)/bin:$$PATH" $(PY) -m pytest -m "not slow" $(PYTEST_ARGS)
+	PATH="$(CURDIR)/$(VENV)/bin:$$PATH" $(PY) -m pytest -m "not slow" -n $(TEST_WORKERS) $(PYTEST_ARGS)
 
 ## Everything, slow tests included.
 test-all: setup
-	PATH="$(CURDIR)/$(VENV)/bin:$$PATH" $(PY) -m pytest $(PYTEST_ARGS)
+	PATH="$(CURDIR)/$(VENV)/bin:$$PATH" $(PY) -m pytest -n $(TEST_WORKERS) $(PYTEST_ARGS)
 
 lint: setup
 	$(VENV)/bin/ruff check ssw tests

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import signal
+from pathlib import Path
 
 import pytest
 
@@ -14,6 +15,73 @@ for _var in ("OPENBLAS_NUM_THREADS", "OMP_NUM_THREADS", "MKL_NUM_THREADS"):
 # command computes: commands default to the uncalibrated device (--calibration none) unless
 # a test names a calibration; the workflow's rules always pass --calibration explicitly
 os.environ["SSW_CALIBRATION"] = "none"
+
+
+# ---------------------------------------------------------------- the suite on several cores
+# `make test` runs pytest-xdist with `--dist loadgroup --no-loadscope-reorder`: tests of one
+# xdist group run on one worker, one after the other, and the groups leave in the order of
+# the collection. pytest_collection_modifyitems below puts into one group (the union of):
+# * the tests that share a fixture wider than a test (module, class or session scope, defined
+#   in tests/): such a fixture is computed once, not once per worker (`ci_study`, a whole
+#   study, is the largest);
+# * the tests that share a machine-wide resource (the local Slurm cluster and its job names;
+#   `mpiexec -n 2` runs, which busy-wait when they share the 2 cores with one another).
+# and moves the groups of EARLY to the front, longest first: a long group that starts last
+# leaves the other worker idle at the end.
+
+#: Markers whose tests share one machine-wide resource (one group each).
+SHARED_MARKERS = ("slurm", "mpi")
+#: Groups dispatched first (longest first: measured with --durations, 2 cores); a group is
+#: named by its first member's key (a marker, ``fixture:NAME`` or a module's path).
+EARLY = ()
+
+
+def _group_keys(item: pytest.Item) -> list[str]:
+    """What ``item`` shares with other tests: its markers of SHARED_MARKERS and its fixtures
+    wider than a test that tests/ defines (``fixture:NAME`` for session scope, the module's
+    path for module and class scope)."""
+    keys = [m for m in SHARED_MARKERS if item.get_closest_marker(m) is not None]
+    info = getattr(item, "_fixtureinfo", None)
+    for name, defs in (info.name2fixturedefs.items() if info else ()):
+        fdef = defs[-1]
+        if not fdef.baseid.startswith("tests"):  # pytest's own (tmp_path_factory ...)
+            continue
+        if fdef.scope == "session":
+            keys.append(f"fixture:{name}")
+        elif fdef.scope in ("module", "class", "package"):
+            keys.append(item.nodeid.split("::")[0])
+    return keys
+
+
+@pytest.hookimpl(tryfirst=True)
+def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
+    """Mark the tests that share an expensive fixture or a machine-wide resource with one
+    ``xdist_group`` per connected set (before xdist reads the marks), and order the items:
+    the groups of EARLY first, then the rest in collection order."""
+    parent: dict[str, str] = {}
+
+    def find(k: str) -> str:
+        while parent.setdefault(k, k) != k:
+            parent[k] = parent[parent[k]]
+            k = parent[k]
+        return k
+
+    keys = {item.nodeid: _group_keys(item) for item in items}
+    for ks in keys.values():
+        for a, b in zip(ks, ks[1:], strict=False):
+            parent[find(b)] = find(a)
+    size: dict[str, int] = {}
+    for ks in keys.values():
+        if ks:
+            size[find(ks[0])] = size.get(find(ks[0]), 0) + 1
+    group: dict[str, str] = {}
+    for item in items:
+        ks = keys[item.nodeid]
+        if ks and size[find(ks[0])] > 1:
+            group[item.nodeid] = find(ks[0])
+            item.add_marker(pytest.mark.xdist_group(find(ks[0])))
+    rank = {name: i for i, name in enumerate(EARLY)}
+    items.sort(key=lambda it: rank.get(group.get(it.nodeid, ""), len(rank)))
 
 
 @pytest.fixture

@@ -2,9 +2,9 @@
 
 from __future__ import annotations
 
+import itertools
 import os
 import signal
-from pathlib import Path
 
 import pytest
 
@@ -68,7 +68,7 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
 
     keys = {item.nodeid: _group_keys(item) for item in items}
     for ks in keys.values():
-        for a, b in zip(ks, ks[1:], strict=False):
+        for a, b in itertools.pairwise(ks):
             parent[find(b)] = find(a)
     size: dict[str, int] = {}
     for ks in keys.values():
@@ -82,6 +82,22 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
             item.add_marker(pytest.mark.xdist_group(find(ks[0])))
     rank = {name: i for i, name in enumerate(EARLY)}
     items.sort(key=lambda it: rank.get(group.get(it.nodeid, ""), len(rank)))
+
+
+def pytest_collection_finish(session: pytest.Session) -> None:
+    """On an xdist worker under ``--dist loadgroup``: stop when xdist did not tag a grouped
+    test's id with its group (then it spreads the group over the workers without a word: a
+    session fixture computed once per worker, Slurm tests side by side), as with pytest 9.2
+    (constraints.txt)."""
+    if not getattr(session.config.option, "loadgroup", False):
+        return
+    lost = [it.nodeid for it in session.items
+            if it.get_closest_marker("xdist_group") and "@" not in it.nodeid]
+    if lost:
+        raise pytest.UsageError(
+            f"pytest-xdist's --dist loadgroup did not group {len(lost)} tests (e.g. "
+            f"{lost[0]}): pytest {pytest.__version__} with this pytest-xdist; use the "
+            "versions of constraints.txt")
 
 
 @pytest.fixture

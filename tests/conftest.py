@@ -22,8 +22,8 @@ os.environ["SSW_CALIBRATION"] = "none"
 # xdist group run on one worker, one after the other, and the groups leave in the order of
 # the collection. pytest_collection_modifyitems below puts into one group (the union of):
 # * the tests that share a fixture wider than a test (module, class or session scope, defined
-#   in tests/): such a fixture is computed once, not once per worker (`ci_study`, a whole
-#   study, is the largest);
+#   in tests/): such a fixture is computed once, not once per worker (but `ci_study`, a
+#   whole study, is shared by the workers through a file lock: its tests spread);
 # * the tests that share a machine-wide resource (the local Slurm cluster and its job names;
 #   `mpiexec -n 2` runs, which busy-wait when they share the 2 cores with one another).
 # and moves the groups of EARLY to the front, longest first: a long group that starts last
@@ -31,6 +31,8 @@ os.environ["SSW_CALIBRATION"] = "none"
 
 #: Markers whose tests share one machine-wide resource (one group each).
 SHARED_MARKERS = ("slurm", "mpi")
+#: Session fixtures computed once per run across the workers (a file lock): no group.
+LOCKED_FIXTURES = ("ci_study",)
 #: Groups dispatched first (longest first: measured with --durations, 2 cores); a group is
 #: named by its first member's key (a marker, ``fixture:NAME`` or a module's path).
 EARLY = ()
@@ -47,7 +49,8 @@ def _group_keys(item: pytest.Item) -> list[str]:
         if not fdef.baseid.startswith("tests"):  # pytest's own (tmp_path_factory ...)
             continue
         if fdef.scope == "session":
-            keys.append(f"fixture:{name}")
+            if name not in LOCKED_FIXTURES:
+                keys.append(f"fixture:{name}")
         elif fdef.scope in ("module", "class", "package"):
             keys.append(item.nodeid.split("::")[0])
     return keys
@@ -131,16 +134,29 @@ def require(ok: bool, reason: str) -> None:
 def ci_study(tmp_path_factory):
     """The whole pipeline on config/ci.yaml, run once for the session: contact -> fits -> the
     fem wall -> calibration on the thesis foams' measured TOFs -> sweep -> Tables 2-3 ->
-    survey. Tests read it or dry-run edits against it; a test that reruns jobs copies it."""
+    survey. Tests read it or dry-run edits against it; a test that reruns jobs copies it.
+
+    Once for the whole run under pytest-xdist too: in the run's folder, which its workers
+    share, under a file lock; the first worker that needs it runs it, another that needs it
+    meanwhile waits for it (so its tests need no xdist group)."""
+    import fcntl
     import shutil
 
     from snakemake_run import ROOT, smk
 
-    tmp = tmp_path_factory.mktemp("ci_study")
-    shutil.copytree(ROOT / "config", tmp / "config")
-    r = smk("--cores", "2", "--directory", str(tmp), "--configfile",
-            str(tmp / "config" / "ci.yaml"), timeout=900)
-    assert r.returncode == 0, r.stdout[-4000:] + r.stderr[-4000:]
+    base = tmp_path_factory.getbasetemp()
+    if os.environ.get("PYTEST_XDIST_WORKER"):
+        base = base.parent  # the run's folder: the workers' own folders are in it
+    tmp, done = base / "ci_study", base / "ci_study.complete"
+    with open(base / "ci_study.lock", "w") as lock:
+        fcntl.flock(lock, fcntl.LOCK_EX)
+        if not done.is_file():
+            shutil.rmtree(tmp, ignore_errors=True)
+            shutil.copytree(ROOT / "config", tmp / "config")
+            r = smk("--cores", "2", "--directory", str(tmp), "--configfile",
+                    str(tmp / "config" / "ci.yaml"), timeout=900)
+            assert r.returncode == 0, r.stdout[-4000:] + r.stderr[-4000:]
+            done.touch()
     return tmp
 
 

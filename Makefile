@@ -19,7 +19,9 @@ setup:
 study: setup
 	$(SMK) --cores $(CORES) --configfile $(CONFIG)
 
-## The test suite (default: everything but the `slow` marker), lint and workflow checks.
+## The test suite (default: everything but the `slow` marker) on every core (pytest-xdist:
+## TEST_WORKERS=auto; tests/conftest.py keeps the tests that share a fixture or a machine-wide
+## resource on one worker), lint and workflow checks.
 test: setup
 	@# The local Slurm of tests/test_slurm.py. Under CI=true a cluster that does not start
 	@# fails the run; elsewhere its tests skip and say why.

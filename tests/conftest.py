@@ -26,16 +26,33 @@ os.environ["SSW_CALIBRATION"] = "none"
 #   whole study, is shared by the workers through a file lock: its tests spread);
 # * the tests that share a machine-wide resource (the local Slurm cluster and its job names;
 #   `mpiexec -n 2` runs, which busy-wait when they share the 2 cores with one another).
-# and moves the groups of EARLY to the front, longest first: a long group that starts last
-# leaves the other worker idle at the end.
+# and moves the groups and modules of EARLY to the front, longest first: a long one that
+# starts last leaves the other worker idle at the end.
 
 #: Markers whose tests share one machine-wide resource (one group each).
 SHARED_MARKERS = ("slurm", "mpi")
 #: Session fixtures computed once per run across the workers (a file lock): no group.
 LOCKED_FIXTURES = ("ci_study",)
-#: Groups dispatched first (longest first: measured with --durations, 2 cores); a group is
-#: named by its first member's key (a marker, ``fixture:NAME`` or a module's path).
-EARLY = ()
+#: Dispatched first, longest first: groups (named by a member's key: a marker,
+#: ``fixture:NAME`` or a module's path) and modules (a path: its tests that are in no group).
+#: From ``pytest -n 2 --durations=0`` (2 cores, 2026-11-26): a module's or group's seconds.
+EARLY = (
+    "slurm",  # a CI study on Slurm, the 60-120 s waits of the lost-jobs and Ctrl-C tests
+    "tests/test_workflow.py",  # the CI study (ci_study) and the tests that read it
+    "tests/test_docs.py",  # the documentation site, from nothing in a fresh clone
+    "fixture:made", "tests/test_commands.py",  # the README's and the docs' commands
+    "tests/test_calibration.py",
+    "tests/test_contact_plastic.py",
+    "tests/test_measure_information.py",
+    "tests/test_calibration_flags.py",
+    "tests/test_design_cli.py",
+    "tests/test_interrupt.py",
+    "tests/test_dynamic.py",
+    "tests/test_workflow_reruns.py",
+    "tests/test_design_device_plastic.py",
+    "tests/test_plastic_wall.py",
+    "tests/test_design_device_workflow.py",
+)
 
 
 def _group_keys(item: pytest.Item) -> list[str]:
@@ -60,7 +77,7 @@ def _group_keys(item: pytest.Item) -> list[str]:
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """Mark the tests that share an expensive fixture or a machine-wide resource with one
     ``xdist_group`` per connected set (before xdist reads the marks), and order the items:
-    the groups of EARLY first, then the rest in collection order."""
+    those of EARLY first, in its order, then the rest in collection order."""
     parent: dict[str, str] = {}
 
     def find(k: str) -> str:
@@ -84,7 +101,8 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
             group[item.nodeid] = find(ks[0])
             item.add_marker(pytest.mark.xdist_group(find(ks[0])))
     rank = {name: i for i, name in enumerate(EARLY)}
-    items.sort(key=lambda it: rank.get(group.get(it.nodeid, ""), len(rank)))
+    items.sort(key=lambda it: rank.get(group.get(it.nodeid) or it.nodeid.split("::")[0],
+                                       len(rank)))
 
 
 def pytest_collection_finish(session: pytest.Session) -> None:

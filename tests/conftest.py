@@ -5,6 +5,7 @@ from __future__ import annotations
 import itertools
 import os
 import signal
+import sys
 
 import pytest
 
@@ -115,10 +116,11 @@ def pytest_collection_finish(session: pytest.Session) -> None:
     lost = [it.nodeid for it in session.items
             if it.get_closest_marker("xdist_group") and "@" not in it.nodeid]
     if lost:
-        raise pytest.UsageError(
-            f"pytest-xdist's --dist loadgroup did not group {len(lost)} tests (e.g. "
-            f"{lost[0]}): pytest {pytest.__version__} with this pytest-xdist; use the "
-            "versions of constraints.txt")
+        msg = (f"pytest-xdist's --dist loadgroup did not group {len(lost)} tests (e.g. "
+               f"{lost[0]}): pytest {pytest.__version__} with this pytest-xdist; use the "
+               "versions of constraints.txt")
+        print(f"ERROR: {msg}", file=sys.__stderr__, flush=True)  # a worker's error is terse
+        raise pytest.UsageError(msg)
 
 
 @pytest.fixture

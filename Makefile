@@ -6,6 +6,8 @@ SMK     := $(VENV)/bin/snakemake
 CORES   ?= 2
 CONFIG  ?= config/config.yaml
 PYTEST_ARGS ?=
+# pytest-xdist workers of `make test` (auto: one per core; 0: one process, no workers)
+TEST_WORKERS ?= auto
 
 .PHONY: setup study test test-all lint bench report docs clean
 
@@ -17,7 +19,9 @@ setup:
 study: setup
 	$(SMK) --cores $(CORES) --configfile $(CONFIG)
 
-## The test suite (default: everything but the `slow` marker), lint and workflow checks.
+## The test suite (default: everything but the `slow` marker) on every core (pytest-xdist:
+## TEST_WORKERS=auto; tests/conftest.py keeps the tests that share a fixture or a machine-wide
+## resource on one worker), lint and workflow checks.
 test: setup
 	@# The local Slurm of tests/test_slurm.py. Under CI=true a cluster that does not start
 	@# fails the run; elsewhere its tests skip and say why.
@@ -26,11 +30,11 @@ test: setup
 	$(VENV)/bin/ruff check ssw tests
 	$(VENV)/bin/snakefmt --check workflow
 	$(SMK) --lint --configfile $(CONFIG)
-	PATH="$(CURDIR)/$(VENV)/bin:$$PATH" $(PY) -m pytest -m "not slow" $(PYTEST_ARGS)
+	PATH="$(CURDIR)/$(VENV)/bin:$$PATH" $(PY) -m pytest -m "not slow" -n $(TEST_WORKERS) $(PYTEST_ARGS)
 
 ## Everything, slow tests included.
 test-all: setup
-	PATH="$(CURDIR)/$(VENV)/bin:$$PATH" $(PY) -m pytest $(PYTEST_ARGS)
+	PATH="$(CURDIR)/$(VENV)/bin:$$PATH" $(PY) -m pytest -n $(TEST_WORKERS) $(PYTEST_ARGS)
 
 lint: setup
 	$(VENV)/bin/ruff check ssw tests

@@ -60,7 +60,9 @@ onstart:
 """
 NO_ACCOUNTING_NOTE = "this Slurm keeps no job accounting"
 RUN_TIMEOUT_S = 300
-JOB_PREFIX = "sswtest"
+# The job names of this test process: another test run on the same machine (and its
+# cancel_test_jobs) leaves them alone.
+JOB_PREFIX = f"sswtest{os.getpid()}"
 
 
 def _env() -> dict[str, str]:
@@ -354,35 +356,27 @@ def _sbatch_calls(log: str) -> dict[str, str]:
     return out
 
 
-def test_thesis_study_slurm_equals_local(tmp_path: Path, slurm_cluster: str) -> None:
-    """The whole thesis study (config/config.yaml) through the SLURM profile finishes, and
-    its tables and result files equal a local run's, bit for bit.
+def _run_study_on_slurm(workdir: Path, config: Path, timeout: float) -> str:
+    """The study of ``config`` through the SLURM profile in ``workdir`` (the sweep under MPI
+    on 2 ranks: ``--set-resources tof_sweep:tasks=2``, a runtime knob); its log."""
+    proc = run_snakemake(workdir, [
+        "--snakefile", str(ROOT / "workflow" / "Snakefile"), "--configfile", str(config),
+        "--profile", str(PROFILE), *LOCAL_CLUSTER_ARGS, "--verbose",
+        "--slurm-jobname-prefix", JOB_PREFIX,
+        "--set-resources", "tof_sweep:tasks=2", "tof_sweep:mpi=mpiexec"], timeout=timeout)
+    assert NO_ACCOUNTING_NOTE in proc.stderr  # the status command the cluster needs
+    return proc.stderr + proc.stdout
 
-    The sweep runs under MPI on 2 ranks (`--set-resources tof_sweep:tasks=2`, a runtime
-    knob: its numbers equal the local serial sweep's). Each job's sbatch asks for what it
-    uses: one CPU per task (the rules' threads), --ntasks 2 for the MPI sweep, --mem and
-    -t from the rules' resources (ssw.workflow.RESOURCES), scaled with a contact family's
-    size (docs/cluster.md lists the calls).
-    """
+
+def _assert_jobs_ask_for_what_they_use(log: str, config: Path) -> None:
+    """Each job's sbatch asks for what it uses: one CPU per task (the rules' threads),
+    --ntasks 2 for the MPI sweep, --mem and -t from the rules' resources
+    (ssw.workflow.RESOURCES), scaled with a contact family's size (docs/cluster.md lists
+    the calls); the light jobs run where Snakemake runs (localrules)."""
     from ssw.config import load_config
     from ssw.workflow import RESOURCES, families, mem_mb, runtime_min
 
-    config = ROOT / "config" / "config.yaml"
-    local, slurm = tmp_path / "local", tmp_path / "slurm"
-    base = [str(SNAKEMAKE), "--snakefile", str(ROOT / "workflow" / "Snakefile"),
-            "--configfile", str(config)]
-    for d in (local, slurm):
-        d.mkdir()
-    run_snakemake(local, [*base[1:], "--cores", "2"], timeout=600)
-    proc = run_snakemake(slurm, [
-        *base[1:], "--profile", str(PROFILE), *LOCAL_CLUSTER_ARGS, "--verbose",
-        "--slurm-jobname-prefix", JOB_PREFIX,
-        "--set-resources", "tof_sweep:tasks=2", "tof_sweep:mpi=mpiexec"], timeout=900)
-    assert NO_ACCOUNTING_NOTE in proc.stderr  # the status command the cluster needs
-    n = assert_same_results(slurm / "results", local / "results",
-                            ignore=("benchmarks/", "logs/", "cache/"))
-    assert n >= 20, f"only {n} result files compared"
-    calls = _sbatch_calls(proc.stderr + proc.stdout)
+    calls = _sbatch_calls(log)
     fams = families(load_config(config))
     for fam, ids in fams.items():
         call = calls[f"contact_batch[{fam}]"]
@@ -394,8 +388,41 @@ def test_thesis_study_slurm_equals_local(tmp_path: Path, slurm_cluster: str) -> 
     for rule in ("calibration", "validation"):
         assert f"--mem {mem_mb(rule, 0)}" in calls[rule] and "--ntasks=1" in calls[rule]
     assert set(RESOURCES) >= {"contact", "calibration", "sweep", "validation"}
-    # light jobs run where Snakemake runs (localrules): never submitted
     assert not any(k.startswith(("sweep_figure", "report_tables", "all")) for k in calls)
+
+
+def test_ci_study_slurm_equals_local(tmp_path: Path, slurm_cluster: str, ci_study) -> None:
+    """The whole CI study (config/ci.yaml: contact -> fits -> the fem wall -> calibration ->
+    the sweep under MPI on 2 ranks -> Tables 2-3 -> survey) through the SLURM profile
+    finishes, and its tables and result files equal the local run's (the suite's
+    ``ci_study``, ``--cores 2``), bit for bit; each job asked Slurm for what it uses.
+    (The thesis study's run, 300 scenes more, is test_thesis_study_slurm_equals_local,
+    ``slow``: the same checks at the study's size.)"""
+    config = ci_study / "config" / "ci.yaml"
+    log = _run_study_on_slurm(tmp_path, config, timeout=900)
+    n = assert_same_results(tmp_path / "results", ci_study / "results",
+                            ignore=("benchmarks/", "logs/", "cache/"))
+    assert n >= 20, f"only {n} result files compared"
+    _assert_jobs_ask_for_what_they_use(log, config)
+
+
+@pytest.mark.slow
+def test_thesis_study_slurm_equals_local(tmp_path: Path, slurm_cluster: str) -> None:
+    """The whole thesis study (config/config.yaml) through the SLURM profile finishes, and
+    its tables and result files equal a local run's, bit for bit, each job asking for what
+    it uses. ``slow``: test_ci_study_slurm_equals_local makes the same checks on the CI
+    study; this one adds the thesis study's size (302 scenes in one contact family)."""
+    config = ROOT / "config" / "config.yaml"
+    local, slurm = tmp_path / "local", tmp_path / "slurm"
+    for d in (local, slurm):
+        d.mkdir()
+    run_snakemake(local, ["--snakefile", str(ROOT / "workflow" / "Snakefile"),
+                          "--configfile", str(config), "--cores", "2"], timeout=600)
+    log = _run_study_on_slurm(slurm, config, timeout=900)
+    n = assert_same_results(slurm / "results", local / "results",
+                            ignore=("benchmarks/", "logs/", "cache/"))
+    assert n >= 20, f"only {n} result files compared"
+    _assert_jobs_ask_for_what_they_use(log, config)
 
 
 def test_a_job_larger_than_any_node_is_an_error_not_a_wait(tmp_path: Path,

@@ -190,10 +190,10 @@ def study(folder: Path) -> list[dict]:
 @pytest.mark.slow
 def test_every_unseen_modulus_is_inside_its_interval_and_the_records_narrow_it(tmp_path):
     """The TOF level's unseen E inside its interval with the stated model term; every other
-    level's inside its interval or flagged; the features or the waveform give, unflagged, every E inside an interval at least 2x
-    narrower than the TOF's and within 5 %; through those calibrations a clipped hit and
-    hits on a yielding sample are flagged, an untriggered time offset flagged or without
-    effect on E."""
+    level's inside its interval or flagged; the features or the waveform give, unflagged,
+    every E inside an interval at least 2x narrower than the TOF's and within 5 %; through
+    those calibrations a clipped hit and hits on a yielding sample are flagged, an
+    untriggered time offset flagged or without effect on E."""
     out = study(tmp_path)
     rows = [r for r in out if "E_true" in r]
     for r in rows:
@@ -221,9 +221,18 @@ def test_every_unseen_modulus_is_inside_its_interval_and_the_records_narrow_it(t
 
 
 if __name__ == "__main__":
+    import argparse
     import json
     import tempfile
 
+    ap = argparse.ArgumentParser(description="the honesty study's table; the recorded device "
+                                 "off the features' start grid with the options")
+    ap.add_argument("--sensor-mass", type=float, default=1.5,
+                    help="the recorded device's sensor particle, in beads' masses")
+    ap.add_argument("--damping", type=float, default=5.0,
+                    help="the recorded device's dashpot in every contact, N s/m")
+    a = ap.parse_args()
+    MISFIT.update(sensor_mass=a.sensor_mass * BEAD_MASS, damping=a.damping)
     with tempfile.TemporaryDirectory() as d:
         out = study(Path(d))
     print(json.dumps(out[-len(LEVELS):], indent=1))

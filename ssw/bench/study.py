@@ -6,14 +6,9 @@ user's ``results/`` is never touched and nothing is reused: every job runs. Befo
 run, a dry run builds the DAG once (warm bytecode, imports and file-system caches: "warm
 environment"); its time is reported separately.
 
-Bytecode. A warm environment has the modules' bytecode: Python writes it on the first
-import, unless ``PYTHONDONTWRITEBYTECODE`` is set (some containers and CI images set it, and
-a venv installed by uv has none to begin with). Then every job would compile numpy, scipy,
-matplotlib and ssw from source again (1.5-2 s of CPU per job, about 30 s over the study),
-which no user who has run Python twice pays; so the benchmark gives the run a bytecode
-folder of its own (``PYTHONPYCACHEPREFIX`` in the working folder), filled before the timed
-run by the dry run and by one import of every ssw module (:func:`warm_bytecode`), and says
-so in its report (``bytecode``).
+Bytecode comes from the environment: ``scripts/setup.sh`` compiles it at install, so a
+run here and `make study` import the same way even where ``PYTHONDONTWRITEBYTECODE``
+is set.
 
 Per-job times come from Snakemake's ``benchmark:`` records: every rule of the study writes
 ``results/benchmarks/<stage>/<job>.tsv`` (wall seconds, peak memory, CPU time); the stage is
@@ -231,85 +226,17 @@ class RunTime:
     error: str | None
 
 
-#: Folder of the run's bytecode when the environment does not write it, relative to the
-#: working folder (module docstring).
-PYCACHE = "pycache"
-#: What a warm-up imports besides every ssw module: the figures' backend.
-WARM_IMPORTS = ("matplotlib.pyplot", "matplotlib.backends.backend_agg")
-
-
-def bytecode_env(work: Path) -> dict[str, str]:
-    """The environment entries that give a run in ``work`` its own bytecode folder when the
-    environment does not write bytecode (``PYTHONDONTWRITEBYTECODE``); empty otherwise.
-
-    Parameters
-    ----------
-    work : pathlib.Path
-        The working folder.
-
-    Returns
-    -------
-    dict
-        ``{"PYTHONPYCACHEPREFIX": folder}`` or ``{}``.
-    """
-    if not os.environ.get("PYTHONDONTWRITEBYTECODE"):
-        return {}
-    return {"PYTHONPYCACHEPREFIX": str(work / PYCACHE)}
-
-
-def warm_bytecode(work: Path, repo: Path, timeout: float) -> float | None:
-    """Compile the bytecode of every ssw module and of :data:`WARM_IMPORTS` into the run's
-    bytecode folder (:func:`bytecode_env`) by importing them once, with bytecode writing on;
-    nothing when the environment writes bytecode itself.
-
-    Parameters
-    ----------
-    work : pathlib.Path
-        The working folder.
-    repo : pathlib.Path
-        The repository whose ssw the jobs run (the Snakefile's: first on the path).
-    timeout : float
-        s.
-
-    Returns
-    -------
-    float or None
-        The warm-up's wall time (s), or None when none was needed.
-    """
-    extra = bytecode_env(work)
-    if not extra:
-        return None
-    code = ("import importlib, pkgutil, ssw\n"
-            "for m in pkgutil.walk_packages(ssw.__path__, 'ssw.'):\n"
-            "    if m.name.endswith('__main__'):\n        continue\n"
-            "    try:\n        importlib.import_module(m.name)\n"
-            "    except Exception:\n        pass\n"
-            f"for name in {WARM_IMPORTS!r}:\n"
-            "    importlib.import_module(name)\n")
-    env = {k: v for k, v in os.environ.items() if k != "PYTHONDONTWRITEBYTECODE"}
-    env.update(extra, MPLBACKEND="Agg",
-               PYTHONPATH=os.pathsep.join([str(repo), *filter(None, [env.get("PYTHONPATH")])]))
-    t0 = time.perf_counter()
-    subprocess.run([sys.executable, "-c", code], cwd=work, env=env, capture_output=True,
-                   timeout=timeout, check=False)
-    return time.perf_counter() - t0
-
-
-def _run(cmd: list[str], cwd: Path, timeout: float, warm: bool = False) -> RunTime:
+def _run(cmd: list[str], cwd: Path, timeout: float) -> RunTime:
     """Run ``cmd`` (module docstring). The condensed FEM operators are cached in the
     working folder (``SSW_CACHE_DIR``), so "from clean" also means no operator reused from
     an earlier run; every ``ssw`` process records its CPU time in ``usage/`` there
-    (:data:`ssw.cli.USAGE_ENV`); their bytecode is read from the run's folder when the
-    environment writes none (:func:`bytecode_env`; ``warm``: written there too)."""
+    (:data:`ssw.cli.USAGE_ENV`)."""
     from ssw.cli import USAGE_ENV
 
     env = dict(os.environ)
     env["PATH"] = f"{Path(sys.executable).parent}{os.pathsep}{env.get('PATH', '')}"
     env["SSW_CACHE_DIR"] = str(cwd / "cache")
     env[USAGE_ENV] = str(cwd / USAGE)
-    env.update(bytecode_env(cwd))
-    if warm:
-        env.pop("PYTHONDONTWRITEBYTECODE", None)
     load0, cpu0 = load_average(), _children_cpu()
     t0 = time.perf_counter()
     try:
@@ -380,11 +307,9 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     increment = _increment(args, config)
     work, temporary = _prepare_workdir(args)
     inc: dict[str, Any] | None = None
-    warm: float | None = None
     try:
         cmd = _snakemake_cmd(args, work, config)
-        dry = _run([*cmd, "--dry-run", "--quiet"], work, args.timeout, warm=True)
-        warm = warm_bytecode(work, snakefile.parents[1], args.timeout)
+        dry = _run([*cmd, "--dry-run", "--quiet"], work, args.timeout)
         if dry.error:
             raise SswError(f"the study's dry run failed: {shlex.join(cmd)}\n{dry.error}")
         if args.keep_going:
@@ -412,8 +337,6 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         "cpu_s": full.cpu_s, "jobs_cpu_s": _sum_cpu(records),
         "load_before": full.load_before, "load_after": full.load_after,
         "dry_run_s": dry.wall_s,
-        "bytecode": "the environment's" if warm is None else (
-            f"the run's own folder, warmed in {warm:.1f} s (PYTHONDONTWRITEBYTECODE is set)"),
         "jobs": len(records), "busy_s": sum(r["s"] for r in records), "stages": stages,
         "increment": inc,
         "command": shlex.join(cmd), "workdir": str(work) if (args.keep or not temporary)
@@ -460,8 +383,7 @@ def markdown(result: dict[str, Any]) -> str:
         + ("" if result["status"] == "complete" else
            " -- **the run FAILED**; the table shows the jobs that finished"),
         f"- load average (1, 5, 15 min) before: {_load(result.get('load_before'))}, "
-        f"after: {_load(result.get('load_after'))}",
-        f"- bytecode: {result.get('bytecode', '-')}", "",
+        f"after: {_load(result.get('load_after'))}", "",
         "| stage | jobs | busy (s) | CPU (s) | peak memory (MB) | costliest job |",
         "|---|---:|---:|---:|---:|---|",
     ]

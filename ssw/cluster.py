@@ -58,10 +58,11 @@ ACTIVE_STATES = frozenset({
     "RESV_DEL_HOLD",
 })
 
-#: Seconds between two looks of :func:`watch_lost_jobs` at the run's jobs.
+#: Seconds between two looks of :func:`watch_lost_jobs` at the run's jobs (environment
+#: ``SSW_SLURM_WATCH_POLL_S``: :func:`watch_timing`).
 WATCH_POLL_S = 15.0
 #: Seconds Slurm may list no job of a run at all (a submission in flight) before the run's
-#: jobs count as lost.
+#: jobs count as lost (environment ``SSW_SLURM_VANISH_GRACE_S``: :func:`watch_timing`).
 VANISH_GRACE_S = 60.0
 
 
@@ -509,6 +510,49 @@ class LostJobsWatch:
                     f"{len(waiting)} cluster job(s): {names}. Outputs of finished jobs "
                     "are kept; run the same command again to redo the rest.")
         return None
+
+
+def watch_timing(environ: Mapping[str, str]) -> tuple[float, float]:
+    """The lost-jobs watch's grace and poll, s: the defaults or the environment's values.
+
+    ``SSW_SLURM_VANISH_GRACE_S`` (default :data:`VANISH_GRACE_S`) is how long Slurm may list
+    no job of a run before its jobs count as lost: longer on a controller whose submissions
+    take minutes to appear in ``squeue``, shorter where a lost run should stop sooner.
+    ``SSW_SLURM_WATCH_POLL_S`` (default :data:`WATCH_POLL_S`) is the pause between two looks.
+
+    Parameters
+    ----------
+    environ : Mapping[str, str]
+        The environment of the Snakemake run (``os.environ``).
+
+    Returns
+    -------
+    tuple[float, float]
+        ``(vanish_s, poll_s)``, s.
+
+    Raises
+    ------
+    ConfigError
+        A value that is not a positive number of seconds, or a poll longer than the grace.
+    """
+    values = {}
+    for name, default in (("SSW_SLURM_VANISH_GRACE_S", VANISH_GRACE_S),
+                          ("SSW_SLURM_WATCH_POLL_S", WATCH_POLL_S)):
+        raw = environ.get(name, "").strip()
+        try:
+            value = float(raw) if raw else default
+        except ValueError:
+            value = float("nan")
+        if not value > 0 or value == float("inf"):
+            raise ConfigError(name, raw, f"a positive number of seconds (default {default:g}); "
+                              f"unset {name} for the default")
+        values[name] = value
+    vanish_s, poll_s = values["SSW_SLURM_VANISH_GRACE_S"], values["SSW_SLURM_WATCH_POLL_S"]
+    if poll_s > vanish_s:
+        raise ConfigError("SSW_SLURM_WATCH_POLL_S", f"{poll_s:g}",
+                          f"at most SSW_SLURM_VANISH_GRACE_S ({vanish_s:g} seconds): the "
+                          "watch must look at least once within the grace")
+    return vanish_s, poll_s
 
 
 def watch_lost_jobs(query: Callable[[], Mapping[str, str] | None],

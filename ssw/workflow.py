@@ -579,6 +579,7 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
     ConfigError
         A job no node can hold, or a cluster on which the plugin cannot see jobs end.
     """
+    import os
     import shutil
 
     from snakemake_executor_plugin_slurm import job_status_query as plugin_query
@@ -620,11 +621,12 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
 
         scheduler.executor_error_callback(WorkflowError(f"Lost cluster jobs: {message}"))
 
-    stall_s = (cluster.PLUGIN_MAX_STATUS_INTERVAL_S + cluster.VANISH_GRACE_S
+    grace_s, poll_s = cluster.watch_timing(os.environ)
+    stall_s = (cluster.PLUGIN_MAX_STATUS_INTERVAL_S + grace_s
                + float(workflow.execution_settings.latency_wait))
-    vanish_s = cluster.VANISH_GRACE_S if used == "squeue" else stall_s
+    vanish_s = grace_s if used == "squeue" else stall_s
     cluster.watch_lost_jobs(lambda: cluster.query_states(command), waiting, lost, stall_s,
-                            vanish_s)
+                            vanish_s, poll_s)
     return notes
 
 

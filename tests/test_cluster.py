@@ -132,3 +132,16 @@ def test_sinfo_gives_the_largest_node():
     assert cl.parse_sinfo("2 1000\n4+ 800\n") == cl.NodeLimits(4, 1000)
     with pytest.raises(SswError):
         cl.parse_sinfo("")
+
+
+def test_the_watch_timing_comes_from_the_environment_or_the_defaults():
+    assert cl.watch_timing({}) == (cl.VANISH_GRACE_S, cl.WATCH_POLL_S) == (60.0, 15.0)
+    assert cl.watch_timing({"SSW_SLURM_VANISH_GRACE_S": "600",
+                            "SSW_SLURM_WATCH_POLL_S": " 30 "}) == (600.0, 30.0)
+    for env, field in [({"SSW_SLURM_VANISH_GRACE_S": "soon"}, "SSW_SLURM_VANISH_GRACE_S"),
+                       ({"SSW_SLURM_VANISH_GRACE_S": "-5"}, "SSW_SLURM_VANISH_GRACE_S"),
+                       ({"SSW_SLURM_WATCH_POLL_S": "inf"}, "SSW_SLURM_WATCH_POLL_S"),
+                       ({"SSW_SLURM_WATCH_POLL_S": "90"}, "SSW_SLURM_WATCH_POLL_S")]:
+        with pytest.raises(ConfigError) as err:
+            cl.watch_timing(env)
+        assert err.value.field == field and "seconds" in str(err.value)

@@ -37,12 +37,14 @@ system's copy) is removed and rebuilt, never used.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import json
 import os
 import time
 from collections import OrderedDict
+from collections.abc import Iterator
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -262,7 +264,11 @@ class OperatorStore:
             op = BodyOperator(data["S"], json.loads(str(data["stats"])))
             self.hits["disk"] += 1
         else:
-            op = _condense(self._model(geom), which, float(nu))
+            op, factor = _condense(self._model(geom), which, float(nu))
+            if factor is not None and _KEPT[0] > 0:
+                _FACTORS[(geom.key(), which, float(nu))] = factor
+                while len(_FACTORS) > _KEPT[0]:
+                    _FACTORS.popitem(last=False)
             _save(path, {"S": op.S, "stats": np.asarray(json.dumps(op.stats))})
             self.hits["built"] += 1
             self._cost["count"] += 1
@@ -359,8 +365,44 @@ def _build_model(geom: Geometry) -> _Model:
                   lay, time.perf_counter() - t0)
 
 
-def _condense(model: _Model, which: str, nu: float) -> BodyOperator:
-    """Condense one body of ``model`` (unit E) onto its retained dofs."""
+#: Factorizations of condensed bodies kept in memory for their interior solves (the
+#: stresses of the states just traced: :func:`take_factor`), at most this many, inside
+#: :func:`keeping_factors` only (each holds a sparse LU of a body, tens of MB).
+_FACTORS: OrderedDict[tuple[str, str, float], tuple[Any, Any]] = OrderedDict()
+_KEPT = [0]
+
+
+@contextlib.contextmanager
+def keeping_factors(n: int) -> Iterator[None]:
+    """Within the block, the factorizations of the last ``n`` bodies condensed are kept
+    for :func:`take_factor`; on leaving it every one left is dropped.
+
+    Parameters
+    ----------
+    n : int
+        How many to keep (the bodies whose stresses follow: two per plate scene).
+    """
+    old = _KEPT[0]
+    _KEPT[0] = int(n)
+    try:
+        yield
+    finally:
+        _KEPT[0] = old
+        _FACTORS.clear()
+
+
+def take_factor(geom: Geometry, which: str, nu: float) -> tuple[Any, Any] | None:
+    """The body matrix and the pivot-free LU of the whole body matrix of the ``plate`` or
+    the ``soil`` of ``geom`` at ``nu`` that its condensation computed in this process
+    (:func:`ssw.contact.substructure.schur_factor`), removed from memory; None when the
+    operator came from disk or memory, was condensed with pivoting, or was not kept
+    (:func:`keeping_factors`)."""
+    return _FACTORS.pop((geom.key(), which, float(nu)), None)
+
+
+def _condense(model: _Model, which: str, nu: float) -> tuple[BodyOperator, tuple[Any, Any] | None]:
+    """Condense one body of ``model`` (unit E) onto its retained dofs; with the operator,
+    its body matrix and factorization (None after the pivoted fallback)."""
     from ssw.contact.substructure import condense_body, min_degree_order
 
     plate = which == "plate"
@@ -386,7 +428,7 @@ def _condense(model: _Model, which: str, nu: float) -> BodyOperator:
              "pivoted": c.pivoted, "wall_mesh": model.wall_mesh,
              "wall_assemble": c.wall_assemble, "wall_factor": c.wall_factor}
     model.wall_mesh = 0.0  # the mesh is paid once
-    return BodyOperator(c.S, stats)
+    return BodyOperator(c.S, stats), (None if c.factor is None else (c.body, c.factor))
 
 
 @dataclass(frozen=True)

@@ -62,6 +62,7 @@ from ssw.contact.operators import (
     default_store,
     geometry_of,
     scene_lcp,
+    take_factor,
 )
 from ssw.errors import ConfigError, SolverError
 
@@ -120,17 +121,27 @@ class BodyField:
         (nb,) the retained dofs' components (0 = u_r, 1 = u_z), in that order.
     nu : float
         The body's Poisson's ratio.
+    prepared : tuple or None
+        ``(body matrix, LU)`` of this body from its condensation
+        (:func:`ssw.contact.operators.take_factor`): the same matrix, and ``K_II``'s
+        factors are the leading blocks of the LU (no second assembly or factorization).
+        None: assembled and factored here.
     """
 
     def __init__(self, nodes: np.ndarray, tri: np.ndarray, free: np.ndarray,
-                 b_nodes: np.ndarray, b_comps: np.ndarray, nu: float) -> None:
+                 b_nodes: np.ndarray, b_comps: np.ndarray, nu: float,
+                 prepared: tuple[Any, Any] | None = None) -> None:
         from ssw.contact.substructure import body_matrix, min_degree_order
 
-        bm = body_matrix(nodes, tri, nu, free, b_nodes, b_comps, min_degree_order)
+        if prepared is None:
+            bm = body_matrix(nodes, tri, nu, free, b_nodes, b_comps, min_degree_order)
+        else:
+            bm = prepared[0]
         K, n_int, ndof, udof, lnodes, ltri = bm.K, bm.n_int, bm.ndof, bm.udof, bm.nodes, bm.tri
         self.n_int, self.ndof = n_int, ndof
         self.KIB = K[:n_int, n_int:].tocsc()
-        self._lu = _factor(K[:n_int, :n_int].tocsc())
+        self._lu = (_factor(K[:n_int, :n_int].tocsc()) if prepared is None
+                    else LeadingBlock(prepared[1], n_int))
         self.udof = udof
         self.nodes = lnodes
         self.tri = ltri
@@ -162,6 +173,32 @@ class BodyField:
                 + 0.5 * eps[:, :, 3] ** 2)
         G = np.asarray(E, float) / (2.0 * (1.0 + self.nu))
         return (np.sqrt(6.0 * dev2) * G).reshape(-1, u_B.shape[1] if u_B.ndim > 1 else 1)
+
+
+class LeadingBlock:
+    """Solves with the leading ``n x n`` block of a matrix from its pivot-free LU (identity
+    row and column permutations): ``K_II = L_II U_II``, the leading blocks of the factors
+    (the trailing rows and columns do not enter them), by two sparse triangular solves.
+
+    Parameters
+    ----------
+    lu : scipy.sparse.linalg.SuperLU
+        The pivot-free factorization of the whole matrix (``perm_r``, ``perm_c`` the
+        identity; :func:`ssw.contact.substructure.schur_factor` checks it).
+    n : int
+        The size of the leading block.
+    """
+
+    def __init__(self, lu: Any, n: int) -> None:
+        self.L = lu.L.tocsr()[:n, :n]
+        self.U = lu.U.tocsr()[:n, :n]
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        """``K_II^-1 b`` for ``b`` (n,) or (n, k)."""
+        from scipy.sparse.linalg import spsolve_triangular
+
+        y = spsolve_triangular(self.L, b, lower=True, unit_diagonal=True)
+        return spsolve_triangular(self.U, y, lower=False)
 
 
 def _factor(KII: Any) -> Any:
@@ -222,7 +259,8 @@ def body_field(store: OperatorStore, geom: Geometry, which: str, nu: float) -> B
                           "a rigid base or the half-space for the stress field (no subgrade)")
     b_nodes, b_comps = retained_dofs(model, which)
     tri = model.tri[model.body == (1 if which == "plate" else 0)]
-    fld = BodyField(model.nodes, tri, model.free, b_nodes, b_comps, nu)
+    fld = BodyField(model.nodes, tri, model.free, b_nodes, b_comps, nu,
+                    take_factor(geom, which, nu))
     _FIELDS[key] = fld
     while len(_FIELDS) > FIELDS_KEPT:
         _FIELDS.popitem(last=False)

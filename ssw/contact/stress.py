@@ -342,28 +342,82 @@ def equivalent_radius(radius: float, top: tuple[float, float], bead: tuple[float
     return float(radius * (1.0 + e_top / e_bead))
 
 
-def _indentation_at(lcp: Any, force: np.ndarray, guess: float) -> tuple[Any, np.ndarray]:
-    """The LCP's path and the indentations (m) at which the sphere carries ``force`` (N,
-    (k,)): the path is traced to ``guess`` (doubled until it holds the largest force) and
-    the piecewise linear force inverted on its pieces."""
-    from ssw.contact.parametric import trace
+#: Gap tolerance of the LCP solved at one indentation, relative to it (a few ulp of it,
+#: as :data:`ssw.contact.scene.LCP_TOL` per increment).
+STATE_TOL = 1e-12
+#: Newton steps allowed to the indentation of a force (one per affine piece crossed; the
+#: force is piecewise affine and increasing in the indentation).
+NEWTON_STEPS = 100
+
+
+def _state_at_force(lcp: Any, force: np.ndarray, guess: float
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The contact states at which the sphere carries ``force`` (N, (k,)): indentations (k,)
+    m, constraint forces (k, m) N and active sets (k, m).
+
+    The sphere's force ``f(delta)`` is continuous, piecewise affine and increasing
+    (:mod:`ssw.contact.parametric`); on the piece of an active set ``A`` its slope is
+    ``-1 . (W_AA^-1 q1_A)`` over the sphere's constraints. Newton's step from a state,
+    ``delta + (F - f) / slope``, lands on ``F`` exactly when it stays on the state's piece,
+    which the LCP solved there (:func:`ssw.contact.contact_lcp.solve_lcp`, warm-started
+    from the previous active set) confirms by returning the same active set; otherwise it
+    lands on another piece and steps again. A bracket ``f(lo) < F <= f(hi)`` (``hi``
+    doubled from ``guess`` until it holds ``F``) safeguards the steps (bisection when a
+    step leaves it). The same state as the path traced from 0 and inverted on its pieces
+    (:func:`ssw.contact.parametric.trace`), to round-off, in a few LCP solves instead of
+    one per breakpoint.
+    """
+    from ssw.contact.contact_lcp import solve_lcp
+    from ssw.contact.lapack import cho_solve, cholesky
 
     ms = lcp.n_sphere
+    W, q0, q1 = lcp.W, lcp.q0, lcp.q1
     force = np.atleast_1d(np.asarray(force, float))
-    end = float(guess)
-    for _ in range(60):
-        path, _ = trace(lcp.W, lcp.q0, lcp.q1, end)
-        br = path.breaks
-        f_lo = path.lam0[:, :ms].sum(1) + br[:-1] * path.lam1[:, :ms].sum(1)
-        f_hi = path.lam0[:, :ms].sum(1) + br[1:] * path.lam1[:, :ms].sum(1)
-        if f_hi[-1] >= force.max():
-            j = np.searchsorted(f_hi, force, side="left")
-            slope = path.lam1[j, :ms].sum(axis=1)
-            safe = np.where(slope > 0, slope, 1.0)
-            d = np.where(slope > 0, br[j] + (force - f_lo[j]) / safe, br[j + 1])
-            return path, np.clip(d, br[j], br[j + 1])
-        end *= 2.0
-    raise SolverError(f"no indentation up to {end:.4g} m carries the force {force.max():.4g} N")
+    out_d = np.empty(force.size)
+    out_lam = np.empty((force.size, q0.size))
+    out_act = np.empty((force.size, q0.size), bool)
+    cache: dict = {}
+
+    def state(d: float, act: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float]:
+        g0 = q0 + d * q1
+        lam, act, _ = solve_lcp(W, g0, act, STATE_TOL * d, cache)
+        idx = np.flatnonzero(act)
+        if idx.size == 0:
+            return lam, act, 0.0, 0.0
+        cf = cholesky(W[idx[:, None], idx], lower=False, clean=False)
+        lam1 = -cho_solve(cf, q1[idx], lower=False)
+        return lam, act, float(lam[:ms].sum()), float(lam1[idx < ms].sum())
+
+    for k, F in enumerate(force):
+        hi = float(guess)
+        # warm start: Hertz's contact radius (a^2 = R delta, half the geometric overlap's
+        # r^2 = 2 R delta) and every touching pair of an unilateral interface
+        act = (q0 + 0.5 * hi * q1 < 0) | ((q1 == 0) & (q0 == 0))
+        for _ in range(60):
+            lam, act, f, slope = state(hi, act)
+            if f >= F:
+                break
+            hi *= 2.0
+        else:
+            raise SolverError(f"no indentation up to {hi:.4g} m carries the force {F:.4g} N")
+        lo, d = 0.0, hi
+        for _ in range(NEWTON_STEPS):
+            step = d + (F - f) / slope if slope > 0 else 0.5 * (lo + hi)
+            nxt = step if lo < step <= hi else 0.5 * (lo + hi)
+            lam_n, act_n, f_n, slope_n = state(nxt, act)
+            if np.array_equal(act_n, act) and nxt == step:
+                d, lam, act = nxt, lam_n, act_n  # on the piece Newton stepped along: f = F
+                break
+            if f_n >= F:
+                hi = nxt
+            else:
+                lo = nxt
+            d, lam, act, f, slope = nxt, lam_n, act_n, f_n, slope_n
+        else:
+            raise SolverError(f"the indentation of the force {F:.4g} N was not found in "
+                              f"{NEWTON_STEPS} Newton steps")
+        out_d[k], out_lam[k], out_act[k] = d, lam, act
+    return out_d, out_lam, out_act
 
 
 def contact_stresses(
@@ -451,10 +505,11 @@ def contact_stresses(
             r_eq = equivalent_radius(radius, (top_E, top[1]), bead)
             lcp = scene_lcp(layout, plate_op, soil_op, float(Eu),
                             plate[0] if has_plate else None, interface, r_eq)
-            path, d[ks] = _indentation_at(lcp, f_R, float(d[ks].max()))
-            lam = path.forces(d[ks])
+            d[ks], lam, active = _state_at_force(lcp, f_R, float(d[ks].max()))
+        else:
+            active = path.active
         ms = lcp.n_sphere
-        if np.any(path.active[:, ms - 1]):
+        if np.any(active[:, ms - 1]):
             k = int(ks[np.argmax(d[ks])])
             raise SolverError(f"the contact zone reached the last candidate (r = "
                               f"{layout.r[-1]:.4g} m) at the state {k}: soil E {E[k]:.4g} Pa, "

@@ -57,13 +57,16 @@ def test_interior_minimizer_within_tolerance_in_few_batched_runs(x_opt):
     assert res.nfev == sum(ev.calls) == len(res.evaluated)
 
 
-def test_minimizer_on_the_lower_bound():
-    """Every plate yields and the thinnest yields least (the thesis design's case): the
-    search ends on the bound."""
-    ev = Merit(SPEC, lambda x: x)
+@pytest.mark.parametrize("side", [0, 1])
+def test_minimizer_on_a_bound(side):
+    """Every plate yields and the thinnest yields least (the thesis design's case), or the
+    thickest wins: the search ends on the bound, its nearest neighbour evaluated within
+    the tolerance of it, after one round of points approaching the bound."""
+    ev = Merit(SPEC, (lambda x: x) if side == 0 else (lambda x: -x))
     res = search(ev, "pla")
-    assert res.best.thickness == pytest.approx(SPEC.thickness[0])
-    assert len(ev.calls) <= 5
-    # the bound's neighbour evaluated last is within the tolerance of it
-    inner = sorted(t for t in res.evaluated if t > SPEC.thickness[0])[0]
-    assert np.log(inner / SPEC.thickness[0]) <= SPEC.thickness_tol + 1e-12
+    bound = SPEC.thickness[side]
+    assert res.best.thickness == pytest.approx(bound)
+    assert ev.calls == [SPEC.scan_points, REFINE_POINTS]
+    nearest = min((t for t in res.evaluated if t != bound),
+                  key=lambda t: abs(np.log(t / bound)))
+    assert abs(np.log(nearest / bound)) <= SPEC.thickness_tol

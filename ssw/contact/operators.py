@@ -199,6 +199,11 @@ def cache_dir() -> Path | None:
     return base / "contact"
 
 
+#: Meshes an :class:`OperatorStore` keeps in memory (the plate design condenses a batch of
+#: plates, then computes their stresses on the same meshes).
+MODELS_KEPT = 16
+
+
 class OperatorStore:
     """Operators by geometry and material, in memory and (optionally) on disk.
 
@@ -211,7 +216,7 @@ class OperatorStore:
     def __init__(self, directory: str | Path | None = "env") -> None:
         self.directory = cache_dir() if directory == "env" else (
             Path(directory) if directory is not None else None)
-        self._models: dict[str, _Model] = {}
+        self._models: OrderedDict[str, _Model] = OrderedDict()
         self._layouts: dict[str, Layout] = {}
         self._bodies: dict[str, BodyOperator] = {}
         self.hits = {"memory": 0, "disk": 0, "built": 0}
@@ -227,9 +232,13 @@ class OperatorStore:
     # -- geometry ---------------------------------------------------------------------------
     def _model(self, geom: Geometry) -> _Model:
         key = geom.key()
-        if key not in self._models:
-            self._models = {key: _build_model(geom)}  # keep one mesh: they are large
-        return self._models[key]
+        if key in self._models:
+            self._models.move_to_end(key)
+            return self._models[key]
+        model = self._models[key] = _build_model(geom)
+        while len(self._models) > MODELS_KEPT:  # the last few meshes (about 1 MB each)
+            self._models.popitem(last=False)
+        return model
 
     def layout(self, geom: Geometry) -> Layout:
         """The retained dofs of ``geom`` (from memory, disk, or by meshing it)."""

@@ -16,16 +16,20 @@ candidates the merit is ``-S``: the most sensitive wins.
 Search (:func:`search`). Per material (and plate diameter and striker speed, when those are
 design variables too) the thickness is continuous: :data:`ssw.design.spec.SCAN_POINTS`
 thicknesses log-spaced over the range (evaluated together: one batched chain run) bracket
-the best one; a batched grid refinement then narrows the bracket in ``ln t``: each round
-evaluates :data:`REFINE_POINTS` equally spaced interior thicknesses together (one batched
-chain run; the scenes are independent, each keeps its own TOF and tangent) and keeps the
-best point's two neighbours as the next bracket, until the round's spacing ``h`` is at most
-``thickness_tol``. For a merit unimodal in the bracket (what a bracketing search assumes),
-the minimizer then lies within ``h`` of the best point evaluated: the optimum to
-``thickness_tol``, as Brent's bounded method (``fminbound``: Forsythe, Malcolm & Moler 1977)
-reaches it, in three or four batched runs instead of its 9-11 sequential evaluations. The
-contact operators of each thickness are built once and cached on disk
-(:mod:`ssw.contact.operators`), so a repeated design costs the chain and the stresses only.
+the best one; a batched refinement then narrows the bracket in ``ln t`` (the best point
+evaluated and its two neighbours): each round evaluates :data:`REFINE_POINTS` thicknesses
+together (one batched chain run; the scenes are independent, each keeps its own TOF and
+tangent), equally spaced inside the bracket, or, when the best point is a bound of the
+range (every plate yields and the thinnest least), approaching that bound geometrically
+down to :data:`BOUND_SHARE` ``thickness_tol`` from it. The search ends when both of the
+best point's neighbours are within ``thickness_tol`` of it: for a merit unimodal in the
+bracket (what a bracketing search assumes) the minimizer lies between them, so the best
+point is the optimum to ``thickness_tol``, as Brent's bounded method (``fminbound``:
+Forsythe, Malcolm & Moler 1977) reaches it; in one to four batched runs instead of its
+9-11 sequential evaluations (one round, four plates, when the optimum is on a bound).
+The contact operators of each thickness are built once and cached on disk
+(:mod:`ssw.contact.operators`), so a repeated design costs the chain and the stresses
+only.
 
 Ranking (:func:`rank`). The recommended candidate has the least merit of all candidates
 evaluated (scan, search and the device's own plate). The Pareto front is the set of
@@ -54,9 +58,13 @@ from ssw.design.spec import DesignSpec
 HARD_WEIGHT = 1.0e6
 #: Weight of the soil limit's violation in the merit.
 SOFT_WEIGHT = 10.0
-#: Interior thicknesses evaluated together per round of the search's refinement (the
-#: bracket shrinks by (REFINE_POINTS + 1) / 2 per round).
+#: Thicknesses evaluated together per round of the search's refinement (inside the
+#: bracket, the bracket shrinks by (REFINE_POINTS + 1) / 2 per round).
 REFINE_POINTS = 4
+#: With the best thickness on a bound of the range, a round's points approach it
+#: geometrically, the nearest at this share of ``thickness_tol`` from it (below 1: room for
+#: the rounding of thicknesses to the quantum).
+BOUND_SHARE = 0.9
 
 
 def merit(c: Candidate) -> float:
@@ -125,35 +133,47 @@ def search(ev: Evaluator, material: str, plate_diameter: float | None = None,
                    ["scan"] * xs.size + [src for _, _, src in extra])[: xs.size]
     seen.extend(scan)
     values = [merit(c) for c in scan]
-    k = int(np.argmin(values))
-    x, f = _refine(xs, np.asarray(values), k)
-    nfev, rounds, h = xs.size, 0, (xs[-1] - xs[0]) / max(xs.size - 1, 1)
-    message = f"the scan's spacing {h:.3g} in ln t is within the tolerance"
-    while h > spec.thickness_tol:
-        h = (x[-1] - x[0]) / (REFINE_POINTS + 1)
-        grid = x[0] + h * np.arange(1, REFINE_POINTS + 1)
+    # ln of the thicknesses evaluated (rounded to the quantum), sorted with their merits
+    x, f = _refine(np.log([c.thickness for c in scan]), np.asarray(values),
+                   int(np.argmin(values)))
+    tol = spec.thickness_tol
+    nfev, rounds = xs.size, 0
+    while True:
+        b = int(np.argmin(f))
+        err = max(x[b] - x[0], x[-1] - x[b])  # the minimizer lies in [x[0], x[-1]]
+        if err <= tol:
+            message = (f"batched refinement: {rounds} rounds of up to {REFINE_POINTS} "
+                       f"thicknesses, the best within {err:.3g} in ln t of its bracket's "
+                       f"ends (tolerance {tol:g})")
+            break
+        width = x[-1] - x[0]
+        if b in (0, x.size - 1):  # the best is a bound of the range: geometric toward it
+            r = (BOUND_SHARE * tol / width) ** (1.0 / REFINE_POINTS)
+            off = width * r ** np.arange(1, REFINE_POINTS + 1)
+            grid = x[b] + off if b == 0 else x[b] - off
+        else:  # uniform over the bracket
+            grid = x[0] + width / (REFINE_POINTS + 1) * np.arange(1, REFINE_POINTS + 1)
         known = {quantize(c.thickness) for c in seen}
         new = []
         for g in grid:  # thicknesses are rounded: one evaluation per rounded thickness
             q = quantize(float(np.exp(g)))
             if q not in known:
                 known.add(q)
-                new.append(g)
+                new.append(q)
         if not new:
             message = (f"the thicknesses of the next round are those evaluated (rounded to "
-                       f"{THICKNESS_QUANTUM:g} m), spacing {h:.3g} in ln t")
+                       f"{THICKNESS_QUANTUM:g} m): the best within {err:.3g} in ln t of its "
+                       f"bracket's ends (tolerance {tol:g})")
             break
-        cands = ev.many([(material, float(np.exp(g))) for g in new], plate_diameter,
-                        striker_velocity, ["search"] * len(new))
+        cands = ev.many([(material, t) for t in new], plate_diameter, striker_velocity,
+                        ["search"] * len(new))
         seen.extend(cands)
         nfev += len(new)
         rounds += 1
-        pts = np.concatenate([x, new])
+        pts = np.concatenate([x, np.log([c.thickness for c in cands])])
         vals = np.concatenate([f, [merit(c) for c in cands]])
         order = np.argsort(pts, kind="stable")
         x, f = _refine(pts[order], vals[order], int(np.argmin(vals[order])))
-        message = (f"batched grid refinement: {rounds} rounds of {REFINE_POINTS} thicknesses, "
-                   f"last spacing {h:.3g} in ln t (tolerance {spec.thickness_tol:g})")
     best = min(seen, key=merit)
     return Search(material, best.plate_diameter, best.striker_velocity, best,
                   tuple(c.thickness for c in seen), nfev, message)

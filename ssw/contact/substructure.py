@@ -161,8 +161,9 @@ def schur_factor(K: Any, n_int: int) -> tuple[np.ndarray, float, int, bool, Any]
             norm = float(np.max(abs(K).sum(axis=1)))
             berr = float(np.max(np.abs(r)) / (norm * np.max(np.abs(x))))
             if berr <= BACKWARD_ERROR_TOL:
-                L22 = lu.L[:, n_int:].toarray()[n_int:]
-                U22 = lu.U[:, n_int:].toarray()[n_int:]
+                # the trailing blocks: columns first (CSC), then their rows, then dense
+                L22 = lu.L[:, n_int:][n_int:].toarray()
+                U22 = lu.U[:, n_int:][n_int:].toarray()
                 return L22 @ U22, berr, int(lu.L.nnz + lu.U.nnz), False, lu
     except RuntimeError:  # SuperLU: "Factor is exactly singular"
         pass

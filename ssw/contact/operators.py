@@ -390,6 +390,11 @@ def keeping_factors(n: int) -> Iterator[None]:
     ----------
     n : int
         How many to keep (the bodies whose stresses follow: two per plate scene).
+
+    Yields
+    ------
+    None
+        Nothing; the block runs with the factorizations kept.
     """
     old = _KEPT[0]
     _KEPT[0] = int(n)
@@ -401,11 +406,24 @@ def keeping_factors(n: int) -> Iterator[None]:
 
 
 def take_factor(geom: Geometry, which: str, nu: float) -> tuple[Any, Any] | None:
-    """The body matrix and the pivot-free LU of the whole body matrix of the ``plate`` or
-    the ``soil`` of ``geom`` at ``nu`` that its condensation computed in this process
-    (:func:`ssw.contact.substructure.schur_factor`), removed from memory; None when the
-    operator came from disk or memory, was condensed with pivoting, or was not kept
-    (:func:`keeping_factors`)."""
+    """The body matrix and its pivot-free LU that the condensation of a body computed in
+    this process (:func:`ssw.contact.substructure.schur_factor`), removed from memory.
+
+    Parameters
+    ----------
+    geom : Geometry
+        The scene's geometry.
+    which : str
+        ``plate`` or ``soil``.
+    nu : float
+        The body's Poisson's ratio.
+
+    Returns
+    -------
+    tuple or None
+        ``(BodyMatrix, SuperLU)``; None when the operator came from disk or memory, was
+        condensed with pivoting, or was not kept (:func:`keeping_factors`).
+    """
     return _FACTORS.pop((geom.key(), which, float(nu)), None)
 
 

@@ -194,7 +194,18 @@ class LeadingBlock:
         self.U = lu.U.tocsr()[:n, :n]
 
     def solve(self, b: np.ndarray) -> np.ndarray:
-        """``K_II^-1 b`` for ``b`` (n,) or (n, k)."""
+        """``K_II^-1 b``.
+
+        Parameters
+        ----------
+        b : numpy.ndarray
+            (n,) or (n, k) right-hand sides.
+
+        Returns
+        -------
+        numpy.ndarray
+            The solutions, shape of ``b``.
+        """
         from scipy.sparse.linalg import spsolve_triangular
 
         y = spsolve_triangular(self.L, b, lower=True, unit_diagonal=True)

@@ -142,11 +142,23 @@ def schur_complement(K: Any, n_int: int) -> tuple[np.ndarray, float, int, bool]:
 
 
 def schur_factor(K: Any, n_int: int) -> tuple[np.ndarray, float, int, bool, Any]:
-    """:func:`schur_complement` and the factorization it came from: ``(S,
-    backward_error, nnz, pivoted, lu)``, ``lu`` the pivot-free SuperLU factorization of
-    the whole ``K`` (its leading blocks ``L_II``, ``U_II`` factor ``K_II``: the body's
-    interior solves reuse them, :mod:`ssw.contact.stress`), or None when the pivoted
-    fallback was used."""
+    """:func:`schur_complement` and the factorization it came from.
+
+    Parameters
+    ----------
+    K : scipy.sparse matrix
+        Square, the retained dofs ``B`` last (from ``n_int`` on).
+    n_int : int
+        The number of internal dofs.
+
+    Returns
+    -------
+    tuple
+        ``(S, backward_error, nnz, pivoted, lu)``: those of :func:`schur_complement` and
+        ``lu`` the pivot-free SuperLU factorization of the whole ``K`` (its leading blocks
+        ``L_II``, ``U_II`` factor ``K_II``: the body's interior solves reuse them,
+        :mod:`ssw.contact.stress`), or None when the pivoted fallback was used.
+    """
     from scipy.sparse.linalg import splu
 
     K = K.tocsc()

@@ -157,3 +157,79 @@ def test_retained_displacements_meet_the_sphere(store, interface):
     assert np.all(up[:nc] <= surface + 1e-9 * d)
     if interface != "unilateral":
         assert us == pytest.approx(up[nc:], rel=1e-12, abs=0)
+
+
+def test_interior_solve_from_the_condensation_factor_is_the_bodys_own(tmp_path):
+    """The body field that reuses its condensation's LU (the leading blocks of the whole
+    body matrix's factors, ssw.contact.operators.keeping_factors) gives the displacements
+    of a body field that assembles and factors ``K_II`` itself, and the interior solve
+    satisfies the body's own equilibrium ``K_II u_I = -K_IB u_B``."""
+    from ssw.contact.operators import geometry_of, keeping_factors, take_factor
+    from ssw.contact.scene import settings_of
+    from ssw.contact.stress import BodyField, LeadingBlock, retained_dofs
+
+    store = OperatorStore(tmp_path)  # a cold store: the operators are condensed here
+    cfg = settings_of({"interface": "frictionless"})
+    geom = geometry_of(cfg, 0.2e-3, R, 2e-5, "frictionless")
+    model = store._model(geom)
+    u_B = {}
+    for which, nu in (("plate", 0.33), ("soil", 0.3)):
+        with keeping_factors(2):
+            store.body(geom, which, nu)
+            prepared = take_factor(geom, which, nu)
+        assert prepared is not None and take_factor(geom, which, nu) is None
+        b_nodes, b_comps = retained_dofs(model, which)
+        tri = model.tri[model.body == (1 if which == "plate" else 0)]
+        own = BodyField(model.nodes, tri, model.free, b_nodes, b_comps, nu)
+        reused = BodyField(model.nodes, tri, model.free, b_nodes, b_comps, nu, prepared)
+        assert isinstance(reused._lu, LeadingBlock)
+        u_B[which] = np.random.default_rng(3).normal(size=(b_nodes.size, 3)) * 1e-6
+        a, b = own.displacements(u_B[which]), reused.displacements(u_B[which])
+        assert b == pytest.approx(a, rel=1e-9, abs=1e-12 * np.max(np.abs(a)))
+        K = prepared[0].K.tocsr()
+        n = prepared[0].n_int
+        x = np.empty((n, 3))
+        x[:] = reused._lu.solve(-(K[:n, n:] @ u_B[which]))
+        res = K[:n, :n] @ x + K[:n, n:] @ u_B[which]
+        assert np.max(np.abs(res)) <= 1e-10 * np.max(np.abs(K[:n, n:] @ u_B[which]))
+    # outside keeping_factors nothing is kept
+    store2 = OperatorStore(tmp_path / "other")
+    store2.body(geom, "soil", 0.25)
+    assert take_factor(geom, "soil", 0.25) is None
+
+
+@pytest.mark.parametrize("interface, plate", [("frictionless", (200e9, 0.26)),
+                                               ("unilateral", (200e9, 0.26)),
+                                               ("bonded", (3.5e9, 0.36))])
+def test_state_at_a_force_is_the_traced_paths(store, interface, plate):
+    """The contact state that carries a given force, found by Newton steps on the LCP at
+    single indentations (ssw.contact.stress), is the one the exact path traced from zero
+    (ssw.contact.parametric.trace) gives when its piecewise affine force is inverted, on a
+    steel plate whose path lifts off the axis and on a PLA plate."""
+    from ssw.contact.operators import geometry_of, scene_lcp
+    from ssw.contact.parametric import trace
+    from ssw.contact.scene import settings_of
+    from ssw.contact.stress import _state_at_force
+
+    cfg = settings_of({"interface": interface})
+    geom = geometry_of(cfg, 0.2e-3, R, 4e-5, interface)
+    layout = store.layout(geom)
+    P, S = store.body(geom, "plate", plate[1]), store.body(geom, "soil", 0.3)
+    lcp = scene_lcp(layout, P, S, 80e6, plate[0], interface, 2.0 * R)
+    ms = lcp.n_sphere
+    path, _ = trace(lcp.W, lcp.q0, lcp.q1, 4e-5)
+    F_end = float(path.forces(np.array([4e-5]))[0, :ms].sum())
+    force = F_end * np.array([0.003, 0.05, 0.4, 0.97])
+    d, lam, active = _state_at_force(lcp, force, 4e-5)
+    # invert the traced path's force on its pieces
+    br = path.breaks
+    f_hi = path.lam0[:, :ms].sum(1) + br[1:] * path.lam1[:, :ms].sum(1)
+    j = np.searchsorted(f_hi, force)
+    f_lo = path.lam0[j, :ms].sum(1) + br[j] * path.lam1[j, :ms].sum(1)
+    d_ref = br[j] + (force - f_lo) / path.lam1[j, :ms].sum(1)
+    assert d == pytest.approx(d_ref, rel=1e-10)
+    assert lam[:, :ms].sum(1) == pytest.approx(force, rel=1e-10)
+    lam_ref = path.forces(d_ref)
+    assert np.max(np.abs(lam - lam_ref)) <= 1e-9 * np.max(np.abs(lam_ref))
+    assert np.array_equal(active, lam_ref > 0) or np.all(np.abs(lam_ref[active != (lam_ref > 0)])
+                                                        <= 1e-9 * np.max(lam_ref))

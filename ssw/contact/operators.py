@@ -37,12 +37,14 @@ system's copy) is removed and rebuilt, never used.
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import hashlib
 import json
 import os
 import time
 from collections import OrderedDict
+from collections.abc import Iterator
 from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
@@ -197,6 +199,11 @@ def cache_dir() -> Path | None:
     return base / "contact"
 
 
+#: Meshes an :class:`OperatorStore` keeps in memory (the plate design condenses a batch of
+#: plates, then computes their stresses on the same meshes).
+MODELS_KEPT = 16
+
+
 class OperatorStore:
     """Operators by geometry and material, in memory and (optionally) on disk.
 
@@ -209,7 +216,7 @@ class OperatorStore:
     def __init__(self, directory: str | Path | None = "env") -> None:
         self.directory = cache_dir() if directory == "env" else (
             Path(directory) if directory is not None else None)
-        self._models: dict[str, _Model] = {}
+        self._models: OrderedDict[str, _Model] = OrderedDict()
         self._layouts: dict[str, Layout] = {}
         self._bodies: dict[str, BodyOperator] = {}
         self.hits = {"memory": 0, "disk": 0, "built": 0}
@@ -225,9 +232,13 @@ class OperatorStore:
     # -- geometry ---------------------------------------------------------------------------
     def _model(self, geom: Geometry) -> _Model:
         key = geom.key()
-        if key not in self._models:
-            self._models = {key: _build_model(geom)}  # keep one mesh: they are large
-        return self._models[key]
+        if key in self._models:
+            self._models.move_to_end(key)
+            return self._models[key]
+        model = self._models[key] = _build_model(geom)
+        while len(self._models) > MODELS_KEPT:  # the last few meshes (about 1 MB each)
+            self._models.popitem(last=False)
+        return model
 
     def layout(self, geom: Geometry) -> Layout:
         """The retained dofs of ``geom`` (from memory, disk, or by meshing it)."""
@@ -262,7 +273,11 @@ class OperatorStore:
             op = BodyOperator(data["S"], json.loads(str(data["stats"])))
             self.hits["disk"] += 1
         else:
-            op = _condense(self._model(geom), which, float(nu))
+            op, factor = _condense(self._model(geom), which, float(nu))
+            if factor is not None and _KEPT[0] > 0:
+                _FACTORS[(geom.key(), which, float(nu))] = factor
+                while len(_FACTORS) > _KEPT[0]:
+                    _FACTORS.popitem(last=False)
             _save(path, {"S": op.S, "stats": np.asarray(json.dumps(op.stats))})
             self.hits["built"] += 1
             self._cost["count"] += 1
@@ -359,8 +374,62 @@ def _build_model(geom: Geometry) -> _Model:
                   lay, time.perf_counter() - t0)
 
 
-def _condense(model: _Model, which: str, nu: float) -> BodyOperator:
-    """Condense one body of ``model`` (unit E) onto its retained dofs."""
+#: Factorizations of condensed bodies kept in memory for their interior solves (the
+#: stresses of the states just traced: :func:`take_factor`), at most this many, inside
+#: :func:`keeping_factors` only (each holds a sparse LU of a body, tens of MB).
+_FACTORS: OrderedDict[tuple[str, str, float], tuple[Any, Any]] = OrderedDict()
+_KEPT = [0]
+
+
+@contextlib.contextmanager
+def keeping_factors(n: int) -> Iterator[None]:
+    """Within the block, the factorizations of the last ``n`` bodies condensed are kept
+    for :func:`take_factor`; on leaving it every one left is dropped.
+
+    Parameters
+    ----------
+    n : int
+        How many to keep (the bodies whose stresses follow: two per plate scene).
+
+    Yields
+    ------
+    None
+        Nothing; the block runs with the factorizations kept.
+    """
+    old = _KEPT[0]
+    _KEPT[0] = int(n)
+    try:
+        yield
+    finally:
+        _KEPT[0] = old
+        _FACTORS.clear()
+
+
+def take_factor(geom: Geometry, which: str, nu: float) -> tuple[Any, Any] | None:
+    """The body matrix and its pivot-free LU that the condensation of a body computed in
+    this process (:func:`ssw.contact.substructure.schur_factor`), removed from memory.
+
+    Parameters
+    ----------
+    geom : Geometry
+        The scene's geometry.
+    which : str
+        ``plate`` or ``soil``.
+    nu : float
+        The body's Poisson's ratio.
+
+    Returns
+    -------
+    tuple or None
+        ``(BodyMatrix, SuperLU)``; None when the operator came from disk or memory, was
+        condensed with pivoting, or was not kept (:func:`keeping_factors`).
+    """
+    return _FACTORS.pop((geom.key(), which, float(nu)), None)
+
+
+def _condense(model: _Model, which: str, nu: float) -> tuple[BodyOperator, tuple[Any, Any] | None]:
+    """Condense one body of ``model`` (unit E) onto its retained dofs; with the operator,
+    its body matrix and factorization (None after the pivoted fallback)."""
     from ssw.contact.substructure import condense_body, min_degree_order
 
     plate = which == "plate"
@@ -386,7 +455,7 @@ def _condense(model: _Model, which: str, nu: float) -> BodyOperator:
              "pivoted": c.pivoted, "wall_mesh": model.wall_mesh,
              "wall_assemble": c.wall_assemble, "wall_factor": c.wall_factor}
     model.wall_mesh = 0.0  # the mesh is paid once
-    return BodyOperator(c.S, stats)
+    return BodyOperator(c.S, stats), (None if c.factor is None else (c.body, c.factor))
 
 
 @dataclass(frozen=True)

@@ -62,6 +62,7 @@ from ssw.contact.operators import (
     default_store,
     geometry_of,
     scene_lcp,
+    take_factor,
 )
 from ssw.errors import ConfigError, SolverError
 
@@ -120,17 +121,27 @@ class BodyField:
         (nb,) the retained dofs' components (0 = u_r, 1 = u_z), in that order.
     nu : float
         The body's Poisson's ratio.
+    prepared : tuple or None
+        ``(body matrix, LU)`` of this body from its condensation
+        (:func:`ssw.contact.operators.take_factor`): the same matrix, and ``K_II``'s
+        factors are the leading blocks of the LU (no second assembly or factorization).
+        None: assembled and factored here.
     """
 
     def __init__(self, nodes: np.ndarray, tri: np.ndarray, free: np.ndarray,
-                 b_nodes: np.ndarray, b_comps: np.ndarray, nu: float) -> None:
+                 b_nodes: np.ndarray, b_comps: np.ndarray, nu: float,
+                 prepared: tuple[Any, Any] | None = None) -> None:
         from ssw.contact.substructure import body_matrix, min_degree_order
 
-        bm = body_matrix(nodes, tri, nu, free, b_nodes, b_comps, min_degree_order)
+        if prepared is None:
+            bm = body_matrix(nodes, tri, nu, free, b_nodes, b_comps, min_degree_order)
+        else:
+            bm = prepared[0]
         K, n_int, ndof, udof, lnodes, ltri = bm.K, bm.n_int, bm.ndof, bm.udof, bm.nodes, bm.tri
         self.n_int, self.ndof = n_int, ndof
         self.KIB = K[:n_int, n_int:].tocsc()
-        self._lu = _factor(K[:n_int, :n_int].tocsc())
+        self._lu = (_factor(K[:n_int, :n_int].tocsc()) if prepared is None
+                    else LeadingBlock(prepared[1], n_int))
         self.udof = udof
         self.nodes = lnodes
         self.tri = ltri
@@ -162,6 +173,43 @@ class BodyField:
                 + 0.5 * eps[:, :, 3] ** 2)
         G = np.asarray(E, float) / (2.0 * (1.0 + self.nu))
         return (np.sqrt(6.0 * dev2) * G).reshape(-1, u_B.shape[1] if u_B.ndim > 1 else 1)
+
+
+class LeadingBlock:
+    """Solves with the leading ``n x n`` block of a matrix from its pivot-free LU (identity
+    row and column permutations): ``K_II = L_II U_II``, the leading blocks of the factors
+    (the trailing rows and columns do not enter them), by two sparse triangular solves.
+
+    Parameters
+    ----------
+    lu : scipy.sparse.linalg.SuperLU
+        The pivot-free factorization of the whole matrix (``perm_r``, ``perm_c`` the
+        identity; :func:`ssw.contact.substructure.schur_factor` checks it).
+    n : int
+        The size of the leading block.
+    """
+
+    def __init__(self, lu: Any, n: int) -> None:
+        self.L = lu.L.tocsr()[:n, :n]
+        self.U = lu.U.tocsr()[:n, :n]
+
+    def solve(self, b: np.ndarray) -> np.ndarray:
+        """``K_II^-1 b``.
+
+        Parameters
+        ----------
+        b : numpy.ndarray
+            (n,) or (n, k) right-hand sides.
+
+        Returns
+        -------
+        numpy.ndarray
+            The solutions, shape of ``b``.
+        """
+        from scipy.sparse.linalg import spsolve_triangular
+
+        y = spsolve_triangular(self.L, b, lower=True, unit_diagonal=True)
+        return spsolve_triangular(self.U, y, lower=False)
 
 
 def _factor(KII: Any) -> Any:
@@ -222,7 +270,8 @@ def body_field(store: OperatorStore, geom: Geometry, which: str, nu: float) -> B
                           "a rigid base or the half-space for the stress field (no subgrade)")
     b_nodes, b_comps = retained_dofs(model, which)
     tri = model.tri[model.body == (1 if which == "plate" else 0)]
-    fld = BodyField(model.nodes, tri, model.free, b_nodes, b_comps, nu)
+    fld = BodyField(model.nodes, tri, model.free, b_nodes, b_comps, nu,
+                    take_factor(geom, which, nu))
     _FIELDS[key] = fld
     while len(_FIELDS) > FIELDS_KEPT:
         _FIELDS.popitem(last=False)
@@ -304,28 +353,82 @@ def equivalent_radius(radius: float, top: tuple[float, float], bead: tuple[float
     return float(radius * (1.0 + e_top / e_bead))
 
 
-def _indentation_at(lcp: Any, force: np.ndarray, guess: float) -> tuple[Any, np.ndarray]:
-    """The LCP's path and the indentations (m) at which the sphere carries ``force`` (N,
-    (k,)): the path is traced to ``guess`` (doubled until it holds the largest force) and
-    the piecewise linear force inverted on its pieces."""
-    from ssw.contact.parametric import trace
+#: Gap tolerance of the LCP solved at one indentation, relative to it (a few ulp of it,
+#: as :data:`ssw.contact.scene.LCP_TOL` per increment).
+STATE_TOL = 1e-12
+#: Newton steps allowed to the indentation of a force (one per affine piece crossed; the
+#: force is piecewise affine and increasing in the indentation).
+NEWTON_STEPS = 100
+
+
+def _state_at_force(lcp: Any, force: np.ndarray, guess: float
+                    ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The contact states at which the sphere carries ``force`` (N, (k,)): indentations (k,)
+    m, constraint forces (k, m) N and active sets (k, m).
+
+    The sphere's force ``f(delta)`` is continuous, piecewise affine and increasing
+    (:mod:`ssw.contact.parametric`); on the piece of an active set ``A`` its slope is
+    ``-1 . (W_AA^-1 q1_A)`` over the sphere's constraints. Newton's step from a state,
+    ``delta + (F - f) / slope``, lands on ``F`` exactly when it stays on the state's piece,
+    which the LCP solved there (:func:`ssw.contact.contact_lcp.solve_lcp`, warm-started
+    from the previous active set) confirms by returning the same active set; otherwise it
+    lands on another piece and steps again. A bracket ``f(lo) < F <= f(hi)`` (``hi``
+    doubled from ``guess`` until it holds ``F``) safeguards the steps (bisection when a
+    step leaves it). The same state as the path traced from 0 and inverted on its pieces
+    (:func:`ssw.contact.parametric.trace`), to round-off, in a few LCP solves instead of
+    one per breakpoint.
+    """
+    from ssw.contact.contact_lcp import solve_lcp
+    from ssw.contact.lapack import cho_solve, cholesky
 
     ms = lcp.n_sphere
+    W, q0, q1 = lcp.W, lcp.q0, lcp.q1
     force = np.atleast_1d(np.asarray(force, float))
-    end = float(guess)
-    for _ in range(60):
-        path, _ = trace(lcp.W, lcp.q0, lcp.q1, end)
-        br = path.breaks
-        f_lo = path.lam0[:, :ms].sum(1) + br[:-1] * path.lam1[:, :ms].sum(1)
-        f_hi = path.lam0[:, :ms].sum(1) + br[1:] * path.lam1[:, :ms].sum(1)
-        if f_hi[-1] >= force.max():
-            j = np.searchsorted(f_hi, force, side="left")
-            slope = path.lam1[j, :ms].sum(axis=1)
-            safe = np.where(slope > 0, slope, 1.0)
-            d = np.where(slope > 0, br[j] + (force - f_lo[j]) / safe, br[j + 1])
-            return path, np.clip(d, br[j], br[j + 1])
-        end *= 2.0
-    raise SolverError(f"no indentation up to {end:.4g} m carries the force {force.max():.4g} N")
+    out_d = np.empty(force.size)
+    out_lam = np.empty((force.size, q0.size))
+    out_act = np.empty((force.size, q0.size), bool)
+    cache: dict = {}
+
+    def state(d: float, act: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float]:
+        g0 = q0 + d * q1
+        lam, act, _ = solve_lcp(W, g0, act, STATE_TOL * d, cache)
+        idx = np.flatnonzero(act)
+        if idx.size == 0:
+            return lam, act, 0.0, 0.0
+        cf = cholesky(W[idx[:, None], idx], lower=False, clean=False)
+        lam1 = -cho_solve(cf, q1[idx], lower=False)
+        return lam, act, float(lam[:ms].sum()), float(lam1[idx < ms].sum())
+
+    for k, F in enumerate(force):
+        hi = float(guess)
+        # warm start: Hertz's contact radius (a^2 = R delta, half the geometric overlap's
+        # r^2 = 2 R delta) and every touching pair of an unilateral interface
+        act = (q0 + 0.5 * hi * q1 < 0) | ((q1 == 0) & (q0 == 0))
+        for _ in range(60):
+            lam, act, f, slope = state(hi, act)
+            if f >= F:
+                break
+            hi *= 2.0
+        else:
+            raise SolverError(f"no indentation up to {hi:.4g} m carries the force {F:.4g} N")
+        lo, d = 0.0, hi
+        for _ in range(NEWTON_STEPS):
+            step = d + (F - f) / slope if slope > 0 else 0.5 * (lo + hi)
+            nxt = step if lo < step <= hi else 0.5 * (lo + hi)
+            lam_n, act_n, f_n, slope_n = state(nxt, act)
+            if np.array_equal(act_n, act) and nxt == step:
+                d, lam, act = nxt, lam_n, act_n  # on the piece Newton stepped along: f = F
+                break
+            if f_n >= F:
+                hi = nxt
+            else:
+                lo = nxt
+            d, lam, act, f, slope = nxt, lam_n, act_n, f_n, slope_n
+        else:
+            raise SolverError(f"the indentation of the force {F:.4g} N was not found in "
+                              f"{NEWTON_STEPS} Newton steps")
+        out_d[k], out_lam[k], out_act[k] = d, lam, act
+    return out_d, out_lam, out_act
 
 
 def contact_stresses(
@@ -413,10 +516,11 @@ def contact_stresses(
             r_eq = equivalent_radius(radius, (top_E, top[1]), bead)
             lcp = scene_lcp(layout, plate_op, soil_op, float(Eu),
                             plate[0] if has_plate else None, interface, r_eq)
-            path, d[ks] = _indentation_at(lcp, f_R, float(d[ks].max()))
-            lam = path.forces(d[ks])
+            d[ks], lam, active = _state_at_force(lcp, f_R, float(d[ks].max()))
+        else:
+            active = path.active
         ms = lcp.n_sphere
-        if np.any(path.active[:, ms - 1]):
+        if np.any(active[:, ms - 1]):
             k = int(ks[np.argmax(d[ks])])
             raise SolverError(f"the contact zone reached the last candidate (r = "
                               f"{layout.r[-1]:.4g} m) at the state {k}: soil E {E[k]:.4g} Pa, "

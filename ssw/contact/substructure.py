@@ -32,7 +32,7 @@ matrix scales with ``E`` at fixed ``nu``), so ``S`` is returned in N/m per Pa (m
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -61,6 +61,8 @@ class Condensation:
     pivoted: bool
     wall_assemble: float
     wall_factor: float
+    body: BodyMatrix | None = field(default=None, repr=False, compare=False)
+    factor: Any = field(default=None, repr=False, compare=False)
 
 
 def min_degree_order(rows: np.ndarray, cols: np.ndarray, n: int) -> np.ndarray:
@@ -136,6 +138,27 @@ def schur_complement(K: Any, n_int: int) -> tuple[np.ndarray, float, int, bool]:
     :data:`BACKWARD_ERROR_TOL` (module docstring), else from a pivoted LU of ``K_II`` and one
     solve per column of ``K_IB``.
     """
+    return schur_factor(K, n_int)[:4]
+
+
+def schur_factor(K: Any, n_int: int) -> tuple[np.ndarray, float, int, bool, Any]:
+    """:func:`schur_complement` and the factorization it came from.
+
+    Parameters
+    ----------
+    K : scipy.sparse matrix
+        Square, the retained dofs ``B`` last (from ``n_int`` on).
+    n_int : int
+        The number of internal dofs.
+
+    Returns
+    -------
+    tuple
+        ``(S, backward_error, nnz, pivoted, lu)``: those of :func:`schur_complement` and
+        ``lu`` the pivot-free SuperLU factorization of the whole ``K`` (its leading blocks
+        ``L_II``, ``U_II`` factor ``K_II``: the body's interior solves reuse them,
+        :mod:`ssw.contact.stress`), or None when the pivoted fallback was used.
+    """
     from scipy.sparse.linalg import splu
 
     K = K.tocsc()
@@ -150,9 +173,10 @@ def schur_complement(K: Any, n_int: int) -> tuple[np.ndarray, float, int, bool]:
             norm = float(np.max(abs(K).sum(axis=1)))
             berr = float(np.max(np.abs(r)) / (norm * np.max(np.abs(x))))
             if berr <= BACKWARD_ERROR_TOL:
-                L22 = lu.L[:, n_int:].toarray()[n_int:]
-                U22 = lu.U[:, n_int:].toarray()[n_int:]
-                return L22 @ U22, berr, int(lu.L.nnz + lu.U.nnz), False
+                # the trailing blocks: columns first (CSC), then their rows, then dense
+                L22 = lu.L[:, n_int:][n_int:].toarray()
+                U22 = lu.U[:, n_int:][n_int:].toarray()
+                return L22 @ U22, berr, int(lu.L.nnz + lu.U.nnz), False, lu
     except RuntimeError:  # SuperLU: "Factor is exactly singular"
         pass
     # stable fallback: threshold-pivoted LU of K_II, one solve per retained dof
@@ -165,7 +189,7 @@ def schur_complement(K: Any, n_int: int) -> tuple[np.ndarray, float, int, bool]:
         np.max(np.abs(KIB)))
     berr = float(np.max(np.abs(r)) / denom) if denom > 0 else 0.0
     S = K[n_int:, n_int:].toarray() - K[n_int:, :n_int] @ X
-    return np.asarray(S), berr, int(lu.L.nnz + lu.U.nnz), True
+    return np.asarray(S), berr, int(lu.L.nnz + lu.U.nnz), True, None
 
 
 @dataclass(frozen=True)
@@ -245,9 +269,9 @@ def condense_body(
     bm = body_matrix(nodes, tri, nu, free, b_nodes, b_comps, order_nodes, E)
     K, n_int, ndof, scale = bm.K, bm.n_int, bm.ndof, bm.scale
     t1 = time.perf_counter()
-    S, berr, nnz, pivoted = schur_complement(K, n_int)
+    S, berr, nnz, pivoted, lu = schur_factor(K, n_int)
     t2 = time.perf_counter()
     S = 0.5 * (S + S.T) * scale
     if S.shape != (b_nodes.size,) * 2 or not np.all(np.isfinite(S)):
         raise SolverError("the condensed stiffness of a substructure is not finite")
-    return Condensation(S, int(ndof), nnz, berr, pivoted, t1 - t0, t2 - t1)
+    return Condensation(S, int(ndof), nnz, berr, pivoted, t1 - t0, t2 - t1, bm, lu)

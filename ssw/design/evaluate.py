@@ -261,10 +261,8 @@ class Evaluator:
                   ) -> list[Candidate]:
         """The candidates ``keys`` ((material, thickness, diameter, speed)): one fem wall
         each, their chains in one run (grouped by time step), then each one's stresses."""
-        from ssw.chain.integrate import time_step
-        from ssw.chain.run import run_peaks
-        from ssw.tof.api import forward_ok, tof_derivatives
-        from ssw.walls.fem import concatenate, fem_wall
+        from ssw.contact.operators import keeping_factors
+        from ssw.walls.fem import fem_wall
 
         t0 = time.perf_counter()
         spec = self.spec
@@ -279,8 +277,22 @@ class Evaluator:
                 raise ConfigError("thickness", t, "a plate thickness > 0 m")
             plate_yield_stress(self.materials[material])  # designed against it: known first
             ps.append(candidate_params(self.params, self.materials[material], t, D, v))
-        walls = [fem_wall(p, E, nu, contact=self.contact, operators=self.store, with_dE=True)
-                 for p in ps]
+        with keeping_factors(2 * len(ps)):  # the stresses below reuse the bodies' LU
+            walls = [fem_wall(p, E, nu, contact=self.contact, operators=self.store,
+                              with_dE=True) for p in ps]
+            return self._finish(keys, sources, ps, walls, t0)
+
+    def _finish(self, keys: list[tuple[str, float, float, float]], sources: list[str],
+                ps: list[ChainParams], walls: list[Any], t0: float) -> list[Candidate]:
+        """The chains of the candidates' walls in one run per time step, then each one's
+        stresses (:meth:`_candidate`)."""
+        from ssw.chain.integrate import time_step
+        from ssw.chain.run import run_peaks
+        from ssw.tof.api import forward_ok, tof_derivatives
+        from ssw.walls.fem import concatenate
+
+        spec = self.spec
+        E = spec.grid
         n = len(keys)
         tof: list[np.ndarray] = [np.empty(0)] * n
         dtof: list[np.ndarray] = [np.empty(0)] * n

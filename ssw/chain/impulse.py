@@ -73,27 +73,53 @@ def psi(x: np.ndarray, tangent: bool = False) -> tuple[np.ndarray, np.ndarray | 
     tuple
         ``(psi, psi')``, (m,) each (None without ``tangent``).
     """
-    y = np.maximum(x[:, None] + OFFSETS, 0.0)
-    y25 = y * y * np.sqrt(y)
-    # explicit sums (not a matrix product, whose rounding may follow the batch's size): a
-    # scene's force does not depend on the scenes run with it
-    val = _weighted(y25 * y)
+    y = np.add(x[:, None], OFFSETS)
+    np.maximum(y, 0.0, out=y)
+    y25 = np.multiply(y, y)
+    y25 *= np.sqrt(y)
     if not tangent:
-        return val, None
-    return val, 3.5 * _weighted(y25)
+        y *= y25
+        return _weighted(y), None
+    # both sums weighted at once: rows (y^3.5, y^2.5)
+    both = np.empty((2, *y.shape))
+    np.multiply(y25, y, out=both[0])
+    both[1] = y25
+    val, dval = _weighted(both)
+    dval *= 3.5
+    return val, dval
 
 
 def _weighted(y: np.ndarray) -> np.ndarray:
-    """``y @ WEIGHTS`` for (m, 3) ``y``, in a fixed order."""
-    return y[:, 0] * WEIGHTS[0] + y[:, 1] * WEIGHTS[1] + y[:, 2] * WEIGHTS[2]
+    """``y @ WEIGHTS`` over the last axis (length 3), in a fixed order: explicit sums,
+    not a matrix product, whose rounding may follow the batch's size (a scene's force
+    does not depend on the scenes run with it)."""
+    t = np.multiply(y, WEIGHTS)
+    out = np.add(t[..., 0], t[..., 1])
+    out += t[..., 2]
+    return out
 
 
-def near_events(x: np.ndarray) -> np.ndarray:
-    """Flat indices of the contacts near an event: ``-1 < x < FAR``, ``x = d / |delta|``
-    (NaN, a contact at rest at ``d = 0``, is not)."""
-    m = x > -1.0
-    m &= x < FAR
-    return m.ravel().nonzero()[0]
+def near_events(x: np.ndarray, upper: float = FAR) -> np.ndarray:
+    """Flat indices of the contacts near an event: ``-1 < x < upper``, ``x = d / |delta|``
+    (NaN, a contact at rest at ``d = 0``, is not).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        ``d / |delta|``, any shape, C-contiguous.
+    upper : float
+        The bound above: :data:`FAR` for the Hertz force's average, 1 for the dashpot's
+        share (:func:`closed_share`).
+
+    Returns
+    -------
+    numpy.ndarray
+        Flat indices (int).
+    """
+    xf = x.reshape(-1)
+    m = xf > -1.0
+    m &= xf < upper
+    return m.nonzero()[0]
 
 
 def hertz_force(d: np.ndarray, a: np.ndarray, x: np.ndarray, A: float | np.ndarray,
@@ -104,17 +130,18 @@ def hertz_force(d: np.ndarray, a: np.ndarray, x: np.ndarray, A: float | np.ndarr
     Parameters
     ----------
     d : numpy.ndarray
-        Overlaps (m), any shape (the bead-bead contacts (N - 1, n), or with a wall's row).
+        Overlaps (m), any shape (the bead-bead contacts (N - 1, n), or with a wall's row),
+        C-contiguous.
     a : numpy.ndarray
-        ``|d'| dt`` (m), same shape.
+        ``|d'| dt`` (m), same shape, C-contiguous.
     x : numpy.ndarray
-        ``d / a``, same shape.
+        ``d / a``, same shape, C-contiguous.
     A : float or numpy.ndarray
         Hertz coefficient (N/m^1.5), a scalar or one per contact (same shape).
     near : numpy.ndarray
         Flat indices of the contacts near an event (:func:`near_events`).
     out : numpy.ndarray
-        N, same shape, written.
+        N, same shape, C-contiguous, written.
     tangent : bool
         Also return ``dF/dd`` (N/m) and ``dF/da`` (N/m), else None.
 
@@ -141,19 +168,36 @@ def hertz_force(d: np.ndarray, a: np.ndarray, x: np.ndarray, A: float | np.ndarr
     fd = fa = None
     if tangent:
         # d/dd [d^1.5 P(r)] = d^0.5 (1.5 P - 2 r P'), d/da = d^1.5 P' 2 r / a = 2 P' a d^-0.5
-        dpoly = c1 + 2.0 * c2 * r
-        fd = A * sq * (1.5 * poly - 2.0 * r * dpoly)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            fa = np.where(dp > 0, 2.0 * A * dpoly * a / np.where(dp > 0, sq, 1.0), 0.0)
+        dpoly = np.multiply(r, 2.0 * c2)
+        dpoly += c1
+        poly *= 1.5
+        r *= 2.0
+        r *= dpoly
+        poly -= r
+        fd = np.multiply(sq, A)
+        fd *= poly
+        # 2 A P' a / sqrt(d) where d > 0, else 0 (sq + (sq == 0) is sq, or 1 at d <= 0)
+        closed = dp > 0
+        fa = np.multiply(dpoly, 2.0 * A)
+        fa *= a
+        sq += ~closed
+        fa /= sq
+        fa *= closed
     if near.size:
-        an = a.flat[near]
-        xn = x.flat[near]
+        af, xf, of = a.reshape(-1), x.reshape(-1), out.reshape(-1)
+        an = af[near]
+        xn = xf[near]
         val, dval = psi(xn, tangent)
-        s = (A if np.ndim(A) == 0 else np.asarray(A).flat[near]) * np.sqrt(an)
-        out.flat[near] = s * an * val
+        s = np.sqrt(an)
+        s *= A if np.isscalar(A) else np.asarray(A).reshape(-1)[near]
+        of[near] = s * an * val
         if tangent:
-            fd.flat[near] = s * dval
-            fa.flat[near] = s * (1.5 * val - xn * dval)
+            fd.reshape(-1)[near] = s * dval
+            xn *= dval
+            val *= 1.5
+            val -= xn
+            val *= s
+            fa.reshape(-1)[near] = val
     return fd, fa
 
 
@@ -165,9 +209,9 @@ def closed_share(d: np.ndarray, a: np.ndarray, near: np.ndarray, tangent: bool =
     Parameters
     ----------
     d : numpy.ndarray
-        Overlaps (m), any shape.
+        Overlaps (m), any shape, C-contiguous.
     a : numpy.ndarray
-        ``|d'| dt`` (m), same shape.
+        ``|d'| dt`` (m), same shape, C-contiguous.
     near : numpy.ndarray
         Flat indices of the contacts with ``|d| < a`` (others are 0 or 1).
     tangent : bool
@@ -184,11 +228,12 @@ def closed_share(d: np.ndarray, a: np.ndarray, near: np.ndarray, tangent: bool =
         gd = np.zeros_like(d)
         ga = np.zeros_like(d)
     if near.size:
-        an = a.flat[near]
-        x = d.flat[near] / an
-        share.flat[near] = np.where(x <= 0, 0.5 * (1.0 + x) ** 2, 1.0 - 0.5 * (1.0 - x) ** 2)
+        an = a.reshape(-1)[near]
+        x = d.reshape(-1)[near] / an
+        share.reshape(-1)[near] = np.where(x <= 0, 0.5 * (1.0 + x) ** 2,
+                                           1.0 - 0.5 * (1.0 - x) ** 2)
         if tangent:
             slope = 1.0 - np.abs(x)
-            gd.flat[near] = slope / an
-            ga.flat[near] = -slope * x / an
+            gd.reshape(-1)[near] = slope / an
+            ga.reshape(-1)[near] = -slope * x / an
     return share, gd, ga

@@ -268,6 +268,25 @@ def contact_differences(x: np.ndarray) -> np.ndarray:
     return out
 
 
+class _Workspace:
+    """Buffers of a step for ``n`` active scenes (reused from step to step): the contacts'
+    overlaps and rates ``D`` (2, N, n), ``|rate| dt`` and ``d / (|rate| dt)`` (N, n), the
+    contact forces ``f`` (N, n) as rows 1.. of ``fz`` (row 0 zero: the net force on every
+    bead is one subtraction), and with ``k`` sensitivities their (N, n, k) counterparts."""
+
+    def __init__(self, N: int, n: int, k: int | None) -> None:
+        self.D = np.empty((2, N, n))
+        self.a = np.empty((N, n))
+        self.x = np.empty((N, n))
+        self.fz = np.zeros((N + 1, n))
+        self.f = self.fz[1:]
+        if k is not None:
+            self.DT = np.empty((2, N, n, k))
+            self.dfz = np.zeros((N + 1, n, k))
+            self.df = self.dfz[1:]
+            self.dtmp = np.empty((N - 1, n, k))
+
+
 class _StopRule:
     """Per-scene state of the early-stop rule (module docstring); arrays over all scenes."""
 
@@ -407,7 +426,11 @@ def simulate(
 
     # internal layout (N, n_scenes): every bead's row is contiguous
     u0, v0 = initial if initial is not None else initial_state(b, wall)
-    u, v = np.ascontiguousarray(u0.T), np.ascontiguousarray(v0.T)
+    # positions and velocities stacked (2, N, n), so that one subtraction gives the
+    # contacts' overlaps and their rates; the workspace follows the active scenes
+    z = np.stack([u0.T, v0.T])
+    u, v = z
+    ws = _Workspace(N, n, None if tg is None else tg.k)
     peak_ind = u[-1].copy()  # per active scene
     peak_all = np.empty(n)
     peak_f_all = np.empty(n)
@@ -422,7 +445,12 @@ def simulate(
         c_E, c_P = tg.col("E"), tg.col("preload")
         c_m0 = tg.col("striker_mass")
         c_ms = None if p.uniform else tg.col("sensor_mass")
-        U, V = initial_tangent(b, wall, u0, tg)
+        # (bead, column) of the masses differentiated: the striker's, the sensor's
+        mass_at = [(i, c) for i, c in ((0, c_m0), (s, c_ms)) if c is not None]
+        mass_rows = np.array([i for i, _ in mass_at], int)
+        mass_cols = np.array([c for _, c in mass_at], int)
+        ZT = np.stack(initial_tangent(b, wall, u0, tg))
+        U, V = ZT
         dE_all = np.zeros((n, tg.k))
         if c_E is not None:
             dE_all[:, c_E] = 1.0
@@ -441,12 +469,14 @@ def simulate(
         the half-step velocities ``v``; the dashpot at the new time's velocity, ``v + dt/2
         acc`` with the last accelerations ``acc``) and, for the sensitivities and the
         dashpots' work, what they were made of."""
-        d = contact_differences(u)
-        dv = contact_differences(v)
-        a = np.abs(dv)
+        D = ws.D
+        np.subtract(z[:, :-1], z[:, 1:], out=D[:, :-1])
+        D[:, -1] = z[:, -1]
+        d, dv = D
+        a = np.abs(dv, out=ws.a)
         a *= dt
-        x = d / a  # NaN or inf where a contact does not move (errors ignored: simulate)
-        f = np.empty_like(u)
+        x = np.divide(d, a, out=ws.x)  # NaN or inf where a contact does not move
+        f = ws.f
         wparts = None
         near = near_events(x[:-1])
         fd, fa = hertz_force(d[:-1], a[:-1], x[:-1], A, near, f[:-1], tangent=tg is not None)
@@ -468,15 +498,16 @@ def simulate(
             # the dashpot's velocity at the new time: v_half + dt/2 a_old, to O(dt^2) (the
             # half-step velocity would make the damped scheme first order)
             dvp = dv if acc is None else dv + half * contact_differences(acc)
-            touch = ((x > -1.0) & (x < 1.0)).ravel().nonzero()[0]
-            share, gd, ga = closed_share(d, a, touch, tangent=tg is not None)
+            # the share's own derivatives act through the dashpot only
+            share, gd, ga = closed_share(d, a, near_events(x, 1.0),
+                                         tangent=tg is not None and damping > 0.0)
             if damping > 0.0:
                 f += damping * dvp * share
         return f, (fd, fa, dv, dvp, share, gd, ga, wparts)
 
     def accel(f: np.ndarray) -> np.ndarray:
-        net = -f
-        net[1:] += f[:-1]
+        # f is ws.f, rows 1.. of ws.fz (row 0 zero): net force F_(i-1) - F_i in one go
+        net = np.subtract(ws.fz[:-1], ws.fz[1:])
         if has_preload:
             net[1] += preload
         net *= inv_m
@@ -490,19 +521,25 @@ def simulate(
         accelerations ``Acc_old`` (``dfw`` the wall force's (n, k) from a stateful wall,
         else None)."""
         fd, fa, dv, dvp, share, gd, ga, wparts = parts
-        dD = contact_differences(U)
-        dDV = contact_differences(V)
+        DT = ws.DT
+        np.subtract(ZT[:, :-1], ZT[:, 1:], out=DT[:, :-1])
+        DT[:, -1] = ZT[:, -1]
+        dD, dDV = DT
         # d|dv dt| = sign(dv) dt dDV
-        sdt = np.sign(dv) * dt
-        df = np.empty_like(U)
+        sdt = np.sign(dv)
+        sdt *= dt
+        df = ws.df
         np.multiply(dD[:-1], fd[:, :, None], out=df[:-1])
-        df[:-1] += (fa * sdt[:-1])[:, :, None] * dDV[:-1]
+        fa *= sdt[:-1]
+        tmp = np.multiply(dDV[:-1], fa[:, :, None], out=ws.dtmp)
+        df[:-1] += tmp
         if dfw is not None:
             df[-1] = dfw
         else:
             wd, wa, wE = wparts
             np.multiply(U[-1], np.asarray(wd)[:, None], out=df[-1])
-            df[-1] += (wa * sdt[-1])[:, None] * V[-1]
+            if not (np.isscalar(wa) and wa == 0.0):
+                df[-1] += (wa * sdt[-1])[:, None] * V[-1]
             if c_E is not None:
                 df[-1, :, c_E] += wE
         if damping > 0.0:
@@ -513,15 +550,14 @@ def simulate(
             df += (damping * dvp * gd)[:, :, None] * dD
         if c_D is not None:
             df[:, :, c_D] += dvp * share
-        dnet = -df
-        dnet[1:] += df[:-1]
+        dnet = np.subtract(ws.dfz[:-1], ws.dfz[1:])
         if c_P is not None:
             dnet[1, :, c_P] += 1.0
-        dA = dnet * inv_m[:, :, None]
-        if c_m0 is not None:
-            dA[0, :, c_m0] -= (a[0] - g_acc) * inv_m[0]
-        if c_ms is not None:
-            dA[s, :, c_ms] -= (a[s] - g_acc) * inv_m[s]
+        dnet *= inv_m[:, :, None]
+        dA = dnet
+        if mass_rows.size:
+            # the masses' own columns: d(F / m)/dm = -(acc - g) / m
+            dA[mass_rows, :, mass_cols] -= (a[mass_rows] - g_acc) * inv_m[mass_rows]
         return dA, df
 
     def read(f: np.ndarray, out: np.ndarray) -> None:
@@ -579,14 +615,20 @@ def simulate(
 
         record_row(0, n, f, w)
         rec.flush(0, 1, active)
-        peak_f = f[:-1].max(axis=0)  # per active scene: the largest bead-bead force
+        # per contact and active scene, the largest bead-bead force (reduced over the
+        # contacts when a scene stops)
+        peak_f = f[:-1].copy()
         stop_time = np.full(n, np.nan)
         step, j0 = 0, 1
+        # the half kick of the last accelerations, once per step (it ends one step and
+        # begins the next)
+        ha = half * a
+        hA = None if tg is None else half * Acc
         for step in range(1, n_steps + 1):
-            v += half * a
+            v += ha
             u += dt * v
             if tg is not None:
-                V += half * Acc
+                V += hA
                 U += dt * V
             if stateful:
                 if tg is not None:
@@ -596,14 +638,16 @@ def simulate(
                     f_wall, wstate = w.advance(wstate, u[-1].copy(), dt)
             f, parts = contact_forces(u, v, a, w)
             a = accel(f)
-            v += half * a
+            ha = half * a
+            v += ha
             if tg is not None:
                 Acc, dF = accel_tangent(U, V, Acc, a, parts, df_wall)
-                V += half * Acc
+                hA = half * Acc
+                V += hA
             k = step - j0
             na = active.size
             np.maximum(peak_ind, u[-1], out=peak_ind)
-            np.maximum(peak_f, f[:-1].max(axis=0), out=peak_f)
+            np.maximum(peak_f, f[:-1], out=peak_f)
             if record_energy and damping > 0.0:
                 p_new = dashpot_power(parts)
                 w_dash += half * (p_dash + p_new)
@@ -623,17 +667,20 @@ def simulate(
                 stop_time[active[done]] = times[-1]
                 keep = ~done
                 peak_all[active[done]] = peak_ind[done]
-                peak_f_all[active[done]] = peak_f[done]
-                active, peak_ind, peak_f = active[keep], peak_ind[keep], peak_f[keep]
+                peak_f_all[active[done]] = peak_f[:, done].max(axis=0)
+                active, peak_ind, peak_f = active[keep], peak_ind[keep], peak_f[:, keep]
                 if active.size == 0:
                     break
                 idx = np.flatnonzero(keep)
-                u, v, a = u[:, keep], v[:, keep], a[:, keep]
+                z, a, ha = z[:, :, keep], a[:, keep], ha[:, keep]
+                u, v = z
+                ws = _Workspace(N, active.size, None if tg is None else tg.k)
                 inv_m, preload = inv_m_all[:, active], preload_all[active]
                 if record_energy:
                     w_dash, p_dash = w_dash[keep], p_dash[keep]
                 if tg is not None:
-                    U, V, Acc = U[:, keep], V[:, keep], Acc[:, keep]
+                    ZT, Acc, hA = ZT[:, :, keep], Acc[:, keep], hA[:, keep]
+                    U, V = ZT
                     dE = dE_all[active]
                     if stateful:
                         df_wall = df_wall[keep]
@@ -645,7 +692,8 @@ def simulate(
     finally:
         np.seterr(**errors)
     peak_all[active] = peak_ind
-    peak_f_all[active] = peak_f
+    if active.size:
+        peak_f_all[active] = peak_f.max(axis=0)
     n_t = step + 1
     out = rec.assemble(n_t)
     return Run(

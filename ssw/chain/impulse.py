@@ -44,6 +44,8 @@ Springer, sec. I.1.4 (Störmer-Verlet).
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 #: ``d / |delta|`` from which the average is summed from its series.
@@ -55,6 +57,31 @@ SERIES = (1.0 / 16.0, 1.0 / 640.0)
 #: Offsets of the three terms of ``psi`` and their weights (``1, -2, 1`` over 35/4).
 OFFSETS = np.array([1.0, 0.0, -1.0])
 WEIGHTS = np.array([1.0, -2.0, 1.0]) / 8.75
+
+
+@lru_cache(maxsize=512)
+def filled(shape: tuple[int, ...], value: float) -> np.ndarray:
+    """A read-only array of ``shape`` holding ``value`` everywhere.
+
+    numpy converts a Python scalar operand on every ufunc call; an array operand of the
+    same shape is about twice as fast on the chain's small arrays (a few dozen values),
+    where that overhead is most of a call's cost. The result is the same to the bit.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        The shape.
+    value : float
+        The value.
+
+    Returns
+    -------
+    numpy.ndarray
+        float, not writeable (shared between calls).
+    """
+    out = np.full(shape, float(value))
+    out.flags.writeable = False
+    return out
 
 
 def psi(x: np.ndarray, tangent: bool = False) -> tuple[np.ndarray, np.ndarray | None]:
@@ -74,7 +101,7 @@ def psi(x: np.ndarray, tangent: bool = False) -> tuple[np.ndarray, np.ndarray | 
         ``(psi, psi')``, (m,) each (None without ``tangent``).
     """
     y = np.add(x[:, None], OFFSETS)
-    np.maximum(y, 0.0, out=y)
+    np.maximum(y, filled(y.shape, 0.0), out=y)
     y25 = np.multiply(y, y)
     y25 *= np.sqrt(y)
     if not tangent:
@@ -85,7 +112,7 @@ def psi(x: np.ndarray, tangent: bool = False) -> tuple[np.ndarray, np.ndarray | 
     np.multiply(y25, y, out=both[0])
     both[1] = y25
     val, dval = _weighted(both)
-    dval *= 3.5
+    dval *= filled(dval.shape, 3.5)
     return val, dval
 
 
@@ -117,8 +144,8 @@ def near_events(x: np.ndarray, upper: float = FAR) -> np.ndarray:
         Flat indices (int).
     """
     xf = x.reshape(-1)
-    m = xf > -1.0
-    m &= xf < upper
+    m = xf > filled(xf.shape, -1.0)
+    m &= xf < filled(xf.shape, upper)
     return m.nonzero()[0]
 
 
@@ -150,38 +177,41 @@ def hertz_force(d: np.ndarray, a: np.ndarray, x: np.ndarray, A: float | np.ndarr
     tuple
         ``(dF/dd, dF/da)`` or ``(None, None)``.
     """
-    dp = np.maximum(d, 0.0)
+    # constant operands as arrays of the contacts' shape (:func:`filled`)
+    sh = d.shape
+    dp = np.maximum(d, filled(sh, 0.0))
     sq = np.sqrt(dp)
     # the series in r = 1 / x^2 (far contacts; near ones are overwritten below): r is 0 at
     # rest (x infinite) and bounded where it does not apply (fmin ignores a NaN x)
     r = np.multiply(x, x)
     np.reciprocal(r, out=r)
-    np.fmin(r, 1.0, out=r)
+    one = filled(sh, 1.0)
+    np.fmin(r, one, out=r)
     c1, c2 = SERIES
-    poly = np.multiply(r, c2)
-    poly += c1
+    poly = np.multiply(r, filled(sh, c2))
+    poly += filled(sh, c1)
     poly *= r
-    poly += 1.0
+    poly += one
     np.multiply(dp, sq, out=out)
     out *= poly
-    out *= A
+    Ac = filled(sh, A) if np.isscalar(A) else A
+    out *= Ac
     fd = fa = None
     if tangent:
         # d/dd [d^1.5 P(r)] = d^0.5 (1.5 P - 2 r P'), d/da = d^1.5 P' 2 r / a = 2 P' a d^-0.5
-        dpoly = np.multiply(r, 2.0 * c2)
-        dpoly += c1
-        poly *= 1.5
-        r *= 2.0
+        dpoly = np.multiply(r, filled(sh, 2.0 * c2))
+        dpoly += filled(sh, c1)
+        poly *= filled(sh, 1.5)
+        r *= filled(sh, 2.0)
         r *= dpoly
         poly -= r
-        fd = np.multiply(sq, A)
+        fd = np.multiply(sq, Ac)
         fd *= poly
-        # 2 A P' a / sqrt(d) where d > 0, else 0 (sq + (sq == 0) is sq, or 1 at d <= 0)
+        # 2 A P' a / sqrt(d) where d > 0, else 0
         closed = dp > 0
-        fa = np.multiply(dpoly, 2.0 * A)
+        fa = np.multiply(dpoly, filled(sh, 2.0 * A) if np.isscalar(A) else 2.0 * A)
         fa *= a
-        sq += ~closed
-        fa /= sq
+        np.divide(fa, sq, out=fa, where=closed)
         fa *= closed
     if near.size:
         af, xf, of = a.reshape(-1), x.reshape(-1), out.reshape(-1)

@@ -58,7 +58,7 @@ from typing import Any
 
 import numpy as np
 
-from ssw.chain.impulse import closed_share, hertz_force, near_events
+from ssw.chain.impulse import closed_share, filled, hertz_force, near_events
 from ssw.chain.params import Batch, ChainParams
 from ssw.chain.sensitivity import Tangent, tangent_of
 from ssw.chain.statics import (
@@ -288,7 +288,11 @@ class _Workspace:
 
 
 class _StopRule:
-    """Per-scene state of the early-stop rule (module docstring); arrays over all scenes."""
+    """Per-scene state of the early-stop rule (module docstring), over the active scenes
+    (:meth:`keep` drops the stopped ones)."""
+
+    _FIELDS = ("sensor0", "wall0", "f_noise", "t_c", "inc_max", "t_inc", "inc_done",
+               "t_onset", "w_max", "released", "t_rel")
 
     def __init__(self, n: int, sensor0: np.ndarray, wall0: np.ndarray, f_noise: np.ndarray,
                  t_c: np.ndarray):
@@ -301,35 +305,37 @@ class _StopRule:
         self.released = np.zeros(n, bool)
         self.t_rel = np.zeros(n)
 
-    def update(self, active: np.ndarray, times: np.ndarray, S: np.ndarray, W: np.ndarray
-               ) -> np.ndarray:
+    def keep(self, mask: np.ndarray) -> None:
+        """Keep the scenes ``mask`` (bool over the active scenes)."""
+        for name in self._FIELDS:
+            setattr(self, name, getattr(self, name)[mask])
+
+    def update(self, times: np.ndarray, S: np.ndarray, W: np.ndarray) -> np.ndarray:
         """Digest a block (k, n_active) of sensor and wall forces; the scenes that may stop."""
-        Sr, Wr = S - self.sensor0[active], W - self.wall0[active]
-        f_noise, t_c = self.f_noise[active], self.t_c[active]
+        Sr, Wr = S - self.sensor0, W - self.wall0
+        f_noise, t_c = self.f_noise, self.t_c
         bm = Sr.max(axis=0)
-        upd = ~self.inc_done[active] & (bm > self.inc_max[active])
-        self.inc_max[active[upd]] = bm[upd]
-        self.t_inc[active[upd]] = times[np.argmax(Sr, axis=0)[upd]]
-        self.inc_done[active] |= (self.inc_max[active] > f_noise) & (
-            Sr[-1] < INCIDENT_END * self.inc_max[active]
-        )
+        upd = ~self.inc_done & (bm > self.inc_max)
+        np.copyto(self.inc_max, bm, where=upd)
+        np.copyto(self.t_inc, times[np.argmax(Sr, axis=0)], where=upd)
+        self.inc_done |= (self.inc_max > f_noise) & (Sr[-1] < INCIDENT_END * self.inc_max)
         above = Wr > f_noise
-        first = np.isnan(self.t_onset[active]) & above.any(axis=0)
-        self.t_onset[active[first]] = times[np.argmax(above, axis=0)[first]]
+        first = np.isnan(self.t_onset) & above.any(axis=0)
+        np.copyto(self.t_onset, times[np.argmax(above, axis=0)], where=first)
         wm = Wr.max(axis=0)
-        upw = ~self.released[active] & (wm > self.w_max[active])
-        self.w_max[active[upw]] = wm[upw]
+        upw = ~self.released & (wm > self.w_max)
+        np.copyto(self.w_max, wm, where=upw)
         newly = (
-            ~self.released[active]
-            & self.inc_done[active]
-            & (self.w_max[active] > f_noise)
-            & (Wr[-1] < WALL_RELEASE * self.w_max[active])
+            ~self.released
+            & self.inc_done
+            & (self.w_max > f_noise)
+            & (Wr[-1] < WALL_RELEASE * self.w_max)
         )
-        self.released[active[newly]] = True
-        self.t_rel[active[newly]] = times[-1]
-        travel = np.nan_to_num(self.t_onset[active] - self.t_inc[active]) + t_c
-        return self.released[active] & (
-            times[-1] > self.t_rel[active] + TRAVEL_FACTOR * travel + TAIL_CONTACTS * t_c
+        self.released |= newly
+        np.copyto(self.t_rel, times[-1], where=newly)
+        travel = np.nan_to_num(self.t_onset - self.t_inc) + t_c
+        return self.released & (
+            times[-1] > self.t_rel + TRAVEL_FACTOR * travel + TAIL_CONTACTS * t_c
         )
 
 
@@ -474,7 +480,7 @@ def simulate(
         D[:, -1] = z[:, -1]
         d, dv = D
         a = np.abs(dv, out=ws.a)
-        a *= dt
+        a *= filled(a.shape, dt)
         x = np.divide(d, a, out=ws.x)  # NaN or inf where a contact does not move
         f = ws.f
         wparts = None
@@ -497,7 +503,12 @@ def simulate(
         if predict:
             # the dashpot's velocity at the new time: v_half + dt/2 a_old, to O(dt^2) (the
             # half-step velocity would make the damped scheme first order)
-            dvp = dv if acc is None else dv + half * contact_differences(acc)
+            if acc is None:
+                dvp = dv
+            else:
+                dvp = contact_differences(acc)
+                dvp *= filled(dvp.shape, half)
+                np.add(dv, dvp, out=dvp)
             # the share's own derivatives act through the dashpot only
             share, gd, ga = closed_share(d, a, near_events(x, 1.0),
                                          tangent=tg is not None and damping > 0.0)
@@ -511,7 +522,7 @@ def simulate(
         if has_preload:
             net[1] += preload
         net *= inv_m
-        net += g_acc
+        net += filled(net.shape, g_acc)
         return net
 
     def accel_tangent(U: np.ndarray, V: np.ndarray, Acc_old: Any, a: np.ndarray,
@@ -527,7 +538,7 @@ def simulate(
         dD, dDV = DT
         # d|dv dt| = sign(dv) dt dDV
         sdt = np.sign(dv)
-        sdt *= dt
+        sdt *= filled(sdt.shape, dt)
         df = ws.df
         np.multiply(dD[:-1], fd[:, :, None], out=df[:-1])
         fa *= sdt[:-1]
@@ -560,13 +571,14 @@ def simulate(
             dA[mass_rows, :, mass_cols] -= (a[mass_rows] - g_acc) * inv_m[mass_rows]
         return dA, df
 
-    def read(f: np.ndarray, out: np.ndarray) -> None:
+    def read(upper: np.ndarray, lower: np.ndarray, out: np.ndarray) -> None:
+        """The sensor's reading (``sensor_reading``) of its two contacts' forces."""
         if reads == "upper":
-            out[...] = f[s - 1]
+            out[...] = upper
         elif reads == "lower":
-            out[...] = f[s]
+            out[...] = lower
         else:
-            np.add(f[s - 1], f[s], out=out)
+            np.add(upper, lower, out=out)
             out *= 0.5
 
     def dashpot_power(parts: Any) -> np.ndarray:
@@ -594,12 +606,16 @@ def simulate(
         rec = _Record(shapes, n, check_every)
         buf = rec.buf
 
+        # the sensor's two contacts, step by step; read once per block (flush)
+        pair = np.empty((check_every, 2, n))
+        dpair = None if tg is None else np.empty((check_every, 2, n, tg.k))
+
         def record_row(k: int, na: int, f: np.ndarray, sub_w: Any) -> None:
             """Row ``k`` of the block buffers (the active scenes' first ``na`` columns)."""
-            read(f, buf["sensor"][k, :na])
+            pair[k, :, :na] = f[s - 1 : s + 1]
             buf["wall"][k, :na] = f[-1]
             if tg is not None:
-                read(dF.transpose(0, 2, 1), buf["dsensor"][k, :, :na])
+                dpair[k, :, :na] = dF[s - 1 : s + 1]
             if record_forces:
                 buf["forces"][k, :, :na] = f
             if record_energy:
@@ -613,8 +629,17 @@ def simulate(
                 buf["dissipated"][k, :na] = lost + w_dash
                 buf["energy"][k, :na] = e + stored + lost + w_dash
 
+        def flush(j0: int, rows: int) -> dict[str, np.ndarray]:
+            """The block's sensor readings, then :meth:`_Record.flush`."""
+            na = active.size
+            read(pair[:rows, 0, :na], pair[:rows, 1, :na], buf["sensor"][:rows, :na])
+            if tg is not None:
+                read(dpair[:rows, 0, :na].transpose(0, 2, 1),
+                     dpair[:rows, 1, :na].transpose(0, 2, 1), buf["dsensor"][:rows, :, :na])
+            return rec.flush(j0, rows, active)
+
         record_row(0, n, f, w)
-        rec.flush(0, 1, active)
+        flush(0, 1)
         # per contact and active scene, the largest bead-bead force (reduced over the
         # contacts when a scene stops)
         peak_f = f[:-1].copy()
@@ -622,14 +647,14 @@ def simulate(
         step, j0 = 0, 1
         # the half kick of the last accelerations, once per step (it ends one step and
         # begins the next)
-        ha = half * a
-        hA = None if tg is None else half * Acc
+        ha = np.multiply(a, filled(a.shape, half))
+        hA = None if tg is None else np.multiply(Acc, filled(Acc.shape, half))
         for step in range(1, n_steps + 1):
             v += ha
-            u += dt * v
+            u += np.multiply(v, filled(v.shape, dt))
             if tg is not None:
                 V += hA
-                U += dt * V
+                U += np.multiply(V, filled(V.shape, dt))
             if stateful:
                 if tg is not None:
                     f_wall, df_wall, wstate, tstate = w.advance_tangent(
@@ -638,11 +663,11 @@ def simulate(
                     f_wall, wstate = w.advance(wstate, u[-1].copy(), dt)
             f, parts = contact_forces(u, v, a, w)
             a = accel(f)
-            ha = half * a
+            ha = np.multiply(a, filled(a.shape, half))
             v += ha
             if tg is not None:
                 Acc, dF = accel_tangent(U, V, Acc, a, parts, df_wall)
-                hA = half * Acc
+                hA = np.multiply(Acc, filled(Acc.shape, half))
                 V += hA
             k = step - j0
             na = active.size
@@ -655,17 +680,18 @@ def simulate(
             record_row(k, na, f, w)
             if k + 1 < check_every and step < n_steps:
                 continue
-            got = rec.flush(j0, k + 1, active)
+            got = flush(j0, k + 1)
             times = dt * np.arange(j0, step + 1)
             j0 = step + 1
             if not stop_early:
                 continue
-            done = rule.update(active, times, got["sensor"], got["wall"])
+            done = rule.update(times, got["sensor"], got["wall"])
             if np.any(done):
                 if on_progress is not None:
                     on_progress(int(np.count_nonzero(done)))
                 stop_time[active[done]] = times[-1]
                 keep = ~done
+                rule.keep(keep)
                 peak_all[active[done]] = peak_ind[done]
                 peak_f_all[active[done]] = peak_f[:, done].max(axis=0)
                 active, peak_ind, peak_f = active[keep], peak_ind[keep], peak_f[:, keep]

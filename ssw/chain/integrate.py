@@ -434,7 +434,8 @@ def simulate(
     u0, v0 = initial if initial is not None else initial_state(b, wall)
     # positions and velocities stacked (2, N, n), so that one subtraction gives the
     # contacts' overlaps and their rates; the workspace follows the active scenes
-    z = np.stack([u0.T, v0.T])
+    z = np.empty((2, N, n))
+    z[0], z[1] = u0.T, v0.T
     u, v = z
     ws = _Workspace(N, n, None if tg is None else tg.k)
     peak_ind = u[-1].copy()  # per active scene
@@ -455,7 +456,8 @@ def simulate(
         mass_at = [(i, c) for i, c in ((0, c_m0), (s, c_ms)) if c is not None]
         mass_rows = np.array([i for i, _ in mass_at], int)
         mass_cols = np.array([c for _, c in mass_at], int)
-        ZT = np.stack(initial_tangent(b, wall, u0, tg))
+        ZT = np.empty((2, N, n, tg.k))
+        ZT[0], ZT[1] = initial_tangent(b, wall, u0, tg)
         U, V = ZT
         dE_all = np.zeros((n, tg.k))
         if c_E is not None:

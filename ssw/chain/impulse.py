@@ -252,7 +252,8 @@ def closed_share(d: np.ndarray, a: np.ndarray, near: np.ndarray, tangent: bool =
     tuple
         ``(Phi, dPhi/dd, dPhi/da)``.
     """
-    share = (d > 0).astype(float)
+    share = np.empty(d.shape)
+    np.greater(d, filled(d.shape, 0.0), out=share)
     gd = ga = None
     if tangent:
         gd = np.zeros_like(d)

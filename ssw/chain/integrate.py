@@ -258,11 +258,12 @@ def time_step(params: ChainParams | Batch, wall: Wall) -> float:
     return min(float(np.min(b.contact_time())), t_wall) / p.steps_per_contact
 
 
-def contact_differences(x: np.ndarray) -> np.ndarray:
+def contact_differences(x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """Per contact, the difference of a bead quantity ``x`` (N, ...) across it: ``x_j -
     x_(j+1)`` for the bead pairs and ``x_(N-1)`` for the wall (overlaps from positions,
-    their rates from velocities), shape of ``x``."""
-    out = np.empty_like(x)
+    their rates from velocities), shape of ``x`` (into ``out`` if given)."""
+    if out is None:
+        out = np.empty_like(x)
     np.subtract(x[:-1], x[1:], out=out[:-1])
     out[-1] = x[-1]
     return out
@@ -274,13 +275,17 @@ class _Workspace:
     contact forces ``f`` (N, n) as rows 1.. of ``fz`` (row 0 zero: the net force on every
     bead is one subtraction), and with ``k`` sensitivities their (N, n, k) counterparts."""
 
-    def __init__(self, N: int, n: int, k: int | None) -> None:
+    def __init__(self, N: int, n: int, k: int | None, mass_rows: np.ndarray,
+                 mass_cols: np.ndarray) -> None:
         self.D = np.empty((2, N, n))
         self.a = np.empty((N, n))
         self.x = np.empty((N, n))
         self.fz = np.zeros((N + 1, n))
         self.f = self.fz[1:]
+        self.dacc = np.empty((N, n))
         if k is not None:
+            # flat indices in a (N, n, k) array of the masses' own (bead, column) pairs
+            self.mass_at = (mass_rows[:, None] * n + np.arange(n)) * k + mass_cols[:, None]
             self.DT = np.empty((2, N, n, k))
             self.dfz = np.zeros((N + 1, n, k))
             self.df = self.dfz[1:]
@@ -437,7 +442,6 @@ def simulate(
     z = np.empty((2, N, n))
     z[0], z[1] = u0.T, v0.T
     u, v = z
-    ws = _Workspace(N, n, None if tg is None else tg.k)
     peak_ind = u[-1].copy()  # per active scene
     peak_all = np.empty(n)
     peak_f_all = np.empty(n)
@@ -448,6 +452,7 @@ def simulate(
     f_wall = wall.force(u[-1]) if stateful else None
 
     # forward sensitivities (ssw.chain.sensitivity): U, V, Acc (N, n, k)
+    mass_rows = mass_cols = np.zeros(0, int)
     if tg is not None:
         c_E, c_P = tg.col("E"), tg.col("preload")
         c_m0 = tg.col("striker_mass")
@@ -469,6 +474,7 @@ def simulate(
             df_wall = wall.dforce_dd(u[-1])[:, None] * U[-1]
             if c_E is not None:
                 df_wall[:, c_E] += wall.dforce_dE(u[-1])
+    ws = _Workspace(N, n, None if tg is None else tg.k, mass_rows, mass_cols)
 
     def contact_forces(u: np.ndarray, v: np.ndarray, acc: Any, w: Any
                        ) -> tuple[np.ndarray, Any]:
@@ -508,7 +514,7 @@ def simulate(
             if acc is None:
                 dvp = dv
             else:
-                dvp = contact_differences(acc)
+                dvp = contact_differences(acc, ws.dacc)
                 dvp *= filled(dvp.shape, half)
                 np.add(dv, dvp, out=dvp)
             # the share's own derivatives act through the dashpot only
@@ -570,7 +576,11 @@ def simulate(
         dA = dnet
         if mass_rows.size:
             # the masses' own columns: d(F / m)/dm = -(acc - g) / m
-            dA[mass_rows, :, mass_cols] -= (a[mass_rows] - g_acc) * inv_m[mass_rows]
+            q = a[mass_rows]
+            q -= filled(q.shape, g_acc)
+            q *= inv_m[mass_rows]
+            flat = dA.reshape(-1)
+            flat[ws.mass_at] -= q
         return dA, df
 
     def read(upper: np.ndarray, lower: np.ndarray, out: np.ndarray) -> None:
@@ -702,7 +712,8 @@ def simulate(
                 idx = np.flatnonzero(keep)
                 z, a, ha = z[:, :, keep], a[:, keep], ha[:, keep]
                 u, v = z
-                ws = _Workspace(N, active.size, None if tg is None else tg.k)
+                ws = _Workspace(N, active.size, None if tg is None else tg.k, mass_rows,
+                                mass_cols)
                 inv_m, preload = inv_m_all[:, active], preload_all[active]
                 if record_energy:
                     w_dash, p_dash = w_dash[keep], p_dash[keep]

@@ -44,6 +44,8 @@ Springer, sec. I.1.4 (Störmer-Verlet).
 
 from __future__ import annotations
 
+from functools import lru_cache
+
 import numpy as np
 
 #: ``d / |delta|`` from which the average is summed from its series.
@@ -55,6 +57,31 @@ SERIES = (1.0 / 16.0, 1.0 / 640.0)
 #: Offsets of the three terms of ``psi`` and their weights (``1, -2, 1`` over 35/4).
 OFFSETS = np.array([1.0, 0.0, -1.0])
 WEIGHTS = np.array([1.0, -2.0, 1.0]) / 8.75
+
+
+@lru_cache(maxsize=512)
+def filled(shape: tuple[int, ...], value: float) -> np.ndarray:
+    """A read-only array of ``shape`` holding ``value`` everywhere.
+
+    numpy converts a Python scalar operand on every ufunc call; an array operand of the
+    same shape is about twice as fast on the chain's small arrays (a few dozen values),
+    where that overhead is most of a call's cost. The result is the same to the bit.
+
+    Parameters
+    ----------
+    shape : tuple of int
+        The shape.
+    value : float
+        The value.
+
+    Returns
+    -------
+    numpy.ndarray
+        float, not writeable (shared between calls).
+    """
+    out = np.full(shape, float(value))
+    out.flags.writeable = False
+    return out
 
 
 def psi(x: np.ndarray, tangent: bool = False) -> tuple[np.ndarray, np.ndarray | None]:
@@ -73,27 +100,53 @@ def psi(x: np.ndarray, tangent: bool = False) -> tuple[np.ndarray, np.ndarray | 
     tuple
         ``(psi, psi')``, (m,) each (None without ``tangent``).
     """
-    y = np.maximum(x[:, None] + OFFSETS, 0.0)
-    y25 = y * y * np.sqrt(y)
-    # explicit sums (not a matrix product, whose rounding may follow the batch's size): a
-    # scene's force does not depend on the scenes run with it
-    val = _weighted(y25 * y)
+    y = np.add(x[:, None], OFFSETS)
+    np.maximum(y, filled(y.shape, 0.0), out=y)
+    y25 = np.multiply(y, y)
+    y25 *= np.sqrt(y)
     if not tangent:
-        return val, None
-    return val, 3.5 * _weighted(y25)
+        y *= y25
+        return _weighted(y), None
+    # both sums weighted at once: rows (y^3.5, y^2.5)
+    both = np.empty((2, *y.shape))
+    np.multiply(y25, y, out=both[0])
+    both[1] = y25
+    val, dval = _weighted(both)
+    dval *= filled(dval.shape, 3.5)
+    return val, dval
 
 
 def _weighted(y: np.ndarray) -> np.ndarray:
-    """``y @ WEIGHTS`` for (m, 3) ``y``, in a fixed order."""
-    return y[:, 0] * WEIGHTS[0] + y[:, 1] * WEIGHTS[1] + y[:, 2] * WEIGHTS[2]
+    """``y @ WEIGHTS`` over the last axis (length 3), in a fixed order: explicit sums,
+    not a matrix product, whose rounding may follow the batch's size (a scene's force
+    does not depend on the scenes run with it)."""
+    t = np.multiply(y, WEIGHTS)
+    out = np.add(t[..., 0], t[..., 1])
+    out += t[..., 2]
+    return out
 
 
-def near_events(x: np.ndarray) -> np.ndarray:
-    """Flat indices of the contacts near an event: ``-1 < x < FAR``, ``x = d / |delta|``
-    (NaN, a contact at rest at ``d = 0``, is not)."""
-    m = x > -1.0
-    m &= x < FAR
-    return m.ravel().nonzero()[0]
+def near_events(x: np.ndarray, upper: float = FAR) -> np.ndarray:
+    """Flat indices of the contacts near an event: ``-1 < x < upper``, ``x = d / |delta|``
+    (NaN, a contact at rest at ``d = 0``, is not).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        ``d / |delta|``, any shape, C-contiguous.
+    upper : float
+        The bound above: :data:`FAR` for the Hertz force's average, 1 for the dashpot's
+        share (:func:`closed_share`).
+
+    Returns
+    -------
+    numpy.ndarray
+        Flat indices (int).
+    """
+    xf = x.reshape(-1)
+    m = xf > filled(xf.shape, -1.0)
+    m &= xf < filled(xf.shape, upper)
+    return m.nonzero()[0]
 
 
 def hertz_force(d: np.ndarray, a: np.ndarray, x: np.ndarray, A: float | np.ndarray,
@@ -104,17 +157,18 @@ def hertz_force(d: np.ndarray, a: np.ndarray, x: np.ndarray, A: float | np.ndarr
     Parameters
     ----------
     d : numpy.ndarray
-        Overlaps (m), any shape (the bead-bead contacts (N - 1, n), or with a wall's row).
+        Overlaps (m), any shape (the bead-bead contacts (N - 1, n), or with a wall's row),
+        C-contiguous.
     a : numpy.ndarray
-        ``|d'| dt`` (m), same shape.
+        ``|d'| dt`` (m), same shape, C-contiguous.
     x : numpy.ndarray
-        ``d / a``, same shape.
+        ``d / a``, same shape, C-contiguous.
     A : float or numpy.ndarray
         Hertz coefficient (N/m^1.5), a scalar or one per contact (same shape).
     near : numpy.ndarray
         Flat indices of the contacts near an event (:func:`near_events`).
     out : numpy.ndarray
-        N, same shape, written.
+        N, same shape, C-contiguous, written.
     tangent : bool
         Also return ``dF/dd`` (N/m) and ``dF/da`` (N/m), else None.
 
@@ -123,37 +177,57 @@ def hertz_force(d: np.ndarray, a: np.ndarray, x: np.ndarray, A: float | np.ndarr
     tuple
         ``(dF/dd, dF/da)`` or ``(None, None)``.
     """
-    dp = np.maximum(d, 0.0)
+    # constant operands as arrays of the contacts' shape (:func:`filled`)
+    sh = d.shape
+    dp = np.maximum(d, filled(sh, 0.0))
     sq = np.sqrt(dp)
     # the series in r = 1 / x^2 (far contacts; near ones are overwritten below): r is 0 at
     # rest (x infinite) and bounded where it does not apply (fmin ignores a NaN x)
     r = np.multiply(x, x)
     np.reciprocal(r, out=r)
-    np.fmin(r, 1.0, out=r)
+    one = filled(sh, 1.0)
+    np.fmin(r, one, out=r)
     c1, c2 = SERIES
-    poly = np.multiply(r, c2)
-    poly += c1
+    poly = np.multiply(r, filled(sh, c2))
+    poly += filled(sh, c1)
     poly *= r
-    poly += 1.0
+    poly += one
     np.multiply(dp, sq, out=out)
     out *= poly
-    out *= A
+    Ac = filled(sh, A) if np.isscalar(A) else A
+    out *= Ac
     fd = fa = None
     if tangent:
         # d/dd [d^1.5 P(r)] = d^0.5 (1.5 P - 2 r P'), d/da = d^1.5 P' 2 r / a = 2 P' a d^-0.5
-        dpoly = c1 + 2.0 * c2 * r
-        fd = A * sq * (1.5 * poly - 2.0 * r * dpoly)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            fa = np.where(dp > 0, 2.0 * A * dpoly * a / np.where(dp > 0, sq, 1.0), 0.0)
+        dpoly = np.multiply(r, filled(sh, 2.0 * c2))
+        dpoly += filled(sh, c1)
+        poly *= filled(sh, 1.5)
+        r *= filled(sh, 2.0)
+        r *= dpoly
+        poly -= r
+        fd = np.multiply(sq, Ac)
+        fd *= poly
+        # 2 A P' a / sqrt(d) where d > 0, else 0
+        closed = dp > 0
+        fa = np.multiply(dpoly, filled(sh, 2.0 * A) if np.isscalar(A) else 2.0 * A)
+        fa *= a
+        np.divide(fa, sq, out=fa, where=closed)
+        fa *= closed
     if near.size:
-        an = a.flat[near]
-        xn = x.flat[near]
+        af, xf, of = a.reshape(-1), x.reshape(-1), out.reshape(-1)
+        an = af[near]
+        xn = xf[near]
         val, dval = psi(xn, tangent)
-        s = (A if np.ndim(A) == 0 else np.asarray(A).flat[near]) * np.sqrt(an)
-        out.flat[near] = s * an * val
+        s = np.sqrt(an)
+        s *= A if np.isscalar(A) else np.asarray(A).reshape(-1)[near]
+        of[near] = s * an * val
         if tangent:
-            fd.flat[near] = s * dval
-            fa.flat[near] = s * (1.5 * val - xn * dval)
+            fd.reshape(-1)[near] = s * dval
+            xn *= dval
+            val *= 1.5
+            val -= xn
+            val *= s
+            fa.reshape(-1)[near] = val
     return fd, fa
 
 
@@ -165,9 +239,9 @@ def closed_share(d: np.ndarray, a: np.ndarray, near: np.ndarray, tangent: bool =
     Parameters
     ----------
     d : numpy.ndarray
-        Overlaps (m), any shape.
+        Overlaps (m), any shape, C-contiguous.
     a : numpy.ndarray
-        ``|d'| dt`` (m), same shape.
+        ``|d'| dt`` (m), same shape, C-contiguous.
     near : numpy.ndarray
         Flat indices of the contacts with ``|d| < a`` (others are 0 or 1).
     tangent : bool
@@ -178,17 +252,19 @@ def closed_share(d: np.ndarray, a: np.ndarray, near: np.ndarray, tangent: bool =
     tuple
         ``(Phi, dPhi/dd, dPhi/da)``.
     """
-    share = (d > 0).astype(float)
+    share = np.empty(d.shape)
+    np.greater(d, filled(d.shape, 0.0), out=share)
     gd = ga = None
     if tangent:
         gd = np.zeros_like(d)
         ga = np.zeros_like(d)
     if near.size:
-        an = a.flat[near]
-        x = d.flat[near] / an
-        share.flat[near] = np.where(x <= 0, 0.5 * (1.0 + x) ** 2, 1.0 - 0.5 * (1.0 - x) ** 2)
+        an = a.reshape(-1)[near]
+        x = d.reshape(-1)[near] / an
+        share.reshape(-1)[near] = np.where(x <= 0, 0.5 * (1.0 + x) ** 2,
+                                           1.0 - 0.5 * (1.0 - x) ** 2)
         if tangent:
             slope = 1.0 - np.abs(x)
-            gd.flat[near] = slope / an
-            ga.flat[near] = -slope * x / an
+            gd.reshape(-1)[near] = slope / an
+            ga.reshape(-1)[near] = -slope * x / an
     return share, gd, ga

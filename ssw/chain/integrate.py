@@ -58,7 +58,7 @@ from typing import Any
 
 import numpy as np
 
-from ssw.chain.impulse import closed_share, hertz_force, near_events
+from ssw.chain.impulse import closed_share, filled, hertz_force, near_events
 from ssw.chain.params import Batch, ChainParams
 from ssw.chain.sensitivity import Tangent, tangent_of
 from ssw.chain.statics import (
@@ -258,18 +258,46 @@ def time_step(params: ChainParams | Batch, wall: Wall) -> float:
     return min(float(np.min(b.contact_time())), t_wall) / p.steps_per_contact
 
 
-def contact_differences(x: np.ndarray) -> np.ndarray:
+def contact_differences(x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
     """Per contact, the difference of a bead quantity ``x`` (N, ...) across it: ``x_j -
     x_(j+1)`` for the bead pairs and ``x_(N-1)`` for the wall (overlaps from positions,
-    their rates from velocities), shape of ``x``."""
-    out = np.empty_like(x)
+    their rates from velocities), shape of ``x`` (into ``out`` if given)."""
+    if out is None:
+        out = np.empty_like(x)
     np.subtract(x[:-1], x[1:], out=out[:-1])
     out[-1] = x[-1]
     return out
 
 
+class _Workspace:
+    """Buffers of a step for ``n`` active scenes (reused from step to step): the contacts'
+    overlaps and rates ``D`` (2, N, n), ``|rate| dt`` and ``d / (|rate| dt)`` (N, n), the
+    contact forces ``f`` (N, n) as rows 1.. of ``fz`` (row 0 zero: the net force on every
+    bead is one subtraction), and with ``k`` sensitivities their (N, n, k) counterparts."""
+
+    def __init__(self, N: int, n: int, k: int | None, mass_rows: np.ndarray,
+                 mass_cols: np.ndarray) -> None:
+        self.D = np.empty((2, N, n))
+        self.a = np.empty((N, n))
+        self.x = np.empty((N, n))
+        self.fz = np.zeros((N + 1, n))
+        self.f = self.fz[1:]
+        self.dacc = np.empty((N, n))
+        if k is not None:
+            # flat indices in a (N, n, k) array of the masses' own (bead, column) pairs
+            self.mass_at = (mass_rows[:, None] * n + np.arange(n)) * k + mass_cols[:, None]
+            self.DT = np.empty((2, N, n, k))
+            self.dfz = np.zeros((N + 1, n, k))
+            self.df = self.dfz[1:]
+            self.dtmp = np.empty((N - 1, n, k))
+
+
 class _StopRule:
-    """Per-scene state of the early-stop rule (module docstring); arrays over all scenes."""
+    """Per-scene state of the early-stop rule (module docstring), over the active scenes
+    (:meth:`keep` drops the stopped ones)."""
+
+    _FIELDS = ("sensor0", "wall0", "f_noise", "t_c", "inc_max", "t_inc", "inc_done",
+               "t_onset", "w_max", "released", "t_rel")
 
     def __init__(self, n: int, sensor0: np.ndarray, wall0: np.ndarray, f_noise: np.ndarray,
                  t_c: np.ndarray):
@@ -282,35 +310,37 @@ class _StopRule:
         self.released = np.zeros(n, bool)
         self.t_rel = np.zeros(n)
 
-    def update(self, active: np.ndarray, times: np.ndarray, S: np.ndarray, W: np.ndarray
-               ) -> np.ndarray:
+    def keep(self, mask: np.ndarray) -> None:
+        """Keep the scenes ``mask`` (bool over the active scenes)."""
+        for name in self._FIELDS:
+            setattr(self, name, getattr(self, name)[mask])
+
+    def update(self, times: np.ndarray, S: np.ndarray, W: np.ndarray) -> np.ndarray:
         """Digest a block (k, n_active) of sensor and wall forces; the scenes that may stop."""
-        Sr, Wr = S - self.sensor0[active], W - self.wall0[active]
-        f_noise, t_c = self.f_noise[active], self.t_c[active]
+        Sr, Wr = S - self.sensor0, W - self.wall0
+        f_noise, t_c = self.f_noise, self.t_c
         bm = Sr.max(axis=0)
-        upd = ~self.inc_done[active] & (bm > self.inc_max[active])
-        self.inc_max[active[upd]] = bm[upd]
-        self.t_inc[active[upd]] = times[np.argmax(Sr, axis=0)[upd]]
-        self.inc_done[active] |= (self.inc_max[active] > f_noise) & (
-            Sr[-1] < INCIDENT_END * self.inc_max[active]
-        )
+        upd = ~self.inc_done & (bm > self.inc_max)
+        np.copyto(self.inc_max, bm, where=upd)
+        np.copyto(self.t_inc, times[np.argmax(Sr, axis=0)], where=upd)
+        self.inc_done |= (self.inc_max > f_noise) & (Sr[-1] < INCIDENT_END * self.inc_max)
         above = Wr > f_noise
-        first = np.isnan(self.t_onset[active]) & above.any(axis=0)
-        self.t_onset[active[first]] = times[np.argmax(above, axis=0)[first]]
+        first = np.isnan(self.t_onset) & above.any(axis=0)
+        np.copyto(self.t_onset, times[np.argmax(above, axis=0)], where=first)
         wm = Wr.max(axis=0)
-        upw = ~self.released[active] & (wm > self.w_max[active])
-        self.w_max[active[upw]] = wm[upw]
+        upw = ~self.released & (wm > self.w_max)
+        np.copyto(self.w_max, wm, where=upw)
         newly = (
-            ~self.released[active]
-            & self.inc_done[active]
-            & (self.w_max[active] > f_noise)
-            & (Wr[-1] < WALL_RELEASE * self.w_max[active])
+            ~self.released
+            & self.inc_done
+            & (self.w_max > f_noise)
+            & (Wr[-1] < WALL_RELEASE * self.w_max)
         )
-        self.released[active[newly]] = True
-        self.t_rel[active[newly]] = times[-1]
-        travel = np.nan_to_num(self.t_onset[active] - self.t_inc[active]) + t_c
-        return self.released[active] & (
-            times[-1] > self.t_rel[active] + TRAVEL_FACTOR * travel + TAIL_CONTACTS * t_c
+        self.released |= newly
+        np.copyto(self.t_rel, times[-1], where=newly)
+        travel = np.nan_to_num(self.t_onset - self.t_inc) + t_c
+        return self.released & (
+            times[-1] > self.t_rel + TRAVEL_FACTOR * travel + TAIL_CONTACTS * t_c
         )
 
 
@@ -407,7 +437,11 @@ def simulate(
 
     # internal layout (N, n_scenes): every bead's row is contiguous
     u0, v0 = initial if initial is not None else initial_state(b, wall)
-    u, v = np.ascontiguousarray(u0.T), np.ascontiguousarray(v0.T)
+    # positions and velocities stacked (2, N, n), so that one subtraction gives the
+    # contacts' overlaps and their rates; the workspace follows the active scenes
+    z = np.empty((2, N, n))
+    z[0], z[1] = u0.T, v0.T
+    u, v = z
     peak_ind = u[-1].copy()  # per active scene
     peak_all = np.empty(n)
     peak_f_all = np.empty(n)
@@ -418,11 +452,18 @@ def simulate(
     f_wall = wall.force(u[-1]) if stateful else None
 
     # forward sensitivities (ssw.chain.sensitivity): U, V, Acc (N, n, k)
+    mass_rows = mass_cols = np.zeros(0, int)
     if tg is not None:
         c_E, c_P = tg.col("E"), tg.col("preload")
         c_m0 = tg.col("striker_mass")
         c_ms = None if p.uniform else tg.col("sensor_mass")
-        U, V = initial_tangent(b, wall, u0, tg)
+        # (bead, column) of the masses differentiated: the striker's, the sensor's
+        mass_at = [(i, c) for i, c in ((0, c_m0), (s, c_ms)) if c is not None]
+        mass_rows = np.array([i for i, _ in mass_at], int)
+        mass_cols = np.array([c for _, c in mass_at], int)
+        ZT = np.empty((2, N, n, tg.k))
+        ZT[0], ZT[1] = initial_tangent(b, wall, u0, tg)
+        U, V = ZT
         dE_all = np.zeros((n, tg.k))
         if c_E is not None:
             dE_all[:, c_E] = 1.0
@@ -433,6 +474,7 @@ def simulate(
             df_wall = wall.dforce_dd(u[-1])[:, None] * U[-1]
             if c_E is not None:
                 df_wall[:, c_E] += wall.dforce_dE(u[-1])
+    ws = _Workspace(N, n, None if tg is None else tg.k, mass_rows, mass_cols)
 
     def contact_forces(u: np.ndarray, v: np.ndarray, acc: Any, w: Any
                        ) -> tuple[np.ndarray, Any]:
@@ -441,12 +483,14 @@ def simulate(
         the half-step velocities ``v``; the dashpot at the new time's velocity, ``v + dt/2
         acc`` with the last accelerations ``acc``) and, for the sensitivities and the
         dashpots' work, what they were made of."""
-        d = contact_differences(u)
-        dv = contact_differences(v)
-        a = np.abs(dv)
-        a *= dt
-        x = d / a  # NaN or inf where a contact does not move (errors ignored: simulate)
-        f = np.empty_like(u)
+        D = ws.D
+        np.subtract(z[:, :-1], z[:, 1:], out=D[:, :-1])
+        D[:, -1] = z[:, -1]
+        d, dv = D
+        a = np.abs(dv, out=ws.a)
+        a *= filled(a.shape, dt)
+        x = np.divide(d, a, out=ws.x)  # NaN or inf where a contact does not move
+        f = ws.f
         wparts = None
         near = near_events(x[:-1])
         fd, fa = hertz_force(d[:-1], a[:-1], x[:-1], A, near, f[:-1], tangent=tg is not None)
@@ -467,20 +511,26 @@ def simulate(
         if predict:
             # the dashpot's velocity at the new time: v_half + dt/2 a_old, to O(dt^2) (the
             # half-step velocity would make the damped scheme first order)
-            dvp = dv if acc is None else dv + half * contact_differences(acc)
-            touch = ((x > -1.0) & (x < 1.0)).ravel().nonzero()[0]
-            share, gd, ga = closed_share(d, a, touch, tangent=tg is not None)
+            if acc is None:
+                dvp = dv
+            else:
+                dvp = contact_differences(acc, ws.dacc)
+                dvp *= filled(dvp.shape, half)
+                np.add(dv, dvp, out=dvp)
+            # the share's own derivatives act through the dashpot only
+            share, gd, ga = closed_share(d, a, near_events(x, 1.0),
+                                         tangent=tg is not None and damping > 0.0)
             if damping > 0.0:
                 f += damping * dvp * share
         return f, (fd, fa, dv, dvp, share, gd, ga, wparts)
 
     def accel(f: np.ndarray) -> np.ndarray:
-        net = -f
-        net[1:] += f[:-1]
+        # f is ws.f, rows 1.. of ws.fz (row 0 zero): net force F_(i-1) - F_i in one go
+        net = np.subtract(ws.fz[:-1], ws.fz[1:])
         if has_preload:
             net[1] += preload
         net *= inv_m
-        net += g_acc
+        net += filled(net.shape, g_acc)
         return net
 
     def accel_tangent(U: np.ndarray, V: np.ndarray, Acc_old: Any, a: np.ndarray,
@@ -490,19 +540,25 @@ def simulate(
         accelerations ``Acc_old`` (``dfw`` the wall force's (n, k) from a stateful wall,
         else None)."""
         fd, fa, dv, dvp, share, gd, ga, wparts = parts
-        dD = contact_differences(U)
-        dDV = contact_differences(V)
+        DT = ws.DT
+        np.subtract(ZT[:, :-1], ZT[:, 1:], out=DT[:, :-1])
+        DT[:, -1] = ZT[:, -1]
+        dD, dDV = DT
         # d|dv dt| = sign(dv) dt dDV
-        sdt = np.sign(dv) * dt
-        df = np.empty_like(U)
+        sdt = np.sign(dv)
+        sdt *= filled(sdt.shape, dt)
+        df = ws.df
         np.multiply(dD[:-1], fd[:, :, None], out=df[:-1])
-        df[:-1] += (fa * sdt[:-1])[:, :, None] * dDV[:-1]
+        fa *= sdt[:-1]
+        tmp = np.multiply(dDV[:-1], fa[:, :, None], out=ws.dtmp)
+        df[:-1] += tmp
         if dfw is not None:
             df[-1] = dfw
         else:
             wd, wa, wE = wparts
             np.multiply(U[-1], np.asarray(wd)[:, None], out=df[-1])
-            df[-1] += (wa * sdt[-1])[:, None] * V[-1]
+            if not (np.isscalar(wa) and wa == 0.0):
+                df[-1] += (wa * sdt[-1])[:, None] * V[-1]
             if c_E is not None:
                 df[-1, :, c_E] += wE
         if damping > 0.0:
@@ -513,24 +569,28 @@ def simulate(
             df += (damping * dvp * gd)[:, :, None] * dD
         if c_D is not None:
             df[:, :, c_D] += dvp * share
-        dnet = -df
-        dnet[1:] += df[:-1]
+        dnet = np.subtract(ws.dfz[:-1], ws.dfz[1:])
         if c_P is not None:
             dnet[1, :, c_P] += 1.0
-        dA = dnet * inv_m[:, :, None]
-        if c_m0 is not None:
-            dA[0, :, c_m0] -= (a[0] - g_acc) * inv_m[0]
-        if c_ms is not None:
-            dA[s, :, c_ms] -= (a[s] - g_acc) * inv_m[s]
+        dnet *= inv_m[:, :, None]
+        dA = dnet
+        if mass_rows.size:
+            # the masses' own columns: d(F / m)/dm = -(acc - g) / m
+            q = a[mass_rows]
+            q -= filled(q.shape, g_acc)
+            q *= inv_m[mass_rows]
+            flat = dA.reshape(-1)
+            flat[ws.mass_at] -= q
         return dA, df
 
-    def read(f: np.ndarray, out: np.ndarray) -> None:
+    def read(upper: np.ndarray, lower: np.ndarray, out: np.ndarray) -> None:
+        """The sensor's reading (``sensor_reading``) of its two contacts' forces."""
         if reads == "upper":
-            out[...] = f[s - 1]
+            out[...] = upper
         elif reads == "lower":
-            out[...] = f[s]
+            out[...] = lower
         else:
-            np.add(f[s - 1], f[s], out=out)
+            np.add(upper, lower, out=out)
             out *= 0.5
 
     def dashpot_power(parts: Any) -> np.ndarray:
@@ -558,12 +618,16 @@ def simulate(
         rec = _Record(shapes, n, check_every)
         buf = rec.buf
 
+        # the sensor's two contacts, step by step; read once per block (flush)
+        pair = np.empty((check_every, 2, n))
+        dpair = None if tg is None else np.empty((check_every, 2, n, tg.k))
+
         def record_row(k: int, na: int, f: np.ndarray, sub_w: Any) -> None:
             """Row ``k`` of the block buffers (the active scenes' first ``na`` columns)."""
-            read(f, buf["sensor"][k, :na])
+            pair[k, :, :na] = f[s - 1 : s + 1]
             buf["wall"][k, :na] = f[-1]
             if tg is not None:
-                read(dF.transpose(0, 2, 1), buf["dsensor"][k, :, :na])
+                dpair[k, :, :na] = dF[s - 1 : s + 1]
             if record_forces:
                 buf["forces"][k, :, :na] = f
             if record_energy:
@@ -577,17 +641,32 @@ def simulate(
                 buf["dissipated"][k, :na] = lost + w_dash
                 buf["energy"][k, :na] = e + stored + lost + w_dash
 
+        def flush(j0: int, rows: int) -> dict[str, np.ndarray]:
+            """The block's sensor readings, then :meth:`_Record.flush`."""
+            na = active.size
+            read(pair[:rows, 0, :na], pair[:rows, 1, :na], buf["sensor"][:rows, :na])
+            if tg is not None:
+                read(dpair[:rows, 0, :na].transpose(0, 2, 1),
+                     dpair[:rows, 1, :na].transpose(0, 2, 1), buf["dsensor"][:rows, :, :na])
+            return rec.flush(j0, rows, active)
+
         record_row(0, n, f, w)
-        rec.flush(0, 1, active)
-        peak_f = f[:-1].max(axis=0)  # per active scene: the largest bead-bead force
+        flush(0, 1)
+        # per contact and active scene, the largest bead-bead force (reduced over the
+        # contacts when a scene stops)
+        peak_f = f[:-1].copy()
         stop_time = np.full(n, np.nan)
         step, j0 = 0, 1
+        # the half kick of the last accelerations, once per step (it ends one step and
+        # begins the next)
+        ha = np.multiply(a, filled(a.shape, half))
+        hA = None if tg is None else np.multiply(Acc, filled(Acc.shape, half))
         for step in range(1, n_steps + 1):
-            v += half * a
-            u += dt * v
+            v += ha
+            u += np.multiply(v, filled(v.shape, dt))
             if tg is not None:
-                V += half * Acc
-                U += dt * V
+                V += hA
+                U += np.multiply(V, filled(V.shape, dt))
             if stateful:
                 if tg is not None:
                     f_wall, df_wall, wstate, tstate = w.advance_tangent(
@@ -596,14 +675,16 @@ def simulate(
                     f_wall, wstate = w.advance(wstate, u[-1].copy(), dt)
             f, parts = contact_forces(u, v, a, w)
             a = accel(f)
-            v += half * a
+            ha = np.multiply(a, filled(a.shape, half))
+            v += ha
             if tg is not None:
                 Acc, dF = accel_tangent(U, V, Acc, a, parts, df_wall)
-                V += half * Acc
+                hA = np.multiply(Acc, filled(Acc.shape, half))
+                V += hA
             k = step - j0
             na = active.size
             np.maximum(peak_ind, u[-1], out=peak_ind)
-            np.maximum(peak_f, f[:-1].max(axis=0), out=peak_f)
+            np.maximum(peak_f, f[:-1], out=peak_f)
             if record_energy and damping > 0.0:
                 p_new = dashpot_power(parts)
                 w_dash += half * (p_dash + p_new)
@@ -611,29 +692,34 @@ def simulate(
             record_row(k, na, f, w)
             if k + 1 < check_every and step < n_steps:
                 continue
-            got = rec.flush(j0, k + 1, active)
+            got = flush(j0, k + 1)
             times = dt * np.arange(j0, step + 1)
             j0 = step + 1
             if not stop_early:
                 continue
-            done = rule.update(active, times, got["sensor"], got["wall"])
+            done = rule.update(times, got["sensor"], got["wall"])
             if np.any(done):
                 if on_progress is not None:
                     on_progress(int(np.count_nonzero(done)))
                 stop_time[active[done]] = times[-1]
                 keep = ~done
+                rule.keep(keep)
                 peak_all[active[done]] = peak_ind[done]
-                peak_f_all[active[done]] = peak_f[done]
-                active, peak_ind, peak_f = active[keep], peak_ind[keep], peak_f[keep]
+                peak_f_all[active[done]] = peak_f[:, done].max(axis=0)
+                active, peak_ind, peak_f = active[keep], peak_ind[keep], peak_f[:, keep]
                 if active.size == 0:
                     break
                 idx = np.flatnonzero(keep)
-                u, v, a = u[:, keep], v[:, keep], a[:, keep]
+                z, a, ha = z[:, :, keep], a[:, keep], ha[:, keep]
+                u, v = z
+                ws = _Workspace(N, active.size, None if tg is None else tg.k, mass_rows,
+                                mass_cols)
                 inv_m, preload = inv_m_all[:, active], preload_all[active]
                 if record_energy:
                     w_dash, p_dash = w_dash[keep], p_dash[keep]
                 if tg is not None:
-                    U, V, Acc = U[:, keep], V[:, keep], Acc[:, keep]
+                    ZT, Acc, hA = ZT[:, :, keep], Acc[:, keep], hA[:, keep]
+                    U, V = ZT
                     dE = dE_all[active]
                     if stateful:
                         df_wall = df_wall[keep]
@@ -645,7 +731,8 @@ def simulate(
     finally:
         np.seterr(**errors)
     peak_all[active] = peak_ind
-    peak_f_all[active] = peak_f
+    if active.size:
+        peak_f_all[active] = peak_f.max(axis=0)
     n_t = step + 1
     out = rec.assemble(n_t)
     return Run(

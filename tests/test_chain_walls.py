@@ -133,3 +133,37 @@ def test_a_k_table_file_is_read_once_per_version(tmp_path):
     w = build_wall("fit", P, 100e6, 0.32, k_table=str(path))
     w1 = build_wall("fit", P, 100e6, 0.32, K=2.0)
     np.testing.assert_allclose(w.force(np.array([[5e-5]])), w1.force(np.array([[5e-5]])))
+
+
+def test_the_fused_tangent_of_a_piecewise_law_is_its_three_methods_to_the_bit():
+    """The integrator's step with sensitivities reads the fem wall's force, stiffness and
+    dF/dE from one search of its pieces (``force_and_tangent``): the same numbers as the
+    three methods, at indentations inside pieces, on breakpoints, beyond the exact law and
+    at and below zero; a power law (no fused method) gives its three methods."""
+    from ssw.chain.wall import PowerWall, force_and_tangent
+    from ssw.walls.fem import PiecewiseLinearWall
+
+    rng = np.random.default_rng(11)
+    n, K = 4, 9
+    d = np.concatenate([np.zeros((n, 1)), np.cumsum(rng.uniform(1e-6, 3e-6, (n, K)), 1)], 1)
+    b = np.cumsum(rng.uniform(1e5, 5e5, (n, K + 1)), 1)  # stiffening pieces
+    F = np.concatenate([np.zeros((n, 1)), np.cumsum(b[:, :-1] * np.diff(d, axis=1), 1)], 1)
+    a = F - b * d
+    wall = PiecewiseLinearWall(d, a, b, np.zeros_like(d), d[:, -1],
+                               da_dE=rng.normal(size=(n, K + 1)) * 1e-9,
+                               db_dE=rng.normal(size=(n, K + 1)) * 1e-3)
+    for at in (np.array([-1e-6, 0.0, 1.3e-6, 5e-5]), d[:, 3].copy(), 0.999 * d[:, -1],
+               rng.uniform(0, 1.2, n) * d[:, -1]):
+        f, kd, kE = force_and_tangent(wall, at, True)
+        assert np.array_equal(f, wall.force(at)) and np.array_equal(kd, wall.dforce_dd(at))
+        assert np.array_equal(kE, wall.dforce_dE(at))
+        f2, kd2, none = force_and_tangent(wall, at, False)
+        assert none is None and np.array_equal(f2, f) and np.array_equal(kd2, kd)
+    # the law is continuous: the force at a breakpoint is both pieces' value
+    at = d[:, 4]
+    assert np.allclose(wall.force(at), F[:, 4], rtol=1e-12)
+    power = PowerWall(np.full(n, 2e9), np.full(n, 1.5), dcoef_dE=np.full(n, 10.0))
+    at = np.array([-1e-6, 0.0, 2e-6, 4e-5])
+    f, kd, kE = force_and_tangent(power, at, True)
+    assert np.array_equal(f, power.force(at)) and np.array_equal(kd, power.dforce_dd(at))
+    assert np.array_equal(kE, power.dforce_dE(at))

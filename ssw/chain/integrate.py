@@ -68,7 +68,7 @@ from ssw.chain.statics import (
     potential_energy,
     static_contact_forces,
 )
-from ssw.chain.wall import Wall, is_stateful
+from ssw.chain.wall import Wall, force_and_tangent, is_stateful
 from ssw.errors import ConfigError
 
 #: Fall of the sensor signal (share of its peak) that ends the incident pulse.
@@ -497,10 +497,11 @@ def simulate(
         if f_wall is not None:
             f[-1] = f_wall
         else:
-            f[-1] = w.force(u[-1])
-            if tg is not None:
-                wparts = (w.dforce_dd(u[-1]), 0.0,
-                          w.dforce_dE(u[-1]) if c_E is not None else None)
+            if tg is None:
+                f[-1] = w.force(u[-1])
+            else:
+                f[-1], kd, kE = force_and_tangent(w, u[-1], c_E is not None)
+                wparts = (kd, 0.0, kE)
         return finish(f, d, a, x, dv, acc, (fd, fa, dv), wparts)
 
     def finish(f: np.ndarray, d: np.ndarray, a: np.ndarray, x: np.ndarray, dv: np.ndarray,

@@ -284,6 +284,35 @@ class Wall(Protocol):
         """``F(d_ref) / d_ref^1.5`` (N/m^1.5), for the time-step choice."""
 
 
+def force_and_tangent(wall: Wall, d: np.ndarray, with_E: bool
+                      ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+    """A displacement wall's force, its tangent stiffness and (with ``with_E``) ``dF/dE`` at
+    ``d``: the wall's own fused evaluation where it has one (``force_and_tangent``, e.g.
+    :meth:`ssw.walls.fem.PiecewiseLinearWall.force_and_tangent`: one search of its pieces
+    for the three), else its ``force``, ``dforce_dd`` and ``dforce_dE``.
+
+    Parameters
+    ----------
+    wall : Wall
+        The law, with ``dforce_dd`` (and ``dforce_dE`` for ``with_E``).
+    d : numpy.ndarray
+        Indentations (m), (n,).
+    with_E : bool
+        Whether ``dF/dE`` is wanted.
+
+    Returns
+    -------
+    tuple
+        ``(F, dF/dd, dF/dE)``: N, N/m and N/Pa, (n,) each; ``dF/dE`` None without
+        ``with_E``.
+    """
+    fused = getattr(wall, "force_and_tangent", None)
+    if fused is not None:
+        return fused(d, with_E)
+    w: Any = wall
+    return w.force(d), w.dforce_dd(d), (w.dforce_dE(d) if with_E else None)
+
+
 class StatefulWall(Protocol):
     """A last contact with internal state (the soil's motion, a sample's history).
 

@@ -143,11 +143,50 @@ class PiecewiseLinearWall:
         """``dF/dE`` (N/Pa) at fixed indentation ``d`` (m): ``da/dE + db/dE d`` of the piece
         holding ``d`` (the law is continuous at the breakpoints, which move with E, so
         their motion adds nothing); ConfigError without the pieces' derivatives."""
+        self._check_dE()
+        dp, j = self._at(d)
+        return np.where(d > 0, self.da_dE.ravel()[j] + self.db_dE.ravel()[j] * dp, 0.0)
+
+    def _check_dE(self) -> None:
         if self.da_dE is None or self.db_dE is None:
             raise ConfigError("wall", "fem (unilateral interface)",
                               "a frictionless or bonded plate, or none, for dF/dE")
+
+    def force_and_tangent(self, d: np.ndarray, with_E: bool
+                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
+        """:meth:`force`, :meth:`dforce_dd` and, with ``with_E``, :meth:`dforce_dE` at
+        ``d`` from one search of the pieces (the same numbers as the three calls, which
+        search three times: the integrator's step with the forward sensitivities).
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+        with_E : bool
+            Whether ``dF/dE`` is wanted.
+
+        Returns
+        -------
+        tuple
+            ``(F, dF/dd, dF/dE)``: N, N/m and N/Pa, (n,) each; ``dF/dE`` None without
+            ``with_E``.
+
+        Raises
+        ------
+        ConfigError
+            ``with_E`` on a law without its pieces' derivatives (:meth:`dforce_dE`).
+        """
+        if with_E:
+            self._check_dE()
         dp, j = self._at(d)
-        return np.where(d > 0, self.da_dE.ravel()[j] + self.db_dE.ravel()[j] * dp, 0.0)
+        bj = self._bf[j]
+        force = self._af[j] + bj * dp
+        pos = d > 0
+        kd = np.where(pos, bj, 0.0)
+        if not with_E:
+            return force, kd, None
+        return force, kd, np.where(pos, self.da_dE.ravel()[j] + self.db_dE.ravel()[j] * dp,
+                                   0.0)
 
     def potential(self, d: np.ndarray) -> np.ndarray:
         """Stored energy ``int_0^d F`` (J)."""

@@ -1073,7 +1073,7 @@ def global_start(setup: Setup, globals_: dict[str, float], E: Any, speed: float,
     """A start for a calibration of records in the basin of their best fit: on a grid of
     the sensor's mass and the contact dashpot, each point's per-hit parameters (striker
     speed, time offset, delay) from :func:`initial_state` and a short fit
-    (:data:`START_ITERATIONS` runs, each point its own problem: :func:`_fit_points`), the
+    (:data:`START_ITERATIONS` runs, each point its own least-squares problem), the
     weights with ``setup``'s floor; the point of least chi^2 is the start. Every sensor
     mass of one dashpot is one chain run (the hits of every point batched,
     ``scene_sensor_mass`` of :class:`Setup`).

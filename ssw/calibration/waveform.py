@@ -778,14 +778,23 @@ def _residuals(setup: Setup, state: State, free: list[Column], wanted: set[str]
     """Weighted residuals and their Jacobian in the scaled coordinates of ``free`` (rows
     where the model or the data has no value, a feature not found, count 0), and how many
     rows the record has a value for but the model none (unexplained)."""
-    obs = observe(setup, state, wanted)
+    return _weighted(setup, observe(setup, state, wanted), state, free)
+
+
+def _weighted(setup: Setup, obs: Observed, state: State, free: list[Column],
+              rows: np.ndarray | None = None) -> tuple[np.ndarray, np.ndarray, int]:
+    """:func:`_residuals` of the observations ``obs`` of ``state`` (only ``rows``, a
+    boolean mask, when given)."""
     index = {c: j for j, c in enumerate(obs.columns)}
     vals = np.array([get(state, c) for c in free])
-    J = obs.jacobian[:, [index[c] for c in free]] * dtheta_dx(setup, free, vals)[None, :]
-    r = (obs.model - obs.data) / obs.sigma
+    keep = slice(None) if rows is None else rows
+    J = (obs.jacobian[keep][:, [index[c] for c in free]]
+         * dtheta_dx(setup, free, vals)[None, :])
+    sigma = obs.sigma[keep]
+    r = (obs.model[keep] - obs.data[keep]) / sigma
     ok = np.isfinite(r) & np.all(np.isfinite(J), axis=1)
-    unexplained = int(np.count_nonzero(~ok & np.isfinite(obs.data)))
-    return (np.where(ok, r, 0.0), np.where(ok[:, None], J / obs.sigma[:, None], 0.0),
+    unexplained = int(np.count_nonzero(~ok & np.isfinite(obs.data[keep])))
+    return (np.where(ok, r, 0.0), np.where(ok[:, None], J / sigma[:, None], 0.0),
             unexplained)
 
 
@@ -793,7 +802,10 @@ def fit(setup: Setup, state: State, free: list[Column], iterations: int | None =
         ) -> Fit:
     """Fit the ``free`` parameters of ``state`` to the records by the one bounded
     Levenberg-Marquardt (:func:`ssw.calibration.lm.levenberg_marquardt`), in the scaled
-    coordinates, each parameter within its range (:data:`PARAMETERS`).
+    coordinates, each parameter within its range (:data:`PARAMETERS`). A trial point where
+    the model loses observations that the current point explains (a hit's pulse or trigger
+    crossing it no longer produces) is rejected: those rows would drop out of chi^2, a
+    fall that is no better fit and a trap the fit cannot leave.
 
     Parameters
     ----------
@@ -818,12 +830,7 @@ def fit(setup: Setup, state: State, free: list[Column], iterations: int | None =
     wanted = {c.name for c in free}
     work = state.copy()
     x0 = to_x(setup, free, np.array([get(work, c) for c in free]))
-    lo, hi = np.empty(len(free)), np.empty(len(free))
-    for j, c in enumerate(free):
-        p = parameter(c.name)
-        log, scale = coordinate(setup, c)
-        lo[j], hi[j] = ((np.log(p.lower), np.log(p.upper)) if log
-                        else (p.lower / scale, p.upper / scale))
+    lo, hi = _bounds(setup, free)
     x0 = np.clip(x0, lo, hi)
 
     def at(x: np.ndarray) -> State:
@@ -840,8 +847,14 @@ def fit(setup: Setup, state: State, free: list[Column], iterations: int | None =
                                                                   float]]:
         out = {}
         for i, x in trial.items():
-            rr, JJ, unexplained[x.tobytes()] = _residuals(setup, at(x), free, wanted)
-            out[i] = (rr, JJ, float(rr @ rr))
+            rr, JJ, lost = _residuals(setup, at(x), free, wanted)
+            unexplained[x.tobytes()] = lost
+            # a point where the model loses observations the current one explains (a
+            # hit's pulse not found) drops their rows from chi^2: a fall of chi^2 that is
+            # no better fit, and a trap the fit cannot leave (every way back adds the rows
+            # again); such a trial is rejected as a rise of chi^2
+            worse = lost > unexplained[pr.x.tobytes()]
+            out[i] = (rr, JJ, np.inf if worse else float(rr @ rr))
         return out
 
     levenberg_marquardt([pr], evaluate, lo, hi, iterations or LM_ITERATIONS)
@@ -1034,9 +1047,24 @@ START_ITERATIONS = 8
 #: 2e-4 of the amplitude, 1.7e-3 of the secondary ratio), so that the grid ranks its points
 #: by the model's distance from the records rather than by the noise.
 START_FLOOR = 3e-3
+#: Refinements of the global start (:func:`refine_start`): each a grid of
+#: :data:`REFINE_POINTS` sensor masses by as many dashpots around the best point so far,
+#: its spacing a third of the last one's (0.1 bead and 1 N s/m, then 0.033 and 0.33, 0.011
+#: and 0.11, 0.0037 and 0.037). The features' chi^2 is so sharp in the sensor's mass (a
+#: device of 1.45 x a bead, 4.5 N s/m: chi^2 ~1e4 at 1.4x, 5 N s/m with the hits'
+#: parameters fitted, 3 at its own values) that the Levenberg-Marquardt from a point of
+#: the first grid crawls (damping 1e4-1e5, a step predicted to gain 5e3 of chi^2 gaining
+#: nothing) and stops far from the optimum; from within ~0.005 bead it converges.
+REFINE_LEVELS = 3
+#: Points per parameter of a refinement (offsets -2..2 of its spacing: the neighbours'
+#: halfway points are inside).
+REFINE_POINTS = 5
 #: Fits of the global parameters with the floor re-estimated from their residuals
-#: (:func:`model_floor`) after the first.
-FLOOR_PASSES = 2
+#: (:func:`model_floor`) after the first, at most; they stop when the floor settles
+#: (every kind within :data:`FLOOR_RTOL` of the last pass's).
+FLOOR_PASSES = 4
+#: The floor's relative change that counts as settled.
+FLOOR_RTOL = 0.1
 
 
 def global_start(setup: Setup, globals_: dict[str, float], E: Any, speed: float,
@@ -1045,9 +1073,10 @@ def global_start(setup: Setup, globals_: dict[str, float], E: Any, speed: float,
     """A start for a calibration of records in the basin of their best fit: on a grid of
     the sensor's mass and the contact dashpot, each point's per-hit parameters (striker
     speed, time offset, delay) from :func:`initial_state` and a short fit
-    (:data:`START_ITERATIONS` runs), the weights with ``setup``'s floor; the point of least
-    chi^2 is the start. Every sensor mass of one dashpot is one chain run (the hits of every
-    point batched, ``scene_sensor_mass`` of :class:`Setup`).
+    (:data:`START_ITERATIONS` runs, each point its own least-squares problem), the
+    weights with ``setup``'s floor; the point of least chi^2 is the start. Every sensor
+    mass of one dashpot is one chain run (the hits of every point batched,
+    ``scene_sensor_mass`` of :class:`Setup`).
 
     Parameters
     ----------
@@ -1078,14 +1107,13 @@ def global_start(setup: Setup, globals_: dict[str, float], E: Any, speed: float,
     E = np.asarray(E, float).ravel()
     tiled = replace(setup, samples=list(setup.samples) * n_g, runs=0,
                     scene_sensor_mass=np.repeat(masses, n_h))
-    per_hit = [Column(name, h) for name in PER_HIT for h in range(tiled.n_hits)]
     replica = np.arange(tiled.n_hits) // n_h
     best, best_chi2, scan = None, np.inf, []
     for c in (START_DAMPING if damping is None else damping):
         g = {**globals_, "damping": float(c)}
-        f = fit(tiled, initial_state(tiled, g, np.tile(E, n_g), speed), per_hit,
-                START_ITERATIONS)
-        obs = observe(tiled, f.state, set())
+        f = _fit_points(tiled, initial_state(tiled, g, np.tile(E, n_g), speed), n_g,
+                        START_ITERATIONS)
+        obs = observe(tiled, f, set())
         r2 = ((obs.model - obs.data) / obs.sigma) ** 2
         ok = np.isfinite(r2)
         chi2 = np.bincount(replica[obs.hit[ok]], weights=r2[ok], minlength=n_g)
@@ -1099,13 +1127,151 @@ def global_start(setup: Setup, globals_: dict[str, float], E: Any, speed: float,
         if chi2[i] < best_chi2:
             hits = slice(i * n_h, (i + 1) * n_h)
             best_chi2 = float(chi2[i])
-            best = State(E.copy(), f.state.striker_velocity[hits].copy(),
-                         f.state.time_offset[hits].copy(), f.state.delay[hits].copy(),
+            best = State(E.copy(), f.striker_velocity[hits].copy(),
+                         f.time_offset[hits].copy(), f.delay[hits].copy(),
                          {**g, "sensor_mass": float(masses[i])})
     setup.runs += tiled.runs
     if best is None:
         raise RecordingError("no point of the global start's grid explains the records")
     return best, scan
+
+
+def refine_start(setup: Setup, globals_: dict[str, float], E: Any, speed: float,
+                 state: State, scan: list[dict], levels: int = REFINE_LEVELS
+                 ) -> tuple[State, list[dict]]:
+    """A global start (:func:`global_start`) refined: ``levels`` times a grid of
+    :data:`REFINE_POINTS` sensor masses by as many dashpots around the best point so far,
+    its spacing a third of the last one's (the first: the start grid's), the best point of
+    all kept (a continuation towards the optimum that a local fit from the coarse grid does
+    not reach, :data:`REFINE_LEVELS`).
+
+    Parameters
+    ----------
+    setup : Setup
+        The model and the records.
+    globals_ : dict
+        The device's global parameters (SI).
+    E : array_like
+        (n_s,) Pa, the samples' moduli.
+    speed : float
+        m/s, the device's striker speed.
+    state : State
+        The best point so far (:func:`global_start`).
+    scan : list of dict
+        Its grid's points (``sensor_mass``, ``damping``, ``chi2``).
+    levels : int
+        Refinements.
+
+    Returns
+    -------
+    tuple of (State, list of dict)
+        The best point's state and every point's ``sensor_mass``, ``damping`` and
+        ``chi2`` (the start grid's and the refinements').
+    """
+    m0 = float(globals_["sensor_mass"])
+    masses = sorted({p["sensor_mass"] for p in scan})
+    dampings = sorted({p["damping"] for p in scan})
+    if len(masses) < 2 or len(dampings) < 2:
+        return state, scan
+    dm = (masses[1] - masses[0]) / m0
+    dc = dampings[1] - dampings[0]
+    best = min(p["chi2"] for p in scan)
+    offsets = np.arange(REFINE_POINTS) - (REFINE_POINTS - 1) // 2
+    lo, hi = parameter("damping").lower, parameter("damping").upper
+    scan = list(scan)
+    for _ in range(levels):
+        dm, dc = dm / 3.0, dc / 3.0
+        ms = state.globals["sensor_mass"] / m0 + dm * offsets
+        cs = np.unique(np.clip(state.globals["damping"] + dc * offsets, lo, hi))
+        try:
+            new, points = global_start(setup, globals_, E, speed, tuple(ms[ms > 0]),
+                                       tuple(float(c) for c in cs))
+        except RecordingError:  # no point of this grid explains the records
+            continue
+        scan += points
+        chi2 = min(p["chi2"] for p in points)
+        if chi2 < best:
+            state, best = new, chi2
+    return state, scan
+
+
+def _fit_points(tiled: Setup, state: State, n_g: int, iterations: int) -> State:
+    """The per-hit parameters of every point of a global start's grid (``tiled``: the
+    records repeated ``n_g`` times, a sensor mass per point) fitted, each point its own
+    least-squares problem (its own damping and steps: one point's hard start holds back no
+    other), every iteration's trial points in ONE chain run
+    (:func:`ssw.calibration.lm.levenberg_marquardt`). A trial where a point's model loses
+    observations its current state explains is rejected (as in :func:`fit`).
+
+    Parameters
+    ----------
+    tiled : Setup
+        The records of every point.
+    state : State
+        The start (every point's hits).
+    n_g : int
+        Points.
+    iterations : int
+        At most this many chain runs.
+
+    Returns
+    -------
+    State
+        Every point's hits fitted.
+    """
+    from ssw.calibration.lm import Problem, levenberg_marquardt
+
+    n_h = tiled.n_hits // n_g
+    cols = [[Column(name, i * n_h + h) for name in PER_HIT for h in range(n_h)]
+            for i in range(n_g)]
+    lo, hi = _bounds(tiled, cols[0])
+    work = state.copy()
+    x = [np.clip(to_x(tiled, cs, np.array([get(work, c) for c in cs])), lo, hi)
+         for cs in cols]
+
+    def at(trial: dict[int, np.ndarray]) -> State:
+        st = work.copy()
+        for i, cs in enumerate(cols):
+            for c, v in zip(cs, from_x(tiled, cs, trial.get(i, x[i])), strict=True):
+                put(st, c, v)
+        return st
+
+    def split(trial: dict[int, np.ndarray]) -> dict[int, tuple[np.ndarray, np.ndarray, int]]:
+        st = at(trial)
+        obs = observe(tiled, st, set(PER_HIT))
+        point = obs.hit // n_h
+        return {i: _weighted(tiled, obs, st, cols[i], point == i) for i in trial}
+
+    first = split(dict(enumerate(x)))
+    problems = [Problem(x[i], r, J, float(r @ r), np.eye(lo.size))
+                for i, (r, J, _) in first.items()]
+    lost = [first[i][2] for i in range(n_g)]
+
+    def evaluate(trial: dict[int, np.ndarray]) -> dict[int, tuple[np.ndarray, np.ndarray,
+                                                                  float]]:
+        for i, pr in enumerate(problems):
+            x[i] = pr.x
+        out = {}
+        for i, (r, J, n_lost) in split(trial).items():
+            worse = n_lost > lost[i]
+            out[i] = (r, J, np.inf if worse else float(r @ r))
+            if not worse and float(r @ r) < problems[i].cost:
+                lost[i] = n_lost  # accepted below
+        return out
+
+    levenberg_marquardt(problems, evaluate, lo, hi, iterations)
+    return at({i: pr.x for i, pr in enumerate(problems)})
+
+
+def _bounds(setup: Setup, free: list[Column]) -> tuple[np.ndarray, np.ndarray]:
+    """The scaled coordinates' bounds of ``free`` (each parameter's range)."""
+    lo, hi = np.empty(len(free)), np.empty(len(free))
+    for j, c in enumerate(free):
+        p = parameter(c.name)
+        log, scale = coordinate(setup, c)
+        lo[j], hi[j] = ((np.log(p.lower), np.log(p.upper)) if log
+                        else (p.lower / scale, p.upper / scale))
+    return lo, hi
 
 
 def calibrate_records(samples: list[Hits], params: Any, wall: str,
@@ -1117,10 +1283,12 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
 
     1. The start: when the sensor's mass and the dashpot may be freed, the best point of
        a grid of them (:func:`global_start`, weights with the floor
-       :data:`START_FLOOR`), else the device's values (weights: the noise).
-    2. A fit of every free parameter; then :data:`FLOOR_PASSES` times the model-error
-       floor estimated from its residuals (:func:`model_floor`: each kind's chi^2 brought
-       to its share of the degrees of freedom) and the fit again with it. The chi^2 of a
+       :data:`START_FLOOR`) refined around it (:func:`refine_start`), else the device's
+       values (weights: the noise).
+    2. A fit of every free parameter; then the model-error floor estimated from its
+       residuals (:func:`model_floor`: each kind's chi^2 brought to its share of the
+       degrees of freedom) and the fit again with it, until the floor settles
+       (:data:`FLOOR_RTOL`, at most :data:`FLOOR_PASSES` times). The chi^2 of a
        calibration is then its degrees of freedom by construction; what it says about the
        model is the floor (stated in the result, and the weights of every measurement
        through the calibration, :func:`ssw.measure.measure_information`).
@@ -1181,13 +1349,18 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     kinds = FEATURES if level == "features" else ("waveform",)
     if scan and {"sensor_mass", "damping"} <= set(free_globals):
         setup.floor = dict.fromkeys(kinds, START_FLOOR)
-        state, scan = global_start(setup, glob, E, v0)
+        state, scan = refine_start(setup, glob, E, v0, *global_start(setup, glob, E, v0))
     else:
         state, scan = initial_state(setup, glob, E, v0), []
     f = fit(setup, state, free + per_hit)
     for _ in range(FLOOR_PASSES):  # the floor: the start's, then the residuals' own
-        setup.floor = model_floor(setup, f)
+        floor = model_floor(setup, f)
+        settled = all(abs(v - setup.floor.get(k, 0.0)) <= FLOOR_RTOL * v
+                      for k, v in floor.items())
+        setup.floor = floor
         f = fit(setup, f.state, free + per_hit)
+        if settled:
+            break
     while True:
         kept = [c for c in free if f.std(c) <= IDENTIFIED_U]
         if len(kept) == len(free):

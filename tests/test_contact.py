@@ -1,6 +1,6 @@
 """Stage I contact FEM against independent truth: Hertz/Sneddon, energy balance, ordering.
 
-Tolerances: the issue's 0.5 % for Hertz; discretization-level agreement elsewhere, with the
+Tolerances: the required 0.5 % for Hertz; discretization-level agreement elsewhere, with the
 measured figure in a comment.
 """
 

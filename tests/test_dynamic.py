@@ -97,7 +97,7 @@ VARIANTS = ({}, {"sensor_reads": "upper"}, {"damping": 2.0})
 def test_density_limit_is_the_quasi_static_chain():
     """Soil and no plate of density 1e-6 kg/m^3: the dynamic FEM wall's TOF equals the
     quasi-static chain's (the same integrator with the FEM's static law as a table wall)
-    within 0.1 % (the issue's bound; measured 1.6e-6) for the default device, its sensor
+    within 0.1 % (the required bound; measured 1.6e-6) for the default device, its sensor
     read at the upper contact and with a contact dashpot (2 N s/m): the dynamic wall
     honours every device field (a loop that read the mean and had no dashpot missed by
     2.6 % and 0.5 %); and the static law is Hertz's with the bead's compliance
@@ -137,7 +137,7 @@ def test_fem_tof_follows_the_sensor_reading_and_the_dashpot():
     2000 kg/m^3: the sensor's upper contact and a 2 N s/m dashpot change the dynamic TOF
     as they change the quasi-static ones. The dynamic wall's shift against the
     quasi-static half-space is the same for both readings within 0.02 % of the TOF (the
-    issue's bound; measured 5e-5), and the dashpot moves the dynamic TOF as it moves the
+    required bound; measured 5e-5), and the dashpot moves the dynamic TOF as it moves the
     quasi-static one within 5 % of its move (measured 0.2 %). The old loop read the mean
     and had no dashpot: its TOF did not move at all."""
     from ssw.dynamics.api import fem_tof
@@ -221,8 +221,8 @@ def test_reduced_wall_limits_scaling_and_energy():
 @pytest.mark.slow
 def test_reduced_wall_follows_the_fem_wall():
     """Slow (~1-2 min): the strongest dynamic effect of the study (0.4 mm PLA on 10 MPa,
-    2200 kg/m^3): the reduced wall's TOF is within 0.5 % of the FEM wall's (the issue's
-    goal) and removes at least 3/4 of the quasi-static assumption's error."""
+    2200 kg/m^3): the reduced wall's TOF is within 0.5 % of the FEM wall's (the
+    required bound) and removes at least 3/4 of the quasi-static assumption's error."""
     from ssw.dynamics.api import fem_tof, reduced_tof
 
     p = ChainParams()

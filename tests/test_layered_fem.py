@@ -125,7 +125,7 @@ def test_fem_wide_plate_matches_the_oracle(scene, curves, tolerance):
     c = curves[scene]
     assert np.allclose(c["wide"].delta, c["oracle"].delta, rtol=1e-12, atol=0)
     dev = c["wide"].force / c["oracle"].force - 1
-    assert tolerance < 0.015  # the target: 1-1.5 %
+    assert tolerance < 0.015  # the target: 1-1.5 %
     assert np.max(np.abs(dev)) <= tolerance, (scene, dev, tolerance)
 
 

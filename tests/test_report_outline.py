@@ -18,7 +18,7 @@ ROOT = Path(__file__).resolve().parent.parent
 
 @pytest.mark.parametrize(("config", "shown"), [
     # the thesis study: no survey, a plate design -> the design is 5 (it was "6." after a
-    # missing "5."), as the report showed
+    # missing "5."), as a report of that study once showed
     ("config.yaml", ["1. Contact (Stage I)", "2. Fits (Stage I)", "3. Chain (Stage II)",
                      "4. Validation (Stage III)", "5. Plate design"]),
     ("ci.yaml", ["1. Contact (Stage I)", "2. Fits (Stage I)", "3. Chain (Stage II)",

@@ -103,7 +103,7 @@ def test_stiff_plate_on_soft_soil_is_bounded_or_refused(plate, soil) -> None:
 
 
 def test_steel_plate_on_10MPa_soil_solves() -> None:
-    """The issue's stiffest plate/soil pair must give a curve, not an error."""
+    """The stiffest plate/soil pair of the grids must give a curve, not an error."""
     curve, work, energy = _solve((10.0e6, 0.3), STEEL, 0.4e-3)
     _check_sane(curve)
     assert work == pytest.approx(energy, rel=ENERGY_TOL)
@@ -139,7 +139,7 @@ def test_tiny_indentations_with_a_scaled_mesh(delta_max: float) -> None:
 
 @pytest.mark.parametrize("delta_max", [1.0e-7, 1.0e-9])
 def test_tiny_indentations_solve(delta_max: float) -> None:
-    """The issue asks for indentations from 1e-9 m: with a suitable mesh they must solve
+    """Indentations from 1e-9 m are required: with a suitable mesh they must solve
     (element sizes spanning 1e7 once stopped the LU with a false "zero pivot"; the matrix is
     now nondimensional, ssw.contact.assembly) and meet Hertz within 0.5 % over the last two
     decades (measured 0.11 % and 0.10 %) with the energy balance."""

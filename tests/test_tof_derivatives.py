@@ -6,7 +6,7 @@ Truth: fourth-order central differences (one-sided at a bound of 0) of TOFs comp
 the same fixed step, at two relative steps (1e-4, 2e-4); the TOF is smooth in its
 parameters to ~1e-10 (tests/test_chain_smooth.py), so the differences converge: the two
 steps agree within 1e-4 (the finer one's truncation is 1/15 of their difference) and the
-finer one is taken. The forward derivative must match within 1e-4 relative (the issue's
+finer one is taken. The forward derivative must match within 1e-4 relative (the required
 bound; measured 1e-9 - 2e-5), relative to the parameter's largest derivative over the three
 scenes (a derivative near 0, at a TOF's extremum in that parameter, has no relative
 accuracy of its own).

@@ -94,7 +94,7 @@ def test_study_tables_2_and_3_against_the_thesis_and_the_manufacturer(ci_study):
       measured TOF (in-sample) and of the thesis's simulated TOF (measured: 0.3-1.0 % and
       0.2-0.7 %);
     * Table 3: the inverted E within 6 % of the manufacturer's (in-sample; measured 2.1 /
-      3.5 / 5.5 %: PCF 08 misses the issue's 5 % goal, README "Calibration"), each 95 %
+      3.5 / 5.5 %: PCF 08 misses the 5 % goal, README "Calibration"), each 95 %
       interval holding the manufacturer's E, and within 5 % of the thesis's own inverted E
       (2.6-2.8 %).
 

@@ -15,7 +15,7 @@ Tables:
   (theory 2: F(delta) is piecewise linear between nodes entering the contact).
 * ``goals``: the study's default curves (the config's contact settings, 1000 increments):
   no plate for nu 0.1, 0.3, 0.5 (error vs Hertz over [1e-6, 1e-4] m) and the 0.4 mm PLA
-  plate, cold and warm, as multiples of the reference LU (the issue's goal: <= 0.5).
+  plate, cold and warm, as multiples of the reference LU (the goal: <= 0.5).
 * ``engines`` (``--engines``): the monolithic engine on the same curves.
 * ``wall`` (``--wall``): the ``fem`` wall over the thesis's Set 3 sweep (E 10..1000 MPa x
   nu 0.1/0.3/0.5): build time cold (operators per nu) and warm, and the TOF of the exact
@@ -140,7 +140,7 @@ def level(g: float, nu: float, contact: dict[str, Any], radius: float, repeat: i
 
 def goals(cfg: dict[str, Any], radius: float, repeat: int, lu: float, engines: bool
           ) -> list[dict[str, Any]]:
-    """The issue's curves (module docstring), cold and warm, relative to the reference LU."""
+    """The benchmark's curves (module docstring), cold and warm, relative to the reference LU."""
     from ssw.config import library
     from ssw.contact.operators import OperatorStore
 

@@ -10,7 +10,7 @@ Parts (``--parts``, default all):
   mesh (1 m, fixed): the dynamic FEM wall's TOF against the quasi-static pipeline of the
   study (``ssw.contact.solve_curve`` -> ``table`` wall -> ``ssw.chain.integrate``);
 * ``point``: one FEM-wall TOF point on the softest, densest soil with the plate (the
-  dearest scene: the longest run), its wall time (the issue's goal: <= 5 min on 2 cores),
+  dearest scene: the longest run), its wall time (the goal: <= 5 min on 2 cores),
   size and energy balance;
 * ``sweep-cost``: a 300-point sweep (E 10..1000 MPa x nu 0.1/0.3/0.5, Hertz law) with the
   quasi-static wall and with the reduced wall through the chain's one integrator

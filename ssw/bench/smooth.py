@@ -6,7 +6,7 @@ calibration file). Parts (``--parts``, default all):
 * ``noise``: the TOF on ``--moduli`` moduli 95-105 MPa (0.1 % apart, nu 0.3), per wall of
   ``--walls`` (default ``hertz`` and ``fem``): the relative residual from a polynomial in E
   of degree ``--degree`` (5: the TOF's own curvature over +-5 % needs it to reach 1e-9),
-  rms and worst (the issue's measure: 8.7e-7 rms, 1.9e-6 worst on the ``fem`` wall before
+  rms and worst (the measure: 8.7e-7 rms, 1.9e-6 worst on the ``fem`` wall before
   the dense peak and the smooth contact events);
 * ``derivatives``: on the thesis's three foams (PCF 08, 15, 30), each parameter's forward
   derivative (:func:`ssw.tof.api.tof_derivatives`) against fourth-order central differences

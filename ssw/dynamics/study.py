@@ -24,7 +24,7 @@ from typing import Any
 
 import numpy as np
 
-#: The issue's grid: soil moduli (Pa) and densities (kg/m^3): foams 130-480, soils
+#: The study's grid: soil moduli (Pa) and densities (kg/m^3): foams 130-480, soils
 #: 1600-2200.
 STUDY_E = (10e6, 30e6, 100e6, 300e6, 1000e6)
 STUDY_DENSITY = (130.0, 480.0, 1600.0, 2200.0)

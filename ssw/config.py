@@ -18,6 +18,7 @@ import yaml
 
 from ssw.errors import ConfigError
 from ssw.materials import Material, material_set
+from ssw.yamlio import safe_load
 
 SCHEMA_PATH = Path(__file__).resolve().parent / "data" / "config.schema.yaml"
 REPO_ROOT = Path(__file__).resolve().parent.parent
@@ -26,7 +27,7 @@ DEFAULT_CONFIG = REPO_ROOT / "config" / "config.yaml"
 
 def load_schema() -> dict[str, Any]:
     """The config JSON schema as a dict."""
-    return yaml.safe_load(SCHEMA_PATH.read_text())
+    return safe_load(SCHEMA_PATH.read_text())
 
 
 def _looks_numeric(text: str) -> bool:
@@ -98,7 +99,7 @@ def load_config(path: str | Path | None = None, overrides: dict[str, Any] | None
     p = Path(path)
     if not p.is_file():
         raise ConfigError("--config", str(p), "an existing YAML file")
-    cfg = yaml.safe_load(p.read_text()) or {}
+    cfg = safe_load(p.read_text()) or {}
     if not isinstance(cfg, dict):
         raise ConfigError("--config", str(p), "a YAML mapping at the top level")
     cfg.update(overrides or {})

@@ -28,6 +28,7 @@ import numpy as np
 import yaml
 
 from ssw.errors import ConfigError
+from ssw.yamlio import safe_load
 
 DATA = Path(__file__).resolve().parent / "data"
 SCHEMA_PATH = DATA / "device.schema.yaml"
@@ -215,7 +216,7 @@ def device_from_dict(data: dict[str, Any], source: str = "") -> Device:
     if not isinstance(data, dict):
         raise ConfigError("device", source or type(data).__name__, "a YAML mapping")
     d = copy.deepcopy(data)
-    err = first_error(yaml.safe_load(SCHEMA_PATH.read_text()), d)
+    err = first_error(safe_load(SCHEMA_PATH.read_text()), d)
     if err is not None:
         raise ConfigError(f"device {source}: {path_of(err)}".strip(), err.instance, err.message)
     st = d["striker"]
@@ -272,7 +273,7 @@ def load_device(spec: str | Path | dict[str, Any] | Device | None = None) -> Dev
         return device_from_dict(spec, "(mapping)")
     p = device_path(DEFAULT_DEVICE if spec is None else spec)
     try:
-        data = yaml.safe_load(p.read_text())
+        data = safe_load(p.read_text())
     except (OSError, yaml.YAMLError) as exc:
         raise ConfigError("--device", str(p), f"a readable YAML device file ({exc})") from exc
     return device_from_dict(data, str(p))

@@ -14,9 +14,8 @@ from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from ssw.errors import ConfigError
+from ssw.yamlio import safe_load
 
 #: The library shipped with ssw (package data; ``config/materials.yaml`` links to it).
 DEFAULT_LIBRARY = Path(__file__).resolve().parent / "data" / "materials.yaml"
@@ -112,7 +111,7 @@ def load_library(path: str | Path | None = None) -> dict[str, dict[str, Any]]:
     p = Path(path) if path is not None else DEFAULT_LIBRARY
     if not p.is_file():
         raise ConfigError("materials_file", str(p), "an existing YAML materials library")
-    data = yaml.safe_load(p.read_text())
+    data = safe_load(p.read_text())
     if not isinstance(data, dict) or BASE_SET not in data:
         raise ConfigError("materials_file", str(p), f"a mapping with a '{BASE_SET}' set")
     return data

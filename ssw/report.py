@@ -21,6 +21,7 @@ from typing import Any
 from ssw import __version__
 from ssw.errors import ConfigError
 from ssw.h5io import atomic_write_text
+from ssw.yamlio import safe_load
 
 MAX_ROWS = 60  # rows shown per CSV table (the file holds them all)
 STYLE = """body{font-family:sans-serif;margin:1em;color:#222}
@@ -34,9 +35,8 @@ def load_captions(path: str | Path | None) -> dict[str, str]:
     """Notes from a YAML mapping of file-name globs to text ({} without a file)."""
     if path is None or not Path(path).is_file():
         return {}
-    import yaml
 
-    data = yaml.safe_load(Path(path).read_text()) or {}
+    data = safe_load(Path(path).read_text()) or {}
     if not isinstance(data, dict):
         raise ConfigError("captions", str(path), "a YAML mapping of file-name globs to text")
     return {str(k): str(v) for k, v in data.items()}

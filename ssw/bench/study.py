@@ -44,6 +44,7 @@ from typing import Any
 
 from ssw.errors import ConfigError, SswError
 from ssw.h5io import atomic_write_text, write_json
+from ssw.yamlio import safe_load
 
 REPO = Path(__file__).resolve().parents[2]
 #: Parts of the repository a study run reads through relative paths (materials library,
@@ -168,13 +169,12 @@ def _snakemake_cmd(args: argparse.Namespace, workdir: Path, config: Path) -> lis
 
 def _increment(args: argparse.Namespace, config: Path) -> tuple[str, float] | None:
     """The (set, thickness) of the rerun measurement, or None."""
-    import yaml
 
     spec = getattr(args, "increment", None)
     if spec is not None and spec.lower() == "none":
         return None
     if spec is None:
-        sets = (yaml.safe_load(config.read_text()) or {}).get("sets", {})
+        sets = (safe_load(config.read_text()) or {}).get("sets", {})
         return DEFAULT_INCREMENT if DEFAULT_INCREMENT[0] in sets else None
     name, _, value = spec.partition(":")
     try:
@@ -187,7 +187,7 @@ def _incremented_config(config: Path, set_name: str, thickness: float, out: Path
     """A copy of ``config`` with ``thickness`` added to ``set_name``'s plate thicknesses."""
     import yaml
 
-    cfg = yaml.safe_load(config.read_text())
+    cfg = safe_load(config.read_text())
     if set_name not in cfg.get("sets", {}):
         raise ConfigError("--increment", set_name, f"a set of {config}")
     axis = cfg["sets"][set_name]["plate_thickness"]

@@ -104,7 +104,7 @@ def _nu_args(nu: Any, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 def estimate_moduli(
     tof: Any, tof_sem: Any, nu: Any, params: Any, wall: str,
     wall_options: dict[str, Any] | None = None, *, calibration: Any = None,
-    E_range: tuple[float, float] = E_RANGE,
+    E_range: tuple[float, float] = E_RANGE, grid: Any = None,
 ) -> list[ModulusEstimate]:
     """E with its interval for ``k`` samples (module docstring), in a few batched runs.
 
@@ -127,6 +127,10 @@ def estimate_moduli(
         The calibration whose covariance enters the interval.
     E_range : tuple of float
         ``(lo, hi)``, Pa: the moduli the inversion searches.
+    grid : ForwardGrid, optional
+        A forward grid of the same device over ``E_range``
+        (:func:`ssw.tof.inverse.forward_grid`; the live estimate keeps one): used when it
+        holds every inversion's Poisson's ratio, else one is computed.
     """
     from ssw.chain.wall import beyond_exact_reach
     from ssw.tof import api
@@ -143,7 +147,9 @@ def estimate_moduli(
     # E at the central nu, and at the range ends (one batched inversion)
     targets = np.concatenate([T, T[ranged], T[ranged]])
     nus = np.concatenate([nu_c, nu_lo[ranged], nu_hi[ranged]])
-    inv = invert_batch(targets, nus, params, wall, E_range=E_range, **opts)
+    if grid is not None and np.any(grid.group_of(nus, {}) < 0):
+        grid = None  # a range's end the grid was not computed for
+    inv = invert_batch(targets, nus, params, wall, E_range=E_range, grid=grid, **opts)
     E = inv.E[:k]
     nr = int(ranged.sum())
     lnE_lo = np.full(k, np.nan)
@@ -361,7 +367,7 @@ class Estimator:
         if self._fixed is None:
             est = estimate_moduli([tof_mean], [0.0], np.asarray(self.nu, float), self.params,
                                   self.wall, self.opts, calibration=self.calibration,
-                                  E_range=self.E_range)[0]
+                                  E_range=self.E_range, grid=self.grid)[0]
             self._fixed = {k: v for k, v in est.contributions.items() if k != "tof"}
             self.notes = est.notes
         dlnE_dT = abs(float(self._slope(tof_mean)))

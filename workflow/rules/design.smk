@@ -37,6 +37,10 @@ rule design_material:
     wildcard_constraints:
         soil=sswwf.alternatives(DESIGN_SOILS),
         material=sswwf.alternatives(DESIGN_MATERIALS),
+    # The longest jobs of a study with a design, on its critical path (calibration ->
+    # design -> ranking): they start as soon as the calibration is there, before the sweep
+    # (40) and the validation (30), which the remaining cores fit in around them.
+    priority: 45
     conda:
         SSW_ENV
     resources:

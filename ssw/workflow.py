@@ -529,6 +529,30 @@ def mpi_flag(resources: Any) -> str:
     return "--mpi" if int(getattr(resources, "tasks", 1) or 1) > 1 else ""
 
 
+def end_of_run() -> int:
+    """Cancel the job scheduler's pending timers once a run is over (the workflow's
+    ``onsuccess`` and ``onerror``).
+
+    Snakemake's scheduler arms a ``threading.Timer`` at every scheduling round (its job-rate
+    limit, ``--max-jobs-per-timespan``, 1 s by default) to look again for jobs to start.
+    The timers are not daemon threads: the process waits for the last one before it exits,
+    a second after its last job (measured: 1.3 s from "Complete log" to the exit of a
+    two-job workflow, 0.3 s without the timers). After the last job no timer has anything
+    left to do.
+
+    Returns
+    -------
+    int
+        How many timers were cancelled.
+    """
+    import threading
+
+    timers = [t for t in threading.enumerate() if isinstance(t, threading.Timer)]
+    for t in timers:
+        t.cancel()
+    return len(timers)
+
+
 def submits_to_slurm(workflow: Any) -> bool:
     """Whether a Snakemake run submits its jobs to Slurm (the ``slurm`` executor)."""
     plugin = getattr(workflow, "executor_plugin", None)

@@ -38,6 +38,24 @@ def test_dry_run_of_the_thesis_study(tmp_path):
     assert not (tmp_path / "results").exists()
 
 
+def test_the_end_of_a_run_cancels_the_timers_that_would_hold_its_exit():
+    """A non-daemon ``threading.Timer`` (what Snakemake's scheduler arms each round) keeps
+    the interpreter alive until it fires; ``end_of_run`` (the workflow's onsuccess and
+    onerror) cancels it: the thread ends at once, and its function never runs."""
+    import threading
+    import time
+
+    from ssw.workflow import end_of_run
+
+    fired = []
+    timer = threading.Timer(60.0, lambda: fired.append(1))
+    timer.start()
+    t0 = time.monotonic()
+    assert end_of_run() >= 1
+    timer.join(5.0)
+    assert not timer.is_alive() and time.monotonic() - t0 < 5.0 and not fired
+
+
 def test_negative_thickness_is_refused_before_any_job(tmp_path):
     bad = tmp_path / "bad.yaml"
     text = (ROOT / "config" / "ci.yaml").read_text()

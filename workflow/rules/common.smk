@@ -67,6 +67,15 @@ onstart:
     sswwf.write_study_config(config, STUDY_CONFIG)
 
 
+# Once the last job is done: no timer of the scheduler holds the exit (ssw.workflow.end_of_run).
+onsuccess:
+    sswwf.end_of_run()
+
+
+onerror:
+    sswwf.end_of_run()
+
+
 def inputs_of(step, key=None):
     """The slice of the study a job reads (a param: Snakemake reruns the job when it
     changes) and its digest (recorded in the job's results)."""

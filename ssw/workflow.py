@@ -537,7 +537,7 @@ def end_of_run() -> int:
     limit, ``--max-jobs-per-timespan``, 1 s by default) to look again for jobs to start.
     The timers are not daemon threads: the process waits for the last one before it exits,
     a second after its last job (measured: 1.3 s from "Complete log" to the exit of a
-    two-job workflow, 0.3 s without the timers). After the last job no timer has anything
+    two-job workflow, 0.3-0.4 s without the timers). After the last job no timer has anything
     left to do.
 
     Returns

@@ -35,7 +35,6 @@ def load_captions(path: str | Path | None) -> dict[str, str]:
     """Notes from a YAML mapping of file-name globs to text ({} without a file)."""
     if path is None or not Path(path).is_file():
         return {}
-
     data = safe_load(Path(path).read_text()) or {}
     if not isinstance(data, dict):
         raise ConfigError("captions", str(path), "a YAML mapping of file-name globs to text")

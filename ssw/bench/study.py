@@ -169,7 +169,6 @@ def _snakemake_cmd(args: argparse.Namespace, workdir: Path, config: Path) -> lis
 
 def _increment(args: argparse.Namespace, config: Path) -> tuple[str, float] | None:
     """The (set, thickness) of the rerun measurement, or None."""
-
     spec = getattr(args, "increment", None)
     if spec is not None and spec.lower() == "none":
         return None

@@ -841,20 +841,14 @@ def fit(setup: Setup, state: State, free: list[Column], iterations: int | None =
 
     r, J, lost = _residuals(setup, at(x0), free, wanted)
     pr = Problem(x0, r, J, float(r @ r), np.eye(len(free)))
-    unexplained = {x0.tobytes(): lost}  # per point: rows the model has no value for
+    explained = _Explained(x0, lost)
 
     def evaluate(trial: dict[int, np.ndarray]) -> dict[int, tuple[np.ndarray, np.ndarray,
                                                                   float]]:
         out = {}
         for i, x in trial.items():
             rr, JJ, lost = _residuals(setup, at(x), free, wanted)
-            unexplained[x.tobytes()] = lost
-            # a point where the model loses observations the current one explains (a
-            # hit's pulse not found) drops their rows from chi^2: a fall of chi^2 that is
-            # no better fit, and a trap the fit cannot leave (every way back adds the rows
-            # again); such a trial is rejected as a rise of chi^2
-            worse = lost > unexplained[pr.x.tobytes()]
-            out[i] = (rr, JJ, np.inf if worse else float(rr @ rr))
+            out[i] = (rr, JJ, explained.cost(pr.x, x, rr, lost))
         return out
 
     levenberg_marquardt([pr], evaluate, lo, hi, iterations or LM_ITERATIONS)
@@ -868,7 +862,37 @@ def fit(setup: Setup, state: State, free: list[Column], iterations: int | None =
     final = at(pr.x)
     return Fit(final, list(free), from_x(setup, free, pr.x), cov, float(pr.cost), dof,
                float(stats.chi2.cdf(pr.cost, dof)), bool(pr.converged), setup.runs,
-               unexplained=unexplained[pr.x.tobytes()], floor=dict(setup.floor))
+               unexplained=explained.lost(pr.x), floor=dict(setup.floor))
+
+
+class _Explained:
+    """The rows of the records that each point a fit evaluated leaves unexplained (the
+    model has no value for them), and the cost of a trial point: its chi^2, or infinite
+    where it loses observations that the problem's current point explains (a hit's pulse
+    or trigger crossing not found). Such a point drops their rows from chi^2: a fall that
+    is no better fit, and a trap the fit cannot leave (every way back adds the rows again).
+
+    Parameters
+    ----------
+    x0 : numpy.ndarray
+        The start (scaled coordinates).
+    lost : int
+        The rows it leaves unexplained.
+    """
+
+    def __init__(self, x0: np.ndarray, lost: int) -> None:
+        self._lost = {x0.tobytes(): int(lost)}
+
+    def lost(self, x: np.ndarray) -> int:
+        """The rows an evaluated point ``x`` leaves unexplained."""
+        return self._lost[x.tobytes()]
+
+    def cost(self, current: np.ndarray, trial: np.ndarray, r: np.ndarray, lost: int
+             ) -> float:
+        """The cost of ``trial`` (residuals ``r``, ``lost`` rows unexplained) for a problem
+        at ``current``: ``r . r``, or infinite when it loses rows ``current`` explains."""
+        self._lost[trial.tobytes()] = int(lost)
+        return np.inf if lost > self.lost(current) else float(r @ r)
 
 
 #: The confidence of the model-error floor's upper bound (:func:`model_floor`).
@@ -1201,7 +1225,7 @@ def _fit_points(tiled: Setup, state: State, n_g: int, iterations: int) -> State:
     least-squares problem (its own damping and steps: one point's hard start holds back no
     other), every iteration's trial points in ONE chain run
     (:func:`ssw.calibration.lm.levenberg_marquardt`). A trial where a point's model loses
-    observations its current state explains is rejected (as in :func:`fit`).
+    observations its current state explains is rejected (:class:`_Explained`, as in :func:`fit`).
 
     Parameters
     ----------
@@ -1245,19 +1269,14 @@ def _fit_points(tiled: Setup, state: State, n_g: int, iterations: int) -> State:
     first = split(dict(enumerate(x)))
     problems = [Problem(x[i], r, J, float(r @ r), np.eye(lo.size))
                 for i, (r, J, _) in first.items()]
-    lost = [first[i][2] for i in range(n_g)]
+    explained = [_Explained(x[i], first[i][2]) for i in range(n_g)]
 
     def evaluate(trial: dict[int, np.ndarray]) -> dict[int, tuple[np.ndarray, np.ndarray,
                                                                   float]]:
         for i, pr in enumerate(problems):
             x[i] = pr.x
-        out = {}
-        for i, (r, J, n_lost) in split(trial).items():
-            worse = n_lost > lost[i]
-            out[i] = (r, J, np.inf if worse else float(r @ r))
-            if not worse and float(r @ r) < problems[i].cost:
-                lost[i] = n_lost  # accepted below
-        return out
+        return {i: (r, J, explained[i].cost(problems[i].x, trial[i], r, n_lost))
+                for i, (r, J, n_lost) in split(trial).items()}
 
     levenberg_marquardt(problems, evaluate, lo, hi, iterations)
     return at({i: pr.x for i, pr in enumerate(problems)})

@@ -121,17 +121,15 @@ class PiecewiseLinearWall:
 
     def force(self, d: np.ndarray) -> np.ndarray:
         """Wall force (N) at indentation ``d`` (m), shape (n,); 0 for ``d <= 0``."""
-        dp = np.maximum(d, 0.0)
-        x = dp * self._inv_d
-        np.minimum(x, 1.0, out=x)
-        j = np.searchsorted(self._keys, x + self._off, side="right") - 1
+        dp, j = self._at(d)
         return self._af[j] + self._bf[j] * dp
 
     def _at(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         """Clipped indentations and the flat index of their pieces."""
         dp = np.maximum(d, 0.0)
-        x = np.minimum(dp * self._inv_d, 1.0)
-        return dp, np.searchsorted(self._keys, x + self._off, side="right") - 1
+        x = dp * self._inv_d
+        np.minimum(x, 1.0, out=x)
+        return dp, self._piece(x, self._keys)
 
     def dforce_dd(self, d: np.ndarray) -> np.ndarray:
         """Tangent stiffness (N/m): the slope ``b`` of the piece holding ``d`` (m); 0 for

@@ -44,6 +44,15 @@ NO_ACCOUNTING = "accounting_storage/none"
 #: job finish).
 PLUGIN_MAX_STATUS_INTERVAL_S = 180.0
 
+#: ssw's longest pause between two of the plugin's status queries of a run, s (environment
+#: ``SSW_SLURM_STATUS_MAX_S``: :func:`status_pause_max`; applied by
+#: :func:`ssw.workflow.cap_status_pause`). Left to grow to
+#: :data:`PLUGIN_MAX_STATUS_INTERVAL_S`, the pause lets a job that ends just after a query
+#: wait three minutes to be seen, longer than most of the study's jobs run; one query of
+#: the run's jobs per 30 s stays light for a controller (Snakemake's own default for remote
+#: executors is one per 10 s).
+STATUS_PAUSE_MAX_S = 30.0
+
 #: The plugin trades ``squeue`` for ``sacct`` (where the binary exists) when ``MinJobAge``
 #: is shorter than this many times ``--slurm-init-seconds-before-status-checks`` (2.8.0).
 PLUGIN_SQUEUE_AGE_FACTOR = 3
@@ -385,7 +394,8 @@ def status_command(cluster: SlurmConfig, requested: str, init_s: int,
     return cmd
 
 
-def short_job_age(cluster: SlurmConfig, status: str) -> str | None:
+def short_job_age(cluster: SlurmConfig, status: str,
+                  pause_s: float = PLUGIN_MAX_STATUS_INTERVAL_S) -> str | None:
     """A warning when ``squeue`` may forget a finished job before a status query sees it.
 
     Parameters
@@ -394,19 +404,21 @@ def short_job_age(cluster: SlurmConfig, status: str) -> str | None:
         The controller's ``MinJobAge``.
     status : str
         The status command the run uses.
+    pause_s : float
+        s, the run's longest pause between two status queries (:func:`status_pause_max`;
+        default the plugin's own, :data:`PLUGIN_MAX_STATUS_INTERVAL_S`).
 
     Returns
     -------
     str or None
-        The warning when the run queries ``squeue`` and ``MinJobAge`` is shorter than the
-        plugin's longest pause between queries (:data:`PLUGIN_MAX_STATUS_INTERVAL_S`),
-        else None.
+        The warning when the run queries ``squeue`` and ``MinJobAge`` is shorter than that
+        pause, else None.
     """
     age = cluster.min_job_age_s
-    if status != "squeue" or age is None or age >= PLUGIN_MAX_STATUS_INTERVAL_S:
+    if status != "squeue" or age is None or age >= pause_s:
         return None
-    return (f"MinJobAge = {age} s is shorter than the executor plugin's longest pause "
-            f"between status queries ({PLUGIN_MAX_STATUS_INTERVAL_S:.0f} s): squeue may "
+    return (f"MinJobAge = {age} s is shorter than the longest pause between the run's "
+            f"status queries ({pause_s:.0f} s): squeue may "
             "forget a finished job before a query sees it; such a run stops with a message "
             "(ssw.cluster.LostJobsWatch). Ask for MinJobAge >= 300 s.")
 
@@ -512,6 +524,20 @@ class LostJobsWatch:
         return None
 
 
+def _env_seconds(environ: Mapping[str, str], name: str, default: float) -> float:
+    """A positive, finite number of seconds from the environment variable ``name``, or
+    ``default`` when it is unset or empty; a ConfigError naming the variable otherwise."""
+    raw = environ.get(name, "").strip()
+    try:
+        value = float(raw) if raw else default
+    except ValueError:
+        value = float("nan")
+    if not value > 0 or value == float("inf"):
+        raise ConfigError(name, raw, f"a positive number of seconds (default {default:g}); "
+                          f"unset {name} for the default")
+    return value
+
+
 def watch_timing(environ: Mapping[str, str]) -> tuple[float, float]:
     """The lost-jobs watch's grace and poll, s: the defaults or the environment's values.
 
@@ -535,24 +561,41 @@ def watch_timing(environ: Mapping[str, str]) -> tuple[float, float]:
     ConfigError
         A value that is not a positive number of seconds, or a poll longer than the grace.
     """
-    values = {}
-    for name, default in (("SSW_SLURM_VANISH_GRACE_S", VANISH_GRACE_S),
-                          ("SSW_SLURM_WATCH_POLL_S", WATCH_POLL_S)):
-        raw = environ.get(name, "").strip()
-        try:
-            value = float(raw) if raw else default
-        except ValueError:
-            value = float("nan")
-        if not value > 0 or value == float("inf"):
-            raise ConfigError(name, raw, f"a positive number of seconds (default {default:g}); "
-                              f"unset {name} for the default")
-        values[name] = value
-    vanish_s, poll_s = values["SSW_SLURM_VANISH_GRACE_S"], values["SSW_SLURM_WATCH_POLL_S"]
+    vanish_s = _env_seconds(environ, "SSW_SLURM_VANISH_GRACE_S", VANISH_GRACE_S)
+    poll_s = _env_seconds(environ, "SSW_SLURM_WATCH_POLL_S", WATCH_POLL_S)
     if poll_s > vanish_s:
         raise ConfigError("SSW_SLURM_WATCH_POLL_S", f"{poll_s:g}",
                           f"at most SSW_SLURM_VANISH_GRACE_S ({vanish_s:g} seconds): the "
                           "watch must look at least once within the grace")
     return vanish_s, poll_s
+
+
+def status_pause_max(environ: Mapping[str, str]) -> float:
+    """The longest pause between two status queries of a run, s: ``SSW_SLURM_STATUS_MAX_S``
+    or :data:`STATUS_PAUSE_MAX_S`, never more than the plugin's own
+    (:data:`PLUGIN_MAX_STATUS_INTERVAL_S`).
+
+    A job is seen to end at most this long after it ends. Shorter on a small cluster of
+    short jobs (the project's tests use 2 s), longer where the controller asks users to
+    query it seldom.
+
+    Parameters
+    ----------
+    environ : Mapping[str, str]
+        The environment of the Snakemake run (``os.environ``).
+
+    Returns
+    -------
+    float
+        s.
+
+    Raises
+    ------
+    ConfigError
+        A value that is not a positive number of seconds.
+    """
+    value = _env_seconds(environ, "SSW_SLURM_STATUS_MAX_S", STATUS_PAUSE_MAX_S)
+    return min(value, PLUGIN_MAX_STATUS_INTERVAL_S)
 
 
 def watch_lost_jobs(query: Callable[[], Mapping[str, str] | None],

@@ -579,14 +579,45 @@ def _job_name(job: Any) -> str:
                         if wildcards else "")
 
 
+def cap_status_pause(executor: Any, pause_s: float) -> None:
+    """Hold the executor plugin's pause between two status queries at ``pause_s`` at most.
+
+    The Slurm plugin (2.8.0, ``Executor.check_active_jobs``) sets the pause before the next
+    query at the end of each query: back to ``--slurm-init-seconds-before-status-checks``
+    when a job ended, else 10 s longer, up to 180 s. Each query is wrapped here, and the
+    pause it leaves is clipped to ``pause_s`` (:func:`ssw.cluster.status_pause_max`), so
+    that a job is seen to end at most ``pause_s`` after it ends.
+
+    Parameters
+    ----------
+    executor : snakemake_interface_executor_plugins.executors.remote.RemoteExecutor
+        The run's executor (``next_seconds_between_status_checks``, ``check_active_jobs``
+        an async generator of the jobs still active).
+    pause_s : float
+        s, the longest pause.
+    """
+    query = executor.check_active_jobs
+
+    async def capped(active_jobs: list[Any]) -> Any:
+        async for job in query(active_jobs):
+            yield job
+        pause = executor.next_seconds_between_status_checks
+        if pause is not None and pause > pause_s:
+            executor.next_seconds_between_status_checks = pause_s
+
+    executor.check_active_jobs = capped
+
+
 def prepare_slurm_run(workflow: Any) -> list[str]:
     """Make a Snakemake run on Slurm see its jobs end, before anything is submitted.
 
     On a cluster without accounting storage the run's status command becomes ``squeue``
     (:func:`ssw.cluster.status_command`; or a ConfigError naming the flag), every job must
-    fit a node (:func:`check_cluster_fit`), and a watch stops the run with a message when
-    its jobs are lost (:func:`ssw.cluster.watch_lost_jobs`, with the executor plugin's own
-    ``squeue`` query of the run's jobs).
+    fit a node (:func:`check_cluster_fit`), the pause between two status queries stops
+    growing at :func:`ssw.cluster.status_pause_max` (:func:`cap_status_pause`), and a watch
+    stops the run with a message when its jobs are lost
+    (:func:`ssw.cluster.watch_lost_jobs`, with the executor plugin's own ``squeue`` query of
+    the run's jobs).
 
     Parameters
     ----------
@@ -622,13 +653,17 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
                      f"--slurm-status-command {wanted}")
         settings.status_command = wanted
     used = cluster.effective_status_command(wanted, info.min_job_age_s, init_s, sacct)
-    warning = cluster.short_job_age(info, used)
+    pause_s = cluster.status_pause_max(os.environ)
+    warning = cluster.short_job_age(info, used, pause_s)
     if warning:
         notes.append(warning)
     check_cluster_fit(workflow)
 
     scheduler = workflow.scheduler
-    run_id = getattr(getattr(scheduler, "_executor", None), "run_uuid", None)
+    executor = getattr(scheduler, "_executor", None)
+    if executor is not None:
+        cap_status_pause(executor, pause_s)
+    run_id = getattr(executor, "run_uuid", None)
     if run_id is None:
         notes.append("the lost-jobs watch is off: the Slurm executor has no run ID")
         return notes
@@ -646,7 +681,7 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
         scheduler.executor_error_callback(WorkflowError(f"Lost cluster jobs: {message}"))
 
     grace_s, poll_s = cluster.watch_timing(os.environ)
-    stall_s = (cluster.PLUGIN_MAX_STATUS_INTERVAL_S + grace_s
+    stall_s = (pause_s + grace_s
                + float(workflow.execution_settings.latency_wait))
     vanish_s = grace_s if used == "squeue" else stall_s
     cluster.watch_lost_jobs(lambda: cluster.query_states(command), waiting, lost, stall_s,

@@ -134,6 +134,53 @@ def test_sinfo_gives_the_largest_node():
         cl.parse_sinfo("")
 
 
+def test_the_status_pause_comes_from_the_environment_within_the_plugins_own():
+    assert cl.status_pause_max({}) == cl.STATUS_PAUSE_MAX_S == 30.0
+    assert cl.status_pause_max({"SSW_SLURM_STATUS_MAX_S": " 2 "}) == 2.0
+    assert cl.status_pause_max({"SSW_SLURM_STATUS_MAX_S": "600"}) == 180.0
+    for raw in ("often", "0", "-1", "inf"):
+        with pytest.raises(ConfigError) as err:
+            cl.status_pause_max({"SSW_SLURM_STATUS_MAX_S": raw})
+        assert err.value.field == "SSW_SLURM_STATUS_MAX_S" and "seconds" in str(err.value)
+    assert "(30 s)" in cl.short_job_age(cl.SlurmConfig(cl.NO_ACCOUNTING, 20), "squeue", 30.0)
+    assert cl.short_job_age(cl.SlurmConfig(cl.NO_ACCOUNTING, 150), "squeue", 30.0) is None
+
+
+class _PluginLike:
+    """The Slurm plugin's pause rule (2.8.0, ``check_active_jobs``): after a query, the
+    initial pause when a job ended, else 10 s more, up to 180 s."""
+
+    def __init__(self) -> None:
+        self.next_seconds_between_status_checks = 1.0
+
+    async def check_active_jobs(self, active_jobs):
+        still = [j for j in active_jobs if j != "ended"]
+        for j in still:
+            yield j
+        pause = self.next_seconds_between_status_checks
+        self.next_seconds_between_status_checks = (
+            1.0 if len(still) < len(active_jobs) else min(pause + 10.0, 180.0))
+
+
+def test_the_pause_between_status_queries_stops_growing_at_the_cap():
+    import asyncio
+
+    from ssw.workflow import cap_status_pause
+
+    async def query(executor, jobs):
+        return [j async for j in executor.check_active_jobs(jobs)]
+
+    free, capped = _PluginLike(), _PluginLike()
+    cap_status_pause(capped, 25.0)
+    pauses = []
+    for jobs in (["a", "b"], ["a", "b"], ["a", "b"], ["a", "ended"], ["a"], ["a"], ["a"]):
+        assert asyncio.run(query(capped, jobs)) == asyncio.run(query(free, jobs))
+        pauses.append((free.next_seconds_between_status_checks,
+                       capped.next_seconds_between_status_checks))
+    assert pauses == [(11.0, 11.0), (21.0, 21.0), (31.0, 25.0), (1.0, 1.0), (11.0, 11.0),
+                      (21.0, 21.0), (31.0, 25.0)]
+
+
 def test_the_watch_timing_comes_from_the_environment_or_the_defaults():
     assert cl.watch_timing({}) == (cl.VANISH_GRACE_S, cl.WATCH_POLL_S) == (60.0, 15.0)
     assert cl.watch_timing({"SSW_SLURM_VANISH_GRACE_S": "600",

@@ -494,7 +494,6 @@ def observe(setup: Setup, state: State, wanted: set[str] | None = None) -> Obser
     nu = np.array([setup.samples[i].nu for i in hit_sample], float)
     p = setup._params(state)
     names = _names(wanted)
-    t_last = float(np.max(first + (n_win - 1) / fs)) - acq.pure_delay
     vary = {"striker_velocity": state.striker_velocity}
     if setup.scene_sensor_mass is not None:
         vary["sensor_mass"] = setup.scene_sensor_mass
@@ -503,6 +502,10 @@ def observe(setup: Setup, state: State, wanted: set[str] | None = None) -> Obser
     after = grid.s > s_split[None, :]
     shifted = grid.s - np.where(after, state.delay[None, :], 0.0)
     dt = setup.dt
+    # the run covers the last sample's inputs and, for a negative delay, the later chain
+    # times the split's samples read: a record that ends before them leaves those rows
+    # unexplained (NaN), and a fit would fall into dropping them
+    t_last = max(float(np.max(grid.s)), float(np.max(shifted)))
     sd = api.sensor_derivatives(E, nu, p, setup.wall, times=np.clip(shifted, 0.0, None),
                                 derivatives=names, t_end=t_last + 8 * (dt or 1e-6),
                                 vary=vary, rate=True, dt=dt, **setup.wall_options)

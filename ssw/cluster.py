@@ -31,7 +31,7 @@ import shutil
 import subprocess
 from collections.abc import Callable, Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 from ssw.errors import ConfigError, SswError
 
@@ -45,7 +45,7 @@ NO_ACCOUNTING = "accounting_storage/none"
 PLUGIN_MAX_STATUS_INTERVAL_S = 180.0
 
 #: ssw's longest pause between two of the plugin's status queries of a run, s (environment
-#: ``SSW_SLURM_STATUS_MAX_S``: :func:`status_pause_max`; applied by
+#: ``SSW_SLURM_STATUS_MAX_S``: :func:`slurm_timing`; applied by
 #: :func:`ssw.workflow.cap_status_pause`). Left to grow to
 #: :data:`PLUGIN_MAX_STATUS_INTERVAL_S`, the pause lets a job that ends just after a query
 #: wait three minutes to be seen, longer than most of the study's jobs run; one query of
@@ -68,10 +68,10 @@ ACTIVE_STATES = frozenset({
 })
 
 #: Seconds between two looks of :func:`watch_lost_jobs` at the run's jobs (environment
-#: ``SSW_SLURM_WATCH_POLL_S``: :func:`watch_timing`).
+#: ``SSW_SLURM_WATCH_POLL_S``: :func:`slurm_timing`).
 WATCH_POLL_S = 15.0
 #: Seconds Slurm may list no job of a run at all (a submission in flight) before the run's
-#: jobs count as lost (environment ``SSW_SLURM_VANISH_GRACE_S``: :func:`watch_timing`).
+#: jobs count as lost (environment ``SSW_SLURM_VANISH_GRACE_S``: :func:`slurm_timing`).
 VANISH_GRACE_S = 60.0
 
 
@@ -405,7 +405,7 @@ def short_job_age(cluster: SlurmConfig, status: str,
     status : str
         The status command the run uses.
     pause_s : float
-        s, the run's longest pause between two status queries (:func:`status_pause_max`;
+        s, the run's longest pause between two status queries (:func:`slurm_timing`;
         default the plugin's own, :data:`PLUGIN_MAX_STATUS_INTERVAL_S`).
 
     Returns
@@ -538,13 +538,29 @@ def _env_seconds(environ: Mapping[str, str], name: str, default: float) -> float
     return value
 
 
-def watch_timing(environ: Mapping[str, str]) -> tuple[float, float]:
-    """The lost-jobs watch's grace and poll, s: the defaults or the environment's values.
+class SlurmTiming(NamedTuple):
+    """A Slurm run's timing, s (:func:`slurm_timing`)."""
+
+    #: How long Slurm may list no job of the run before its jobs count as lost.
+    vanish_s: float
+    #: The lost-jobs watch's pause between two looks.
+    poll_s: float
+    #: The longest pause between two of the executor plugin's status queries.
+    status_pause_s: float
+
+
+def slurm_timing(environ: Mapping[str, str]) -> SlurmTiming:
+    """A Slurm run's timing: the defaults or the environment's values.
 
     ``SSW_SLURM_VANISH_GRACE_S`` (default :data:`VANISH_GRACE_S`) is how long Slurm may list
     no job of a run before its jobs count as lost: longer on a controller whose submissions
     take minutes to appear in ``squeue``, shorter where a lost run should stop sooner.
-    ``SSW_SLURM_WATCH_POLL_S`` (default :data:`WATCH_POLL_S`) is the pause between two looks.
+    ``SSW_SLURM_WATCH_POLL_S`` (default :data:`WATCH_POLL_S`) is the lost-jobs watch's pause
+    between two looks. ``SSW_SLURM_STATUS_MAX_S`` (default :data:`STATUS_PAUSE_MAX_S`, never
+    more than the plugin's own :data:`PLUGIN_MAX_STATUS_INTERVAL_S`) is the longest pause
+    between two status queries: a job is seen to end about that long after it ends at most;
+    shorter on a small cluster of short jobs (the project's tests use 2 s), longer where the
+    controller asks users to query it seldom.
 
     Parameters
     ----------
@@ -553,8 +569,8 @@ def watch_timing(environ: Mapping[str, str]) -> tuple[float, float]:
 
     Returns
     -------
-    tuple[float, float]
-        ``(vanish_s, poll_s)``, s.
+    SlurmTiming
+        The grace, the watch's poll and the longest status pause, s.
 
     Raises
     ------
@@ -567,35 +583,8 @@ def watch_timing(environ: Mapping[str, str]) -> tuple[float, float]:
         raise ConfigError("SSW_SLURM_WATCH_POLL_S", f"{poll_s:g}",
                           f"at most SSW_SLURM_VANISH_GRACE_S ({vanish_s:g} seconds): the "
                           "watch must look at least once within the grace")
-    return vanish_s, poll_s
-
-
-def status_pause_max(environ: Mapping[str, str]) -> float:
-    """The longest pause between two status queries of a run, s: ``SSW_SLURM_STATUS_MAX_S``
-    or :data:`STATUS_PAUSE_MAX_S`, never more than the plugin's own
-    (:data:`PLUGIN_MAX_STATUS_INTERVAL_S`).
-
-    A job is seen to end at most this long after it ends. Shorter on a small cluster of
-    short jobs (the project's tests use 2 s), longer where the controller asks users to
-    query it seldom.
-
-    Parameters
-    ----------
-    environ : Mapping[str, str]
-        The environment of the Snakemake run (``os.environ``).
-
-    Returns
-    -------
-    float
-        s.
-
-    Raises
-    ------
-    ConfigError
-        A value that is not a positive number of seconds.
-    """
-    value = _env_seconds(environ, "SSW_SLURM_STATUS_MAX_S", STATUS_PAUSE_MAX_S)
-    return min(value, PLUGIN_MAX_STATUS_INTERVAL_S)
+    pause_s = _env_seconds(environ, "SSW_SLURM_STATUS_MAX_S", STATUS_PAUSE_MAX_S)
+    return SlurmTiming(vanish_s, poll_s, min(pause_s, PLUGIN_MAX_STATUS_INTERVAL_S))
 
 
 def watch_lost_jobs(query: Callable[[], Mapping[str, str] | None],

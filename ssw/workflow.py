@@ -585,7 +585,7 @@ def cap_status_pause(executor: Any, pause_s: float) -> None:
     The Slurm plugin (2.8.0, ``Executor.check_active_jobs``) sets the pause before the next
     query at the end of each query: back to ``--slurm-init-seconds-before-status-checks``
     when a job ended, else 10 s longer, up to 180 s. Each query is wrapped here, and the
-    pause it leaves is clipped to ``pause_s`` (:func:`ssw.cluster.status_pause_max`), so
+    pause it leaves is clipped to ``pause_s`` (:func:`ssw.cluster.slurm_timing`), so
     that a job is seen to end at most ``pause_s`` after it ends.
 
     Parameters
@@ -614,7 +614,7 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
     On a cluster without accounting storage the run's status command becomes ``squeue``
     (:func:`ssw.cluster.status_command`; or a ConfigError naming the flag), every job must
     fit a node (:func:`check_cluster_fit`), the pause between two status queries stops
-    growing at :func:`ssw.cluster.status_pause_max` (:func:`cap_status_pause`), and a watch
+    growing at :func:`ssw.cluster.slurm_timing` (:func:`cap_status_pause`), and a watch
     stops the run with a message when its jobs are lost
     (:func:`ssw.cluster.watch_lost_jobs`, with the executor plugin's own ``squeue`` query of
     the run's jobs).
@@ -653,7 +653,8 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
                      f"--slurm-status-command {wanted}")
         settings.status_command = wanted
     used = cluster.effective_status_command(wanted, info.min_job_age_s, init_s, sacct)
-    pause_s = cluster.status_pause_max(os.environ)
+    timing = cluster.slurm_timing(os.environ)
+    pause_s = timing.status_pause_s
     warning = cluster.short_job_age(info, used, pause_s)
     if warning:
         notes.append(warning)
@@ -680,7 +681,7 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
 
         scheduler.executor_error_callback(WorkflowError(f"Lost cluster jobs: {message}"))
 
-    grace_s, poll_s = cluster.watch_timing(os.environ)
+    grace_s, poll_s = timing.vanish_s, timing.poll_s
     stall_s = (pause_s + grace_s
                + float(workflow.execution_settings.latency_wait))
     vanish_s = grace_s if used == "squeue" else stall_s

@@ -135,12 +135,12 @@ def test_sinfo_gives_the_largest_node():
 
 
 def test_the_status_pause_comes_from_the_environment_within_the_plugins_own():
-    assert cl.status_pause_max({}) == cl.STATUS_PAUSE_MAX_S == 30.0
-    assert cl.status_pause_max({"SSW_SLURM_STATUS_MAX_S": " 2 "}) == 2.0
-    assert cl.status_pause_max({"SSW_SLURM_STATUS_MAX_S": "600"}) == 180.0
+    assert cl.slurm_timing({}).status_pause_s == cl.STATUS_PAUSE_MAX_S == 30.0
+    assert cl.slurm_timing({"SSW_SLURM_STATUS_MAX_S": " 2 "}).status_pause_s == 2.0
+    assert cl.slurm_timing({"SSW_SLURM_STATUS_MAX_S": "600"}).status_pause_s == 180.0
     for raw in ("often", "0", "-1", "inf"):
         with pytest.raises(ConfigError) as err:
-            cl.status_pause_max({"SSW_SLURM_STATUS_MAX_S": raw})
+            cl.slurm_timing({"SSW_SLURM_STATUS_MAX_S": raw})
         assert err.value.field == "SSW_SLURM_STATUS_MAX_S" and "seconds" in str(err.value)
     assert "(30 s)" in cl.short_job_age(cl.SlurmConfig(cl.NO_ACCOUNTING, 20), "squeue", 30.0)
     assert cl.short_job_age(cl.SlurmConfig(cl.NO_ACCOUNTING, 150), "squeue", 30.0) is None
@@ -182,13 +182,13 @@ def test_the_pause_between_status_queries_stops_growing_at_the_cap():
 
 
 def test_the_watch_timing_comes_from_the_environment_or_the_defaults():
-    assert cl.watch_timing({}) == (cl.VANISH_GRACE_S, cl.WATCH_POLL_S) == (60.0, 15.0)
-    assert cl.watch_timing({"SSW_SLURM_VANISH_GRACE_S": "600",
-                            "SSW_SLURM_WATCH_POLL_S": " 30 "}) == (600.0, 30.0)
+    assert cl.slurm_timing({})[:2] == (cl.VANISH_GRACE_S, cl.WATCH_POLL_S) == (60.0, 15.0)
+    assert cl.slurm_timing({"SSW_SLURM_VANISH_GRACE_S": "600",
+                            "SSW_SLURM_WATCH_POLL_S": " 30 "})[:2] == (600.0, 30.0)
     for env, field in [({"SSW_SLURM_VANISH_GRACE_S": "soon"}, "SSW_SLURM_VANISH_GRACE_S"),
                        ({"SSW_SLURM_VANISH_GRACE_S": "-5"}, "SSW_SLURM_VANISH_GRACE_S"),
                        ({"SSW_SLURM_WATCH_POLL_S": "inf"}, "SSW_SLURM_WATCH_POLL_S"),
                        ({"SSW_SLURM_WATCH_POLL_S": "90"}, "SSW_SLURM_WATCH_POLL_S")]:
         with pytest.raises(ConfigError) as err:
-            cl.watch_timing(env)
+            cl.slurm_timing(env)
         assert err.value.field == field and "seconds" in str(err.value)

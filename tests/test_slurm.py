@@ -526,7 +526,7 @@ def test_jobs_that_vanish_from_slurm_stop_the_run_with_a_message(tmp_path: Path,
     workflow's watch (ssw.cluster.LostJobsWatch) stops the run with a message naming the
     jobs: within the grace and a poll, and Snakemake exits soon after. The grace and the
     poll are the environment's (``SSW_SLURM_VANISH_GRACE_S``, ``SSW_SLURM_WATCH_POLL_S``:
-    ``ssw.cluster.watch_timing``), shorter than the defaults (60 s, 15 s) so that the test
+    ``ssw.cluster.slurm_timing``), shorter than the defaults (60 s, 15 s) so that the test
     does not idle a worker for two minutes; tests/test_cluster.py checks the defaults."""
     grace_s, poll_s = 12.0, 3.0
     (tmp_path / "Snakefile").write_text(CLUSTER_CHECK + SLOW_SNAKEFILE)

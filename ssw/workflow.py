@@ -614,8 +614,8 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
     On a cluster without accounting storage the run's status command becomes ``squeue``
     (:func:`ssw.cluster.status_command`; or a ConfigError naming the flag), every job must
     fit a node (:func:`check_cluster_fit`), the pause between two status queries stops
-    growing at :func:`ssw.cluster.slurm_timing` (:func:`cap_status_pause`), and a watch
-    stops the run with a message when its jobs are lost
+    growing at the run's limit (:func:`ssw.cluster.slurm_timing`, :func:`cap_status_pause`),
+    and a watch stops the run with a message when its jobs are lost
     (:func:`ssw.cluster.watch_lost_jobs`, with the executor plugin's own ``squeue`` query of
     the run's jobs).
 
@@ -681,12 +681,10 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
 
         scheduler.executor_error_callback(WorkflowError(f"Lost cluster jobs: {message}"))
 
-    grace_s, poll_s = timing.vanish_s, timing.poll_s
-    stall_s = (pause_s + grace_s
-               + float(workflow.execution_settings.latency_wait))
-    vanish_s = grace_s if used == "squeue" else stall_s
+    stall_s = pause_s + timing.vanish_s + float(workflow.execution_settings.latency_wait)
+    vanish_s = timing.vanish_s if used == "squeue" else stall_s
     cluster.watch_lost_jobs(lambda: cluster.query_states(command), waiting, lost, stall_s,
-                            vanish_s, poll_s)
+                            vanish_s, timing.poll_s)
     return notes
 
 

@@ -576,7 +576,8 @@ def test_the_profile_alone_runs_a_study_on_a_cluster_without_accounting(
     """`snakemake --profile workflow/profiles/slurm` and nothing else about the cluster
     (no --slurm-status-command, no --slurm-no-account; the job-name prefix only lets the
     test clean up) runs the CI study on this cluster without accounting: the workflow's
-    check switches the status command to squeue and says so."""
+    check switches the status command to squeue and says so. (The environment holds the
+    status queries 2 s apart at most, as for every run here: ``_env``.)"""
     start = time.monotonic()
     proc = run_snakemake(tmp_path, [
         "--snakefile", str(ROOT / "workflow" / "Snakefile"), "--configfile",

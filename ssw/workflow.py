@@ -601,8 +601,7 @@ def cap_status_pause(executor: Any, pause_s: float) -> None:
     async def capped(active_jobs: list[Any]) -> Any:
         async for job in query(active_jobs):
             yield job
-        pause = executor.next_seconds_between_status_checks
-        if pause is not None and pause > pause_s:
+        if executor.next_seconds_between_status_checks > pause_s:
             executor.next_seconds_between_status_checks = pause_s
 
     executor.check_active_jobs = capped

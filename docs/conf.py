@@ -70,7 +70,8 @@ nitpick_ignore_regex = [
     (r"py:.*", r"(np|numpy|scipy|h5py|matplotlib|gmsh|petsc4py|mpi4py|jsonschema|yaml"
                r"|snakemake|nidaqmx|nptdms|argparse|collections|typing|types|pathlib|os"
                r"|io|concurrent|threading|subprocess|dataclasses|enum|abc|contextlib"
-               r"|functools|itertools|datetime|logging|json|re|builtins)(\..*)?"),
+               r"|functools|itertools|datetime|logging|json|re|builtins|ctypes|hashlib"
+               r"|importlib)(\..*)?"),
     (r"py:class", r"(Path|ndarray|NDArray|Any|Callable|Iterator|Iterable|Sequence|Mapping"
                   r"|MutableMapping|Generator|Literal|Self|TypeVar|ArrayLike|Figure|Axes"
                   r"|PETSc\..*|MPI\..*)"),

@@ -22,8 +22,9 @@
 # whole binary set-up 12 s with uv; its packages alone take 64 s by pip (49 s of CPU
 # against uv's 11 s).
 #
-# Idempotent: a stamp records the hash of this script, constraints.txt, pyproject.toml, the
-# route and the interpreter; when nothing changed and the packages are in place, it returns
+# Idempotent: a stamp records the hash of this script, constraints.txt, pyproject.toml,
+# setup.py, the chain step's C source (ssw/chain/_step.c: a change rebuilds it), the route
+# and the interpreter; when nothing changed and the packages are in place, it returns
 # in about a second. A venv made by the other route (or another Python) is made anew.
 #
 # Why the source recipe looks the way it does (measured on this kind of machine):
@@ -86,8 +87,10 @@ PYVER=$("$PY" -c 'import sys; print("%d.%d" % sys.version_info[:2])') ||
 # the gmsh wheel's libgmsh.so links against even when no window is opened.
 # chromium + chromium-driver: the headless browser the report test opens the study report in
 # (tests/test_report_browser.py, through selenium; no browser download).
+# gcc + libc6-dev: the compiler of ssw's chain step (ssw/chain/_step.c, built by setup.py
+# when ssw is installed).
 SYS_PKGS=(libglu1-mesa libxrender1 libxcursor1 libxft2 libxinerama1 libgl1 chromium
-          chromium-driver)
+          chromium-driver gcc libc6-dev)
 # source route: libopenblas-dev (BLAS/LAPACK for PETSc), libmpich-dev + mpich (the one MPI:
 # mpicc, mpiexec).
 if [ "$ROUTE" = source ]; then
@@ -130,17 +133,22 @@ fi
 present() {
   "$VENV/bin/python" -c "import importlib.util as u, sys
 sys.exit(any(u.find_spec(m) is None
-             for m in ('ssw', 'gmsh', 'h5py', 'snakemake', 'petsc4py', 'mpi4py')))" 2>/dev/null
+             for m in ('ssw', 'ssw.chain._step', 'gmsh', 'h5py', 'snakemake', 'petsc4py',
+                       'mpi4py')))" 2>/dev/null
 }
-# The full check: ssw's own import of PETSc (the binary stack's MPI first) and mpi4py.
+# The full check: ssw's own import of PETSc (the binary stack's MPI first) and mpi4py, and
+# its compiled chain step (built from the source in the tree).
 check_imports() {
   "$VENV/bin/python" -c "import gmsh, h5py, snakemake, mpi4py
+from ssw.chain.kernel import library
+library()
 from ssw.contact.petsc_solver import _petsc
 from mpi4py import MPI
 assert _petsc().COMM_WORLD.getSize() == MPI.COMM_WORLD.Get_size()" >/dev/null 2>&1
 }
 id_line="$ROUTE $("$PY" -c 'import sys; print(sys.version.split()[0])')"
-stamp_src=$( (cat scripts/setup.sh constraints.txt pyproject.toml; echo "$id_line") |
+stamp_src=$( (cat scripts/setup.sh constraints.txt pyproject.toml setup.py ssw/chain/_step.c
+              echo "$id_line") |
             sha256sum | cut -c1-16)
 stamp="$VENV/.ssw-setup-$stamp_src"
 # ssw's own bytecode, brought up to date on every call (a fraction of a second when it is)
@@ -209,7 +217,8 @@ fi
 
 check_imports || {
   "$VENV/bin/python" -c "from ssw.contact.petsc_solver import _petsc; _petsc()" || true
-  die "the environment in $VENV does not import PETSc and mpi4py (see above)"
+  "$VENV/bin/python" -c "from ssw.chain.kernel import library; library()" || true
+  die "the environment in $VENV does not import PETSc and mpi4py, or ssw's chain step (see above)"
 }
 compile_ssw
 rm -f "$VENV"/.ssw-setup-*

@@ -59,21 +59,24 @@ def test_derivative_of_the_tof_is_smooth(thesis):
 
 
 def test_a_contact_event_is_the_exact_hat_average_of_the_law():
-    """The force a step applies to a contact, ``A |delta|^1.5 psi(d / |delta|)``, is the
-    hat average of the Hertz law along the step's linear relative motion (checked against
-    adaptive quadrature of ``int (1 - |s|) (x + s)_+^1.5 ds``), continuous with its series
-    far from events to 1e-11 (value and slope), and never negative (no tension)."""
+    """The force a step applies to a contact, ``A |delta|^1.5 psi(d / |delta|)`` (the step's
+    own compiled code, ssw.chain.kernel), is the hat average of the Hertz law along the
+    step's linear relative motion (checked against adaptive quadrature of ``int (1 - |s|)
+    (x + s)_+^1.5 ds``), continuous with its series far from events to 1e-11 (value and
+    slope), and never negative (no tension)."""
     from scipy.integrate import quad
 
-    from ssw.chain.impulse import FAR, SERIES, psi
+    from ssw.chain.impulse import FAR, SERIES
+    from ssw.chain.kernel import averaged_hertz
 
     xs = np.array([-0.9, -0.5, -0.1, 0.0, 0.2, 0.7, 1.0, 1.5, 4.0, 12.0])
     ref = [quad(lambda s, x=x: (1 - abs(s)) * max(x + s, 0.0) ** 1.5, -1.0, 1.0,
                 points=sorted({-x, 0.0} & {v for v in (-x, 0.0) if -1 < v < 1}) or None,
                 epsabs=1e-14)[0] for x in xs]
-    np.testing.assert_allclose(psi(xs)[0], ref, rtol=1e-9, atol=1e-13)
-    x = np.linspace(-1.0, FAR, 4001)
-    val, slope = psi(x, tangent=True)
+    # |delta| = 1 m and A = 1: the force is psi(d) itself, its dF/dd psi'(d)
+    np.testing.assert_allclose(averaged_hertz(xs, 1.0, 1.0)[0], ref, rtol=1e-9, atol=1e-13)
+    x = np.linspace(-1.0, np.nextafter(FAR, 0.0), 4001)
+    val, slope, _ = averaged_hertz(x, 1.0, 1.0, tangent=True)
     assert np.all(val >= 0.0)
     r = 1.0 / FAR**2
     series = FAR**1.5 * (1 + SERIES[0] * r + SERIES[1] * r * r)
@@ -82,3 +85,7 @@ def test_a_contact_event_is_the_exact_hat_average_of_the_law():
     dseries = FAR**0.5 * (1.5 * (1 + SERIES[0] * r + SERIES[1] * r * r)
                           - 2 * r * (SERIES[0] + 2 * SERIES[1] * r))
     assert slope[-1] == pytest.approx(dseries, rel=1e-10)
+    # across FAR the step switches to the series: the same force and slope on both sides
+    far, far_slope, _ = averaged_hertz(np.array([FAR]), 1.0, 1.0, tangent=True)
+    assert far[0] == pytest.approx(val[-1], rel=1e-11)
+    assert far_slope[0] == pytest.approx(slope[-1], rel=1e-10)

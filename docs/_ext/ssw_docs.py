@@ -330,13 +330,21 @@ class CliReference(SphinxDirective):
 # ------------------------------------------------------------------ API
 
 
+def _python(info: pkgutil.ModuleInfo) -> bool:
+    """A Python module or package, not a compiled library (``ssw/chain/_step.c``'s, which
+    :mod:`ssw.chain.kernel` loads through ctypes and documents)."""
+    spec = info.module_finder.find_spec(info.name)
+    origin = "" if spec is None or spec.origin is None else spec.origin
+    return info.ispkg or origin.endswith(".py")
+
+
 def ssw_modules() -> list[str]:
-    """Every module of the ``ssw`` package (``__main__`` aside), sorted."""
+    """Every Python module of the ``ssw`` package (``__main__`` aside), sorted."""
     import ssw
 
     names = {"ssw"}
     for info in pkgutil.walk_packages(ssw.__path__, "ssw."):
-        if not info.name.endswith("__main__"):
+        if not info.name.endswith("__main__") and _python(info):
             names.add(info.name)
     return sorted(names)
 
@@ -348,7 +356,7 @@ def api_modules(target: str) -> list[str]:
     if hasattr(module, "__path__"):
         names += sorted(
             f"{target}.{m.name}" for m in pkgutil.iter_modules(module.__path__)
-            if m.name != "__main__" and not m.ispkg
+            if m.name != "__main__" and not m.ispkg and _python(m)
         )
     return names
 

@@ -41,6 +41,10 @@ differentiated line by line, from the derivatives of the initial statics
 (:func:`ssw.chain.statics.initial_tangent`); the run keeps the sensor's, ``Run.dsensor``.
 They cost nothing when not asked.
 
+The step's arithmetic (forces, dashpots, accelerations, kicks, drift, sensitivities, the
+sensor's record and the peaks) is one compiled kernel, :mod:`ssw.chain.kernel`; this
+module drives it and keeps what varies by wall, the records and the stop rule.
+
 Early stop. Every ``check_every`` steps each scene's record is inspected; a scene stops when
 (1) its incident pulse has passed the sensor (the sensor signal fell below 30 % of its peak),
 (2) the wall force has peaked and fallen below 35 % of its peak above the static force
@@ -58,7 +62,7 @@ from typing import Any
 
 import numpy as np
 
-from ssw.chain.impulse import closed_share, filled, hertz_force, near_events
+from ssw.chain.kernel import Stepper
 from ssw.chain.params import Batch, ChainParams
 from ssw.chain.sensitivity import Tangent, tangent_of
 from ssw.chain.statics import (
@@ -258,40 +262,6 @@ def time_step(params: ChainParams | Batch, wall: Wall) -> float:
     return min(float(np.min(b.contact_time())), t_wall) / p.steps_per_contact
 
 
-def contact_differences(x: np.ndarray, out: np.ndarray | None = None) -> np.ndarray:
-    """Per contact, the difference of a bead quantity ``x`` (N, ...) across it: ``x_j -
-    x_(j+1)`` for the bead pairs and ``x_(N-1)`` for the wall (overlaps from positions,
-    their rates from velocities), shape of ``x`` (into ``out`` if given)."""
-    if out is None:
-        out = np.empty_like(x)
-    np.subtract(x[:-1], x[1:], out=out[:-1])
-    out[-1] = x[-1]
-    return out
-
-
-class _Workspace:
-    """Buffers of a step for ``n`` active scenes (reused from step to step): the contacts'
-    overlaps and rates ``D`` (2, N, n), ``|rate| dt`` and ``d / (|rate| dt)`` (N, n), the
-    contact forces ``f`` (N, n) as rows 1.. of ``fz`` (row 0 zero: the net force on every
-    bead is one subtraction), and with ``k`` sensitivities their (N, n, k) counterparts."""
-
-    def __init__(self, N: int, n: int, k: int | None, mass_rows: np.ndarray,
-                 mass_cols: np.ndarray) -> None:
-        self.D = np.empty((2, N, n))
-        self.a = np.empty((N, n))
-        self.x = np.empty((N, n))
-        self.fz = np.zeros((N + 1, n))
-        self.f = self.fz[1:]
-        self.dacc = np.empty((N, n))
-        if k is not None:
-            # flat indices in a (N, n, k) array of the masses' own (bead, column) pairs
-            self.mass_at = (mass_rows[:, None] * n + np.arange(n)) * k + mass_cols[:, None]
-            self.DT = np.empty((2, N, n, k))
-            self.dfz = np.zeros((N + 1, n, k))
-            self.df = self.dfz[1:]
-            self.dtmp = np.empty((N - 1, n, k))
-
-
 class _StopRule:
     """Per-scene state of the early-stop rule (module docstring), over the active scenes
     (:meth:`keep` drops the stopped ones)."""
@@ -437,22 +407,17 @@ def simulate(
 
     # internal layout (N, n_scenes): every bead's row is contiguous
     u0, v0 = initial if initial is not None else initial_state(b, wall)
-    # positions and velocities stacked (2, N, n), so that one subtraction gives the
-    # contacts' overlaps and their rates; the workspace follows the active scenes
-    z = np.empty((2, N, n))
-    z[0], z[1] = u0.T, v0.T
-    u, v = z
-    peak_ind = u[-1].copy()  # per active scene
+    u_last = np.ascontiguousarray(u0[:, -1])
     peak_all = np.empty(n)
     peak_f_all = np.empty(n)
-    inv_m, preload = inv_m_all, preload_all
     # a wall with internal state advances it every step from the last bead's new position;
     # its force is then f_wall, not force(u_last)
-    wstate = wall.start(u[-1].copy()) if stateful else None
-    f_wall = wall.force(u[-1]) if stateful else None
+    wstate = wall.start(u_last.copy()) if stateful else None
+    f_wall = wall.force(u_last) if stateful else None
 
     # forward sensitivities (ssw.chain.sensitivity): U, V, Acc (N, n, k)
     mass_rows = mass_cols = np.zeros(0, int)
+    c_E = c_P = None
     if tg is not None:
         c_E, c_P = tg.col("E"), tg.col("preload")
         c_m0 = tg.col("striker_mass")
@@ -463,126 +428,40 @@ def simulate(
         mass_cols = np.array([c for _, c in mass_at], int)
         ZT = np.empty((2, N, n, tg.k))
         ZT[0], ZT[1] = initial_tangent(b, wall, u0, tg)
-        U, V = ZT
         dE_all = np.zeros((n, tg.k))
         if c_E is not None:
             dE_all[:, c_E] = 1.0
         dE = dE_all
-        tstate = wall.start_tangent(wstate, U[-1], dE) if stateful else None
+        tstate = wall.start_tangent(wstate, ZT[0, -1], dE) if stateful else None
         df_wall = None
         if stateful:
-            df_wall = wall.dforce_dd(u[-1])[:, None] * U[-1]
+            df_wall = wall.dforce_dd(u_last)[:, None] * ZT[0, -1]
             if c_E is not None:
-                df_wall[:, c_E] += wall.dforce_dE(u[-1])
-    ws = _Workspace(N, n, None if tg is None else tg.k, mass_rows, mass_cols)
+                df_wall[:, c_E] += wall.dforce_dE(u_last)
+    consts = dict(A=A, dt=dt, damping=damping, g=g_acc, predict=predict,
+                  damped_tangent=tg is not None and damping > 0.0,
+                  c_D=-1 if c_D is None else c_D, c_P=-1 if c_P is None else c_P,
+                  mass_at=list(zip(mass_rows.tolist(), mass_cols.tolist(), strict=True)))
+    ch = Stepper(N, n, 0 if tg is None else tg.k, consts, inv_m_all,
+                 preload_all if has_preload else None, record_energy and damping > 0.0)
+    ch.z[0], ch.z[1] = u0.T, v0.T
+    if tg is not None:
+        ch.ZT[...] = ZT
 
-    def contact_forces(u: np.ndarray, v: np.ndarray, acc: Any, w: Any
-                       ) -> tuple[np.ndarray, Any]:
-        """Contact forces (N, n) the step applies (:mod:`ssw.chain.impulse`: the Hertz law
-        and the dashpot smooth through the contacts' events along the relative motion of
-        the half-step velocities ``v``; the dashpot at the new time's velocity, ``v + dt/2
-        acc`` with the last accelerations ``acc``) and, for the sensitivities and the
-        dashpots' work, what they were made of."""
-        D = ws.D
-        np.subtract(z[:, :-1], z[:, 1:], out=D[:, :-1])
-        D[:, -1] = z[:, -1]
-        d, dv = D
-        a = np.abs(dv, out=ws.a)
-        a *= filled(a.shape, dt)
-        x = np.divide(d, a, out=ws.x)  # NaN or inf where a contact does not move
-        f = ws.f
-        wparts = None
-        near = near_events(x[:-1])
-        fd, fa = hertz_force(d[:-1], a[:-1], x[:-1], A, near, f[:-1], tangent=tg is not None)
+    def wall_row(w: Any) -> None:
+        """The wall's force (and its sensitivities) into the step's last contact row."""
+        u_last = ch.z[0, -1]
         if f_wall is not None:
-            f[-1] = f_wall
+            ch.f[-1] = f_wall
+            if tg is not None:
+                ch.dF[-1] = df_wall
+        elif tg is None:
+            ch.f[-1] = w.force(u_last)
         else:
-            if tg is None:
-                f[-1] = w.force(u[-1])
-            else:
-                f[-1], kd, kE = force_and_tangent(w, u[-1], c_E is not None)
-                wparts = (kd, 0.0, kE)
-        return finish(f, d, a, x, dv, acc, (fd, fa, dv), wparts)
-
-    def finish(f: np.ndarray, d: np.ndarray, a: np.ndarray, x: np.ndarray, dv: np.ndarray,
-               acc: Any, hertz: tuple, wparts: Any) -> tuple[np.ndarray, Any]:
-        """The dashpot's share of the contact forces (into ``f``) and the parts."""
-        fd, fa, dv = hertz
-        dvp = share = gd = ga = None
-        if predict:
-            # the dashpot's velocity at the new time: v_half + dt/2 a_old, to O(dt^2) (the
-            # half-step velocity would make the damped scheme first order)
-            if acc is None:
-                dvp = dv
-            else:
-                dvp = contact_differences(acc, ws.dacc)
-                dvp *= filled(dvp.shape, half)
-                np.add(dv, dvp, out=dvp)
-            # the share's own derivatives act through the dashpot only
-            share, gd, ga = closed_share(d, a, near_events(x, 1.0),
-                                         tangent=tg is not None and damping > 0.0)
-            if damping > 0.0:
-                f += damping * dvp * share
-        return f, (fd, fa, dv, dvp, share, gd, ga, wparts)
-
-    def accel(f: np.ndarray) -> np.ndarray:
-        # f is ws.f, rows 1.. of ws.fz (row 0 zero): net force F_(i-1) - F_i in one go
-        net = np.subtract(ws.fz[:-1], ws.fz[1:])
-        if has_preload:
-            net[1] += preload
-        net *= inv_m
-        net += filled(net.shape, g_acc)
-        return net
-
-    def accel_tangent(U: np.ndarray, V: np.ndarray, Acc_old: Any, a: np.ndarray,
-                      parts: Any, dfw: Any) -> tuple[np.ndarray, np.ndarray]:
-        """``dAcc`` and ``dF`` (N, n, k) of the step's accelerations and contact forces, from
-        the derivatives of the positions ``U``, the half-step velocities ``V`` and the last
-        accelerations ``Acc_old`` (``dfw`` the wall force's (n, k) from a stateful wall,
-        else None)."""
-        fd, fa, dv, dvp, share, gd, ga, wparts = parts
-        DT = ws.DT
-        np.subtract(ZT[:, :-1], ZT[:, 1:], out=DT[:, :-1])
-        DT[:, -1] = ZT[:, -1]
-        dD, dDV = DT
-        # d|dv dt| = sign(dv) dt dDV
-        sdt = np.sign(dv)
-        sdt *= filled(sdt.shape, dt)
-        df = ws.df
-        np.multiply(dD[:-1], fd[:, :, None], out=df[:-1])
-        fa *= sdt[:-1]
-        tmp = np.multiply(dDV[:-1], fa[:, :, None], out=ws.dtmp)
-        df[:-1] += tmp
-        if dfw is not None:
-            df[-1] = dfw
-        else:
-            wd, wa, wE = wparts
-            np.multiply(U[-1], np.asarray(wd)[:, None], out=df[-1])
-            if not (np.isscalar(wa) and wa == 0.0):
-                df[-1] += (wa * sdt[-1])[:, None] * V[-1]
+            ch.f[-1], kd, kE = force_and_tangent(w, u_last, c_E is not None)
+            np.multiply(ch.ZT[0, -1], np.asarray(kd)[:, None], out=ch.dF[-1])
             if c_E is not None:
-                df[-1, :, c_E] += wE
-        if damping > 0.0:
-            # c dvp Phi(d, |dv| dt): c Phi dDVP + c dvp (Phi_d dD + Phi_a sign(dv) dt dDV)
-            dDVP = dDV if Acc_old is None else dDV + half * contact_differences(Acc_old)
-            df += (damping * share)[:, :, None] * dDVP
-            df += (damping * dvp * ga * sdt)[:, :, None] * dDV
-            df += (damping * dvp * gd)[:, :, None] * dD
-        if c_D is not None:
-            df[:, :, c_D] += dvp * share
-        dnet = np.subtract(ws.dfz[:-1], ws.dfz[1:])
-        if c_P is not None:
-            dnet[1, :, c_P] += 1.0
-        dnet *= inv_m[:, :, None]
-        dA = dnet
-        if mass_rows.size:
-            # the masses' own columns: d(F / m)/dm = -(acc - g) / m
-            q = a[mass_rows]
-            q -= filled(q.shape, g_acc)
-            q *= inv_m[mass_rows]
-            flat = dA.reshape(-1)
-            flat[ws.mass_at] -= q
-        return dA, df
+                ch.dF[-1, :, c_E] += kE
 
     def read(upper: np.ndarray, lower: np.ndarray, out: np.ndarray) -> None:
         """The sensor's reading (``sensor_reading``) of its two contacts' forces."""
@@ -594,146 +473,113 @@ def simulate(
             np.add(upper, lower, out=out)
             out *= 0.5
 
-    def dashpot_power(parts: Any) -> np.ndarray:
-        """``sum c Phi dv^2`` (W) per scene: the dashpots' dissipation rate."""
-        dvp, share = parts[3], parts[4]
-        return damping * np.sum(dvp * dvp * share, axis=0)
+    w = wall
+    wall_row(w)
+    ch.forces(has_old=False, kick=False)
+    active = np.arange(n)
+    shapes: dict[str, tuple[int, ...]] = {"sensor": (), "wall": ()}
+    if tg is not None:
+        shapes.update(dsensor=(tg.k,))
+    if record_energy:
+        shapes.update(energy=(), energy_wall=(), dissipated=())
+        w_dash = np.zeros(n)  # the dashpots' work so far (J)
+        p_dash = ch.power.copy() if ch.power is not None else np.zeros(n)
+    if record_forces:
+        shapes["forces"] = (N,)
+    rec = _Record(shapes, n, check_every)
+    buf = rec.buf
 
-    # x = d / |delta| of a contact at rest divides by 0: NaN or inf, never near an event
-    errors = np.seterr(divide="ignore", invalid="ignore")
-    try:
-        w = wall
-        f, parts = contact_forces(u, v, None, w)
-        a = accel(f)
-        active = np.arange(n)
-        shapes: dict[str, tuple[int, ...]] = {"sensor": (), "wall": ()}
-        if tg is not None:
-            shapes.update(dsensor=(tg.k,))
-            Acc, dF = accel_tangent(U, V, None, a, parts, df_wall)
-        if record_energy:
-            shapes.update(energy=(), energy_wall=(), dissipated=())
-            w_dash = np.zeros(n)  # the dashpots' work so far (J)
-            p_dash = dashpot_power(parts) if damping > 0.0 else np.zeros(n)
+    # the sensor's two contacts, step by step; read once per block (flush)
+    pair = np.empty((check_every, 2, n))
+    dpair = None if tg is None else np.empty((check_every, 2, n, tg.k))
+
+    # the step's code fills the sensor's and the wall's rows and keeps the peaks: the
+    # largest wall indentation and, per contact and active scene, bead-bead force (reduced
+    # over the contacts when a scene stops)
+    ch.start_record(s, buf["wall"], pair, dpair)
+
+    def record_row(k: int, na: int, sub_w: Any) -> None:
+        """Row ``k`` of the block buffers (the active scenes' first ``na`` columns)."""
+        ch.record(k)
         if record_forces:
-            shapes["forces"] = (N,)
-        rec = _Record(shapes, n, check_every)
-        buf = rec.buf
-
-        # the sensor's two contacts, step by step; read once per block (flush)
-        pair = np.empty((check_every, 2, n))
-        dpair = None if tg is None else np.empty((check_every, 2, n, tg.k))
-
-        def record_row(k: int, na: int, f: np.ndarray, sub_w: Any) -> None:
-            """Row ``k`` of the block buffers (the active scenes' first ``na`` columns)."""
-            pair[k, :, :na] = f[s - 1 : s + 1]
-            buf["wall"][k, :na] = f[-1]
-            if tg is not None:
-                dpair[k, :, :na] = dF[s - 1 : s + 1]
-            if record_forces:
-                buf["forces"][k, :, :na] = f
-            if record_energy:
-                sub = b.take(active)
-                e = kinetic_energy(sub, v.T) + potential_energy(sub, None if stateful else sub_w,
-                                                                u.T)
-                stored = lost = 0.0
-                if stateful:
-                    stored, lost = sub_w.energy(wstate)
-                buf["energy_wall"][k, :na] = stored if stateful else np.nan
-                buf["dissipated"][k, :na] = lost + w_dash
-                buf["energy"][k, :na] = e + stored + lost + w_dash
-
-        def flush(j0: int, rows: int) -> dict[str, np.ndarray]:
-            """The block's sensor readings, then :meth:`_Record.flush`."""
-            na = active.size
-            read(pair[:rows, 0, :na], pair[:rows, 1, :na], buf["sensor"][:rows, :na])
-            if tg is not None:
-                read(dpair[:rows, 0, :na].transpose(0, 2, 1),
-                     dpair[:rows, 1, :na].transpose(0, 2, 1), buf["dsensor"][:rows, :, :na])
-            return rec.flush(j0, rows, active)
-
-        record_row(0, n, f, w)
-        flush(0, 1)
-        # per contact and active scene, the largest bead-bead force (reduced over the
-        # contacts when a scene stops)
-        peak_f = f[:-1].copy()
-        stop_time = np.full(n, np.nan)
-        step, j0 = 0, 1
-        # the half kick of the last accelerations, once per step (it ends one step and
-        # begins the next)
-        ha = np.multiply(a, filled(a.shape, half))
-        hA = None if tg is None else np.multiply(Acc, filled(Acc.shape, half))
-        for step in range(1, n_steps + 1):
-            v += ha
-            u += np.multiply(v, filled(v.shape, dt))
-            if tg is not None:
-                V += hA
-                U += np.multiply(V, filled(V.shape, dt))
+            buf["forces"][k, :, :na] = ch.f
+        if record_energy:
+            sub = b.take(active)
+            u, v = ch.z
+            e = kinetic_energy(sub, v.T) + potential_energy(sub, None if stateful else sub_w,
+                                                            u.T)
+            stored = lost = 0.0
             if stateful:
-                if tg is not None:
-                    f_wall, df_wall, wstate, tstate = w.advance_tangent(
-                        wstate, tstate, u[-1].copy(), U[-1], dt, dE)
-                else:
-                    f_wall, wstate = w.advance(wstate, u[-1].copy(), dt)
-            f, parts = contact_forces(u, v, a, w)
-            a = accel(f)
-            ha = np.multiply(a, filled(a.shape, half))
-            v += ha
+                stored, lost = sub_w.energy(wstate)
+            buf["energy_wall"][k, :na] = stored if stateful else np.nan
+            buf["dissipated"][k, :na] = lost + w_dash
+            buf["energy"][k, :na] = e + stored + lost + w_dash
+
+    def flush(j0: int, rows: int) -> dict[str, np.ndarray]:
+        """The block's sensor readings, then :meth:`_Record.flush`."""
+        na = active.size
+        read(pair[:rows, 0, :na], pair[:rows, 1, :na], buf["sensor"][:rows, :na])
+        if tg is not None:
+            read(dpair[:rows, 0, :na].transpose(0, 2, 1),
+                 dpair[:rows, 1, :na].transpose(0, 2, 1), buf["dsensor"][:rows, :, :na])
+        return rec.flush(j0, rows, active)
+
+    record_row(0, n, w)
+    flush(0, 1)
+    stop_time = np.full(n, np.nan)
+    step, j0 = 0, 1
+    for step in range(1, n_steps + 1):
+        ch.drift()
+        if stateful:
+            u_last = ch.z[0, -1].copy()
             if tg is not None:
-                Acc, dF = accel_tangent(U, V, Acc, a, parts, df_wall)
-                hA = np.multiply(Acc, filled(Acc.shape, half))
-                V += hA
-            k = step - j0
-            na = active.size
-            np.maximum(peak_ind, u[-1], out=peak_ind)
-            np.maximum(peak_f, f[:-1], out=peak_f)
-            if record_energy and damping > 0.0:
-                p_new = dashpot_power(parts)
-                w_dash += half * (p_dash + p_new)
-                p_dash = p_new
-            record_row(k, na, f, w)
-            if k + 1 < check_every and step < n_steps:
-                continue
-            got = flush(j0, k + 1)
-            times = dt * np.arange(j0, step + 1)
-            j0 = step + 1
-            if not stop_early:
-                continue
-            done = rule.update(times, got["sensor"], got["wall"])
-            if np.any(done):
-                if on_progress is not None:
-                    on_progress(int(np.count_nonzero(done)))
-                stop_time[active[done]] = times[-1]
-                keep = ~done
-                rule.keep(keep)
-                peak_all[active[done]] = peak_ind[done]
-                peak_f_all[active[done]] = peak_f[:, done].max(axis=0)
-                active, peak_ind, peak_f = active[keep], peak_ind[keep], peak_f[:, keep]
-                if active.size == 0:
-                    break
-                idx = np.flatnonzero(keep)
-                z, a, ha = z[:, :, keep], a[:, keep], ha[:, keep]
-                u, v = z
-                ws = _Workspace(N, active.size, None if tg is None else tg.k, mass_rows,
-                                mass_cols)
-                inv_m, preload = inv_m_all[:, active], preload_all[active]
-                if record_energy:
-                    w_dash, p_dash = w_dash[keep], p_dash[keep]
-                if tg is not None:
-                    ZT, Acc, hA = ZT[:, :, keep], Acc[:, keep], hA[:, keep]
-                    U, V = ZT
-                    dE = dE_all[active]
-                    if stateful:
-                        df_wall = df_wall[keep]
-                        tstate = tuple(x[idx] for x in tstate)
+                f_wall, df_wall, wstate, tstate = w.advance_tangent(
+                    wstate, tstate, u_last, ch.ZT[0, -1], dt, dE)
+            else:
+                f_wall, wstate = w.advance(wstate, u_last, dt)
+        wall_row(w)
+        ch.forces(has_old=True, kick=True)
+        k = step - j0
+        na = active.size
+        if record_energy and damping > 0.0:
+            w_dash += half * (p_dash + ch.power)
+            p_dash = ch.power.copy()
+        record_row(k, na, w)
+        if k + 1 < check_every and step < n_steps:
+            continue
+        got = flush(j0, k + 1)
+        times = dt * np.arange(j0, step + 1)
+        j0 = step + 1
+        if not stop_early:
+            continue
+        done = rule.update(times, got["sensor"], got["wall"])
+        if np.any(done):
+            if on_progress is not None:
+                on_progress(int(np.count_nonzero(done)))
+            stop_time[active[done]] = times[-1]
+            keep = ~done
+            rule.keep(keep)
+            peak_all[active[done]] = ch.peak_u[done]
+            peak_f_all[active[done]] = ch.peak_f[:, done].max(axis=0)
+            active = active[keep]
+            if active.size == 0:
+                break
+            idx = np.flatnonzero(keep)
+            ch.keep(keep)
+            if record_energy:
+                w_dash, p_dash = w_dash[keep], p_dash[keep]
+            if tg is not None:
+                dE = dE_all[active]
                 if stateful:
-                    wstate = w.take_state(wstate, idx)
-                    f_wall = f_wall[keep]
-                w = w.take(idx)
-    finally:
-        np.seterr(**errors)
-    peak_all[active] = peak_ind
+                    df_wall = df_wall[keep]
+                    tstate = tuple(x[idx] for x in tstate)
+            if stateful:
+                wstate = w.take_state(wstate, idx)
+                f_wall = f_wall[keep]
+            w = w.take(idx)
     if active.size:
-        peak_f_all[active] = peak_f.max(axis=0)
+        peak_all[active] = ch.peak_u
+        peak_f_all[active] = ch.peak_f.max(axis=0)
     n_t = step + 1
     out = rec.assemble(n_t)
     return Run(

@@ -1,0 +1,303 @@
+/* The chain's velocity-Verlet step, compiled (ssw.chain.kernel loads it through ctypes).
+
+   The physics is documented in ssw/chain/integrate.py (the scheme, the dashpot's predicted
+   velocity, the forward sensitivities) and ssw/chain/impulse.py (the contact laws averaged
+   over the step's relative motion: psi, its series far from events, the dashpot's closed
+   share Phi). Arrays are C-contiguous doubles: bead quantities (N, n), their sensitivities
+   (N, n, k), positions and velocities stacked (2, N, n) and (2, N, n, k); contact j joins
+   beads j and j + 1, contact N - 1 is the wall (its force, and its sensitivities, are
+   written by the caller before ssw_forces: any wall law, with or without state).
+
+   No Python C-API: a plain shared library, built by setuptools with the package (setup.py)
+   and checked against this file's hash by its loader (SSW_STEP_SOURCE). */
+#include <math.h>
+#include <string.h>
+
+#ifndef SSW_STEP_SOURCE
+#define SSW_STEP_SOURCE "unknown"
+#endif
+
+/* ssw.chain.impulse.FAR and SERIES */
+#define FAR 20.0
+#define C1 (1.0 / 16.0)
+#define C2 (1.0 / 640.0)
+
+typedef struct {
+    int N, n, k;          /* beads, active scenes, sensitivity columns (0: none) */
+    int predict;          /* the dashpot's velocity and share are needed */
+    int damped_tangent;   /* damping > 0 with sensitivities: the share's own slopes */
+    int c_D, c_P;         /* columns of the damping and the preload (-1: none) */
+    int n_mass;           /* masses differentiated (<= 2): rows and columns */
+    int mass_row[2], mass_col[2];
+    double A, dt, damping, g;
+    double *z;            /* (2, N, n) u, v (m, m/s) */
+    double *acc;          /* (N, n) m/s^2, the last accelerations (replaced) */
+    double *inv_m;        /* (N, n) 1/kg */
+    double *preload;      /* (n) N on bead 1, or NULL */
+    double *f;            /* (N, n) N, written; row N - 1 holds the wall's force on entry */
+    double *power;        /* (n) W, the dashpots' dissipation rate, or NULL */
+    double *ZT;           /* (2, N, n, k) */
+    double *Acc;          /* (N, n, k), the last accelerations' sensitivities (replaced) */
+    double *dF;           /* (N, n, k), written; row N - 1 holds the wall's on entry */
+    double *work;         /* scratch: 8 N n + N n k doubles */
+    /* the record (ssw_record): the sensor's two contacts, the wall force, their
+       sensitivities, in block buffers whose scene axis has stride n_rec (the run's first n);
+       the largest wall indentation and bead-bead forces so far (n) and (N - 1, n) */
+    int s, n_rec;
+    double *pair;         /* (rows, 2, n_rec) */
+    double *wall;         /* (rows, n_rec) */
+    double *dpair;        /* (rows, 2, n_rec, k) or NULL */
+    double *peak_u;       /* (n) */
+    double *peak_f;       /* (N - 1, n) */
+} ssw_chain;
+
+const char *ssw_step_source(void) { return SSW_STEP_SOURCE; }
+
+/* FAR, C1 and C2, for the loader's check against ssw.chain.impulse */
+void ssw_step_constants(double *out)
+{
+    out[0] = FAR;
+    out[1] = C1;
+    out[2] = C2;
+}
+
+/* (y)_+^(7/2) and (y)_+^(5/2) */
+static inline void pow_plus(double y, double *p35, double *p25)
+{
+    if (y > 0.0) {
+        double q = y * y * sqrt(y);
+        *p25 = q;
+        *p35 = q * y;
+    } else {
+        *p25 = 0.0;
+        *p35 = 0.0;
+    }
+}
+
+/* The Hertz force the step applies to one contact (impulse.py): F = A |delta|^1.5 psi(x),
+   x = d / |delta|, near an event (-1 < x < FAR), else A d_+^1.5 (1 + r/16 + r^2/640),
+   r = min(1 / x^2, 1). With fd, fa: dF/dd and dF/d|delta| (N/m). */
+static inline double hertz(double d, double a, double A, double *fd, double *fa)
+{
+    double x = d / a;
+    if (x > -1.0 && x < FAR) {
+        double t0, t1, t2, s0, s1, s2;
+        pow_plus(x + 1.0, &t0, &s0);
+        pow_plus(x, &t1, &s1);
+        pow_plus(x - 1.0, &t2, &s2);
+        double val = (t0 - 2.0 * t1 + t2) / 8.75;
+        double s = A * sqrt(a);
+        if (fd) {
+            double dval = 3.5 * ((s0 - 2.0 * s1 + s2) / 8.75);
+            *fd = s * dval;
+            *fa = s * (1.5 * val - x * dval);
+        }
+        return s * a * val;
+    }
+    double dp = d > 0.0 ? d : 0.0;
+    double sq = sqrt(dp);
+    double r = 1.0 / (x * x);
+    if (!(r < 1.0)) r = 1.0; /* NaN (a contact at rest at d = 0) and r >= 1 */
+    double poly = 1.0 + r * (C1 + r * C2);
+    if (fd) {
+        double dpoly = C1 + 2.0 * C2 * r;
+        *fd = A * sq * (1.5 * poly - 2.0 * r * dpoly);
+        *fa = dp > 0.0 ? 2.0 * A * dpoly * a / sq : 0.0;
+    }
+    return A * dp * sq * poly;
+}
+
+/* The hat-weighted share Phi(d / a) of the step a contact is closed, and its slopes. */
+static inline double closed_share(double d, double a, double *gd, double *ga)
+{
+    double x = d / a;
+    if (x > -1.0 && x < 1.0) {
+        double slope = 1.0 - fabs(x);
+        if (gd) {
+            *gd = slope / a;
+            *ga = -slope * x / a;
+        }
+        return x <= 0.0 ? 0.5 * (1.0 + x) * (1.0 + x) : 1.0 - 0.5 * (1.0 - x) * (1.0 - x);
+    }
+    if (gd) {
+        *gd = 0.0;
+        *ga = 0.0;
+    }
+    return d > 0.0 ? 1.0 : 0.0;
+}
+
+/* Averaged Hertz forces of m contacts (tests and any caller outside the step). */
+void ssw_hertz(int m, const double *d, const double *a, double A, double *out, double *fd,
+               double *fa)
+{
+    for (int i = 0; i < m; i++)
+        out[i] = hertz(d[i], a[i], A, fd ? fd + i : 0, fa ? fa + i : 0);
+}
+
+/* Row `row` of the record, and the peaks, from the step just taken. */
+void ssw_record(const ssw_chain *c, int row)
+{
+    const int N = c->N, n = c->n, k = c->k, nr = c->n_rec, s = c->s;
+    const double *f = c->f;
+    double *pair = c->pair + (long)row * 2 * nr;
+    for (int i = 0; i < n; i++) {
+        pair[i] = f[(s - 1) * n + i];
+        pair[nr + i] = f[s * n + i];
+        c->wall[(long)row * nr + i] = f[(N - 1) * n + i];
+    }
+    if (k && c->dpair) {
+        double *dp = c->dpair + (long)row * 2 * nr * k;
+        memcpy(dp, c->dF + (long)(s - 1) * n * k, sizeof(double) * n * k);
+        memcpy(dp + (long)nr * k, c->dF + (long)s * n * k, sizeof(double) * n * k);
+    }
+    const double *u_last = c->z + (N - 1) * n;
+    /* as numpy.maximum: a NaN stays */
+    for (int i = 0; i < n; i++)
+        if (u_last[i] > c->peak_u[i] || isnan(u_last[i])) c->peak_u[i] = u_last[i];
+    for (int q = 0; q < (N - 1) * n; q++)
+        if (f[q] > c->peak_f[q] || isnan(f[q])) c->peak_f[q] = f[q];
+}
+
+/* The step's first half: v += dt/2 acc, u += dt v (and the same for the sensitivities). */
+void ssw_drift(const ssw_chain *c)
+{
+    const int Nn = c->N * c->n, m = Nn * c->k;
+    const double half = 0.5 * c->dt, dt = c->dt;
+    double *u = c->z, *v = c->z + Nn;
+    for (int i = 0; i < Nn; i++) {
+        v[i] += half * c->acc[i];
+        u[i] += dt * v[i];
+    }
+    if (c->k) {
+        double *U = c->ZT, *V = c->ZT + m;
+        for (int i = 0; i < m; i++) {
+            V[i] += half * c->Acc[i];
+            U[i] += dt * V[i];
+        }
+    }
+}
+
+/* Contact forces, accelerations and (k > 0) their sensitivities at the drifted state; with
+   kick, the step's second half v += dt/2 acc. has_old: acc (and Acc) hold the last step's
+   accelerations (the dashpot's predicted velocity v + dt/2 acc_old); 0 at the start. */
+void ssw_forces(const ssw_chain *c, int has_old, int kick)
+{
+    const int N = c->N, n = c->n, k = c->k, Nn = N * n;
+    const double dt = c->dt, half = 0.5 * dt, A = c->A, cd = c->damping;
+    const double *u = c->z, *v = c->z + Nn;
+    double *f = c->f, *acc = c->acc;
+    /* per contact: fd, fa sign(dv) dt, sign(dv) dt, dvp, share, gd, ga; new accelerations */
+    double *w_fd = c->work, *w_fa = w_fd + Nn, *w_sdt = w_fa + Nn, *w_dvp = w_sdt + Nn;
+    double *w_sh = w_dvp + Nn, *w_gd = w_sh + Nn, *w_ga = w_gd + Nn, *acc_new = w_ga + Nn;
+    const int tangent = k > 0;
+
+    if (c->power)
+        memset(c->power, 0, sizeof(double) * n);
+    for (int j = 0; j < N; j++) {
+        const int last = j == N - 1;
+        for (int i = 0; i < n; i++) {
+            const int q = j * n + i;
+            const double d = last ? u[q] : u[q] - u[q + n];
+            const double dv = last ? v[q] : v[q] - v[q + n];
+            const double a = fabs(dv) * dt;
+            if (!last)
+                f[q] = hertz(d, a, A, tangent ? w_fd + q : 0, tangent ? w_fa + q : 0);
+            if (tangent) {
+                const double sg = dv > 0.0 ? 1.0 : (dv < 0.0 ? -1.0 : (dv == 0.0 ? 0.0 : dv));
+                w_sdt[q] = sg * dt;
+                if (!last)
+                    w_fa[q] *= w_sdt[q];
+            }
+            if (c->predict) {
+                double dvp = dv;
+                if (has_old)
+                    dvp += half * (last ? acc[q] : acc[q] - acc[q + n]);
+                double gd = 0.0, ga = 0.0;
+                const double sh = closed_share(d, a, c->damped_tangent ? &gd : 0,
+                                               c->damped_tangent ? &ga : 0);
+                if (cd > 0.0) {
+                    f[q] += cd * dvp * sh;
+                    if (c->power)
+                        c->power[i] += cd * dvp * dvp * sh;
+                }
+                if (tangent) {
+                    w_dvp[q] = dvp;
+                    w_sh[q] = sh;
+                    w_gd[q] = gd;
+                    w_ga[q] = ga;
+                }
+            }
+        }
+    }
+    /* m_i a_i = F_(i-1) - F_i (+ P on bead 1) + m_i g */
+    for (int j = 0; j < N; j++)
+        for (int i = 0; i < n; i++) {
+            const int q = j * n + i;
+            double net = (j ? f[q - n] : 0.0) - f[q];
+            if (j == 1 && c->preload)
+                net += c->preload[i];
+            acc_new[q] = net * c->inv_m[q] + c->g;
+        }
+    if (tangent) {
+        const int m = Nn * k;
+        const double *U = c->ZT, *V = c->ZT + m;
+        double *dF = c->dF, *Acc = c->Acc;
+        double *Acc_new = acc_new + Nn;
+        for (int j = 0; j < N; j++) {
+            const int last = j == N - 1;
+            for (int i = 0; i < n; i++) {
+                const int q = j * n + i;
+                const double fd = w_fd[q], fa = w_fa[q], sdt = w_sdt[q];
+                const double dvp = w_dvp[q], sh = w_sh[q];
+                const double tD = cd * dvp * w_gd[q], tV = cd * dvp * w_ga[q] * sdt;
+                const double tP = cd * sh;
+                for (int p = 0; p < k; p++) {
+                    const int r = q * k + p;
+                    const double dD = last ? U[r] : U[r] - U[r + n * k];
+                    const double dDV = last ? V[r] : V[r] - V[r + n * k];
+                    double df = last ? dF[r] : dD * fd + dDV * fa;
+                    if (cd > 0.0) {
+                        double dDVP = dDV;
+                        if (has_old)
+                            dDVP += half * (last ? Acc[r] : Acc[r] - Acc[r + n * k]);
+                        df += tP * dDVP + tV * dDV + tD * dD;
+                    }
+                    if (p == c->c_D)
+                        df += dvp * sh;
+                    dF[r] = df;
+                }
+            }
+        }
+        for (int j = 0; j < N; j++)
+            for (int i = 0; i < n; i++) {
+                const int q = j * n + i;
+                for (int p = 0; p < k; p++) {
+                    const int r = q * k + p;
+                    double dnet = (j ? dF[r - n * k] : 0.0) - dF[r];
+                    if (j == 1 && p == c->c_P)
+                        dnet += 1.0;
+                    Acc_new[r] = dnet * c->inv_m[q];
+                }
+            }
+        /* the masses' own columns: d(F / m)/dm = -(acc - g) / m */
+        for (int t = 0; t < c->n_mass; t++) {
+            const int j = c->mass_row[t], p = c->mass_col[t];
+            for (int i = 0; i < n; i++) {
+                const int q = j * n + i;
+                Acc_new[q * k + p] -= (acc_new[q] - c->g) * c->inv_m[q];
+            }
+        }
+        memcpy(Acc, Acc_new, sizeof(double) * m);
+        if (kick) {
+            double *Vw = c->ZT + m;
+            for (int r = 0; r < m; r++)
+                Vw[r] += half * Acc[r];
+        }
+    }
+    memcpy(acc, acc_new, sizeof(double) * Nn);
+    if (kick) {
+        double *vw = c->z + Nn;
+        for (int q = 0; q < Nn; q++)
+            vw[q] += half * acc[q];
+    }
+}

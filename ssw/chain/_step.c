@@ -6,7 +6,8 @@
    share Phi). Arrays are C-contiguous doubles: bead quantities (N, n), their sensitivities
    (N, n, k), positions and velocities stacked (2, N, n) and (2, N, n, k); contact j joins
    beads j and j + 1, contact N - 1 is the wall (its force, and its sensitivities, are
-   written by the caller before ssw_forces: any wall law, with or without state).
+   written by the caller before ssw_forces: any wall law, with or without state; or, for
+   a piecewise-linear law, ssw.walls.fem.PiecewiseLinearWall, by the step itself).
 
    No Python C-API: a plain shared library, built by setuptools with the package (setup.py)
    and checked against this file's hash by its loader (SSW_STEP_SOURCE). */
@@ -49,6 +50,11 @@ typedef struct {
     double *dpair;        /* (rows, 2, n_rec, k) or NULL */
     double *peak_u;       /* (n) */
     double *peak_f;       /* (N - 1, n) */
+    /* a piecewise-linear wall the step evaluates itself (ssw_piecewise; K1 > 0), its rows
+       (n, K1): breakpoints (m), a (N), b (N/m), da/dE and db/dE (or NULL); c_E the
+       modulus's sensitivity column (-1: none). K1 = 0: the caller writes the wall row. */
+    int K1, c_E;
+    double *wd, *wa, *wb, *wda, *wdb;
 } ssw_chain;
 
 const char *ssw_step_source(void) { return SSW_STEP_SOURCE; }
@@ -126,6 +132,67 @@ static inline double closed_share(double d, double a, double *gd, double *ga)
     return d > 0.0 ? 1.0 : 0.0;
 }
 
+/* A piecewise-linear law F = a_j + b_j d on [d_j, d_(j+1)] at the indentation x (one row of
+   K1 breakpoints, d_0 = 0, the last piece continued beyond d_(K1-1)): F at d = max(x, 0),
+   with kd the slope (0 for x <= 0) and, with da, kE = da_j + db_j d (0 for x <= 0). */
+static inline double piecewise(const double *d, const double *a, const double *b,
+                               const double *da, const double *db, int K1, double x,
+                               double *kd, double *kE, int *piece)
+{
+    const double dp = x > 0.0 ? x : 0.0;
+    int lo = 0, hi = K1; /* the last j with d_j <= dp: d[lo] <= dp < d[hi] (d[K1] = inf) */
+    while (hi - lo > 1) {
+        const int mid = (lo + hi) / 2;
+        if (d[mid] <= dp)
+            lo = mid;
+        else
+            hi = mid;
+    }
+    if (piece)
+        *piece = lo;
+    if (kd)
+        *kd = x > 0.0 ? b[lo] : 0.0;
+    if (kE)
+        *kE = x > 0.0 ? da[lo] + db[lo] * dp : 0.0;
+    return a[lo] + b[lo] * dp;
+}
+
+/* The piecewise-linear law of n scenes (rows of K1) at x (n): F, and kd, kE and the piece
+   (its index in the row) where not NULL (kE needs da, db). */
+void ssw_piecewise(int n, int K1, const double *d, const double *a, const double *b,
+                   const double *da, const double *db, const double *x, double *F,
+                   double *kd, double *kE, int *piece)
+{
+    for (int i = 0; i < n; i++) {
+        const long o = (long)i * K1;
+        F[i] = piecewise(d + o, a + o, b + o, da ? da + o : 0, db ? db + o : 0, K1, x[i],
+                         kd ? kd + i : 0, kE ? kE + i : 0, piece ? piece + i : 0);
+    }
+}
+
+/* The wall's row of f (and of dF) from the step's own piecewise-linear law. */
+static void wall_row(const ssw_chain *c)
+{
+    const int N = c->N, n = c->n, k = c->k, K1 = c->K1;
+    const double *u_last = c->z + (long)(N - 1) * n;
+    for (int i = 0; i < n; i++) {
+        const long o = (long)i * K1;
+        double kd = 0.0, kE = 0.0;
+        const int wantE = k && c->c_E >= 0;
+        c->f[(long)(N - 1) * n + i] =
+            piecewise(c->wd + o, c->wa + o, c->wb + o, wantE ? c->wda + o : 0,
+                      wantE ? c->wdb + o : 0, K1, u_last[i], &kd, wantE ? &kE : 0, 0);
+        if (k) {
+            const double *U = c->ZT + ((long)(N - 1) * n + i) * k;
+            double *dF = c->dF + ((long)(N - 1) * n + i) * k;
+            for (int p = 0; p < k; p++)
+                dF[p] = kd * U[p];
+            if (wantE)
+                dF[c->c_E] += kE;
+        }
+    }
+}
+
 /* Averaged Hertz forces of m contacts (tests and any caller outside the step). */
 void ssw_hertz(int m, const double *d, const double *a, double A, double *out, double *fd,
                double *fa)
@@ -191,6 +258,8 @@ void ssw_forces(const ssw_chain *c, int has_old, int kick)
     double *w_sh = w_dvp + Nn, *w_gd = w_sh + Nn, *w_ga = w_gd + Nn, *acc_new = w_ga + Nn;
     const int tangent = k > 0;
 
+    if (c->K1)
+        wall_row(c);
     if (c->power)
         memset(c->power, 0, sizeof(double) * n);
     for (int j = 0; j < N; j++) {

@@ -441,16 +441,25 @@ def simulate(
     consts = dict(A=A, dt=dt, damping=damping, g=g_acc, predict=predict,
                   damped_tangent=tg is not None and damping > 0.0,
                   c_D=-1 if c_D is None else c_D, c_P=-1 if c_P is None else c_P,
+                  c_E=-1 if c_E is None else c_E,
                   mass_at=list(zip(mass_rows.tolist(), mass_cols.tolist(), strict=True)))
     ch = Stepper(N, n, 0 if tg is None else tg.k, consts, inv_m_all,
                  preload_all if has_preload else None, record_energy and damping > 0.0)
     ch.z[0], ch.z[1] = u0.T, v0.T
     if tg is not None:
         ch.ZT[...] = ZT
+    # a piecewise-linear wall's law is evaluated by the step itself (one call per step);
+    # without its E derivatives, the E sensitivity goes through force_and_tangent, which
+    # says so
+    law = None if stateful else getattr(wall, "step_law", lambda: None)()
+    if law is not None and (c_E is None or law[3] is not None):
+        ch.use_law(law)
 
     def wall_row(w: Any) -> None:
         """The wall's force (and its sensitivities) into the step's last contact row."""
         u_last = ch.z[0, -1]
+        if ch.law is not None:
+            return
         if f_wall is not None:
             ch.f[-1] = f_wall
             if tg is not None:

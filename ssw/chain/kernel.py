@@ -28,9 +28,11 @@ from pathlib import Path
 import numpy as np
 
 from ssw.chain.impulse import FAR, SERIES
-from ssw.errors import SswError
+from ssw.errors import ConfigError, SswError
 
 _D = ctypes.POINTER(ctypes.c_double)
+#: The largest array index of the step (C ``int``).
+MAX_INDEX = 2**31 - 1
 SOURCE = Path(__file__).with_name("_step.c")
 REBUILD = ("run `bash scripts/setup.sh` (or `pip install -e .`) in the ssw checkout; it needs "
            "a C compiler (Debian: apt-get install gcc libc6-dev)")
@@ -51,6 +53,8 @@ class _Chain(ctypes.Structure):
         ("ZT", _D), ("Acc", _D), ("dF", _D), ("work", _D),
         ("s", ctypes.c_int), ("n_rec", ctypes.c_int),
         ("pair", _D), ("wall", _D), ("dpair", _D), ("peak_u", _D), ("peak_f", _D),
+        ("K1", ctypes.c_int), ("c_E", ctypes.c_int),
+        ("wd", _D), ("wa", _D), ("wb", _D), ("wda", _D), ("wdb", _D),
     ]
 
 
@@ -103,6 +107,9 @@ def library() -> ctypes.CDLL:
     lib.ssw_record.restype = None
     lib.ssw_hertz.argtypes = [ctypes.c_int, _D, _D, ctypes.c_double, _D, _D, _D]
     lib.ssw_hertz.restype = None
+    lib.ssw_piecewise.argtypes = [ctypes.c_int, ctypes.c_int, _D, _D, _D, _D, _D, _D, _D, _D,
+                                  _D, ctypes.POINTER(ctypes.c_int)]
+    lib.ssw_piecewise.restype = None
     return lib
 
 
@@ -143,6 +150,48 @@ def averaged_hertz(d: np.ndarray, a: np.ndarray, A: float, tangent: bool = False
     return out, fd, fa
 
 
+def piecewise(law: tuple, x: np.ndarray, tangent: bool = False, with_E: bool = False,
+              piece: bool = False) -> tuple[np.ndarray | None, ...]:
+    """A piecewise-linear law per scene, by the step's own code (one implementation for the
+    step and :class:`ssw.walls.fem.PiecewiseLinearWall`).
+
+    ``F = a_j + b_j d`` with ``j`` the last breakpoint ``d_j <= d``, ``d = max(x, 0)``
+    (``d_0 = 0``; the last piece continues beyond the last breakpoint).
+
+    Parameters
+    ----------
+    law : tuple
+        ``(d, a, b, da_dE, db_dE)``: (n, K) C-contiguous float arrays, breakpoints (m,
+        increasing per row), ``a`` (N), ``b`` (N/m) of the piece starting at each, and the
+        derivatives of ``a`` and ``b`` with respect to the soil's modulus (N/Pa, N/m/Pa;
+        None when unknown).
+    x : numpy.ndarray
+        (n,) m, the indentations.
+    tangent : bool
+        Also ``dF/dd`` (N/m; 0 for ``x <= 0``).
+    with_E : bool
+        Also ``dF/dE = da/dE + db/dE d`` (N/Pa; 0 for ``x <= 0``): needs ``da_dE``.
+    piece : bool
+        Also ``j``, each scene's piece (its index in the row).
+
+    Returns
+    -------
+    tuple
+        ``(F, dF/dd, dF/dE, j)``, (n,) each (None where not asked).
+    """
+    d, a, b, da, db = law
+    x = np.ascontiguousarray(x, float)
+    out = np.empty(d.shape[0])
+    kd = np.empty_like(out) if tangent else None
+    kE = np.empty_like(out) if with_E else None
+    j = np.empty(d.shape[0], np.intc) if piece else None
+    library().ssw_piecewise(d.shape[0], d.shape[1], _ptr(d), _ptr(a), _ptr(b),
+                            _ptr(da if with_E else None), _ptr(db if with_E else None),
+                            _ptr(x), _ptr(out), _ptr(kd), _ptr(kE),
+                            None if j is None else j.ctypes.data_as(ctypes.POINTER(ctypes.c_int)))
+    return out, kd, kE, j
+
+
 class Stepper:
     """The state of ``n`` chains of ``N`` beads (``k`` sensitivity columns) and their step.
 
@@ -163,8 +212,8 @@ class Stepper:
         Sensitivity columns (0: none).
     consts : dict
         ``A`` (N/m^1.5), ``dt`` (s), ``damping`` (N s/m), ``g`` (m/s^2), ``predict``,
-        ``damped_tangent`` (bool), ``c_D``, ``c_P`` (int, -1: none), ``mass_at`` (list of
-        (bead, column)).
+        ``damped_tangent`` (bool), ``c_D``, ``c_P``, ``c_E`` (int, -1: none), ``mass_at``
+        (list of (bead, column)).
     inv_m : numpy.ndarray
         (N, n) 1/kg.
     preload : numpy.ndarray or None
@@ -175,6 +224,10 @@ class Stepper:
 
     def __init__(self, N: int, n: int, k: int, consts: dict, inv_m: np.ndarray,
                  preload: np.ndarray | None, power: bool) -> None:
+        if N * n * (8 + k) > MAX_INDEX:
+            raise ConfigError("scenes", n, f"at most {MAX_INDEX // (N * (8 + k))} per run of "
+                              f"{N} beads with {k} sensitivities (the compiled step indexes "
+                              "its arrays with C ints): run the scenes in batches")
         self.N, self.n, self.k, self.consts = N, n, k, consts
         self.z = np.zeros((2, N, n))
         self.acc = np.zeros((N, n))
@@ -188,6 +241,7 @@ class Stepper:
         self.peak_u = np.zeros(n)
         self.peak_f = np.zeros((N - 1, n))
         self._rec: tuple = (0, None, None, None)
+        self.law: tuple | None = None
         self._bind()
 
     def _bind(self) -> None:
@@ -203,10 +257,25 @@ class Stepper:
             _ptr(self.power), _ptr(self.ZT), _ptr(self.Acc), _ptr(self.dF), _ptr(self.work),
             self._rec[0], 0 if self._rec[1] is None else self._rec[1].shape[-1],
             # pair, wall, dpair
-            *(_ptr(x) for x in self._rec[1:]), _ptr(self.peak_u), _ptr(self.peak_f))
+            *(_ptr(x) for x in self._rec[1:]), _ptr(self.peak_u), _ptr(self.peak_f),
+            0 if self.law is None else self.law[0].shape[1], c["c_E"],
+            *(_ptr(x) for x in (self.law or (None,) * 5)))
         self._ref = ctypes.byref(self._c)
         lib = library()
         self._drift, self._forces, self._record = lib.ssw_drift, lib.ssw_forces, lib.ssw_record
+
+    def use_law(self, law: tuple) -> None:
+        """Evaluate the wall's row in the step, from a piecewise-linear law (:func:`piecewise`'s
+        ``law``, one row per current scene; ``da_dE``, ``db_dE`` needed with the ``E``
+        sensitivity, ``consts["c_E"]``).
+
+        Parameters
+        ----------
+        law : tuple
+            ``(d, a, b, da_dE, db_dE)``.
+        """
+        self.law = tuple(None if x is None else np.ascontiguousarray(x, float) for x in law)
+        self._bind()
 
     def start_record(self, s: int, wall: np.ndarray, pair: np.ndarray,
                      dpair: np.ndarray | None) -> None:
@@ -273,6 +342,9 @@ class Stepper:
             self.preload = np.ascontiguousarray(self.preload[mask])
         if self.power is not None:
             self.power = np.ascontiguousarray(self.power[mask])
+        if self.law is not None:
+            self.law = tuple(None if x is None else np.ascontiguousarray(x[mask])
+                             for x in self.law)
         self.peak_u = np.ascontiguousarray(self.peak_u[mask])
         self.peak_f = np.ascontiguousarray(self.peak_f[:, mask])
         if self.k:

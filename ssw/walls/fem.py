@@ -46,6 +46,7 @@ from typing import Any
 
 import numpy as np
 
+from ssw.chain.kernel import piecewise
 from ssw.chain.params import ChainParams
 from ssw.errors import ConfigError, SolverError
 
@@ -82,26 +83,22 @@ class PiecewiseLinearWall:
     force_error: np.ndarray | None = None
     da_dE: np.ndarray | None = None
     db_dE: np.ndarray | None = None
-    _keys: np.ndarray = field(init=False, repr=False)
     _fkeys: np.ndarray = field(init=False, repr=False)
     _fend: np.ndarray = field(init=False, repr=False)
     _off: np.ndarray = field(init=False, repr=False)  # 2 x row: each row's key offset
-    _inv_d: np.ndarray = field(init=False, repr=False)  # 1 / d_exact
-    _af: np.ndarray = field(init=False, repr=False)  # a, b flat (contiguous)
-    _bf: np.ndarray = field(init=False, repr=False)
+    _law: tuple = field(init=False, repr=False)  # the arrays, C-contiguous (step_law)
 
     def __post_init__(self) -> None:
         n = self.d.shape[0]
         rows = 2.0 * np.arange(n)[:, None]
-        object.__setattr__(self, "_keys", (rows + self.d / self.d_exact[:, None]).ravel())
         F = self.a + self.b * self.d
         fend = F[:, -1]
         object.__setattr__(self, "_fend", fend)
         object.__setattr__(self, "_fkeys", (rows + F / fend[:, None]).ravel())
         object.__setattr__(self, "_off", rows.ravel().copy())
-        object.__setattr__(self, "_inv_d", 1.0 / self.d_exact)
-        object.__setattr__(self, "_af", np.ascontiguousarray(self.a).ravel())
-        object.__setattr__(self, "_bf", np.ascontiguousarray(self.b).ravel())
+        object.__setattr__(self, "_law", tuple(
+            None if x is None else np.ascontiguousarray(x, float)
+            for x in (self.d, self.a, self.b, self.da_dE, self.db_dE)))
 
     @property
     def n(self) -> int:
@@ -113,70 +110,60 @@ class PiecewiseLinearWall:
         return self.d_exact
 
     def _piece(self, x: np.ndarray, keys: np.ndarray) -> np.ndarray:
-        """Flat index of the piece holding the normalized values ``x`` (n,) in [0, 1].
+        """Flat index of the piece holding the normalized values ``x`` (n,) in [0, 1] (the
+        forces, for :meth:`indentation`; the law's own search is the step's,
+        :func:`ssw.chain.kernel.piecewise`).
 
         Row ``i``'s keys lie in ``[2 i, 2 i + 1]`` with its first key ``2 i``, so for ``x``
         in [0, 1] the search lands inside the row: no clipping needed."""
         return np.searchsorted(keys, x + self._off, side="right") - 1
 
+    def step_law(self) -> tuple:
+        """The law's arrays as the chain's step evaluates them itself
+        (:func:`ssw.chain.kernel.piecewise`): ``(d, a, b, da_dE, db_dE)``.
+
+        Returns
+        -------
+        tuple
+            (n, K + 1) arrays, C-contiguous (the derivatives None when unknown).
+        """
+        return self._law
+
     def force(self, d: np.ndarray) -> np.ndarray:
         """Wall force (N) at indentation ``d`` (m), shape (n,); 0 for ``d <= 0``."""
-        dp, j = self._at(d)
-        return self._af[j] + self._bf[j] * dp
-
-    def _at(self, d: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Clipped indentations and the flat index of their pieces."""
-        dp = np.maximum(d, 0.0)
-        x = dp * self._inv_d
-        np.minimum(x, 1.0, out=x)
-        return dp, self._piece(x, self._keys)
+        return piecewise(self._law, d)[0]
 
     def dforce_dd(self, d: np.ndarray) -> np.ndarray:
         """Tangent stiffness (N/m): the slope ``b`` of the piece holding ``d`` (m); 0 for
         ``d <= 0``."""
-        _, j = self._at(d)
-        return np.where(d > 0, self._bf[j], 0.0)
+        return piecewise(self._law, d, tangent=True)[1]
 
     def dforce_dE(self, d: np.ndarray) -> np.ndarray:
         """``dF/dE`` (N/Pa) at fixed indentation ``d`` (m): ``da/dE + db/dE d`` of the piece
         holding ``d`` (the law is continuous at the breakpoints, which move with E, so
         their motion adds nothing); ConfigError without the pieces' derivatives."""
         self._check_dE()
-        dp, j = self._at(d)
-        return self._dE_at(d > 0, dp, j)
+        return piecewise(self._law, d, with_E=True)[2]
 
     def _check_dE(self) -> None:
         if self.da_dE is None or self.db_dE is None:
             raise ConfigError("wall", "fem (unilateral interface)",
                               "a frictionless or bonded plate, or none, for dF/dE")
 
-    def _dE_at(self, pos: np.ndarray, dp: np.ndarray, j: np.ndarray) -> np.ndarray:
-        """``da/dE + db/dE d`` of the pieces ``j`` at the clipped indentations ``dp`` where
-        ``pos``, else 0 (N/Pa)."""
-        return np.where(pos, self.da_dE.ravel()[j] + self.db_dE.ravel()[j] * dp, 0.0)
-
     def force_and_tangent(self, d: np.ndarray, with_E: bool
                           ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
         """``(F, dF/dd, dF/dE)`` at indentations ``d`` (m) from one search of the pieces:
         :meth:`force`, :meth:`dforce_dd` and, with ``with_E``, :meth:`dforce_dE` (else
-        None), the same numbers as those three calls, which search three times
-        (:func:`ssw.chain.wall.force_and_tangent`, the integrator's step with the forward
-        sensitivities); ConfigError for ``with_E`` without the pieces' derivatives."""
+        None) (:func:`ssw.chain.wall.force_and_tangent`); ConfigError for ``with_E``
+        without the pieces' derivatives."""
         if with_E:
             self._check_dE()
-        dp, j = self._at(d)
-        bj = self._bf[j]
-        force = self._af[j] + bj * dp
-        pos = d > 0
-        kd = np.where(pos, bj, 0.0)
-        if not with_E:
-            return force, kd, None
-        return force, kd, self._dE_at(pos, dp, j)
+        return piecewise(self._law, d, tangent=True, with_E=with_E)[:3]
 
     def potential(self, d: np.ndarray) -> np.ndarray:
         """Stored energy ``int_0^d F`` (J)."""
         dp = np.maximum(np.asarray(d, float), 0.0)
-        j = self._piece(np.minimum(dp / self.d_exact, 1.0), self._keys)
+        j = np.arange(self.n) * self.d.shape[1] + piecewise(self._law, dp, piece=True)[3]
         dj, aj, bj = self.d.ravel()[j], self.a.ravel()[j], self.b.ravel()[j]
         return self.U.ravel()[j] + (dp - dj) * (aj + 0.5 * bj * (dp + dj))
 

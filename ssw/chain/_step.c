@@ -157,17 +157,18 @@ static inline double piecewise(const double *d, const double *a, const double *b
     return a[lo] + b[lo] * dp;
 }
 
-/* The piecewise-linear law of n scenes (rows of K1) at x (n): F, and kd, kE and the piece
-   (its index in the row) where not NULL (kE needs da, db). */
-void ssw_piecewise(int n, int K1, const double *d, const double *a, const double *b,
+/* The piecewise-linear law of n scenes (rows of K1) at x (m, n): F, and kd, kE and the
+   piece (its index in the row) where not NULL (kE needs da, db), (m, n) each. */
+void ssw_piecewise(long m, int n, int K1, const double *d, const double *a, const double *b,
                    const double *da, const double *db, const double *x, double *F,
                    double *kd, double *kE, int *piece)
 {
-    for (int i = 0; i < n; i++) {
-        const long o = (long)i * K1;
-        F[i] = piecewise(d + o, a + o, b + o, da ? da + o : 0, db ? db + o : 0, K1, x[i],
-                         kd ? kd + i : 0, kE ? kE + i : 0, piece ? piece + i : 0);
-    }
+    for (long r = 0; r < m; r++)
+        for (int i = 0; i < n; i++) {
+            const long o = (long)i * K1, q = r * n + i;
+            F[q] = piecewise(d + o, a + o, b + o, da ? da + o : 0, db ? db + o : 0, K1, x[q],
+                             kd ? kd + q : 0, kE ? kE + q : 0, piece ? piece + q : 0);
+        }
 }
 
 /* The wall's row of f (and of dF) from the step's own piecewise-linear law. */

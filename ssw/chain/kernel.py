@@ -107,8 +107,8 @@ def library() -> ctypes.CDLL:
     lib.ssw_record.restype = None
     lib.ssw_hertz.argtypes = [ctypes.c_int, _D, _D, ctypes.c_double, _D, _D, _D]
     lib.ssw_hertz.restype = None
-    lib.ssw_piecewise.argtypes = [ctypes.c_int, ctypes.c_int, _D, _D, _D, _D, _D, _D, _D, _D,
-                                  _D, ctypes.POINTER(ctypes.c_int)]
+    lib.ssw_piecewise.argtypes = [ctypes.c_long, ctypes.c_int, ctypes.c_int, _D, _D, _D, _D,
+                                  _D, _D, _D, _D, _D, ctypes.POINTER(ctypes.c_int)]
     lib.ssw_piecewise.restype = None
     return lib
 
@@ -166,7 +166,7 @@ def piecewise(law: tuple, x: np.ndarray, tangent: bool = False, with_E: bool = F
         derivatives of ``a`` and ``b`` with respect to the soil's modulus (N/Pa, N/m/Pa;
         None when unknown).
     x : numpy.ndarray
-        (n,) m, the indentations.
+        m, the indentations: shape (..., n), the last axis the scenes'.
     tangent : bool
         Also ``dF/dd`` (N/m; 0 for ``x <= 0``).
     with_E : bool
@@ -177,15 +177,19 @@ def piecewise(law: tuple, x: np.ndarray, tangent: bool = False, with_E: bool = F
     Returns
     -------
     tuple
-        ``(F, dF/dd, dF/dE, j)``, (n,) each (None where not asked).
+        ``(F, dF/dd, dF/dE, j)``, each the shape of ``x`` broadcast with (n,) (None where
+        not asked).
     """
     d, a, b, da, db = law
-    x = np.ascontiguousarray(x, float)
-    out = np.empty(d.shape[0])
+    n = d.shape[0]
+    x = np.asarray(x, float)
+    shape = np.broadcast_shapes(x.shape, (n,))
+    x = np.ascontiguousarray(np.broadcast_to(x, shape))
+    out = np.empty(shape)
     kd = np.empty_like(out) if tangent else None
     kE = np.empty_like(out) if with_E else None
-    j = np.empty(d.shape[0], np.intc) if piece else None
-    library().ssw_piecewise(d.shape[0], d.shape[1], _ptr(d), _ptr(a), _ptr(b),
+    j = np.empty(shape, np.intc) if piece else None
+    library().ssw_piecewise(out.size // max(n, 1), n, d.shape[1], _ptr(d), _ptr(a), _ptr(b),
                             _ptr(da if with_E else None), _ptr(db if with_E else None),
                             _ptr(x), _ptr(out), _ptr(kd), _ptr(kE),
                             None if j is None else j.ctypes.data_as(ctypes.POINTER(ctypes.c_int)))

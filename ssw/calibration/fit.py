@@ -533,10 +533,10 @@ def identify(
     obs = Observations.tof(T, s)
     rng = scan_ranges(model.free, ranges, model.device)
     # the search's steps take central differences (one batched run of 1 + 2 p points per
-    # row: at a calibration's few scenes the chain's cost is per step, not per scene, and
-    # they cost 1.1-1.8 plain runs against 2.2 for the forward tangent of two parameters,
-    # measured on the thesis chain with 3 references and 1-16 rows); the covariance at the
-    # solution, a result, takes the exact derivatives
+    # row); the covariance at the solution, a result, takes the exact derivatives. Measured
+    # with the compiled step on the study's calibration (2 free parameters, 3 references):
+    # 2.9-3.2 s of user CPU so, 3.5-3.8 s with the exact derivatives at every step too (one
+    # row alone costs 1.5 plain runs by differences, 1.2 by the tangent)
     search_derivs = central_differences(model, model.free, rng)
     derivs = model_derivatives(model, rng)
     nominal = np.array([parameter_value(model.device, n) for n in model.free])

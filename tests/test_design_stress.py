@@ -160,8 +160,8 @@ def test_retained_displacements_meet_the_sphere(store, interface):
 
 
 def test_interior_solve_from_the_condensation_factor_is_the_bodys_own(tmp_path):
-    """The body field that reuses its condensation's LU (the leading blocks of the whole
-    body matrix's factors, ssw.contact.operators.keeping_factors) gives the displacements
+    """The body field that reuses its condensation's LU (the whole body matrix's factors,
+    ssw.contact.operators.keeping_factors) gives the displacements
     of a body field that assembles and factors ``K_II`` itself, and the interior solve
     satisfies the body's own equilibrium ``K_II u_I = -K_IB u_B``."""
     from ssw.contact.operators import geometry_of, keeping_factors, take_factor
@@ -182,14 +182,14 @@ def test_interior_solve_from_the_condensation_factor_is_the_bodys_own(tmp_path):
         tri = model.tri[model.body == (1 if which == "plate" else 0)]
         own = BodyField(model.nodes, tri, model.free, b_nodes, b_comps, nu)
         reused = BodyField(model.nodes, tri, model.free, b_nodes, b_comps, nu, prepared)
-        assert isinstance(reused._lu, LeadingBlock)
+        assert isinstance(reused._interior.__self__, LeadingBlock)
         u_B[which] = np.random.default_rng(3).normal(size=(b_nodes.size, 3)) * 1e-6
         a, b = own.displacements(u_B[which]), reused.displacements(u_B[which])
         assert b == pytest.approx(a, rel=1e-9, abs=1e-12 * np.max(np.abs(a)))
         K = prepared[0].K.tocsr()
         n = prepared[0].n_int
         x = np.empty((n, 3))
-        x[:] = reused._lu.solve(-(K[:n, n:] @ u_B[which]))
+        x[:] = reused._interior(u_B[which])
         res = K[:n, :n] @ x + K[:n, n:] @ u_B[which]
         assert np.max(np.abs(res)) <= 1e-10 * np.max(np.abs(K[:n, n:] @ u_B[which]))
     # outside keeping_factors nothing is kept

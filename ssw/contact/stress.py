@@ -139,9 +139,11 @@ class BodyField:
             bm = prepared[0]
         K, n_int, ndof, udof, lnodes, ltri = bm.K, bm.n_int, bm.ndof, bm.udof, bm.nodes, bm.tri
         self.n_int, self.ndof = n_int, ndof
-        self.KIB = K[:n_int, n_int:].tocsc()
-        self._lu = (_factor(K[:n_int, :n_int].tocsc()) if prepared is None
-                    else LeadingBlock(prepared[1], n_int))
+        if prepared is None:
+            lu, KIB = _factor(K[:n_int, :n_int].tocsc()), K[:n_int, n_int:].tocsc()
+            self._interior = lambda u_B: -lu.solve(np.asarray(KIB @ u_B))
+        else:
+            self._interior = LeadingBlock(prepared[1], n_int).interior
         self.udof = udof
         self.nodes = lnodes
         self.tri = ltri
@@ -154,7 +156,7 @@ class BodyField:
         u_B = np.asarray(u_B, float).reshape(self.ndof - self.n_int, -1)
         x = np.empty((self.ndof, u_B.shape[1]))
         x[self.n_int:] = u_B
-        x[: self.n_int] = -self._lu.solve(np.asarray(self.KIB @ u_B))
+        x[: self.n_int] = self._interior(u_B)
         u = np.zeros((self.udof.shape[0], 2, u_B.shape[1]))
         for c in (0, 1):
             has = self.udof[:, c] >= 0
@@ -179,9 +181,14 @@ class BodyField:
 
 
 class LeadingBlock:
-    """Solves with the leading ``n x n`` block of a matrix from its pivot-free LU (identity
-    row and column permutations): ``K_II = L_II U_II``, the leading blocks of the factors
-    (the trailing rows and columns do not enter them), by two sparse triangular solves.
+    """The interior displacements of a body from its retained ones, with the pivot-free LU of
+    its whole matrix (identity row and column permutations): ``K = L U``, interior dofs
+    first.
+
+    ``x_I = -K_II^-1 K_IB u_B``, and ``K_IB = L_II U_IB`` (the blocks of ``L U``), so ``x_I =
+    -U_II^-1 U_IB u_B``: the interior rows of the one upper triangular solve ``U [x_I; x_B]
+    = [0; U_BB u_B]``, whose retained rows give back ``x_B = u_B``. No solve with ``L`` and
+    no leading block cut out of the factors.
 
     Parameters
     ----------
@@ -189,30 +196,33 @@ class LeadingBlock:
         The pivot-free factorization of the whole matrix (``perm_r``, ``perm_c`` the
         identity; :func:`ssw.contact.substructure.schur_factor` checks it).
     n : int
-        The size of the leading block.
+        The number of interior dofs (the leading block's size).
     """
 
     def __init__(self, lu: Any, n: int) -> None:
-        self.L = lu.L.tocsr()[:n, :n]
-        self.U = lu.U.tocsr()[:n, :n]
+        self.U = lu.U.tocsr()
+        self.n = n
 
-    def solve(self, b: np.ndarray) -> np.ndarray:
-        """``K_II^-1 b``.
+    def interior(self, u_B: np.ndarray) -> np.ndarray:
+        """``x_I = -K_II^-1 K_IB u_B``.
 
         Parameters
         ----------
-        b : numpy.ndarray
-            (n,) or (n, k) right-hand sides.
+        u_B : numpy.ndarray
+            (n_B,) or (n_B, k) retained displacements.
 
         Returns
         -------
         numpy.ndarray
-            The solutions, shape of ``b``.
+            (n,) or (n, k), the interior displacements.
         """
         from scipy.sparse.linalg import spsolve_triangular
 
-        y = spsolve_triangular(self.L, b, lower=True, unit_diagonal=True)
-        return spsolve_triangular(self.U, y, lower=False)
+        z = np.zeros((self.U.shape[0], *u_B.shape[1:]))
+        z[self.n:] = u_B
+        rhs = np.asarray(self.U @ z)
+        rhs[: self.n] = 0.0
+        return spsolve_triangular(self.U, rhs, lower=False)[: self.n]
 
 
 def _factor(KII: Any) -> Any:

@@ -123,9 +123,9 @@ class BodyField:
         The body's Poisson's ratio.
     prepared : tuple or None
         ``(body matrix, LU)`` of this body from its condensation
-        (:func:`ssw.contact.operators.take_factor`): the same matrix, and ``K_II``'s
-        factors are the leading blocks of the LU (no second assembly or factorization).
-        None: assembled and factored here.
+        (:func:`ssw.contact.operators.take_factor`): the same matrix, and the interior
+        solve is one triangular solve with its ``U`` (:class:`LeadingBlock`; no second
+        assembly or factorization). None: assembled, and ``K_II`` factored, here.
     """
 
     def __init__(self, nodes: np.ndarray, tri: np.ndarray, free: np.ndarray,

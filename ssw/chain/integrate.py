@@ -456,10 +456,9 @@ def simulate(
         ch.use_law(law)
 
     def wall_row(w: Any) -> None:
-        """The wall's force (and its sensitivities) into the step's last contact row."""
+        """The wall's force (and its sensitivities) into the step's last contact row (not
+        called when the step evaluates the wall's law itself)."""
         u_last = ch.z[0, -1]
-        if ch.law is not None:
-            return
         if f_wall is not None:
             ch.f[-1] = f_wall
             if tg is not None:
@@ -483,7 +482,9 @@ def simulate(
             out *= 0.5
 
     w = wall
-    wall_row(w)
+    writes_wall = ch.law is None  # else the step evaluates the wall's law itself
+    if writes_wall:
+        wall_row(w)
     ch.forces(has_old=False, kick=False)
     active = np.arange(n)
     shapes: dict[str, tuple[int, ...]] = {"sensor": (), "wall": ()}
@@ -546,7 +547,8 @@ def simulate(
                     wstate, tstate, u_last, ch.ZT[0, -1], dt, dE)
             else:
                 f_wall, wstate = w.advance(wstate, u_last, dt)
-        wall_row(w)
+        if writes_wall:
+            wall_row(w)
         ch.forces(has_old=True, kick=True)
         k = step - j0
         na = active.size

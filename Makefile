@@ -2,7 +2,12 @@
 # Both set up the environment first (scripts/setup.sh: idempotent, seconds when done).
 VENV    := .venv
 PY      := $(VENV)/bin/python
-SMK     := $(VENV)/bin/snakemake
+# Snakemake's Slurm plugin asks `scontrol show config` when it is imported, at every start.
+# With the local cluster of scripts/slurm-local.sh installed but stopped (after a reboot),
+# scontrol retries the absent controller for the plugin's 10 s: these Snakemake calls then
+# read an empty Slurm configuration instead, which scontrol refuses at once.
+SLURM_ENV := $(shell bash scripts/slurm-local.sh down 2>/dev/null && echo SLURM_CONF=/dev/null)
+SMK     := $(SLURM_ENV) $(VENV)/bin/snakemake
 CORES   ?= 2
 CONFIG  ?= config/config.yaml
 PYTEST_ARGS ?=

@@ -6,6 +6,8 @@
 #                                    start munged, slurmctld, slurmd; wait for an idle node
 #   scripts/slurm-local.sh stop      stop the three daemons started here
 #   scripts/slurm-local.sh status    print sinfo / squeue
+#   scripts/slurm-local.sh down      exit 0 when this script's cluster is configured here but
+#                                    its controller is not running (after a reboot, a stop)
 #
 # Idempotent: when the cluster already answers, `start` returns in well under a second.
 # Needs root (it installs packages, writes /etc/slurm/slurm.conf and runs the daemons).
@@ -225,6 +227,15 @@ stop() {
     fi
 }
 
+# The cluster written by this script is installed and its controller is not running. Then
+# every Snakemake start waits 10 s: its Slurm executor plugin asks `scontrol show config` on
+# import, and scontrol retries the absent controller until the plugin's timeout. The Makefile
+# points its Snakemake calls at an empty Slurm configuration then, which fails at once.
+down() {
+    [ -f "$CONF" ] && head -n1 "$CONF" | grep -q "Written by ssw scripts/slurm-local.sh" \
+        && ! daemon_running "$RUNDIR/slurmctld.pid"
+}
+
 status() {
     command -v sinfo >/dev/null 2>&1 || die "Slurm is not installed (run: $0 start)"
     sinfo
@@ -235,5 +246,6 @@ case "${1:-start}" in
     start) start ;;
     stop) stop ;;
     status) status ;;
-    *) die "unknown subcommand '$1' (allowed: start, stop, status)" ;;
+    down) down ;;
+    *) die "unknown subcommand '$1' (allowed: start, stop, status, down)" ;;
 esac

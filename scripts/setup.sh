@@ -43,6 +43,44 @@ VENV=${SSW_VENV:-$here/.venv}
 log() { printf '[setup] %s\n' "$*" >&2; }
 die() { printf 'ssw setup: %s\n' "$*" >&2; exit 1; }
 
+# Up to date: the stamp of this set-up is there and the packages are in place (the full
+# import check ran when the stamp was written; this one costs hundredths of a second).
+present() {
+  "$VENV/bin/python" -c "import importlib.util as u, sys
+sys.exit(any(u.find_spec(m) is None
+             for m in ('ssw', 'ssw.chain._step', 'gmsh', 'h5py', 'snakemake', 'petsc4py',
+                       'mpi4py')))" 2>/dev/null
+}
+# The full check: ssw's own import of PETSc (the binary stack's MPI first) and mpi4py, and
+# its compiled chain step (built from the source in the tree).
+check_imports() {
+  "$VENV/bin/python" -c "import gmsh, h5py, snakemake, mpi4py
+from ssw.chain.kernel import library
+library()
+from ssw.contact.petsc_solver import _petsc
+from mpi4py import MPI
+assert _petsc().COMM_WORLD.getSize() == MPI.COMM_WORLD.Get_size()" >/dev/null 2>&1
+}
+# The stamp of a set-up of this tree for route and Python "$1" (e.g. "binary 3.12.1").
+stamp_of() {
+  printf '%s/.ssw-setup-%s' "$VENV" "$( (cat scripts/setup.sh constraints.txt pyproject.toml \
+    setup.py ssw/chain/_step.c; echo "$1") | sha256sum | cut -c1-16)"
+}
+# ssw's own bytecode, brought up to date on every call (one process: 0.05 s when it is; a
+# pool of workers, -j 0, costs 0.3 s to start and pays only for a full compile)
+compile_ssw() { "$VENV/bin/python" -m compileall -q "$@" ssw >/dev/null; }
+# ---------------------------------------------------------------- up to date?
+# The usual call (`make study`, `make test` on a set-up tree) ends here: the venv records the
+# route and Python it was made for (.ssw-route), and the stamp of the set-up that made it is
+# there, so no interpreter is looked for (pyenv's shims cost a fifth of a second each).
+# Asking for a route or an interpreter (SSW_PETSC, SSW_PYTHON) goes the whole way.
+if [ -z "${SSW_PETSC:-}" ] && [ -z "${SSW_PYTHON:-}" ] && [ -f "$VENV/.ssw-route" ] &&
+   [ -f "$(stamp_of "$(cat "$VENV/.ssw-route")")" ] && present; then
+  compile_ssw
+  log "environment up to date ($VENV, $(cat "$VENV/.ssw-route"))"
+  exit 0
+fi
+
 # ---------------------------------------------------------------- route and interpreter
 # A Python >= 3.12 (the binary wheel's floor): $SSW_PYTHON, then on PATH, then pyenv's.
 py_ok() { "$1" -c 'import sys; sys.exit(sys.version_info < (3, 12))' >/dev/null 2>&1; }
@@ -128,31 +166,8 @@ if [ "$ROUTE" = source ]; then
 fi
 
 # ---------------------------------------------------------------- virtual environment
-# Up to date: the stamp of this set-up is there and the packages are in place (the full
-# import check ran when the stamp was written; this one costs hundredths of a second).
-present() {
-  "$VENV/bin/python" -c "import importlib.util as u, sys
-sys.exit(any(u.find_spec(m) is None
-             for m in ('ssw', 'ssw.chain._step', 'gmsh', 'h5py', 'snakemake', 'petsc4py',
-                       'mpi4py')))" 2>/dev/null
-}
-# The full check: ssw's own import of PETSc (the binary stack's MPI first) and mpi4py, and
-# its compiled chain step (built from the source in the tree).
-check_imports() {
-  "$VENV/bin/python" -c "import gmsh, h5py, snakemake, mpi4py
-from ssw.chain.kernel import library
-library()
-from ssw.contact.petsc_solver import _petsc
-from mpi4py import MPI
-assert _petsc().COMM_WORLD.getSize() == MPI.COMM_WORLD.Get_size()" >/dev/null 2>&1
-}
 id_line="$ROUTE $("$PY" -c 'import sys; print(sys.version.split()[0])')"
-stamp_src=$( (cat scripts/setup.sh constraints.txt pyproject.toml setup.py ssw/chain/_step.c
-              echo "$id_line") |
-            sha256sum | cut -c1-16)
-stamp="$VENV/.ssw-setup-$stamp_src"
-# ssw's own bytecode, brought up to date on every call (a fraction of a second when it is)
-compile_ssw() { "$VENV/bin/python" -m compileall -q -j 0 ssw >/dev/null; }
+stamp=$(stamp_of "$id_line")
 if [ -f "$stamp" ] && present; then
   compile_ssw
   log "environment up to date ($VENV, $id_line)"
@@ -220,7 +235,7 @@ check_imports || {
   "$VENV/bin/python" -c "from ssw.chain.kernel import library; library()" || true
   die "the environment in $VENV does not import PETSc and mpi4py, or ssw's chain step (see above)"
 }
-compile_ssw
+compile_ssw -j 0
 rm -f "$VENV"/.ssw-setup-*
 touch "$stamp"
 log "environment ready ($VENV, $id_line)"

@@ -69,10 +69,10 @@ def validate_config(cfg: dict[str, Any]) -> dict[str, Any]:
     Returns ``cfg``. Raises :class:`.ConfigError` on the first problem (the deepest error of
     the schema, so that the message names the offending field).
     """
-    from ssw.schema import first_error, path_of
+    from ssw.schema import first_file_error, path_of
 
     check_moved_keys(cfg)
-    err = first_error(load_schema(), cfg)
+    err = first_file_error(SCHEMA_PATH, cfg)
     if err is not None:
         hint = ""
         if isinstance(err.instance, str) and _looks_numeric(err.instance):

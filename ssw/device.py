@@ -211,12 +211,12 @@ def device_from_dict(data: dict[str, Any], source: str = "") -> Device:
     what is
     allowed.
     """
-    from ssw.schema import first_error, path_of
+    from ssw.schema import first_file_error, path_of
 
     if not isinstance(data, dict):
         raise ConfigError("device", source or type(data).__name__, "a YAML mapping")
     d = copy.deepcopy(data)
-    err = first_error(safe_load(SCHEMA_PATH.read_text()), d)
+    err = first_file_error(SCHEMA_PATH, d)
     if err is not None:
         raise ConfigError(f"device {source}: {path_of(err)}".strip(), err.instance, err.message)
     st = d["striker"]

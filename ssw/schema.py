@@ -4,11 +4,25 @@
 in every ``default`` of the schema, as ``snakemake.utils.validate`` does, so that a command
 and the workflow see the same config. :func:`first_error` turns the deepest error into
 (field, value, message) for :class:`ssw.errors.ConfigError`.
+
+Every job of a study validates the same study config and device again (a command cannot
+know that the workflow did); :func:`first_file_error` remembers, under the disk cache
+(``$SSW_CACHE_DIR/schema``, default ``~/.cache/ssw``; ``SSW_CACHE_DIR=none`` turns it off),
+the filled instance of every valid (schema file, instance) pair, named by the SHA-256 of
+the schema file's bytes and of the instance's JSON (keys in their order: the filled
+instance comes back exactly, order included; an instance that JSON does not carry exactly,
+with integer keys, dates or NaN, is not remembered). A job that finds its pair
+there takes the filled instance without importing ``jsonschema`` (85 ms of each job's
+start, with the 13 ms of parsing the schema, measured on a 2-core machine).
 """
 
 from __future__ import annotations
 
 import copy
+import hashlib
+import json
+import os
+from pathlib import Path
 from typing import Any
 
 
@@ -39,3 +53,74 @@ def first_error(schema: dict[str, Any], instance: Any) -> Any | None:
     """Validate ``instance`` in place (defaults filled); the deepest error, or None."""
     errors = sorted(validator(schema).iter_errors(instance), key=lambda e: -len(e.absolute_path))
     return errors[0] if errors else None
+
+
+def cache_root() -> Path | None:
+    """ssw's disk cache folder: ``$SSW_CACHE_DIR`` (default ``~/.cache/ssw``); None when
+    ``SSW_CACHE_DIR`` is ``none``, ``off`` or empty (no disk cache)."""
+    root = os.environ.get("SSW_CACHE_DIR")
+    if root is not None and root.strip().lower() in ("none", "off", ""):
+        return None
+    return Path(root) if root else Path.home() / ".cache" / "ssw"
+
+
+def _memo_path(schema_bytes: bytes, instance: Any) -> Path | None:
+    """Where the filled ``instance`` of a valid pair is kept; None without a disk cache or
+    when JSON does not carry ``instance`` exactly."""
+    root = cache_root()
+    text = _exact_json(instance)
+    if root is None or text is None:
+        return None
+    digest = hashlib.sha256(hashlib.sha256(schema_bytes).digest() + text.encode()).hexdigest()
+    return root / "schema" / f"{digest[:32]}.json"
+
+
+def _exact_json(obj: Any) -> str | None:
+    """``obj`` as JSON when it reads back equal (plain dicts with str keys, lists, str,
+    numbers, bools, None; no NaN), else None."""
+    try:
+        text = json.dumps(obj, allow_nan=False)
+    except (TypeError, ValueError):
+        return None
+    return text if json.loads(text) == obj else None
+
+
+def first_file_error(schema_path: str | os.PathLike[str], instance: dict[str, Any]) -> Any | None:
+    """:func:`first_error` against the YAML schema at ``schema_path``, remembered on disk
+    for the valid pairs (module docstring).
+
+    Parameters
+    ----------
+    schema_path : str or os.PathLike
+        The JSON schema, as a YAML file.
+    instance : dict
+        The document; validated in place (defaults filled).
+
+    Returns
+    -------
+    jsonschema.ValidationError or None
+        The deepest error, or None when ``instance`` is valid.
+    """
+    from ssw.h5io import atomic_write_text
+    from ssw.yamlio import safe_load
+
+    schema_bytes = Path(schema_path).read_bytes()
+    memo = _memo_path(schema_bytes, instance)
+    if memo is not None and memo.is_file():
+        try:
+            filled = json.loads(memo.read_text())
+        except (OSError, ValueError):
+            filled = None
+        if isinstance(filled, dict):
+            instance.clear()
+            instance.update(filled)
+            return None
+    err = first_error(safe_load(schema_bytes.decode()), instance)
+    filled_text = _exact_json(instance) if err is None and memo is not None else None
+    if filled_text is not None:
+        try:
+            memo.parent.mkdir(parents=True, exist_ok=True)
+            atomic_write_text(memo, filled_text)
+        except OSError:
+            pass  # a cache that cannot be written costs a validation next time
+    return err

@@ -101,3 +101,35 @@ def test_materials_sets():
     assert all(m.source for m in real.values())
     with pytest.raises(ConfigError, match="material"):
         get_material("cheese")
+
+
+def test_a_remembered_validation_gives_the_filled_config_itself(tmp_path, monkeypatch,
+                                                                thesis_raw):
+    """The disk memo of valid (schema, config) pairs (ssw.schema.first_file_error) returns
+    exactly what jsonschema's validation fills in, key order included, and never stands in
+    for a config it has not seen: an invalid one is still refused after a valid one."""
+    import json
+    import os
+    import subprocess
+    import sys
+
+    monkeypatch.setenv("SSW_CACHE_DIR", str(tmp_path))
+    fresh = validate_config(copy.deepcopy(thesis_raw))
+    assert list((tmp_path / "schema").glob("*.json"))  # the config's (and its device's)
+    again = validate_config(copy.deepcopy(thesis_raw))
+    assert json.dumps(again) == json.dumps(fresh)
+    monkeypatch.setenv("SSW_CACHE_DIR", "none")
+    assert json.dumps(validate_config(copy.deepcopy(thesis_raw))) == json.dumps(fresh)
+    monkeypatch.setenv("SSW_CACHE_DIR", str(tmp_path))
+    bad = copy.deepcopy(thesis_raw)
+    bad["contact"]["steps"] = -3
+    with pytest.raises(ConfigError, match=r"contact\.steps"):
+        validate_config(bad)
+    # a second process finds the pair remembered and does not load jsonschema at all
+    code = ("import sys, yaml; from ssw.config import DEFAULT_CONFIG, validate_config; "
+            "validate_config(yaml.safe_load(DEFAULT_CONFIG.read_text())); "
+            "print('jsonschema' in sys.modules)")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         check=True, env={**os.environ,
+                                          "SSW_CACHE_DIR": str(tmp_path)})
+    assert run.stdout.strip() == "False"

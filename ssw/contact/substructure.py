@@ -67,16 +67,23 @@ class Condensation:
 
 def min_degree_order(rows: np.ndarray, cols: np.ndarray, n: int) -> np.ndarray:
     """Elimination order (position -> node) of a graph given as COO: SuperLU's multiple
-    minimum degree on ``A^T + A`` (Liu 1985), taken from the factorization of a diagonally
-    dominant matrix with the graph's pattern (a few hundredths of a second)."""
+    minimum degree on ``A^T + A`` (Liu 1985) of a diagonally dominant matrix with the
+    graph's pattern.
+
+    SuperLU computes its column order from the pattern alone, before the numeric phase;
+    scipy exposes it only through a factorization. The incomplete one (``spilu``) with
+    every off-diagonal entry dropped (``drop_tol`` 1e30, ``fill_factor`` 1) returns the same
+    order as the complete one at a fraction of its cost: 0.006-0.010 s against 0.016-0.032 s
+    on the thesis's plates and soils (4-7 k nodes; the orders equal, element for element).
+    """
     import scipy.sparse as sp
-    from scipy.sparse.linalg import splu
+    from scipy.sparse.linalg import spilu
 
     G = sp.csc_array((np.full(len(rows), 0.01), (rows, cols)), shape=(n, n))
     G.sum_duplicates()
     G = (G + sp.diags_array(np.asarray(abs(G).sum(axis=1)).ravel() + 1.0)).tocsc()
-    lu = splu(G, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-              options={"SymmetricMode": True})
+    lu = spilu(G, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, drop_tol=1e30,
+               fill_factor=1, options={"SymmetricMode": True})
     return np.argsort(lu.perm_c)
 
 

@@ -508,7 +508,11 @@ def coupled_stiffness(
 
 
 #: Scenes' condensed problems kept in memory, least recently used out (:func:`scene_lcp`).
-SCENES_KEPT = 64
+#: A plate design's batch builds the fem walls of all its candidates before their stresses
+#: ask for the same scenes again (the thesis design's scan: 6 plates x 20 soils = 120
+#: scenes; at 64 every one was condensed twice, 0.2 s); about 0.16 MB a scene (98 contact
+#: candidates: ``W`` and ``dW_dE``), 40 MB at most.
+SCENES_KEPT = 256
 _SCENES: OrderedDict[tuple[Any, ...], tuple[SceneLCP, tuple[Any, ...]]] = OrderedDict()
 
 

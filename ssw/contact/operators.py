@@ -502,8 +502,11 @@ def coupled_stiffness(
         s_map[off] = nc + ni + np.arange(off.size)
     n = int(max(p_map.max(), s_map.max())) + 1
     K = np.zeros((n, n))
-    K[np.ix_(p_map, p_map)] += plate_E * plate_S
-    K[np.ix_(s_map, s_map)] += soil_E * soil_S
+    K[: nc + ni, : nc + ni] = plate_E * plate_S  # p_map: the leading dofs, in order
+    if off.size:
+        K[np.ix_(s_map, s_map)] += soil_E * soil_S
+    else:  # s_map: the interface block, in order (slices: no index arrays)
+        K[nc:nc + ni, nc:nc + ni] += soil_E * soil_S
     return K, p_map, s_map, off
 
 

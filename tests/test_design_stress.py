@@ -166,7 +166,8 @@ def test_interior_solve_from_the_condensation_factor_is_the_bodys_own(tmp_path):
     satisfies the body's own equilibrium ``K_II u_I = -K_IB u_B``."""
     from ssw.contact.operators import geometry_of, keeping_factors, take_factor
     from ssw.contact.scene import settings_of
-    from ssw.contact.stress import BodyField, LeadingBlock, retained_dofs
+    from ssw.contact.stress import BodyField, retained_dofs
+    from ssw.contact.substructure import LeadingBlock
 
     store = OperatorStore(tmp_path)  # a cold store: the operators are condensed here
     cfg = settings_of({"interface": "frictionless"})

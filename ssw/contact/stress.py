@@ -122,10 +122,11 @@ class BodyField:
     nu : float
         The body's Poisson's ratio.
     prepared : tuple or None
-        ``(body matrix, LU)`` of this body from its condensation
+        ``(body matrix, LeadingBlock)`` of this body from its condensation
         (:func:`ssw.contact.operators.take_factor`): the same matrix, and the interior
-        solve is one triangular solve with its ``U`` (:class:`LeadingBlock`; no second
-        assembly or factorization). None: assembled, and ``K_II`` factored, here.
+        solve is one triangular solve with the unit upper factor of its LU
+        (:class:`ssw.contact.substructure.LeadingBlock`; no second assembly or
+        factorization). None: assembled, and ``K_II`` factored, here.
     """
 
     def __init__(self, nodes: np.ndarray, tri: np.ndarray, free: np.ndarray,
@@ -143,7 +144,7 @@ class BodyField:
             lu, KIB = _factor(K[:n_int, :n_int].tocsc()), K[:n_int, n_int:].tocsc()
             self._interior = lambda u_B: -lu.solve(np.asarray(KIB @ u_B))
         else:
-            self._interior = LeadingBlock(prepared[1], n_int).interior
+            self._interior = prepared[1].interior
         self.udof = udof
         self.nodes = lnodes
         self.tri = ltri
@@ -178,51 +179,6 @@ class BodyField:
                 + 0.5 * eps[:, :, 3] ** 2)
         G = np.asarray(E, float) / (2.0 * (1.0 + self.nu))
         return (np.sqrt(6.0 * dev2) * G).reshape(-1, u_B.shape[1] if u_B.ndim > 1 else 1)
-
-
-class LeadingBlock:
-    """The interior displacements of a body from its retained ones, with the pivot-free LU of
-    its whole matrix (identity row and column permutations): ``K = L U``, interior dofs
-    first.
-
-    ``x_I = -K_II^-1 K_IB u_B``, and ``K_IB = L_II U_IB`` (the blocks of ``L U``), so ``x_I =
-    -U_II^-1 U_IB u_B``: the interior rows of the one upper triangular solve ``U [x_I; x_B]
-    = [0; U_BB u_B]``, whose retained rows give back ``x_B = u_B``. No solve with ``L`` and
-    no leading block cut out of the factors.
-
-    Parameters
-    ----------
-    lu : scipy.sparse.linalg.SuperLU
-        The pivot-free factorization of the whole matrix (``perm_r``, ``perm_c`` the
-        identity; :func:`ssw.contact.substructure.schur_factor` checks it).
-    n : int
-        The number of interior dofs (the leading block's size).
-    """
-
-    def __init__(self, lu: Any, n: int) -> None:
-        self.U = lu.U.tocsr()
-        self.n = n
-
-    def interior(self, u_B: np.ndarray) -> np.ndarray:
-        """``x_I = -K_II^-1 K_IB u_B``.
-
-        Parameters
-        ----------
-        u_B : numpy.ndarray
-            (n_B,) or (n_B, k) retained displacements.
-
-        Returns
-        -------
-        numpy.ndarray
-            (n,) or (n, k), the interior displacements.
-        """
-        from scipy.sparse.linalg import spsolve_triangular
-
-        z = np.zeros((self.U.shape[0], *u_B.shape[1:]))
-        z[self.n:] = u_B
-        rhs = np.asarray(self.U @ z)
-        rhs[: self.n] = 0.0
-        return spsolve_triangular(self.U, rhs, lower=False)[: self.n]
 
 
 def _factor(KII: Any) -> Any:

@@ -67,16 +67,37 @@ class Condensation:
 
 def min_degree_order(rows: np.ndarray, cols: np.ndarray, n: int) -> np.ndarray:
     """Elimination order (position -> node) of a graph given as COO: SuperLU's multiple
-    minimum degree on ``A^T + A`` (Liu 1985), taken from the factorization of a diagonally
-    dominant matrix with the graph's pattern (a few hundredths of a second)."""
+    minimum degree on ``A^T + A`` (Liu 1985) of a diagonally dominant matrix with the
+    graph's pattern.
+
+    SuperLU computes its column order from the pattern alone, before the numeric phase;
+    scipy exposes it only through a factorization. The incomplete one (``spilu``) with
+    every off-diagonal entry dropped (``drop_tol`` 1e30, ``fill_factor`` 1) returns the same
+    order as the complete one at a fraction of its cost: 0.006-0.010 s against 0.016-0.032 s
+    on the thesis's plates and soils (4-7 k nodes; the orders equal, element for element).
+
+    Parameters
+    ----------
+    rows : numpy.ndarray
+        (m,) the graph's edges' first nodes (duplicates and self-loops allowed).
+    cols : numpy.ndarray
+        (m,) their second nodes.
+    n : int
+        The number of nodes.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n,) the nodes in elimination order.
+    """
     import scipy.sparse as sp
-    from scipy.sparse.linalg import splu
+    from scipy.sparse.linalg import spilu
 
     G = sp.csc_array((np.full(len(rows), 0.01), (rows, cols)), shape=(n, n))
     G.sum_duplicates()
     G = (G + sp.diags_array(np.asarray(abs(G).sum(axis=1)).ravel() + 1.0)).tocsc()
-    lu = splu(G, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-              options={"SymmetricMode": True})
+    lu = spilu(G, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0, drop_tol=1e30,
+               fill_factor=1, options={"SymmetricMode": True})
     return np.argsort(lu.perm_c)
 
 
@@ -190,6 +211,63 @@ def schur_factor(K: Any, n_int: int) -> tuple[np.ndarray, float, int, bool, Any]
     berr = float(np.max(np.abs(r)) / denom) if denom > 0 else 0.0
     S = K[n_int:, n_int:].toarray() - K[n_int:, :n_int] @ X
     return np.asarray(S), berr, int(lu.L.nnz + lu.U.nnz), True, None
+
+
+class LeadingBlock:
+    """The interior displacements of a body from its retained ones, with the pivot-free LU of
+    its whole matrix (identity row and column permutations): ``K = L U``, interior dofs
+    first.
+
+    ``x_I = -K_II^-1 K_IB u_B``, and ``K_IB = L_II U_IB`` (the blocks of ``L U``), so ``x_I =
+    -U_II^-1 U_IB u_B``: one upper triangular solve, no solve with ``L``. With ``U = D V``
+    (``D`` the diagonal of ``U``, ``V`` unit upper triangular, both taken once here),
+    ``x_I = -V_II^-1 V_IB u_B``, the interior rows of ``V x = [-V_IB u_B; 0]``, whose
+    retained rows are exactly 0. Solved by scipy's ``spsolve_triangular`` with
+    ``unit_diagonal``: given ``V``, it skips its per-call scaling of the matrix by its
+    diagonal and the conversion to CSC (1 mm PLA plate, 19 k dofs, 1.6 M nonzeros of ``U``,
+    7 states: 0.012 s to prepare ``V`` and 0.012 s a solve, against 0.012 s and 0.045 s for
+    ``U`` in CSR passed as it is; measured with ``time.perf_counter``, best of 3).
+
+    Parameters
+    ----------
+    lu : scipy.sparse.linalg.SuperLU
+        The pivot-free factorization of the whole matrix (``perm_r``, ``perm_c`` the
+        identity; :func:`ssw.contact.substructure.schur_factor` checks it).
+    n : int
+        The number of interior dofs (the leading block's size).
+    """
+
+    def __init__(self, lu: Any, n: int) -> None:
+        import scipy.sparse as sp
+
+        U = sp.csc_array(lu.U)
+        d = U.diagonal()
+        # V = D^-1 U: each entry divided by the diagonal of its row; its row indices (sorted,
+        # as SuperLU gives them) checked once here, not on every solve
+        V = sp.csc_array((U.data / d[U.indices], U.indices, U.indptr), shape=U.shape)
+        V.sort_indices()
+        self.V, self.V_IB = V, V[:, n:][:n]
+        self.n = n
+
+    def interior(self, u_B: np.ndarray) -> np.ndarray:
+        """``x_I = -K_II^-1 K_IB u_B``.
+
+        Parameters
+        ----------
+        u_B : numpy.ndarray
+            (n_B,) or (n_B, k) retained displacements.
+
+        Returns
+        -------
+        numpy.ndarray
+            (n,) or (n, k), the interior displacements.
+        """
+        from scipy.sparse.linalg import spsolve_triangular
+
+        rhs = np.zeros((self.V.shape[0], *u_B.shape[1:]))
+        rhs[: self.n] = -np.asarray(self.V_IB @ u_B)
+        return spsolve_triangular(self.V, rhs, lower=False, unit_diagonal=True,
+                                  overwrite_b=True)[: self.n]
 
 
 @dataclass(frozen=True)

@@ -284,10 +284,13 @@ def fem_wall(
     # the real one); it sets the candidate zone, the trace goes on as far as needed
     Eh = np.minimum(E, plate[0]) if has_plate else E
     A = hertz_coefficient(effective_modulus(Eh, nu), R)
-    guess = energy_indentation(A, W, Wg)
+    # the margined energy's reach (the guess) and the nominal one's (the zone, the error
+    # model below) in one call of the elementwise root finder (each root its own iteration)
+    guess, reach = energy_indentation(A, np.stack([np.broadcast_to(W, A.shape),
+                                                   np.broadcast_to(W0, A.shape)]), Wg)
     # the zone: as the study's curves (the nominal energy's reach), so that the wall shares
     # their operators; a deeper contact is caught (the last candidate must stay open)
-    geom = geometry_of(cfg, t, R, float(np.max(energy_indentation(A, W0, Wg))), cfg["interface"])
+    geom = geometry_of(cfg, t, R, float(np.max(reach)), cfg["interface"])
     layout = store.layout(geom)
     plate_op = store.body(geom, "plate", plate[1]) if has_plate else None
     rows = []
@@ -352,7 +355,7 @@ def fem_wall(
         rows.append((*row, *(deriv if deriv is not None else (None, None))))
     # per scene: the mesh's error and the finite domain's stiffening at its own contact
     # radius (a soft soil's is larger)
-    a_peak = np.sqrt(R * energy_indentation(A, W0, Wg))
+    a_peak = np.sqrt(R * reach)
     L = min(float(cfg["soil_radius"]), float(cfg["soil_depth"]))
     error = np.hypot(FORCE_ERROR_COEF * float(cfg["mesh_growth"]) ** 2,
                      DOMAIN_ERROR_COEF * a_peak / L)

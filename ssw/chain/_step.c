@@ -500,3 +500,15 @@ void ssw_forces(const ssw_chain *c, int has_old, int kick)
         }
     }
 }
+
+/* Steps of a run whose wall row the step writes itself (K1 > 0) or that is held fixed:
+   rows times ssw_drift, ssw_forces (has_old, kick) and ssw_record into rows row0 ..
+   row0 + rows - 1 of the block buffers: one call for a block of steps. */
+void ssw_advance(const ssw_chain *c, int rows, int row0)
+{
+    for (int r = 0; r < rows; r++) {
+        ssw_drift(c);
+        ssw_forces(c, 1, 1);
+        ssw_record(c, row0 + r);
+    }
+}

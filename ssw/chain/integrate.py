@@ -537,28 +537,33 @@ def simulate(
     record_row(0, n, w)
     flush(0, 1)
     stop_time = np.full(n, np.nan)
+    # blocks of check_every steps (steps j0 .. step); when nothing is done in Python between
+    # the steps (the step evaluates the wall's law, no force or energy record), a block is
+    # one call of the compiled step
+    in_c = not (stateful or writes_wall or record_forces or record_energy)
     step, j0 = 0, 1
-    for step in range(1, n_steps + 1):
-        ch.drift()
-        if stateful:
-            u_last = ch.z[0, -1].copy()
-            if tg is not None:
-                f_wall, df_wall, wstate, tstate = w.advance_tangent(
-                    wstate, tstate, u_last, ch.ZT[0, -1], dt, dE)
-            else:
-                f_wall, wstate = w.advance(wstate, u_last, dt)
-        if writes_wall:
-            wall_row(w)
-        ch.forces(has_old=True, kick=True)
-        k = step - j0
-        na = active.size
-        if record_energy and damping > 0.0:
-            w_dash += half * (p_dash + ch.power)
-            p_dash = ch.power.copy()
-        record_row(k, na, w)
-        if k + 1 < check_every and step < n_steps:
-            continue
-        got = flush(j0, k + 1)
+    while j0 <= n_steps:
+        rows = min(check_every, n_steps - j0 + 1)
+        step = j0 + rows - 1
+        if in_c:
+            ch.advance(rows)
+        for k in range(0 if in_c else rows):
+            ch.drift()
+            if stateful:
+                u_last = ch.z[0, -1].copy()
+                if tg is not None:
+                    f_wall, df_wall, wstate, tstate = w.advance_tangent(
+                        wstate, tstate, u_last, ch.ZT[0, -1], dt, dE)
+                else:
+                    f_wall, wstate = w.advance(wstate, u_last, dt)
+            if writes_wall:
+                wall_row(w)
+            ch.forces(has_old=True, kick=True)
+            if record_energy and damping > 0.0:
+                w_dash += half * (p_dash + ch.power)
+                p_dash = ch.power.copy()
+            record_row(k, active.size, w)
+        got = flush(j0, rows)
         times = dt * np.arange(j0, step + 1)
         j0 = step + 1
         if not stop_early:

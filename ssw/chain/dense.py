@@ -202,7 +202,7 @@ def dense_peaks(run: Any, *, rule: PeakRule = RULE, strict: bool = True) -> Peak
     """
     y = run.sensor
     s = y - y[0]
-    s = np.where(np.isnan(s), 0.0, s)
+    s[np.isnan(s)] = 0.0
     sel = select(s, rule)
     bad = check_selection(sel, strict)
     n = y.shape[1]

@@ -22,12 +22,19 @@ from __future__ import annotations
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.interpolate import PchipInterpolator
 
 from ssw.errors import OutOfRangeError
 
 #: Relative slack when testing whether a point lies on the grid (rounding of E and nu).
 GRID_SLACK = 1e-9
+
+
+def _pchip() -> type:
+    """``scipy.interpolate.PchipInterpolator``, imported when a grid has two E nodes or more
+    (scipy.interpolate costs a command that interpolates nothing 0.07-0.1 s to import)."""
+    from scipy.interpolate import PchipInterpolator
+
+    return PchipInterpolator
 
 
 class GridInterpolant:
@@ -51,7 +58,7 @@ class GridInterpolant:
         self.log_values = log_values
         g = np.log(self.values) if log_values else self.values
         self._rows = [
-            PchipInterpolator(np.log(self.E), g[j]) if self.E.size > 1 else None
+            _pchip()(np.log(self.E), g[j]) if self.E.size > 1 else None
             for j in range(self.nu.size)
         ]
         self._g = g
@@ -116,7 +123,7 @@ class GridInterpolant:
         x = np.log(self.E)
         for i in range(1, self.E.size - 1):
             keep = np.arange(self.E.size) != i
-            along_E[:, i] = PchipInterpolator(x[keep], self._g[:, keep], axis=1)(x[i])
+            along_E[:, i] = _pchip()(x[keep], self._g[:, keep], axis=1)(x[i])
         along_nu = np.full(self.values.shape, np.nan)
         for j in range(1, self.nu.size - 1):
             t = (self.nu[j] - self.nu[j - 1]) / (self.nu[j + 1] - self.nu[j - 1])

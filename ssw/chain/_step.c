@@ -17,6 +17,7 @@
 #pragma GCC optimize("O3", "fp-contract=off")
 #endif
 #include <math.h>
+#include <float.h>
 #include <string.h>
 
 #ifndef SSW_STEP_SOURCE
@@ -510,5 +511,73 @@ void ssw_advance(const ssw_chain *c, int rows, int row0)
         ssw_drift(c);
         ssw_forces(c, 1, 1);
         ssw_record(c, row0 + r);
+    }
+}
+
+/* numpy's max and argmax of x[0] - base, x[stride] - base, ... (rows values): a NaN is
+   the maximum, the first one its index. */
+static inline double max_at(const double *x, long stride, int rows, double base, int *at)
+{
+    double m = x[0] - base;
+    *at = 0;
+    for (int r = 1; r < rows && m == m; r++) {
+        const double v = x[r * stride] - base;
+        if (v > m || v != v) {
+            m = v;
+            *at = r;
+        }
+    }
+    return m;
+}
+
+/* The early-stop rule over a block (ssw.chain.integrate._StopRule.update, whose docstring
+   states it): rows (rows, n) of the sensor S and the wall force W (row stride `stride`),
+   their times; k = (INCIDENT_END, WALL_RELEASE, TRAVEL_FACTOR, TAIL_CONTACTS); the per
+   scene state, rows of n: F = sensor0, wall0, f_noise, t_c (the baselines, the noise
+   force, the contact time), inc_max, t_inc, t_onset, w_max, t_rel and B = inc_done,
+   released, updated; done: the scenes that may stop. The same IEEE operations as the
+   numpy expressions of the rule. */
+void ssw_stop_update(int rows, int n, long stride, const double *S, const double *W,
+                     const double *times, const double *k, double *F, unsigned char *B,
+                     unsigned char *done)
+{
+    const double *sensor0 = F, *wall0 = F + n, *f_noise = F + 2 * n, *t_c = F + 3 * n;
+    double *inc_max = F + 4 * n, *t_inc = F + 5 * n, *t_onset = F + 6 * n;
+    double *w_max = F + 7 * n, *t_rel = F + 8 * n;
+    unsigned char *inc_done = B, *released = B + n;
+    const double t_last = times[rows - 1];
+    for (int i = 0; i < n; i++) {
+        /* the incident pulse: its peak, and its fall below INCIDENT_END of it */
+        int at, first = -1;
+        const double bm = max_at(S + i, stride, rows, sensor0[i], &at);
+        if (!inc_done[i] && bm > inc_max[i]) {
+            inc_max[i] = bm;
+            t_inc[i] = times[at];
+        }
+        const double s_last = S[(rows - 1) * stride + i] - sensor0[i];
+        inc_done[i] |= (inc_max[i] > f_noise[i]) & (s_last < k[0] * inc_max[i]);
+        /* the wall force: its onset above the noise, its peak and its release */
+        const double wm = max_at(W + i, stride, rows, wall0[i], &at);
+        for (int r = 0; r < rows && first < 0; r++)
+            if (W[r * stride + i] - wall0[i] > f_noise[i])
+                first = r;
+        if (t_onset[i] != t_onset[i] && first >= 0)
+            t_onset[i] = times[first];
+        if (!released[i] && wm > w_max[i])
+            w_max[i] = wm;
+        const double w_last = W[(rows - 1) * stride + i] - wall0[i];
+        const int newly = !released[i] && inc_done[i] && w_max[i] > f_noise[i] &&
+                          w_last < k[1] * w_max[i];
+        released[i] |= newly;
+        if (newly)
+            t_rel[i] = t_last;
+        /* numpy.nan_to_num of the sensor-to-wall travel time */
+        double travel = t_onset[i] - t_inc[i];
+        if (travel != travel)
+            travel = 0.0;
+        else if (isinf(travel))
+            travel = travel > 0.0 ? DBL_MAX : -DBL_MAX;
+        travel = travel + t_c[i];
+        done[i] = released[i] && t_last > t_rel[i] + k[2] * travel + k[3] * t_c[i];
     }
 }

@@ -111,6 +111,10 @@ def library() -> ctypes.CDLL:
     lib.ssw_record.restype = None
     lib.ssw_advance.argtypes = [ref, ctypes.c_int, ctypes.c_int]
     lib.ssw_advance.restype = None
+    # addresses as integers (ndarray.ctypes.data): a block's call costs a few us
+    lib.ssw_stop_update.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_long] + \
+        [ctypes.c_void_p] * 7
+    lib.ssw_stop_update.restype = None
     lib.ssw_hertz.argtypes = [ctypes.c_int, _D, _D, ctypes.c_double, _D, _D, _D]
     lib.ssw_hertz.restype = None
     lib.ssw_piecewise.argtypes = [ctypes.c_long, ctypes.c_int, ctypes.c_int, _D, _D, _D, _D,
@@ -200,6 +204,42 @@ def piecewise(law: tuple, x: np.ndarray, tangent: bool = False, with_E: bool = F
                             _ptr(x), _ptr(out), _ptr(kd), _ptr(kE),
                             None if j is None else j.ctypes.data_as(ctypes.POINTER(ctypes.c_int)))
     return out, kd, kE, j
+
+
+def stop_update(S: np.ndarray, W: np.ndarray, times: np.ndarray, consts: np.ndarray,
+                F: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """The early-stop rule over a block of the record, by the step's code
+    (:meth:`ssw.chain.integrate._StopRule.update` states the rule).
+
+    Parameters
+    ----------
+    S : numpy.ndarray
+        (rows, n) N, the sensor's rows (scenes contiguous, any row stride).
+    W : numpy.ndarray
+        (rows, n) N, the wall force's, the same strides.
+    times : numpy.ndarray
+        (rows,) s, C-contiguous.
+    consts : numpy.ndarray
+        ``(INCIDENT_END, WALL_RELEASE, TRAVEL_FACTOR, TAIL_CONTACTS)``.
+    F : numpy.ndarray
+        (9, n) C-contiguous, per scene: ``sensor0``, ``wall0``, ``f_noise``, ``t_c``, then
+        ``inc_max``, ``t_inc``, ``t_onset``, ``w_max``, ``t_rel`` (updated).
+    B : numpy.ndarray
+        (2, n) bool, C-contiguous: ``inc_done``, ``released`` (updated).
+
+    Returns
+    -------
+    numpy.ndarray
+        (n,) bool, the scenes that may stop.
+    """
+    rows, n = S.shape
+    if S.strides[1] != 8 or W.strides != S.strides:
+        S, W = np.ascontiguousarray(S), np.ascontiguousarray(W)
+    done = np.empty(n, bool)
+    library().ssw_stop_update(rows, n, S.strides[0] // 8, S.ctypes.data, W.ctypes.data,
+                              times.ctypes.data, consts.ctypes.data, F.ctypes.data,
+                              B.ctypes.data, done.ctypes.data)
+    return done
 
 
 class Stepper:

@@ -62,6 +62,7 @@ class GridInterpolant:
             for j in range(self.nu.size)
         ]
         self._g = g
+        self._loo: tuple[NDArray[np.float64], NDArray[np.float64]] | None = None
 
     def _row(self, j: int, logE: NDArray[np.float64]) -> NDArray[np.float64]:
         spline = self._rows[j]
@@ -118,7 +119,14 @@ class GridInterpolant:
     def loo_predictions(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """Leave-one-out predictions at the nodes, shape (n_nu, n_E) each: along E (each
         interior E node from PCHIP through the others) and along nu (each interior nu row
-        from its two neighbours); NaN where a node has no two-sided neighbours."""
+        from its two neighbours); NaN where a node has no two-sided neighbours. Computed
+        once per interpolant (a PCHIP per interior E node: 20 ms for 100 nodes; a fit set's
+        outputs state the error three times) and returned read-only."""
+        if self._loo is None:
+            self._loo = self._loo_predictions()
+        return self._loo
+
+    def _loo_predictions(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         along_E = np.full(self.values.shape, np.nan)
         x = np.log(self.E)
         for i in range(1, self.E.size - 1):
@@ -128,9 +136,10 @@ class GridInterpolant:
         for j in range(1, self.nu.size - 1):
             t = (self.nu[j] - self.nu[j - 1]) / (self.nu[j + 1] - self.nu[j - 1])
             along_nu[j] = (1.0 - t) * self._g[j - 1] + t * self._g[j + 1]
-        if self.log_values:
-            return np.exp(along_E), np.exp(along_nu)
-        return along_E, along_nu
+        out = (np.exp(along_E), np.exp(along_nu)) if self.log_values else (along_E, along_nu)
+        for x in out:
+            x.flags.writeable = False
+        return out
 
     def loo_error(self) -> dict[str, float]:
         """Leave-one-out errors (max relative for log values, else absolute) along E and nu,

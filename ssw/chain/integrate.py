@@ -42,8 +42,11 @@ differentiated line by line, from the derivatives of the initial statics
 They cost nothing when not asked.
 
 The step's arithmetic (forces, dashpots, accelerations, kicks, drift, sensitivities, the
-sensor's record and the peaks) is one compiled kernel, :mod:`ssw.chain.kernel`; this
-module drives it and keeps what varies by wall, the records and the stop rule.
+sensor's record and the peaks) and the stop rule's are one compiled kernel,
+:mod:`ssw.chain.kernel`; this module drives it and keeps what varies by wall, the records
+and the stop rule's state. When nothing is done in Python between two steps (the step
+evaluates the wall's law, no force or energy record), a block of ``check_every`` steps is
+one call of the kernel.
 
 Early stop. Every ``check_every`` steps each scene's record is inspected; a scene stops when
 (1) its incident pulse has passed the sensor (the sensor signal fell below 30 % of its peak),

@@ -1,10 +1,12 @@
 """The chain's compiled step: ``ssw/chain/_step.c``, loaded through :mod:`ctypes`.
 
 One implementation of the step's arithmetic (:func:`ssw.chain.integrate.simulate` keeps the
-walls, the records and the stop rule): the contact forces averaged over the step's relative
-motion (:mod:`ssw.chain.impulse`), the contact dashpots at the predicted velocity, the
-accelerations with the preload and gravity, the two half kicks and the drift of velocity
-Verlet, and the forward sensitivities of all of them (:mod:`ssw.chain.sensitivity`).
+walls, the records and the stop rule's state): the contact forces averaged over the step's
+relative motion (:mod:`ssw.chain.impulse`), the contact dashpots at the predicted velocity,
+the accelerations with the preload and gravity, the two half kicks and the drift of velocity
+Verlet, and the forward sensitivities of all of them (:mod:`ssw.chain.sensitivity`); a block
+of whole steps in one call (:meth:`Stepper.advance`) and the early-stop rule
+(:func:`stop_update`).
 
 Why compiled: a chain has a few dozen contacts per scene, so a numpy step was a hundred
 small ufunc calls whose overhead was most of their cost. Measured on this project's 2-core
@@ -209,7 +211,7 @@ def piecewise(law: tuple, x: np.ndarray, tangent: bool = False, with_E: bool = F
 def stop_update(S: np.ndarray, W: np.ndarray, times: np.ndarray, consts: np.ndarray,
                 F: np.ndarray, B: np.ndarray) -> np.ndarray:
     """The early-stop rule over a block of the record, by the step's code
-    (:meth:`ssw.chain.integrate._StopRule.update` states the rule).
+    (the module docstring of :mod:`ssw.chain.integrate` states the rule).
 
     Parameters
     ----------

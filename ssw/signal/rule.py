@@ -147,7 +147,7 @@ def gap_end(s: np.ndarray, k_incident: np.ndarray, rule: PeakRule = RULE
     return np.argmax(after, axis=0), after.any(axis=0)
 
 
-#: Rows of the signal per block of :func:`_window_max`.
+#: Rows of the signal per block of the reflected window's maximum (:func:`reflected`).
 WINDOW_ROWS = 256
 
 

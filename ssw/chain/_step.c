@@ -12,7 +12,7 @@
    No Python C-API: a plain shared library, built by setuptools with the package (setup.py)
    and checked against this file's hash by its loader (SSW_STEP_SOURCE). */
 #if defined(__GNUC__) && !defined(__clang__)
-/* loops vectorized (SIMD lanes round as the scalar code does: IEEE operations one by one),
+/* loops vectorized (SIMD lanes give the scalar code's results: IEEE operations one by one),
    no fused multiply-add */
 #pragma GCC optimize("O3", "fp-contract=off")
 #endif
@@ -119,7 +119,7 @@ static void near_lanes(int q, int w, const double *v1, const double *v0, double 
 }
 
 /* The far law of W contacts at once, in vector lanes (GCC vector extensions; every lane
-   rounds as scalar code: the same numbers whatever W): with d = d1 - d0, a = |v1 - v0| dt,
+   gives the scalar result: the same numbers whatever W): with d = d1 - d0, a = |v1 - v0| dt,
    x = d / a, d_+ = max(d, 0) (NaN: 0), r = min(1 / x^2, 1) (NaN: 1),
    F = A d_+ sqrt(d_+) (1 + r C1 + r^2 C2) and, with fd, fa,
    dF/dd = A sqrt(d_+) (1.5 poly - 2 r dpoly), dF/d|delta| = 2 A dpoly a / sqrt(d_+)

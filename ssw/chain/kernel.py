@@ -14,8 +14,8 @@ machine (docs/performance.md, "The cost of a step"), a whole run's step costs 3.
 CPU for 1 to 20 scenes, and every recorded array agrees with the numpy step's to round-off.
 The Hertz law far from an event (two divisions and a square root per contact, most of the
 step's arithmetic) runs in SIMD lanes (AVX2 where the CPU has it, else SSE2), whose IEEE
-operations round as scalar code does: the same bits, and a run of 900 scenes on Hertz walls
-(``simulate``, the study's chain) costs 0.35 s of CPU instead of 0.76 s.
+operations give the scalar code's results: the same bits, and a run of 900 scenes on Hertz
+walls (``simulate``, the study's chain) costs 0.35 s of CPU instead of 0.76 s.
 
 The library is built with the package (``setup.py``; ``bash scripts/setup.sh`` or ``pip
 install -e .``, which need a C compiler: Debian's ``gcc`` and ``libc6-dev``). It carries the

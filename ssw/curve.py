@@ -66,8 +66,24 @@ def write_curve(path: str | Path, curve: ForceCurve) -> None:
             write_dataset(g, "p", curve.pressure["p"], "Pa", "contact pressure, (k, nr)")
 
 
-def read_curve(path: str | Path) -> ForceCurve:
-    """Read a curve written by :func:`write_curve`."""
+def read_curve(path: str | Path, *, extras: bool = True) -> ForceCurve:
+    """Read a curve written by :func:`write_curve`.
+
+    Parameters
+    ----------
+    path : str or Path
+        The curve file.
+    extras : bool
+        Also read the solver's ``stats`` and the ``pressure`` profiles; without them (empty
+        ``stats``, no ``pressure``: what the fits and the chain use) a file reads in 0.9 ms
+        instead of 2.2 ms (h5py reads each of the ~18 stats attributes and 3 datasets one
+        by one).
+
+    Returns
+    -------
+    ForceCurve
+        The curve.
+    """
     import h5py
 
     p = Path(path)
@@ -76,13 +92,13 @@ def read_curve(path: str | Path) -> ForceCurve:
     with h5py.File(p, "r") as f:
         check_kind(f, KIND)
         pressure = None
-        if "pressure" in f:
+        if extras and "pressure" in f:
             pressure = {k: f["pressure"][k][()] for k in ("r", "delta", "p")}
         return ForceCurve(
             delta=f["delta"][()],
             force=f["force"][()],
             contact_radius=f["contact_radius"][()],
             inputs=read_inputs(f),
-            stats=dict(f["stats"].attrs) if "stats" in f else {},
+            stats=dict(f["stats"].attrs) if extras and "stats" in f else {},
             pressure=pressure,
         )

@@ -11,7 +11,13 @@
 
    No Python C-API: a plain shared library, built by setuptools with the package (setup.py)
    and checked against this file's hash by its loader (SSW_STEP_SOURCE). */
+#if defined(__GNUC__) && !defined(__clang__)
+/* loops vectorized (SIMD lanes give the scalar code's results: IEEE operations one by one),
+   no fused multiply-add */
+#pragma GCC optimize("O3", "fp-contract=off")
+#endif
 #include <math.h>
+#include <float.h>
 #include <string.h>
 
 #ifndef SSW_STEP_SOURCE
@@ -81,37 +87,135 @@ static inline void pow_plus(double y, double *p35, double *p25)
 }
 
 /* The Hertz force the step applies to one contact (impulse.py): F = A |delta|^1.5 psi(x),
-   x = d / |delta|, near an event (-1 < x < FAR), else A d_+^1.5 (1 + r/16 + r^2/640),
-   r = min(1 / x^2, 1). With fd, fa: dF/dd and dF/d|delta| (N/m). */
-static inline double hertz(double d, double a, double A, double *fd, double *fa)
+   x = d / |delta|, near an event (-1 < x < FAR, hertz_near), else A d_+^1.5 (1 + r/16 +
+   r^2/640), r = min(1 / x^2, 1) (far_forces). With fd, fa: dF/dd and dF/d|delta| (N/m). */
+static inline int near_event(double x) { return x > -1.0 && x < FAR; }
+
+static inline double hertz_near(double x, double a, double A, double *fd, double *fa)
 {
-    double x = d / a;
-    if (x > -1.0 && x < FAR) {
-        double t0, t1, t2, s0, s1, s2;
-        pow_plus(x + 1.0, &t0, &s0);
-        pow_plus(x, &t1, &s1);
-        pow_plus(x - 1.0, &t2, &s2);
-        double val = (t0 - 2.0 * t1 + t2) / 8.75;
-        double s = A * sqrt(a);
-        if (fd) {
-            double dval = 3.5 * ((s0 - 2.0 * s1 + s2) / 8.75);
-            *fd = s * dval;
-            *fa = s * (1.5 * val - x * dval);
-        }
-        return s * a * val;
-    }
-    double dp = d > 0.0 ? d : 0.0;
-    double sq = sqrt(dp);
-    double r = 1.0 / (x * x);
-    if (!(r < 1.0)) r = 1.0; /* NaN (a contact at rest at d = 0) and r >= 1 */
-    double poly = 1.0 + r * (C1 + r * C2);
+    double t0, t1, t2, s0, s1, s2;
+    pow_plus(x + 1.0, &t0, &s0);
+    pow_plus(x, &t1, &s1);
+    pow_plus(x - 1.0, &t2, &s2);
+    double val = (t0 - 2.0 * t1 + t2) / 8.75;
+    double s = A * sqrt(a);
     if (fd) {
-        double dpoly = C1 + 2.0 * C2 * r;
-        *fd = A * sq * (1.5 * poly - 2.0 * r * dpoly);
-        *fa = dp > 0.0 ? 2.0 * A * dpoly * a / sq : 0.0;
+        double dval = 3.5 * ((s0 - 2.0 * s1 + s2) / 8.75);
+        *fd = s * dval;
+        *fa = s * (1.5 * val - x * dval);
     }
-    return A * dp * sq * poly;
+    return s * a * val;
 }
+
+/* hertz_near in place of the far law for the contacts q .. q + w - 1 near an event (x
+   = d / a, a = |v1 - v0| dt). */
+static void near_lanes(int q, int w, const double *v1, const double *v0, double dt, double A,
+                       const double *x, double *f, double *fd, double *fa)
+{
+    for (int i = q; i < q + w; i++)
+        if (near_event(x[i]))
+            f[i] = hertz_near(x[i], fabs(v1[i] - v0[i]) * dt, A, fd ? fd + i : 0,
+                              fa ? fa + i : 0);
+}
+
+/* The far law of W contacts at once, in vector lanes (GCC vector extensions; every lane
+   gives the scalar result: the same numbers whatever W): with d = d1 - d0, a = |v1 - v0| dt,
+   x = d / a, d_+ = max(d, 0) (NaN: 0), r = min(1 / x^2, 1) (NaN: 1),
+   F = A d_+ sqrt(d_+) (1 + r C1 + r^2 C2) and, with fd, fa,
+   dF/dd = A sqrt(d_+) (1.5 poly - 2 r dpoly), dF/d|delta| = 2 A dpoly a / sqrt(d_+)
+   (0 for d_+ = 0), dpoly = C1 + 2 C2 r; then hertz_near in the lanes near an event
+   (near_lanes). Rows of M, the last partial vector through a padded copy. The lanes'
+   square root is the ISA's (SQRT). */
+#define FAR_FORCES(NAME, W, SQRT, ATTR)                                                     \
+    typedef double NAME##_v __attribute__((vector_size(8 * W)));                            \
+    typedef long long NAME##_m __attribute__((vector_size(8 * W)));                         \
+    ATTR static inline NAME##_v NAME##_sel(NAME##_m m, NAME##_v a, NAME##_v b)              \
+    {                                                                                       \
+        return (NAME##_v)((m & (NAME##_m)a) | (~m & (NAME##_m)b));                          \
+    }                                                                                       \
+    ATTR static inline __attribute__((always_inline)) int NAME##_lanes(                     \
+        const double *d1, const double *d0, const double *v1, const double *v0, double dt,  \
+        double A, double *x_out, double *f, double *fd, double *fa)                         \
+    {                                                                                       \
+        NAME##_v D1, D0, V1, V0, zero = {0}, one = zero + 1.0;                              \
+        memcpy(&D1, d1, sizeof D1);                                                         \
+        memcpy(&D0, d0, sizeof D0);                                                         \
+        memcpy(&V1, v1, sizeof V1);                                                         \
+        memcpy(&V0, v0, sizeof V0);                                                         \
+        const NAME##_v d = D1 - D0;                                                         \
+        const NAME##_v a = (NAME##_v)((NAME##_m)(V1 - V0) & ~(NAME##_m)(-zero)) * dt;       \
+        const NAME##_v x = d / a;                                                           \
+        const NAME##_v dp = (NAME##_v)((NAME##_m)(d > zero) & (NAME##_m)d);                 \
+        const NAME##_v sq = SQRT(dp);                                                       \
+        NAME##_v r = one / (x * x);                                                         \
+        r = NAME##_sel(r < one, r, one);                                                    \
+        const NAME##_v poly = one + r * (C1 + r * C2);                                      \
+        const NAME##_v F = A * dp * sq * poly;                                              \
+        memcpy(x_out, &x, sizeof x);                                                        \
+        memcpy(f, &F, sizeof F);                                                            \
+        if (fd) {                                                                           \
+            const NAME##_v dpoly = C1 + 2.0 * C2 * r;                                       \
+            const NAME##_v Fd = A * sq * (1.5 * poly - 2.0 * r * dpoly);                    \
+            const NAME##_v Fa = NAME##_sel(dp > zero, 2.0 * A * dpoly * a / sq, zero);      \
+            memcpy(fd, &Fd, sizeof Fd);                                                     \
+            memcpy(fa, &Fa, sizeof Fa);                                                     \
+        }                                                                                   \
+        const NAME##_m near = (x > -1.0) & (x < FAR);                                       \
+        long long any = 0;                                                                  \
+        for (int l = 0; l < W; l++)                                                         \
+            any |= near[l];                                                                 \
+        return any != 0;                                                                    \
+    }                                                                                       \
+    ATTR static void NAME(int M, const double *d1, const double *d0, const double *v1,      \
+                          const double *v0, double dt, double A, double *x, double *f,      \
+                          double *fd, double *fa)                                           \
+    {                                                                                       \
+        int q = 0;                                                                          \
+        for (; q + W <= M; q += W)                                                          \
+            if (NAME##_lanes(d1 + q, d0 + q, v1 + q, v0 + q, dt, A, x + q, f + q,           \
+                             fd ? fd + q : 0, fa ? fa + q : 0))                             \
+                near_lanes(q, W, v1, v0, dt, A, x, f, fd, fa);                              \
+        if (q < M) {                                                                        \
+            double b[7][W] = {{0}};                                                         \
+            const int r = M - q;                                                            \
+            memcpy(b[0], d1 + q, sizeof(double) * r);                                       \
+            memcpy(b[1], d0 + q, sizeof(double) * r);                                       \
+            memcpy(b[2], v1 + q, sizeof(double) * r);                                       \
+            memcpy(b[3], v0 + q, sizeof(double) * r);                                       \
+            NAME##_lanes(b[0], b[1], b[2], b[3], dt, A, b[4], b[5], fd ? b[6] : 0,          \
+                         fd ? b[0] : 0);                                                    \
+            memcpy(x + q, b[4], sizeof(double) * r);                                        \
+            memcpy(f + q, b[5], sizeof(double) * r);                                        \
+            if (fd) {                                                                       \
+                memcpy(fd + q, b[6], sizeof(double) * r);                                   \
+                memcpy(fa + q, b[0], sizeof(double) * r);                                   \
+            }                                                                               \
+            near_lanes(q, r, v1, v0, dt, A, x, f, fd, fa);                                  \
+        }                                                                                   \
+    }
+
+#if defined(__x86_64__) && defined(__GNUC__)
+#define SQRT4(v) __builtin_ia32_sqrtpd256(v)
+#define SQRT2(v) __builtin_ia32_sqrtpd(v)
+FAR_FORCES(far_avx2, 4, SQRT4, __attribute__((target("avx2"))))
+FAR_FORCES(far_sse2, 2, SQRT2, )
+/* The widest lanes this CPU runs (AVX2: 4, else SSE2: 2). */
+static void far_forces(int M, const double *d1, const double *d0, const double *v1,
+                       const double *v0, double dt, double A, double *x, double *f,
+                       double *fd, double *fa)
+{
+    static int avx2 = -1;
+    if (avx2 < 0) {
+        __builtin_cpu_init();
+        avx2 = __builtin_cpu_supports("avx2") ? 1 : 0;
+    }
+    (avx2 ? far_avx2 : far_sse2)(M, d1, d0, v1, v0, dt, A, x, f, fd, fa);
+}
+#else
+static inline double sqrt_lane(double v) { return sqrt(v); }
+#define SQRT1(v) ((far_forces_v){sqrt_lane((v)[0])})
+FAR_FORCES(far_forces, 1, SQRT1, )
+#endif
 
 /* The hat-weighted share Phi(d / a) of the step a contact is closed, and its slopes. */
 static inline double closed_share(double d, double a, double *gd, double *ga)
@@ -194,12 +298,17 @@ static void wall_row(const ssw_chain *c)
     }
 }
 
-/* Averaged Hertz forces of m contacts (tests and any caller outside the step). */
+/* Averaged Hertz forces of m contacts (tests and any caller outside the step), by the
+   step's far_forces. */
 void ssw_hertz(int m, const double *d, const double *a, double A, double *out, double *fd,
                double *fa)
 {
-    for (int i = 0; i < m; i++)
-        out[i] = hertz(d[i], a[i], A, fd ? fd + i : 0, fa ? fa + i : 0);
+    enum { CHUNK = 64 };
+    const double zero[CHUNK] = {0};
+    double x[CHUNK];
+    for (int q = 0; q < m; q += CHUNK)
+        far_forces(m - q < CHUNK ? m - q : CHUNK, d + q, zero, a + q, zero, 1.0, A, x,
+                   out + q, fd ? fd + q : 0, fa ? fa + q : 0);
 }
 
 /* Row `row` of the record, and the peaks, from the step just taken. */
@@ -219,11 +328,16 @@ void ssw_record(const ssw_chain *c, int row)
         memcpy(dp + (long)nr * k, c->dF + (long)s * n * k, sizeof(double) * n * k);
     }
     const double *u_last = c->z + (N - 1) * n;
-    /* as numpy.maximum: a NaN stays */
-    for (int i = 0; i < n; i++)
-        if (u_last[i] > c->peak_u[i] || isnan(u_last[i])) c->peak_u[i] = u_last[i];
-    for (int q = 0; q < (N - 1) * n; q++)
-        if (f[q] > c->peak_f[q] || isnan(f[q])) c->peak_f[q] = f[q];
+    double *peak_u = c->peak_u, *peak_f = c->peak_f;
+    /* as numpy.maximum: a NaN stays (selects without branches: vector loops) */
+    for (int i = 0; i < n; i++) {
+        const double x = u_last[i], p = peak_u[i];
+        peak_u[i] = (x > p || x != x) ? x : p;
+    }
+    for (int q = 0; q < (N - 1) * n; q++) {
+        const double x = f[q], p = peak_f[q];
+        peak_f[q] = (x > p || x != x) ? x : p;
+    }
 }
 
 /* The step's first half: v += dt/2 acc, u += dt v (and the same for the sensitivities). */
@@ -245,74 +359,97 @@ void ssw_drift(const ssw_chain *c)
     }
 }
 
+/* The bead-bead contacts' Hertz forces (and with the tangent their slopes fd, fa) at the
+   drifted state: far_forces on all M = (N - 1) n contacts (x kept in w_x). */
+static void contact_forces(const ssw_chain *c, double *w_x, double *w_fd, double *w_fa)
+{
+    const int n = c->n;
+    const double *u = c->z, *v = c->z + c->N * n;
+    far_forces((c->N - 1) * n, u, u + n, v, v + n, c->dt, c->A, w_x, c->f, w_fd, w_fa);
+}
+
 /* Contact forces, accelerations and (k > 0) their sensitivities at the drifted state; with
    kick, the step's second half v += dt/2 acc. has_old: acc (and Acc) hold the last step's
    accelerations (the dashpot's predicted velocity v + dt/2 acc_old); 0 at the start. */
 void ssw_forces(const ssw_chain *c, int has_old, int kick)
 {
     const int N = c->N, n = c->n, k = c->k, Nn = N * n;
-    const double dt = c->dt, half = 0.5 * dt, A = c->A, cd = c->damping;
+    const double dt = c->dt, half = 0.5 * dt, cd = c->damping;
     const double *u = c->z, *v = c->z + Nn;
     double *f = c->f, *acc = c->acc;
-    /* per contact: fd, fa sign(dv) dt, sign(dv) dt, dvp, share, gd, ga; new accelerations */
+    /* per contact: fd, fa sign(dv) dt, sign(dv) dt, dvp, share, gd, ga, x = d / |delta| */
     double *w_fd = c->work, *w_fa = w_fd + Nn, *w_sdt = w_fa + Nn, *w_dvp = w_sdt + Nn;
-    double *w_sh = w_dvp + Nn, *w_gd = w_sh + Nn, *w_ga = w_gd + Nn, *acc_new = w_ga + Nn;
+    double *w_sh = w_dvp + Nn, *w_gd = w_sh + Nn, *w_ga = w_gd + Nn, *w_x = w_ga + Nn;
     const int tangent = k > 0;
 
     if (c->K1)
         wall_row(c);
     if (c->power)
         memset(c->power, 0, sizeof(double) * n);
-    for (int j = 0; j < N; j++) {
-        const int last = j == N - 1;
-        for (int i = 0; i < n; i++) {
-            const int q = j * n + i;
-            const double d = last ? u[q] : u[q] - u[q + n];
-            const double dv = last ? v[q] : v[q] - v[q + n];
-            const double a = fabs(dv) * dt;
-            if (!last)
-                f[q] = hertz(d, a, A, tangent ? w_fd + q : 0, tangent ? w_fa + q : 0);
-            if (tangent) {
-                const double sg = dv > 0.0 ? 1.0 : (dv < 0.0 ? -1.0 : (dv == 0.0 ? 0.0 : dv));
-                w_sdt[q] = sg * dt;
-                if (!last)
-                    w_fa[q] *= w_sdt[q];
-            }
-            if (c->predict) {
-                double dvp = dv;
-                if (has_old)
-                    dvp += half * (last ? acc[q] : acc[q] - acc[q + n]);
-                double gd = 0.0, ga = 0.0;
-                const double sh = closed_share(d, a, c->damped_tangent ? &gd : 0,
-                                               c->damped_tangent ? &ga : 0);
-                if (cd > 0.0) {
-                    f[q] += cd * dvp * sh;
-                    if (c->power)
-                        c->power[i] += cd * dvp * dvp * sh;
-                }
+    contact_forces(c, w_x, tangent ? w_fd : 0, tangent ? w_fa : 0);
+    if (tangent || c->predict) {
+        for (int j = 0; j < N; j++) {
+            const int last = j == N - 1;
+            for (int i = 0; i < n; i++) {
+                const int q = j * n + i;
+                const double d = last ? u[q] : u[q] - u[q + n];
+                const double dv = last ? v[q] : v[q] - v[q + n];
+                const double a = fabs(dv) * dt;
                 if (tangent) {
-                    w_dvp[q] = dvp;
-                    w_sh[q] = sh;
-                    w_gd[q] = gd;
-                    w_ga[q] = ga;
+                    const double sg =
+                        dv > 0.0 ? 1.0 : (dv < 0.0 ? -1.0 : (dv == 0.0 ? 0.0 : dv));
+                    w_sdt[q] = sg * dt;
+                    if (!last)
+                        w_fa[q] *= w_sdt[q];
+                }
+                if (c->predict) {
+                    double dvp = dv;
+                    if (has_old)
+                        dvp += half * (last ? acc[q] : acc[q] - acc[q + n]);
+                    double gd = 0.0, ga = 0.0;
+                    const double sh = closed_share(d, a, c->damped_tangent ? &gd : 0,
+                                                   c->damped_tangent ? &ga : 0);
+                    if (cd > 0.0) {
+                        f[q] += cd * dvp * sh;
+                        if (c->power)
+                            c->power[i] += cd * dvp * dvp * sh;
+                    }
+                    if (tangent) {
+                        w_dvp[q] = dvp;
+                        w_sh[q] = sh;
+                        w_gd[q] = gd;
+                        w_ga[q] = ga;
+                    }
                 }
             }
         }
     }
-    /* m_i a_i = F_(i-1) - F_i (+ P on bead 1) + m_i g */
-    for (int j = 0; j < N; j++)
-        for (int i = 0; i < n; i++) {
-            const int q = j * n + i;
-            double net = (j ? f[q - n] : 0.0) - f[q];
-            if (j == 1 && c->preload)
-                net += c->preload[i];
-            acc_new[q] = net * c->inv_m[q] + c->g;
+    /* m_i a_i = F_(i-1) - F_i (+ P on bead 1) + m_i g, into acc (its old values are not
+       needed any more), and with kick v += dt/2 acc; row by row, each a vector loop */
+    {
+        const double g = c->g, *inv_m = c->inv_m, *pre = c->preload;
+        double *vw = c->z + Nn;
+        for (int j = 0; j < N; j++) {
+            const double *fj = f + (long)j * n, *im = inv_m + (long)j * n;
+            double *aj = acc + (long)j * n, *vj = vw + (long)j * n;
+            if (j == 0)
+                for (int i = 0; i < n; i++)
+                    aj[i] = (0.0 - fj[i]) * im[i] + g;
+            else if (j == 1 && pre)
+                for (int i = 0; i < n; i++)
+                    aj[i] = (fj[i - n] - fj[i] + pre[i]) * im[i] + g;
+            else
+                for (int i = 0; i < n; i++)
+                    aj[i] = (fj[i - n] - fj[i]) * im[i] + g;
+            if (kick)
+                for (int i = 0; i < n; i++)
+                    vj[i] += half * aj[i];
         }
+    }
     if (tangent) {
         const int m = Nn * k;
         const double *U = c->ZT, *V = c->ZT + m;
         double *dF = c->dF, *Acc = c->Acc;
-        double *Acc_new = acc_new + Nn;
         for (int j = 0; j < N; j++) {
             const int last = j == N - 1;
             for (int i = 0; i < n; i++) {
@@ -346,7 +483,7 @@ void ssw_forces(const ssw_chain *c, int has_old, int kick)
                     double dnet = (j ? dF[r - n * k] : 0.0) - dF[r];
                     if (j == 1 && p == c->c_P)
                         dnet += 1.0;
-                    Acc_new[r] = dnet * c->inv_m[q];
+                    Acc[r] = dnet * c->inv_m[q];
                 }
             }
         /* the masses' own columns: d(F / m)/dm = -(acc - g) / m */
@@ -354,20 +491,93 @@ void ssw_forces(const ssw_chain *c, int has_old, int kick)
             const int j = c->mass_row[t], p = c->mass_col[t];
             for (int i = 0; i < n; i++) {
                 const int q = j * n + i;
-                Acc_new[q * k + p] -= (acc_new[q] - c->g) * c->inv_m[q];
+                Acc[q * k + p] -= (acc[q] - c->g) * c->inv_m[q];
             }
         }
-        memcpy(Acc, Acc_new, sizeof(double) * m);
         if (kick) {
             double *Vw = c->ZT + m;
             for (int r = 0; r < m; r++)
                 Vw[r] += half * Acc[r];
         }
     }
-    memcpy(acc, acc_new, sizeof(double) * Nn);
-    if (kick) {
-        double *vw = c->z + Nn;
-        for (int q = 0; q < Nn; q++)
-            vw[q] += half * acc[q];
+}
+
+/* Steps of a run whose wall row the step writes itself (K1 > 0) or that is held fixed:
+   rows times ssw_drift, ssw_forces (has_old, kick) and ssw_record into rows row0 ..
+   row0 + rows - 1 of the block buffers: one call for a block of steps. */
+void ssw_advance(const ssw_chain *c, int rows, int row0)
+{
+    for (int r = 0; r < rows; r++) {
+        ssw_drift(c);
+        ssw_forces(c, 1, 1);
+        ssw_record(c, row0 + r);
+    }
+}
+
+/* numpy's max and argmax of x[0] - base, x[stride] - base, ... (rows values): a NaN is
+   the maximum, the first one its index. */
+static inline double max_at(const double *x, long stride, int rows, double base, int *at)
+{
+    double m = x[0] - base;
+    *at = 0;
+    for (int r = 1; r < rows && m == m; r++) {
+        const double v = x[r * stride] - base;
+        if (v > m || v != v) {
+            m = v;
+            *at = r;
+        }
+    }
+    return m;
+}
+
+/* The early-stop rule over a block (ssw.chain.integrate._StopRule.update, whose docstring
+   states it): rows (rows, n) of the sensor S and the wall force W (row stride `stride`),
+   their times; k = (INCIDENT_END, WALL_RELEASE, TRAVEL_FACTOR, TAIL_CONTACTS); the per
+   scene state, rows of n: F = sensor0, wall0, f_noise, t_c (the baselines, the noise
+   force, the contact time), inc_max, t_inc, t_onset, w_max, t_rel and B = inc_done,
+   released, updated; done: the scenes that may stop. The same IEEE operations as the
+   numpy expressions of the rule. */
+void ssw_stop_update(int rows, int n, long stride, const double *S, const double *W,
+                     const double *times, const double *k, double *F, unsigned char *B,
+                     unsigned char *done)
+{
+    const double *sensor0 = F, *wall0 = F + n, *f_noise = F + 2 * n, *t_c = F + 3 * n;
+    double *inc_max = F + 4 * n, *t_inc = F + 5 * n, *t_onset = F + 6 * n;
+    double *w_max = F + 7 * n, *t_rel = F + 8 * n;
+    unsigned char *inc_done = B, *released = B + n;
+    const double t_last = times[rows - 1];
+    for (int i = 0; i < n; i++) {
+        /* the incident pulse: its peak, and its fall below INCIDENT_END of it */
+        int at, first = -1;
+        const double bm = max_at(S + i, stride, rows, sensor0[i], &at);
+        if (!inc_done[i] && bm > inc_max[i]) {
+            inc_max[i] = bm;
+            t_inc[i] = times[at];
+        }
+        const double s_last = S[(rows - 1) * stride + i] - sensor0[i];
+        inc_done[i] |= (inc_max[i] > f_noise[i]) & (s_last < k[0] * inc_max[i]);
+        /* the wall force: its onset above the noise, its peak and its release */
+        const double wm = max_at(W + i, stride, rows, wall0[i], &at);
+        for (int r = 0; r < rows && first < 0; r++)
+            if (W[r * stride + i] - wall0[i] > f_noise[i])
+                first = r;
+        if (t_onset[i] != t_onset[i] && first >= 0)
+            t_onset[i] = times[first];
+        if (!released[i] && wm > w_max[i])
+            w_max[i] = wm;
+        const double w_last = W[(rows - 1) * stride + i] - wall0[i];
+        const int newly = !released[i] && inc_done[i] && w_max[i] > f_noise[i] &&
+                          w_last < k[1] * w_max[i];
+        released[i] |= newly;
+        if (newly)
+            t_rel[i] = t_last;
+        /* numpy.nan_to_num of the sensor-to-wall travel time */
+        double travel = t_onset[i] - t_inc[i];
+        if (travel != travel)
+            travel = 0.0;
+        else if (isinf(travel))
+            travel = travel > 0.0 ? DBL_MAX : -DBL_MAX;
+        travel = travel + t_c[i];
+        done[i] = released[i] && t_last > t_rel[i] + k[2] * travel + k[3] * t_c[i];
     }
 }

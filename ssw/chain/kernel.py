@@ -1,15 +1,21 @@
 """The chain's compiled step: ``ssw/chain/_step.c``, loaded through :mod:`ctypes`.
 
 One implementation of the step's arithmetic (:func:`ssw.chain.integrate.simulate` keeps the
-walls, the records and the stop rule): the contact forces averaged over the step's relative
-motion (:mod:`ssw.chain.impulse`), the contact dashpots at the predicted velocity, the
-accelerations with the preload and gravity, the two half kicks and the drift of velocity
-Verlet, and the forward sensitivities of all of them (:mod:`ssw.chain.sensitivity`).
+walls, the records and the stop rule's state): the contact forces averaged over the step's
+relative motion (:mod:`ssw.chain.impulse`), the contact dashpots at the predicted velocity,
+the accelerations with the preload and gravity, the two half kicks and the drift of velocity
+Verlet, and the forward sensitivities of all of them (:mod:`ssw.chain.sensitivity`); a block
+of whole steps in one call (:meth:`Stepper.advance`) and the early-stop rule
+(:func:`stop_update`).
 
 Why compiled: a chain has a few dozen contacts per scene, so a numpy step was a hundred
 small ufunc calls whose overhead was most of their cost. Measured on this project's 2-core
 machine (docs/performance.md, "The cost of a step"), a whole run's step costs 3.4-4.8x less
 CPU for 1 to 20 scenes, and every recorded array agrees with the numpy step's to round-off.
+The Hertz law far from an event (two divisions and a square root per contact, most of the
+step's arithmetic) runs in SIMD lanes (AVX2 where the CPU has it, else SSE2), whose IEEE
+operations give the scalar code's results: the same bits, and a run of 900 scenes on Hertz
+walls (``simulate``, the study's chain) costs 0.35 s of CPU instead of 0.76 s.
 
 The library is built with the package (``setup.py``; ``bash scripts/setup.sh`` or ``pip
 install -e .``, which need a C compiler: Debian's ``gcc`` and ``libc6-dev``). It carries the
@@ -105,6 +111,12 @@ def library() -> ctypes.CDLL:
     lib.ssw_forces.restype = None
     lib.ssw_record.argtypes = [ref, ctypes.c_int]
     lib.ssw_record.restype = None
+    lib.ssw_advance.argtypes = [ref, ctypes.c_int, ctypes.c_int]
+    lib.ssw_advance.restype = None
+    # addresses as integers (ndarray.ctypes.data): a block's call costs a few us
+    lib.ssw_stop_update.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_long] + \
+        [ctypes.c_void_p] * 7
+    lib.ssw_stop_update.restype = None
     lib.ssw_hertz.argtypes = [ctypes.c_int, _D, _D, ctypes.c_double, _D, _D, _D]
     lib.ssw_hertz.restype = None
     lib.ssw_piecewise.argtypes = [ctypes.c_long, ctypes.c_int, ctypes.c_int, _D, _D, _D, _D,
@@ -196,6 +208,42 @@ def piecewise(law: tuple, x: np.ndarray, tangent: bool = False, with_E: bool = F
     return out, kd, kE, j
 
 
+def stop_update(S: np.ndarray, W: np.ndarray, times: np.ndarray, consts: np.ndarray,
+                F: np.ndarray, B: np.ndarray) -> np.ndarray:
+    """The early-stop rule over a block of the record, by the step's code
+    (the module docstring of :mod:`ssw.chain.integrate` states the rule).
+
+    Parameters
+    ----------
+    S : numpy.ndarray
+        (rows, n) N, the sensor's rows (scenes contiguous, any row stride).
+    W : numpy.ndarray
+        (rows, n) N, the wall force's, the same strides.
+    times : numpy.ndarray
+        (rows,) s, C-contiguous.
+    consts : numpy.ndarray
+        ``(INCIDENT_END, WALL_RELEASE, TRAVEL_FACTOR, TAIL_CONTACTS)``.
+    F : numpy.ndarray
+        (9, n) C-contiguous, per scene: ``sensor0``, ``wall0``, ``f_noise``, ``t_c``, then
+        ``inc_max``, ``t_inc``, ``t_onset``, ``w_max``, ``t_rel`` (updated).
+    B : numpy.ndarray
+        (2, n) bool, C-contiguous: ``inc_done``, ``released`` (updated).
+
+    Returns
+    -------
+    numpy.ndarray
+        (n,) bool, the scenes that may stop.
+    """
+    rows, n = S.shape
+    if S.strides[1] != 8 or W.strides != S.strides:
+        S, W = np.ascontiguousarray(S), np.ascontiguousarray(W)
+    done = np.empty(n, bool)
+    library().ssw_stop_update(rows, n, S.strides[0] // 8, S.ctypes.data, W.ctypes.data,
+                              times.ctypes.data, consts.ctypes.data, F.ctypes.data,
+                              B.ctypes.data, done.ctypes.data)
+    return done
+
+
 class Stepper:
     """The state of ``n`` chains of ``N`` beads (``k`` sensitivity columns) and their step.
 
@@ -267,6 +315,7 @@ class Stepper:
         self._ref = ctypes.byref(self._c)
         lib = library()
         self._drift, self._forces, self._record = lib.ssw_drift, lib.ssw_forces, lib.ssw_record
+        self._advance = lib.ssw_advance
 
     def use_law(self, law: tuple) -> None:
         """Evaluate the wall's row in the step, from a piecewise-linear law (:func:`piecewise`'s
@@ -312,6 +361,22 @@ class Stepper:
             The row.
         """
         self._record(self._ref, row)
+
+    def advance(self, rows: int, row0: int = 0) -> None:
+        """``rows`` whole steps, each :meth:`drift`, :meth:`forces` (``has_old``, ``kick``)
+        and :meth:`record` into rows ``row0 ..``: one call for a block of steps of a run
+        whose wall row does not change from Python (the step evaluates the wall's law,
+        :meth:`use_law`). A block of 32 steps of a few scenes cost 3-4 us of call overhead
+        per step as three calls.
+
+        Parameters
+        ----------
+        rows : int
+            Steps.
+        row0 : int
+            The first record row.
+        """
+        self._advance(self._ref, rows, row0)
 
     def drift(self) -> None:
         """The step's first half: ``v += dt/2 acc``, ``u += dt v`` (and their sensitivities)."""

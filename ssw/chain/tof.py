@@ -76,11 +76,12 @@ class Peaks:
         return self.dt_reflected - self.dt_incident
 
 
-def parabolic(y: np.ndarray, k: np.ndarray, cols: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+def parabolic(y: np.ndarray, k: np.ndarray, cols: np.ndarray, *, near: bool = False
+              ) -> tuple[np.ndarray, np.ndarray]:
     """Vertex offset (samples) and height of the parabola through ``y[k-1..k+1, col]``
-    (``y`` (n_t, n), ``k`` and ``cols`` (m,) with ``1 <= k <= n_t - 2``):
-    :func:`ssw.signal.peaks.parabolic_vertex`."""
-    pos, height = parabolic_vertex(y, k, cols)
+    (``y`` (n_t, n), ``k`` and ``cols`` (m,) with ``1 <= k <= n_t - 2``; with ``near``,
+    ``y`` (3, m) holds only those samples): :func:`ssw.signal.peaks.parabolic_vertex`."""
+    pos, height = parabolic_vertex(y, k, cols, near=near)
     return pos - k, height
 
 

@@ -626,7 +626,7 @@ def _as_curve(c: Any) -> Any:
         return c
     from ssw.curve import read_curve
 
-    return read_curve(c)
+    return read_curve(c, extras=False)
 
 
 def _resample(curve: Any, scale: float) -> tuple[float, np.ndarray, float, float]:

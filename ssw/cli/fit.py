@@ -199,7 +199,7 @@ def run_fit(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.fit.pipeline import fit_with_config
 
     cfg = _cfg_with(args)
-    res, rng = fit_with_config(read_curve(args.curve), cfg, args.law)
+    res, rng = fit_with_config(read_curve(args.curve, extras=False), cfg, args.law)
     out = res.as_dict()
     out["range"] = asdict(rng)
     out["formula"] = LAWS[res.law].formula
@@ -243,7 +243,7 @@ def run_deviation(args: argparse.Namespace) -> dict[str, Any]:
 
     cfg = load_config(args.config)
     rows = deviation_rows(
-        [read_curve(p) for p in args.curves], args.set_kind, cfg["fit"]["delta_ref"]
+        [read_curve(p, extras=False) for p in args.curves], args.set_kind, cfg["fit"]["delta_ref"]
     )
     for r in rows:
         r["material_set"] = cfg["material_set"]
@@ -266,7 +266,7 @@ def run_tof_impact(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.curve import read_curve
     from ssw.tof.impact import tof_impact
 
-    rows = tof_impact([read_curve(p) for p in args.curves], load_config(args.config))
+    rows = tof_impact([read_curve(p, extras=False) for p in args.curves], load_config(args.config))
     if args.output:
         from ssw.h5io import write_rows_csv
 
@@ -356,7 +356,7 @@ def run_set(args: argparse.Namespace) -> dict[str, Any]:
     tdir.mkdir(parents=True, exist_ok=True)
     (out / "figures").mkdir(parents=True, exist_ok=True)
     args.curves = set_curve_files(cfg, args.set, args.curves)
-    curves = [read_curve(p) for p in args.curves]
+    curves = [read_curve(p, extras=False) for p in args.curves]
     written: list[str] = []
 
     def dump(path: Path, res: dict[str, Any]) -> None:

@@ -41,7 +41,7 @@ def plot_curves(paths: list[str], output: str, cfg: dict[str, Any], title: str =
     """Force vs indentation and the ratio to bare-soil Hertz, one line per curve."""
     fig, ax = _figure(2)
     for p in paths:
-        c = read_curve(p)
+        c = read_curve(p, extras=False)
         sc = scene_inputs(c)
         F_H = hertz.force(
             c.delta, hertz.effective_modulus(sc["soil_E"], sc["soil_nu"]), sc["radius"]
@@ -63,7 +63,7 @@ def plot_curves(paths: list[str], output: str, cfg: dict[str, Any], title: str =
 
 def plot_deviation(paths: list[str], output: str, cfg: dict[str, Any], title: str = "") -> None:
     """Deviation from Hertz at ``fit.delta_ref`` per scene, with the thesis's values."""
-    curves = [read_curve(p) for p in paths]
+    curves = [read_curve(p, extras=False) for p in paths]
     kinds = {float(scene_inputs(c).get("plate_thickness") or 0.0) for c in curves}
     rows = deviation_rows(
         curves, "thickness" if len(kinds) > 1 else "materials", cfg["fit"]["delta_ref"]

@@ -48,7 +48,7 @@ def fit_files(
     ``curves``: the files' curves when already read.
     """
     paths = [str(p) for p in paths]
-    curves = [read_curve(p) for p in paths] if curves is None else list(curves)
+    curves = [read_curve(p, extras=False) for p in paths] if curves is None else list(curves)
     scs = [scene_inputs(c) for c in curves]
     ranges = fit_ranges(
         [float(s["soil_E"]) for s in scs],

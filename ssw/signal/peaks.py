@@ -67,18 +67,21 @@ class PeakError(RecordingError):
     """A record's peaks cannot be picked (the message gives the reason)."""
 
 
-def parabolic_vertex(y: np.ndarray, k: int | np.ndarray, cols: np.ndarray | None = None
-                     ) -> tuple[np.ndarray, np.ndarray]:
+def parabolic_vertex(y: np.ndarray, k: int | np.ndarray, cols: np.ndarray | None = None,
+                     *, near: bool = False) -> tuple[np.ndarray, np.ndarray]:
     """Sub-sample offset ``p`` and height of the parabola through ``y[k-1], y[k], y[k+1]``.
 
     Parameters
     ----------
     y : numpy.ndarray
-        (n_t,) samples, or (n_t, n) with ``cols``.
+        (n_t,) samples, or (n_t, n) with ``cols``; with ``near``, (3, m): only the samples
+        ``k - 1``, ``k``, ``k + 1`` of each ``k``.
     k : int or numpy.ndarray
         Sample indices, each ``1 <= k <= n_t - 2``.
     cols : numpy.ndarray or None
         Column of each ``k`` in a 2-d ``y``.
+    near : bool
+        ``y`` holds only the three samples of each ``k`` (``cols`` unused).
 
     Returns
     -------
@@ -87,8 +90,11 @@ def parabolic_vertex(y: np.ndarray, k: int | np.ndarray, cols: np.ndarray | None
         1/2``).
     """
     k = np.asarray(k)
-    at = (lambda j: y[j]) if cols is None else (lambda j: y[j, cols])
-    ym, y0, yp = at(k - 1), at(k), at(k + 1)
+    if near:
+        ym, y0, yp = y
+    else:
+        at = (lambda j: y[j]) if cols is None else (lambda j: y[j, cols])
+        ym, y0, yp = at(k - 1), at(k), at(k + 1)
     den = ym - 2 * y0 + yp
     safe = np.where(den < 0, den, -1.0)
     p = np.where(den < 0, 0.5 * (ym - yp) / safe, 0.0)

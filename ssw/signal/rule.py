@@ -147,6 +147,21 @@ def gap_end(s: np.ndarray, k_incident: np.ndarray, rule: PeakRule = RULE
     return np.argmax(after, axis=0), after.any(axis=0)
 
 
+#: Rows of the signal per block of the reflected window's maximum (:func:`reflected`).
+WINDOW_ROWS = 256
+
+
+def _window_max(s: np.ndarray, window: np.ndarray) -> np.ndarray:
+    """``max(s[window])`` per column (-inf where the window is empty), ``s`` and ``window``
+    (n_t, n): block by block of :data:`WINDOW_ROWS` rows, so that no (n_t, n) array of
+    floats is made (a long record of many scenes: 70 MB of memory to touch)."""
+    out = np.full(s.shape[1:], -np.inf)
+    for i in range(0, s.shape[0], WINDOW_ROWS):
+        blk = np.where(window[i : i + WINDOW_ROWS], s[i : i + WINDOW_ROWS], -np.inf)
+        np.maximum(out, blk.max(axis=0), out=out)
+    return out
+
+
 def reflected(s: np.ndarray, start: np.ndarray, rule: PeakRule = RULE, *,
               floor: float | np.ndarray = 0.0, allowed: np.ndarray | None = None,
               maxima: np.ndarray | None = None
@@ -175,7 +190,7 @@ def reflected(s: np.ndarray, start: np.ndarray, rule: PeakRule = RULE, *,
     """
     m = local_maxima(s) if maxima is None else maxima
     window = np.arange(s.shape[0])[:, None] >= start
-    w_max = np.where(window, s, -np.inf).max(axis=0)
+    w_max = _window_max(s, window)
     ok = m & window & (s >= rule.split_fraction * w_max) & (s > floor) & (w_max > 0)
     if allowed is not None:
         ok &= allowed
@@ -185,7 +200,8 @@ def reflected(s: np.ndarray, start: np.ndarray, rule: PeakRule = RULE, *,
 def select(s: np.ndarray, rule: PeakRule = RULE) -> Selection:
     """Rules 1-3 on the columns of a noiseless signal ``s`` ((n_t, n), baseline removed;
     NaN samples, a stopped scene's, read as 0): the chosen samples (:class:`Selection`)."""
-    s = np.where(np.isnan(s), 0.0, s)
+    if np.isnan(s.max(initial=0.0)):  # a NaN anywhere (no copy of a signal without one)
+        s = np.where(np.isnan(s), 0.0, s)
     m = local_maxima(s)
     k_inc, has_inc = incident(s, rule, maxima=m)
     k_gap, has_gap = gap_end(s, k_inc, rule)

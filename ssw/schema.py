@@ -7,8 +7,9 @@ and the workflow see the same config. :func:`first_error` turns the deepest erro
 
 Every job of a study validates the same study config and device again (a command cannot
 know that the workflow did); :func:`first_file_error` remembers, under the disk cache
-(``$SSW_CACHE_DIR/schema``, default ``~/.cache/ssw``; ``SSW_CACHE_DIR=none`` turns it off),
-the filled instance of every valid (schema file, instance) pair, named by the SHA-256 of
+(``$SSW_CACHE_DIR/schema``, default ``~/.cache/ssw``; ``SSW_CACHE_DIR=none`` turns it off;
+only in a cache folder that exists already, so that a dry run, which makes none, writes
+nothing), the filled instance of every valid (schema file, instance) pair, named by the SHA-256 of
 the schema file's bytes and of the instance's JSON (keys in their order: the filled
 instance comes back exactly, order included; an instance that JSON does not carry exactly,
 with integer keys, dates or NaN, is not remembered). A job that finds its pair
@@ -116,7 +117,8 @@ def first_file_error(schema_path: str | os.PathLike[str], instance: dict[str, An
             instance.update(filled)
             return None
     err = first_error(safe_load(schema_bytes.decode()), instance)
-    filled_text = _exact_json(instance) if err is None and memo is not None else None
+    keep = err is None and memo is not None and memo.parent.parent.is_dir()
+    filled_text = _exact_json(instance) if keep else None
     if filled_text is not None:
         try:
             memo.parent.mkdir(parents=True, exist_ok=True)

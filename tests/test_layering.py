@@ -22,7 +22,8 @@ FOUNDATION = {"ssw", "errors", "provenance", "schema", "roots", "hertz", "materi
 DATA = {"device", "config", "sample", "constitutive"}
 ALLOWED: dict[str, set[str]] = {
     # foundation: errors at the very bottom
-    "errors": set(), "ssw": set(), "schema": set(), "yamlio": set(), "roots": {"errors"},
+    "errors": set(), "ssw": set(), "schema": {"yamlio", "h5io"}, "yamlio": set(),
+    "roots": {"errors"},
     "hertz": {"errors", "roots"},
     "materials": {"errors", "yamlio"}, "provenance": {"errors", "ssw"},
     "h5io": {"errors", "ssw", "provenance"}, "plotting": {"h5io"}, "progress": set(),

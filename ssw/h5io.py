@@ -98,6 +98,22 @@ def fsync_path(path: str | os.PathLike[str]) -> None:
         os.close(fd)
 
 
+def cache_root() -> Path | None:
+    """ssw's disk cache folder, for files it can always rebuild (condensed contact operators,
+    validated configs): ``$SSW_CACHE_DIR`` (default ``~/.cache/ssw``).
+
+    Returns
+    -------
+    pathlib.Path or None
+        The folder (it may not exist yet); None when ``SSW_CACHE_DIR`` is ``none``, ``off``
+        or empty (no disk cache).
+    """
+    root = os.environ.get("SSW_CACHE_DIR")
+    if root is not None and root.strip().lower() in ("none", "off", ""):
+        return None
+    return Path(root) if root else Path.home() / ".cache" / "ssw"
+
+
 def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
     """Write ``text`` to ``path`` atomically."""
     with atomic_path(path) as tmp:

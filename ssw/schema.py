@@ -56,18 +56,11 @@ def first_error(schema: dict[str, Any], instance: Any) -> Any | None:
     return errors[0] if errors else None
 
 
-def cache_root() -> Path | None:
-    """ssw's disk cache folder: ``$SSW_CACHE_DIR`` (default ``~/.cache/ssw``); None when
-    ``SSW_CACHE_DIR`` is ``none``, ``off`` or empty (no disk cache)."""
-    root = os.environ.get("SSW_CACHE_DIR")
-    if root is not None and root.strip().lower() in ("none", "off", ""):
-        return None
-    return Path(root) if root else Path.home() / ".cache" / "ssw"
-
-
 def _memo_path(schema_bytes: bytes, instance: Any) -> Path | None:
     """Where the filled ``instance`` of a valid pair is kept; None without a disk cache or
     when JSON does not carry ``instance`` exactly."""
+    from ssw.h5io import cache_root
+
     root = cache_root()
     text = _exact_json(instance)
     if root is None or text is None:

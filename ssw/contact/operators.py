@@ -41,7 +41,6 @@ import contextlib
 import functools
 import hashlib
 import json
-import os
 import time
 from collections import OrderedDict
 from collections.abc import Iterator
@@ -192,11 +191,10 @@ def _code_hash() -> str:
 def cache_dir() -> Path | None:
     """The disk cache folder: ``$SSW_CACHE_DIR/contact`` (default ``~/.cache/ssw``); None
     (memory only) when ``SSW_CACHE_DIR`` is ``none``, ``off`` or empty."""
-    root = os.environ.get("SSW_CACHE_DIR")
-    if root is not None and root.strip().lower() in ("none", "off", ""):
-        return None
-    base = Path(root) if root else Path.home() / ".cache" / "ssw"
-    return base / "contact"
+    from ssw.h5io import cache_root
+
+    root = cache_root()
+    return None if root is None else root / "contact"
 
 
 #: Meshes an :class:`OperatorStore` keeps in memory (the plate design condenses a batch of

@@ -6,15 +6,15 @@ and the workflow see the same config. :func:`first_error` turns the deepest erro
 (field, value, message) for :class:`ssw.errors.ConfigError`.
 
 Every job of a study validates the same study config and device again (a command cannot
-know that the workflow did); :func:`first_file_error` remembers, under the disk cache
-(``$SSW_CACHE_DIR/schema``, default ``~/.cache/ssw``; ``SSW_CACHE_DIR=none`` turns it off;
-only in a cache folder that exists already, so that a dry run, which makes none, writes
-nothing), the filled instance of every valid (schema file, instance) pair, named by the SHA-256 of
-the schema file's bytes and of the instance's JSON (keys in their order: the filled
-instance comes back exactly, order included; an instance that JSON does not carry exactly,
-with integer keys, dates or NaN, is not remembered). A job that finds its pair
-there takes the filled instance without importing ``jsonschema`` (85 ms of each job's
-start, with the 13 ms of parsing the schema, measured on a 2-core machine).
+know that the workflow did). :func:`first_file_error` remembers the filled instance of every
+valid (schema file, instance) pair under the disk cache (``$SSW_CACHE_DIR/schema``, default
+``~/.cache/ssw``, :func:`ssw.h5io.cache_root`; ``SSW_CACHE_DIR=none`` turns it off), named
+by the SHA-256 of the schema file's bytes and of the instance's JSON, keys in their order: the
+filled instance comes back exactly, order included. An instance that JSON does not carry
+exactly (integer keys, dates, NaN) is not remembered, and nothing is written where the cache
+folder does not exist yet (a dry run makes none). A job that finds its pair takes the filled
+instance without importing ``jsonschema`` (85 ms of each job's start, with the 13 ms of
+parsing the schema, measured on a 2-core machine).
 """
 
 from __future__ import annotations

@@ -216,10 +216,12 @@ def _chandrupatla(full: Callable[[np.ndarray], np.ndarray], pos: np.ndarray,
     SolverError
         An end is not finite, or :data:`MAX_ITERATIONS` iterations did not converge.
     """
-    # the status codes of the message are scipy's (-3: a value error, -2: too many steps),
-    # kept from the time ssw called it
-    if not (np.all(np.isfinite(x1)) and np.all(np.isfinite(x2))):
-        raise SolverError("the bracketed root did not converge (status [-3])")
+    finite = np.isfinite(x1) & np.isfinite(x2)
+    if not finite.all():
+        raise SolverError(
+            f"a root's bracket has an end that is not finite: [{x1[~finite][:3].tolist()}, "
+            f"{x2[~finite][:3].tolist()}] (give finite ends, or grow=True from a finite "
+            "first guess)")
     xf = x.copy()  # the abscissae f sees: the converged elements keep their last one
     x3 = f3 = np.empty(0)
     t = 0.5  # the first point is the midpoint
@@ -267,4 +269,5 @@ def _chandrupatla(full: Callable[[np.ndarray], np.ndarray], pos: np.ndarray,
         # at least half the tolerance away from the ends of the bracket
         tl = 0.5 * tol / dx
         t = np.clip(t, tl, 1 - tl)
-    raise SolverError("the bracketed root did not converge (status [-2])")
+    raise SolverError(f"the bracketed root did not converge in {MAX_ITERATIONS} iterations "
+                      f"(brackets left: [{x1[:3].tolist()}, {x2[:3].tolist()}])")

@@ -136,7 +136,7 @@ def test_refusals_element_by_element():
         find_root(lambda x: np.where((x > 0.4) & (x < 0.6), np.nan, x - 0.7), 0.0, 1.0)
     with pytest.raises(SolverError, match="not finite"):
         find_root(lambda x: np.where(x > 0.9, np.inf, x - 0.5), np.zeros(2), np.ones(2))
-    with pytest.raises(SolverError, match=r"did not converge \(status \[-3\]\)"):
+    with pytest.raises(SolverError, match=r"bracket has an end that is not finite: \[\[-inf\]"):
         find_root(np.arctan, -np.inf, 1.0)
 
 
@@ -145,7 +145,7 @@ def test_iteration_limit(monkeypatch):
     import ssw.roots
 
     monkeypatch.setattr(ssw.roots, "MAX_ITERATIONS", 3)
-    with pytest.raises(SolverError, match=r"did not converge \(status \[-2\]\)"):
+    with pytest.raises(SolverError, match=r"did not converge in 3 iterations"):
         find_root(lambda x: x**3 - 2.0, 0.0, 2.0)
 
 

@@ -318,14 +318,6 @@ class _StopRule:
         self.F[self.FLOATS.index("t_onset")] = np.nan
         self.B = np.zeros((len(self.FLAGS), n), bool)
 
-    def __getattr__(self, name: str) -> np.ndarray:
-        """A row of the state by its name (``inc_max``, ``released``, ...)."""
-        if name in self.FLOATS:
-            return self.F[self.FLOATS.index(name)]
-        if name in self.FLAGS:
-            return self.B[self.FLAGS.index(name)]
-        raise AttributeError(name)
-
     def keep(self, mask: np.ndarray) -> None:
         """Keep the scenes ``mask`` (bool over the active scenes)."""
         self.F = np.ascontiguousarray(self.F[:, mask])

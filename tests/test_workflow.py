@@ -89,6 +89,9 @@ def test_tiny_study_writes_every_output_and_reruns_nothing(ci_study):
                  "survey/figures/survey_map.png"):
         assert (res / name).is_file(), name
     assert not list(res.rglob("*.part")), "a temporary file was left behind"
+    # the jobs ran in forks of the run's warm process (ssw.warmstart), which ended with it
+    log = (res / "logs" / "warm-start.log").read_text()
+    assert sum(line.startswith("pid ") for line in log.splitlines()) >= 10, log
     r2 = _smk("-n", "--cores", "2", "--directory", str(ci_study), "--configfile",
               str(ci_study / "config" / "ci.yaml"))
     assert "Nothing to be done" in r2.stdout + r2.stderr

@@ -15,6 +15,7 @@ from snakemake.utils import validate
 REPO = Path(workflow.basedir).resolve().parent
 sys.path.insert(0, str(REPO))
 import ssw.config as sswcfg  # noqa: E402
+import ssw.warmstart as sswwarm  # noqa: E402
 import ssw.workflow as sswwf  # noqa: E402
 
 # The rules run `python -m ssw ...` with the repository on PYTHONPATH. `python` is the one
@@ -65,14 +66,24 @@ onstart:
         for note in sswwf.prepare_slurm_run(workflow):
             print(f"ssw cluster check: {note}", file=sys.stderr)
     sswwf.write_study_config(config, STUDY_CONFIG)
+    # Jobs on this machine: their `python -m ssw` forks a process that has already imported
+    # ssw and its libraries (ssw.warmstart; SSW_WARM_START=0 turns it off).
+    sswwarm.start_for(
+        workflow,
+        os.pathsep.join([str(REPO), *filter(None, [os.environ.get("PYTHONPATH")])]),
+        Path(LOGS) / "warm-start.log",
+    )
 
 
-# Once the last job is done: no timer of the scheduler holds the exit (ssw.workflow.end_of_run).
+# Once the last job is done: the warm process ends, and no timer of the scheduler holds the
+# exit (ssw.workflow.end_of_run).
 onsuccess:
+    sswwarm.stop_all()
     sswwf.end_of_run()
 
 
 onerror:
+    sswwarm.stop_all()
     sswwf.end_of_run()
 
 

@@ -1,0 +1,159 @@
+"""The warm start (ssw.warmstart): a command forked from the warm process prints, writes and
+exits as a fresh ``python -m ssw`` process does; one whose imports would differ runs by
+itself; signals reach the command; the warm process holds no thread and nothing that
+cannot be forked."""
+
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from collections.abc import Iterator
+from pathlib import Path
+
+import pytest
+
+from ssw import warmstart
+
+TOF = ["tof", "--soil-E", "50e6", "--soil-nu", "0.3", "--calibration", "none", "--json"]
+
+
+def _env(**extra: str) -> dict[str, str]:
+    env = {k: v for k, v in os.environ.items() if k != warmstart.SOCKET_ENV}
+    return {**env, **warmstart.ONE_THREAD_ENV, **extra}
+
+
+@pytest.fixture
+def warm(tmp_path: Path) -> Iterator[warmstart.WarmProcess]:
+    """A warm process serving commands that run in ``tmp_path`` with :func:`_env`."""
+    before = os.environ.get(warmstart.SOCKET_ENV)
+    proc = warmstart.start(_env(), tmp_path / "warm.log", cwd=tmp_path)
+    try:
+        assert proc.wait_ready(120), (tmp_path / "warm.log").read_text()
+        yield proc
+    finally:
+        warmstart.stop(proc)
+        if before is not None:
+            os.environ[warmstart.SOCKET_ENV] = before
+    assert not proc.folder.exists()
+    assert proc.process.returncode == 0, (tmp_path / "warm.log").read_text()
+
+
+def _ssw(args: list[str], cwd: Path, socket: Path | None, **env: str
+         ) -> subprocess.CompletedProcess:
+    extra = {warmstart.SOCKET_ENV: str(socket)} if socket else {}
+    return subprocess.run([sys.executable, "-m", "ssw", *args], cwd=cwd, capture_output=True,
+                          text=True, env=_env(**extra, **env), timeout=300)
+
+
+def _served(log: Path) -> list[str]:
+    return [line for line in log.read_text().splitlines() if line.startswith("pid ")]
+
+
+def test_a_forked_command_prints_and_exits_as_a_fresh_process(warm, tmp_path):
+    cold = _ssw(TOF, tmp_path, None)
+    hot = _ssw(TOF, tmp_path, warm.socket)
+    assert cold.returncode == hot.returncode == 0, cold.stderr + hot.stderr
+    assert hot.stdout == cold.stdout and '"tof"' in hot.stdout
+    assert hot.stderr == cold.stderr
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("sets: {s: {plate_thickness: {values: [-0.4e-3]}}}\n")
+    args = ["check-config", "--config", str(bad)]
+    cold, hot = _ssw(args, tmp_path, None), _ssw(args, tmp_path, warm.socket)
+    assert cold.returncode == hot.returncode == 2
+    assert hot.stderr == cold.stderr and "plate_thickness" in hot.stderr
+    served = _served(tmp_path / "warm.log")
+    assert [line.split(": ", 1)[1] for line in served] == [" ".join(TOF), " ".join(args)]
+
+
+def test_a_command_whose_imports_would_differ_runs_by_itself(warm, tmp_path):
+    """Another BLAS thread count (it moves the TOF's last digits), another working folder:
+    the command imports by itself, with its own result; the log says why."""
+    other = tmp_path / "elsewhere"
+    other.mkdir()
+    for cwd, env, why in ((tmp_path, {"OPENBLAS_NUM_THREADS": "2"},
+                           "environment variables OPENBLAS_NUM_THREADS"),
+                          (other, {}, "the interpreter's path")):
+        ref = _ssw(TOF, cwd, None, **env)
+        r = _ssw(TOF, cwd, warm.socket, **env)
+        assert r.returncode == 0 and r.stdout == ref.stdout, r.stderr
+        assert f"runs by itself (differs in {why})" in (tmp_path / "warm.log").read_text()
+    assert _served(tmp_path / "warm.log") == []
+
+
+def test_without_a_warm_process_a_command_runs_by_itself(tmp_path):
+    ref = _ssw(TOF, tmp_path, None)
+    r = _ssw(TOF, tmp_path, tmp_path / "no-such-socket")
+    assert r.returncode == 0 and r.stdout == ref.stdout
+
+
+def _long_command(warm, tmp_path: Path) -> tuple[subprocess.Popen, int]:
+    """A served command that runs for minutes (a TOF at 200,000 steps per contact), and
+    its pid."""
+    caller = subprocess.Popen(
+        [sys.executable, "-m", "ssw", *TOF[:-1], "--steps-per-contact", "200000"],
+        cwd=tmp_path, env=_env(**{warmstart.SOCKET_ENV: str(warm.socket)}),
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    end = time.monotonic() + 60
+    while not _served(tmp_path / "warm.log"):
+        assert time.monotonic() < end and caller.poll() is None, "the command was not served"
+        time.sleep(0.02)
+    time.sleep(0.5)  # past the command's start: its SIGTERM handler is in place
+    return caller, int(_served(tmp_path / "warm.log")[0].split()[1].rstrip(":"))
+
+
+def _ends(pid: int, timeout_s: float = 30.0) -> bool:
+    end = time.monotonic() + timeout_s
+    while time.monotonic() < end:
+        try:
+            os.kill(pid, 0)
+        except ProcessLookupError:
+            return True
+        time.sleep(0.02)
+    return False
+
+
+def test_sigterm_to_the_caller_interrupts_the_command(warm, tmp_path):
+    """As Snakemake cancels a job: the command unwinds (ssw.cli's SIGTERM handler) and the
+    caller exits with its status, 130."""
+    caller, pid = _long_command(warm, tmp_path)
+    caller.send_signal(signal.SIGTERM)
+    _, err = caller.communicate(timeout=60)
+    assert caller.returncode == 130, err
+    assert "ssw tof: interrupted" in err
+    assert _ends(pid)
+
+
+def test_a_killed_caller_takes_its_command_with_it(warm, tmp_path):
+    caller, pid = _long_command(warm, tmp_path)
+    caller.kill()
+    caller.wait(60)
+    assert _ends(pid), "the command outlived its caller"
+
+
+def _preload(code: str) -> subprocess.CompletedProcess:
+    return subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                          env=_env(), timeout=300)
+
+
+def test_the_preload_leaves_one_thread_and_nothing_unforkable():
+    r = _preload("from ssw.warmstart import preload, PRELOAD\n"
+                 "import os, sys\n"
+                 "preload()\n"
+                 "print(len(os.listdir('/proc/self/task')), all(m in sys.modules for m in "
+                 "PRELOAD))")
+    assert r.returncode == 0, r.stderr
+    assert r.stdout.split() == ["1", "True"]
+
+
+@pytest.mark.parametrize("code, message", [
+    ("import threading, time\n"
+     "threading.Thread(target=time.sleep, args=(30,), daemon=True).start()\n"
+     "preload(('numpy',))", "runs 2 threads"),
+    ("preload(('gmsh',))", "imported gmsh"),
+])
+def test_the_preload_refuses_a_process_it_could_not_fork(code, message):
+    r = _preload(f"from ssw.warmstart import preload\n{code}")
+    assert r.returncode != 0 and message in r.stderr

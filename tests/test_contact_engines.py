@@ -137,6 +137,32 @@ def test_tracer_on_random_lcp_family():
         assert np.max(np.abs(got - ref)) < 1e-10 * max(1.0, np.max(np.abs(ref)))
 
 
+def test_tracer_with_simultaneous_breakpoints():
+    """Mirror-symmetric constraints (``W = [[B, C], [C, B]]``, equal gaps and rates) reach
+    their bounds in twins: breakpoints past the start where two constraints switch at once
+    (the directional problem), among single switches; the path vs cold LCP solves."""
+    rng = np.random.default_rng(5)
+    k = 12
+    a, c = rng.normal(size=(k, k)), rng.normal(size=(k, k))
+    B = a @ a.T / k + 1.0 * np.eye(k)
+    C = 0.3 * (c + c.T) / np.sqrt(k)
+    W = np.block([[B, C], [C, B]])
+    assert np.all(np.linalg.eigvalsh(W) > 0)
+    u = np.abs(rng.normal(size=k))
+    u[0] = 0.0
+    v = -rng.uniform(0.2, 2.0, k)
+    q0, q1 = np.concatenate([u, u]), np.concatenate([v, v])
+    tr = Tracer(W, q0, q1)
+    tr.advance(4.0)
+    path = tr.path()
+    switched = np.count_nonzero(path.active[1:] != path.active[:-1], axis=1)
+    assert np.all(switched % 2 == 0) and path.pieces > 5  # every change is a twin pair
+    for d in np.concatenate([np.linspace(0.0, 4.0, 41), path.breaks[1:-1] * (1 + 1e-6)]):
+        ref, _, _ = solve_lcp(W, q0 + d * q1, np.zeros(2 * k, bool), 1e-13)
+        got = path.forces(np.array([d]))[0]
+        assert np.max(np.abs(got - ref)) < 1e-10 * max(1.0, np.max(np.abs(ref)))
+
+
 def test_trace_falls_back_when_not_a_prefix():
     """Where the active sets are not prefixes, ``trace`` must use the general tracer."""
     # constraint 0 touches first; once 1 closes (delta 0.106) its push unloads 0, which

@@ -23,11 +23,15 @@ active (``dg_F = 0``), ``dlam_H`` solves the small LCP
     dlam_H . dg_H = 0,
 
 whose matrix (a Schur complement of ``W``) is positive definite: the new active set is
-``F`` plus the ``H`` with ``dlam > 0``. This also settles degenerate starts: at
-``delta = 0`` every constraint with ``q0 = 0`` (the sphere's axis node; every pair of an
-unilateral interface, all touching) is in ``H``. Every increment between breakpoints is
-then filled in one vectorized step, and the curve is exact (to round-off) at any
-indentation: the per-increment LCP (:mod:`ssw.contact.contact_lcp`) gives the same numbers.
+``F`` plus the ``H`` with ``dlam > 0``. When ``H`` is one constraint ``h`` reached along a
+piece (the usual breakpoint) that problem is ``1 x 1`` with ``M > 0`` and ``q`` of the sign
+of the rate that ended the piece: ``q = eta_h < 0`` for a closing gap, ``q = -M beta_h > 0``
+for a vanishing force (block elimination of ``W_AA beta = -q1_A``), so ``h`` switches, with
+no solve. The directional problem also settles degenerate starts: at ``delta = 0`` every
+constraint with ``q0 = 0`` (the sphere's axis node; every pair of an unilateral interface,
+all touching) is in ``H``. Every increment between breakpoints is then filled in one
+vectorized step, and the curve is exact (to round-off) at any indentation: the
+per-increment LCP (:mod:`ssw.contact.contact_lcp`) gives the same numbers.
 
 Cholesky factors of ``W_AA`` are reused between pieces: ``A`` is kept sorted, and when it
 changes only the part of the factor from the first changed position on is recomputed
@@ -60,6 +64,8 @@ from ssw.errors import SolverError
 TIE_RTOL = 1e-9
 #: Most pieces a path may have (a safeguard against cycling; a curve has ~1-3 per candidate).
 MAX_PIECES = 100_000
+#: No constraint pending at a breakpoint.
+_NONE = np.zeros(0, dtype=np.int64)
 
 
 @dataclass(frozen=True)
@@ -172,6 +178,10 @@ class Tracer:
     """Follows the solution path of ``LCP(W, q0 + delta q1)`` from ``delta = 0`` (resumable:
     :meth:`advance` extends it).
 
+    A breakpoint reached by one constraint switches it (module docstring); the start and
+    simultaneous breakpoints solve their directional problem
+    (:func:`ssw.contact.contact_lcp.solve_lcp`).
+
     Parameters
     ----------
     W : numpy.ndarray
@@ -192,6 +202,7 @@ class Tracer:
                 f"LCP data of inconsistent shapes {self.W.shape}, {m}, {self.q1.shape}")
         if np.any(self.q0 < 0):
             raise SolverError("the gaps at zero indentation must be >= 0 (no initial penetration)")
+        self._minus_q = -np.column_stack([self.q0, self.q1])  # (m, 2) right-hand sides
         self.delta = 0.0
         self.active = np.zeros(m, dtype=bool)  # the active set of the current piece
         self._idx = np.zeros(0, dtype=np.int64)  # sorted active indices of the factor
@@ -206,16 +217,35 @@ class Tracer:
 
     # -- factor of W_AA, updated from the first changed position ------------------------
     def _factor(self, idx: np.ndarray) -> np.ndarray:
-        """Lower Cholesky factor of ``W[idx, idx]`` (``idx`` sorted), reusing the leading
-        block shared with the previous factor."""
+        """Lower Cholesky factor of ``W[idx, idx]``, reusing the leading block shared with
+        the previous factor.
+
+        Parameters
+        ----------
+        idx : numpy.ndarray
+            (n,) sorted constraint indices, int.
+
+        Returns
+        -------
+        numpy.ndarray
+            (n, n) the lower factor (also kept for the next call).
+
+        Raises
+        ------
+        SolverError
+            ``W[idx, idx]`` is not positive definite.
+        """
         old = self._idx
-        n_common = min(old.size, idx.size)
-        p = int(np.argmax(old[:n_common] != idx[:n_common])) if n_common else 0
-        if n_common and np.all(old[:n_common] == idx[:n_common]):
-            p = n_common
-        L = np.zeros((idx.size, idx.size))
+        n = idx.size
+        p = min(old.size, n)
+        changed = (old[:p] != idx[:p]).nonzero()[0]
+        if changed.size:
+            p = int(changed[0])
+        elif p == n == old.size:
+            return self._L
+        L = np.zeros((n, n))
         L[:p, :p] = self._L[:p, :p]
-        if idx.size > p:
+        if n > p:
             W = self.W
             tail = idx[p:]
             if p:
@@ -230,17 +260,36 @@ class Tracer:
                 raise SolverError(
                     f"contact compliance not positive definite on the active set: {exc}"
                 ) from exc
-            self.cholesky_rows += idx.size - p
+            self.cholesky_rows += n - p
         self._idx, self._L = idx, L
         return L
 
     def _solve(self, L: np.ndarray, rhs: np.ndarray) -> np.ndarray:
-        y = triangular_solve(L, rhs, lower=True)
-        return triangular_solve(L.T, y, lower=False)
+        """``x`` with ``L L^T x = rhs``.
+
+        Parameters
+        ----------
+        L : numpy.ndarray
+            (n, n) lower Cholesky factor.
+        rhs : numpy.ndarray
+            (n,) or (n, k) right-hand sides.
+
+        Returns
+        -------
+        numpy.ndarray
+            The solution, the shape of ``rhs``.
+        """
+        return triangular_solve(L.T, triangular_solve(L, rhs, lower=True), lower=False)
 
     # -- the active set after a breakpoint ------------------------------------------------
     def _resolve(self, hits: np.ndarray) -> None:
-        """New active set when the constraints ``hits`` reach a bound at ``self.delta``."""
+        """New active set when the constraints ``hits`` reach a bound at ``self.delta``.
+
+        Parameters
+        ----------
+        hits : numpy.ndarray
+            (h,) indices of the constraints at a bound, int.
+        """
         act = self.active.copy()
         act[hits] = False
         F = np.flatnonzero(act)
@@ -259,39 +308,71 @@ class Tracer:
         self.active = act
 
     def _affine(self) -> tuple[np.ndarray, ...]:
-        """(lam0, lam1, gap0, gap1) of the current active set (vectors of length m)."""
-        A = np.flatnonzero(self.active)
+        """The current active set's piece.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            (lam0, lam1, gap0, gap1), each (m,), N, N/m, m and -.
+        """
+        A = self.active.nonzero()[0]
         m = self.q0.size
         lam0, lam1 = np.zeros(m), np.zeros(m)
         if A.size:
-            L = self._factor(A)
-            ab = self._solve(L, -np.column_stack([self.q0[A], self.q1[A]]))
-            lam0[A], lam1[A] = ab[:, 0], ab[:, 1]
-            gap0 = self.q0 + self.W[:, A] @ ab[:, 0]
-            gap1 = self.q1 + self.W[:, A] @ ab[:, 1]
+            ab = self._solve(self._factor(A), self._minus_q[A])
+            a, b = ab[:, 0], ab[:, 1]
+            lam0[A], lam1[A] = a, b
+            WA = self.W[:, A]
+            gap0 = self.q0 + WA @ a
+            gap1 = self.q1 + WA @ b
             gap0[A], gap1[A] = 0.0, 0.0
         else:
             gap0, gap1 = self.q0.copy(), self.q1.copy()
         return lam0, lam1, gap0, gap1
 
     def _next_break(self, piece: tuple[np.ndarray, ...]) -> tuple[float, np.ndarray]:
-        """The end of the current piece (inf if none) and the constraints that reach a
-        bound there."""
+        """The end of the current piece and the constraints that reach a bound there.
+
+        A force (on the active set) or a gap (off it) with a negative rate reaches zero at
+        ``-value / rate``; the values and rates are the sums ``lam + gap`` (each zero where
+        the other is not).
+
+        Parameters
+        ----------
+        piece : tuple of numpy.ndarray
+            (lam0, lam1, gap0, gap1) of the current piece (:meth:`_affine`).
+
+        Returns
+        -------
+        nxt : float
+            The end (m), inf if none.
+        hits : numpy.ndarray
+            (h,) indices of the constraints reaching a bound there, int.
+        """
         lam0, lam1, gap0, gap1 = piece
-        d = self.delta
-        A = self.active
-        with np.errstate(divide="ignore", invalid="ignore"):
-            cross = np.where(A, np.where(lam1 < 0, -lam0 / lam1, np.inf),
-                             np.where(gap1 < 0, -gap0 / gap1, np.inf))
+        fall = -(lam1 + gap1)  # the rates of fall
+        cross = np.full(fall.size, np.inf)
+        np.divide(lam0 + gap0, fall, out=cross, where=fall > 0)
         # the ones at or behind the current point change sign there only by round-off
-        cross[~(cross > d * (1.0 + TIE_RTOL))] = np.inf
-        nxt = float(np.min(cross)) if cross.size else np.inf
-        if not np.isfinite(nxt):
+        cross[~(cross > self.delta * (1.0 + TIE_RTOL))] = np.inf
+        nxt = float(cross.min(initial=np.inf))
+        if nxt == np.inf:
             return np.inf, np.zeros(0, dtype=np.int64)
-        return nxt, np.flatnonzero(cross <= nxt * (1.0 + TIE_RTOL))
+        return nxt, (cross <= nxt * (1.0 + TIE_RTOL)).nonzero()[0]
 
     def advance(self, delta_end: float) -> None:
-        """Extend the path to ``delta_end`` (m) (nothing if it already reaches it)."""
+        """Extend the path to ``delta_end`` (nothing if it already reaches it).
+
+        Parameters
+        ----------
+        delta_end : float
+            The indentation to reach, m.
+
+        Raises
+        ------
+        SolverError
+            More than :data:`MAX_PIECES` pieces, or an active block not positive definite.
+        """
         delta_end = float(delta_end)
         if self.breaks[-1] >= delta_end:
             return
@@ -299,27 +380,38 @@ class Tracer:
             self.rows.pop()
             self.breaks.pop()
             self._open = False
+        rows, breaks = self.rows, self.breaks
         while True:
-            if self._pending.size:
-                self._resolve(self._pending)
-                self._pending = np.zeros(0, dtype=np.int64)
+            pending = self._pending
+            if pending.size == 1 and self._piece is not None:  # one constraint switches
+                self.active[pending[0]] = not self.active[pending[0]]
+                self._piece = self._affine()
+            elif pending.size:
+                self._resolve(pending)
                 self._piece = self._affine()
             elif self._piece is None:
                 self._piece = self._affine()
+            self._pending = _NONE
             nxt, hits = self._next_break(self._piece)
-            self.rows.append((*self._piece, self.active.copy()))
-            if len(self.rows) > MAX_PIECES:
+            rows.append((*self._piece, self.active.copy()))
+            if len(rows) > MAX_PIECES:
                 raise SolverError(f"the contact path has more than {MAX_PIECES} pieces")
             if nxt < delta_end:
-                self.breaks.append(nxt)
+                breaks.append(nxt)
                 self.delta = nxt
                 self._pending = hits
             else:
-                self.breaks.append(delta_end)
+                breaks.append(delta_end)
                 self._open = True
                 return
 
     def path(self) -> Path:
-        """The path traced so far."""
+        """The path traced so far.
+
+        Returns
+        -------
+        Path
+            Its pieces from ``delta = 0`` to the last requested end.
+        """
         lam0, lam1, gap0, gap1, active = (np.array(x) for x in zip(*self.rows, strict=True))
         return Path(np.array(self.breaks), lam0, lam1, gap0, gap1, active)

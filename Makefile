@@ -7,7 +7,7 @@ PY      := $(VENV)/bin/python
 # scontrol retries the absent controller for the plugin's 10 s: these Snakemake calls then
 # read an empty Slurm configuration instead, which scontrol refuses at once.
 SLURM_ENV := $(shell bash scripts/slurm-local.sh down 2>/dev/null && echo SLURM_CONF=/dev/null)
-SMK     := $(SLURM_ENV) $(VENV)/bin/snakemake
+SMK     := env $(SLURM_ENV) $(VENV)/bin/snakemake
 CORES   ?= 2
 CONFIG  ?= config/config.yaml
 PYTEST_ARGS ?=
@@ -21,8 +21,9 @@ setup:
 
 ## The default study (the thesis study in config/config.yaml), results under results/.
 ## (Snakemake finds workflow/Snakefile and its workstation profile workflow/profiles/default.)
+## (ssw.warmstart: the jobs' warm process imports ssw while Snakemake itself starts.)
 study: setup
-	$(SMK) --cores $(CORES) --configfile $(CONFIG)
+	$(PY) -m ssw.warmstart -- $(SMK) --cores $(CORES) --configfile $(CONFIG)
 
 ## The test suite (default: everything but the `slow` marker) on every core (pytest-xdist:
 ## TEST_WORKERS=auto; tests/conftest.py keeps the tests that share a fixture or a machine-wide

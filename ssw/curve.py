@@ -21,7 +21,7 @@ from typing import Any
 import numpy as np
 
 from ssw.errors import SswError
-from ssw.h5io import atomic_h5, check_kind, read_inputs, write_dataset
+from ssw.h5io import atomic_h5, check_kind, new_attrs, read_inputs, write_dataset
 
 KIND = "contact_curve"
 
@@ -56,9 +56,7 @@ def write_curve(path: str | Path, curve: ForceCurve) -> None:
         write_dataset(f, "delta", curve.delta, "m", "indentation of the rigid sphere")
         write_dataset(f, "force", curve.force, "N", "reaction force on the sphere")
         write_dataset(f, "contact_radius", curve.contact_radius, "m", "contact radius")
-        st = f.create_group("stats")
-        for k, v in curve.stats.items():
-            st.attrs[k] = v
+        new_attrs(f.create_group("stats"), curve.stats)
         if curve.pressure is not None:
             g = f.create_group("pressure")
             write_dataset(g, "r", curve.pressure["r"], "m", "radial coordinate")

@@ -65,3 +65,30 @@ def test_finished_files_get_the_umask_mode_not_mkstemps_0600(tmp_path):
     finally:
         os.umask(old)
     assert (tmp_path / "a.txt").stat().st_mode & 0o777 == 0o644
+
+
+def test_new_attributes_are_stored_as_h5py_stores_them(tmp_path):
+    """``new_attrs`` against h5py's own ``attrs[name] = value``: the same HDF5 type, shape and
+    value for every kind of value ssw writes (and those it leaves to h5py)."""
+    import h5py
+
+    from ssw.h5io import new_attrs
+
+    values = {"text": "pla-t400um-E10MPa", "unicode": "ν = 0.3, 10 µm", "empty": "",
+              "float": 0.1, "nan": float("nan"), "int": -7, "big": 2**40, "bool": True,
+              "np_float32": np.float32(1.5), "np_int16": np.int16(3), "np_bool": np.bool_(False),
+              "array": np.linspace(0.0, 1.0, 7), "matrix": np.arange(6.0).reshape(2, 3),
+              "int_list": [1, 2, 3], "empty_array": np.zeros(0), "bytes": b"raw",
+              "text_list": ["a", "bc"]}
+    with h5py.File(tmp_path / "ref.h5", "w") as ref, h5py.File(tmp_path / "new.h5", "w") as new:
+        for k, v in values.items():
+            ref.attrs[k] = v
+        new_attrs(new, values)
+    with h5py.File(tmp_path / "ref.h5") as ref, h5py.File(tmp_path / "new.h5") as new:
+        assert list(new.attrs) == list(ref.attrs)
+        for k in values:
+            a, b = ref.attrs.get_id(k), new.attrs.get_id(k)
+            assert a.get_type().equal(b.get_type()), k
+            assert a.shape == b.shape, k
+            np.testing.assert_array_equal(np.asarray(new.attrs[k]), np.asarray(ref.attrs[k]))
+            assert type(new.attrs[k]) is type(ref.attrs[k]), k

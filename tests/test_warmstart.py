@@ -157,3 +157,47 @@ def test_the_preload_leaves_one_thread_and_nothing_unforkable():
 def test_the_preload_refuses_a_process_it_could_not_fork(code, message):
     r = _preload(f"from ssw.warmstart import preload\n{code}")
     assert r.returncode != 0 and message in r.stderr
+
+
+def test_a_run_with_a_warm_process_beside_it(tmp_path):
+    """``python -m ssw.warmstart -- COMMAND`` (``make study``): the command's children are
+    served, its exit status is the command's, and the warm process ends with it."""
+    env = _env()
+    ref = _ssw(TOF, tmp_path, None)
+    script = tmp_path / "two.sh"
+    script.write_text("export PYTHONPATH=$(pwd -P)${PYTHONPATH:+:$PYTHONPATH}\n"  # the rules'
+                      "while [ ! -S \"$SSW_WARM_SOCKET\" ]; do sleep 0.02; done\n"
+                      f"{sys.executable} -m ssw {' '.join(TOF)}\n"
+                      f"{sys.executable} -m ssw check-config --config missing.yaml\n")
+    r = subprocess.run([sys.executable, "-m", "ssw.warmstart", "--log", "warm.log", "--",
+                        "sh", str(script)], cwd=tmp_path, env=env, capture_output=True,
+                       text=True, timeout=300)
+    assert r.returncode == 2 and r.stdout == ref.stdout, r.stderr
+    assert "ssw check-config: error" in r.stderr
+    log = (tmp_path / "warm.log").read_text()
+    assert [line.split(": ", 1)[1] for line in _served(tmp_path / "warm.log")] == [
+        " ".join(TOF), "check-config --config missing.yaml"]
+    folder = Path(log.split("listening at ")[1].split()[0]).parent
+    assert not folder.exists()
+
+
+def test_a_run_adopts_the_warm_process_it_was_given(tmp_path, monkeypatch):
+    """The workflow's ``onstart`` (``start_for``) starts none when the run inherited one,
+    nor for a dry run or a cluster; else one, which ``stop_all`` ends."""
+
+    class Run:
+        local_exec, remote_exec, subprocess_exec, touch, dryrun = True, False, False, False, False
+
+    monkeypatch.delenv(warmstart.SOCKET_ENV, raising=False)
+    for attr, value in (("dryrun", True), ("local_exec", False), ("remote_exec", True)):
+        run = Run()
+        setattr(run, attr, value)
+        assert warmstart.start_for(run, "", tmp_path / "log") is None
+    monkeypatch.setenv(warmstart.SOCKET_ENV, str(tmp_path / "socket"))
+    assert warmstart.start_for(Run(), "", tmp_path / "log") is None
+    monkeypatch.delenv(warmstart.SOCKET_ENV)
+    warm = warmstart.start_for(Run(), warmstart.job_pythonpath(str(tmp_path)),
+                               tmp_path / "log")
+    assert warm is not None and os.environ[warmstart.SOCKET_ENV] == str(warm.socket)
+    warmstart.stop_all()
+    assert warm.process.poll() is not None and warmstart.SOCKET_ENV not in os.environ

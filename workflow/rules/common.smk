@@ -67,11 +67,10 @@ onstart:
             print(f"ssw cluster check: {note}", file=sys.stderr)
     sswwf.write_study_config(config, STUDY_CONFIG)
     # Jobs on this machine: their `python -m ssw` forks a process that has already imported
-    # ssw and its libraries (ssw.warmstart; SSW_WARM_START=0 turns it off).
+    # ssw and its libraries (ssw.warmstart; SSW_WARM_START=0 turns it off), this run's own
+    # unless `make study` started one beside Snakemake.
     sswwarm.start_for(
-        workflow,
-        os.pathsep.join([str(REPO), *filter(None, [os.environ.get("PYTHONPATH")])]),
-        Path(LOGS) / "warm-start.log",
+        workflow, sswwarm.job_pythonpath(str(REPO)), Path(LOGS) / "warm-start.log"
     )
 
 

@@ -134,4 +134,5 @@ def test_every_ssw_process_records_its_cpu_time(tmp_path: Path, monkeypatch) -> 
     rec = study.usage_records(tmp_path, t0)
     assert list(rec) == ["tof"]
     assert rec["tof"]["cpu_s"] > 0 and rec["tof"]["wall_s"] >= rec["tof"]["startup_s"] >= 0
+    assert rec["tof"]["max_rss_mb"] > 0
     assert study.usage_records(tmp_path, time.time() + 10.0) == {}  # older records ignored

@@ -90,7 +90,9 @@ def job_records(workdir: Path, since: float = 0.0) -> list[dict[str, Any]]:
     """One record per job of a run in ``workdir`` from its ``benchmark:`` files
     (``results/benchmarks/<stage>/<job>.tsv``): stage, job, wall s, peak memory MB, and
     the CPU time (s) of its ``ssw`` processes (:func:`usage_records`, None when it left
-    none: Snakemake's own sampled ``cpu_time`` misses the end of a job); only files
+    none: Snakemake's own sampled ``cpu_time`` misses the end of a job, and a job served by
+    the warm process runs outside the processes Snakemake samples); the peak memory is the
+    ``ssw`` process's own when it left a record, else Snakemake's sample; only files
     written after ``since`` (Unix s)."""
     usage = usage_records(workdir, since)
     out = []
@@ -110,9 +112,12 @@ def job_records(workdir: Path, since: float = 0.0) -> list[dict[str, Any]]:
         rel = tsv.relative_to(root)
         job = str(rel.with_suffix(""))
         use = usage.get(job) or usage.get(LOG_OF.get(job, ""))
+        # the ssw process's own peak when it left a record: a job served by the warm
+        # process (ssw.warmstart) runs in a fork outside the tree Snakemake samples
+        peak = (use["max_rss_mb"] if use and use.get("max_rss_mb")
+                else float(rss) if rss not in ("NA", "-", "") else None)
         out.append({"stage": rel.parts[0] if len(rel.parts) > 1 else "other",
-                    "job": job, "s": seconds,
-                    "max_rss_mb": float(rss) if rss not in ("NA", "-", "") else None,
+                    "job": job, "s": seconds, "max_rss_mb": peak,
                     "cpu_s": use["cpu_s"] if use else None,
                     "startup_s": use["startup_s"] if use else None})
     return out
@@ -254,7 +259,8 @@ def usage_records(workdir: Path, since: float = 0.0) -> dict[str, dict[str, floa
     ``ssw.cli._record_usage``), keyed as :func:`job_records` keys the jobs (the job's
     log ``results/logs/<stage>/<job>.log``; a process without a log: its command): ``cpu_s``,
     ``wall_s`` and ``startup_s`` (s before the command's own code ran), summed over the
-    job's processes; only records written after ``since`` (Unix s)."""
+    job's processes, and ``max_rss_mb``, the largest peak memory of one of them (MB); only
+    records written after ``since`` (Unix s)."""
     import json
 
     out: dict[str, dict[str, float]] = {}
@@ -272,9 +278,11 @@ def usage_records(workdir: Path, since: float = 0.0) -> dict[str, dict[str, floa
             key = str(log.resolve().relative_to(logs.resolve()).with_suffix(""))
         except ValueError:
             key = " ".join(a for a in rec.get("argv", []) if not a.startswith("-"))[:60]
-        acc = out.setdefault(key, {"cpu_s": 0.0, "wall_s": 0.0, "startup_s": 0.0})
-        for k in acc:
+        acc = out.setdefault(key, {"cpu_s": 0.0, "wall_s": 0.0, "startup_s": 0.0,
+                                   "max_rss_mb": 0.0})
+        for k in ("cpu_s", "wall_s", "startup_s"):
             acc[k] += float(rec.get(k) or 0.0)
+        acc["max_rss_mb"] = max(acc["max_rss_mb"], float(rec.get("max_rss_mb") or 0.0))
     return out
 
 

@@ -12,7 +12,9 @@ valid (schema file, instance) pair under the disk cache (``$SSW_CACHE_DIR/schema
 by the SHA-256 of the schema file's bytes and of the instance's JSON, keys in their order: the
 filled instance comes back exactly, order included. An instance that JSON does not carry
 exactly (integer keys, dates, NaN) is not remembered, and nothing is written where the cache
-folder does not exist yet (a dry run makes none). A job that finds its pair takes the filled
+folder does not exist yet, nor by a process that turned writing off (:func:`set_memo_writes`:
+the workflow's own, so that parsing the Snakefile, in a dry run or a lint, writes nothing;
+its jobs remember). A job that finds its pair takes the filled
 instance without importing ``jsonschema`` (85 ms of each job's start, with the 13 ms of
 parsing the schema, measured on a 2-core machine).
 """
@@ -25,6 +27,21 @@ import json
 import os
 from pathlib import Path
 from typing import Any
+
+#: Whether :func:`first_file_error` writes the pairs it validates (it reads them regardless).
+_MEMO_WRITES = True
+
+
+def set_memo_writes(enabled: bool) -> None:
+    """Let this process write the validated pairs of :func:`first_file_error`, or not.
+
+    Parameters
+    ----------
+    enabled : bool
+        False: read the remembered pairs, write none.
+    """
+    global _MEMO_WRITES
+    _MEMO_WRITES = bool(enabled)
 
 
 def validator(schema: dict[str, Any]) -> Any:
@@ -110,7 +127,8 @@ def first_file_error(schema_path: str | os.PathLike[str], instance: dict[str, An
             instance.update(filled)
             return None
     err = first_error(safe_load(schema_bytes.decode()), instance)
-    keep = err is None and memo is not None and memo.parent.parent.is_dir()
+    keep = (err is None and _MEMO_WRITES and memo is not None
+            and memo.parent.parent.is_dir())
     filled_text = _exact_json(instance) if keep else None
     if filled_text is not None:
         try:

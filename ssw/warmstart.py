@@ -23,11 +23,12 @@ What a fork runs is what a fresh process runs: the warm process only imported mo
 unchanged process, so nothing carries over from one command to the next.
 
 A command runs by itself, as without the warm process, when nothing listens at the socket,
-or when anything that shapes its imports differs from the warm process's
+or when anything that shapes its imports or its process differs from the warm process's
 (:func:`fingerprint`): the interpreter, the module search path (the working folder is on
-it), the interpreter's flags, or an environment variable read when modules load (the BLAS
+it), the interpreter's flags, an environment variable read when modules load (the BLAS
 thread counts, the locale, ``PYTHON*``, matplotlib's) or set by a launcher whose processes
-must not be forked elsewhere (MPI's ``mpiexec``, a Slurm job).
+must not be forked elsewhere (MPI's ``mpiexec``, a Slurm job), the resource limits, the
+CPUs it may run on, its niceness.
 
 Why ssw's own: ``multiprocessing``'s forkserver serves only the process that started it,
 while the commands here are separate processes started by Snakemake's shell.
@@ -108,9 +109,12 @@ def fingerprint() -> dict[str, Any]:
     dict
         ``executable`` and ``prefix`` (the interpreter and its environment), ``path`` (the
         module search path, entries resolved: ``''`` is the working folder), ``flags``,
-        ``warnoptions`` and ``xoptions`` (the interpreter's options) and ``env`` (the
-        variables of :data:`IMPORT_ENV`).
+        ``warnoptions`` and ``xoptions`` (the interpreter's options), ``env`` (the
+        variables of :data:`IMPORT_ENV`), and the process's resource limits, CPUs and
+        niceness (a fork keeps the warm process's).
     """
+    import resource
+
     return {
         "executable": os.path.realpath(sys.executable),
         "prefix": sys.prefix,
@@ -119,7 +123,18 @@ def fingerprint() -> dict[str, Any]:
         "warnoptions": list(sys.warnoptions),
         "xoptions": {k: str(v) for k, v in sys._xoptions.items()},
         "env": {k: v for k, v in sorted(os.environ.items()) if k.startswith(IMPORT_ENV)},
+        "limits": {k: list(resource.getrlimit(getattr(resource, k)))
+                   for k in sorted(dir(resource)) if k.startswith("RLIMIT_")},
+        "cpus": sorted(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else None,
+        "nice": os.getpriority(os.PRIO_PROCESS, 0),
     }
+
+
+#: The fields of :func:`fingerprint`, as the warm process's log names them.
+_FIELDS = {"executable": "the interpreter", "prefix": "the interpreter's environment",
+           "path": "the module search path", "flags": "the interpreter's flags",
+           "warnoptions": "the warning options", "xoptions": "the -X options",
+           "limits": "the resource limits", "cpus": "the CPUs", "nice": "the niceness"}
 
 
 def _difference(mine: dict[str, Any], theirs: dict[str, Any]) -> str | None:
@@ -130,7 +145,7 @@ def _difference(mine: dict[str, Any], theirs: dict[str, Any]) -> str | None:
                 a, b = mine.get(key, {}), theirs.get(key, {})
                 names = sorted(k for k in a.keys() | b.keys() if a.get(k) != b.get(k))
                 return f"environment variables {', '.join(names)}"
-            return f"the interpreter's {key}"
+            return _FIELDS.get(key, key)
     return None
 
 

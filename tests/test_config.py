@@ -133,3 +133,21 @@ def test_a_remembered_validation_gives_the_filled_config_itself(tmp_path, monkey
                          check=True, env={**os.environ,
                                           "SSW_CACHE_DIR": str(tmp_path)})
     assert run.stdout.strip() == "False"
+
+
+def test_a_process_that_turns_memo_writes_off_validates_and_writes_nothing(tmp_path,
+                                                                          monkeypatch):
+    """The workflow's own process (a Snakefile parse: a dry run, a lint) reads remembered
+    validations and writes none; a job's process writes them."""
+    from ssw import schema
+
+    raw = yaml.safe_load(DEFAULT_CONFIG.read_text())
+    monkeypatch.setenv("SSW_CACHE_DIR", str(tmp_path))
+    try:
+        schema.set_memo_writes(False)
+        quiet = validate_config(copy.deepcopy(raw))
+        assert not (tmp_path / "schema").exists()
+    finally:
+        schema.set_memo_writes(True)
+    assert validate_config(copy.deepcopy(raw)) == quiet
+    assert len(list((tmp_path / "schema").glob("*.json"))) >= 1

@@ -75,7 +75,7 @@ def test_a_command_whose_imports_would_differ_runs_by_itself(warm, tmp_path):
     other.mkdir()
     for cwd, env, why in ((tmp_path, {"OPENBLAS_NUM_THREADS": "2"},
                            "environment variables OPENBLAS_NUM_THREADS"),
-                          (other, {}, "the interpreter's path")):
+                          (other, {}, "the module search path")):
         ref = _ssw(TOF, cwd, None, **env)
         r = _ssw(TOF, cwd, warm.socket, **env)
         assert r.returncode == 0 and r.stdout == ref.stdout, r.stderr
@@ -201,3 +201,14 @@ def test_a_run_adopts_the_warm_process_it_was_given(tmp_path, monkeypatch):
     assert warm is not None and os.environ[warmstart.SOCKET_ENV] == str(warm.socket)
     warmstart.stop_all()
     assert warm.process.poll() is not None and warmstart.SOCKET_ENV not in os.environ
+
+
+def test_a_command_with_other_process_limits_runs_by_itself(warm, tmp_path):
+    """A fork keeps the warm process's limits: a command under a tighter one (``ulimit``)
+    runs by itself, under its own limit."""
+    r = subprocess.run(["sh", "-c", f"ulimit -n 512 && {sys.executable} -m ssw {' '.join(TOF)}"],
+                       cwd=tmp_path, capture_output=True, text=True, timeout=300,
+                       env=_env(**{warmstart.SOCKET_ENV: str(warm.socket)}))
+    assert r.returncode == 0 and '"tof"' in r.stdout, r.stderr
+    assert "runs by itself (differs in the resource limits)" in (
+        tmp_path / "warm.log").read_text()

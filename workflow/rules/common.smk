@@ -15,6 +15,7 @@ from snakemake.utils import validate
 REPO = Path(workflow.basedir).resolve().parent
 sys.path.insert(0, str(REPO))
 import ssw.config as sswcfg  # noqa: E402
+import ssw.schema as sswschema  # noqa: E402
 import ssw.warmstart as sswwarm  # noqa: E402
 import ssw.workflow as sswwf  # noqa: E402
 
@@ -38,6 +39,9 @@ if workflow.overwrite_configfiles:
     config.clear()
     config.update(copy.deepcopy(workflow.config_settings.overwrite_config))
 
+# Parsing this file (a run, a dry run, a lint) reads the validations the jobs remembered
+# (ssw.schema) and writes none: a dry run writes nothing.
+sswschema.set_memo_writes(False)
 sswcfg.check_moved_keys(config)
 validate(config, schema="../schemas/config.schema.yaml")
 sswcfg.check_config(config)

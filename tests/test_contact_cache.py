@@ -30,7 +30,7 @@ def test_every_truncated_or_corrupt_file_is_rebuilt(tmp_path):
     cache = tmp_path / "cache"
     want = _force(cache)
     files = sorted(cache.rglob("*.npz"))
-    assert len(files) == 3  # the layout, the plate, the soil
+    assert len(files) == 4  # the mesh, the layout, the plate, the soil
     originals = {f: f.read_bytes() for f in files}
     for f in files:
         data = originals[f]
@@ -39,6 +39,8 @@ def test_every_truncated_or_corrupt_file_is_rebuilt(tmp_path):
             for g, d in originals.items():
                 g.write_bytes(d)
             f.write_bytes(bad)
+            if f.name == "model.npz":  # read when an operator is built from it: the layout
+                (f.parent / "layout.npz").unlink()
             with pytest.warns(CacheWarning, match="rebuilding"):
                 got = _force(cache)
             np.testing.assert_array_equal(got, want)
@@ -78,3 +80,33 @@ def test_the_cache_key_covers_the_source_that_computes_operators():
     import ssw.contact.assembly as asm
 
     assert hasattr(asm, "top_surface_weights")  # the weights live where the key sees them
+
+
+def test_a_mesh_read_back_is_the_mesh_itself(tmp_path, monkeypatch):
+    """A store that finds a geometry's mesh in the cache meshes nothing and holds every
+    array of a fresh meshing, bit for bit and of the same type (its operators' stresses
+    need it: ssw.contact.stress)."""
+    from dataclasses import fields
+
+    import ssw.contact.operators as ops
+    from ssw.contact.scene import indentation_steps, settings_of
+
+    cfg = settings_of(CONTACT)
+    delta_end = float(indentation_steps(float(cfg["delta_max"]), int(cfg["steps"]),
+                                        cfg.get("delta_reach"))[-1])
+    geom = ops.geometry_of(cfg, SCENE[2], SCENE[3], delta_end, cfg["interface"])
+    want = OperatorStore(None)._model(geom)  # meshed
+    _force(tmp_path)
+    assert (tmp_path / geom.key() / "model.npz").is_file()
+    monkeypatch.setattr(ops, "build_mesh", lambda *a, **k: pytest.fail("meshed again"))
+    got = OperatorStore(tmp_path)._model(geom)
+    pairs = [(f"mesh.{f.name}", getattr(want.mesh, f.name), getattr(got.mesh, f.name))
+             for f in fields(want.mesh)]
+    pairs += [(f"layout.{f.name}", getattr(want.layout, f.name), getattr(got.layout, f.name))
+              for f in fields(want.layout)]
+    pairs += [(k, getattr(want, k), getattr(got, k)) for k in ("body", *ops._MODEL_ARRAYS)]
+    for name, a, b in pairs:
+        if isinstance(a, np.ndarray):
+            assert a.dtype == b.dtype and np.array_equal(a, b), name
+        else:
+            assert type(a) is type(b) and a == b, name

@@ -24,7 +24,10 @@ the scene's indentation, so one operator serves every curve and the chain's wall
 
 Cache. Operators are kept in memory per process and on disk under
 ``$SSW_CACHE_DIR/contact`` (default ``~/.cache/ssw``; ``SSW_CACHE_DIR=none`` turns the disk
-cache off), one file per operator, named by a hash of every input that changes it: the
+cache off), one file per operator, and one per geometry for its retained dofs
+(``layout.npz``) and its mesh (``model.npz``: the bodies' stress fields need it where the
+operators come from the disk, :mod:`ssw.contact.stress`), named by a hash of every input
+that changes it: the
 geometry and mesh settings, the zone, the interface kind, nu, the source of every module
 the computation runs (the import closure of this module, :func:`ssw.provenance.source_hash`:
 derived from the package, not a hand list) and the versions of gmsh, numpy and scipy. A
@@ -229,11 +232,20 @@ class OperatorStore:
 
     # -- geometry ---------------------------------------------------------------------------
     def _model(self, geom: Geometry) -> _Model:
+        """The mesh of ``geom`` with its retained dofs: from memory, the disk cache (the same
+        arrays, bit for bit: meshing is deterministic), or meshed here (and kept on disk:
+        a process that reads the operators of a geometry still needs its mesh for their
+        stresses, ssw.contact.stress)."""
         key = geom.key()
         if key in self._models:
             self._models.move_to_end(key)
             return self._models[key]
-        model = self._models[key] = _build_model(geom)
+        path = self._path(key, "model")
+        model = _model_from_arrays(_load(path))
+        if model is None:
+            model = _build_model(geom)
+            _save(path, _model_arrays(model))
+        self._models[key] = model
         while len(self._models) > MODELS_KEPT:  # the last few meshes (about 1 MB each)
             self._models.popitem(last=False)
         return model
@@ -338,6 +350,45 @@ def _save(path: Path | None, arrays: dict[str, np.ndarray]) -> None:
             np.savez(fh, **arrays)
     except OSError:
         return
+
+
+#: The scalar fields of a :class:`~ssw.contact.mesh.Mesh` and their types (the disk cache
+#: keeps them as 0-d arrays).
+_MESH_SCALARS = {"top": float, "plate_radius": float, "soil_radius": float,
+                 "soil_depth": float, "base": str, "lateral": str, "subgrade_ratio": float,
+                 "subgrade_nu": float}
+#: The array fields of a :class:`_Model` besides its mesh and layout.
+_MODEL_ARRAYS = ("nodes", "tri", "free", "cand", "iface_nodes", "iface_comp")
+
+
+def _model_arrays(model: _Model) -> dict[str, np.ndarray]:
+    """A model as the arrays of its disk-cache file (:func:`_model_from_arrays`)."""
+    m = model.mesh
+    out = {f"mesh_{k}": np.asarray(getattr(m, k)) for k in ("nodes", "tri", "body", *_MESH_SCALARS)}
+    if m.subgrade is not None:
+        out["mesh_subgrade"] = np.asarray(m.subgrade)
+    out.update({k: np.asarray(getattr(model, k)) for k in _MODEL_ARRAYS})
+    out.update({f"layout_{k}": np.asarray(v) for k, v in asdict(model.layout).items()})
+    return out
+
+
+def _model_from_arrays(data: dict[str, np.ndarray] | None) -> _Model | None:
+    """The model a disk-cache file holds (:func:`_model_arrays`), or None (no file, or one
+    of another layout: rebuilt)."""
+    if data is None:
+        return None
+    try:
+        mesh = Mesh(data["mesh_nodes"], data["mesh_tri"], data["mesh_body"],
+                    subgrade=data.get("mesh_subgrade"),
+                    **{k: t(data[f"mesh_{k}"]) for k, t in _MESH_SCALARS.items()})
+        lay = Layout(data["layout_r"], data["layout_weight"], data["layout_iface_r"],
+                     data["layout_iface_comp"], int(data["layout_nodes"]),
+                     int(data["layout_elements"]))
+        parts = {k: data[k] for k in _MODEL_ARRAYS}
+    except KeyError:
+        return None
+    return _Model(mesh, parts["nodes"], parts["tri"], mesh.body, parts["free"], parts["cand"],
+                  parts["iface_nodes"], parts["iface_comp"], lay, 0.0)
 
 
 def _build_model(geom: Geometry) -> _Model:

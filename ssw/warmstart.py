@@ -179,6 +179,9 @@ def request(argv: list[str] | None = None) -> int | None:
         "env": dict(os.environ), "umask": umask, "fingerprint": fingerprint(),
     }).encode()
     sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+    # a signal that comes before this process knows its command waits (blocked): then it
+    # goes to the command, or, when the command runs here, it acts as on any process
+    signal.pthread_sigmask(signal.SIG_BLOCK, FORWARDED)
     try:
         sock.connect(path)
         socket.send_fds(sock, [_LENGTH.pack(len(payload))], [0, 1, 2])
@@ -186,27 +189,39 @@ def request(argv: list[str] | None = None) -> int | None:
         replies = sock.makefile("rb")
         reply = json.loads(replies.readline() or b"{}")
     except (OSError, ValueError):
-        sock.close()
-        return None
+        reply = {}
     if "pid" not in reply:
         sock.close()
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, FORWARDED)
         return None
     return _wait(int(reply["pid"]), replies, path)
 
 
+def _signal_command(pid: int, signum: int) -> None:
+    """Send ``signum`` to the command running as ``pid`` and its children (its process
+    group, once its fork made it a session leader: before that, to it alone)."""
+    try:
+        os.killpg(pid, signum)
+    except ProcessLookupError:
+        try:
+            os.kill(pid, signum)
+        except ProcessLookupError:
+            pass
+    except PermissionError:
+        pass
+
+
 def _wait(pid: int, replies: Any, path: str) -> int:
     """Wait for the status of the command running as ``pid`` (a session leader), passing
-    on the signals this process receives; a command killed by a signal kills this process
-    with the same signal."""
+    on the signals this process receives (blocked until now); a command killed by a signal
+    kills this process with the same signal."""
 
     def forward(signum: int, frame: object) -> None:
-        try:
-            os.killpg(pid, signum)
-        except (ProcessLookupError, PermissionError):
-            pass
+        _signal_command(pid, signum)
 
     for sig in FORWARDED:
         signal.signal(sig, forward)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, FORWARDED)
     try:
         line = replies.readline()
     except OSError:
@@ -373,9 +388,13 @@ def _accept(srv: _Server) -> None:
             raise ValueError(why)
         sys.stdout.flush()
         sys.stderr.flush()
+        # the caller's signals wait (blocked) until the fork has its own handlers: none is
+        # taken by this process's handlers, copied into the fork
+        signal.pthread_sigmask(signal.SIG_BLOCK, FORWARDED)
         pid = os.fork()
         if pid == 0:
             _run_command(req, fds, [*srv.sockets(), conn])
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, FORWARDED)
         print(f"pid {pid}: {command}", flush=True)
         conn.sendall(json.dumps({"pid": pid}).encode() + b"\n")
     except (OSError, ValueError, KeyError, TypeError):
@@ -392,10 +411,7 @@ def _caller_left(srv: _Server, pid: int, conn: Any) -> None:
     """A caller's socket turned readable: it is gone (killed without passing a signal on);
     its command gets SIGTERM, as Snakemake cancels a job."""
     srv.selector.unregister(conn)
-    try:
-        os.killpg(pid, signal.SIGTERM)
-    except (ProcessLookupError, PermissionError):
-        pass
+    _signal_command(pid, signal.SIGTERM)
 
 
 def _reap(srv: _Server) -> None:
@@ -434,6 +450,7 @@ def _run_command(req: dict[str, Any], fds: list[int], sockets: list[socket.socke
         for sig in (signal.SIGCHLD, signal.SIGTERM, signal.SIGHUP, signal.SIGQUIT):
             signal.signal(sig, signal.SIG_DFL)
         signal.signal(signal.SIGINT, signal.default_int_handler)
+        signal.pthread_sigmask(signal.SIG_UNBLOCK, FORWARDED)  # blocked across the fork
         for s in sockets:
             s.close()
         os.setsid()
@@ -552,21 +569,17 @@ class WarmProcess:
         return self.socket.exists()
 
 
-def switched_on(env: dict[str, str] | None = None) -> bool:
-    """Whether ``$SSW_WARM_START`` (default: on) lets a run start a warm process.
-
-    Parameters
-    ----------
-    env : dict, optional
-        The environment (default ``os.environ``).
+def switched_on() -> bool:
+    """Whether this process may start a warm process: on POSIX (it forks and passes file
+    descriptors), unless ``$SSW_WARM_START`` is 0, off, no or false.
 
     Returns
     -------
     bool
-        False when the variable is 0, off, no or false.
+        Whether it may.
     """
-    value = (os.environ if env is None else env).get(SWITCH_ENV, "")
-    return value.strip().lower() not in ("0", "off", "no", "false")
+    value = os.environ.get(SWITCH_ENV, "")
+    return os.name == "posix" and value.strip().lower() not in ("0", "off", "no", "false")
 
 
 def start(env: dict[str, str], log: Path, cwd: Path | None = None) -> WarmProcess:
@@ -679,7 +692,7 @@ def start_for(workflow: Any, pythonpath: str, log: Path) -> WarmProcess | None:
     remote = bool(getattr(workflow, "remote_exec", False)
                   or getattr(workflow, "subprocess_exec", False))
     idle = bool(getattr(workflow, "touch", False) or getattr(workflow, "dryrun", False))
-    if not local or remote or idle or not switched_on() or os.name != "posix":
+    if not local or remote or idle or not switched_on():
         return None
     given = os.environ.get(SOCKET_ENV)
     if given and os.path.isdir(os.path.dirname(given)):
@@ -709,7 +722,7 @@ def run_with(command: list[str], log: Path) -> int:
     import subprocess
 
     warm = None
-    if switched_on() and os.name == "posix":
+    if switched_on():
         root = os.path.realpath(os.getcwd())
         warm = start({**os.environ, "PYTHONPATH": job_pythonpath(root), **ONE_THREAD_ENV},
                      log)

@@ -21,8 +21,10 @@ TOF = ["tof", "--soil-E", "50e6", "--soil-nu", "0.3", "--calibration", "none", "
 
 
 def _env(**extra: str) -> dict[str, str]:
+    # no disk cache: every command builds its operators itself, whatever other runs left in
+    # ~/.cache/ssw or write there meanwhile
     env = {k: v for k, v in os.environ.items() if k != warmstart.SOCKET_ENV}
-    return {**env, **warmstart.ONE_THREAD_ENV, **extra}
+    return {**env, **warmstart.ONE_THREAD_ENV, "SSW_CACHE_DIR": "none", **extra}
 
 
 @pytest.fixture
@@ -56,8 +58,8 @@ def test_a_forked_command_prints_and_exits_as_a_fresh_process(warm, tmp_path):
     cold = _ssw(TOF, tmp_path, None)
     hot = _ssw(TOF, tmp_path, warm.socket)
     assert cold.returncode == hot.returncode == 0, cold.stderr + hot.stderr
-    assert hot.stdout == cold.stdout and '"tof"' in hot.stdout
-    assert hot.stderr == cold.stderr
+    assert hot.stdout == cold.stdout and '"tof"' in hot.stdout, (cold.stdout, hot.stdout)
+    assert hot.stderr == cold.stderr, (cold.stderr, hot.stderr)
     bad = tmp_path / "bad.yaml"
     bad.write_text("sets: {s: {plate_thickness: {values: [-0.4e-3]}}}\n")
     args = ["check-config", "--config", str(bad)]
@@ -100,8 +102,19 @@ def _long_command(warm, tmp_path: Path) -> tuple[subprocess.Popen, int]:
     while not _served(tmp_path / "warm.log"):
         assert time.monotonic() < end and caller.poll() is None, "the command was not served"
         time.sleep(0.02)
-    time.sleep(0.5)  # past the command's start: its SIGTERM handler is in place
-    return caller, int(_served(tmp_path / "warm.log")[0].split()[1].rstrip(":"))
+    pid = int(_served(tmp_path / "warm.log")[0].split()[1].rstrip(":"))
+    while not _running_ssw(pid):  # past the command's start: ssw.cli's handler is set
+        assert time.monotonic() < end and caller.poll() is None, "the command did not start"
+        time.sleep(0.02)
+    return caller, pid
+
+
+def _running_ssw(pid: int) -> bool:
+    """Whether the fork ``pid`` runs its command: SIGCHLD back to its default (the warm
+    process's handler gone) and SIGTERM caught (``ssw.cli``'s), from its ``SigCgt`` mask."""
+    status = Path(f"/proc/{pid}/status").read_text()
+    mask = int(next(x for x in status.splitlines() if x.startswith("SigCgt:")).split()[1], 16)
+    return bool(mask >> (signal.SIGTERM - 1) & 1) and not mask >> (signal.SIGCHLD - 1) & 1
 
 
 def _ends(pid: int, timeout_s: float = 30.0) -> bool:
@@ -124,6 +137,22 @@ def test_sigterm_to_the_caller_interrupts_the_command(warm, tmp_path):
     assert caller.returncode == 130, err
     assert "ssw tof: interrupted" in err
     assert _ends(pid)
+
+
+def test_a_sigterm_as_the_command_starts_is_never_lost(warm, tmp_path):
+    """SIGTERM the moment the fork exists: it dies by it (before ``ssw.cli``'s handler) or
+    unwinds (after), never runs on as if it had not come."""
+    caller = subprocess.Popen(
+        [sys.executable, "-m", "ssw", *TOF[:-1], "--steps-per-contact", "200000"],
+        cwd=tmp_path, env=_env(**{warmstart.SOCKET_ENV: str(warm.socket)}),
+        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
+    end = time.monotonic() + 60
+    while not _served(tmp_path / "warm.log"):
+        assert time.monotonic() < end and caller.poll() is None, "the command was not served"
+        time.sleep(0.001)
+    caller.send_signal(signal.SIGTERM)
+    caller.communicate(timeout=60)
+    assert caller.returncode in (130, -signal.SIGTERM)
 
 
 def test_a_killed_caller_takes_its_command_with_it(warm, tmp_path):
@@ -183,7 +212,8 @@ def test_a_run_with_a_warm_process_beside_it(tmp_path):
 
 def test_a_run_adopts_the_warm_process_it_was_given(tmp_path, monkeypatch):
     """The workflow's ``onstart`` (``start_for``) starts none when the run inherited one,
-    nor for a dry run or a cluster; else one, which ``stop_all`` ends."""
+    nor for a dry run or a cluster, nor under ``SSW_WARM_START=off``; else one, which
+    ``stop_all`` ends."""
 
     class Run:
         local_exec, remote_exec, subprocess_exec, touch, dryrun = True, False, False, False, False
@@ -193,6 +223,9 @@ def test_a_run_adopts_the_warm_process_it_was_given(tmp_path, monkeypatch):
         run = Run()
         setattr(run, attr, value)
         assert warmstart.start_for(run, "", tmp_path / "log") is None
+    monkeypatch.setenv(warmstart.SWITCH_ENV, "off")
+    assert warmstart.start_for(Run(), "", tmp_path / "log") is None
+    monkeypatch.delenv(warmstart.SWITCH_ENV)
     monkeypatch.setenv(warmstart.SOCKET_ENV, str(tmp_path / "socket"))
     assert warmstart.start_for(Run(), "", tmp_path / "log") is None
     monkeypatch.delenv(warmstart.SOCKET_ENV)

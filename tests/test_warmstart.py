@@ -91,9 +91,10 @@ def test_without_a_warm_process_a_command_runs_by_itself(tmp_path):
     assert r.returncode == 0 and r.stdout == ref.stdout
 
 
-def _long_command(warm, tmp_path: Path) -> tuple[subprocess.Popen, int]:
-    """A served command that runs for minutes (a TOF at 200,000 steps per contact), and
-    its pid."""
+def _long_command(warm, tmp_path: Path, started: bool = True
+                  ) -> tuple[subprocess.Popen, int]:
+    """A served command that runs for minutes (a TOF at 200,000 steps per contact), and its
+    pid, once forked (``started``: once it runs ``ssw.cli``, its SIGTERM handler set)."""
     caller = subprocess.Popen(
         [sys.executable, "-m", "ssw", *TOF[:-1], "--steps-per-contact", "200000"],
         cwd=tmp_path, env=_env(**{warmstart.SOCKET_ENV: str(warm.socket)}),
@@ -101,9 +102,9 @@ def _long_command(warm, tmp_path: Path) -> tuple[subprocess.Popen, int]:
     end = time.monotonic() + 60
     while not _served(tmp_path / "warm.log"):
         assert time.monotonic() < end and caller.poll() is None, "the command was not served"
-        time.sleep(0.02)
+        time.sleep(0.001)
     pid = int(_served(tmp_path / "warm.log")[0].split()[1].rstrip(":"))
-    while not _running_ssw(pid):  # past the command's start: ssw.cli's handler is set
+    while started and not _running_ssw(pid):
         assert time.monotonic() < end and caller.poll() is None, "the command did not start"
         time.sleep(0.02)
     return caller, pid
@@ -142,14 +143,7 @@ def test_sigterm_to_the_caller_interrupts_the_command(warm, tmp_path):
 def test_a_sigterm_as_the_command_starts_is_never_lost(warm, tmp_path):
     """SIGTERM the moment the fork exists: it dies by it (before ``ssw.cli``'s handler) or
     unwinds (after), never runs on as if it had not come."""
-    caller = subprocess.Popen(
-        [sys.executable, "-m", "ssw", *TOF[:-1], "--steps-per-contact", "200000"],
-        cwd=tmp_path, env=_env(**{warmstart.SOCKET_ENV: str(warm.socket)}),
-        stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True)
-    end = time.monotonic() + 60
-    while not _served(tmp_path / "warm.log"):
-        assert time.monotonic() < end and caller.poll() is None, "the command was not served"
-        time.sleep(0.001)
+    caller, _ = _long_command(warm, tmp_path, started=False)
     caller.send_signal(signal.SIGTERM)
     caller.communicate(timeout=60)
     assert caller.returncode in (130, -signal.SIGTERM)

@@ -3,7 +3,7 @@ when one serves it (:mod:`ssw.warmstart`), else here."""
 
 import os
 
-if os.environ.get("SSW_WARM_SOCKET"):
+if os.environ.get("SSW_WARM_SOCKET"):  # ssw.warmstart.SOCKET_ENV, read before importing it
     from ssw.warmstart import request
 
     _status = request()

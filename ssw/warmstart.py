@@ -546,28 +546,6 @@ class WarmProcess:
     def __init__(self, process: subprocess.Popen, folder: Path, socket: Path) -> None:
         self.process, self.folder, self.socket = process, folder, socket
 
-    def wait_ready(self, timeout_s: float = 60.0) -> bool:
-        """Wait until the process listens (its imports done) or ends.
-
-        Parameters
-        ----------
-        timeout_s : float
-            Seconds to wait at most.
-
-        Returns
-        -------
-        bool
-            Whether it listens.
-        """
-        import time
-
-        end = time.monotonic() + timeout_s
-        while time.monotonic() < end and self.process.poll() is None:
-            if self.socket.exists():
-                return True
-            time.sleep(0.02)
-        return self.socket.exists()
-
 
 def switched_on() -> bool:
     """Whether this process may start a warm process: on POSIX (it forks and passes file
@@ -651,9 +629,11 @@ def stop(warm: WarmProcess, timeout_s: float = 10.0) -> None:
 _RUNNING: list[WarmProcess] = []
 
 
-def job_pythonpath(root: str) -> str:
-    """The ``PYTHONPATH`` of the workflow's jobs: the repository, then this process's own
-    (what the rules' shell prefix exports, ``workflow/rules/common.smk``).
+def job_env(root: str) -> dict[str, str]:
+    """The environment of the workflow's jobs, as far as their fingerprint reads it: this
+    process's, with the repository first on ``PYTHONPATH`` (what the rules' shell prefix
+    exports, ``workflow/rules/common.smk``) and Snakemake's thread counts of a one-thread
+    job (:data:`ONE_THREAD_ENV`).
 
     Parameters
     ----------
@@ -662,13 +642,14 @@ def job_pythonpath(root: str) -> str:
 
     Returns
     -------
-    str
-        The path list.
+    dict
+        The environment.
     """
-    return os.pathsep.join([root, *filter(None, [os.environ.get("PYTHONPATH")])])
+    path = os.pathsep.join([root, *filter(None, [os.environ.get("PYTHONPATH")])])
+    return {**os.environ, "PYTHONPATH": path, **ONE_THREAD_ENV}
 
 
-def start_for(workflow: Any, pythonpath: str, log: Path) -> WarmProcess | None:
+def start_for(workflow: Any, root: str, log: Path) -> WarmProcess | None:
     """Start the warm process of a Snakemake run when its jobs run on this machine (not on
     a cluster, nor a touch or a dry run), ``$SSW_WARM_START`` allows, and no warm process
     was started for it already (by :func:`run_with`, whose ``$SSW_WARM_SOCKET`` the run
@@ -678,8 +659,8 @@ def start_for(workflow: Any, pythonpath: str, log: Path) -> WarmProcess | None:
     ----------
     workflow : snakemake.workflow.Workflow
         The run.
-    pythonpath : str
-        The ``PYTHONPATH`` its jobs run with (:func:`job_pythonpath`).
+    root : str
+        The repository (resolved), first on its jobs' ``PYTHONPATH`` (:func:`job_env`).
     log : Path
         File of the warm process's messages.
 
@@ -697,7 +678,7 @@ def start_for(workflow: Any, pythonpath: str, log: Path) -> WarmProcess | None:
     given = os.environ.get(SOCKET_ENV)
     if given and os.path.isdir(os.path.dirname(given)):
         return None
-    warm = start({**os.environ, "PYTHONPATH": pythonpath, **ONE_THREAD_ENV}, log)
+    warm = start(job_env(root), log)
     _RUNNING.append(warm)
     return warm
 
@@ -721,11 +702,7 @@ def run_with(command: list[str], log: Path) -> int:
     """
     import subprocess
 
-    warm = None
-    if switched_on():
-        root = os.path.realpath(os.getcwd())
-        warm = start({**os.environ, "PYTHONPATH": job_pythonpath(root), **ONE_THREAD_ENV},
-                     log)
+    warm = start(job_env(os.path.realpath(os.getcwd())), log) if switched_on() else None
     try:
         proc = subprocess.Popen(command)
         while True:

@@ -73,9 +73,7 @@ onstart:
     # Jobs on this machine: their `python -m ssw` forks a process that has already imported
     # ssw and its libraries (ssw.warmstart; SSW_WARM_START=0 turns it off), this run's own
     # unless `make study` started one beside Snakemake.
-    sswwarm.start_for(
-        workflow, sswwarm.job_pythonpath(str(REPO)), Path(LOGS) / "warm-start.log"
-    )
+    sswwarm.start_for(workflow, str(REPO), Path(LOGS) / "warm-start.log")
 
 
 # Once the last job is done: the warm process ends, and no timer of the scheduler holds the

@@ -223,7 +223,7 @@ uvpip() { "$VENV/bin/uv" pip "$1" --quiet --python "$VENV/bin/python" "${@:2}"; 
 
 if [ "$ROUTE" = binary ]; then
   log "installing ssw, its pinned dependencies and the binary PETSc stack"
-  uvpip install --compile-bytecode "${C[@]}" pip -e ".[dev,petsc]"
+  uvpip install --compile-bytecode "${C[@]}" pip -e ".[dev,petsc,study]"
   install_petsc_first
 else
   # The three builds go through pip, whose wheel cache keeps the built PETSc for the next
@@ -245,7 +245,7 @@ else
     MPICC="$MPICC" pip install "${C[@]}" --no-binary=mpi4py mpi4py
   fi
   log "installing ssw and its pinned dependencies"
-  uvpip install --compile-bytecode "${C[@]}" -e ".[dev]"
+  uvpip install --compile-bytecode "${C[@]}" -e ".[dev,study]"
 fi
 
 check_imports || {

@@ -39,7 +39,8 @@ def _pins() -> dict[str, str]:
 
 def _runtime(route: str) -> set[str]:
     meta = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
-    names = [*meta["dependencies"], *meta["optional-dependencies"][ROUTE_EXTRAS[route]]]
+    extras = meta["optional-dependencies"]
+    names = [*meta["dependencies"], *extras["study"], *extras[ROUTE_EXTRAS[route]]]
     return {re.split(r"[<>=\[ ;]", n)[0].lower() for n in names}
 
 

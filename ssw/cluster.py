@@ -19,6 +19,12 @@ while the run goes (the workflow's ``onstart`` handler, ``workflow/rules/common.
   settings are switched to it) or stops at once naming the flag; :class:`LostJobsWatch`
   stops a run whose jobs Slurm no longer shows as queued or running while Snakemake still
   waits for them.
+* **A job that pends forever.** A partition that never schedules it, a constraint no node
+  has, a hold: Slurm keeps it ``PENDING``, and every check above sees a queued job. The
+  same watch reports a job pending longer than its limit, with the reason ``squeue`` gives,
+  then stops the run or waits, reporting again after each further limit
+  (:class:`PendingWatch`; the job resources ``ssw_pending_s`` and ``ssw_on_pending``,
+  :func:`pending_limit`, which the SLURM profile sets).
 
 The plugin's behaviour quoted here is that of its version pinned in ``constraints.txt``
 (``snakemake_executor_plugin_slurm/__init__.py``, ``Executor.check_active_jobs``).
@@ -66,6 +72,19 @@ ACTIVE_STATES = frozenset({
     "REQUEUE_FED", "REQUEUE_HOLD", "RESIZING", "SIGNALING", "STAGE_OUT", "STOPPED",
     "RESV_DEL_HOLD",
 })
+
+#: s, how long a job may pend before it is reported (job resource ``ssw_pending_s``: the
+#: SLURM profile's ``default-resources``, a rule's ``set-resources``): an hour, long beside
+#: the study's jobs (1-2 CPUs and 1-2 GB for minutes, which a cluster's backfill starts
+#: soon) and short beside a run left alone overnight.
+PENDING_LIMIT_S = 3600.0
+#: What a run does with a job pending beyond its limit (job resource ``ssw_on_pending``):
+#: ``stop`` the run (outputs of finished jobs are kept), or ``wait`` for the job, reporting
+#: it again after each further limit. Either way the report names the job, how long it has
+#: pended and the reason ``squeue`` gives.
+PENDING_ACTIONS = ("stop", "wait")
+#: The default of ``ssw_on_pending``.
+ON_PENDING = "stop"
 
 #: Seconds between two looks of :func:`watch_lost_jobs` at the run's jobs (environment
 #: ``SSW_SLURM_WATCH_POLL_S``: :func:`slurm_timing`).
@@ -423,9 +442,32 @@ def short_job_age(cluster: SlurmConfig, status: str,
             "(ssw.cluster.LostJobsWatch). Ask for MinJobAge >= 300 s.")
 
 
+def parse_job_lines(text: str) -> dict[str, tuple[str, str]]:
+    """Job id -> (state, reason) in ``ID|STATE[|REASON]`` lines (:func:`squeue_command`;
+    ``squeue -o '%i|%T'``, ``sacct --parsable2 -o JobIdRaw,State``).
+
+    Parameters
+    ----------
+    text : str
+        The command's output.
+
+    Returns
+    -------
+    dict[str, tuple[str, str]]
+        The state's first word (``sacct`` writes ``CANCELLED by 0``), upper case, and the
+        reason as given (``""`` when the line has none).
+    """
+    out = {}
+    for line in text.splitlines():
+        jid, _, rest = line.partition("|")
+        state, _, reason = rest.partition("|")
+        if jid.strip() and state.strip():
+            out[jid.strip()] = (state.split()[0].upper(), reason.strip())
+    return out
+
+
 def parse_job_states(text: str) -> dict[str, str]:
-    """Job id -> state in ``ID|STATE`` lines (``squeue -o '%i|%T'``, ``sacct --parsable2
-    -o JobIdRaw,State``).
+    """Job id -> state in ``ID|STATE[|REASON]`` lines (:func:`parse_job_lines`).
 
     Parameters
     ----------
@@ -435,14 +477,152 @@ def parse_job_states(text: str) -> dict[str, str]:
     Returns
     -------
     dict[str, str]
-        The state's first word (``sacct`` writes ``CANCELLED by 0``), upper case.
+        The state's first word, upper case.
     """
-    out = {}
-    for line in text.splitlines():
-        jid, sep, state = line.partition("|")
-        if sep and jid.strip() and state.strip():
-            out[jid.strip()] = state.split()[0].upper()
-    return out
+    return {jid: state for jid, (state, _) in parse_job_lines(text).items()}
+
+
+def squeue_command(run_id: str) -> list[str]:
+    """The ``squeue`` query of a run's jobs: id, state and Slurm's reason for the state.
+
+    Parameters
+    ----------
+    run_id : str
+        The run's Slurm job name (the executor plugin names every job of a run by its run
+        ID).
+
+    Returns
+    -------
+    list[str]
+        The command and its arguments (``ID|STATE|REASON`` lines, every state).
+    """
+    return ["squeue", "--format=%i|%T|%r", "--states=all", "--noheader", "--name", run_id]
+
+
+@dataclass(frozen=True)
+class PendingLimit:
+    """How long a job may pend, and what its run does then.
+
+    Attributes
+    ----------
+    limit_s : float
+        s, the time after which the job is reported.
+    action : str
+        ``stop`` (the run stops) or ``wait`` (the run waits, the job is reported again
+        after each further ``limit_s``).
+    """
+
+    limit_s: float
+    action: str
+
+
+def pending_limit(resources: Mapping[str, Any]) -> PendingLimit:
+    """A job's :class:`PendingLimit` from its resources (``ssw_pending_s``, s;
+    ``ssw_on_pending``, ``stop`` or ``wait``), the defaults :data:`PENDING_LIMIT_S` and
+    :data:`ON_PENDING` where they are not set.
+
+    Parameters
+    ----------
+    resources : Mapping[str, Any]
+        The job's resources (Snakemake's ``default-resources`` and ``set-resources``).
+
+    Returns
+    -------
+    PendingLimit
+        The job's limit and action.
+
+    Raises
+    ------
+    ConfigError
+        A limit that is not a positive number of seconds, or an action other than
+        :data:`PENDING_ACTIONS`.
+    """
+    raw = resources.get("ssw_pending_s")
+    try:
+        limit = PENDING_LIMIT_S if raw is None else float(raw)
+    except (TypeError, ValueError):
+        limit = float("nan")
+    if not 0 < limit < float("inf"):
+        raise ConfigError("resources ssw_pending_s", raw,
+                          f"a positive number of seconds a job may pend before it is "
+                          f"reported (default {PENDING_LIMIT_S:g}; the SLURM profile's "
+                          "default-resources, or --set-resources RULE:ssw_pending_s=...)")
+    action = str(resources.get("ssw_on_pending") or ON_PENDING).strip().strip("'\"")
+    if action not in PENDING_ACTIONS:
+        raise ConfigError("resources ssw_on_pending", action,
+                          f"{' or '.join(PENDING_ACTIONS)}: what the run does with a job "
+                          "pending beyond ssw_pending_s (the SLURM profile's "
+                          "default-resources, or --set-resources RULE:ssw_on_pending=...)")
+    return PendingLimit(limit, action)
+
+
+@dataclass
+class PendingWatch:
+    """Reports the jobs of a run that pend longer than their :class:`PendingLimit`, with the
+    reason ``squeue`` gives (``PartitionConfig``, ``ReqNodeNotAvail``, ``JobHeldUser``,
+    ``Priority``, ``Resources``, ...).
+
+    A job counts as pending from the first look that sees it ``PENDING``; a look that sees
+    it in any other state forgets it. Past its limit a job whose action is ``stop`` stops
+    the run; one whose action is ``wait`` is reported, and again after each further limit.
+    """
+
+    _since: dict[str, float] = field(default_factory=dict, repr=False)
+    _reported: dict[str, float] = field(default_factory=dict, repr=False)
+
+    def step(self, now: float, jobs: Mapping[str, tuple[str, str]],
+             limits: Mapping[str, tuple[str, PendingLimit]]) -> tuple[str | None, str | None]:
+        """Take one look.
+
+        Parameters
+        ----------
+        now : float
+            A monotonic clock, s.
+        jobs : Mapping[str, tuple[str, str]]
+            Slurm job id -> (state, reason) of the run's jobs (:func:`parse_job_lines`).
+        limits : Mapping[str, tuple[str, PendingLimit]]
+            Slurm job id -> (the job's name in the run, its limit); a job missing here is
+            named by its id and gets the defaults.
+
+        Returns
+        -------
+        tuple[str | None, str | None]
+            The message that stops the run (jobs past their limit whose action is
+            ``stop``), and the report of the jobs past their limit whose action is
+            ``wait`` (due now); None where there is none.
+        """
+        pending = {j for j, (state, _) in jobs.items() if state == "PENDING"}
+        for gone in set(self._since) - pending:
+            self._since.pop(gone, None)
+            self._reported.pop(gone, None)
+        stop, wait = [], []
+        for jid in sorted(pending):
+            since = self._since.setdefault(jid, now)
+            name, limit = limits.get(jid, (f"Slurm job {jid}",
+                                           PendingLimit(PENDING_LIMIT_S, ON_PENDING)))
+            last = self._reported.get(jid, since)
+            if now - since < limit.limit_s or now - last < limit.limit_s:
+                continue
+            reason = jobs[jid][1] or "none given"
+            what = (f"{name} (Slurm job {jid}) pending for {now - since:.0f} s, limit "
+                    f"{limit.limit_s:g} s, squeue's reason: {reason}")
+            if limit.action == "stop":
+                stop.append(what)
+            else:
+                self._reported[jid] = now
+                wait.append(what)
+        stop_msg = None if not stop else (
+            f"{len(stop)} cluster job(s) pend beyond their limit: {'; '.join(stop)}. Slurm "
+            "does not start them (the reason: squeue -j JOBID -o %r; scontrol show job "
+            "JOBID for the whole story: a partition or a constraint no node offers, a hold, "
+            "a node down, or a long queue). The run stops (resources ssw_on_pending=stop; "
+            "ssw_on_pending=wait waits, ssw_pending_s sets the limit). Outputs of finished "
+            "jobs are kept; run the same command again to redo the rest.")
+        wait_msg = None if not wait else (
+            f"{len(wait)} cluster job(s) pend beyond their limit: {'; '.join(wait)}. The "
+            "run waits for them (resources ssw_on_pending=wait) and reports them again "
+            "after each further limit.")
+        return stop_msg, wait_msg
 
 
 @dataclass
@@ -587,18 +767,22 @@ def slurm_timing(environ: Mapping[str, str]) -> SlurmTiming:
     return SlurmTiming(vanish_s, poll_s, min(pause_s, PLUGIN_MAX_STATUS_INTERVAL_S))
 
 
-def watch_lost_jobs(query: Callable[[], Mapping[str, str] | None],
+def watch_lost_jobs(query: Callable[[], Mapping[str, tuple[str, str]] | None],
                     waiting: Callable[[], Sequence[str]],
                     on_lost: Callable[[str], None], stall_s: float,
-                    vanish_s: float = VANISH_GRACE_S, poll_s: float = WATCH_POLL_S) -> Any:
+                    vanish_s: float = VANISH_GRACE_S, poll_s: float = WATCH_POLL_S,
+                    limits: Callable[[], Mapping[str, tuple[str, PendingLimit]]] | None = None,
+                    on_note: Callable[[str], None] | None = None) -> Any:
     """Start a daemon thread that calls ``on_lost`` once when a run's jobs are lost
-    (:class:`LostJobsWatch`).
+    (:class:`LostJobsWatch`) or pend beyond their limit with the action ``stop``
+    (:class:`PendingWatch`), and ``on_note`` with each report of jobs pending beyond their
+    limit with the action ``wait``.
 
     Parameters
     ----------
-    query : Callable[[], Mapping[str, str] | None]
-        Job id -> state of the run's jobs as the controller lists them (the executor
-        plugin's ``squeue`` query; None when the query fails).
+    query : Callable[[], Mapping[str, tuple[str, str]] | None]
+        Job id -> (state, reason) of the run's jobs as the controller lists them
+        (:func:`squeue_command`, :func:`query_jobs`; None when the query fails).
     waiting : Callable[[], Sequence[str]]
         The cluster jobs Snakemake waits for.
     on_lost : Callable[[str], None]
@@ -609,6 +793,12 @@ def watch_lost_jobs(query: Callable[[], Mapping[str, str] | None],
         ``LostJobsWatch.vanish_s``, s.
     poll_s : float
         Seconds between two looks.
+    limits : Callable[[], Mapping[str, tuple[str, PendingLimit]]] or None
+        Slurm job id -> (job name, :class:`PendingLimit`) of the run's submitted jobs
+        (None: every job gets the defaults). A ConfigError it raises (a job's limit that
+        is not allowed) is passed to ``on_lost``.
+    on_note : Callable[[str], None] or None
+        Called with each report of the ``wait`` action (None: not reported).
 
     Returns
     -------
@@ -619,15 +809,30 @@ def watch_lost_jobs(query: Callable[[], Mapping[str, str] | None],
     import time
 
     watch = LostJobsWatch(vanish_s, stall_s)
+    pending = PendingWatch()
 
     def loop() -> None:
         while True:
             time.sleep(poll_s)
             try:
-                jobs = list(waiting())
+                names = list(waiting())
             except RuntimeError:  # Snakemake changed its set of running jobs meanwhile
                 continue
-            msg = watch.step(time.monotonic(), jobs, query() if jobs else {})
+            jobs = query() if names else {}
+            now = time.monotonic()
+            if jobs:
+                try:
+                    stop, note = pending.step(now, jobs, limits() if limits else {})
+                except ConfigError as exc:
+                    on_lost(str(exc))
+                    return
+                if stop is not None:
+                    on_lost(stop)
+                    return
+                if note is not None and on_note is not None:
+                    on_note(note)
+            states = None if jobs is None else {j: st for j, (st, _) in jobs.items()}
+            msg = watch.step(now, names, states)
             if msg is not None:
                 on_lost(msg)
                 return
@@ -637,24 +842,22 @@ def watch_lost_jobs(query: Callable[[], Mapping[str, str] | None],
     return thread
 
 
-def query_states(command: str) -> dict[str, str] | None:
-    """Job id -> state from a status command (``ID|STATE`` lines); None when it fails.
+def query_jobs(command: Sequence[str]) -> dict[str, tuple[str, str]] | None:
+    """Job id -> (state, reason) from a status command (``ID|STATE[|REASON]`` lines, such as
+    :func:`squeue_command`'s); None when it fails.
 
     Parameters
     ----------
-    command : str
-        The command line (split with ``shlex.split``, run without a shell).
+    command : Sequence[str]
+        The command and its arguments (run without a shell).
 
     Returns
     -------
-    dict[str, str] or None
-        :func:`parse_job_states` of its output.
+    dict[str, tuple[str, str]] or None
+        :func:`parse_job_lines` of its output.
     """
-    import shlex
-
     try:
-        out = subprocess.run(shlex.split(command), capture_output=True, text=True,
-                             timeout=60)
+        out = subprocess.run(list(command), capture_output=True, text=True, timeout=60)
     except (OSError, subprocess.SubprocessError):
         return None
-    return parse_job_states(out.stdout) if out.returncode == 0 else None
+    return parse_job_lines(out.stdout) if out.returncode == 0 else None

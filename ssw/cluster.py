@@ -612,7 +612,8 @@ class PendingWatch:
                 self._reported[jid] = now
                 wait.append(what)
         stop_msg = None if not stop else (
-            f"{len(stop)} cluster job(s) pend beyond their limit: {'; '.join(stop)}. Slurm "
+            f"Cluster jobs pending beyond their limit: {len(stop)} job(s): "
+            f"{'; '.join(stop)}. Slurm "
             "does not start them (the reason: squeue -j JOBID -o %r; scontrol show job "
             "JOBID for the whole story: a partition or a constraint no node offers, a hold, "
             "a node down, or a long queue). The run stops (resources ssw_on_pending=stop; "
@@ -786,7 +787,8 @@ def watch_lost_jobs(query: Callable[[], Mapping[str, tuple[str, str]] | None],
     waiting : Callable[[], Sequence[str]]
         The cluster jobs Snakemake waits for.
     on_lost : Callable[[str], None]
-        Called with the message; the thread ends after it.
+        Called with the message that stops the run (``Lost cluster jobs: ...``, ``Cluster
+        jobs pending beyond their limit: ...``); the thread ends after it.
     stall_s : float
         ``LostJobsWatch.stall_s``, s.
     vanish_s : float
@@ -834,7 +836,7 @@ def watch_lost_jobs(query: Callable[[], Mapping[str, tuple[str, str]] | None],
             states = None if jobs is None else {j: st for j, (st, _) in jobs.items()}
             msg = watch.step(now, names, states)
             if msg is not None:
-                on_lost(msg)
+                on_lost(f"Lost cluster jobs: {msg}")
                 return
 
     thread = threading.Thread(target=loop, name="ssw-lost-jobs-watch", daemon=True)

@@ -692,7 +692,7 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
     def lost(message: str) -> None:
         from snakemake_interface_common.exceptions import WorkflowError
 
-        scheduler.executor_error_callback(WorkflowError(f"Lost cluster jobs: {message}"))
+        scheduler.executor_error_callback(WorkflowError(message))
 
     def note(message: str) -> None:
         from snakemake.logging import logger

@@ -23,8 +23,8 @@ while the run goes (the workflow's ``onstart`` handler, ``workflow/rules/common.
   has, a hold: Slurm keeps it ``PENDING``, and every check above sees a queued job. The
   same watch reports a job pending longer than its limit, with the reason ``squeue`` gives,
   then stops the run or waits, reporting again after each further limit
-  (:class:`PendingWatch`; the job resources ``ssw_pending_s`` and ``ssw_on_pending``,
-  :func:`pending_limit`, which the SLURM profile sets).
+  (:class:`ssw.pending.PendingWatch`; the job resources ``ssw_pending_s`` and
+  ``ssw_on_pending``, :func:`ssw.pending.pending_limit`, which the SLURM profile sets).
 
 The plugin's behaviour quoted here is that of its version pinned in ``constraints.txt``
 (``snakemake_executor_plugin_slurm/__init__.py``, ``Executor.check_active_jobs``).
@@ -40,6 +40,7 @@ from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 from ssw.errors import ConfigError, SswError
+from ssw.pending import PendingLimit, PendingWatch
 
 #: ``AccountingStorageType`` of a cluster without accounting storage (no ``sacct``).
 NO_ACCOUNTING = "accounting_storage/none"
@@ -72,19 +73,6 @@ ACTIVE_STATES = frozenset({
     "REQUEUE_FED", "REQUEUE_HOLD", "RESIZING", "SIGNALING", "STAGE_OUT", "STOPPED",
     "RESV_DEL_HOLD",
 })
-
-#: s, how long a job may pend before it is reported (job resource ``ssw_pending_s``: the
-#: SLURM profile's ``default-resources``, a rule's ``set-resources``): an hour, long beside
-#: the study's jobs (1-2 CPUs and 1-2 GB for minutes, which a cluster's backfill starts
-#: soon) and short beside a run left alone overnight.
-PENDING_LIMIT_S = 3600.0
-#: What a run does with a job pending beyond its limit (job resource ``ssw_on_pending``):
-#: ``stop`` the run (outputs of finished jobs are kept), or ``wait`` for the job, reporting
-#: it again after each further limit. Either way the report names the job, how long it has
-#: pended and the reason ``squeue`` gives.
-PENDING_ACTIONS = ("stop", "wait")
-#: The default of ``ssw_on_pending``.
-ON_PENDING = "stop"
 
 #: Seconds between two looks of :func:`watch_lost_jobs` at the run's jobs (environment
 #: ``SSW_SLURM_WATCH_POLL_S``: :func:`slurm_timing`).
@@ -499,133 +487,6 @@ def squeue_command(run_id: str) -> list[str]:
     return ["squeue", "--format=%i|%T|%r", "--states=all", "--noheader", "--name", run_id]
 
 
-@dataclass(frozen=True)
-class PendingLimit:
-    """How long a job may pend, and what its run does then.
-
-    Attributes
-    ----------
-    limit_s : float
-        s, the time after which the job is reported.
-    action : str
-        ``stop`` (the run stops) or ``wait`` (the run waits, the job is reported again
-        after each further ``limit_s``).
-    """
-
-    limit_s: float
-    action: str
-
-
-def pending_limit(resources: Mapping[str, Any]) -> PendingLimit:
-    """A job's :class:`PendingLimit` from its resources (``ssw_pending_s``, s;
-    ``ssw_on_pending``, ``stop`` or ``wait``), the defaults :data:`PENDING_LIMIT_S` and
-    :data:`ON_PENDING` where they are not set.
-
-    Parameters
-    ----------
-    resources : Mapping[str, Any]
-        The job's resources (Snakemake's ``default-resources`` and ``set-resources``).
-
-    Returns
-    -------
-    PendingLimit
-        The job's limit and action.
-
-    Raises
-    ------
-    ConfigError
-        A limit that is not a positive number of seconds, or an action other than
-        :data:`PENDING_ACTIONS`.
-    """
-    raw = resources.get("ssw_pending_s")
-    try:
-        limit = PENDING_LIMIT_S if raw is None else float(raw)
-    except (TypeError, ValueError):
-        limit = float("nan")
-    if not 0 < limit < float("inf"):
-        raise ConfigError("resources ssw_pending_s", raw,
-                          f"a positive number of seconds a job may pend before it is "
-                          f"reported (default {PENDING_LIMIT_S:g}; the SLURM profile's "
-                          "default-resources, or --set-resources RULE:ssw_pending_s=...)")
-    action = str(resources.get("ssw_on_pending") or ON_PENDING).strip().strip("'\"")
-    if action not in PENDING_ACTIONS:
-        raise ConfigError("resources ssw_on_pending", action,
-                          f"{' or '.join(PENDING_ACTIONS)}: what the run does with a job "
-                          "pending beyond ssw_pending_s (the SLURM profile's "
-                          "default-resources, or --set-resources RULE:ssw_on_pending=...)")
-    return PendingLimit(limit, action)
-
-
-@dataclass
-class PendingWatch:
-    """Reports the jobs of a run that pend longer than their :class:`PendingLimit`, with the
-    reason ``squeue`` gives (``PartitionConfig``, ``ReqNodeNotAvail``, ``JobHeldUser``,
-    ``Priority``, ``Resources``, ...).
-
-    A job counts as pending from the first look that sees it ``PENDING``; a look that sees
-    it in any other state forgets it. Past its limit a job whose action is ``stop`` stops
-    the run; one whose action is ``wait`` is reported, and again after each further limit.
-    """
-
-    _since: dict[str, float] = field(default_factory=dict, repr=False)
-    _reported: dict[str, float] = field(default_factory=dict, repr=False)
-
-    def step(self, now: float, jobs: Mapping[str, tuple[str, str]],
-             limits: Mapping[str, tuple[str, PendingLimit]]) -> tuple[str | None, str | None]:
-        """Take one look.
-
-        Parameters
-        ----------
-        now : float
-            A monotonic clock, s.
-        jobs : Mapping[str, tuple[str, str]]
-            Slurm job id -> (state, reason) of the run's jobs (:func:`parse_job_lines`).
-        limits : Mapping[str, tuple[str, PendingLimit]]
-            Slurm job id -> (the job's name in the run, its limit); a job missing here is
-            named by its id and gets the defaults.
-
-        Returns
-        -------
-        tuple[str | None, str | None]
-            The message that stops the run (jobs past their limit whose action is
-            ``stop``), and the report of the jobs past their limit whose action is
-            ``wait`` (due now); None where there is none.
-        """
-        pending = {j for j, (state, _) in jobs.items() if state == "PENDING"}
-        for gone in set(self._since) - pending:
-            self._since.pop(gone, None)
-            self._reported.pop(gone, None)
-        stop, wait = [], []
-        for jid in sorted(pending):
-            since = self._since.setdefault(jid, now)
-            name, limit = limits.get(jid, (f"Slurm job {jid}",
-                                           PendingLimit(PENDING_LIMIT_S, ON_PENDING)))
-            last = self._reported.get(jid, since)
-            if now - since < limit.limit_s or now - last < limit.limit_s:
-                continue
-            reason = jobs[jid][1] or "none given"
-            what = (f"{name} (Slurm job {jid}) pending for {now - since:.0f} s, limit "
-                    f"{limit.limit_s:g} s, squeue's reason: {reason}")
-            if limit.action == "stop":
-                stop.append(what)
-            else:
-                self._reported[jid] = now
-                wait.append(what)
-        stop_msg = None if not stop else (
-            f"Cluster jobs pending beyond their limit: {len(stop)} job(s): "
-            f"{'; '.join(stop)}. Slurm "
-            "does not start them (the reason: squeue -j JOBID -o %r; scontrol show job "
-            "JOBID for the whole story: a partition or a constraint no node offers, a hold, "
-            "a node down, or a long queue). The run stops (resources ssw_on_pending=stop; "
-            "ssw_on_pending=wait waits, ssw_pending_s sets the limit). Outputs of finished "
-            "jobs are kept; run the same command again to redo the rest.")
-        wait_msg = None if not wait else (
-            f"{len(wait)} cluster job(s) pend beyond their limit: {'; '.join(wait)}. The "
-            "run waits for them (resources ssw_on_pending=wait) and reports them again "
-            "after each further limit.")
-        return stop_msg, wait_msg
-
-
 @dataclass
 class LostJobsWatch:
     """Decides when a run's cluster jobs are lost: Snakemake waits for jobs, and Slurm
@@ -776,8 +637,8 @@ def watch_lost_jobs(query: Callable[[], Mapping[str, tuple[str, str]] | None],
                     on_note: Callable[[str], None] | None = None) -> Any:
     """Start a daemon thread that calls ``on_lost`` once when a run's jobs are lost
     (:class:`LostJobsWatch`) or pend beyond their limit with the action ``stop``
-    (:class:`PendingWatch`), and ``on_note`` with each report of jobs pending beyond their
-    limit with the action ``wait``.
+    (:class:`ssw.pending.PendingWatch`), and ``on_note`` with each report of jobs pending
+    beyond their limit with the action ``wait``.
 
     Parameters
     ----------
@@ -796,7 +657,7 @@ def watch_lost_jobs(query: Callable[[], Mapping[str, tuple[str, str]] | None],
     poll_s : float
         Seconds between two looks.
     limits : Callable[[], Mapping[str, tuple[str, PendingLimit]]] or None
-        Slurm job id -> (job name, :class:`PendingLimit`) of the run's submitted jobs
+        Slurm job id -> (job name, :class:`ssw.pending.PendingLimit`) of the run's jobs
         (None: every job gets the defaults). A ConfigError it raises (a job's limit that
         is not allowed) is passed to ``on_lost``.
     on_note : Callable[[str], None] or None

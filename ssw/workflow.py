@@ -639,6 +639,7 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
     import shutil
 
     from ssw import cluster
+    from ssw.pending import pending_limit
 
     notes = []
     settings = workflow.executor_settings
@@ -683,7 +684,7 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
         # the jobs submitted so far (the plugin empties its list while a status query runs:
         # what was known stays known)
         known.update({str(info.external_jobid): (_job_name(info.job),
-                                                 cluster.pending_limit(info.job.resources))
+                                                 pending_limit(info.job.resources))
                       for info in list(getattr(executor, "active_jobs", ()))
                       if info.external_jobid is not None and str(info.external_jobid)
                       not in known})

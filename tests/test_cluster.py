@@ -8,6 +8,7 @@ import time
 import pytest
 
 from ssw import cluster as cl
+from ssw import pending as pd
 from ssw.errors import ConfigError, SswError
 
 # `scontrol show config` of scripts/slurm-local.sh's cluster (Slurm 22.05), abridged.
@@ -90,16 +91,16 @@ def test_job_states_are_parsed_from_squeue_and_sacct():
 
 
 def test_a_jobs_pending_limit_comes_from_its_resources_or_the_defaults():
-    assert cl.pending_limit({}) == cl.PendingLimit(cl.PENDING_LIMIT_S, cl.ON_PENDING)
-    assert (cl.PENDING_LIMIT_S, cl.ON_PENDING) == (3600.0, "stop")
-    assert cl.pending_limit({"ssw_pending_s": 90, "ssw_on_pending": "wait"}) == \
-        cl.PendingLimit(90.0, "wait")
-    assert cl.pending_limit({"ssw_on_pending": "'wait'"}).action == "wait"
+    assert pd.pending_limit({}) == pd.PendingLimit(pd.PENDING_LIMIT_S, pd.ON_PENDING)
+    assert (pd.PENDING_LIMIT_S, pd.ON_PENDING) == (3600.0, "stop")
+    assert pd.pending_limit({"ssw_pending_s": 90, "ssw_on_pending": "wait"}) == \
+        pd.PendingLimit(90.0, "wait")
+    assert pd.pending_limit({"ssw_on_pending": "'wait'"}).action == "wait"
     for res, field in [({"ssw_pending_s": 0}, "resources ssw_pending_s"),
                        ({"ssw_pending_s": "soon"}, "resources ssw_pending_s"),
                        ({"ssw_on_pending": "retry"}, "resources ssw_on_pending")]:
         with pytest.raises(ConfigError) as err:
-            cl.pending_limit(res)
+            pd.pending_limit(res)
         assert err.value.field == field and "--set-resources" in str(err.value)
 
 
@@ -107,8 +108,8 @@ HELD = {"7": ("PENDING", "JobHeldUser"), "8": ("RUNNING", "None")}
 
 
 def test_a_job_pending_beyond_its_limit_stops_the_run_with_squeues_reason():
-    watch = cl.PendingWatch()
-    limits = {"7": ("slow[i=0]", cl.PendingLimit(60, "stop"))}
+    watch = pd.PendingWatch()
+    limits = {"7": ("slow[i=0]", pd.PendingLimit(60, "stop"))}
     assert watch.step(0, HELD, limits) == (None, None)
     assert watch.step(59, HELD, limits) == (None, None)
     stop, note = watch.step(60, HELD, limits)
@@ -119,25 +120,25 @@ def test_a_job_pending_beyond_its_limit_stops_the_run_with_squeues_reason():
 
 
 def test_a_waiting_run_reports_a_pending_job_once_per_limit():
-    watch = cl.PendingWatch()
-    limits = {"7": ("slow[i=0]", cl.PendingLimit(60, "wait"))}
+    watch = pd.PendingWatch()
+    limits = {"7": ("slow[i=0]", pd.PendingLimit(60, "wait"))}
     reports = [t for t in range(0, 200, 5) if watch.step(t, HELD, limits)[1] is not None]
     assert reports == [60, 120, 180]
     assert all(watch.step(t, HELD, limits)[0] is None for t in range(200, 300, 5))
 
 
 def test_a_job_that_starts_is_forgotten_and_counts_anew_if_it_pends_again():
-    watch = cl.PendingWatch()
-    limits = {"7": ("a", cl.PendingLimit(60, "stop"))}
+    watch = pd.PendingWatch()
+    limits = {"7": ("a", pd.PendingLimit(60, "stop"))}
     assert watch.step(0, HELD, limits) == (None, None)
     assert watch.step(50, {"7": ("RUNNING", "None")}, limits) == (None, None)
     assert watch.step(55, HELD, limits) == (None, None)   # requeued: pending from 55
     assert watch.step(114, HELD, limits) == (None, None)
     assert watch.step(115, HELD, limits)[0] is not None
     # a pending job the run has no limit for: named by its id, the defaults
-    watch = cl.PendingWatch()
+    watch = pd.PendingWatch()
     assert watch.step(0, HELD, {}) == (None, None)
-    stop, _ = watch.step(cl.PENDING_LIMIT_S, HELD, {})
+    stop, _ = watch.step(pd.PENDING_LIMIT_S, HELD, {})
     assert stop is not None and "Slurm job 7 (Slurm job 7) pending for 3600 s" in stop
 
 
@@ -145,7 +146,7 @@ def test_the_watch_thread_stops_a_run_whose_job_pends_beyond_its_limit():
     got, notes = [], []
     thread = cl.watch_lost_jobs(lambda: dict(HELD), lambda: ["slow[i=0]", "slow[i=1]"],
                                 got.append, stall_s=100, vanish_s=100, poll_s=0.02,
-                                limits=lambda: {"7": ("slow[i=0]", cl.PendingLimit(0.1,
+                                limits=lambda: {"7": ("slow[i=0]", pd.PendingLimit(0.1,
                                                                                   "stop"))},
                                 on_note=notes.append)
     thread.join(timeout=5)
@@ -157,7 +158,7 @@ def test_the_watch_thread_reports_a_pending_job_and_waits():
     got, notes = [], []
     cl.watch_lost_jobs(lambda: dict(HELD), lambda: ["slow[i=0]"], got.append, stall_s=100,
                        vanish_s=100, poll_s=0.02,
-                       limits=lambda: {"7": ("slow[i=0]", cl.PendingLimit(0.1, "wait"))},
+                       limits=lambda: {"7": ("slow[i=0]", pd.PendingLimit(0.1, "wait"))},
                        on_note=notes.append)
     time.sleep(0.5)
     assert not got and 2 <= len(notes) <= 6, notes
@@ -168,7 +169,7 @@ def test_a_jobs_limit_that_is_not_allowed_stops_the_run_naming_the_resource():
     got = []
     thread = cl.watch_lost_jobs(
         lambda: dict(HELD), lambda: ["a"], got.append, stall_s=100, vanish_s=100,
-        poll_s=0.02, limits=lambda: {"7": ("a", cl.pending_limit({"ssw_pending_s": -1}))})
+        poll_s=0.02, limits=lambda: {"7": ("a", pd.pending_limit({"ssw_pending_s": -1}))})
     thread.join(timeout=5)
     assert len(got) == 1 and "ssw_pending_s" in got[0]
 

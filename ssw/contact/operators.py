@@ -350,7 +350,8 @@ MODEL_FORMAT = CacheFormat(
      "iface_comp": "iu", **{f"layout_{k}": v for k, v in _LAYOUT_KINDS.items()}},
     optional=frozenset({"mesh_subgrade"}), what="mesh")
 #: ``plate-*.npz``, ``soil-*.npz``: a body's condensed operator ``S`` on its ``dofs``
-#: retained dofs (:func:`_body_dofs`) and the stats of its condensation (JSON text).
+#: retained dofs (the plate's candidates and interface dofs; the soil's interface dofs, or
+#: its candidates without a plate) and the stats of its condensation (JSON text).
 BODY_FORMAT = CacheFormat("contact.body", FORMAT, {"S": ("dofs", "dofs"), "stats": ()},
                           {"S": "f", "stats": "U"}, what="operator")
 

@@ -112,8 +112,8 @@ def instrument_venv(wheel, tmp_path_factory) -> tuple[Path, dict[str, str]]:
     constraints.txt), installed with no compiler: its Python and the environment to run it
     in (PATH its own bin folder alone, CC and CXX ``false``)."""
     venv = tmp_path_factory.mktemp("instrument") / "venv"
-    subprocess.run([os.path.join(sys.base_prefix, "bin", "python3"), "-m", "venv",
-                    "--without-pip", str(venv)], check=True, timeout=120)
+    base = getattr(sys, "_base_executable", sys.executable)  # this venv's interpreter
+    subprocess.run([base, "-m", "venv", "--without-pip", str(venv)], check=True, timeout=120)
     env = {**os.environ, "PATH": str(venv / "bin"), "CC": "false", "CXX": "false"}
     env.pop("VIRTUAL_ENV", None)
     env.pop("PYTHONPATH", None)

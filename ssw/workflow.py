@@ -614,9 +614,11 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
     (:func:`ssw.cluster.status_command`; or a ConfigError naming the flag), every job must
     fit a node (:func:`check_cluster_fit`), the pause between two status queries stops
     growing at the run's limit (:func:`ssw.cluster.slurm_timing`, :func:`cap_status_pause`),
-    and a watch stops the run with a message when its jobs are lost
-    (:func:`ssw.cluster.watch_lost_jobs`, with the executor plugin's own ``squeue`` query of
-    the run's jobs).
+    and a watch stops the run with a message when its jobs are lost, and when a job pends
+    beyond its limit stops the run or reports the job, as its resources ``ssw_pending_s``
+    and ``ssw_on_pending`` say (:func:`ssw.cluster.watch_lost_jobs`, with a ``squeue``
+    query of the run's jobs by the run's job name, as the executor plugin's own, and
+    Slurm's reason for each state).
 
     Parameters
     ----------
@@ -636,9 +638,8 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
     import os
     import shutil
 
-    from snakemake_executor_plugin_slurm import job_status_query as plugin_query
-
     from ssw import cluster
+    from ssw.pending import pending_limit
 
     notes = []
     settings = workflow.executor_settings
@@ -667,23 +668,42 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
     if run_id is None:
         notes.append("the lost-jobs watch is off: the Slurm executor has no run ID")
         return notes
-    # The controller's view of the run's jobs (the plugin's squeue query): with squeue as the
-    # status command a job it no longer lists is lost to the run after the short grace; with
-    # sacct (history kept in slurmdbd, which may lag) only after the longest patience.
-    command = plugin_query.query_job_status_squeue(run_id)
+    # The controller's view of the run's jobs (squeue, by the run's job name, as the plugin's
+    # own query, with Slurm's reason for each state): with squeue as the status command a
+    # job it no longer lists is lost to the run after the short grace; with sacct (history
+    # kept in slurmdbd, which may lag) only after the longest patience. A job pending beyond
+    # its limit (its resources ssw_pending_s, ssw_on_pending) stops the run or is reported.
+    command = cluster.squeue_command(run_id)
 
     def waiting() -> list[str]:
         return sorted(_job_name(j) for j in list(scheduler.running) if not j.is_local)
 
+    known: dict[str, tuple[str, Any]] = {}
+
+    def limits() -> dict[str, tuple[str, Any]]:
+        # the jobs submitted so far (the plugin empties its list while a status query runs:
+        # what was known stays known)
+        known.update({str(info.external_jobid): (_job_name(info.job),
+                                                 pending_limit(info.job.resources))
+                      for info in list(getattr(executor, "active_jobs", ()))
+                      if info.external_jobid is not None and str(info.external_jobid)
+                      not in known})
+        return known
+
     def lost(message: str) -> None:
         from snakemake_interface_common.exceptions import WorkflowError
 
-        scheduler.executor_error_callback(WorkflowError(f"Lost cluster jobs: {message}"))
+        scheduler.executor_error_callback(WorkflowError(message))
+
+    def note(message: str) -> None:
+        from snakemake.logging import logger
+
+        logger.warning(f"ssw cluster check: {message}")
 
     stall_s = pause_s + timing.vanish_s + float(workflow.execution_settings.latency_wait)
     vanish_s = timing.vanish_s if used == "squeue" else stall_s
-    cluster.watch_lost_jobs(lambda: cluster.query_states(command), waiting, lost, stall_s,
-                            vanish_s, timing.poll_s)
+    cluster.watch_lost_jobs(lambda: cluster.query_jobs(command), waiting, lost, stall_s,
+                            vanish_s, timing.poll_s, limits, note)
     return notes
 
 

@@ -96,6 +96,14 @@ def test_without_a_warm_process_a_command_runs_by_itself(tmp_path):
     assert r.returncode == 0 and r.stdout == ref.stdout
 
 
+def test_ssw_warm_start_0_keeps_a_command_from_a_warm_process(warm, tmp_path):
+    """The switch holds for a single command too: named a warm process that answers, it
+    runs by itself."""
+    r = _ssw(CHECK, tmp_path, warm.socket, SSW_WARM_START="0")
+    assert r.returncode == 0 and "valid: True" in r.stdout
+    assert _served(tmp_path / "warm.log") == []
+
+
 def _long_command(warm, tmp_path: Path, started: bool = True
                   ) -> tuple[subprocess.Popen, int]:
     """A served command that runs for minutes (a TOF at 200,000 steps per contact), and its

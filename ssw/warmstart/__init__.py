@@ -124,6 +124,18 @@ def usable() -> bool:
             and hasattr(socket, "AF_UNIX") and hasattr(socket, "send_fds"))
 
 
+def switch_allows() -> bool:
+    """Whether ``$SSW_WARM_START`` leaves the warm start on (unset, or anything but 0, off,
+    no and false).
+
+    Returns
+    -------
+    bool
+        Whether it does.
+    """
+    return os.environ.get(SWITCH_ENV, "").strip().lower() not in ("0", "off", "no", "false")
+
+
 def fingerprint() -> dict[str, Any]:
     """What shapes this process's imports; a command is served only when its fingerprint
     equals the warm process's.
@@ -201,12 +213,13 @@ def request(argv: list[str] | None = None) -> int | None:
     -------
     int or None
         The command's exit status; None when it is to run in this process: this system
-        does not serve (:func:`usable`), no warm process is named or answers in
-        :data:`REPLY_TIMEOUT_S`, a standard stream is closed, or the warm process leaves
-        it to run by itself (another fingerprint, changed code, a failed fork).
+        does not serve (:func:`usable`), ``$SSW_WARM_START`` is off, no warm process is
+        named or answers in :data:`REPLY_TIMEOUT_S`, a standard stream is closed, or the
+        warm process leaves it to run by itself (another fingerprint, changed code, a
+        failed fork).
     """
     path = os.environ.get(SOCKET_ENV)
-    if not path or not usable():
+    if not path or not usable() or not switch_allows():
         return None
     try:
         for fd in (0, 1, 2):

@@ -26,7 +26,7 @@ import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
-from ssw.warmstart import SOCKET_ENV, SWITCH_ENV, USAGE_FOLDER, usable
+from ssw.warmstart import SOCKET_ENV, USAGE_FOLDER, switch_allows, usable
 
 if TYPE_CHECKING:
     import subprocess
@@ -72,8 +72,7 @@ def switched_on() -> bool:
     bool
         Whether it may.
     """
-    value = os.environ.get(SWITCH_ENV, "")
-    return usable() and value.strip().lower() not in ("0", "off", "no", "false")
+    return usable() and switch_allows()
 
 
 def start(env: dict[str, str], log: Path, cwd: Path | None = None) -> WarmProcess:

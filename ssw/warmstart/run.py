@@ -301,8 +301,10 @@ def served_usage(folder: Path, pid: int, since: float, until: float) -> list[dic
         The records' folder.
     pid : int
         The job's process (its shell).
-    since, until : float
-        The job's start and end (Unix time, s).
+    since : float
+        The job's start (Unix time, s).
+    until : float
+        The job's end (Unix time, s).
 
     Returns
     -------

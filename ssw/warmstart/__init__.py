@@ -35,12 +35,13 @@ resource limits, the CPUs it may run on, its niceness.
 
 Where forking a process that imported these libraries is unsafe the warm start steps aside
 and every command runs by itself (:func:`usable`): off POSIX (Windows, where the lab PCs
-acquire with NI-DAQmx, has no ``fork``), and on macOS, where system libraries start
-threads that a fork does not copy: Apple's Accelerate (numpy's BLAS in its macOS wheels)
-runs its work on Grand Central Dispatch's thread pools, and the Objective-C runtime aborts
-a child that initializes a class another thread was initializing at the fork; CPython made
-``spawn`` the default start method of ``multiprocessing`` on macOS for these reasons
-(Python 3.8, bpo-33725).
+acquire with NI-DAQmx, has no ``fork``), and on macOS, where system libraries keep threads
+that a fork does not copy: numpy's BLAS there is Apple's Accelerate, whose work runs on
+Grand Central Dispatch's thread pools (a ``numpy.dot`` in a fork of a process that used it
+hangs [2]_), and the Objective-C runtime aborts a fork's child that initializes a class
+another thread was initializing at the fork (since macOS 10.13 [3]_). CPython made
+``spawn`` the default start method of ``multiprocessing`` on macOS for these crashes
+(Python 3.8, bpo-33725 [1]_).
 
 Why ssw's own: ``multiprocessing``'s forkserver serves only the process that started it,
 while the commands here are separate processes started by Snakemake's shell.
@@ -53,11 +54,14 @@ References
 ----------
 .. [1] Python documentation, ``multiprocessing``, "Contexts and start methods": "Changed in
    version 3.8: On macOS, the spawn start method is now the default. The fork start method
-   should be considered unsafe as it can lead to crashes of the subprocess as macOS system
-   libraries may start threads. See bpo-33725."
-.. [2] Apple, ``objc4`` runtime (``objc-initialize.mm``, macOS 10.13): "+[X initialize]
-   may have been in progress in another thread when fork() was called" and the
-   ``OBJC_DISABLE_INITIALIZE_FORK_SAFETY`` switch.
+   should be considered unsafe as it can lead to crashes of the subprocess. See
+   bpo-33725."
+.. [2] numpy issue 5752, "NumPy dot hangs when used with multiprocessing (potentially
+   Apple Accelerate related?)", https://github.com/numpy/numpy/issues/5752.
+.. [3] G. Parker, "Objective-C and fork() in macOS 10.13" (2017),
+   http://www.sealiesoftware.com/blog/archive/2017/6/5/Objective-C_and_fork_in_macOS_1013.html:
+   "+[X initialize] may have been in progress in another thread when fork() was called"
+   and the ``OBJC_DISABLE_INITIALIZE_FORK_SAFETY`` switch.
 """
 
 from __future__ import annotations

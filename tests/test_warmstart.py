@@ -393,6 +393,10 @@ def _malformed(socket_path: Path, kind: str) -> None:
 
     request = json.dumps({"argv": ["ssw", "--version"], "cwd": "/", "env": {}, "umask": 18,
                           "fingerprint": {}}).encode()
+    # the first field compared that differs, the environment, is not a mapping
+    odd = json.dumps({"argv": ["ssw", "--version"], "cwd": "/", "env": {}, "umask": 18,
+                      "fingerprint": {"cpus": sorted(os.sched_getaffinity(0)),
+                                      "env": ["not", "a", "mapping"]}}).encode()
     frames = {
         "closed before its length": [],
         "a length cut short": [b"\x00\x00"],
@@ -405,6 +409,7 @@ def _malformed(socket_path: Path, kind: str) -> None:
         "no descriptors": whole(request),
         "five descriptors": whole(request),
         "deep JSON": whole(b"[" * 100_000 + b"]" * 100_000),
+        "a fingerprint of another shape": whole(odd),
     }[kind]
     with socket.socket(socket.AF_UNIX, socket.SOCK_STREAM) as s:
         s.connect(str(socket_path))
@@ -419,7 +424,8 @@ def _malformed(socket_path: Path, kind: str) -> None:
 
 MALFORMED = ("closed before its length", "a length cut short", "a body cut short", "no JSON",
              "JSON not an object", "argv not text", "a length too long",
-             "more bytes than its length", "no descriptors", "five descriptors", "deep JSON")
+             "more bytes than its length", "no descriptors", "five descriptors", "deep JSON",
+             "a fingerprint of another shape")
 
 
 def test_malformed_requests_leave_it_serving(warm, tmp_path):

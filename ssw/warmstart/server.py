@@ -391,7 +391,16 @@ def _drop(srv: _Server, c: _Caller, why: str | None = None) -> None:
 
 
 def _readable(srv: _Server, c: _Caller) -> None:
-    """A caller's socket is readable: more of its request, its GO, or its end."""
+    """A caller's socket is readable: more of its request, its GO, or its end. Whatever
+    goes wrong with one caller drops it (logged), never the warm process."""
+    try:
+        _read(srv, c)
+    except Exception as exc:  # a request no check foresaw: this caller's alone
+        _drop(srv, c, f"it could not be handled: {exc!r}"[:300])
+
+
+def _read(srv: _Server, c: _Caller) -> None:
+    """:func:`_readable`'s work."""
     try:
         if c.state == "reading":
             data, fds, flags, _ = socket.recv_fds(c.sock, 1 << 16, 4)

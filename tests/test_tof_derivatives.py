@@ -74,23 +74,38 @@ def _check(params: ChainParams, make_wall, names: tuple[str, ...]) -> dict[str, 
     pytest.param({}, id="thesis-device"),
     pytest.param({"preload": 5.0, "damping": 2.0, "sensor_reads": "upper"},
                  id="preload-dashpot-upper", marks=pytest.mark.slow),
+    pytest.param({"preload": 2.0, "damping": 1.5e3, "damping_law": "kuwabara_kono"},
+                 id="preload-kuwabara-kono"),
+    pytest.param({"damping": 2.5e-2, "damping_law": "hunt_crossley", "sensor_reads": "lower",
+                  "striker_mass": 0.012}, id="hunt-crossley-lower-light-striker"),
 ])
 def test_forward_derivatives_of_the_hertz_wall_match_central_differences(device):
-    """Every parameter (E, striker speed, preload, sensor and striker masses, dashpot) on
-    the thesis device (preload and dashpot 0: one-sided differences) and on a device with a
-    preload, a dashpot and the sensor read at its upper contact."""
+    """Every parameter (E, striker speed, preload, sensor and striker masses, the
+    dissipation coefficient) on the thesis device (preload and dissipation 0: one-sided
+    differences), on a device with a preload, a dashpot and the sensor read at its upper
+    contact, with a preload and Kuwabara-Kono contacts, and with Hunt-Crossley contacts,
+    the sensor read at its lower contact and a light striker (whose contact with bead 1,
+    not the last bead's on a rigid flat, sets the step)."""
     p = ChainParams().with_(**device)
     _check(p, lambda E: build_wall("hertz", p, E, NU3), tuple(PARAMETERS))
 
 
-def test_forward_derivatives_of_the_reduced_dynamic_wall_match_central_differences():
+@pytest.mark.parametrize("device", [
+    pytest.param({"damping": 1.0}, id="dashpot"),
+    pytest.param({"damping": 2.5e-2, "damping_law": "hunt_crossley"}, id="hunt-crossley",
+                 marks=pytest.mark.slow),
+])
+def test_forward_derivatives_of_the_reduced_dynamic_wall_match_central_differences(device):
     """The reduced dynamic wall (a stateful wall with an exact tangent: its quasi-static law,
-    dashpot and participating masses differentiated line by line), soil 1800 kg/m^3, with
-    a contact dashpot: E (through the law and the soil's impedance), the sensor's mass and
-    the dashpot (the device's other parameters enter the chain, not the wall)."""
-    p = ChainParams(damping=1.0)
+    dashpot and participating masses differentiated line by line, the step's explicit
+    ``dt`` too), soil 1800 kg/m^3, with a contact dashpot or Hunt-Crossley contacts (whose
+    damping at the wall follows the wall's force, the soil's dashpot and inertia
+    included): E (through the law and the soil's impedance), the striker's speed (which
+    moves the step), the sensor's mass and the dissipation coefficient."""
+    p = ChainParams(**device)
     _check(p, lambda E: build_wall("hertz", p, E, NU3, dynamics="reduced",
-                                   soil_density=1800.0), ("E", "sensor_mass", "damping"))
+                                   soil_density=1800.0),
+           ("E", "striker_velocity", "sensor_mass", "damping"))
 
 
 def test_dE_of_the_fit_wall_follows_the_k_table_interpolant():

@@ -441,8 +441,8 @@ static void contact_forces(const ssw_chain *c, double *w_x, double *w_fd, double
    sqrt, or the Hunt-Crossley elastic force fe (the averaged Hertz force of a bead-bead
    contact, the wall's force at the wall) with its slopes fe_d, fe_a; with gd: dK/dd,
    dK/da (0 at the wall for Hunt-Crossley: the wall's own sensitivities, dF, carry it). */
-static inline double damping_factor(int law, double d, double a, double fe, double fe_d,
-                                    double fe_a, double *gd, double *ga)
+static inline __attribute__((always_inline)) double damping_factor(
+    int law, double d, double a, double fe, double fe_d, double fe_a, double *gd, double *ga)
 {
     if (law == KUWABARA_KONO)
         return root_share(d, a, gd, ga);
@@ -456,6 +456,77 @@ static inline double damping_factor(int law, double d, double a, double fe, doub
     return closed_share(d, a, gd, ga);
 }
 
+/* Per contact, at the drifted state: the relative velocity's sign times dt and the Hertz
+   slope fa times it (with the tangent), and with the damping (predict) its predicted
+   velocity, its factor K (damping_factor), c K dvp added to f (and to the power), K's
+   slopes; the time step's column, its explicit dt slope w_et. The work rows are
+   ssw_forces'. */
+static inline __attribute__((always_inline)) void contact_rates(const ssw_chain *c, int law,
+                                                                int has_old)
+{
+    const int N = c->N, n = c->n, Nn = N * n, tangent = c->k > 0;
+    const int c_T = tangent ? c->c_T : -1;
+    const double dt = c->dt, half = 0.5 * dt, cd = c->damping;
+    const double *u = c->z, *v = c->z + Nn, *acc = c->acc;
+    double *f = c->f, *power = c->power;
+    const int predict = c->predict, damped = c->damped_tangent;
+    double *w_fd = c->work, *w_fa = w_fd + Nn, *w_sdt = w_fa + Nn, *w_dvp = w_sdt + Nn;
+    double *w_sh = w_dvp + Nn, *w_gd = w_sh + Nn, *w_ga = w_gd + Nn, *w_x = w_ga + Nn;
+    double *w_et = w_x + Nn;
+    for (int j = 0; j < N; j++) {
+        const int last = j == N - 1;
+        for (int i = 0; i < n; i++) {
+            const int q = j * n + i;
+            const double d = last ? u[q] : u[q] - u[q + n];
+            const double dv = last ? v[q] : v[q] - v[q + n];
+            const double a = fabs(dv) * dt;
+            /* the Hertz force's slope in |delta| (a bead-bead contact's) */
+            double fe_a = 0.0;
+            if (tangent) {
+                const double sg =
+                    dv > 0.0 ? 1.0 : (dv < 0.0 ? -1.0 : (dv == 0.0 ? 0.0 : dv));
+                w_sdt[q] = sg * dt;
+                if (!last) {
+                    fe_a = w_fa[q];
+                    w_fa[q] *= w_sdt[q];
+                }
+                if (c_T >= 0)
+                    w_et[q] = fe_a * fabs(dv);
+            }
+            if (predict) {
+                double dvp = dv;
+                if (has_old)
+                    dvp += half * (last ? acc[q] : acc[q] - acc[q + n]);
+                /* Hunt-Crossley's factor: the contact's elastic force and its slopes */
+                double fe = 0.0, fe_d = 0.0;
+                if (law == HUNT_CROSSLEY) {
+                    fe = f[q];
+                    fe_d = tangent && !last ? w_fd[q] : 0.0;
+                }
+                double gd = 0.0, ga = 0.0;
+                const double sh = damping_factor(law, d, a, fe, fe_d, fe_a,
+                                                 damped ? &gd : 0, damped ? &ga : 0);
+                if (cd > 0.0) {
+                    f[q] += cd * dvp * sh;
+                    if (power)
+                        power[i] += cd * dvp * dvp * sh;
+                }
+                if (tangent) {
+                    w_dvp[q] = dvp;
+                    w_sh[q] = sh;
+                    w_gd[q] = gd;
+                    w_ga[q] = ga;
+                    if (c_T >= 0 && cd > 0.0) {
+                        /* the predicted velocity's explicit dt: acc_old / 2 */
+                        const double ao = !has_old ? 0.0 : last ? acc[q] : acc[q] - acc[q + n];
+                        w_et[q] += cd * (dvp * ga * fabs(dv) + 0.5 * sh * ao);
+                    }
+                }
+            }
+        }
+    }
+}
+
 /* Contact forces, accelerations and (k > 0) their sensitivities at the drifted state; with
    kick, the step's second half v += dt/2 acc. has_old: acc (and Acc) hold the last step's
    accelerations (the damping's predicted velocity v + dt/2 acc_old); 0 at the start. The
@@ -467,10 +538,9 @@ void ssw_forces(const ssw_chain *c, int has_old, int kick)
 {
     const int N = c->N, n = c->n, k = c->k, Nn = N * n;
     const double dt = c->dt, half = 0.5 * dt, cd = c->damping;
-    const double *u = c->z, *v = c->z + Nn;
     double *f = c->f, *acc = c->acc;
-    /* per contact: fd, fa sign(dv) dt, sign(dv) dt, dvp, factor K, K_d, K_a, x = d / |delta|,
-       the explicit dt slope */
+    /* per contact (contact_rates): fd, fa sign(dv) dt, sign(dv) dt, dvp, factor K, K_d, K_a,
+       x = d / |delta|, the explicit dt slope */
     double *w_fd = c->work, *w_fa = w_fd + Nn, *w_sdt = w_fa + Nn, *w_dvp = w_sdt + Nn;
     double *w_sh = w_dvp + Nn, *w_gd = w_sh + Nn, *w_ga = w_gd + Nn, *w_x = w_ga + Nn;
     double *w_et = w_x + Nn;
@@ -482,51 +552,13 @@ void ssw_forces(const ssw_chain *c, int has_old, int kick)
         memset(c->power, 0, sizeof(double) * n);
     contact_forces(c, w_x, tangent ? w_fd : 0, tangent ? w_fa : 0);
     if (tangent || c->predict) {
-        for (int j = 0; j < N; j++) {
-            const int last = j == N - 1;
-            for (int i = 0; i < n; i++) {
-                const int q = j * n + i;
-                const double d = last ? u[q] : u[q] - u[q + n];
-                const double dv = last ? v[q] : v[q] - v[q + n];
-                const double a = fabs(dv) * dt;
-                /* the Hertz force's slopes (a bead-bead contact's, with the tangent) */
-                const double fe_d = tangent && !last ? w_fd[q] : 0.0;
-                const double fe_a = tangent && !last ? w_fa[q] : 0.0;
-                if (tangent) {
-                    const double sg =
-                        dv > 0.0 ? 1.0 : (dv < 0.0 ? -1.0 : (dv == 0.0 ? 0.0 : dv));
-                    w_sdt[q] = sg * dt;
-                    if (!last)
-                        w_fa[q] *= w_sdt[q];
-                    if (c_T >= 0)
-                        w_et[q] = fe_a * fabs(dv);
-                }
-                if (c->predict) {
-                    double dvp = dv, ao = 0.0;
-                    if (has_old) {
-                        ao = last ? acc[q] : acc[q] - acc[q + n];
-                        dvp += half * ao;
-                    }
-                    double gd = 0.0, ga = 0.0;
-                    const double sh = damping_factor(law, d, a, f[q], fe_d, fe_a,
-                                                     c->damped_tangent ? &gd : 0,
-                                                     c->damped_tangent ? &ga : 0);
-                    if (cd > 0.0) {
-                        f[q] += cd * dvp * sh;
-                        if (c->power)
-                            c->power[i] += cd * dvp * dvp * sh;
-                    }
-                    if (tangent) {
-                        w_dvp[q] = dvp;
-                        w_sh[q] = sh;
-                        w_gd[q] = gd;
-                        w_ga[q] = ga;
-                        if (c_T >= 0 && cd > 0.0)
-                            w_et[q] += cd * (dvp * ga * fabs(dv) + 0.5 * sh * ao);
-                    }
-                }
-            }
-        }
+        /* one loop per law: the law a constant in each (the dashpot's the loop it was) */
+        if (c->law == KUWABARA_KONO)
+            contact_rates(c, KUWABARA_KONO, has_old);
+        else if (c->law == HUNT_CROSSLEY)
+            contact_rates(c, HUNT_CROSSLEY, has_old);
+        else
+            contact_rates(c, DASHPOT, has_old);
     }
     /* m_i a_i = F_(i-1) - F_i (+ P on bead 1) + m_i g, into acc (its old values are not
        needed any more), and with kick v += dt/2 acc; row by row, each a vector loop */

@@ -3,7 +3,7 @@ elastic one, by name (:data:`LAWS`), like the wall laws of :mod:`ssw.walls`.
 
 Every law adds, in a closed contact of overlap ``d > 0`` (m) and overlap rate ``d'`` (m/s),
 a force ``c g(d) d'``: the coefficient ``c`` (``ChainParams.damping``, in the law's
-:attr:`DissipationLaw.unit`) times the law's factor ``g`` times the rate. The same law and
+``unit``) times the law's factor ``g`` times the rate. The same law and
 coefficient act in every bead-bead contact and at the wall (the last contact, ``d`` the
 last bead's indentation):
 
@@ -21,7 +21,7 @@ the step uses is the predicted new one, and the factor ``g`` the hat average of 
 d')`` over the step's relative motion ``|s| <= dt`` (:mod:`ssw.chain.impulse`: the share
 ``Phi`` the dashpot is closed, the averaged ``sqrt``, the averaged Hertz force): the
 discrete solution stays smooth in its parameters through contact events. The step's code
-evaluates the laws (``ssw/chain/_step.c``, the law's :attr:`DissipationLaw.code`); the
+evaluates the laws (``ssw/chain/_step.c``, the law's ``code``); the
 factors here, :meth:`DissipationLaw.factor`, are their point values (the independent
 references', ``ssw.chain.baseline``).
 

@@ -273,7 +273,7 @@ class Stepper:
         Sensitivity columns (0: none).
     consts : dict
         ``A`` (N/m^1.5), ``dt`` (s), ``damping`` (the law's coefficient, its unit), ``law``
-        (the law's :attr:`ssw.chain.dissipation.DissipationLaw.code`), ``g`` (m/s^2),
+        (the law's ``code``, :class:`ssw.chain.dissipation.DissipationLaw`), ``g`` (m/s^2),
         ``predict``, ``damped_tangent`` (bool), ``c_D``, ``c_P``, ``c_E``, ``c_T`` (int,
         -1: none; ``c_T`` the time step's column), ``mass_at`` (list of (bead, column)).
     inv_m : numpy.ndarray

@@ -681,7 +681,7 @@ def coordinate(setup: Setup, col: Column) -> tuple[bool, float]:
         return False, 1.0 / setup.acq.sample_rate
     if col.name == "delay":
         return False, setup.tof_scatter
-    p = parameter(col.name, setup.params.damping_law)
+    p = parameter(col.name, setup.params.damping_law if col.name == "damping" else None)
     return p.log, p.scale
 
 
@@ -1296,7 +1296,7 @@ def _bounds(setup: Setup, free: list[Column]) -> tuple[np.ndarray, np.ndarray]:
     """The scaled coordinates' bounds of ``free`` (each parameter's range)."""
     lo, hi = np.empty(len(free)), np.empty(len(free))
     for j, c in enumerate(free):
-        p = parameter(c.name, setup.params.damping_law)
+        p = parameter(c.name, setup.params.damping_law if c.name == "damping" else None)
         log, scale = coordinate(setup, c)
         lo[j], hi[j] = ((np.log(p.lower), np.log(p.upper)) if log
                         else (p.lower / scale, p.upper / scale))

@@ -14,7 +14,8 @@ last bead's indentation):
 * ``hunt_crossley``: ``g = F_el(d)``, the contact's own elastic force (``c`` s/m): Hunt &
   Crossley (1975), the damping in proportion to the elastic force (``c = 3 (1 - e) / (2
   v)`` for a restitution coefficient ``e`` at impact speed ``v``); at the wall ``F_el`` is
-  the wall law's force.
+  the wall's force at its point value (a stateful wall's as it reports it: the reduced
+  dynamic wall's with its radiation dashpot and participating mass).
 
 No clamp: a contact opening fast may pull (``d' < 0``), as the dashpot does. The rate ``d'``
 the step uses is the predicted new one, and the factor ``g`` the hat average of ``g(d + s

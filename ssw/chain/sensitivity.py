@@ -30,7 +30,7 @@ The same names are the device's calibratable continuous parameters
 
 The step itself. The step is a fixed fraction of a Hertz contact time at the striker speed
 (:func:`ssw.chain.integrate.time_step`), so a TOF computed at the step its parameters give
-moves with the striker's speed and mass (``t_c ~ (m^2 / v)^(1/5)``: 3e-4 of the striker
+moves with the striker's speed and mass (``t_c ~ (m^2 / v)^(1/5)``: 1-3e-4 of the striker
 speed's derivative on the thesis device) through the step as well. A run may carry the
 step's own column, :data:`STEP` (``dt``, s): the derivative of the discrete solution with
 respect to ``dt`` at a fixed number of steps, the scheme differentiated line by line in its

@@ -20,9 +20,9 @@ Derivatives. A TOF is the discrete scheme's, at the time step its parameters giv
 (:func:`ssw.chain.integrate.time_step`, a fixed fraction of a Hertz contact time at the
 striker's speed): a derivative is that of the TOF a run at the perturbed parameters gives,
 its step's dependence on the striker's speed and masses included (the chain rule through
-the step, :func:`ssw.chain.integrate.step_tangent`; 3e-4 of the striker speed's derivative
-on the thesis device). Given a step (``dt=``), the step is held fixed. Two methods, named in
-every result:
+the step, :func:`ssw.chain.integrate.step_tangent`; 1-3e-4 of the striker speed's
+derivative on the thesis device). Given a step (``dt=``), the step is held fixed. Two
+methods, named in every result:
 
 * ``forward``: forward sensitivities carried by the integrator
   (:mod:`ssw.chain.sensitivity`, the step's own column among them) and the dense peak's

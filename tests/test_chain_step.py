@@ -197,3 +197,18 @@ def test_sensor_derivatives_through_the_step_match_central_differences(wall):
         fd = st.derivative(S)
         err = np.max(np.abs(got.dsensor[:, 0, j] - fd)) / np.max(np.abs(fd))
         assert err < TOL, (name, err)
+
+
+def test_a_run_whose_parameters_leave_the_step_carries_no_step_column():
+    """E on a physical wall, the preload and the dissipation do not move the step: their
+    run carries no extra column (its cost stays), and its derivatives are those at the
+    fixed step to the bit; the striker's speed adds the step's column."""
+    p = ChainParams()
+    w = _wall("hertz", p)
+    names = ("E", "preload", "damping")
+    pk, run = run_peaks(p, w, derivatives=names)
+    fixed, _ = run_peaks(p, w, derivatives=names, dt=run.dt)
+    assert run.tangent.names == names
+    assert np.array_equal(pk.dtof, fixed.dtof)
+    _, run = run_peaks(p, w, derivatives=("E", "striker_velocity"))
+    assert run.tangent.names == ("E", "striker_velocity", STEP)

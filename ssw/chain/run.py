@@ -15,7 +15,7 @@ from typing import Any
 import numpy as np
 
 from ssw.chain.dense import dense_peaks
-from ssw.chain.integrate import Run, simulate, step_tangent
+from ssw.chain.integrate import Run, simulate, step_tangent, time_step
 from ssw.chain.params import Batch, ChainParams
 from ssw.chain.sensitivity import MOVES_STEP, STEP, Tangent, tangent_of
 from ssw.chain.tof import Peaks, check_selection
@@ -53,30 +53,39 @@ def check_complete(run: Run, params: ChainParams) -> None:
         )
 
 
-def step_moves(tangent: Tangent | None, wall: Any) -> bool:
-    """Whether a run at the step its parameters give (no ``dt`` fixed) carries the step's
-    own column (:data:`ssw.chain.sensitivity.STEP`) for the chain rule: a parameter of
-    ``tangent`` may move the step (:data:`ssw.chain.sensitivity.MOVES_STEP`), the step's
-    column is not asked itself, and the wall can differentiate it (any wall without state;
-    a stateful one with ``step_tangent``).
+def step_derivatives(params: ChainParams | Batch, wall: Any, tangent: Tangent | None
+                     ) -> np.ndarray | None:
+    """The step's derivatives for a run at the step its parameters give (no ``dt`` fixed),
+    when the run must carry the step's own column (:data:`ssw.chain.sensitivity.STEP`) for
+    the chain rule: a parameter of ``tangent`` moves the step (some derivative of
+    :func:`ssw.chain.integrate.step_tangent` is not 0: the striker's speed and mass, the
+    sensor's mass at bead 1, E of a wall stiffer than a rigid flat), the step's column is
+    not asked itself, and the wall can differentiate it (any wall without state; a stateful
+    one with ``step_tangent``). Otherwise None: the run carries no extra column.
 
     Parameters
     ----------
-    tangent : Tangent or None
-        The parameters.
+    params : ChainParams or Batch
+        The chain.
     wall : Wall
         The last contact.
+    tangent : Tangent or None
+        The parameters.
 
     Returns
     -------
-    bool
-        Carry the step's column.
+    numpy.ndarray or None
+        (n, k) s per unit of each parameter, or None.
     """
     if tangent is None or STEP in tangent.names:  # the step's column itself is asked
-        return False
+        return None
     if not any(n in MOVES_STEP for n in tangent.names):
-        return False
-    return not is_stateful(wall) or getattr(wall, "step_tangent", False)
+        return None
+    if is_stateful(wall) and not getattr(wall, "step_tangent", False):
+        return None
+    b = params if isinstance(params, Batch) else Batch.of(params, wall.n)
+    ddt = step_tangent(b, wall, time_step(b, wall), tangent.names)
+    return ddt if np.any(ddt) else None
 
 
 def chain_step(x: np.ndarray | None, ddt: np.ndarray) -> np.ndarray | None:
@@ -132,8 +141,8 @@ def run_peaks(params: ChainParams | Batch, wall: Wall, *, strict: bool = True,
         (:mod:`ssw.chain.sensitivity`): the Peaks then carry ``dt_incident``,
         ``dt_reflected``, ... and ``dtof`` (n, k). Without ``dt`` the step is the
         parameters' own (:func:`ssw.chain.integrate.time_step`), and the derivatives
-        include its dependence on them (the run carries the step's column,
-        :func:`step_moves`, and the chain rule with
+        include its dependence on them (the run carries the step's column where it moves,
+        :func:`step_derivatives`, and the chain rule with
         :func:`ssw.chain.integrate.step_tangent`); with ``dt`` the step is held fixed.
 
     Returns
@@ -149,8 +158,8 @@ def run_peaks(params: ChainParams | Batch, wall: Wall, *, strict: bool = True,
         (strict) a scene has no incident or no reflected peak.
     """
     tg = tangent_of(derivatives)
-    steps = dt is None and step_moves(tg, wall)
-    carried = tg.with_step() if steps else tg
+    ddt = step_derivatives(params, wall, tg) if dt is None else None
+    carried = tg.with_step() if ddt is not None else tg
     run = simulate(params, wall, dt=dt, on_progress=on_progress, derivatives=carried)
     b = params if isinstance(params, Batch) else Batch.of(params, wall.n)
     p = b.params
@@ -186,8 +195,7 @@ def run_peaks(params: ChainParams | Batch, wall: Wall, *, strict: bool = True,
             c[gone] = np.nan
     if cols["dense"] is not None:
         cols["dense"][gone] = False
-    if steps:
-        ddt = step_tangent(b, wall, run.dt, tg.names)
+    if ddt is not None:
         for k in ("dt_incident", "dt_reflected", "df_incident", "df_reflected"):
             cols[k] = chain_step(cols[k], ddt)
     return Peaks(**cols, tangent=tg), run

@@ -49,7 +49,7 @@ import numpy as np
 
 from ssw.chain.integrate import Run, simulate, step_tangent, time_step
 from ssw.chain.params import Batch, ChainParams
-from ssw.chain.run import chain_step, run_peaks, step_moves
+from ssw.chain.run import chain_step, run_peaks, step_derivatives
 from ssw.chain.sensitivity import (
     CENTRAL_STEP,
     MOVES_STEP,
@@ -556,12 +556,12 @@ def sensor_derivatives(
         opts["with_dE"] = True
     w = build_wall(wall, params, E, nu, **opts)
     b = Batch.of(params, w.n, flat) if flat else params
-    steps = dt is None and step_moves(tg, w)
-    run = simulate(b, w, derivatives=tg.with_step() if steps else tg, t_end=t_end,
+    ddt = step_derivatives(b, w, tg) if dt is None else None
+    run = simulate(b, w, derivatives=tg if ddt is None else tg.with_step(), t_end=t_end,
                    stop_early=t_end is None, dt=dt)
     t = run.t if times is None else np.asarray(times, float)
     out = evaluate(run, t, tangent=True, rate=rate)
-    dS = chain_step(out[1], step_tangent(b, w, run.dt, tg.names)) if steps else out[1]
+    dS = out[1] if ddt is None else chain_step(out[1], ddt)
     return SensorDerivatives(t, out[0], dS, tg.names, run, out[2] if rate else None)
 
 

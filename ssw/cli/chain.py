@@ -69,6 +69,7 @@ DERIVATIVES = ("auto", "forward", "central", "none")
 
 def run_tof(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.chain.sensitivity import PARAMETERS
+    from ssw.chain.sensitivity import units as sensitivity_units
     from ssw.tof.api import peaks, tof_derivatives
 
     if args.hits is not None or args.soil_model is not None or args.plate_model is not None:
@@ -79,7 +80,7 @@ def run_tof(args: argparse.Namespace) -> dict[str, Any]:
     ctx = chain_context(args, args.soil_E, args.soil_nu)
     params = ctx.params
     method = args.derivatives
-    units = {f"dtof_d{k}": f"s/({u})" for k, u in PARAMETERS.items()}
+    units = {f"dtof_d{k}": f"s/({u})" for k, u in sensitivity_units(params.damping_law).items()}
     if ctx.wall_options.get("dynamics") == "fem":
         from ssw.dynamics.api import fem_tof, fem_tof_derivatives
 

@@ -69,7 +69,7 @@ def validate_config(cfg: dict[str, Any]) -> dict[str, Any]:
     Returns ``cfg``. Raises :class:`.ConfigError` on the first problem (the deepest error of
     the schema, so that the message names the offending field).
     """
-    from ssw.schema import first_file_error, path_of
+    from ssw.schema import first_file_error, message_of, path_of
 
     check_moved_keys(cfg)
     err = first_file_error(SCHEMA_PATH, cfg)
@@ -77,7 +77,7 @@ def validate_config(cfg: dict[str, Any]) -> dict[str, Any]:
         hint = ""
         if isinstance(err.instance, str) and _looks_numeric(err.instance):
             hint = " (YAML reads a number like 1.0e6 as text: write 1.0e+6)"
-        raise ConfigError(path_of(err), err.instance, err.message + hint)
+        raise ConfigError(path_of(err), err.instance, message_of(err) + hint)
     check_config(cfg)
     return cfg
 

@@ -40,6 +40,8 @@ _MEMO_WRITES = True
 ALLOW_NON_FINITE = "allowNonFinite"
 #: The ``validator`` of a non-finite number's error (:func:`first_error` reports it first).
 NON_FINITE = "finite"
+#: Parsed schemas by the SHA-256 of their file's bytes (a process parses each once).
+_SCHEMAS: dict[str, dict[str, Any]] = {}
 
 
 class MemoWarning(UserWarning):
@@ -253,7 +255,10 @@ def first_file_error(schema_path: str | os.PathLike[str], instance: dict[str, An
     from ssw.yamlio import safe_load
 
     schema_bytes = Path(schema_path).read_bytes()
-    schema = safe_load(schema_bytes.decode())
+    key = hashlib.sha256(schema_bytes).hexdigest()
+    schema = _SCHEMAS.get(key)
+    if schema is None:
+        schema = _SCHEMAS[key] = safe_load(schema_bytes.decode())
     memo = _memo_path(schema_bytes, instance)
     if memo is not None and memo.is_file():
         filled = _recall(memo, schema, instance)

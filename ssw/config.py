@@ -357,8 +357,10 @@ def check_points(points: list[dict[str, Any]], field: str = "survey.points") -> 
     seen = set()
     for i, pt in enumerate(points):
         pid = pt["id"]
-        if not re.fullmatch(r"[A-Za-z0-9_.-]+", pid):
-            raise ConfigError(f"{field}[{i}].id", pid, "letters, digits, _ . -")
+        if not re.fullmatch(r"[A-Za-z0-9_][A-Za-z0-9_.-]*", pid):
+            raise ConfigError(f"{field}[{i}].id", pid,
+                              "letters, digits, _ . - (not starting with . or -), as the "
+                              "schema's $defs/id")
         if pid in seen:
             raise ConfigError(f"{field}[{i}].id", pid, "an id used once")
         seen.add(pid)

@@ -659,6 +659,52 @@ def cap_status_pause(executor: Any, pause_s: float) -> None:
     executor.check_active_jobs = capped
 
 
+#: The executors whose spawned jobs' command lines name the interpreter unquoted
+#: (snakemake-interface-executor-plugins 9.4, ``format_job_exec``): (module, class).
+_SPAWNING_EXECUTORS = (
+    ("snakemake_interface_executor_plugins.executors.remote", "RemoteExecutor"),
+    ("snakemake_executor_plugin_slurm_jobstep", "Executor"),
+    ("snakemake.executors.local", "Executor"),
+)
+
+
+def quote_job_python() -> list[str]:
+    """Quote the interpreter in the command lines of the jobs Snakemake spawns.
+
+    An executor that runs a job as ``python -m snakemake ...`` (the Slurm submission's, the
+    Slurm job step's inside each job, the local one's for a ``run:`` rule) puts
+    ``sys.executable`` into the command line unquoted, its other arguments quoted: a venv
+    under a folder whose name holds a space (``~/My Projects/ssw/.venv``) makes every such
+    job fail with ``/home/me/My: not found`` (snakemake issue 3211). Each executor class of
+    :data:`_SPAWNING_EXECUTORS` already imported (Snakemake loads the run's executor
+    plugin before it reads the Snakefile; none is imported here) gets a
+    ``get_python_executable`` whose answer is shell-quoted (unchanged for a path without
+    special characters). Idempotent.
+
+    Returns
+    -------
+    list of str
+        The classes changed by this call, ``module.Class``.
+    """
+    import shlex
+    import sys
+
+    changed = []
+    for module, name in _SPAWNING_EXECUTORS:
+        cls = getattr(sys.modules.get(module), name, None)
+        plain = getattr(cls, "get_python_executable", None)
+        if cls is None or plain is None or getattr(plain, "ssw_quoted", False):
+            continue
+
+        def quoted(self: Any, _plain: Any = plain) -> str:
+            return shlex.quote(str(_plain(self)))
+
+        quoted.ssw_quoted = True  # type: ignore[attr-defined]
+        cls.get_python_executable = quoted
+        changed.append(f"{module}.{name}")
+    return changed
+
+
 def prepare_slurm_run(workflow: Any) -> list[str]:
     """Make a Snakemake run on Slurm see its jobs end, before anything is submitted.
 

@@ -30,6 +30,9 @@ shell.prefix(
     "set -euo pipefail; export PYTHONPATH={SSW_ROOT:q}${{PYTHONPATH:+:$PYTHONPATH}}; "
 )
 SSW_ENV = "../envs/ssw.yaml"
+# Jobs that Snakemake spawns as `python -m snakemake ...` (on Slurm, and the job step inside
+# each job: both read this file) name the interpreter quoted, as every other argument.
+sswwf.quote_job_python()
 
 # A study config is complete by itself: `--configfile other.yaml` replaces
 # config/config.yaml instead of being merged into it (`--config key=value` still applies).

@@ -309,3 +309,26 @@ def test_study_report_renders_in_a_headless_browser(ci_study):
                                   "5. Survey"], seen
     assert seen["images"] and all(w > 0 for _, w in seen["images"]), seen
     assert not seen["blank"], seen
+
+
+def test_spawned_jobs_name_the_interpreter_quoted(monkeypatch):
+    """Snakemake's executors put the interpreter unquoted into a spawned job's command
+    (``python -m snakemake ...``); after ``quote_job_python`` (common.smk) the local one
+    answers a path with a space and an accent quoted, once, and a plain path as it is.
+    (tests/test_slurm.py runs Slurm jobs through the remote ones.)"""
+    import shlex
+
+    from snakemake.executors.local import Executor
+
+    from ssw.workflow import _SPAWNING_EXECUTORS, quote_job_python
+
+    for module, name in _SPAWNING_EXECUTORS:  # put back as they were after the test
+        cls = getattr(sys.modules.get(module), name, None)
+        if cls is not None:
+            monkeypatch.setattr(cls, "get_python_executable", cls.get_python_executable)
+    quote_job_python()
+    quote_job_python()  # idempotent: quoted once
+    for python in ("/home/me/My Études/ssw/.venv/bin/python", "/usr/bin/python3"):
+        monkeypatch.setattr(sys, "executable", python)
+        assert Executor.get_python_executable(None) == shlex.quote(python)
+        assert shlex.split(Executor.get_python_executable(None)) == [python]

@@ -676,7 +676,7 @@ def quote_job_python() -> list[str]:
     ``sys.executable`` into the command line unquoted, its other arguments quoted: a venv
     under a folder whose name holds a space (``~/My Projects/ssw/.venv``) makes every such
     job fail with ``/home/me/My: not found`` (snakemake issue 3211). Each executor class of
-    :data:`_SPAWNING_EXECUTORS` already imported (Snakemake loads the run's executor
+    ``_SPAWNING_EXECUTORS`` already imported (Snakemake loads the run's executor
     plugin before it reads the Snakefile; none is imported here) gets a
     ``get_python_executable`` whose answer is shell-quoted (unchanged for a path without
     special characters). Idempotent.

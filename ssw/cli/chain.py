@@ -26,6 +26,64 @@ def _params_dict(params: Any) -> dict[str, Any]:
     return {f"chain_{k}": v for k, v in asdict(params).items()}
 
 
+def context_strengths(ctx: Any, sample: float | None = None, source: str = "") -> Any:
+    """The strengths of the yield checks (:func:`ssw.validity.strengths_of`) of a resolved
+    chain context: its device's beads and plate in its materials (the calibration's, else
+    the config's library), the sample's ``sample`` (Pa) from ``source`` when known."""
+    from ssw.config import library
+    from ssw.validity import strengths_of
+
+    mats = ctx.calibration.materials() if ctx.calibration is not None else library(ctx.cfg)
+    return strengths_of(ctx.params, mats, ctx.device.bead_material, sample=sample,
+                        sample_source=source)
+
+
+def sample_statement(sample: Any) -> str:
+    """The stated sample geometry a ``finite_sample`` check rests on, in words."""
+    d = sample.to_dict()
+    parts = [f"thickness {d['thickness'] * 1e3:g} mm"]
+    if d.get("radius") is not None:
+        parts.append(f"radius {d['radius'] * 1e3:g} mm")
+    parts += [f"base {d['base']}", f"side {d['lateral']}"]
+    return "the sample as stated: " + ", ".join(parts)
+
+
+def finite_sample_validity(ctx: Any, E: Any, nu: Any, tof: Any) -> Any:
+    """The ``finite_sample`` check of TOFs ``tof`` (s) on the context's stated sample at
+    ``E`` (Pa), ``nu`` (:func:`ssw.validity.half_space_departure`), or None without a
+    stated sample."""
+    from ssw.validity import finite_sample, half_space_departure
+
+    if ctx.sample is None:
+        return None
+    dep = half_space_departure(ctx.params, E, nu, tof, ctx.device_wall_options or {})
+    return finite_sample(dep, sample_statement(ctx.sample))
+
+
+def add_stress_checks_option(p: argparse.ArgumentParser, default: str) -> None:
+    """``--stress-checks`` (:data:`ssw.validity.STRESS_MODES`)."""
+    from ssw.validity import STRESS_MODES
+
+    p.add_argument("--stress-checks", choices=STRESS_MODES, default=default,
+                   help="the yield checks of the sample and the plate (validity): fem (the "
+                   "contact FEM's stresses at the peak wall force), bound (the sample's "
+                   "Hertz upper bound only; no plate check) or none (default "
+                   f"{default})")
+
+
+def human_with_validity(res: dict[str, Any]) -> str:
+    """The generic human summary without the validity fields, then one line per check."""
+    from ssw.cli import _human
+    from ssw.validity import human_lines
+
+    rest = {k: v for k, v in res.items()
+            if k not in ("validity", "checks_failed", "checks_skipped")}
+    lines = [_human(rest)]
+    if "validity" in res:
+        lines += human_lines(res["validity"], res.get("checks_skipped"))
+    return "\n".join(lines)
+
+
 # ---------------------------------------------------------------------------- ssw chain
 def run_chain(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.h5io import atomic_h5, write_dataset
@@ -119,7 +177,21 @@ def run_tof(args: argparse.Namespace) -> dict[str, Any]:
         "f_reflected": float(pk.f_reflected[0]), "dt": run.dt,
         "peak_wall_indentation": float(run.peak_wall_indentation[0]),
         "striker_velocity": params.striker_velocity, **extra,
+        **_point_validity(args, ctx, pk, run).to_dict(0),
     }
+
+
+def _point_validity(args: argparse.Namespace, ctx: Any, pk: Any, run: Any) -> Any:
+    """The checks of ``ssw tof``'s run at ``--soil-E``/``--soil-nu`` (ssw.validity)."""
+    from ssw.validity import assess, fem_options
+    from ssw.walls import build_wall
+
+    E, nu = np.atleast_1d(float(args.soil_E)), np.atleast_1d(float(args.soil_nu))
+    wall = build_wall(ctx.wall, ctx.params, E, nu, **ctx.wall_options)
+    v = assess(ctx.params, E, nu, run, pk, wall, strengths=context_strengths(ctx),
+               stresses=args.stress_checks, **fem_options(ctx.wall, ctx.wall_options))
+    fs = finite_sample_validity(ctx, E, nu, pk.tof)
+    return v if fs is None else v.merged(fs)
 
 
 def _run_hits(args: argparse.Namespace) -> dict[str, Any]:
@@ -216,6 +288,7 @@ def _sweep_points(args: argparse.Namespace, cfg: dict[str, Any]) -> tuple[np.nda
 
 def run_tof_sweep(args: argparse.Namespace) -> dict[str, Any] | None:
     import time
+    from dataclasses import replace
 
     from ssw.config import load_config
     from ssw.tof.sweep import chunk_slice, run_sweep, write_csv, write_sweep
@@ -238,7 +311,11 @@ def run_tof_sweep(args: argparse.Namespace) -> dict[str, Any] | None:
     t0 = time.perf_counter()
     with progress_bar(E.size, desc="TOF sweep", unit="pt",
                       enabled=False if comm is not None and comm.Get_rank() else None) as bar:
-        sw = run_sweep(params, E, nu, wall, comm=comm, on_progress=bar, **opts)
+        sw = run_sweep(params, E, nu, wall, comm=comm, on_progress=bar,
+                       strengths=context_strengths(ctx), stresses=args.stress_checks, **opts)
+    if ctx.sample is not None and sw.validity is not None:  # its half-space reading
+        fs = finite_sample_validity(ctx, sw.soil_E, sw.soil_nu, sw.tof)
+        sw = replace(sw, validity=sw.validity.merged(fs))
     wall_time = time.perf_counter() - t0
     if comm is not None and comm.Get_rank() != 0:
         return None  # rank 0 writes and reports
@@ -254,10 +331,14 @@ def run_tof_sweep(args: argparse.Namespace) -> dict[str, Any] | None:
         from ssw.tof.sweep import plot_fig8
 
         plot_fig8(args.plot, sw.sorted(), f"TOF vs soil modulus, {wall} wall (cf. thesis Fig 8)")
+    checks = sw.validity.columns()
     return {
         **ctx.inputs(), "soil_E": sw.soil_E, "soil_nu": sw.soil_nu, "tof": sw.tof,
         "points": int(sw.tof.size), "wall_time": wall_time,
         "ranks": 1 if comm is None else comm.Get_size(),
+        "validity": {k: v.tolist() for k, v in checks.items()},
+        "validity_meta": sw.validity.meta(),
+        "points_failing_checks": int(sum(bool(x) for x in checks["checks_failed"])),
     }
 
 
@@ -378,8 +459,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "auto (exact forward sensitivities where the wall states its "
                    "derivatives, else central differences; the dynamic FEM wall only with "
                    "central), forward, central or none")
+    add_stress_checks_option(p, "fem")
     add_json_flag(p)
-    p.set_defaults(func=run_tof)
+    p.set_defaults(func=run_tof, human=human_with_validity)
 
     p = sub.add_parser("tof-sweep", help="TOF over a grid of soil E and nu (batched)",
                        description="TOF(E, nu); without --soil-E-min the config's "
@@ -397,6 +479,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--output", help="output HDF5 (kind tof_sweep)")
     p.add_argument("--csv", help="also write this CSV")
     p.add_argument("--plot", help="also draw the Fig 8 style PNG (a whole sweep: one chunk)")
+    add_stress_checks_option(p, "bound")
     add_json_flag(p)
     p.set_defaults(func=run_tof_sweep)
 

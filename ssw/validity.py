@@ -409,8 +409,9 @@ class Strengths:
 
     Attributes
     ----------
-    sample : float or None
-        The sample's (None: ``ratio E``, an assumption named in the entries).
+    sample : float, numpy.ndarray or None
+        The sample's (one per scene, or one for all; None: ``ratio E``, an assumption
+        named in the entries; NaN in an array: that scene's sample states none).
     sample_source : str
         Where it comes from (a library material, a flag).
     plate : float or None
@@ -422,7 +423,7 @@ class Strengths:
         (:data:`ssw.design.spec.SOIL_STRENGTH_RATIO`).
     """
 
-    sample: float | None = None
+    sample: float | np.ndarray | None = None
     sample_source: str = ""
     plate: float | None = None
     bead: float | None = None
@@ -432,15 +433,20 @@ class Strengths:
         """The sample's strength (Pa) at moduli ``E`` (Pa), and the assumption it rests on
         (None when it is stated)."""
         E = np.asarray(E, float)
-        if self.sample is not None:
-            return np.full(E.shape, float(self.sample)), None
-        return self.ratio * E, (f"Y_sample = {self.ratio:g} E, ssw design's stated "
-                                "assumption (no strength given: --sample-strength or "
-                                "--sample-material states one)")
+        what = (f"Y_sample = {self.ratio:g} E, ssw design's stated assumption (no strength "
+                "given: --sample-strength or --sample-material states one)")
+        if self.sample is None:
+            return self.ratio * E, what
+        Y = np.broadcast_to(np.asarray(self.sample, float), E.shape).copy()
+        missing = ~np.isfinite(Y)
+        if np.any(missing):  # a scene whose sample states no strength: the assumption
+            Y[missing] = self.ratio * E[missing]
+            return Y, what + " where the sample states none"
+        return Y, None
 
 
 def strengths_of(params: Any, materials: dict[str, Any], bead_material: str | None, *,
-                 sample: float | None = None, sample_source: str = "") -> Strengths:
+                 sample: Any = None, sample_source: str = "") -> Strengths:
     """The strengths of a device's beads and plate (the library's) and its sample.
 
     Parameters
@@ -451,8 +457,8 @@ def strengths_of(params: Any, materials: dict[str, Any], bead_material: str | No
         The materials library (key -> :class:`ssw.materials.Material`).
     bead_material : str or None
         The beads' material key (the device's).
-    sample : float or None
-        The sample's uniaxial strength, Pa, when known.
+    sample : float, array_like or None
+        The sample's uniaxial strength, Pa, when known (one per scene, or one).
     sample_source : str
         Where it comes from.
 
@@ -474,7 +480,8 @@ def strengths_of(params: Any, materials: dict[str, Any], bead_material: str | No
 
     plate = (of(params.plate_material, ("yield_stress",)) if params.plate_thickness > 0
              else None)
-    return Strengths(sample=None if sample is None else float(sample),
+    return Strengths(sample=None if sample is None else np.asarray(sample, float)
+                     if np.ndim(sample) else float(sample),
                      sample_source=sample_source, plate=plate,
                      bead=of(bead_material, ("yield_stress", "compressive")),
                      ratio=SOIL_STRENGTH_RATIO)
@@ -580,7 +587,7 @@ def assess(params: Any, E: Any, nu: Any, run: Any, pk: Any, wall: Any, *,
     if what is not None:
         assumed["sample_yield"] = what
     elif strengths.sample_source:
-        notes["sample_yield"] = f"strength {strengths.sample:.4g} Pa ({strengths.sample_source})"
+        notes["sample_yield"] = f"the sample's strength: {strengths.sample_source}"
     if stresses == "bound":
         vals["sample_yield"] = BOUND_MARGIN * first_yield_index(force, E, nu,
                                                                 params.bead_radius, Y)

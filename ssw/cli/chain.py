@@ -26,10 +26,11 @@ def _params_dict(params: Any) -> dict[str, Any]:
     return {f"chain_{k}": v for k, v in asdict(params).items()}
 
 
-def context_strengths(ctx: Any, sample: float | None = None, source: str = "") -> Any:
+def context_strengths(ctx: Any, sample: Any = None, source: str = "") -> Any:
     """The strengths of the yield checks (:func:`ssw.validity.strengths_of`) of a resolved
     chain context: its device's beads and plate in its materials (the calibration's, else
-    the config's library), the sample's ``sample`` (Pa) from ``source`` when known."""
+    the config's library), the sample's ``sample`` (Pa, one or one per scene) from
+    ``source`` when known."""
     from ssw.config import library
     from ssw.validity import strengths_of
 
@@ -409,7 +410,8 @@ def run_invert(args: argparse.Namespace) -> dict[str, Any]:
         return {**ctx.inputs(), "E": float(res.E), "E_low": float(res.E_low),
                 "E_high": float(res.E_high), "interval": "E(TOF -+ tof_std) on the sweep",
                 "interval_clipped": bool(res.clipped), "tof_range": list(res.tof_range),
-                "E_range": list(res.E_range)}
+                "E_range": list(res.E_range),
+                **_inverse_validity(args, ctx, float(res.E), nu).to_dict(0)}
     from ssw.modulus import estimate_moduli
 
     nu_arg = np.array(nu, float) if isinstance(nu, tuple) else nu
@@ -421,7 +423,19 @@ def run_invert(args: argparse.Namespace) -> dict[str, Any]:
         "Poisson's ratio range, wall law and integrator contributions",
         "contributions_pct": {k: 100.0 * v for k, v in est.contributions.items()},
         "E_range": list(E_range),
+        **_inverse_validity(args, ctx, float(est.E), est.nu).to_dict(0),
     }
+
+
+def _inverse_validity(args: argparse.Namespace, ctx: Any, E: float, nu: float) -> Any:
+    """The checks of an inverted E (ssw.validity.assess_at: the chain at E, nu), with the
+    stated sample's half-space reading of ``--tof``."""
+    from ssw.validity import assess_at
+
+    v = assess_at(E, nu, ctx.params, ctx.wall, ctx.wall_options,
+                  strengths=context_strengths(ctx), stresses=args.stress_checks)
+    fs = finite_sample_validity(ctx, E, nu, args.tof)
+    return v if fs is None else v.merged(fs)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -503,5 +517,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--soil-E-min", type=float, default=10.0e6, help="range searched, Pa")
     p.add_argument("--soil-E-max", type=float, default=1000.0e6, help="range searched, Pa")
     p.add_argument("--table", help="use a stored sweep (tof_sweep HDF5) instead of the model")
+    add_stress_checks_option(p, "fem")
     add_json_flag(p)
-    p.set_defaults(func=run_invert)
+    p.set_defaults(func=run_invert, human=human_with_validity)

@@ -71,6 +71,8 @@ class SampleResult:
     tof_sim_published: float | None = None
     E_published: float | None = None
     E_cov_published: float | None = None
+    validity: list[dict[str, Any]] = field(default_factory=list)
+    checks_failed: list[str] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -104,7 +106,7 @@ def inverse_range(wall: str, wall_options: dict[str, Any], params: Any) -> tuple
 def validate_samples(
     cfg: dict[str, Any], params: Any, wall: str, wall_options: dict[str, Any], *,
     root: str | Path = ".", tof_options: Any = None, calibration: Any = None,
-    full_scale: float | None = None,
+    full_scale: float | None = None, strengths: Any = None,
 ) -> list[SampleResult]:
     """Compute the validation rows of every sample in ``cfg['validation']['samples']``.
 
@@ -113,7 +115,8 @@ def validate_samples(
     paths start from; ``calibration`` the :class:`ssw.calibration.Calibration` (its
     covariance enters the E intervals, its leave-one-out rows the E_loo column);
     ``full_scale`` (N) the device's largest unclipped force, the recordings' hits are
-    checked against.
+    checked against; ``strengths`` (:class:`ssw.validity.Strengths`: the beads' and the
+    plate's) gives each row its checks at its measured E (:func:`sample_checks`).
     """
     from ssw.calibration.references import from_config
     from ssw.config import library
@@ -172,6 +175,10 @@ def validate_samples(
             extras[i]["E_per_hit"] = inv.E[k:k + h.size].tolist()
             k += h.size
     loo = {row["id"]: row for row in (calibration.loo if calibration is not None else [])}
+    checks = (None if strengths is None else
+              sample_checks(samples, mats, np.array([e.E for e in est]),
+                            np.array([e.nu for e in est]), params, wall, wall_options,
+                            strengths))
     rows = []
     for i, smp in enumerate(samples):
         e = est[i]
@@ -196,6 +203,30 @@ def validate_samples(
             tof_published=smp.get("tof_published"),
             tof_sim_published=smp.get("tof_sim_published"),
             E_published=smp.get("E_published"), E_cov_published=smp.get("E_cov_published"),
+            validity=[] if checks is None else checks.entries(i),
+            checks_failed=[] if checks is None else checks.failed(i),
             **extra,
         ))
     return rows
+
+
+def sample_checks(samples: list[dict[str, Any]], mats: dict[str, Any], E: np.ndarray,
+                  nu: np.ndarray, params: Any, wall: str, wall_options: dict[str, Any],
+                  strengths: Any) -> Any:
+    """The checks (:func:`ssw.validity.assess_at`, the contact FEM's stresses) of the
+    samples at their measured moduli ``E`` (Pa) and ``nu``, in one batched run: each
+    sample's yield against its library material's uniaxial strength
+    (:func:`ssw.measure.uniaxial_strength`), the stated assumption where it has none."""
+    from dataclasses import replace
+
+    from ssw.measure import uniaxial_strength
+    from ssw.validity import assess_at
+
+    Y = [uniaxial_strength(getattr(mats[s["material"]], "strength", None)) for s in samples]
+    src = "; ".join(f"{s['id']}: the library's {s['material']} "
+                    f"({'none stated' if y is None else f'{y:.4g} Pa'})"
+                    for s, y in zip(samples, Y, strict=True))
+    st = replace(strengths, sample=np.array([np.nan if y is None else y for y in Y], float),
+                 sample_source=src)
+    return assess_at(E, nu, params, wall, wall_options, strengths=st, stresses="fem")
+

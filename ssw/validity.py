@@ -389,18 +389,17 @@ def pulse_overlap(run: Any, pk: Any) -> np.ndarray:
 def first_yield_index(force: Any, E: Any, nu: Any, radius: float, strength: Any) -> np.ndarray:
     """Hertz's first-yield index ``p0 / (k(nu) Y)`` of forces ``F`` (N) of a rigid sphere of
     ``radius`` (m) on a half-space of ``E`` (Pa), ``nu`` and uniaxial strength ``Y`` (Pa):
-    ``p0 = 2 E* a / (pi R)``, ``a`` from ``F = 4/3 E* sqrt(R) delta^1.5``, ``E* = E / (1 -
-    nu^2)`` (Johnson 1985, eq. 4.23); ``k`` = 1.61 at nu 0.3 (sec. 6.1,
-    :func:`ssw.constitutive.yield_index.first_yield_ratio`). Two identical beads of radius R
-    and modulus E have the same ``p0`` (``R* = R/2``, ``E* = E / (2 (1 - nu^2))``)."""
-    from ssw import hertz
-    from ssw.constitutive.yield_index import first_yield_ratio
+    ``p0 = (6 F E*^2 / (pi^3 R^2))^(1/3)``, ``E* = E / (1 - nu^2)`` (Johnson 1985, eq. 4.23,
+    :func:`ssw.constitutive.yield_index.hertz_peak_pressure`); ``k`` = 1.61 at nu 0.3
+    (sec. 6.1, :func:`ssw.constitutive.yield_index.first_yield_ratio`). Two identical beads
+    of radius R and modulus E have the same ``p0`` (``R* = R/2``, ``E* = E / (2 (1 -
+    nu^2))``)."""
+    from ssw.constitutive.yield_index import first_yield_ratio, hertz_peak_pressure
 
-    E, nu = np.broadcast_arrays(np.asarray(E, float), np.asarray(nu, float))
-    Es = E / (1.0 - nu**2)
-    p0 = hertz.peak_pressure(hertz.indentation(force, Es, radius), Es, radius)
-    k = np.vectorize(first_yield_ratio, otypes=[float])(nu)
-    return p0 / (k * np.asarray(strength, float))
+    p0 = hertz_peak_pressure(np.asarray(force, float), E, nu, radius)
+    ratios, where = np.unique(np.asarray(nu, float), return_inverse=True)
+    k = np.array([first_yield_ratio(float(v)) for v in ratios])[where]
+    return p0 / (k.reshape(np.shape(nu)) * np.asarray(strength, float))
 
 
 @dataclass(frozen=True)

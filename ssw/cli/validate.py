@@ -36,7 +36,8 @@ def run_validate(args: argparse.Namespace) -> dict[str, Any]:
     rows = validate_samples(cfg, params, wall, opts, root=args.root, tof_options=tof_opts,
                             calibration=ctx.calibration,
                             full_scale=ctx.device.full_scale_force,
-                            strengths=context_strengths(ctx))
+                            strengths=context_strengths(ctx),
+                            stresses=args.stress_checks)
     out: dict[str, Any] = {**ctx.inputs(), "samples": [r.to_dict() for r in rows],
                            "E_range": list(E_range)}
     if args.outdir:
@@ -103,5 +104,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sweep", nargs="+",
                    help="the chain's TOF(E, nu) sweep HDF5 (or its parts), drawn in Fig 10")
     add_device_options(p)
+    from ssw.cli.chain import add_stress_checks_option
+
+    # bound: the study's validation stays cheap (the contact FEM's stresses factor one
+    # soil body per sample's Poisson's ratio, 0.45 s each); fem on request
+    add_stress_checks_option(p, "bound")
     add_json_flag(p)
     p.set_defaults(func=run_validate, human=_human)

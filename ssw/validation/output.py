@@ -35,12 +35,15 @@ def check_names(rows: list[SampleResult]) -> list[str]:
 
 def to_csv_text(rows: list[SampleResult]) -> str:
     """CSV text; the header names each column with its unit, ``name [unit]``. After the
-    thesis's columns, each check's value (dimensionless, ``[1]``; empty where a row has
-    none) and ``checks_failed`` (the failing checks, ``;``-joined)."""
+    thesis's columns, each check's value (dimensionless, ``[1]``; ``_upper_bound`` after the
+    name of an upper bound; empty where a row has none) and ``checks_failed`` (the failing
+    checks, ``;``-joined)."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     checks = check_names(rows)
-    tail = [f"{k} [1]" for k in checks] + (["checks_failed"] if checks else [])
+    bounds = {e["check"] for r in rows for e in r.validity if e.get("bound") == "upper"}
+    tail = ([f"{k}_upper_bound [1]" if k in bounds else f"{k} [1]" for k in checks]
+            + (["checks_failed"] if checks else []))
     w.writerow([f"{k} [{u}]" if u else k for k, u in COLUMNS.items()] + tail)
     for r in rows:
         d = r.to_dict()

@@ -106,7 +106,7 @@ def inverse_range(wall: str, wall_options: dict[str, Any], params: Any) -> tuple
 def validate_samples(
     cfg: dict[str, Any], params: Any, wall: str, wall_options: dict[str, Any], *,
     root: str | Path = ".", tof_options: Any = None, calibration: Any = None,
-    full_scale: float | None = None, strengths: Any = None,
+    full_scale: float | None = None, strengths: Any = None, stresses: str = "bound",
 ) -> list[SampleResult]:
     """Compute the validation rows of every sample in ``cfg['validation']['samples']``.
 
@@ -116,7 +116,8 @@ def validate_samples(
     covariance enters the E intervals, its leave-one-out rows the E_loo column);
     ``full_scale`` (N) the device's largest unclipped force, the recordings' hits are
     checked against; ``strengths`` (:class:`ssw.validity.Strengths`: the beads' and the
-    plate's) gives each row its checks at its measured E (:func:`sample_checks`).
+    plate's) gives each row its checks at its measured E (:func:`sample_checks`, with the
+    stress mode ``stresses``, :data:`ssw.validity.STRESS_MODES`).
     """
     from ssw.calibration.references import from_config
     from ssw.config import library
@@ -178,7 +179,7 @@ def validate_samples(
     checks = (None if strengths is None else
               sample_checks(samples, mats, np.array([e.E for e in est]),
                             np.array([e.nu for e in est]), params, wall, wall_options,
-                            strengths))
+                            strengths, stresses))
     rows = []
     for i, smp in enumerate(samples):
         e = est[i]
@@ -212,11 +213,12 @@ def validate_samples(
 
 def sample_checks(samples: list[dict[str, Any]], mats: dict[str, Any], E: np.ndarray,
                   nu: np.ndarray, params: Any, wall: str, wall_options: dict[str, Any],
-                  strengths: Any) -> Any:
-    """The checks (:func:`ssw.validity.assess_at`, the contact FEM's stresses) of the
-    samples at their measured moduli ``E`` (Pa) and ``nu``, in one batched run: each
-    sample's yield against its library material's uniaxial strength
-    (:func:`ssw.measure.uniaxial_strength`), the stated assumption where it has none."""
+                  strengths: Any, stresses: str = "bound") -> Any:
+    """The checks (:func:`ssw.validity.assess_at`; ``stresses``: the sample's upper bound,
+    or the contact FEM's stresses with ``fem``) of the samples at their measured moduli
+    ``E`` (Pa) and ``nu``, in one batched run: each sample's yield against its library
+    material's uniaxial strength (:func:`ssw.measure.uniaxial_strength`), the stated
+    assumption where it has none."""
     from dataclasses import replace
 
     from ssw.measure import uniaxial_strength
@@ -228,5 +230,5 @@ def sample_checks(samples: list[dict[str, Any]], mats: dict[str, Any], E: np.nda
                     for s, y in zip(samples, Y, strict=True))
     st = replace(strengths, sample=np.array([np.nan if y is None else y for y in Y], float),
                  sample_source=src)
-    return assess_at(E, nu, params, wall, wall_options, strengths=st, stresses="fem")
+    return assess_at(E, nu, params, wall, wall_options, strengths=st, stresses=stresses)
 

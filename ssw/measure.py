@@ -214,9 +214,10 @@ def measure(
         budget as a uniform term, ``|ln(E_hi / E_lo)| / (2 sqrt 3)`` (``sample``).
     strengths : ssw.validity.Strengths or None
         The strengths of the beads and the plate (:func:`ssw.validity.strengths_of`): with
-        them, the measurement carries its checks (``validity``: :func:`ssw.validity.
-        assess_at` at the measured E), the sample's yield against ``strength`` when given,
-        else against ``ssw design``'s stated assumption, named in the entry.
+        them, the measurement carries its checks (``validity``:
+        :func:`ssw.validity.assess_at` at the measured E), the sample's yield against
+        ``strength`` when given, else against ``ssw design``'s stated assumption, named in
+        the entry.
     stresses : str
         The checks' stress mode (:data:`ssw.validity.STRESS_MODES`).
     """

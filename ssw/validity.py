@@ -21,8 +21,9 @@ The checks (``check``: value <= limit):
 * ``plate_deflection``: ``d / t``, the peak indentation (an upper bound of the plate's
   deflection: the bead's own approach is in it) over the plate's thickness, <= 0.5. The
   plate of the contact FEM is linear (small deflection, Kirchhoff); small-deflection theory
-  holds while the deflection stays under half the thickness (Ross, *Mechanics of Solids*,
-  ch. 19); beyond it membrane stretching stiffens the plate (a clamped circular plate:
+  holds while the deflection stays under half the thickness (the textbook boundary between
+  small and large deflections of plates, e.g. Ross, *Mechanics of Solids*, "Lateral
+  deflections of circular plates" [edition recalled]); beyond it membrane stretching stiffens the plate (a clamped circular plate:
   ``w/h + 0.488 (w/h)^3`` against the linear ``w/h``, 12 % at ``w = h/2``; Timoshenko and
   Woinowsky-Krieger 1959, sec. 96 [coefficient recalled, unconfirmed]).
 * ``wall_reach``: the peak indentation over the reach of the wall law's exact part (the
@@ -40,10 +41,11 @@ The checks (``check``: value <= limit):
   the hit's peak wall force, through the plate, under the elastic bead:
   :func:`ssw.walls.fem.peak_stresses`) over its uniaxial strength <= 1 (first yield,
   Johnson 1985, sec. 6.1). The strength is the library material's, or a stated one; else
-  ``ssw design``'s stated assumption ``Y = 0.01 E`` (:data:`ssw.design.spec.
-  SOIL_STRENGTH_RATIO`), named in the entry's ``assumed``. Where FEM stresses are not
-  evaluated (a sweep, by default), the value is an upper bound: Hertz's first-yield index of
-  a rigid sphere of the bead's radius on the bare sample at the same force, times
+  ``ssw design``'s stated assumption ``Y = 0.01 E``
+  (:data:`ssw.design.spec.SOIL_STRENGTH_RATIO`), named in the entry's ``assumed``. Where
+  the FEM's stresses are not evaluated (a sweep and ``ssw validate`` by default:
+  ``--stress-checks bound``), the value is an upper bound: Hertz's first-yield index of a
+  rigid sphere of the bead's radius on the bare sample at the same force, times
   :data:`BOUND_MARGIN` (a plate spreads the load and an elastic bead presses less; measured
   on the thesis device: the FEM's value is 0.4-0.85 of the bare Hertz one under its PLA
   plate, and within 2.5 % of it without a plate), ``"bound": "upper"``: above its limit,
@@ -61,7 +63,8 @@ Johnson, K. L. (1985). *Contact Mechanics*. Cambridge, sec. 4.2, 6.1.
 Sneddon, I. N. (1965). The relation between load and penetration in the axisymmetric
 Boussinesq problem for a punch of arbitrary profile. Int. J. Eng. Sci. 3, 47-57.
 Tabor, D. (1951). *The Hardness of Metals*. Oxford.
-Ross, C. T. F. (1999). *Mechanics of Solids*. Horwood, ch. 19.
+Ross, C. T. F. *Mechanics of Solids*. Horwood, "Lateral deflections of circular plates"
+[edition recalled, unconfirmed].
 Timoshenko, S. P. and Woinowsky-Krieger, S. (1959). *Theory of Plates and Shells*, 2nd ed.
 McGraw-Hill, ch. 13.
 """
@@ -133,7 +136,8 @@ PLATE_DEFLECTION = register(Rule(
     "plate_deflection", "d/t: the peak wall indentation (an upper bound of the plate's "
     "deflection) over the plate's thickness", 0.5, "1",
     "small deflection of the plate (linear Kirchhoff plate in the contact FEM)",
-    "Ross, Mechanics of Solids, ch. 19 (small-deflection theory up to half the thickness); "
+    "Ross, Mechanics of Solids, lateral deflections of circular plates (small-deflection "
+    "theory up to half the thickness); "
     "Timoshenko & Woinowsky-Krieger 1959 sec. 96 (membrane stiffening ~0.49 (w/h)^2, 12 % "
     "at the limit; coefficient recalled)"))
 WALL_REACH = register(Rule(

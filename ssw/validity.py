@@ -23,9 +23,10 @@ The checks (``check``: value <= limit):
   plate of the contact FEM is linear (small deflection, Kirchhoff); small-deflection theory
   holds while the deflection stays under half the thickness (the textbook boundary between
   small and large deflections of plates, e.g. Ross, *Mechanics of Solids*, "Lateral
-  deflections of circular plates" [edition recalled]); beyond it membrane stretching stiffens the plate (a clamped circular plate:
-  ``w/h + 0.488 (w/h)^3`` against the linear ``w/h``, 12 % at ``w = h/2``; Timoshenko and
-  Woinowsky-Krieger 1959, sec. 96 [coefficient recalled, unconfirmed]).
+  deflections of circular plates" [edition recalled]); beyond it membrane stretching
+  stiffens the plate (a clamped circular plate: ``w/h + 0.488 (w/h)^3`` against the
+  linear ``w/h``, 12 % at ``w = h/2``; Timoshenko and Woinowsky-Krieger 1959, sec. 96
+  [coefficient recalled, unconfirmed]).
 * ``wall_reach``: the peak indentation over the reach of the wall law's exact part (the
   FEM law's computed range, a table's end) <= 1; beyond it the force is an extension
   (:func:`ssw.chain.wall.beyond_exact_reach`).

@@ -214,8 +214,8 @@ def measure(
         budget as a uniform term, ``|ln(E_hi / E_lo)| / (2 sqrt 3)`` (``sample``).
     strengths : ssw.validity.Strengths or None
         The strengths of the beads and the plate (:func:`ssw.validity.strengths_of`): with
-        them, the measurement carries its checks (``validity``:
-        :func:`ssw.validity.assess_at` at the measured E), the sample's yield against
+        them, the measurement carries its checks (``validity``: :func:`ssw.validity.assess`
+        of the chain at the measured E), the sample's yield against
         ``strength`` when given, else against ``ssw design``'s stated assumption, named in
         the entry.
     stresses : str
@@ -291,18 +291,19 @@ def measure(
 def _checks(est: Any, params: Any, wall: str, wall_options: dict[str, Any] | None,
             strengths: Any, strength: float | None, stresses: str, notes: list[str]
             ) -> dict[str, Any]:
-    """The checks of a measurement at its E (:func:`ssw.validity.assess_at`), the sample's
+    """The checks of a measurement at its E (the chain run there,
+    :func:`ssw.tof.sweep.run_sweep`, and :func:`ssw.validity.assess`), the sample's
     ``strength`` (Pa) when known; a note when the sample may have yielded under an assumed
     strength."""
     from dataclasses import replace as _replace
 
-    from ssw.validity import assess_at
+    from ssw.tof.sweep import run_sweep
 
     if strength is not None:
         strengths = _replace(strengths, sample=float(strength),
                              sample_source=strengths.sample_source or "stated")
-    v = assess_at(est.E, est.nu, params, wall, dict(wall_options or {}), strengths=strengths,
-                  stresses=stresses)
+    v = run_sweep(params, np.array([est.E]), np.array([est.nu]), wall, strengths=strengths,
+                  stresses=stresses, **dict(wall_options or {})).validity
     if "sample_yield" in v.values and "sample_yield" in v.assumed \
             and not v.holds("sample_yield")[0]:
         notes.append(f"the sample may have yielded under the bead: its yield index is "

@@ -6,8 +6,10 @@ over, a half-space under the plate, and incident and reflected pulses apart at t
 This module owns the checks (the registry :data:`RULES`, one :class:`Rule` each: what the
 value is, its limit and the source of the limit) and evaluates them from what a run already
 computed (pure functions of the peak wall indentation, the contact forces, the sensor signal,
-the contact's elastic stresses). Commands only attach the result, a :class:`Validity`: per
-check one value per scene, ``holds`` where the value is at or below its limit. A failing
+the contact's elastic stresses: :func:`assess`; a sweep's run,
+:func:`ssw.tof.sweep.run_sweep`, carries them for its points and for the single point of an
+inverted E). Commands only attach the result, a :class:`Validity`: per check one value per
+scene, ``holds`` where the value is at or below its limit. A failing
 check never changes a number: it says which assumption the number was computed beyond.
 
 The checks (``check``: value <= limit):
@@ -42,8 +44,8 @@ The checks (``check``: value <= limit):
   the hit's peak wall force, through the plate, under the elastic bead:
   :func:`ssw.walls.fem.peak_stresses`) over its uniaxial strength <= 1 (first yield,
   Johnson 1985, sec. 6.1). The strength is the library material's, or a stated one; else
-  ``ssw design``'s stated assumption ``Y = 0.01 E``
-  (:data:`ssw.design.spec.SOIL_STRENGTH_RATIO`), named in the entry's ``assumed``. Where
+  ``ssw design``'s stated assumption ``Y = 0.01 E`` (:data:`SOIL_STRENGTH_RATIO`), named
+  in the entry's ``assumed``. Where
   the FEM's stresses are not evaluated (a sweep and ``ssw validate`` by default:
   ``--stress-checks bound``), the value is an upper bound: Hertz's first-yield index of a
   rigid sphere of the bead's radius on the bare sample at the same force, times
@@ -77,6 +79,11 @@ from typing import Any
 
 import numpy as np
 
+#: A sample's strength over its modulus where none is stated: ``ssw design``'s stated
+#: assumption (:mod:`ssw.design.spec`: inside the range of compacted clays, ``E_u / s_u``
+#: 100-1500 with ``Y = 2 s_u``, Duncan & Buchignani 1976, and of rigid polyurethane foams,
+#: compressive strength ~0.04 E [U]), named in every entry that rests on it.
+SOIL_STRENGTH_RATIO = 0.01
 #: Factor on the bare Hertz first-yield index that makes it an upper bound of the contact
 #: FEM's (the FEM's largest excess over Hertz without a plate, 2.5 % at 1 MPa, rounded up;
 #: tests/test_validity.py).
@@ -424,14 +431,14 @@ class Strengths:
         The beads' yield stress or compressive strength (None: no bead check).
     ratio : float
         The assumed strength over modulus of a sample without one
-        (:data:`ssw.design.spec.SOIL_STRENGTH_RATIO`).
+        (:data:`SOIL_STRENGTH_RATIO`).
     """
 
     sample: float | np.ndarray | None = None
     sample_source: str = ""
     plate: float | None = None
     bead: float | None = None
-    ratio: float = 0.01
+    ratio: float = SOIL_STRENGTH_RATIO
 
     def sample_at(self, E: Any) -> tuple[np.ndarray, str | None]:
         """The sample's strength (Pa) at moduli ``E`` (Pa), and the assumption it rests on
@@ -471,8 +478,6 @@ def strengths_of(params: Any, materials: dict[str, Any], bead_material: str | No
     Strengths
         With the design's assumed ratio for a sample without a strength.
     """
-    from ssw.design.spec import SOIL_STRENGTH_RATIO
-
     def of(key: str | None, fields: tuple[str, ...]) -> float | None:
         m = materials.get(key) if key else None
         st = getattr(m, "strength", None)
@@ -619,69 +624,16 @@ def assess(params: Any, E: Any, nu: Any, run: Any, pk: Any, wall: Any, *,
     return Validity(vals, assumed, bound, notes, skipped)
 
 
-def assess_at(E: Any, nu: Any, params: Any, wall: str, wall_options: dict[str, Any], *,
-              strengths: Strengths, stresses: str = "fem") -> Validity:
-    """:func:`assess` of the chain run at moduli ``E`` (Pa) and ``nu`` on the wall law
-    ``wall`` with ``wall_options`` (one batched run; a result inverted to E).
-
-    Parameters
-    ----------
-    E : array_like
-        Pa, broadcast with ``nu``.
-    nu : array_like
-        -.
-    params : ssw.chain.params.ChainParams
-        The chain.
-    wall : str
-        A law of :data:`ssw.walls.WALLS`.
-    wall_options : dict
-        Its options.
-    strengths : Strengths
-        The strengths of the yield checks.
-    stresses : str
-        As :func:`assess`.
-
-    Returns
-    -------
-    Validity
-        One value per scene and check.
-    """
-    from ssw.tof.api import peaks
-    from ssw.walls import build_wall
-
-    E, nu = (np.atleast_1d(np.asarray(x, float)) for x in np.broadcast_arrays(E, nu))
-    pk, run = peaks(E, nu, params, wall, strict=False, **wall_options)
-    w = build_wall(wall, params, E, nu, **wall_options)
-    return assess(params, E, nu, run, pk, w, strengths=strengths, stresses=stresses,
-                  **fem_options(wall, wall_options))
-
-
 def fem_options(wall: str, wall_options: dict[str, Any]) -> dict[str, Any]:
     """``contact`` and ``operators`` of a wall's options for the contact FEM's stresses
     (the fem wall's own; another law's: the study's contact settings, if given)."""
     return {k: v for k, v in wall_options.items() if k in ("contact", "operators")}
 
 
-def half_space_departure(params: Any, E: Any, nu: Any, tof: Any,
-                         half_space_options: dict[str, Any]) -> np.ndarray:
-    """The relative error of E a half-space reading makes on a stated sample: the sample's
-    TOF ``tof`` (s) at ``E`` (Pa), ``nu``, read through the fem wall of the half-space
-    (``half_space_options``: the device's contact settings without the sample), to first
-    order ``ln(tof / TOF_half) / (d ln TOF_half / d ln E)`` (the exact forward sensitivity,
-    :func:`ssw.tof.api.tof_derivatives`). (n,) relative (signed)."""
-    from ssw.tof.api import tof_derivatives
-
-    E, nu = (np.atleast_1d(np.asarray(x, float)) for x in np.broadcast_arrays(E, nu))
-    res = tof_derivatives(E, nu, params, "fem", derivatives=("E",), strict=False,
-                          **fem_options("fem", half_space_options))
-    half = np.asarray(res.tof, float)
-    slope = E * np.asarray(res.dtof["E"], float) / half
-    return np.log(np.asarray(tof, float) / half) / slope
-
-
 def finite_sample(departure: Any, assumed: str) -> Validity:
     """The ``finite_sample`` check of relative errors ``departure`` (n,) of a half-space
-    reading, resting on the stated geometry ``assumed``."""
+    reading (:func:`ssw.lift.half_space_departure`, :func:`ssw.lift.lift_errors`), resting
+    on the stated geometry ``assumed``."""
     return Validity({"finite_sample": np.abs(np.atleast_1d(np.asarray(departure, float)))},
                     assumed={"finite_sample": assumed})
 

@@ -30,7 +30,6 @@ from ssw.validity import (
     contact_radius_ratio,
     first_yield_index,
     from_entries,
-    half_space_departure,
     pulse_overlap,
     reach_ratio,
     stress_indices,
@@ -196,6 +195,7 @@ def test_half_space_departure_against_central_differences_of_tofs():
     central differences of `ssw.tof.api.tof` at E (1 +- 1 %). A TOF 0.5 % shorter than the
     half-space's reads as a stiffer half-space (a positive error of about 0.005 / S); the
     half-space's own TOF departs by 0."""
+    from ssw.lift import half_space_departure
     from ssw.tof.api import tof
 
     p = thesis()

@@ -51,9 +51,10 @@ def sample_statement(sample: Any) -> str:
 
 def finite_sample_validity(ctx: Any, E: Any, nu: Any, tof: Any) -> Any:
     """The ``finite_sample`` check of TOFs ``tof`` (s) on the context's stated sample at
-    ``E`` (Pa), ``nu`` (:func:`ssw.validity.half_space_departure`), or None without a
+    ``E`` (Pa), ``nu`` (:func:`ssw.lift.half_space_departure`), or None without a
     stated sample."""
-    from ssw.validity import finite_sample, half_space_departure
+    from ssw.lift import half_space_departure
+    from ssw.validity import finite_sample
 
     if ctx.sample is None:
         return None
@@ -428,12 +429,13 @@ def run_invert(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _inverse_validity(args: argparse.Namespace, ctx: Any, E: float, nu: float) -> Any:
-    """The checks of an inverted E (ssw.validity.assess_at: the chain at E, nu), with the
-    stated sample's half-space reading of ``--tof``."""
-    from ssw.validity import assess_at
+    """The checks of an inverted E (the chain run at E, nu: ssw.tof.sweep.run_sweep), with
+    the stated sample's half-space reading of ``--tof``."""
+    from ssw.tof.sweep import run_sweep
 
-    v = assess_at(E, nu, ctx.params, ctx.wall, ctx.wall_options,
-                  strengths=context_strengths(ctx), stresses=args.stress_checks)
+    v = run_sweep(ctx.params, np.array([E]), np.array([nu]), ctx.wall,
+                  strengths=context_strengths(ctx), stresses=args.stress_checks,
+                  **ctx.wall_options).validity
     fs = finite_sample_validity(ctx, E, nu, args.tof)
     return v if fs is None else v.merged(fs)
 

@@ -3,7 +3,8 @@
 For each sample of config ``validation.samples`` (thesis defaults PCF 08, 15, 30):
 
 * ``tof_sim``: the chain model's TOF at the manufacturer's E and nu
-  (:func:`ssw.tof.api.tof`, the config's wall law);
+  (:func:`ssw.tof.sweep.run_sweep`, the config's wall law), with the checks of that run's
+  assumptions (``validity``, ``checks_failed``: :mod:`ssw.validity`);
 * ``tof_measured``: the mean TOF of the sample's recording (:mod:`ssw.signal.tof`, with its
   hit rejection rule) when ``recordings`` is given, else the thesis's published mean
   (``tof_published``, Table 2);
@@ -116,16 +117,18 @@ def validate_samples(
     covariance enters the E intervals, its leave-one-out rows the E_loo column);
     ``full_scale`` (N) the device's largest unclipped force, the recordings' hits are
     checked against; ``strengths`` (:class:`ssw.validity.Strengths`: the beads' and the
-    plate's) gives each row its checks at its measured E (:func:`sample_checks`, with the
-    stress mode ``stresses``, :data:`ssw.validity.STRESS_MODES`).
+    plate's) gives each row the checks of the chain's run at its manufacturer's E (the run
+    of ``tof_sim``; its sample's yield against its library strength,
+    :func:`sample_strengths`), with the stress mode ``stresses``
+    (:data:`ssw.validity.STRESS_MODES`).
     """
     from ssw.calibration.references import from_config
     from ssw.config import library
     from ssw.daq.importers import read_any
     from ssw.modulus import estimate_moduli
     from ssw.signal.tof import recording_tof
-    from ssw.tof import api
     from ssw.tof.inverse import invert_batch
+    from ssw.tof.sweep import run_sweep
 
     samples = cfg.get("validation", {}).get("samples", [])
     if not samples:
@@ -135,7 +138,13 @@ def validate_samples(
     mats = library(cfg)
     E_man = np.array([mats[s["material"]].E for s in samples])
     nus = np.array([mats[s["material"]].nu for s in samples])
-    tof_sim = np.asarray(api.tof(E_man, nus, params, wall, **wall_options), dtype=float)
+    # the model's TOF at the manufacturer's E; its run's checks (ssw.validity) are the row's
+    sim = run_sweep(params, E_man, nus, wall, **wall_options,
+                    **({} if strengths is None else
+                       {"strengths": sample_strengths(samples, mats, strengths),
+                        "stresses": stresses}))
+    tof_sim = np.asarray(sim.tof, dtype=float)
+    checks = sim.validity
     # measured TOFs and their standard errors: what the calibration uses
     refs = {r.id: r for r in from_config(cfg, params, wall, wall_options, root=root,
                                          tof_options=tof_options, require_std=False,
@@ -176,10 +185,6 @@ def validate_samples(
             extras[i]["E_per_hit"] = inv.E[k:k + h.size].tolist()
             k += h.size
     loo = {row["id"]: row for row in (calibration.loo if calibration is not None else [])}
-    checks = (None if strengths is None else
-              sample_checks(samples, mats, np.array([e.E for e in est]),
-                            np.array([e.nu for e in est]), params, wall, wall_options,
-                            strengths, stresses))
     rows = []
     for i, smp in enumerate(samples):
         e = est[i]
@@ -211,24 +216,19 @@ def validate_samples(
     return rows
 
 
-def sample_checks(samples: list[dict[str, Any]], mats: dict[str, Any], E: np.ndarray,
-                  nu: np.ndarray, params: Any, wall: str, wall_options: dict[str, Any],
-                  strengths: Any, stresses: str = "bound") -> Any:
-    """The checks (:func:`ssw.validity.assess_at`; ``stresses``: the sample's upper bound,
-    or the contact FEM's stresses with ``fem``) of the samples at their measured moduli
-    ``E`` (Pa) and ``nu``, in one batched run: each sample's yield against its library
-    material's uniaxial strength (:func:`ssw.measure.uniaxial_strength`), the stated
-    assumption where it has none."""
+def sample_strengths(samples: list[dict[str, Any]], mats: dict[str, Any],
+                     strengths: Any) -> Any:
+    """``strengths`` (:class:`ssw.validity.Strengths`: the beads' and the plate's) with each
+    sample's own: its library material's uniaxial strength
+    (:func:`ssw.measure.uniaxial_strength`), NaN (the stated assumption) where it has
+    none."""
     from dataclasses import replace
 
     from ssw.measure import uniaxial_strength
-    from ssw.validity import assess_at
 
     Y = [uniaxial_strength(getattr(mats[s["material"]], "strength", None)) for s in samples]
     src = "; ".join(f"{s['id']}: the library's {s['material']} "
                     f"({'none stated' if y is None else f'{y:.4g} Pa'})"
                     for s, y in zip(samples, Y, strict=True))
-    st = replace(strengths, sample=np.array([np.nan if y is None else y for y in Y], float),
-                 sample_source=src)
-    return assess_at(E, nu, params, wall, wall_options, strengths=st, stresses=stresses)
-
+    return replace(strengths, sample=np.array([np.nan if y is None else y for y in Y], float),
+                   sample_source=src)

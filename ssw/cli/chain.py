@@ -162,7 +162,7 @@ def run_tof(args: argparse.Namespace) -> dict[str, Any]:
             out.update(derivative_method=dict.fromkeys(PARAMETERS, "none"),
                        derivative_note="--derivatives central: central differences of the "
                        "dynamic FEM wall's TOF, two FEM runs per parameter")
-        return out
+        return {**out, **_quasi_static_validity(args, ctx).to_dict(0)}
     if method == "none":
         pk, run = peaks(args.soil_E, args.soil_nu, params, ctx.wall, **ctx.wall_options)
         extra: dict[str, Any] = {"derivative_method": dict.fromkeys(PARAMETERS, "none")}
@@ -181,6 +181,23 @@ def run_tof(args: argparse.Namespace) -> dict[str, Any]:
         "striker_velocity": params.striker_velocity, **extra,
         **_point_validity(args, ctx, pk, run).to_dict(0),
     }
+
+
+def _quasi_static_validity(args: argparse.Namespace, ctx: Any) -> Any:
+    """The checks of the dynamic FEM wall's point, from the quasi-static chain at the same
+    ``--soil-E``/``--soil-nu`` (its peak indentation, pulses and stresses; each entry says
+    so)."""
+    from dataclasses import replace
+
+    from ssw.tof.sweep import run_sweep
+
+    opts = {k: v for k, v in ctx.wall_options.items() if k not in ("dynamics", "soil_density")}
+    v = run_sweep(ctx.params, np.array([float(args.soil_E)]), np.array([float(args.soil_nu)]),
+                  ctx.wall, strengths=context_strengths(ctx), stresses=args.stress_checks,
+                  **opts).validity
+    said = "from the quasi-static chain at the same E (the dynamic FEM wall keeps no run)"
+    return replace(v, notes={k: "; ".join(filter(None, [v.notes.get(k), said]))
+                             for k in v.values})
 
 
 def _point_validity(args: argparse.Namespace, ctx: Any, pk: Any, run: Any) -> Any:
@@ -247,7 +264,24 @@ def _run_hits(args: argparse.Namespace) -> dict[str, Any]:
         "exact_reach": float(res.wall.exact_reach[0]),
         "beyond_exact_reach": bool(res.wall.d_max0[0] > res.wall.exact_reach[0]),
         "striker_velocity": ctx.params.striker_velocity,
+        **_hits_validity(ctx.params, res.wall).to_dict(0),
     }
+
+
+def _hits_validity(params: Any, wall: Any) -> Any:
+    """The checks of ``--hits`` (ssw.validity) at the sample's largest indentation over the
+    hits: small strain at the contact and in the plate, the plastic wall's reach; the
+    sample's and the plate's yield are the plastic model's own (skipped, said why)."""
+    from ssw.validity import Validity, contact_radius_ratio, plate_deflection_ratio
+
+    d = np.asarray(wall.d_max0[:1], float)
+    vals = {"contact_strain": contact_radius_ratio(d, params.bead_radius),
+            "wall_reach": d / np.asarray(wall.exact_reach[:1], float)}
+    if params.plate_thickness > 0:
+        vals["plate_deflection"] = plate_deflection_ratio(d, params.plate_thickness)
+    why = "modelled: the plastic wall's set and dissipation per hit"
+    return Validity(vals, notes=dict.fromkeys(vals, "at the largest indentation over the hits"),
+                    skipped={"sample_yield": why, "plate_yield": why})
 
 
 def _human_hits(res: dict[str, Any]) -> str:
@@ -267,6 +301,10 @@ def _human_hits(res: dict[str, Any]) -> str:
               f"{r['dissipated']:.4e}" for r in res["hits"]]
     lines.append(f"TOF std over the hits {res['tof_std']:.3e} s"
                  + ("; beyond the tabulated reach" if res["beyond_exact_reach"] else ""))
+    if "validity" in res:
+        from ssw.validity import human_lines
+
+        lines += human_lines(res["validity"], res.get("checks_skipped"))
     return "\n".join(lines)
 
 

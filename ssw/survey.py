@@ -272,7 +272,7 @@ def verdict(E_low: float, E_high: float, target: float | None, complete: bool = 
     Returns
     -------
     str
-        One of :data:`VERDICTS`.
+        One of ``VERDICTS``: ``pass``, ``fail``, ``inconclusive``, ``no target``.
     """
     if target is None:
         return "no target"

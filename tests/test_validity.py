@@ -237,6 +237,20 @@ def test_thesis_device_on_half_a_megapascal_is_beyond_small_strain_and_on_2_gpa_
     assert plain["tof"] == soft["tof"]
 
 
+def test_invert_checks_the_chain_at_the_inverted_modulus(capsys):
+    """`ssw invert` of the thesis's PCF 08 TOF (1.80 ms) checks the chain at the E it
+    returns: the same entries as `ssw tof` at that E, to round-off."""
+    inv = cli_json(capsys, "invert", "--tof", "1.8e-3", "--soil-nu", "0.34",
+                   "--calibration", "none", "--stress-checks", "none")
+    at = cli_json(capsys, "tof", "--soil-E", repr(inv["E"]), "--soil-nu", "0.34",
+                  "--calibration", "none", "--derivatives", "none", "--stress-checks", "none")
+    a = {e["check"]: e["value"] for e in inv["validity"]}
+    b = {e["check"]: e["value"] for e in at["validity"]}
+    assert set(a) == set(b) >= {"contact_strain", "plate_deflection", "pulse_separation"}
+    for k in a:
+        assert a[k] == pytest.approx(b[k], rel=1e-9, abs=1e-12), k
+
+
 def test_measure_of_a_soft_foam_flags_its_yield_and_names_the_assumed_strength(
         capsys, tmp_path):
     """A simulated PCF 08 session measured without naming its material: the sample's

@@ -130,6 +130,9 @@ def human(res: dict[str, Any]) -> str:
     lines.append(f"{'feasible':20s} {rec['feasible']!s:>12s} "
                  + (f"{ref['feasible']!s:>12s}" if ref else ""))
     lines += [f"  - {r}" for r in rec["reasons"]]
+    if rec.get("validity"):  # ssw.validity, the worst soil of the range
+        lines.append("  checks failing on some soil of the range: "
+                     + ("; ".join(rec["checks_failed"]) or "none"))
     for chk in res.get("plastic_check") or []:
         head = (f"{chk['hits']} hits, {chk['label']} on E {chk['soil_E']:.4g} Pa (von Mises "
                 f"Y {chk['soil_yield_stress']:.3g} Pa): ")

@@ -40,20 +40,22 @@ ALLOWED: dict[str, set[str]] = {
     "dynamics": FOUNDATION | DATA | {"contact", "chain"},
     "walls": FOUNDATION | DATA | {"contact", "chain", "fit", "dynamics"},
     # the device's TOF on a sample: the chain on a law named in ssw.walls
-    "tof": FOUNDATION | DATA | {"contact", "chain", "fit", "walls"},
+    # the checks of a result's assumptions: pure functions of a run, its contact stresses
+    "validity": FOUNDATION | DATA | {"chain", "signal", "walls"},
+    "tof": FOUNDATION | DATA | {"contact", "chain", "fit", "walls", "validity"},
     "daq": FOUNDATION | DATA | {"chain", "signal", "walls", "tof"},
     # applications
     "modulus": FOUNDATION | DATA | {"chain", "walls", "tof"},
     "calibration": FOUNDATION | DATA | {"chain", "walls", "tof", "signal", "daq", "modulus"},
     "measure": FOUNDATION | DATA | {"modulus", "signal", "daq", "chain", "walls", "tof",
-                                    "calibration", "contact"},
-    "survey": FOUNDATION | DATA,
+                                    "calibration", "contact", "validity"},
+    "survey": FOUNDATION | DATA | {"validity"},
     "validation": FOUNDATION | DATA | {"calibration", "chain", "walls", "tof", "daq",
-                                       "modulus", "signal"},
+                                       "modulus", "signal", "validity", "measure"},
     "design": FOUNDATION | DATA | {"contact", "chain", "walls", "tof", "fit", "modulus",
-                                   "signal", "daq"},
+                                   "signal", "daq", "validity"},
     "lift": FOUNDATION | DATA | {"contact", "chain", "tof", "fit"},
-    "report": FOUNDATION,
+    "report": FOUNDATION | {"validity"},
     "cluster": FOUNDATION,
     "workflow": FOUNDATION | DATA | {"cluster", "survey"},
 }

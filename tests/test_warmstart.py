@@ -681,7 +681,7 @@ def test_the_benchmark_record_of_a_served_job_is_the_jobs_own(tmp_path):
 
     root = str(Path(__file__).resolve().parents[1])
     args = " ".join([*TOF, "--steps-per-contact", "10000"])
-    (tmp_path / "Snakefile").write_text(BENCH_SNAKEFILE.format(root=root, args=args))
+    (tmp_path / "Snakefile").write_text(BENCH_SNAKEFILE.format(root=shlex.quote(root), args=args))
     env = _env(**{USAGE_ENV: str(tmp_path / "usage")})
     env.pop("PYTHONPATH", None)
     r = subprocess.run([str(Path(sys.executable).with_name("snakemake")), "--cores", "1",

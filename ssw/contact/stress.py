@@ -72,11 +72,6 @@ from ssw.errors import ConfigError, SolverError
 VERTEX_PULL = 1.0e-9
 #: Body fields kept in memory (each holds a sparse LU of a body: tens of MB).
 FIELDS_KEPT = 4
-#: Largest backward error accepted from the pivot-free factorization of ``K_II``
-#: (the condensation's bound, :data:`ssw.contact.substructure.BACKWARD_ERROR_TOL`).
-BACKWARD_ERROR_TOL = 1e-11
-#: Seed of the backward-error probe (any fixed seed: deterministic).
-PROBE_SEED = 20241130
 
 
 @dataclass(frozen=True)
@@ -183,21 +178,11 @@ class BodyField:
 
 def _factor(KII: Any) -> Any:
     """Sparse LU of ``K_II``: pivot-free in the body's minimum-degree order (as the
-    condensation factors it) when its backward error is small, else threshold-pivoted."""
-    from scipy.sparse.linalg import splu
+    condensation factors it) when its backward error is small, else threshold-pivoted
+    (:func:`ssw.contact.lu.checked_lu`)."""
+    from ssw.contact.lu import checked_lu
 
-    try:
-        lu = splu(KII, permc_spec="NATURAL", diag_pivot_thresh=0.0,
-                  options={"SymmetricMode": True})
-        b = np.random.default_rng(PROBE_SEED).uniform(-1.0, 1.0, KII.shape[0])
-        y = lu.solve(b)
-        norm = float(np.max(abs(KII).sum(axis=1)))
-        berr = float(np.max(np.abs(KII @ y - b)) / (norm * np.max(np.abs(y))))
-        if np.isfinite(berr) and berr <= BACKWARD_ERROR_TOL:
-            return lu
-    except RuntimeError:  # "Factor is exactly singular"
-        pass
-    return splu(KII, permc_spec="COLAMD", diag_pivot_thresh=1.0)
+    return checked_lu(KII)
 
 
 def _vertex_strain_operators(nodes: np.ndarray, tri: np.ndarray

@@ -306,9 +306,10 @@ def newton_bracketed(
     level: np.ndarray | float, lo: np.ndarray | float, hi: np.ndarray | float,
     state: list, *, grow: bool = False, same_piece: Callable[[Any, Any], bool] | None = None,
     ftol: np.ndarray | float | None = None, max_steps: int = NEWTON_STEPS,
+    x0: np.ndarray | float | None = None,
 ) -> NewtonRoot:
     """Safeguarded Newton iteration for ``f(x) = level``, ``f`` non-decreasing, every
-    element at once, starting from the bracket's upper end.
+    element at once, starting from the bracket's upper end (or ``x0``).
 
     Parameters
     ----------
@@ -336,6 +337,9 @@ def newton_bracketed(
         of ``f``). At least one of ``same_piece`` and ``ftol`` must be given.
     max_steps : int
         Newton steps allowed.
+    x0 : array_like or None
+        (n,) or scalar, the first iterate, inside ``[lo, hi]``; None: ``hi`` (the only
+        start ``grow`` accepts).
 
     Returns
     -------
@@ -349,7 +353,7 @@ def newton_bracketed(
 
     Notes
     -----
-    From ``x = hi``, each step updates the bracket by the sign of ``f(x) - level``
+    From ``x = hi`` (or ``x0``), each step updates the bracket by the sign of ``f(x) - level``
     (``f < level``: ``lo = x``; else ``hi = x``) and goes to Newton's point
 
         ``x' = x + (level - f(x)) / f'(x)``,
@@ -368,13 +372,16 @@ def newton_bracketed(
     """
     if same_piece is None and ftol is None:
         raise ValueError("newton_bracketed needs same_piece or ftol to stop")
+    if grow and x0 is not None:
+        raise ValueError("newton_bracketed grows the bracket from hi: give no x0")
     level, lo, hi = (np.array(np.broadcast_to(np.asarray(v, float), (len(state),)))
                      for v in (level, lo, hi))
     n = level.size
     tol = None if ftol is None else np.broadcast_to(np.asarray(ftol, float), (n,))
     st = list(state)
     calls = 1
-    f, slope, st = fun(hi.copy(), st)
+    x = hi.copy() if x0 is None else np.array(np.broadcast_to(np.asarray(x0, float), (n,)))
+    f, slope, st = fun(x.copy(), st)
     if grow:
         for _ in range(MAX_GROWTH):
             short = np.flatnonzero(f < level)
@@ -389,7 +396,7 @@ def newton_bracketed(
         else:
             raise SolverError(f"no abscissa up to {hi[f < level][:3].tolist()} reaches the "
                               f"level {level[f < level][:3].tolist()}")
-    x = hi.copy()
+        x = hi.copy()
     out_x, out_state = x.copy(), list(st)
     go = np.arange(n)
     xs, fs, ss, sts = x, np.asarray(f, float), np.asarray(slope, float), st

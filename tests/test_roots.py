@@ -243,6 +243,8 @@ def test_newton_with_a_residual_tolerance_and_its_bisection_safeguard():
 
     r = newton_bracketed(fun, 0.0, -10.0, 30.0, list(c), ftol=1e-13)
     assert r.x == pytest.approx(c, abs=1e-12)
+    from_lo = newton_bracketed(fun, 0.0, -10.0, 30.0, list(c), ftol=1e-13, x0=-10.0)
+    assert from_lo.x == pytest.approx(c, abs=1e-12)
     with pytest.raises(ValueError, match="same_piece or ftol"):
         newton_bracketed(fun, 0.0, -10.0, 30.0, list(c))
     with pytest.raises(SolverError, match="reaches the level"):

@@ -9,6 +9,12 @@ numpy alone. It reaches full double precision in 8-16 evaluations of the functio
 bracket's two ends and its growth included) where bisection took 60-90
 (``tests/test_roots.py`` counts them).
 
+Where the function's slope is known and cheap, :func:`newton_bracketed` is the
+safeguarded Newton iteration on the same kind of bracket (Newton's point when it stays in
+the bracket, bisection otherwise), with a state per element for the caller's warm starts
+and an exact stop on a piecewise-affine function: the indentation of a contact's force
+(:mod:`ssw.contact.stress`), a return mapping's consistency equation.
+
 The function is evaluated on whole arrays: ``f(x)`` takes and returns arrays of the
 elements' shape, element ``i`` depending on ``x[i]`` alone (a wall's force, one value per
 scene). ``f`` always sees every element: the converged ones stay at their last abscissa
@@ -43,6 +49,7 @@ from __future__ import annotations
 
 from collections.abc import Callable
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -271,3 +278,171 @@ def _chandrupatla(full: Callable[[np.ndarray], np.ndarray], pos: np.ndarray,
         t = np.clip(t, tl, 1 - tl)
     raise SolverError(f"the bracketed root did not converge in {MAX_ITERATIONS} iterations "
                       f"(brackets left: [{x1[:3].tolist()}, {x2[:3].tolist()}])")
+
+
+#: Newton steps allowed by :func:`newton_bracketed` (a piecewise-affine function: one per
+#: piece crossed).
+NEWTON_STEPS = 100
+
+
+@dataclass(frozen=True)
+class NewtonRoot:
+    """Roots found by :func:`newton_bracketed`, element by element.
+
+    ``x`` (n,) the roots (SI unit of the unknown); ``state`` the caller's state of each
+    element at its root (a list); ``lo`` and ``hi`` (n,) the final brackets; ``calls``
+    the evaluations of the function (each on the elements still going).
+    """
+
+    x: np.ndarray
+    state: list
+    lo: np.ndarray
+    hi: np.ndarray
+    calls: int
+
+
+def newton_bracketed(
+    fun: Callable[[np.ndarray, list], tuple[np.ndarray, np.ndarray, list]],
+    level: np.ndarray | float, lo: np.ndarray | float, hi: np.ndarray | float,
+    state: list, *, grow: bool = False, same_piece: Callable[[Any, Any], bool] | None = None,
+    ftol: np.ndarray | float | None = None, max_steps: int = NEWTON_STEPS,
+    x0: np.ndarray | float | None = None,
+) -> NewtonRoot:
+    """Safeguarded Newton iteration for ``f(x) = level``, ``f`` non-decreasing, every
+    element at once, starting from the bracket's upper end (or ``x0``).
+
+    Parameters
+    ----------
+    fun : callable
+        ``fun(x, state) -> (f, slope, state)``: ``x`` (m,) the abscissae of some elements,
+        ``state`` the list of their states (the caller's warm starts, e.g. an active set);
+        returns ``f(x)`` (m,), its slope ``f'(x)`` (m,) and the states at ``x``.
+    level : array_like
+        (n,) or scalar, the value to reach (unit of ``f``).
+    lo : array_like
+        (n,) or scalar, lower ends of the brackets, ``f(lo) < level``.
+    hi : array_like
+        (n,) or scalar, upper ends, ``f(hi) >= level`` (with ``grow``: a first guess).
+    state : list
+        The elements' states at ``hi`` before its evaluation (warm starts), length n.
+    grow : bool
+        Double ``hi`` (warm-starting each evaluation from the last state) until
+        ``f(hi) >= level``, at most :data:`MAX_GROWTH` times; ``lo`` stays.
+    same_piece : callable or None
+        ``same_piece(state, new_state) -> bool``: ``f`` is affine between the two states
+        (a piecewise-affine ``f``, whose pieces the states name). A Newton step that lands
+        on the piece it stepped along is exact: the element stops there.
+    ftol : array_like or None
+        (n,) or scalar: the element stops at an iterate with ``|f - level| <= ftol`` (unit
+        of ``f``). At least one of ``same_piece`` and ``ftol`` must be given.
+    max_steps : int
+        Newton steps allowed.
+    x0 : array_like or None
+        (n,) or scalar, the first iterate, inside ``[lo, hi]``; None: ``hi`` (the only
+        start ``grow`` accepts).
+
+    Returns
+    -------
+    NewtonRoot
+        The roots, their states and final brackets.
+
+    Raises
+    ------
+    SolverError
+        The growth found no upper end, or an element did not stop in ``max_steps``.
+
+    Notes
+    -----
+    From ``x = hi`` (or ``x0``), each step updates the bracket by the sign of ``f(x) - level``
+    (``f < level``: ``lo = x``; else ``hi = x``) and goes to Newton's point
+
+        ``x' = x + (level - f(x)) / f'(x)``,
+
+    if ``f'(x) > 0`` and ``lo < x' <= hi``, else to the bracket's midpoint (bisection:
+    the bracket at least halves every two steps, so the iteration converges for any
+    continuous ``f``; Press et al. 2007, sec. 9.4, ``rtsafe``). On a piecewise-affine
+    ``f`` (a contact's force against its indentation, :mod:`ssw.contact.parametric`),
+    Newton's point is the root once the step stays on one piece: one step per piece
+    crossed.
+
+    References
+    ----------
+    Press, W. H., Teukolsky, S. A., Vetterling, W. T. and Flannery, B. P. (2007).
+    *Numerical Recipes*, 3rd ed., CUP, sec. 9.4 (Newton-Raphson with bisection).
+    """
+    if same_piece is None and ftol is None:
+        raise ValueError("newton_bracketed needs same_piece or ftol to stop")
+    if grow and x0 is not None:
+        raise ValueError("newton_bracketed grows the bracket from hi: give no x0")
+    level, lo, hi = (np.array(np.broadcast_to(np.asarray(v, float), (len(state),)))
+                     for v in (level, lo, hi))
+    n = level.size
+    tol = None if ftol is None else np.broadcast_to(np.asarray(ftol, float), (n,))
+    st = list(state)
+    calls = 1
+    x = hi.copy() if x0 is None else np.array(np.broadcast_to(np.asarray(x0, float), (n,)))
+    f, slope, st = fun(x.copy(), st)
+    if grow:
+        for _ in range(MAX_GROWTH):
+            short = np.flatnonzero(f < level)
+            if short.size == 0:
+                break
+            hi[short] *= 2.0
+            f_s, s_s, st_s = fun(hi[short], [st[i] for i in short])
+            calls += 1
+            f[short], slope[short] = f_s, s_s
+            for j, i in enumerate(short):
+                st[i] = st_s[j]
+        else:
+            raise SolverError(f"no abscissa up to {hi[f < level][:3].tolist()} reaches the "
+                              f"level {level[f < level][:3].tolist()}")
+        x = hi.copy()
+    out_x, out_state = x.copy(), list(st)
+    go = np.arange(n)
+    xs, fs, ss, sts = x, np.asarray(f, float), np.asarray(slope, float), st
+    for _ in range(max_steps):
+        lv, a, b = level[go], lo[go], hi[go]
+        if tol is not None:
+            done = np.abs(fs - lv) <= tol[go]
+            if done.any():
+                _keep(done, go, xs, sts, out_x, out_state)
+                keep = ~done
+                go, xs, fs, ss, lv, a, b = (v[keep] for v in (go, xs, fs, ss, lv, a, b))
+                sts = [s for s, k in zip(sts, keep, strict=True) if k]
+                if go.size == 0:
+                    break
+        a = np.where(fs < lv, xs, a)
+        b = np.where(fs < lv, b, xs)
+        lo[go], hi[go] = a, b
+        mid = 0.5 * (a + b)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            step = np.where(ss > 0, xs + (lv - fs) / ss, mid)
+        nxt = np.where((a < step) & (step <= b), step, mid)
+        f_n, s_n, st_n = fun(nxt, sts)
+        calls += 1
+        f_n, s_n = np.asarray(f_n, float), np.asarray(s_n, float)
+        if same_piece is not None:
+            done = (nxt == step) & np.array([bool(same_piece(p, q))
+                                             for p, q in zip(sts, st_n, strict=True)])
+            if done.any():
+                _keep(done, go, nxt, st_n, out_x, out_state)
+                keep = ~done
+                go, nxt, f_n, s_n = (v[keep] for v in (go, nxt, f_n, s_n))
+                st_n = [s for s, k in zip(st_n, keep, strict=True) if k]
+                if go.size == 0:
+                    break
+        xs, fs, ss, sts = nxt, f_n, s_n, st_n
+    else:
+        if go.size:
+            raise SolverError(f"Newton's iteration did not reach the level "
+                              f"{level[go][:3].tolist()} in {max_steps} steps (brackets "
+                              f"[{lo[go][:3].tolist()}, {hi[go][:3].tolist()}])")
+    return NewtonRoot(out_x, out_state, lo, hi, calls)
+
+
+def _keep(done: np.ndarray, go: np.ndarray, x: np.ndarray, states: list,
+          out_x: np.ndarray, out_state: list) -> None:
+    """Write the stopped elements' abscissae and states (``done`` over ``go``) in place."""
+    out_x[go[done]] = x[done]
+    for j in np.flatnonzero(done):
+        out_state[go[j]] = states[j]

@@ -182,7 +182,7 @@ def test_trace_falls_back_when_not_a_prefix():
 def test_schur_complement_fast_equals_pivoted(monkeypatch, store):
     """A body's condensed stiffness from the LU's trailing block equals the one from a
     pivoted factorization of K_II and one solve per retained dof."""
-    import ssw.contact.substructure as sub
+    import ssw.contact.lu as ssw_lu
     from ssw.contact.operators import geometry_of
     from ssw.contact.scene import settings_of
 
@@ -190,7 +190,7 @@ def test_schur_complement_fast_equals_pivoted(monkeypatch, store):
     geom = geometry_of(cfg, 0.4e-3, R, 1e-4, "frictionless")
     fast = OperatorStore(None)
     op1 = fast.body(geom, "plate", 0.36)
-    monkeypatch.setattr(sub, "BACKWARD_ERROR_TOL", -1.0)  # refuse the pivot-free factors
+    monkeypatch.setattr(ssw_lu, "BACKWARD_ERROR_TOL", -1.0)  # refuse the pivot-free factors
     slow = OperatorStore(None)
     op2 = slow.body(geom, "plate", 0.36)
     assert not op1.stats["pivoted"] and op2.stats["pivoted"]

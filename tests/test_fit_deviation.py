@@ -78,6 +78,22 @@ def test_calibration_inverts_a_known_deviation_law():
         calibrate_soil_E(1e6, lambda E: (E0 / E) ** 0.7)
 
 
+def test_calibration_takes_either_sense_and_solves_each_end_once():
+    """An increasing law, dev(E) = (E/E0)^0.5, reached at E = E0 target^2; the bracket's
+    ends are evaluated once (an FEM solve each), and Chandrupatla's method needs few more
+    (tests/test_roots.py: full precision in 8-16 evaluations)."""
+    E0, seen = 3e8, []
+
+    def dev(E):
+        seen.append(E)
+        return (E / E0) ** 0.5
+
+    E = calibrate_soil_E(0.5, dev, rtol=1e-10)
+    assert E == pytest.approx(E0 * 0.25, rel=1e-8)
+    assert len(set(seen)) == len(seen)  # no abscissa solved twice
+    assert len(seen) <= 20
+
+
 def test_thesis_statements_cover_both_material_sets():
     """With a stand-in solver that stiffens by the plate's modulus ratio, the rows follow
     the material set's moduli (as_printed PLA is 100 MPa) and carry the thesis's values."""

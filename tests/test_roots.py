@@ -194,3 +194,59 @@ def test_no_scipy_optimize_import():
     out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
                          check=True)
     assert out.stdout.strip() == "False"
+
+
+def _polyline(breaks, slopes):
+    """A continuous increasing piecewise-affine ``f`` with ``f(0) = 0`` (pieces between
+    ``breaks``), as ``newton_bracketed``'s ``fun`` with the piece's index as the state."""
+    b = np.asarray(breaks, float)
+    s = np.asarray(slopes, float)
+    f_at = np.concatenate([[0.0], np.cumsum(s[:-1] * np.diff(b))])
+
+    def fun(x, states):
+        j = np.clip(np.searchsorted(b, x, side="right") - 1, 0, s.size - 1)
+        return f_at[j] + s[j] * (x - b[j]), s[j], list(j)
+
+    return fun, b, s, f_at
+
+
+def test_newton_on_a_piecewise_affine_function_is_exact_in_one_step_per_piece():
+    """Levels on five pieces of a stiffening polyline: every root equals the closed-form
+    inversion of its piece (to round-off), found from a first guess 1000 times too small
+    (the bracket grows) in fewer steps than pieces plus growth; the states name the root's
+    piece."""
+    from ssw.roots import newton_bracketed
+
+    fun, b, s, f_at = _polyline([0.0, 1.0, 2.0, 3.0, 4.0], [1.0, 2.0, 4.0, 8.0, 16.0])
+    level = np.array([0.5, 1.5, 4.0, 10.0, 30.0])
+    j = np.searchsorted(f_at, level, side="right") - 1
+    exact = b[j] + (level - f_at[j]) / s[j]
+    r = newton_bracketed(fun, level, 0.0, 5e-3, [None] * 5, grow=True,
+                         same_piece=lambda p, q: p == q)
+    assert r.x == pytest.approx(exact, rel=4 * XRTOL, abs=0)
+    assert list(r.state) == list(j)
+    assert np.all(r.lo < r.x) and np.all(r.x <= r.hi)
+    assert r.calls <= 10 + 5 + 1  # growth to 5.12 (10 doublings), pieces, first point
+
+
+def test_newton_with_a_residual_tolerance_and_its_bisection_safeguard():
+    """``atan(x - c) = 0`` from brackets up to 40 wide: Newton's step from the bracket's end
+    overshoots far out of it (the safeguard bisects); every root ``c`` to ``ftol``. A bracket
+    that never holds the level, and a missing stopping rule, are errors."""
+    from ssw.roots import newton_bracketed
+
+    c = np.array([-3.0, 0.1, 7.0])
+
+    def fun(x, states):  # each element's state is its c
+        u = x - np.array(states)
+        return np.arctan(u), 1.0 / (1.0 + u**2), states
+
+    r = newton_bracketed(fun, 0.0, -10.0, 30.0, list(c), ftol=1e-13)
+    assert r.x == pytest.approx(c, abs=1e-12)
+    from_lo = newton_bracketed(fun, 0.0, -10.0, 30.0, list(c), ftol=1e-13, x0=-10.0)
+    assert from_lo.x == pytest.approx(c, abs=1e-12)
+    with pytest.raises(ValueError, match="same_piece or ftol"):
+        newton_bracketed(fun, 0.0, -10.0, 30.0, list(c))
+    with pytest.raises(SolverError, match="reaches the level"):
+        newton_bracketed(lambda x, st: (np.zeros_like(x), np.zeros_like(x), st), 1.0, 0.0,
+                         1.0, [None], grow=True, ftol=0.0)

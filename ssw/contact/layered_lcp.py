@@ -14,8 +14,9 @@ the first ``delta`` at which a pressure or a gap changes sign is filled at once.
 
 Active sets are almost always the leading rings ``0..k-1``; their systems are the leading
 blocks of ``C``, solved from one LU factorization without pivoting of ``C`` (the leading
-blocks of ``L U`` are the LU factors of the leading blocks of ``C``): ``O(k^2)`` each,
-checked by their residual (a general solve otherwise).
+blocks of ``L U`` are the LU factors of the leading blocks of ``C``,
+:func:`ssw.contact.lu.lu_nopivot`; LAPACK's pivoted ``getrf`` loses that property):
+``O(k^2)`` each, checked by their componentwise backward error (a general solve otherwise).
 """
 
 from __future__ import annotations
@@ -26,14 +27,14 @@ import numpy as np
 from numpy.typing import NDArray
 
 from ssw.contact.contact_lcp import solve_lcp
+from ssw.contact.lu import componentwise_ok, lu_nopivot
 from ssw.errors import SolverError
 
 #: Gap tolerance, relative to the largest indentation of the curve.
 GAP_TOL = 1e-11
-#: Relative residual above which a leading-block solve is redone by a pivoted solve.
+#: Componentwise backward error (:func:`ssw.contact.lu.componentwise_ok`) above which a
+#: leading-block solve is redone by a pivoted solve.
 RESIDUAL_TOL = 1e-9
-#: Leading-block size below which the LU recursion switches to row-by-row elimination.
-LU_BLOCK = 48
 
 
 class ZoneError(SolverError):
@@ -63,32 +64,6 @@ def sphere_surface(r: NDArray, radius: float) -> NDArray[np.float64]:
     return r * r / (radius + np.sqrt(radius * radius - r * r))
 
 
-def lu_nopivot(C: NDArray) -> tuple[NDArray, NDArray, int]:
-    """``C = L U`` without pivoting (L unit lower, U upper); also the size of the largest
-    leading block the factors are valid for (a zero pivot stops them)."""
-    from scipy.linalg import solve_triangular
-
-    n = C.shape[0]
-    L, U = np.eye(n), np.zeros((n, n))
-    if n <= LU_BLOCK:
-        for i in range(n):
-            U[i, i:] = C[i, i:] - L[i, :i] @ U[:i, i:]
-            if not abs(U[i, i]) > 1e-14 * np.abs(C[i]).max():
-                return L, U, i
-            L[i + 1:, i] = (C[i + 1:, i] - L[i + 1:, :i] @ U[:i, i]) / U[i, i]
-        return L, U, n
-    k = n // 2
-    L11, U11, ok = lu_nopivot(C[:k, :k])
-    L[:k, :k], U[:k, :k] = L11, U11
-    if ok < k:
-        return L, U, ok
-    U[:k, k:] = solve_triangular(L11, C[:k, k:], lower=True, unit_diagonal=True)
-    L[k:, :k] = solve_triangular(U11, C[k:, :k].T, trans="T", lower=False).T
-    L22, U22, ok2 = lu_nopivot(C[k:, k:] - L[k:, :k] @ U[:k, k:])
-    L[k:, k:], U[k:, k:] = L22, U22
-    return L, U, k + ok2
-
-
 class _ActiveSolver:
     """``C_AA^{-1} b`` for active sets A, from the LU of the leading blocks."""
 
@@ -114,9 +89,8 @@ class _ActiveSolver:
         if idx[-1] == k - 1 and k <= self.valid:  # the leading rings 0..k-1
             y = solve_triangular(self.L[:k, :k], rhs, lower=True, unit_diagonal=True)
             x = self.U_inv[:k, :k] @ y
-            res = self.C[:k, :k] @ x - rhs
-            scale = np.abs(self.C[:k, :k]) @ np.abs(x) + np.abs(rhs)
-            if np.all(np.abs(res) <= RESIDUAL_TOL * scale):
+            Ck = self.C[:k, :k]
+            if componentwise_ok(Ck, x, Ck @ x - rhs, rhs, RESIDUAL_TOL):
                 return x
         self.general += 1
         try:

@@ -72,11 +72,6 @@ from ssw.errors import ConfigError, SolverError
 VERTEX_PULL = 1.0e-9
 #: Body fields kept in memory (each holds a sparse LU of a body: tens of MB).
 FIELDS_KEPT = 4
-#: Largest backward error accepted from the pivot-free factorization of ``K_II``
-#: (the condensation's bound, :data:`ssw.contact.substructure.BACKWARD_ERROR_TOL`).
-BACKWARD_ERROR_TOL = 1e-11
-#: Seed of the backward-error probe (any fixed seed: deterministic).
-PROBE_SEED = 20241130
 
 
 @dataclass(frozen=True)
@@ -183,21 +178,11 @@ class BodyField:
 
 def _factor(KII: Any) -> Any:
     """Sparse LU of ``K_II``: pivot-free in the body's minimum-degree order (as the
-    condensation factors it) when its backward error is small, else threshold-pivoted."""
-    from scipy.sparse.linalg import splu
+    condensation factors it) when its backward error is small, else threshold-pivoted
+    (:func:`ssw.contact.lu.checked_lu`)."""
+    from ssw.contact.lu import checked_lu
 
-    try:
-        lu = splu(KII, permc_spec="NATURAL", diag_pivot_thresh=0.0,
-                  options={"SymmetricMode": True})
-        b = np.random.default_rng(PROBE_SEED).uniform(-1.0, 1.0, KII.shape[0])
-        y = lu.solve(b)
-        norm = float(np.max(abs(KII).sum(axis=1)))
-        berr = float(np.max(np.abs(KII @ y - b)) / (norm * np.max(np.abs(y))))
-        if np.isfinite(berr) and berr <= BACKWARD_ERROR_TOL:
-            return lu
-    except RuntimeError:  # "Factor is exactly singular"
-        pass
-    return splu(KII, permc_spec="COLAMD", diag_pivot_thresh=1.0)
+    return checked_lu(KII)
 
 
 def _vertex_strain_operators(nodes: np.ndarray, tri: np.ndarray
@@ -325,11 +310,6 @@ def equivalent_radius(radius: float, top: tuple[float, float], bead: tuple[float
 #: Gap tolerance of the LCP solved at one indentation, relative to it (a few ulp of it,
 #: as :data:`ssw.contact.scene.LCP_TOL` per increment).
 STATE_TOL = 1e-12
-#: Newton steps allowed to the indentation of a force (one per affine piece crossed; the
-#: force is piecewise affine and increasing in the indentation).
-NEWTON_STEPS = 100
-
-
 def _state_at_force(lcp: Any, force: np.ndarray, guess: float
                     ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """The contact states at which the sphere carries ``force`` (N, (k,)): indentations (k,)
@@ -343,19 +323,17 @@ def _state_at_force(lcp: Any, force: np.ndarray, guess: float
     from the previous active set) confirms by returning the same active set; otherwise it
     lands on another piece and steps again. A bracket ``f(lo) < F <= f(hi)`` (``hi``
     doubled from ``guess`` until it holds ``F``) safeguards the steps (bisection when a
-    step leaves it). The same state as the path traced from 0 and inverted on its pieces
-    (:func:`ssw.contact.parametric.trace`), to round-off, in a few LCP solves instead of
-    one per breakpoint.
+    step leaves it): :func:`ssw.roots.newton_bracketed`. The same state as the path traced
+    from 0 and inverted on its pieces (:func:`ssw.contact.parametric.trace`), to round-off,
+    in a few LCP solves instead of one per breakpoint.
     """
     from ssw.contact.contact_lcp import solve_lcp
     from ssw.contact.lapack import cho_solve, cholesky
+    from ssw.roots import newton_bracketed
 
     ms = lcp.n_sphere
     W, q0, q1 = lcp.W, lcp.q0, lcp.q1
     force = np.atleast_1d(np.asarray(force, float))
-    out_d = np.empty(force.size)
-    out_lam = np.empty((force.size, q0.size))
-    out_act = np.empty((force.size, q0.size), bool)
     cache: dict = {}
 
     def state(d: float, act: np.ndarray) -> tuple[np.ndarray, np.ndarray, float, float]:
@@ -368,36 +346,24 @@ def _state_at_force(lcp: Any, force: np.ndarray, guess: float
         lam1 = -cho_solve(cf, q1[idx], lower=False)
         return lam, act, float(lam[:ms].sum()), float(lam1[idx < ms].sum())
 
-    for k, F in enumerate(force):
-        hi = float(guess)
-        # warm start: Hertz's contact radius (a^2 = R delta, half the geometric overlap's
-        # r^2 = 2 R delta) and every touching pair of an unilateral interface
-        act = (q0 + 0.5 * hi * q1 < 0) | ((q1 == 0) & (q0 == 0))
-        for _ in range(60):
-            lam, act, f, slope = state(hi, act)
-            if f >= F:
-                break
-            hi *= 2.0
-        else:
-            raise SolverError(f"no indentation up to {hi:.4g} m carries the force {F:.4g} N")
-        lo, d = 0.0, hi
-        for _ in range(NEWTON_STEPS):
-            step = d + (F - f) / slope if slope > 0 else 0.5 * (lo + hi)
-            nxt = step if lo < step <= hi else 0.5 * (lo + hi)
-            lam_n, act_n, f_n, slope_n = state(nxt, act)
-            if np.array_equal(act_n, act) and nxt == step:
-                d, lam, act = nxt, lam_n, act_n  # on the piece Newton stepped along: f = F
-                break
-            if f_n >= F:
-                hi = nxt
-            else:
-                lo = nxt
-            d, lam, act, f, slope = nxt, lam_n, act_n, f_n, slope_n
-        else:
-            raise SolverError(f"the indentation of the force {F:.4g} N was not found in "
-                              f"{NEWTON_STEPS} Newton steps")
-        out_d[k], out_lam[k], out_act[k] = d, lam, act
-    return out_d, out_lam, out_act
+    def fun(d: np.ndarray, states: list) -> tuple[np.ndarray, np.ndarray, list]:
+        # one LCP per element, warm-started from its active set (states: (lam, act))
+        out = [state(float(x), st[1]) for x, st in zip(d, states, strict=True)]
+        return (np.array([o[2] for o in out]), np.array([o[3] for o in out]),
+                [(o[0], o[1]) for o in out])
+
+    # warm start: Hertz's contact radius (a^2 = R delta, half the geometric overlap's
+    # r^2 = 2 R delta) and every touching pair of an unilateral interface
+    hi = float(guess)
+    act0 = (q0 + 0.5 * hi * q1 < 0) | ((q1 == 0) & (q0 == 0))
+    try:
+        root = newton_bracketed(fun, force, 0.0, hi, [(None, act0)] * force.size, grow=True,
+                                same_piece=lambda a, b: np.array_equal(a[1], b[1]))
+    except SolverError as exc:
+        raise SolverError(f"the indentation of a force in {force.tolist()[:3]} N was not "
+                          f"found ({exc})") from exc
+    return (root.x, np.array([st[0] for st in root.state]),
+            np.array([st[1] for st in root.state]))
 
 
 def contact_stresses(

@@ -21,8 +21,9 @@ displacements around them have made their pivots nonzero (at ``nu = 0.5`` the pr
 own diagonal is zero); then ``B``. A pivot-free LU of an indefinite matrix may still be
 unstable, so every factorization is checked by its backward error
 ``||K x - L U x||_inf / (||K||_inf ||x||_inf)`` on a random ``x``; above
-:data:`BACKWARD_ERROR_TOL` the Schur complement is recomputed from a threshold-pivoted
-SuperLU factorization of ``K_II`` and one solve per retained dof (slower, always stable).
+:data:`ssw.contact.lu.BACKWARD_ERROR_TOL` the Schur complement is recomputed from a pivoted
+(threshold 1) SuperLU factorization of ``K_II`` and one solve per retained dof (slower,
+always stable); the factorizations and the check are :mod:`ssw.contact.lu`'s.
 
 Units. The matrix is assembled nondimensional (:mod:`ssw.contact.assembly`) at unit Young's
 modulus: the stiffness of a body of modulus ``E`` is ``E`` times it (every block of the u-p
@@ -40,12 +41,6 @@ import numpy as np
 from ssw.contact.assembly import element_sizes, pow2, pressure_scale
 from ssw.contact.elements import element_matrices, lame
 from ssw.errors import SolverError
-
-#: Largest backward error accepted from the pivot-free factorization (machine epsilon is
-#: 2.2e-16; measured on the thesis meshes: 1e-17 to 1e-16).
-BACKWARD_ERROR_TOL = 1e-11
-#: Seed of the backward-error probe vector (any fixed seed: deterministic).
-PROBE_SEED = 20241130
 
 
 @dataclass(frozen=True)
@@ -156,8 +151,8 @@ def schur_complement(K: Any, n_int: int) -> tuple[np.ndarray, float, int, bool]:
 
     Returns ``(S, backward_error, nnz of the factors, pivoted)``: the trailing block of a
     pivot-free LU in the given order when its backward error is at most
-    :data:`BACKWARD_ERROR_TOL` (module docstring), else from a pivoted LU of ``K_II`` and one
-    solve per column of ``K_IB``.
+    :data:`ssw.contact.lu.BACKWARD_ERROR_TOL` (module docstring), else from a pivoted LU of
+    ``K_II`` and one solve per column of ``K_IB``.
     """
     return schur_factor(K, n_int)[:4]
 
@@ -180,35 +175,27 @@ def schur_factor(K: Any, n_int: int) -> tuple[np.ndarray, float, int, bool, Any]
         ``L_II``, ``U_II`` factor ``K_II``: the body's interior solves reuse them,
         :mod:`ssw.contact.stress`), or None when the pivoted fallback was used.
     """
-    from scipy.sparse.linalg import splu
+    from ssw.contact import lu as ssw_lu
 
     K = K.tocsc()
     n = K.shape[0]
-    try:
-        lu = splu(K, permc_spec="NATURAL", diag_pivot_thresh=0.0,
-                  options={"SymmetricMode": True})
-        ident = np.arange(n)
-        if np.array_equal(lu.perm_r, ident) and np.array_equal(lu.perm_c, ident):
-            x = np.random.default_rng(PROBE_SEED).uniform(-1.0, 1.0, n)
-            r = K @ x - lu.L @ (lu.U @ x)
-            norm = float(np.max(abs(K).sum(axis=1)))
-            berr = float(np.max(np.abs(r)) / (norm * np.max(np.abs(x))))
-            if berr <= BACKWARD_ERROR_TOL:
-                # the trailing blocks: columns first (CSC), then their rows, then dense
-                L22 = lu.L[:, n_int:][n_int:].toarray()
-                U22 = lu.U[:, n_int:][n_int:].toarray()
-                return L22 @ U22, berr, int(lu.L.nnz + lu.U.nnz), False, lu
-    except RuntimeError:  # SuperLU: "Factor is exactly singular"
-        pass
+    lu = ssw_lu.diagonal_lu(K)
+    ident = np.arange(n)
+    if (lu is not None and np.array_equal(lu.perm_r, ident)
+            and np.array_equal(lu.perm_c, ident)):
+        x = ssw_lu.probe(n)
+        berr = ssw_lu.backward_error(K, x, K @ x - lu.L @ (lu.U @ x))
+        if berr <= ssw_lu.BACKWARD_ERROR_TOL:
+            # the trailing blocks: columns first (CSC), then their rows, then dense
+            L22 = lu.L[:, n_int:][n_int:].toarray()
+            U22 = lu.U[:, n_int:][n_int:].toarray()
+            return L22 @ U22, berr, int(lu.L.nnz + lu.U.nnz), False, lu
     # stable fallback: threshold-pivoted LU of K_II, one solve per retained dof
     KII = K[:n_int, :n_int].tocsc()
-    lu = splu(KII, permc_spec="COLAMD", diag_pivot_thresh=1.0)
+    lu = ssw_lu.pivoted_lu(KII)
     KIB = K[:n_int, n_int:].toarray()
     X = lu.solve(KIB)
-    r = KII @ X - KIB
-    denom = float(np.max(abs(KII).sum(axis=1))) * float(np.max(np.abs(X))) + float(
-        np.max(np.abs(KIB)))
-    berr = float(np.max(np.abs(r)) / denom) if denom > 0 else 0.0
+    berr = ssw_lu.backward_error(KII, X, KII @ X - KIB, KIB)
     S = K[n_int:, n_int:].toarray() - K[n_int:, :n_int] @ X
     return np.asarray(S), berr, int(lu.L.nnz + lu.U.nnz), True, None
 

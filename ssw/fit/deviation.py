@@ -99,24 +99,66 @@ def calibrate_soil_E(
 ) -> float:
     """The soil modulus (Pa) at which ``deviation_of_E(E)`` equals ``target``.
 
-    Brent's method on ``log E`` in ``[E_lo, E_hi]`` (Pa). ``deviation_of_E`` is usually an
-    FEM solve and :func:`deviation` (see ``ssw fit-calibrate-soil``): the deviation of a
-    plate falls as the soil stiffens, so one statement of the thesis fixes the soil it left
-    unstated; the other statements are then predictions.
+    ``deviation_of_E`` is usually an FEM solve and :func:`deviation` (see ``ssw
+    fit-calibrate-soil``): the deviation of a plate falls as the soil stiffens, so one
+    statement of the thesis fixes the soil it left unstated; the other statements are then
+    predictions.
+
+    Parameters
+    ----------
+    target : float
+        The deviation to reach (dimensionless).
+    deviation_of_E : callable
+        ``E (Pa) -> deviation``, monotone in ``E`` on ``[E_lo, E_hi]``.
+    E_lo : float
+        Pa, the bracket's lower end.
+    E_hi : float
+        Pa, the bracket's upper end.
+    rtol : float
+        Tolerance on ``log E`` (absolute and relative, :func:`ssw.roots.find_root`'s
+        ``xatol`` and ``xrtol``): about ``rtol`` relative on ``E``.
+
+    Returns
+    -------
+    float
+        Pa, the soil modulus.
+
+    Raises
+    ------
+    OutOfRangeError
+        ``target`` is not reached in ``[E_lo, E_hi]`` (the message gives the deviations at
+        the ends).
+
+    Notes
+    -----
+    The root of ``deviation(exp x) - target`` in ``x = log E``, by the bracketed root
+    finder of ssw (:func:`ssw.roots.find_root`, Chandrupatla 1997), with the sign turned
+    so that the function increases; the bracket's two ends are solved once.
+
+    References
+    ----------
+    Chandrupatla, T. R. (1997). A new hybrid quadratic/bisection algorithm for finding the
+    zero of a nonlinear function without using derivatives. Adv. Eng. Softw. 28(3), 145-149.
     """
-    from scipy.optimize import brentq
+    from ssw.roots import find_root
+
+    known: dict[float, float] = {}
 
     def g(x: float) -> float:
-        return deviation_of_E(float(np.exp(x))) - target
+        if x not in known:
+            known[x] = deviation_of_E(float(np.exp(x))) - target
+        return known[x]
 
-    a, b = np.log(E_lo), np.log(E_hi)
+    a, b = float(np.log(E_lo)), float(np.log(E_hi))
     ga, gb = g(a), g(b)
     if ga * gb > 0:
         raise OutOfRangeError(
             f"deviation {target:g} is not reached for soil E in [{E_lo:g}, {E_hi:g}] Pa "
             f"(deviation {ga + target:.4g} .. {gb + target:.4g})"
         )
-    return float(np.exp(brentq(g, a, b, xtol=rtol, rtol=rtol)))
+    sign = 1.0 if gb >= ga else -1.0
+    root = find_root(lambda x: np.asarray(sign * g(float(x))), a, b, xatol=rtol, xrtol=rtol)
+    return float(np.exp(root.x))
 
 
 def thesis_statements(

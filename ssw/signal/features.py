@@ -50,7 +50,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from ssw.signal.peaks import KAISER_BETA, UPSAMPLE, parabolic_vertex
-from ssw.signal.rule import RULE, PeakRule, gap_end, incident, local_maxima, reflected
+from ssw.signal.rule import RULE, PeakRule, assemble, gap_end, local_maxima, prominent, reflected
 
 #: The features, in order (module docstring).
 NAMES = ("tof", "amplitude_ratio", "secondary_tof", "secondary_ratio", "width_incident",
@@ -153,9 +153,13 @@ def _crossing(y: np.ndarray, dy: np.ndarray | None, k: int, level: float,
 
 
 def pulse_features(y: np.ndarray, h: float, *, dy: np.ndarray | None = None,
-                   noise: float = 0.0, rate: float | None = None, rule: PeakRule = RULE
-                   ) -> Features:
+                   noise: float = 0.0, rate: float | None = None, rule: PeakRule = RULE,
+                   prominence: bool = True, min_tof: float | None = None) -> Features:
     """The features of one signal (module docstring).
+
+    The incident and reflected peaks are :func:`ssw.signal.rule.assemble`'s, with the
+    record's noise floor and prominence test: the samples :func:`ssw.signal.peaks.pick_peaks`
+    chooses on the same record (``ssw measure``), on this finer grid.
 
     Parameters
     ----------
@@ -167,11 +171,19 @@ def pulse_features(y: np.ndarray, h: float, *, dy: np.ndarray | None = None,
     dy : numpy.ndarray or None
         (m, k) its derivatives with respect to ``k`` parameters.
     noise : float
-        N rms of the record's noise (the rule's floor, and :func:`feature_sigma`).
+        N rms of the record's noise (the rule's floor ``noise_k * noise``, and
+        :func:`feature_sigma`).
     rate : float or None
         S/s, the record's sample rate (the noise's bandwidth); default ``1 / h``.
     rule : PeakRule
         The peak rule.
+    prominence : bool
+        The reflected peaks' prominence must exceed the floor (the record's test of
+        :func:`ssw.signal.peaks.pick_peaks`); False: the noiseless rule.
+    min_tof : float or None
+        s, the shortest physical round trip (:func:`ssw.signal.tof.shortest_round_trip`):
+        the reflected window opens no earlier; a window that opens on a pulse's falling
+        flank gives no reflected peak. ``None``: no bound.
 
     Returns
     -------
@@ -183,16 +195,18 @@ def pulse_features(y: np.ndarray, h: float, *, dy: np.ndarray | None = None,
     nan = np.full(len(NAMES), np.nan)
     jac = None if dy is None else np.full((len(NAMES), k_par), np.nan)
     col = y[:, None]
-    maxima = local_maxima(col)
     floor = rule.noise_k * noise
-    k_inc, found = incident(col, rule, floor=floor, maxima=maxima)
     times = {"incident": np.nan, "reflected": np.nan, "secondary": np.nan}
-    if not found[0]:
+
+    def later(k_inc: np.ndarray) -> np.ndarray:
+        pos, _ = parabolic_vertex(y, int(k_inc[0]))
+        return np.array([int(np.ceil(float(pos) + min_tof / h))])
+
+    sel = assemble(col, rule, floor=floor, prominence=prominence,
+                   min_start=None if min_tof is None else later)
+    if not (sel.ok[0] and not sel.straddle[0]):
         return Features(nan, jac, nan.copy(), times)
-    k_gap, ended = gap_end(col, k_inc, rule)
-    k_ref, has_ref, _ = reflected(col, k_gap, rule, floor=floor, maxima=maxima)
-    if not (ended[0] and has_ref[0]):
-        return Features(nan, jac, nan.copy(), times)
+    k_inc, k_ref = sel.k_incident, sel.k_reflected
     ki, kr = int(k_inc[0]), int(k_ref[0])
     ti, fi, dti, dfi, ci = _vertex(y, dy, ki, h)
     tr, fr, dtr, dfr, cr = _vertex(y, dy, kr, h)
@@ -207,7 +221,10 @@ def pulse_features(y: np.ndarray, h: float, *, dy: np.ndarray | None = None,
     dts = dfs = None
     if ended2[0] and k_gap2[0] < end - 2:
         part = col[:end]
-        k_sec, has_sec, _ = reflected(part, k_gap2, rule, floor=floor, maxima=maxima[:end])
+        maxima = local_maxima(col)[:end]
+        allowed = prominent(part, maxima, floor) if prominence else None
+        k_sec, has_sec, _ = reflected(part, k_gap2, rule, floor=floor, allowed=allowed,
+                                      maxima=maxima)
         if has_sec[0]:
             ts, fs_, dts, dfs, cs = _vertex(y, dy, int(k_sec[0]), h)
             times["secondary"] = ts

@@ -2,7 +2,9 @@
 
 Rule: :mod:`ssw.signal.rule` (stated once for measured records and simulated signals, so
 that a simulated recording and the model pick the same pulses), with its noise thresholds
-and the physical bound for measured records. With ``s`` the conditioned record:
+and the physical bound for measured records, assembled by :func:`ssw.signal.rule.assemble`
+(the assembly :func:`ssw.signal.features.pulse_features` calls too).
+With ``s`` the conditioned record:
 
 1. **incident** peak: the first local maximum with ``s >= incident_fraction x max(s)``
    and above ``noise_k`` noise sigmas;
@@ -43,13 +45,12 @@ interpolation.
 
 from __future__ import annotations
 
-import warnings
 from dataclasses import dataclass
 
 import numpy as np
 
 from ssw.errors import ConfigError, RecordingError
-from ssw.signal.rule import PeakRule, gap_end, incident, local_maxima, reflected
+from ssw.signal.rule import PeakRule, Selection, assemble, local_maxima, prominent
 
 __all__ = ["PeakError", "PeakPair", "PeakRule", "check_tof", "parabolic_vertex", "pick_peaks",
            "refine_peak", "refine_peaks"]
@@ -197,68 +198,66 @@ def pick_peaks(
         No peak, a single peak, a peak on the record's edge, or a reflection earlier than
         ``min_tof``.
     """
-    from scipy import signal
-
     y = np.asarray(y, dtype=np.float64)
     top = float(np.max(y))
     floor = rule.noise_k * noise
     if top <= floor:
         raise PeakError(f"no peak: maximum {top:.4g} N is within {rule.noise_k} noise sigmas "
                         f"({floor:.4g} N)")
-    col = y[:, None]
-    maxima = local_maxima(col)
-    k_inc, found = incident(col, rule, floor=floor, maxima=maxima)
-    if not found[0]:  # the maximum sits on the record's edge
+    refined: dict[str, tuple[float, float]] = {}
+
+    def later(k_inc: np.ndarray) -> np.ndarray:
+        # rule 3's bound from the refined incident peak (kept for the pair below)
+        refined["incident"] = refine_peak(y, int(k_inc[0]), upsample)
+        return np.array([int(np.ceil(refined["incident"][0] + min_tof * rate))])
+
+    sel = assemble(y[:, None], rule, floor=floor, prominence=True,
+                   min_start=None if min_tof is None else later)
+    if not sel.has_incident[0]:  # the maximum sits on the record's edge
         raise PeakError("no incident peak inside the record (maximum on an end sample)")
-    ki = int(k_inc[0])
-    k_gap, ended = gap_end(col, k_inc, rule)
-    if not ended[0]:
+    ki = int(sel.k_incident[0])
+    if not sel.has_gap[0]:
         raise PeakError(f"single peak: the incident pulse at sample {ki} never ends "
                         f"(stays above {rule.gap_fraction} of its height)")
-    pi, fi = refine_peak(y, ki, upsample)
-    kg = int(k_gap[0])
-    k0 = kg if min_tof is None else max(kg, int(np.ceil(pi + min_tof * rate)))
+    pi, fi = refined["incident"] if refined else refine_peak(y, ki, upsample)
+    k0 = int(sel.k_gap[0])
     if k0 >= y.size - 1:
         why = (f"before the shortest physical round trip {min_tof * 1e3:.4f} ms"
                if min_tof is not None else "with the incident pulse")
         raise PeakError(f"single peak: the record ends {(y.size - 1 - pi) / rate * 1e3:.4f} ms "
                         f"after the incident peak, {why}")
-    # a reflected peak must also stand out of the noise by its prominence (a step, a
-    # local maximum of the rule that rises again after a flat sample, has prominence 0)
-    idx = np.flatnonzero(maxima[:, 0])
-    with warnings.catch_warnings():
-        warnings.filterwarnings("ignore", message="some peaks have a prominence of 0")
-        prom = signal.peak_prominences(y, idx)[0] if idx.size else np.zeros(0)
-    allowed = np.zeros(col.shape, dtype=bool)
-    allowed[idx, 0] = prom > floor
-    k_ref, has_ref, w_max = reflected(col, np.array([k0]), rule, floor=floor,
-                                      allowed=allowed, maxima=maxima)
-    win_max = float(w_max[0])
-    level = rule.split_fraction * win_max
-    significant = (y[idx] >= level) & (y[idx] > floor) & (prom > floor)
-    before = np.flatnonzero((idx > kg) & (idx < k0) & significant)
-    if min_tof is not None and before.size and y[k0 - 1] > y[k0] >= level:
-        # the window opens on the falling flank of the last significant pulse before the
-        # bound if the record never fell below the significance level in between
-        j = int(before[-1])
-        if np.min(y[idx[j] : k0 + 1]) >= level:
-            raise PeakError(
-                f"a pulse peaks at TOF {(idx[j] - pi) / rate * 1e3:.4f} ms, just before the "
-                f"shortest physical round trip {min_tof * 1e3:.4f} ms (the reflected-peak "
-                "window opens on its falling flank): the chain numbers (beads below the "
-                "sensor, bead size and material) do not fit this record"
-            )
-    if not has_ref[0]:
+    if sel.straddle[0]:
+        j = _last_significant_before(y, sel, rule, floor)
+        raise PeakError(
+            f"a pulse peaks at TOF {(j - pi) / rate * 1e3:.4f} ms, just before the "
+            f"shortest physical round trip {min_tof * 1e3:.4f} ms (the reflected-peak "
+            "window opens on its falling flank): the chain numbers (beads below the "
+            "sensor, bead size and material) do not fit this record"
+        )
+    if not sel.has_reflected[0]:
         raise PeakError(
             f"single peak: no reflected peak after the incident one at sample {ki} (largest "
-            f"later value {win_max:.4g} N, noise floor {floor:.4g} N)"
+            f"later value {float(sel.w_max[0]):.4g} N, noise floor {floor:.4g} N)"
         )
+    k_ref = sel.k_reflected
     kr = int(k_ref[0])
     pr, fr = refine_peak(y, kr, upsample)
     pair = PeakPair(pi / rate, pr / rate, fi, fr)
     if min_tof is not None:
         check_tof(pair.tof, min_tof)
     return pair
+
+
+def _last_significant_before(y: np.ndarray, sel: Selection, rule: PeakRule, floor: float
+                             ) -> int:
+    """The sample of the last significant maximum of ``y`` between the incident pulse's
+    end and the reflected window's start (the pulse a straddle error names)."""
+    col = y[:, None]
+    m = local_maxima(col)
+    level = rule.split_fraction * sel.w_max
+    sig = m & (col >= level) & (col > floor) & prominent(col, m, floor)
+    k = np.flatnonzero(sig[:, 0])
+    return int(k[k < sel.k_gap[0]][-1])
 
 
 def check_tof(tof: float, min_tof: float) -> float:

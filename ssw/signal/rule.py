@@ -22,6 +22,13 @@ TOF_PSW) and does not jump from one pulse to another as E changes unless the pri
 falls below ``split_fraction`` of the largest. A local maximum is a sample above its left
 neighbour and not below its right one (the first sample of a flat top).
 
+The rules are assembled once, by :func:`assemble`, for every reader: the noiseless form
+(:func:`select`: no floor, no prominence test, no later start) for the chain's TOF, and
+the record's form (the noise floor, the prominence test and the shortest physical round
+trip, whose straddle it flags) for recorded hits (:func:`ssw.signal.peaks.pick_peaks`) and
+the features and waveform fits (:func:`ssw.signal.features.pulse_features`), so that one
+record gives the same peaks to ``ssw measure`` and to the calibrations.
+
 How each chosen sample is refined to a time is the reader's: the vertex of the parabola
 through three samples (:func:`ssw.chain.tof.pick_peaks`), a band-limited upsampling first
 for records (:func:`ssw.signal.peaks.refine_peak`), or the maximum of the integrator's own
@@ -35,6 +42,8 @@ highly nonlinear solitary waves with linear elastic media. Phys. Rev. E 83, 0466
 
 from __future__ import annotations
 
+import warnings
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -72,7 +81,9 @@ class Selection:
     """Sample indices chosen by the rule, per column (n,) int, and what was found (bool).
 
     ``k_gap`` is the first sample of the reflected window (the end of the incident
-    pulse, or the later start given); ``w_max`` (n,) the window's maximum.
+    pulse, or the later start given); ``w_max`` (n,) the window's maximum; ``straddle``
+    (n,) bool, the window opens on the falling flank of a significant pulse that peaked
+    before the later start (:func:`assemble`; always False without one).
     """
 
     k_incident: np.ndarray
@@ -82,6 +93,7 @@ class Selection:
     has_incident: np.ndarray
     has_gap: np.ndarray
     has_reflected: np.ndarray
+    straddle: np.ndarray
 
     @property
     def ok(self) -> np.ndarray:
@@ -197,13 +209,157 @@ def reflected(s: np.ndarray, start: np.ndarray, rule: PeakRule = RULE, *,
     return np.argmax(ok, axis=0), ok.any(axis=0), w_max
 
 
-def select(s: np.ndarray, rule: PeakRule = RULE) -> Selection:
-    """Rules 1-3 on the columns of a noiseless signal ``s`` ((n_t, n), baseline removed;
-    NaN samples, a stopped scene's, read as 0): the chosen samples (:class:`Selection`)."""
+def prominent(s: np.ndarray, maxima: np.ndarray, floor: float | np.ndarray) -> np.ndarray:
+    """(n_t, n) bool: the local maxima whose topographic prominence exceeds ``floor``.
+
+    Parameters
+    ----------
+    s : numpy.ndarray
+        (n_t, n) signal, baseline removed (N or V).
+    maxima : numpy.ndarray
+        (n_t, n) bool local maxima (:func:`local_maxima`).
+    floor : float or numpy.ndarray
+        Noise floor (same unit as ``s``; scalar or (n,)).
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_t, n) bool. A step (a maximum of the rule that rises again after a flat sample)
+        has prominence 0 and never passes.
+
+    Notes
+    -----
+    The prominence is ``scipy.signal.peak_prominences`` (height over the higher of the
+    lowest points either side before a higher sample), one call per column: a record is
+    one column.
+    """
+    from scipy import signal
+
+    out = np.zeros(s.shape, dtype=bool)
+    fl = np.broadcast_to(np.asarray(floor, float), s.shape[1:])
+    for c in range(s.shape[1]):
+        idx = np.flatnonzero(maxima[:, c])
+        if idx.size:
+            with warnings.catch_warnings():
+                warnings.filterwarnings("ignore", message="some peaks have a prominence of 0")
+                prom = signal.peak_prominences(s[:, c], idx)[0]
+            out[idx, c] = prom > fl[c]
+    return out
+
+
+def straddles(s: np.ndarray, k_gap: np.ndarray, start: np.ndarray, significant: np.ndarray,
+              level: np.ndarray) -> np.ndarray:
+    """(n,) bool: the reflected window, opened at ``start`` later than the incident pulse's
+    end ``k_gap``, opens on the falling flank of a significant pulse.
+
+    That is: a significant maximum lies strictly between ``k_gap`` and ``start``, the
+    signal falls at ``start`` (``s[start - 1] > s[start] >= level``) and never dropped below
+    ``level`` from that maximum on. The geometry that set ``start`` (the shortest physical
+    round trip) and the record then disagree.
+
+    Parameters
+    ----------
+    s : numpy.ndarray
+        (n_t, n) signal, baseline removed.
+    k_gap : numpy.ndarray
+        (n,) the incident pulse's end (rule 2).
+    start : numpy.ndarray
+        (n,) the window's first sample (``>= k_gap``).
+    significant : numpy.ndarray
+        (n_t, n) bool, the maxima that count for rule 3.
+    level : numpy.ndarray
+        (n,) rule 3's height, ``split_fraction`` times the window's maximum.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n,) bool.
+    """
+    n_t = s.shape[0]
+    cols = np.arange(s.shape[1])
+    idx = np.arange(n_t)[:, None]
+    before = significant & (idx > k_gap) & (idx < start)
+    has = before.any(axis=0)
+    j = n_t - 1 - np.argmax(before[::-1], axis=0)  # the last one
+    k0 = np.clip(start, 1, n_t - 1)
+    falling = (s[k0 - 1, cols] > s[k0, cols]) & (s[k0, cols] >= level)
+    span = (idx >= j) & (idx <= k0)
+    low = np.where(span, s, np.inf).min(axis=0)
+    return has & (start < n_t) & falling & (low >= level)
+
+
+def assemble(s: np.ndarray, rule: PeakRule = RULE, *, floor: float | np.ndarray = 0.0,
+             min_start: Callable[[np.ndarray], np.ndarray] | np.ndarray | None = None,
+             prominence: bool = False) -> Selection:
+    """Rules 1-3 (module docstring) on the columns of ``s``: the one assembly every reader
+    of peaks calls (the chain's TOF, recorded hits, pulse features, waveform fits).
+
+    Parameters
+    ----------
+    s : numpy.ndarray
+        (n_t, n) signal, baseline removed (N or V); NaN samples (a stopped scene's) read
+        as 0.
+    rule : PeakRule
+        The thresholds.
+    floor : float or numpy.ndarray
+        Noise floor (same unit as ``s``; scalar or (n,)) both peaks must exceed; 0 for a
+        noiseless signal.
+    min_start : callable, numpy.ndarray or None
+        The earliest sample of the reflected window (rule 3 of a record: the incident
+        peak's time plus the shortest physical round trip), (n,) int, or a function of the
+        incident peaks' samples (n,) returning it (the reader refines the incident peak its
+        own way). The window starts at the later of it and the incident pulse's end.
+        ``None``: at the end.
+    prominence : bool
+        The reflected peak's prominence must exceed ``floor`` too (a record's test,
+        :func:`prominent`).
+
+    Returns
+    -------
+    Selection
+        The chosen samples; ``k_gap`` is the window's first sample and ``straddle``
+        (:func:`straddles`, with ``min_start`` only) flags a window opening on the
+        falling flank of a significant pulse: readers of records reject such a TOF.
+
+    References
+    ----------
+    Yang, J. et al. (2011), Phys. Rev. E 83, 046606 (the primary reflected wave).
+    """
     if np.isnan(s.max(initial=0.0)):  # a NaN anywhere (no copy of a signal without one)
         s = np.where(np.isnan(s), 0.0, s)
     m = local_maxima(s)
-    k_inc, has_inc = incident(s, rule, maxima=m)
+    k_inc, has_inc = incident(s, rule, floor=floor, maxima=m)
     k_gap, has_gap = gap_end(s, k_inc, rule)
-    k_ref, has_ref, w_max = reflected(s, k_gap, rule, maxima=m)
-    return Selection(k_inc, k_gap, k_ref, w_max, has_inc, has_gap, has_ref & has_gap)
+    start = k_gap
+    if min_start is not None:
+        later = min_start(k_inc) if callable(min_start) else min_start
+        start = np.maximum(k_gap, np.asarray(later, dtype=k_gap.dtype))
+    allowed = prominent(s, m, floor) if prominence else None
+    k_ref, has_ref, w_max = reflected(s, start, rule, floor=floor, allowed=allowed, maxima=m)
+    straddle = np.zeros(s.shape[1], dtype=bool)
+    if min_start is not None:
+        level = rule.split_fraction * w_max
+        sig = m & (s >= level) & (s > floor)
+        if allowed is not None:
+            sig &= allowed
+        straddle = straddles(s, k_gap, start, sig, level) & (start > k_gap)
+    return Selection(k_inc, start, k_ref, w_max, has_inc, has_gap, has_ref & has_gap,
+                     straddle)
+
+
+def select(s: np.ndarray, rule: PeakRule = RULE) -> Selection:
+    """:func:`assemble` on a noiseless signal: no floor, no prominence, no later start.
+
+    Parameters
+    ----------
+    s : numpy.ndarray
+        (n_t, n) signal, baseline removed; NaN samples read as 0.
+    rule : PeakRule
+        The thresholds.
+
+    Returns
+    -------
+    Selection
+        The chosen samples.
+    """
+    return assemble(s, rule)

@@ -52,12 +52,15 @@
 #if defined(_MSC_VER) && !defined(__clang__)
 #define SSW_INLINE static __inline
 #define SSW_ALWAYS_INLINE static __forceinline
+#define SSW_NOINLINE static __declspec(noinline)
 #elif defined(__GNUC__)
 #define SSW_INLINE static inline
 #define SSW_ALWAYS_INLINE static inline __attribute__((always_inline))
+#define SSW_NOINLINE static __attribute__((noinline))
 #else
 #define SSW_INLINE static inline
 #define SSW_ALWAYS_INLINE static inline
+#define SSW_NOINLINE static
 #endif
 
 /* The far law's SIMD lanes: x86-64 intrinsics (AVX2 where the CPU and the OS have it, else
@@ -710,7 +713,7 @@ SSW_API int ssw_hertz(int64_t m, const double *d, const double *a, double A, dou
 }
 
 /* Row `row` of the record, and the peaks, from the step just taken. */
-static void record(const ssw_chain *c, int row)
+SSW_NOINLINE void record(const ssw_chain *c, int row)
 {
     const int N = c->N, n = c->n, k = c->k, nr = c->n_rec, s = c->s;
     const double *f = c->f;
@@ -741,7 +744,7 @@ static void record(const ssw_chain *c, int row)
 /* The step's first half: v += dt/2 acc, u += dt v (and the same for the sensitivities; the
    time step's column, c_T, also differentiates the explicit dt: V += acc / 2, U += dt acc
    / 2 + v). */
-static void drift(const ssw_chain *c)
+SSW_NOINLINE void drift(const ssw_chain *c)
 {
     const int Nn = c->N * c->n, m = Nn * c->k;
     const double half = 0.5 * c->dt, dt = c->dt;
@@ -872,7 +875,7 @@ SSW_ALWAYS_INLINE void contact_rates(const ssw_chain *c, int law, int has_old)
    velocity), its tangent c (K dDVP + dvp (K_d dD + K_a sign(dv) dt dDV)); the time step's
    column adds each force's explicit slope in dt (the averaging's |delta| = |dv| dt, the
    predicted velocity's dt/2 acc_old), w_et. */
-static void forces(const ssw_chain *c, int has_old, int kick)
+SSW_NOINLINE void forces(const ssw_chain *c, int has_old, int kick)
 {
     const int N = c->N, n = c->n, k = c->k, Nn = N * n;
     const double dt = c->dt, half = 0.5 * dt, cd = c->damping;
@@ -986,7 +989,9 @@ static void forces(const ssw_chain *c, int has_old, int kick)
 }
 
 /* The exported step: each checks the chain (chain_error) and the record's rows
-   (record_error) first, then runs drift, forces or record. */
+   (record_error) first, then runs drift, forces or record. Those three stay out of line
+   (SSW_NOINLINE), one copy for both callers: inlined into each, GCC 12 compiled the
+   force loops into 0.7 % more instructions per step. */
 SSW_API int ssw_drift(const ssw_chain *c)
 {
     const int e = chain_error(c);

@@ -6,6 +6,7 @@ route's wheel or the source route's build); the rules' conda environment
 from __future__ import annotations
 
 import importlib.metadata
+import json
 import os
 import re
 import subprocess
@@ -117,13 +118,15 @@ def test_setup_refuses_an_unknown_route():
 #: What a process that imports petsc4py (and mpi4py) by itself reports: PETSc's version,
 #: its world size against MPI's, and every MPI library it mapped (one, or two MPIs).
 _PETSC_ALONE = """
-import re, sys
+import json, re, sys
 {first}
 from mpi4py import MPI
 maps = open("/proc/self/maps").read()
-mpis = sorted({{p for p in re.findall(r"(/\\S+/libmpi(?:ch)?\\.so[.\\d]*)$", maps, re.M)}})
-print(".".join(map(str, PETSc.Sys.getVersion())), PETSc.COMM_WORLD.getSize(),
-      MPI.COMM_WORLD.Get_size(), *mpis)
+# a map's path is its sixth field to the line's end: it may hold spaces
+mpis = sorted({{p for p in re.findall(r"^(?:\\S+\\s+){{5}}(/.*/libmpi(?:ch)?\\.so[.\\d]*)$",
+                                     maps, re.M)}})
+print(json.dumps([".".join(map(str, PETSc.Sys.getVersion())), PETSc.COMM_WORLD.getSize(),
+                  MPI.COMM_WORLD.Get_size(), *mpis]))
 """
 
 
@@ -138,9 +141,9 @@ def test_petsc4py_imports_by_itself(first):
     run = subprocess.run([sys.executable, "-c", _PETSC_ALONE.format(first=first)],
                          capture_output=True, text=True, timeout=120)
     assert run.returncode == 0, run.stderr[-2000:]
-    version, petsc_size, mpi_size, *mpis = run.stdout.splitlines()[0].split()
+    version, petsc_size, mpi_size, *mpis = json.loads(run.stdout.splitlines()[0])
     assert version == _pins()["petsc"]
-    assert petsc_size == mpi_size == "1"
+    assert petsc_size == mpi_size == 1
     assert len({os.path.realpath(p) for p in mpis}) == 1, mpis
     if _installed("dolfinx-solver-real") is not None:  # binary route: the wheel's MPI
         assert Path(os.path.realpath(mpis[0])).parent == Path(sys.prefix) / "lib"

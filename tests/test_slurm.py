@@ -49,9 +49,11 @@ LOCAL_CLUSTER_ARGS = [
 # What the workflow's onstart does on Slurm (workflow/rules/common.smk), for the test
 # workflows here: the status command the cluster needs, the job sizes, the lost-jobs watch.
 CLUSTER_CHECK = f"""
+import shlex
 import sys
 sys.path.insert(0, {str(ROOT)!r})
 import ssw.workflow as sswwf
+sswwf.quote_job_python()
 
 
 onstart:
@@ -209,7 +211,7 @@ TINY_SNAKEFILE = textwrap.dedent('''
             " sh -c 'echo rank=${{PMI_RANK}} size=${{PMI_SIZE}}' | sort > {output}"
 
 
-    SWEEP = (f"ssw tof-sweep --config {config['study_config']} --law hertz"
+    SWEEP = (f"ssw tof-sweep --config {shlex.quote(config['study_config'])} --law hertz"
              " --soil-E-min 1e7 --soil-E-max 1e8 --soil-E-step 3e7 --soil-nu 0.3 0.5")
 
 
@@ -230,8 +232,8 @@ TINY_SNAKEFILE = textwrap.dedent('''
             "{resources.mpi} -n {resources.tasks} {SWEEP} --mpi --output {output} > /dev/null"
 
 
-    CONTACT = (f"ssw contact --config {config['study_config']} --soil-E 5e7 --soil-nu 0.3"
-               " --plate-thickness 0 --steps 20")
+    CONTACT = (f"ssw contact --config {shlex.quote(config['study_config'])} --soil-E 5e7"
+               " --soil-nu 0.3 --plate-thickness 0 --steps 20")
 
 
     rule contact_serial:

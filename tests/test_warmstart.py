@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import json
 import os
+import shlex
 import signal
 import subprocess
 import sys
@@ -203,8 +204,8 @@ def test_a_run_with_a_warm_process_beside_it(tmp_path):
     script = tmp_path / "two.sh"
     script.write_text("export PYTHONPATH=$(pwd -P)${PYTHONPATH:+:$PYTHONPATH}\n"  # the rules'
                       "while [ ! -S \"$SSW_WARM_SOCKET\" ]; do sleep 0.02; done\n"
-                      f"{sys.executable} -m ssw {' '.join(TOF)}\n"
-                      f"{sys.executable} -m ssw check-config --config missing.yaml\n")
+                      f"{shlex.quote(sys.executable)} -m ssw {' '.join(TOF)}\n"
+                      f"{shlex.quote(sys.executable)} -m ssw check-config --config missing.yaml\n")
     r = subprocess.run([sys.executable, "-m", "ssw.warmstart", "--log", "warm.log", "--",
                         "sh", str(script)], cwd=tmp_path, env=env, capture_output=True,
                        text=True, timeout=300)
@@ -247,7 +248,8 @@ def test_a_run_adopts_the_warm_process_it_was_given(warm, tmp_path, monkeypatch)
 def test_a_command_with_other_process_limits_runs_by_itself(warm, tmp_path):
     """A fork keeps the warm process's limits: a command under a tighter one (``ulimit``)
     runs by itself, under its own limit."""
-    r = subprocess.run(["sh", "-c", f"ulimit -n 512 && {sys.executable} -m ssw {' '.join(TOF)}"],
+    r = subprocess.run(["sh", "-c", f"ulimit -n 512 && {shlex.quote(sys.executable)} -m ssw "
+                              f"{' '.join(TOF)}"],
                        cwd=tmp_path, capture_output=True, text=True, timeout=300,
                        env=_env(**{warmstart.SOCKET_ENV: str(warm.socket)}))
     assert r.returncode == 0 and '"tof"' in r.stdout, r.stderr
@@ -679,7 +681,7 @@ def test_the_benchmark_record_of_a_served_job_is_the_jobs_own(tmp_path):
 
     root = str(Path(__file__).resolve().parents[1])
     args = " ".join([*TOF, "--steps-per-contact", "10000"])
-    (tmp_path / "Snakefile").write_text(BENCH_SNAKEFILE.format(root=root, args=args))
+    (tmp_path / "Snakefile").write_text(BENCH_SNAKEFILE.format(root=shlex.quote(root), args=args))
     env = _env(**{USAGE_ENV: str(tmp_path / "usage")})
     env.pop("PYTHONPATH", None)
     r = subprocess.run([str(Path(sys.executable).with_name("snakemake")), "--cores", "1",

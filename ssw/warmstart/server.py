@@ -47,6 +47,7 @@ if TYPE_CHECKING:
 PRELOAD = (
     "numpy", "scipy.linalg", "scipy.sparse", "scipy.sparse.linalg", "scipy.special",
     "scipy.interpolate", "scipy.optimize", "h5py", "matplotlib.pyplot", "PIL.PngImagePlugin",
+    "jsonschema",
     "ssw.cli", "ssw.cli.calibrate", "ssw.cli.chain", "ssw.cli.contact", "ssw.cli.design",
     "ssw.cli.fit", "ssw.cli.report", "ssw.cli.validate", "ssw.cli._device", "ssw.cli._sample",
     "ssw.cli._soil", "ssw.calibration.fit", "ssw.calibration.references", "ssw.chain.run",

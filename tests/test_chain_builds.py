@@ -27,6 +27,7 @@ from __future__ import annotations
 
 import ctypes
 import platform
+import re
 import runpy
 import shutil
 import subprocess
@@ -170,3 +171,65 @@ def test_a_build_that_fuses_multiply_adds_differs(installed, tmp_path, monkeypat
     fused = _with(lib, monkeypatch)
     assert {"hertz", "tof_hertz", "sensor", "dsensor"} <= set(_differing(installed, fused))
     np.testing.assert_allclose(fused["tof_hertz"], installed["tof_hertz"], rtol=1e-6)
+
+
+#: MSVC's headers as far as ``_step.c`` uses them, prototypes only (the MSVC branch's
+#: syntax check below: the intrinsics, CPUID, XGETBV and the C library's few functions).
+MSVC_STUBS = {
+    "immintrin.h": """
+typedef struct { double v[4]; } __m256d;
+typedef struct { double v[2]; } __m128d;
+#define _CMP_LT_OS 1
+#define _CMP_GT_OS 14
+#define V4(f, ...) __m256d _mm256_##f(__VA_ARGS__);
+#define V2(f, ...) __m128d _mm_##f(__VA_ARGS__);
+V4(set1_pd, double) V4(loadu_pd, const double *) V4(add_pd, __m256d, __m256d)
+V4(sub_pd, __m256d, __m256d) V4(mul_pd, __m256d, __m256d) V4(div_pd, __m256d, __m256d)
+V4(sqrt_pd, __m256d) V4(and_pd, __m256d, __m256d) V4(andnot_pd, __m256d, __m256d)
+V4(or_pd, __m256d, __m256d) V4(cmp_pd, __m256d, __m256d, const int)
+V2(set1_pd, double) V2(loadu_pd, const double *) V2(add_pd, __m128d, __m128d)
+V2(sub_pd, __m128d, __m128d) V2(mul_pd, __m128d, __m128d) V2(div_pd, __m128d, __m128d)
+V2(sqrt_pd, __m128d) V2(and_pd, __m128d, __m128d) V2(andnot_pd, __m128d, __m128d)
+V2(or_pd, __m128d, __m128d) V2(cmpgt_pd, __m128d, __m128d) V2(cmplt_pd, __m128d, __m128d)
+void _mm256_storeu_pd(double *, __m256d); void _mm_storeu_pd(double *, __m128d);
+int _mm256_movemask_pd(__m256d); int _mm_movemask_pd(__m128d); void _mm256_zeroupper(void);
+unsigned __int64 _xgetbv(unsigned int);
+""",
+    "intrin.h": "void __cpuidex(int info[4], int leaf, int sub);\n",
+    "math.h": "double sqrt(double); double fabs(double);\n#define isinf(x) __builtin_isinf(x)\n",
+    "string.h": "void *memcpy(void *, const void *, unsigned __int64);\n"
+                "void *memset(void *, int, unsigned __int64);\n",
+}
+
+
+def test_the_msvc_branch_parses(tmp_path):
+    """No MSVC here: this is Clang reading ``_step.c`` as MSVC would see it (the Windows
+    x64 target's macros, ``_MSC_VER`` and ``_M_X64``, Microsoft's extensions, not
+    ``__clang__``), against prototypes of the intrinsics and C functions it calls
+    (:data:`MSVC_STUBS`), without a warning but for MSVC's own ``#pragma fp_contract``:
+    the MSVC-only lines (``__declspec(dllexport)``, ``__forceinline``, ``__declspec(
+    noinline)``, ``__cpuidex``, ``_xgetbv``, ``DllMain``, the intrinsics' lanes and
+    ``_mm256_zeroupper``) parse and type-check, and every function is exported."""
+    from conftest import require
+
+    require(shutil.which("clang") is not None, "no clang to read the MSVC branch with")
+    for name, text in MSVC_STUBS.items():
+        (tmp_path / name).write_text(text)
+    cmd = ["clang", "--target=x86_64-pc-windows-msvc", "-fms-extensions", "-fms-compatibility",
+           "-U__clang__", "-Wall", "-Wextra", "-Werror", "-Wno-unknown-pragmas",
+           f"-I{tmp_path}", str(kernel.SOURCE)]
+    done = subprocess.run([*cmd, "-fsyntax-only"], capture_output=True, text=True,
+                          timeout=300, check=False)
+    assert done.returncode == 0, done.stderr
+    text = subprocess.run([*cmd, "-E"], capture_output=True, text=True, timeout=300,
+                          check=True).stdout
+    assert "int __stdcall DllMain(" in text and "__cpuidex(x," in text
+    exported = re.findall(r"__declspec\(dllexport\) [\w ]+?\**(ssw_\w+)\(", text)
+    # the same functions as the installed build exports (its ELF dynamic symbols)
+    require(shutil.which("nm") is not None, "no nm to list the installed build's exports")
+    so = kernel.library()._name
+    nm = subprocess.run(["nm", "-D", "--defined-only", so], capture_output=True, text=True,
+                        timeout=60, check=True).stdout
+    elf = [line.split()[-1] for line in nm.splitlines() if line.split()[-1].startswith("ssw_")]
+    assert elf and sorted(exported) == sorted(elf)
+

@@ -255,10 +255,9 @@ static int chain_error(const ssw_chain *c)
         return E_COLUMNS;
     if ((int64_t)N * n > INT_MAX / ((int64_t)WORK_BLOCKS + k))
         return E_INDEX;
-    const int cols[4] = {c->c_D, c->c_P, c->c_T, c->c_E};
-    for (int t = 0; t < 4; t++)
-        if (cols[t] < -1 || cols[t] >= k)
-            return E_COLUMN;
+    if (c->c_D < -1 || c->c_D >= k || c->c_P < -1 || c->c_P >= k || c->c_T < -1 ||
+        c->c_T >= k || c->c_E < -1 || c->c_E >= k)
+        return E_COLUMN;
     if (c->n_mass < 0 || c->n_mass > 2)
         return E_MASS;
     for (int t = 0; k > 0 && t < c->n_mass; t++)

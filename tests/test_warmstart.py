@@ -667,7 +667,7 @@ rule tof:
     benchmark:
         "bench.tsv"
     shell:
-        "export PYTHONPATH={root}${{{{PYTHONPATH:+:$PYTHONPATH}}}}; "
+        "export PYTHONPATH={shell_root}${{{{PYTHONPATH:+:$PYTHONPATH}}}}; "
         "while [ ! -S $SSW_WARM_SOCKET ]; do sleep 0.02; done; "  # its imports done
         "python -m ssw {args} > {{output}}"
 """
@@ -681,7 +681,8 @@ def test_the_benchmark_record_of_a_served_job_is_the_jobs_own(tmp_path):
 
     root = str(Path(__file__).resolve().parents[1])
     args = " ".join([*TOF, "--steps-per-contact", "10000"])
-    (tmp_path / "Snakefile").write_text(BENCH_SNAKEFILE.format(root=shlex.quote(root), args=args))
+    snakefile = BENCH_SNAKEFILE.format(root=root, shell_root=shlex.quote(root), args=args)
+    (tmp_path / "Snakefile").write_text(snakefile)
     env = _env(**{USAGE_ENV: str(tmp_path / "usage")})
     env.pop("PYTHONPATH", None)
     r = subprocess.run([str(Path(sys.executable).with_name("snakemake")), "--cores", "1",

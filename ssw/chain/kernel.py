@@ -192,7 +192,7 @@ def check_layout(lib: ctypes.CDLL, mirror: type[ctypes.Structure]) -> None:
     lib : ctypes.CDLL
         The compiled step.
     mirror : type
-        The :class:`ctypes.Structure` that mirrors ``ssw_chain`` (:class:`_Chain`).
+        The :class:`ctypes.Structure` that mirrors ``ssw_chain`` (``ssw.chain.kernel._Chain``).
 
     Raises
     ------

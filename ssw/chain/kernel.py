@@ -14,14 +14,20 @@ small ufunc calls whose overhead was most of their cost. Measured on this projec
 machine (docs/performance.md, "The cost of a step"), a whole run's step costs 3.4-4.8x less
 CPU for 1 to 20 scenes, and every recorded array agrees with the numpy step's to round-off.
 The Hertz law far from an event (two divisions and a square root per contact, most of the
-step's arithmetic) runs in SIMD lanes (AVX2 where the CPU has it, else SSE2), whose IEEE
-operations give the scalar code's results: the same bits, and a run of 900 scenes on Hertz
-walls (``simulate``, the study's chain) costs 0.35 s of CPU instead of 0.76 s.
+step's arithmetic) runs in SIMD lanes on x86-64 (AVX2 where the CPU has it, else SSE2;
+:func:`simd_lanes`), whose IEEE operations give the scalar path's results (every other CPU):
+the same bits, and a run of 900 scenes on Hertz walls (``simulate``, the study's chain)
+costs 0.35 s of CPU instead of 0.76 s.
 
 The library is built with the package (``setup.py``; ``bash scripts/setup.sh`` or ``pip
-install -e .``, which need a C compiler: Debian's ``gcc`` and ``libc6-dev``). It carries the
-hash of the source it was built from; a library older than its source is refused with the
-command that rebuilds it.
+install -e .``, which need a C compiler: Debian's ``gcc`` and ``libc6-dev``; GCC, Clang and
+MSVC build it, each with its flags in ``setup.py``). The loader (:func:`load`) checks what
+it loads: the hash of the source the library was built from (a library older than its
+source is refused with the command that rebuilds it), the constants it shares with
+:mod:`ssw.chain.impulse`, and the layout of the C struct ``ssw_chain`` against its ctypes
+mirror, field by field. Every exported function checks the sizes it is given and answers
+with an error code, which the wrappers here raise as :class:`~ssw.errors.SswError`; the
+wrappers check what C cannot see, that each array has the shape those sizes say.
 """
 
 from __future__ import annotations
@@ -31,6 +37,7 @@ import hashlib
 import importlib.util
 from functools import lru_cache
 from pathlib import Path
+from typing import NoReturn
 
 import numpy as np
 
@@ -52,7 +59,7 @@ WORK_BLOCKS = 9
 
 class _Chain(ctypes.Structure):
     """The C ``ssw_chain`` (``_step.c``): sizes, constants and the arrays' addresses, field by
-    field in the C declaration's order."""
+    field in the C declaration's order (:func:`check_layout` compares them)."""
 
     _fields_ = [
         ("N", ctypes.c_int), ("n", ctypes.c_int), ("k", ctypes.c_int),
@@ -65,7 +72,7 @@ class _Chain(ctypes.Structure):
         ("g", ctypes.c_double),
         ("z", _D), ("acc", _D), ("inv_m", _D), ("preload", _D), ("f", _D), ("power", _D),
         ("ZT", _D), ("Acc", _D), ("dF", _D), ("work", _D),
-        ("s", ctypes.c_int), ("n_rec", ctypes.c_int),
+        ("s", ctypes.c_int), ("n_rec", ctypes.c_int), ("rec_rows", ctypes.c_int),
         ("pair", _D), ("wall", _D), ("dpair", _D), ("peak_u", _D), ("peak_f", _D),
         ("K1", ctypes.c_int), ("c_E", ctypes.c_int),
         ("wd", _D), ("wa", _D), ("wb", _D), ("wda", _D), ("wdb", _D),
@@ -85,7 +92,7 @@ def source_digest() -> str:
 
 @lru_cache(maxsize=1)
 def library() -> ctypes.CDLL:
-    """The compiled step, checked against its source.
+    """The compiled step built with the package, checked (:func:`load`).
 
     Returns
     -------
@@ -95,43 +102,155 @@ def library() -> ctypes.CDLL:
     Raises
     ------
     SswError
-        The library is missing or was built from another source.
+        The library is missing, was built from another source, or disagrees with this
+        module (:func:`load`).
     """
     spec = importlib.util.find_spec("ssw.chain._step")
     if spec is None or spec.origin is None:
         raise SswError(f"ssw's compiled chain step ({SOURCE.name}) is not built: {REBUILD}")
-    lib = ctypes.CDLL(spec.origin)
+    return load(spec.origin)
+
+
+def load(path: str | Path) -> ctypes.CDLL:
+    """A compiled step (a build of ``_step.c``), checked against this module.
+
+    Refused: a library built from another ``_step.c`` than the one beside this module
+    (its built-in hash, ``SSW_STEP_SOURCE``), one whose constants differ from
+    :mod:`ssw.chain.impulse`'s (``FAR``, ``SERIES``, ``ROOT_SERIES``) or from
+    :data:`WORK_BLOCKS`, and one whose ``ssw_chain`` the ctypes mirror does not match
+    (:func:`check_layout`).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The shared library.
+
+    Returns
+    -------
+    ctypes.CDLL
+        The library, its functions' argument and result types set.
+
+    Raises
+    ------
+    SswError
+        A check failed; the message names it (and the command that rebuilds the library,
+        when it is older than its source).
+    """
+    lib = ctypes.CDLL(str(path))
     lib.ssw_step_source.restype = ctypes.c_char_p
     built = lib.ssw_step_source().decode()
     if SOURCE.exists() and built != source_digest():
-        raise SswError(f"the compiled chain step ({spec.origin}) was built from another "
+        raise SswError(f"the compiled chain step ({path}) was built from another "
                        f"{SOURCE.name} (source {built}, now {source_digest()}): {REBUILD}")
-    lib.ssw_step_constants.argtypes = [_D]
-    got = np.empty(6)
-    lib.ssw_step_constants(got.ctypes.data_as(_D))
-    if not np.array_equal(got, [FAR, *SERIES, *ROOT_SERIES]):
+    lib.ssw_step_error.argtypes = [ctypes.c_int]
+    lib.ssw_step_error.restype = ctypes.c_char_p
+    lib.ssw_step_lanes.argtypes = []
+    lib.ssw_step_lanes.restype = ctypes.c_int
+    lib.ssw_step_constants.argtypes = [_D, ctypes.c_int]
+    lib.ssw_step_constants.restype = ctypes.c_int
+    got = np.empty(7)
+    if code := lib.ssw_step_constants(got.ctypes.data_as(_D), got.size):
+        _refused(lib, "ssw_step_constants", code)
+    want = [FAR, *SERIES, *ROOT_SERIES]
+    if not np.array_equal(got[:6], want):
         raise SswError(f"{SOURCE.name} and ssw.chain.impulse disagree on FAR, SERIES and "
-                       f"ROOT_SERIES ({got.tolist()} against "
-                       f"{[FAR, *SERIES, *ROOT_SERIES]})")
+                       f"ROOT_SERIES ({got[:6].tolist()} against {want})")
+    if got[6] != WORK_BLOCKS:
+        raise SswError(f"{SOURCE.name} and ssw.chain.kernel disagree on WORK_BLOCKS "
+                       f"({got[6]:g} against {WORK_BLOCKS})")
+    check_layout(lib, _Chain)
     ref = ctypes.POINTER(_Chain)
-    lib.ssw_drift.argtypes = [ref]
-    lib.ssw_drift.restype = None
-    lib.ssw_forces.argtypes = [ref, ctypes.c_int, ctypes.c_int]
-    lib.ssw_forces.restype = None
-    lib.ssw_record.argtypes = [ref, ctypes.c_int]
-    lib.ssw_record.restype = None
-    lib.ssw_advance.argtypes = [ref, ctypes.c_int, ctypes.c_int]
-    lib.ssw_advance.restype = None
-    # addresses as integers (ndarray.ctypes.data): a block's call costs a few us
-    lib.ssw_stop_update.argtypes = [ctypes.c_int, ctypes.c_int, ctypes.c_long] + \
-        [ctypes.c_void_p] * 7
-    lib.ssw_stop_update.restype = None
-    lib.ssw_hertz.argtypes = [ctypes.c_int, _D, _D, ctypes.c_double, _D, _D, _D]
-    lib.ssw_hertz.restype = None
-    lib.ssw_piecewise.argtypes = [ctypes.c_long, ctypes.c_int, ctypes.c_int, _D, _D, _D, _D,
-                                  _D, _D, _D, _D, _D, ctypes.POINTER(ctypes.c_int)]
-    lib.ssw_piecewise.restype = None
+    types = {
+        "ssw_drift": [ref],
+        "ssw_forces": [ref, ctypes.c_int, ctypes.c_int],
+        "ssw_record": [ref, ctypes.c_int],
+        "ssw_advance": [ref, ctypes.c_int, ctypes.c_int],
+        # addresses as integers (ndarray.ctypes.data): a block's call costs a few us
+        "ssw_stop_update": [ctypes.c_int, ctypes.c_int, ctypes.c_int64]
+        + [ctypes.c_void_p] * 7,
+        "ssw_hertz": [ctypes.c_int64, _D, _D, ctypes.c_double, _D, _D, _D],
+        "ssw_piecewise": [ctypes.c_int64, ctypes.c_int, ctypes.c_int, _D, _D, _D, _D, _D, _D,
+                          _D, _D, _D, ctypes.POINTER(ctypes.c_int)],
+    }
+    for name, args in types.items():
+        fn = getattr(lib, name)
+        fn.argtypes = args
+        fn.restype = ctypes.c_int
     return lib
+
+
+def check_layout(lib: ctypes.CDLL, mirror: type[ctypes.Structure]) -> None:
+    """Refuse a ctypes mirror of ``ssw_chain`` whose layout is not the C struct's.
+
+    The library names the struct's fields in their order (``ssw_chain_fields``) and gives
+    its size and each field's offset and size as its compiler laid them out
+    (``ssw_chain_layout``); the mirror must have the same fields, each at the same offset
+    with the same size, and the same total size.
+
+    Parameters
+    ----------
+    lib : ctypes.CDLL
+        The compiled step.
+    mirror : type
+        The :class:`ctypes.Structure` that mirrors ``ssw_chain`` (``ssw.chain.kernel._Chain``).
+
+    Raises
+    ------
+    SswError
+        A field only one side has, a field at another offset or of another size (the
+        first one in the C order, by name), or another total size.
+    """
+    lib.ssw_chain_fields.restype = ctypes.c_char_p
+    lib.ssw_chain_layout.argtypes = [ctypes.POINTER(ctypes.c_int64), ctypes.c_int]
+    lib.ssw_chain_layout.restype = ctypes.c_int
+    names = lib.ssw_chain_fields().decode().split()
+    got = np.zeros(1 + 2 * len(names), np.int64)
+    if code := lib.ssw_chain_layout(got.ctypes.data_as(ctypes.POINTER(ctypes.c_int64)),
+                                    got.size):
+        _refused(lib, "ssw_chain_layout", code)
+    ours = [f[0] for f in mirror._fields_]
+    where = (f"{mirror.__module__}.{mirror.__qualname__} does not mirror {SOURCE.name}'s "
+             "ssw_chain")
+    how = "the mirror lists the struct's fields in their order, with their C types"
+    if set(ours) != set(names):
+        raise SswError(f"{where}: fields only in the mirror {sorted(set(ours) - set(names))}, "
+                       f"only in C {sorted(set(names) - set(ours))} ({how})")
+    for i, name in enumerate(names):
+        off, size = int(got[1 + 2 * i]), int(got[2 + 2 * i])
+        field = getattr(mirror, name)
+        if (field.offset, field.size) != (off, size):
+            raise SswError(f"{where}: field {name!r} is at offset {field.offset} "
+                           f"({field.size} bytes) in the mirror, at offset {off} ({size} "
+                           f"bytes) in C ({how})")
+    if ctypes.sizeof(mirror) != int(got[0]):
+        raise SswError(f"{where}: {ctypes.sizeof(mirror)} bytes in the mirror, {int(got[0])} "
+                       f"in C ({how})")
+
+
+def simd_lanes() -> int:
+    """The lanes the compiled step's far Hertz law runs in on this CPU.
+
+    Returns
+    -------
+    int
+        4 (AVX2), 2 (SSE2) or 1 (the scalar path: not x86-64, or built with
+        ``-DSSW_SCALAR``); the results are the same bits whatever the lanes.
+    """
+    return int(library().ssw_step_lanes())
+
+
+def _refused(lib: ctypes.CDLL, name: str, code: int) -> NoReturn:
+    """Raise the error a function of the compiled step answered with."""
+    raise SswError(f"the compiled chain step's {name} refused its arguments (error {code}): "
+                   f"{lib.ssw_step_error(code).decode()}")
+
+
+def _rows(x: np.ndarray, shape: tuple[int, ...], what: str) -> np.ndarray:
+    """``x`` as a C-contiguous float array of ``shape``, or an SswError naming ``what``."""
+    x = np.ascontiguousarray(x, float)
+    if x.shape != shape:
+        raise SswError(f"{what}: shape {x.shape}, the compiled chain step needs {shape}")
+    return x
 
 
 def _ptr(x: np.ndarray | None) -> ctypes._Pointer | None:
@@ -167,7 +286,9 @@ def averaged_hertz(d: np.ndarray, a: np.ndarray, A: float, tangent: bool = False
     out = np.empty_like(d)
     fd = np.empty_like(d) if tangent else None
     fa = np.empty_like(d) if tangent else None
-    library().ssw_hertz(d.size, _ptr(d), _ptr(a), float(A), _ptr(out), _ptr(fd), _ptr(fa))
+    lib = library()
+    if code := lib.ssw_hertz(d.size, _ptr(d), _ptr(a), float(A), _ptr(out), _ptr(fd), _ptr(fa)):
+        _refused(lib, "ssw_hertz", code)
     return out, fd, fa
 
 
@@ -201,8 +322,13 @@ def piecewise(law: tuple, x: np.ndarray, tangent: bool = False, with_E: bool = F
         ``(F, dF/dd, dF/dE, j)``, each the shape of ``x`` broadcast with (n,) (None where
         not asked).
     """
-    d, a, b, da, db = law
-    n = d.shape[0]
+    n, K1 = np.shape(law[0])
+    d, a, b = (_rows(y, (n, K1), f"the piecewise law's {w}")
+               for y, w in zip(law[:3], "dab", strict=True))
+    da, db = (None if y is None else _rows(y, (n, K1), "the piecewise law's derivatives")
+              for y in law[3:])
+    if with_E and (da is None or db is None):
+        raise SswError("the piecewise law's dF/dE needs its da_dE and db_dE")
     x = np.asarray(x, float)
     shape = np.broadcast_shapes(x.shape, (n,))
     x = np.ascontiguousarray(np.broadcast_to(x, shape))
@@ -210,10 +336,13 @@ def piecewise(law: tuple, x: np.ndarray, tangent: bool = False, with_E: bool = F
     kd = np.empty_like(out) if tangent else None
     kE = np.empty_like(out) if with_E else None
     j = np.empty(shape, np.intc) if piece else None
-    library().ssw_piecewise(out.size // max(n, 1), n, d.shape[1], _ptr(d), _ptr(a), _ptr(b),
-                            _ptr(da if with_E else None), _ptr(db if with_E else None),
-                            _ptr(x), _ptr(out), _ptr(kd), _ptr(kE),
-                            None if j is None else j.ctypes.data_as(ctypes.POINTER(ctypes.c_int)))
+    lib = library()
+    if code := lib.ssw_piecewise(
+            out.size // max(n, 1), n, K1, _ptr(d), _ptr(a), _ptr(b),
+            _ptr(da if with_E else None), _ptr(db if with_E else None), _ptr(x), _ptr(out),
+            _ptr(kd), _ptr(kE),
+            None if j is None else j.ctypes.data_as(ctypes.POINTER(ctypes.c_int))):
+        _refused(lib, "ssw_piecewise", code)
     return out, kd, kE, j
 
 
@@ -244,12 +373,22 @@ def stop_update(S: np.ndarray, W: np.ndarray, times: np.ndarray, consts: np.ndar
         (n,) bool, the scenes that may stop.
     """
     rows, n = S.shape
-    if S.strides[1] != 8 or W.strides != S.strides:
-        S, W = np.ascontiguousarray(S), np.ascontiguousarray(W)
+    if (S.dtype != float or W.shape != S.shape or S.strides[1] != 8 or W.strides != S.strides
+            or S.strides[0] % 8):
+        S, W = _rows(S, (rows, n), "the sensor's block"), _rows(W, (rows, n), "the wall's")
+    times = _rows(times, (rows,), "the block's times")
+    consts = _rows(consts, (4,), "the stop rule's constants")
+    if (F.shape != (9, n) or F.dtype != float or not F.flags.c_contiguous
+            or B.shape != (2, n) or B.dtype != bool or not B.flags.c_contiguous):
+        raise SswError(f"the stop rule's state: F {F.shape} {F.dtype}, B {B.shape} {B.dtype}, "
+                       f"the compiled chain step needs C-contiguous (9, {n}) float and "
+                       f"(2, {n}) bool (updated in place)")
     done = np.empty(n, bool)
-    library().ssw_stop_update(rows, n, S.strides[0] // 8, S.ctypes.data, W.ctypes.data,
-                              times.ctypes.data, consts.ctypes.data, F.ctypes.data,
-                              B.ctypes.data, done.ctypes.data)
+    lib = library()
+    if code := lib.ssw_stop_update(rows, n, S.strides[0] // 8, S.ctypes.data, W.ctypes.data,
+                                   times.ctypes.data, consts.ctypes.data, F.ctypes.data,
+                                   B.ctypes.data, done.ctypes.data):
+        _refused(lib, "ssw_stop_update", code)
     return done
 
 
@@ -282,6 +421,13 @@ class Stepper:
         (n,) N on bead 1.
     power : bool
         Keep the damping's dissipation rate.
+
+    Raises
+    ------
+    ConfigError
+        More scenes than the compiled step's C ``int`` indices hold.
+    SswError
+        ``inv_m`` or ``preload`` of another shape.
     """
 
     def __init__(self, N: int, n: int, k: int, consts: dict, inv_m: np.ndarray,
@@ -295,8 +441,8 @@ class Stepper:
         self.z = np.zeros((2, N, n))
         self.acc = np.zeros((N, n))
         self.f = np.zeros((N, n))
-        self.inv_m = np.ascontiguousarray(inv_m, float)
-        self.preload = None if preload is None else np.ascontiguousarray(preload, float)
+        self.inv_m = _rows(inv_m, (N, n), "the inverse masses")
+        self.preload = None if preload is None else _rows(preload, (n,), "the preload")
         self.power = np.zeros(n) if power else None
         self.ZT = np.zeros((2, N, n, k)) if k else None
         self.Acc = np.zeros((N, n, k)) if k else None
@@ -304,6 +450,7 @@ class Stepper:
         self.peak_u = np.zeros(n)
         self.peak_f = np.zeros((N - 1, n))
         self._rec: tuple = (0, None, None, None)
+        self._rec_rows = 0
         self.law: tuple | None = None
         self._bind()
 
@@ -312,18 +459,22 @@ class Stepper:
         self.work = np.empty(WORK_BLOCKS * N * n + N * n * k)
         rows = [i for i, _ in c["mass_at"]] + [0, 0]
         cols = [j for _, j in c["mass_at"]] + [0, 0]
+        s, pair, wall, dpair = self._rec
+        wd, wa, wb, wda, wdb = self.law or (None,) * 5
         self._c = _Chain(
-            N, n, k, int(c["predict"]), int(c["damped_tangent"]), int(c.get("law", 0)),
-            c["c_D"], c["c_P"], int(c.get("c_T", -1)),
-            len(c["mass_at"]), (ctypes.c_int * 2)(*rows[:2]), (ctypes.c_int * 2)(*cols[:2]),
-            c["A"], c["dt"], c["damping"], c["g"],
-            _ptr(self.z), _ptr(self.acc), _ptr(self.inv_m), _ptr(self.preload), _ptr(self.f),
-            _ptr(self.power), _ptr(self.ZT), _ptr(self.Acc), _ptr(self.dF), _ptr(self.work),
-            self._rec[0], 0 if self._rec[1] is None else self._rec[1].shape[-1],
-            # pair, wall, dpair
-            *(_ptr(x) for x in self._rec[1:]), _ptr(self.peak_u), _ptr(self.peak_f),
-            0 if self.law is None else self.law[0].shape[1], c["c_E"],
-            *(_ptr(x) for x in (self.law or (None,) * 5)))
+            N=N, n=n, k=k, predict=int(c["predict"]), damped_tangent=int(c["damped_tangent"]),
+            law=int(c.get("law", 0)), c_D=c["c_D"], c_P=c["c_P"], c_T=int(c.get("c_T", -1)),
+            n_mass=len(c["mass_at"]), mass_row=(ctypes.c_int * 2)(*rows[:2]),
+            mass_col=(ctypes.c_int * 2)(*cols[:2]),
+            A=c["A"], dt=c["dt"], damping=c["damping"], g=c["g"],
+            z=_ptr(self.z), acc=_ptr(self.acc), inv_m=_ptr(self.inv_m),
+            preload=_ptr(self.preload), f=_ptr(self.f), power=_ptr(self.power),
+            ZT=_ptr(self.ZT), Acc=_ptr(self.Acc), dF=_ptr(self.dF), work=_ptr(self.work),
+            s=s, n_rec=0 if pair is None else pair.shape[-1], rec_rows=self._rec_rows,
+            pair=_ptr(pair), wall=_ptr(wall), dpair=_ptr(dpair),
+            peak_u=_ptr(self.peak_u), peak_f=_ptr(self.peak_f),
+            K1=0 if wd is None else wd.shape[1], c_E=c["c_E"],
+            wd=_ptr(wd), wa=_ptr(wa), wb=_ptr(wb), wda=_ptr(wda), wdb=_ptr(wdb))
         self._ref = ctypes.byref(self._c)
         lib = library()
         self._drift, self._forces, self._record = lib.ssw_drift, lib.ssw_forces, lib.ssw_record
@@ -337,9 +488,11 @@ class Stepper:
         Parameters
         ----------
         law : tuple
-            ``(d, a, b, da_dE, db_dE)``.
+            ``(d, a, b, da_dE, db_dE)``, each (n, K1) or None (the derivatives).
         """
-        self.law = tuple(None if x is None else np.ascontiguousarray(x, float) for x in law)
+        shape = (self.n, np.shape(law[0])[1])
+        self.law = tuple(None if x is None else _rows(x, shape, "the wall law's rows")
+                         for x in law)
         self._bind()
 
     def start_record(self, s: int, wall: np.ndarray, pair: np.ndarray,
@@ -357,8 +510,26 @@ class Stepper:
             (rows, 2, n) N, the sensor's two contact forces.
         dpair : numpy.ndarray or None
             (rows, 2, n, k), their sensitivities.
+
+        Raises
+        ------
+        SswError
+            A buffer that is not C-contiguous float64 of those shapes, with ``n`` (their
+            last axis but ``dpair``'s) at least the current scenes' and ``rows`` the same.
         """
+        rows, n_rec = wall.shape
+        want = {"pair": (pair, (rows, 2, n_rec)), "wall": (wall, (rows, n_rec))}
+        if dpair is not None:
+            want["dpair"] = (dpair, (rows, 2, n_rec, self.k))
+        for name, (x, shape) in want.items():
+            if x.shape != shape or x.dtype != float or not x.flags.c_contiguous:
+                raise SswError(f"the record's {name} buffer: {x.shape} {x.dtype}, the "
+                               f"compiled chain step needs C-contiguous float {shape}")
+        if n_rec < self.n or not 1 <= s <= self.N - 1:
+            raise SswError(f"the record: {n_rec} scenes for {self.n}, sensor bead {s} (1 .. "
+                           f"{self.N - 1})")
         self._rec = (s, pair, wall, dpair)
+        self._rec_rows = rows
         self.peak_u[:] = self.z[0, -1]
         self.peak_f[:] = self.f[:-1]
         self._bind()
@@ -370,9 +541,10 @@ class Stepper:
         Parameters
         ----------
         row : int
-            The row.
+            The row, ``0 .. rows - 1`` of the buffers.
         """
-        self._record(self._ref, row)
+        if code := self._record(self._ref, row):
+            _refused(library(), "ssw_record", code)
 
     def advance(self, rows: int, row0: int = 0) -> None:
         """``rows`` whole steps, each :meth:`drift`, :meth:`forces` (``has_old``, ``kick``)
@@ -386,13 +558,15 @@ class Stepper:
         rows : int
             Steps.
         row0 : int
-            The first record row.
+            The first record row (``row0 + rows`` at most the buffers' rows).
         """
-        self._advance(self._ref, rows, row0)
+        if code := self._advance(self._ref, rows, row0):
+            _refused(library(), "ssw_advance", code)
 
     def drift(self) -> None:
         """The step's first half: ``v += dt/2 acc``, ``u += dt v`` (and their sensitivities)."""
-        self._drift(self._ref)
+        if code := self._drift(self._ref):
+            _refused(library(), "ssw_drift", code)
 
     def forces(self, has_old: bool, kick: bool) -> None:
         """Contact forces, accelerations and sensitivities at the drifted state.
@@ -404,7 +578,8 @@ class Stepper:
         kick : bool
             Then the step's second half, ``v += dt/2 acc``.
         """
-        self._forces(self._ref, int(has_old), int(kick))
+        if code := self._forces(self._ref, int(has_old), int(kick)):
+            _refused(library(), "ssw_forces", code)
 
     def keep(self, mask: np.ndarray) -> None:
         """Keep the scenes ``mask`` (bool over the current ones), in order.

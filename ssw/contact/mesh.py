@@ -10,6 +10,17 @@ and the largest is resolved by about ``1 / growth`` elements. The plate is a str
 ``1 + growth`` from ``size_contact`` at the axis, through the thickness a progression of
 the same ratio from ``size_contact`` at the loaded top face, with at least ``plate_layers``
 layers. Elements are 6-node (quadratic) triangles.
+
+Two refinements serve a plastic path's elastic part (:mod:`ssw.contact.plastic_mesh`);
+both are off by default, and a mesh without them is the one the settings always gave:
+
+* a plateau (``near_size > 0``): inside it the elements grow as ``near_growth`` times the
+  distance from the contact point, from ``size_contact`` to ``near_size``, which then
+  holds until ``growth d`` exceeds it: ``h(d) = max(clip(near_growth d, size_contact,
+  near_size), clip(growth d, size_contact, size_max))`` (a gmsh Max of two Thresholds);
+* spots (``spot_size > 0``): about each point of ``spot_points`` (radius, depth below the
+  loaded surface) the element is ``spot_size`` within ``spot_radius``, growing by
+  ``spot_growth`` of the distance beyond (a gmsh Min with the rest).
 """
 
 from __future__ import annotations
@@ -41,6 +52,12 @@ class MeshSettings:
     subgrade_depth: float = 0.0  # m, a lift of this thickness on a subgrade below (0: none)
     subgrade_ratio: float = 1.0  # subgrade E / the lift's E
     subgrade_nu: float = 0.0  # the subgrade's Poisson's ratio
+    near_size: float = 0.0  # m, a plateau of this size about the contact point (0: none)
+    near_growth: float = 0.0  # element size / distance below the plateau, -
+    spot_size: float = 0.0  # m, element size in spots (balls about points; 0: none)
+    spot_points: tuple = ()  # ((r m, depth m below the loaded surface), ...): the spots
+    spot_radius: float = 0.0  # m, the spots' radius (spot_size within it)
+    spot_growth: float = 0.0  # element size / distance beyond a spot, -
 
 
 @dataclass(frozen=True)
@@ -174,6 +191,30 @@ def _build(gmsh, t: float, rp: float, s: MeshSettings) -> Mesh:
     field.setNumber(thr, "DistMin", s.size_contact / s.growth)
     field.setNumber(thr, "DistMax", s.size_max / s.growth)
     background = thr
+    if s.near_size > 0:  # a finer grading inside a plateau (module docstring)
+        near = field.add("Threshold")
+        field.setNumber(near, "InField", dist)
+        field.setNumber(near, "SizeMin", s.size_contact)
+        field.setNumber(near, "SizeMax", s.near_size)
+        field.setNumber(near, "DistMin", s.size_contact / s.near_growth)
+        field.setNumber(near, "DistMax", s.near_size / s.near_growth)
+        background = field.add("Max")
+        field.setNumbers(background, "FieldsList", [thr, near])
+    if s.spot_size > 0 and s.spot_points:  # balls refined about points (module docstring)
+        pts = [occ.addPoint(r, top - depth, 0.0) for r, depth in s.spot_points]
+        occ.synchronize()
+        d_s = field.add("Distance")
+        field.setNumbers(d_s, "PointsList", pts)
+        spot = field.add("Threshold")
+        field.setNumber(spot, "InField", d_s)
+        field.setNumber(spot, "SizeMin", s.spot_size)
+        field.setNumber(spot, "SizeMax", s.size_max)
+        field.setNumber(spot, "DistMin", s.spot_radius)
+        field.setNumber(spot, "DistMax", s.spot_radius + (s.size_max - s.spot_size)
+                        / s.spot_growth)
+        finer = field.add("Min")
+        field.setNumbers(finer, "FieldsList", [background, spot])
+        background = finer
     field.setAsBackgroundMesh(background)
     for opt in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints", "MeshSizeFromCurvature"):
         gmsh.option.setNumber(f"Mesh.{opt}", 0)

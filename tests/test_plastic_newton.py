@@ -12,15 +12,8 @@ import pytest
 
 from ssw.constitutive import VonMises
 from ssw.constitutive.base import initial_state
-from ssw.contact.plastic import (
-    RTOL,
-    _Model,
-    _OrderedLU,
-    _symmetric_order,
-    contact_mesh,
-    johnson_first_yield,
-    solve_path,
-)
+from ssw.contact.plastic import RTOL, contact_mesh, johnson_first_yield, solve_path
+from ssw.contact.plastic_model import _Model, _OrderedLU, _symmetric_order
 
 E, NU, Y, R = 100e6, 0.3, 1e6, 4.75e-3
 

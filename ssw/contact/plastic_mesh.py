@@ -158,8 +158,8 @@ PATH_RESOLVED = 1.0
 #: The elastic part's mesh of a plastic path (:func:`elastic_mesh_settings`): element size
 #: over the distance from the contact point, from the first increment's contact radius to
 #: the plastic mesh's element there (every contact radius of the elastic part resolved by
-#: 1 / 0.15 elements: the study's curve within 0.3 % of Sneddon's from its first
-#: increment, 0.43 % at 0.2; docs/physics/plastic.md).
+#: 1 / 0.15 elements: the study's plastic scene within 0.25 % of Sneddon's from its
+#: first increment, 1.0 % at 0.3; docs/physics/plastic.md).
 ELASTIC_GROWTH = 0.15
 #: The spot about the estimated first-yield point (:func:`hertz_yield_point`): element
 #: ``a_y / SPOT_FINE`` within ``SPOT_RADIUS a_y`` of it, growing by ``SPOT_GROWTH`` of the

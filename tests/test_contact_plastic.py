@@ -343,14 +343,14 @@ def test_mesh_grading_of_a_plastic_path():
     from ssw.contact.plastic import elastic_mesh_settings, hertz_yield_point
     from ssw.contact.plastic_mesh import SPOT_FINE, SPOT_RADIUS
 
-    Rs, d_end, d_first = 9.53e-3, 3e-4, 5e-7
-    study = MeshSettings(0.2, 0.2, 5e-6, 0.1, 0.02, 4)
+    Rs, d_end = 9.53e-3, 3e-4
+    study = MeshSettings(0.2, 0.2, 10e-6, 0.1, 0.02, 4)
     plateau = 0.1 * np.sqrt(Rs * d_end)
     d_y, depth = hertz_yield_point(VonMises(STUDY_Y), STUDY_E, 0.3, Rs)
     a_y = np.sqrt(Rs * d_y)
     def sizes(yield_point):
-        mesh = build_mesh(0.0, 0.0, elastic_mesh_settings(study, Rs, d_first, plateau,
-                                                          yield_point, growth=0.15))
+        mesh = build_mesh(0.0, 0.0, elastic_mesh_settings(study, plateau, yield_point,
+                                                          growth=0.15, radius=Rs))
         c = mesh.nodes[mesh.tri[:, :3]].mean(axis=1)
         return element_sizes(mesh.nodes, mesh.tri), c, np.hypot(c[:, 0], c[:, 1])
 

@@ -172,9 +172,9 @@ def scene_meshes(
     ``path`` (two meshes, :func:`ssw.contact.plastic_path.solve_path`'s ``elastic_mesh``):
     the plastic part on the study's domain and growth with its element at the contact
     point scaled to the path's end (:func:`path_mesh_settings`); the elastic part (the
-    increments before first yield) on that mesh graded finer towards the contact point
-    from the first increment's contact radius on and, on a bare sample, refined where
-    Hertz's field first yields and at the contact's edge then
+    increments before first yield) on that mesh graded finer towards the contact point,
+    down to the study's element there (the elastic engine's), and, on a bare sample,
+    refined where Hertz's field first yields and at the contact's edge then
     (:func:`elastic_mesh_settings`, :func:`hertz_yield_point`). ``study``: the elastic
     engine's mesh as configured, one mesh.
 
@@ -221,9 +221,9 @@ def scene_meshes(
     # part's mesh is refined there
     spot = hertz_yield_point(model, float(soil[0]), float(soil[1]), radius) if (
         model is not None and t == 0) else None
-    elastic = elastic_mesh_settings(study, radius, float(deltas[0]), settings.size_contact,
+    elastic = elastic_mesh_settings(study, settings.size_contact,
                                     spot if spot is not None and spot[0] <= d_end else None,
-                                    elastic_growth)
+                                    elastic_growth, radius)
     return deltas, build_mesh(t, rp, settings), build_mesh(t, rp, elastic), {
         "mesh_size_contact": settings.size_contact,
         "elastic_mesh_size_contact": elastic.size_contact}

@@ -156,14 +156,14 @@ def near_radius(mesh: Mesh, E: float, nu: float, radius: float, d_end: float,
 #: the error this costs against a converged mesh is stated in ssw/bench/plastic.py.
 PATH_RESOLVED = 1.0
 #: The elastic part's mesh of a plastic path (:func:`elastic_mesh_settings`): element size
-#: over the distance from the contact point, from the first increment's contact radius to
-#: the plastic mesh's element there (every contact radius of the elastic part resolved by
-#: 1 / 0.15 elements: the study's plastic scene within 0.25 % of Sneddon's from its
-#: first increment, 1.0 % at 0.3; docs/physics/plastic.md).
+#: over the distance from the contact point, from the study's element there to the plastic
+#: mesh's (every contact radius of the elastic part resolved by about 1 / 0.15 elements;
+#: the errors this leaves on the study's plastic scene: docs/physics/plastic.md).
 ELASTIC_GROWTH = 0.15
-#: The spot about the estimated first-yield point (:func:`hertz_yield_point`): element
-#: ``a_y / SPOT_FINE`` within ``SPOT_RADIUS a_y`` of it, growing by ``SPOT_GROWTH`` of the
-#: distance beyond (``a_y`` Hertz's contact radius there).
+#: The spots about the estimated first-yield point and the contact's edge then
+#: (:func:`hertz_yield_point`): element ``a_y / SPOT_FINE`` within ``SPOT_RADIUS a_y`` of
+#: each, growing by ``SPOT_GROWTH`` of the distance beyond (``a_y`` Hertz's contact radius
+#: there).
 SPOT_FINE = 20.0
 SPOT_RADIUS = 0.1
 SPOT_GROWTH = 0.3
@@ -259,48 +259,56 @@ def hertz_yield_point(model: Any, E: float, nu: float, radius: float
     return float(a * a / radius), float(zeta[i] * a)
 
 
-def elastic_mesh_settings(settings: Any, radius: float, d_first: float, plateau: float,
+def elastic_mesh_settings(settings: Any, plateau: float,
                           yield_point: tuple[float, float] | None = None,
-                          growth: float = ELASTIC_GROWTH) -> Any:
+                          growth: float = ELASTIC_GROWTH, radius: float = 0.0) -> Any:
     """The mesh settings of a plastic path's elastic part (the loading increments before
     first yield, :func:`ssw.contact.plastic_path.solve_path`'s ``elastic_mesh``): the
     plastic path's mesh (the study's settings with the element ``plateau`` at the contact
     point, :func:`path_mesh_settings`) graded finer towards the contact point, ``h =
-    growth d`` from the first increment's contact radius ``sqrt(R d_first)`` on
-    (at least the study's ``size_contact``) up to ``plateau`` (every contact radius of the
-    elastic part resolved as the elastic engine resolves its own), and refined in a spot
-    about the first-yield point (:data:`SPOT_FINE`, where the plastic zone starts: its
-    stresses set the first yield).
+    growth d`` from the study's element at the contact point (the elastic engine's: it
+    resolves the contact radii from ``size_contact / growth`` on; so the elastic part's
+    mesh, like the engine's, does not depend on the increments) up to ``plateau``, and
+    refined in spots about the first-yield point and the contact's edge then
+    (:data:`SPOT_FINE`: the plastic zone starts there, and the stresses there set the
+    first yield).
 
     Parameters
     ----------
     settings : ssw.contact.mesh.MeshSettings
         The study's mesh settings (:func:`ssw.contact.mesh.mesh_settings`).
-    radius : float
-        The sphere's radius, m.
-    d_first : float
-        The first increment's indentation, m.
     plateau : float
         The plastic path's element at the contact point, m (:func:`path_mesh_settings`).
     yield_point : tuple of float or None
         ``(delta_y, depth_y)`` (m) of the estimated first yield
-        (:func:`hertz_yield_point`); None: no spot.
+        (:func:`hertz_yield_point`); None: no spots.
     growth : float
         Element size over the distance from the contact point (default
         :data:`ELASTIC_GROWTH`).
+    radius : float
+        The sphere's radius ``R``, m (the contact radius at first yield ``sqrt(R
+        delta_y)`` sizes the spots; needed with ``yield_point``).
 
     Returns
     -------
     ssw.contact.mesh.MeshSettings
-        The settings with the finer grading (and the spot).
+        The settings with the finer grading (and the spots).
+
+    Raises
+    ------
+    ConfigError
+        A ``yield_point`` without the sphere's ``radius``.
     """
     from dataclasses import replace
 
+    from ssw.errors import ConfigError
+
     g = float(growth)
-    h = max(float(settings.size_contact), g * float(np.sqrt(radius * d_first)))
-    out = replace(settings, size_contact=min(h, plateau), near_size=float(plateau),
-                  near_growth=g)
+    out = replace(settings, size_contact=min(float(settings.size_contact), plateau),
+                  near_size=float(plateau), near_growth=g)
     if yield_point is not None:
+        if not radius > 0:
+            raise ConfigError("radius", radius, "the sphere's radius > 0 m with a yield point")
         a_y = float(np.sqrt(radius * yield_point[0]))
         out = replace(out, spot_size=a_y / SPOT_FINE,
                       spot_points=((0.0, float(yield_point[1])), (a_y, 0.0)),

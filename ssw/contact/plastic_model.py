@@ -455,7 +455,8 @@ class _Model:
             p = pos0[free]
             inside = p >= 0
             diag = A.diagonal()
-            outside = ~inside
+            diag = np.where(diag != 0.0, diag, 1.0)  # a dof without stiffness (a region
+            outside = ~inside                           # at an apex): left as it is
 
             def apply(r: np.ndarray) -> np.ndarray:
                 r0 = np.zeros(free0.size)

@@ -95,30 +95,31 @@ def _study_scene(E: float, nu: float, until: float, elastic_growth: float | None
 def test_first_yield_at_the_study_settings_is_johnsons(nu, E, tol, depth):
     """At the study's settings, the first yield force is Johnson's analytic one (p0 = k Y,
     ``k`` the peak of the Hertz axis field's ``(sigma_r - sigma_z) / p0``: 1.61 at nu 0.3,
-    1.81 at 0.45; Johnson 1985, sec. 6.1) within 1 % (measured -0.64 %, -0.59 %), at his
-    depth below the surface (0.48 a, 0.53 a) within 5 %, between the last elastic
+    1.81 at 0.45; Johnson 1985, sec. 6.1) within 1 % (measured -0.68 %, -0.57 %), at his
+    depth below the surface (0.48 a, 0.53 a) within 5 % (measured 3 %, 0.6 %: the
+    quadrature point nearest it), on the axis, between the last elastic
     increment and the first plastic one. Johnson's field is Hertz's, the limit of a
     contact small against the sphere (a_y / R -> 0): the FEM's sphere is exact, and at
     a_y / R = 0.115 (E 100 MPa) it yields 0.5 % below Johnson on converged meshes
     (docs/physics/plastic.md); at a tenth of it (E 1 GPa) the first yield is Johnson's
-    within 0.3 % (measured -0.12 %)."""
+    within 0.3 % (measured -0.09 %)."""
     c, radius, (Fy, _dy) = _study_scene(E, nu, 1.02)
     assert c.first_yield_force == pytest.approx(Fy, rel=tol)
     k = c.stats["elastic_increments"]
     assert c.delta[k - 1] < c.first_yield_delta <= c.delta[k]
     assert c.plastic_volume[k - 1] == 0.0 and c.plastic_volume[k] > 0.0
     a = np.sqrt(radius * c.first_yield_delta)
-    assert c.stats["first_yield_r"] < 0.05 * a
+    assert c.stats["first_yield_r"] < 0.1 * a  # the points nearest the axis
     assert c.stats["first_yield_depth"] == pytest.approx(depth * a, rel=0.05)
 
 
 def test_curve_below_first_yield_is_the_elastic_one():
     """At the study's settings (nu 0.3), every increment before first yield is within 0.5 %
-    of Hertz's force and of Sneddon's exact sphere (measured 0.24 % and 0.23 %), and of
+    of Hertz's force and of Sneddon's exact sphere (measured 0.23 % and 0.22 %), and of
     the elastic engine's curve on its own mesh (the study's: 5 um at the contact, growth
     0.1; the monolithic PETSc engine with its LCP: another mesh, assembly and contact
     solver). The error is the elastic part's mesh's: with its grading coarsened from 0.15
-    to 0.3 the largest deviation from Sneddon grows by more than 2 (measured 4.4: an
+    to 0.3 the largest deviation from Sneddon grows by more than 2 (measured 4.3: an
     observed order above 1)."""
     from ssw import hertz
     from ssw.config import load_config
@@ -395,17 +396,17 @@ def test_config_soil_model(tmp_path):
                      library(c))
     assert pl.inputs["soil_model"]["yield_stress"] == 1e9
     assert pl.inputs["plastic_mesh"] == "path"
-    # the path's meshes: nothing yields, so the whole path is its elastic part's mesh's
-    # (every contact radius resolved from the first increment's on): Hertz's within the
-    # elastic part's 0.5 % (measured 0.1 %), the elastic engine's on its mesh of growth 0.2
-    # within their sum (measured 0.6 %: the engine's own 0.5 % from Hertz)
+    # the path's meshes: nothing yields, so the whole path is its elastic part's mesh's:
+    # the elastic engine's on its mesh of growth 0.2 within 1 % (measured 0.45 %), Hertz's
+    # too (measured 0.54 %: the 5 cm sample's finite depth stiffens the contact by about
+    # 0.36 % at the last increment, Dimitriadis et al. 2002 bonded at a / h = 0.004)
     from ssw import hertz
 
     assert pl.stats["elastic_increments"] == 4 and "elastic_mesh_size_contact" in pl.stats
+    np.testing.assert_allclose(pl.force, el.force, rtol=1e-2)
     np.testing.assert_allclose(
         pl.force, hertz.force(pl.delta, hertz.effective_modulus(38e6, 0.34), radius),
-        rtol=5e-3)
-    np.testing.assert_allclose(pl.force, el.force, rtol=1e-2)
+        rtol=1e-2)
     same, _ = scene_path(scenes["noplate-E38MPa-nu0.340-vm-Y1000MPa"], c["contact"], radius,
                          None, mesh="study")
     np.testing.assert_allclose(same.force, el.force, rtol=1e-6)
@@ -464,7 +465,7 @@ def test_bench_plastic_study_states_its_errors(tmp_path, capsys):
     """``ssw bench plastic --plastic-study`` (a small run, no reference) states for each
     mesh its first yield against Johnson's and its increments before first yield against
     Hertz and Sneddon, in its record and its text; on ``config/ci.yaml``'s mesh the path's
-    are within 1 % and 0.5 % (measured -0.26 %, 0.14 %)."""
+    are within 1 % and 0.5 % (measured -0.40 %, 0.15 %)."""
     import json
 
     from ssw.bench.plastic import human

@@ -8,7 +8,9 @@ curve files) and keeps every public name importable:
 * :mod:`ssw.contact.plastic_model`: the discrete u-p problem of one mesh (the element, the
   condensed far field, the Newton matrix and its solves);
 * :mod:`ssw.contact.plastic_path`: the path, increment by increment (the active set inside
-  Newton's iteration, elastic spans, cutbacks, first yield);
+  Newton's iteration, cutbacks);
+* :mod:`ssw.contact.plastic_elastic`: its elastic parts (elastic spans, first yield located
+  between the increments);
 * :mod:`ssw.contact.plastic_mesh`: the meshes a path is solved on.
 
 Discretization. The scene's mesh (:func:`ssw.contact.mesh.build_mesh`) and the

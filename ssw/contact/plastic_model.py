@@ -19,13 +19,13 @@ Cost (exact reductions of the same discrete problem):
 
 * the far field: the elements beyond a near zone about the contact point stay elastic and
   unloaded, so they are condensed once onto the dofs they share with the near zone (their
-  Schur complement, :meth:`_Model._condense`; Przemieniecki 1963);
+  Schur complement, ``_Model._condense``; Przemieniecki 1963);
 * the Newton steps: GMRES (Saad & Schultz 1986) right-preconditioned by the newest
   factorization of an earlier tangent while that is cheaper than factorizing
-  (:meth:`_Model.solve`), to the linear residual the Newton test needs;
+  (``_Model.solve``), to the linear residual the Newton test needs;
 * the Newton matrix: assembled only when a step needs it, as the elastic matrix plus the
-  plastic elements' change (:meth:`_Model.matrix`), and factored in the elimination order
-  the first factorization of its free set chose (:class:`_OrderedLU`); the elastic
+  plastic elements' change (``_Model.matrix``), and factored in the elimination order
+  the first factorization of its free set chose (``_OrderedLU``); the elastic
   matrix's factorizations are kept per free set.
 
 References

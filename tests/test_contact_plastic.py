@@ -5,6 +5,8 @@ flat punch's limit load on von Mises (a bracket) and Tresca (Eason & Shield 1960
 
 from __future__ import annotations
 
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -58,19 +60,105 @@ def test_below_first_yield_equals_elastic_engine():
     assert plastic.dissipated_work == 0.0
 
 
-@pytest.mark.parametrize("nu", [0.3, 0.45])
-def test_first_yield_force_matches_johnson(nu):
-    """First yield within 3 % of Johnson's Hertz force (p0 = 1.61 Y at nu 0.3, 1.81 Y at
-    nu 0.45) and in the first plastic increment's bracket."""
-    cfg, Fy, dy = _setting(nu)
-    deltas = dy * np.linspace(0, 1.2, 13)[1:]
-    c = solve_path(_mesh(cfg), E, nu, VonMises(Y), R, deltas)
-    assert c.first_yield_force == pytest.approx(Fy, rel=0.03)
-    k = int(np.argmax(c.plastic_volume > 0))
-    assert c.force[k - 1] < c.first_yield_force <= c.force[k]
-    # the first plastic points lie on the axis near depth 0.48 a (0.53 a at nu 0.45)
-    a = np.sqrt(R * dy)
-    assert c.plastic_depth[k] == pytest.approx((0.48 if nu == 0.3 else 0.53) * a, rel=0.35)
+#: The study's plastic scene (docs/physics/plastic.md): config/config.yaml's contact (a 1 m
+#: domain, growth 0.1), a 9.53 mm sphere on a von Mises half-space of yield stress 5 MPa,
+#: loaded to 0.3 mm in 600 increments at E 100 MPa (scaled with the contact radius at
+#: other moduli: the same increments and meshes relative to it).
+STUDY_Y, STUDY_E = 5e6, 100e6
+
+
+def _study_scene(E: float, nu: float, until: float, elastic_growth: float | None = None):
+    """The study's plastic scene at ``E`` (Pa), ``nu`` on its default meshes
+    (:func:`ssw.contact.plastic.scene_meshes`), loaded to ``until`` times Johnson's first
+    yield indentation; the sphere's radius and Johnson's ``(F_y N, delta_y m)``."""
+    from ssw.config import load_config
+    from ssw.contact.plastic import ELASTIC_GROWTH, scene_meshes
+
+    cfg = load_config(Path(__file__).resolve().parent.parent / "config" / "config.yaml")
+    radius = float(cfg["indenter"]["radius"])
+    scale = STUDY_E / E  # the contact radius at first yield goes as 1 / E
+    contact = {**cfg["contact"], "delta_max": 3e-4 * scale**2, "steps": 600,
+               "delta_mode": "fixed",
+               "mesh_size_contact": cfg["contact"]["mesh_size_contact"] * scale}
+    deltas, mesh, elastic, _ = scene_meshes(
+        (E, nu), VonMises(STUDY_Y), radius, contact,
+        elastic_growth=ELASTIC_GROWTH if elastic_growth is None else elastic_growth)
+    Fy, dy = johnson_first_yield(E, nu, STUDY_Y, radius)
+    curve = solve_path(mesh, E, nu, VonMises(STUDY_Y), radius, deltas[deltas < until * dy],
+                       elastic_mesh=elastic)
+    return curve, radius, (Fy, dy)
+
+
+@pytest.mark.parametrize("nu, E, tol, depth", [(0.3, STUDY_E, 0.01, 0.48),
+                                                (0.45, STUDY_E, 0.01, 0.53),
+                                                (0.3, 10 * STUDY_E, 0.003, 0.48)])
+def test_first_yield_at_the_study_settings_is_johnsons(nu, E, tol, depth):
+    """At the study's settings, the first yield force is Johnson's analytic one (p0 = k Y,
+    ``k`` the peak of the Hertz axis field's ``(sigma_r - sigma_z) / p0``: 1.61 at nu 0.3,
+    1.81 at 0.45; Johnson 1985, sec. 6.1) within 1 % (measured -0.68 %, -0.57 %), at his
+    depth below the surface (0.48 a, 0.53 a) within 5 % (measured 3 %, 0.6 %: the
+    quadrature point nearest it), on the axis, between the last elastic
+    increment and the first plastic one. Johnson's field is Hertz's, the limit of a
+    contact small against the sphere (a_y / R -> 0): the FEM's sphere is exact, and at
+    a_y / R = 0.115 (E 100 MPa) it yields 0.5 % below Johnson on converged meshes
+    (docs/physics/plastic.md); at a tenth of it (E 1 GPa) the first yield is Johnson's
+    within 0.3 % (measured -0.09 %). The increments before it (from 3e-4 of the first
+    yield force on) are within 0.5 % of Sneddon's exact rigid sphere on the elastic
+    half-space (Sneddon 1965; :func:`ssw.hertz.sneddon_sphere`)."""
+    from ssw import hertz
+    from ssw.roots import find_root
+
+    c, radius, (Fy, _dy) = _study_scene(E, nu, 1.02)
+    assert c.first_yield_force == pytest.approx(Fy, rel=tol)
+    k = c.stats["elastic_increments"]
+    d, f, Es = c.delta[:k], c.force[:k], E / (1 - nu * nu)
+    a_s = find_root(lambda x: hertz.sneddon_sphere(x, Es, radius)[0] - d,
+                    np.full(k, 1e-9), np.full(k, 0.4 * radius)).x
+    assert f[0] < 0.02 * Fy  # the check covers the foot of the curve
+    np.testing.assert_allclose(f, hertz.sneddon_sphere(a_s, Es, radius)[1], rtol=5e-3)
+    assert c.delta[k - 1] < c.first_yield_delta <= c.delta[k]
+    assert c.plastic_volume[k - 1] == 0.0 and c.plastic_volume[k] > 0.0
+    a = np.sqrt(radius * c.first_yield_delta)
+    assert c.stats["first_yield_r"] < 0.1 * a  # the points nearest the axis
+    assert c.stats["first_yield_depth"] == pytest.approx(depth * a, rel=0.05)
+
+
+def test_curve_below_first_yield_is_the_elastic_one():
+    """At the study's settings (nu 0.3), every increment before first yield is within 0.5 %
+    of Hertz's force and of Sneddon's exact sphere (measured 0.23 % and 0.22 %), and of
+    the elastic engine's curve on its own mesh (the study's: 5 um at the contact, growth
+    0.1; the monolithic PETSc engine with its LCP: another mesh, assembly and contact
+    solver). The error is the elastic part's mesh's: with its grading coarsened from 0.15
+    to 0.3 the largest deviation from Sneddon grows by more than 2 (measured 4.3: an
+    observed order above 1)."""
+    from ssw import hertz
+    from ssw.config import load_config
+    from ssw.contact.scene import solve_curve
+    from ssw.roots import find_root
+
+    nu = 0.3
+    c, radius, (_Fy, dy) = _study_scene(STUDY_E, nu, 1.02)
+    k = c.stats["elastic_increments"]
+    d, f = c.delta[:k], c.force[:k]
+    assert k > 200 and d[-1] > 0.99 * dy
+    Es = STUDY_E / (1 - nu * nu)
+    a = find_root(lambda x: hertz.sneddon_sphere(x, Es, radius)[0] - d, np.full(k, 1e-7),
+                  np.full(k, 0.4 * radius)).x
+    sneddon = hertz.sneddon_sphere(a, Es, radius)[1]
+    err = np.max(np.abs(f / sneddon - 1))
+    assert err < 5e-3
+    np.testing.assert_allclose(f, hertz.force(d, Es, radius), rtol=5e-3)
+    cfg = load_config(Path(__file__).resolve().parent.parent / "config" / "config.yaml")
+    contact = {**cfg["contact"], "delta_max": float(d[-1]), "steps": k,
+               "delta_mode": "fixed"}
+    elastic, state = solve_curve((STUDY_E, nu), None, 0.0, radius, contact,
+                                 engine="monolithic")
+    state["solver"].destroy()
+    np.testing.assert_allclose(elastic.delta, d, rtol=1e-12)
+    np.testing.assert_allclose(f, elastic.force, rtol=5e-3)
+    coarse, _, _ = _study_scene(STUDY_E, nu, 1.02, elastic_growth=0.3)
+    kc = coarse.stats["elastic_increments"]
+    assert np.max(np.abs(coarse.force[:kc] / sneddon[:kc] - 1)) > 2 * err
 
 
 def test_loading_unloading_energy_and_residual_indentation():
@@ -256,6 +344,39 @@ def test_flat_punch_tresca_mesh_convergence():
         _tresca_punch("smooth", 0.05, 0.2)[-1], rel=1e-4)
 
 
+def test_mesh_grading_of_a_plastic_path():
+    """The elastic part's mesh of a plastic path (:func:`elastic_mesh_settings`): its
+    elements grow as ``growth`` times the distance from the contact point below the
+    plastic mesh's element (the plateau), and are ``a_y / SPOT_FINE`` in the spots about
+    the first-yield point and the contact's edge then (measured on the built mesh); the
+    plastic mesh keeps the plateau."""
+    from ssw.contact.assembly import element_sizes
+    from ssw.contact.plastic import elastic_mesh_settings, hertz_yield_point
+    from ssw.contact.plastic_mesh import SPOT_FINE, SPOT_RADIUS
+
+    Rs, d_end = 9.53e-3, 3e-4
+    study = MeshSettings(0.2, 0.2, 10e-6, 0.1, 0.02, 4)
+    plateau = 0.1 * np.sqrt(Rs * d_end)
+    d_y, depth = hertz_yield_point(VonMises(STUDY_Y), STUDY_E, 0.3, Rs)
+    a_y = np.sqrt(Rs * d_y)
+    def sizes(yield_point):
+        mesh = build_mesh(0.0, 0.0, elastic_mesh_settings(study, plateau, yield_point,
+                                                          growth=0.15, radius=Rs))
+        c = mesh.nodes[mesh.tri[:, :3]].mean(axis=1)
+        return element_sizes(mesh.nodes, mesh.tri), c, np.hypot(c[:, 0], c[:, 1])
+
+    h, c, dist = sizes(None)
+    ring = (dist > 0.2 * plateau / 0.15) & (dist < 0.3 * plateau / 0.15)
+    assert np.median(h[ring] / dist[ring]) == pytest.approx(0.15, rel=0.35)
+    plateau_ring = (dist > 1.1 * plateau / 0.15) & (dist < 0.9 * plateau / 0.1)
+    assert np.median(h[plateau_ring]) == pytest.approx(plateau, rel=0.35)
+    h, c, dist = sizes((d_y, depth))
+    for r, z in ((0.0, -depth), (a_y, 0.0)):
+        spot = np.hypot(c[:, 0] - r, c[:, 1] - z) < SPOT_RADIUS * a_y
+        assert spot.sum() >= 8
+        assert np.median(h[spot]) == pytest.approx(a_y / SPOT_FINE, rel=0.35)
+
+
 def test_config_soil_model(tmp_path):
     """``sets.*.soil_model`` enters the scenes (and their ids); such a scene is solved by the
     plastic solver, whose loading curve below yield on the study's mesh is the elastic
@@ -285,11 +406,17 @@ def test_config_soil_model(tmp_path):
                      library(c))
     assert pl.inputs["soil_model"]["yield_stress"] == 1e9
     assert pl.inputs["plastic_mesh"] == "path"
-    # the path's mesh: its element at the contact scaled to the path's end (growth 0.2:
-    # 0.3 % there; the first step's contact is half as wide, 1 % against Hertz)
-    np.testing.assert_allclose(pl.force[1:], el.force[1:], rtol=1e-2)
-    np.testing.assert_allclose(pl.force[-1], el.force[-1], rtol=5e-3)
-    np.testing.assert_allclose(pl.force[0], el.force[0], rtol=1.5e-2)
+    # the path's meshes: nothing yields, so the whole path is its elastic part's mesh's:
+    # the elastic engine's on its mesh of growth 0.2 within 1 % (measured 0.45 %), Hertz's
+    # too (measured 0.54 %: the 5 cm sample's finite depth stiffens the contact by about
+    # 0.36 % at the last increment, Dimitriadis et al. 2002 bonded at a / h = 0.004)
+    from ssw import hertz
+
+    assert pl.stats["elastic_increments"] == 4 and "elastic_mesh_size_contact" in pl.stats
+    np.testing.assert_allclose(pl.force, el.force, rtol=1e-2)
+    np.testing.assert_allclose(
+        pl.force, hertz.force(pl.delta, hertz.effective_modulus(38e6, 0.34), radius),
+        rtol=1e-2)
     same, _ = scene_path(scenes["noplate-E38MPa-nu0.340-vm-Y1000MPa"], c["contact"], radius,
                          None, mesh="study")
     np.testing.assert_allclose(same.force, el.force, rtol=1e-6)
@@ -342,6 +469,29 @@ def test_bench_plastic_runs(tmp_path, capsys):
     assert (tmp_path / "plastic_curve.png").stat().st_size > 0
     assert res["first_yield_force"] == pytest.approx(res["johnson_first_yield_force"],
                                                      rel=0.03)
+
+
+def test_bench_plastic_study_states_its_errors(tmp_path, capsys):
+    """``ssw bench plastic --plastic-study`` (a small run, no reference) states for each
+    mesh its first yield against Johnson's and its increments before first yield against
+    Hertz and Sneddon, in its record and its text; on ``config/ci.yaml``'s mesh the path's
+    are within 1 % and 0.5 % (measured -0.40 %, 0.15 %)."""
+    import json
+
+    from ssw.bench.plastic import human
+    from ssw.cli import main
+
+    ci = str(Path(__file__).resolve().parent.parent / "config" / "ci.yaml")
+    rc = main(["bench", "plastic", "--plastic-study", "--plastic-steps", "20",
+               "--plastic-delta-max", "1e-4", "--no-reference", "--output-dir",
+               str(tmp_path), "--config", ci, "--json"])
+    assert rc == 0
+    res = json.loads(capsys.readouterr().out)
+    assert (tmp_path / "plastic_study.json").is_file()
+    exact = res["path"]["exact"]
+    assert abs(exact["first_yield_vs_johnson"]) < 0.01 and exact["elastic_increments"] > 5
+    assert exact["elastic_vs_hertz_max"] < 5e-3 and exact["elastic_vs_sneddon_max"] < 5e-3
+    assert "of Johnson's" in human(res) and "of Sneddon" in human(res)
 
 
 def _plate_mesh(size: float, domain: float, t: float, rp: float):
@@ -477,18 +627,27 @@ def _plate_dent(fines: tuple[float, ...]) -> tuple[np.ndarray, np.ndarray]:
     return np.array(dent), np.array(work)
 
 
+#: The plate's dent on a converged mesh (m), a labelled band: the Richardson limits of the
+#: dents on the meshes a/16 and a/32 (17.15 and 17.03 um, measured 2026-11-26, one core;
+#: test_yielding_plate_dent_rate recomputes them) for the orders 1 and 2 (their observed
+#: order, with a/8's dent 17.45 um, is 1.32: limit 16.95 um).
+DENT_LIMIT = (16.91e-6, 16.99e-6)
+
+
 def test_yielding_plate_dent_converges_with_the_mesh():
     """The plate's dent after one hit on three meshes (element at the contact and growth
     halved each time; 13 s on one core): the dent and the dissipated work fall
     monotonically, by less each time (measured: dent 17.90, 17.45, 17.15 um; work 4.07,
-    3.84, 3.77e-4 J), and the finest is within 2 % of the slow test's extrapolation
-    (16.95 um)."""
+    3.84, 3.77e-4 J), and the two finer meshes' dents extrapolated to a zero element with
+    the orders 1 and 2 (16.85 and 17.05 um) bracket the converged dent's band
+    (:data:`DENT_LIMIT`, from the finer meshes of the slow test)."""
     dent, work = _plate_dent((4.0, 8.0, 16.0))
     for x in (dent, work):
         steps = -np.diff(x)
         assert np.all(steps > 0) and steps[1] < steps[0]
-    # the finer meshes' Richardson limit (test_yielding_plate_dent_rate, measured once)
-    assert dent[-1] == pytest.approx(16.95e-6, rel=0.02)
+    order_1 = dent[2] - (dent[1] - dent[2])
+    order_2 = dent[2] - (dent[1] - dent[2]) / 3.0
+    assert order_1 <= DENT_LIMIT[0] and DENT_LIMIT[1] <= order_2
 
 
 @pytest.mark.slow
@@ -496,14 +655,17 @@ def test_yielding_plate_dent_rate():
     """The observed order of the plate's dent on the meshes a/8, a/16, a/32 (growth 0.2,
     0.1, 0.05; 2.5 min on one core): p = log2((d8 - d16) / (d16 - d32)) between 1 and 2
     (measured 1.32: dent 17.45, 17.15, 17.03 um, Richardson limit 16.95 um; the work
-    3.84, 3.77, 3.74e-4 J, order 1.1); the time discretization is held (12 increments: at
-    24 the dent on a/16 is 0.8 % larger)."""
+    3.84, 3.77, 3.74e-4 J, order 1.1), and the limits of the orders 1 and 2 are the band
+    :data:`DENT_LIMIT` within 0.1 %; the time discretization is held (12 increments: at 24
+    the dent on a/16 is 0.8 % larger)."""
     dent, work = _plate_dent((8.0, 16.0, 32.0))
     p = np.log2((dent[0] - dent[1]) / (dent[1] - dent[2]))
     assert 1.0 < p < 2.0
     assert np.all(np.diff(work) < 0)
     limit = dent[2] - (dent[1] - dent[2]) / (2.0 ** p - 1.0)
     assert abs(dent[2] / limit - 1) < 0.01  # a/32 within 1 % of its Richardson limit
+    band = (dent[2] - (dent[1] - dent[2]), dent[2] - (dent[1] - dent[2]) / 3.0)
+    np.testing.assert_allclose(band, DENT_LIMIT, rtol=1e-3)
 
 
 def test_plate_model_flags_and_config(tmp_path, capsys):

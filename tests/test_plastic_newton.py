@@ -12,15 +12,8 @@ import pytest
 
 from ssw.constitutive import VonMises
 from ssw.constitutive.base import initial_state
-from ssw.contact.plastic import (
-    RTOL,
-    _Model,
-    _OrderedLU,
-    _symmetric_order,
-    contact_mesh,
-    johnson_first_yield,
-    solve_path,
-)
+from ssw.contact.plastic import RTOL, contact_mesh, johnson_first_yield, solve_path
+from ssw.contact.plastic_model import _Model, _OrderedLU, _symmetric_order
 
 E, NU, Y, R = 100e6, 0.3, 1e6, 4.75e-3
 
@@ -105,3 +98,35 @@ def test_residual_tolerance_costs_nothing_in_the_curve():
     assert np.max(np.abs(used.force - tight.force)) <= 1e-7 * np.max(tight.force)
     assert used.residual_indentation == pytest.approx(tight.residual_indentation, rel=1e-6)
     assert used.stats["newton_iterations"] < tight.stats["newton_iterations"]
+
+
+def test_apex_stiffness_converges_to_the_same_path(monkeypatch):
+    """Drucker-Prager clay (c 50 kPa, phi 25 deg, psi 0) under the device's 0.4 mm PLA plate,
+    loaded to 1.12 mm in 12 increments and lifted (a path of the plastic wall's tables for
+    ``ssw tof --hits 5 --soil-material compacted_clay --soil-model drucker-prager``): as the
+    sphere lifts, the bilateral tie pulls the clay under the dent to the cone's tension
+    apex, where the perfectly plastic return's tangent vanishes. With a zero tangent there
+    the Newton iteration cycles between apex and cone (SolverError at 6e-6 of the load
+    scale); with :data:`APEX_STIFFNESS <ssw.contact.plastic_model.APEX_STIFFNESS>` of the
+    elastic tangent in the Newton matrix it converges. The Newton matrix changes only the
+    iteration, not the equations: where both converge (the loading branch) the two curves
+    agree to the residual tolerance."""
+    import ssw.contact.plastic_model as pm
+    from ssw.constitutive import DruckerPrager
+
+    radius, d_m, clay = 9.525e-3, 1.122e-3, DruckerPrager(50e3, 25.0, 0.0)
+    mesh = contact_mesh(radius, d_m, fine=8.0, growth=0.3, domain=40.0,
+                        plate_thickness=4e-4, plate_radius=0.02475)
+    deltas = d_m * np.arange(1, 13) / 12
+
+    def path(unload: bool):
+        return solve_path(mesh, 40e6, 0.35, clay, radius, deltas, unload=unload,
+                          plate=(3.5e9, 0.36))
+
+    c = path(True)
+    assert 0 < c.residual_indentation < d_m and c.dissipated_work > 0
+    regularized = path(False)
+    monkeypatch.setattr(pm, "APEX_STIFFNESS", 0.0)
+    exact = path(False)
+    np.testing.assert_allclose(regularized.force, exact.force, rtol=0,
+                               atol=1e-6 * float(np.max(exact.force)))

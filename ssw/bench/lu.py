@@ -121,7 +121,7 @@ def recording() -> Iterator[list[tuple[str, tuple, dict]]]:
     """
     from unittest import mock
 
-    import ssw.contact.plastic as plastic
+    import ssw.contact.plastic_model as plastic
     import ssw.contact.scene as scene
     import ssw.contact.substructure as sub
     import ssw.dynamics.newmark as newmark
@@ -317,7 +317,7 @@ def _plastic_rows(rec: Recorded, repeat: int, solvers: tuple[str, ...]
     import scipy.sparse as sp
 
     from ssw.contact.petsc_solver import backward_error
-    from ssw.contact.plastic import _factor
+    from ssw.contact.plastic_model import _factor
 
     (AT,) = rec.data
     A = sp.coo_array(AT.T)

@@ -22,13 +22,15 @@ the first yield) under the output folder.
 
 ``--plastic-study``: the curve a study config's ``ssw contact --soil-model`` solves (its
 domain, mesh growth and increments, ``--plastic-steps`` of ``--plastic-delta-max``, loaded
-and unloaded), wall and CPU time, on the path's mesh (the default of ``ssw contact``:
-:func:`ssw.contact.plastic.path_mesh_settings`) and on the elastic engine's mesh
-(``--plastic-mesh study``), each against the reference: the elastic engine's mesh with its
-growth and its element at the contact halved (on the thesis config's 0.1 to 0.05 the
-force moves 1.1e-3 of the peak at most and the residual indentation 1.7e-3; from 0.07 to
-0.05, 6e-4 and 4e-4: converged to a few 1e-4), the same increments (600 against 2400 on
-one mesh: 7e-6 of the peak force, residual indentation 2e-4); ``plastic_study.json``.
+and unloaded), wall and CPU time, on the path's meshes (the default of ``ssw contact``:
+:func:`ssw.contact.plastic.scene_meshes`, its elastic part on a mesh of its own) and on
+the elastic engine's mesh (``--plastic-mesh study``), each against the reference: the
+elastic engine's mesh with its growth and its element at the contact halved (on the
+thesis config's 0.1 to 0.05 the force moves 1.1e-3 of the peak at most and the residual
+indentation 1.7e-3; from 0.07 to 0.05, 6e-4 and 4e-4: converged to a few 1e-4), the same
+increments (600 against 2400 on one mesh: 7e-6 of the peak force, residual indentation
+2e-4); and each against exact solutions (:func:`elastic_error`: first yield against
+Johnson's, the increments before it against Hertz and Sneddon); ``plastic_study.json``.
 """
 
 from __future__ import annotations
@@ -189,6 +191,52 @@ def curve_error(curve: Any, ref: Any) -> dict[str, Any]:
             "first_yield_force_rel": _rel(curve.first_yield_force, ref.first_yield_force)}
 
 
+def elastic_error(curve: Any, E: float, nu: float, radius: float, johnson: float
+                  ) -> dict[str, Any]:
+    """A von Mises path's error against exact solutions: its first yield force against
+    Johnson's (``johnson``, N; :func:`ssw.contact.plastic.johnson_first_yield`) and its
+    loading increments before first yield against the rigid sphere's elastic force,
+    Hertz's and Sneddon's exact sphere (:func:`ssw.hertz.sneddon_sphere`; largest
+    relative deviation and the force at which it occurs, N).
+
+    Parameters
+    ----------
+    curve : ssw.contact.plastic.PlasticCurve
+        The path.
+    E : float
+        The sample's Young's modulus, Pa.
+    nu : float
+        The sample's Poisson's ratio.
+    radius : float
+        The sphere's radius, m.
+    johnson : float
+        Johnson's first yield force, N.
+
+    Returns
+    -------
+    dict
+        ``first_yield_vs_johnson``, ``elastic_vs_hertz_max``, ``elastic_vs_sneddon_max``
+        (relative), ``elastic_vs_sneddon_at`` (N), ``elastic_increments``.
+    """
+    from ssw.roots import find_root
+
+    Es = hertz.effective_modulus(E, nu)
+    d_y = curve.first_yield_delta
+    m = (curve.branch == 0) & (curve.delta < (np.inf if d_y is None else d_y))
+    d, f = curve.delta[m], curve.force[m]
+    out: dict[str, Any] = {"first_yield_vs_johnson": _rel(curve.first_yield_force, johnson),
+                           "elastic_increments": int(d.size)}
+    if d.size:
+        a = find_root(lambda x: hertz.sneddon_sphere(x, Es, radius)[0] - d,
+                      np.full(d.size, 1e-9 * radius), np.full(d.size, 0.5 * radius)).x
+        e_s = f / hertz.sneddon_sphere(a, Es, radius)[1] - 1.0
+        out.update(elastic_vs_hertz_max=float(np.max(np.abs(
+            f / hertz.force(d, Es, radius) - 1.0))),
+            elastic_vs_sneddon_max=float(np.max(np.abs(e_s))),
+            elastic_vs_sneddon_at=float(f[np.argmax(np.abs(e_s))]))
+    return out
+
+
 def run_study(args: argparse.Namespace) -> dict[str, Any]:
     """``--plastic-study``: the config's plastic curve timed on the path's mesh and on the
     elastic engine's mesh, each against the config's mesh refined (growth and element at
@@ -215,14 +263,17 @@ def run_study(args: argparse.Namespace) -> dict[str, Any]:
     for mesh in ("path", "study"):
         c, wall, cpu = _timed(lambda m=mesh: path(m, contact))
         curves[mesh] = c
-        res[mesh] = {**summary(c), "wall": wall, "cpu": cpu, **c.stats}
+        res[mesh] = {**summary(c), "wall": wall, "cpu": cpu, **c.stats,
+                     "exact": elastic_error(c, E, nu, radius, res["johnson_first_yield_force"])}
     if args.plastic_reference:
         fine = {**contact, "mesh_growth": 0.5 * float(cfg["contact"]["mesh_growth"]),
                 "mesh_size_contact": 0.5 * float(cfg["contact"]["mesh_size_contact"])}
         ref, wall, cpu = _timed(lambda: path("study", fine))
         res["reference"] = {**summary(ref), "wall": wall, "cpu": cpu, **ref.stats,
                             "mesh_growth": fine["mesh_growth"],
-                            "mesh_size_contact": fine["mesh_size_contact"]}
+                            "mesh_size_contact": fine["mesh_size_contact"],
+                            "exact": elastic_error(ref, E, nu, radius,
+                                                   res["johnson_first_yield_force"])}
         for mesh, c in curves.items():
             res[mesh]["error"] = curve_error(c, ref)
     out = Path(args.output_dir)
@@ -274,11 +325,18 @@ def human(res: dict[str, Any]) -> str:
             if mesh not in res:
                 continue
             r = res[mesh]
+            x = r["exact"]
             text = (f"{mesh} mesh: {r['dofs']} dofs ({r['near_elements']} of {r['elements']} "
-                    f"elements near), {r['increments']} increments, wall {r['wall']:.2f} s, "
+                    f"elements near"
+                    + (f"; its elastic part's {r['elastic_dofs']}" if "elastic_dofs" in r
+                       else "")
+                    + f"), {r['increments']} increments, wall {r['wall']:.2f} s, "
                     f"CPU {r['cpu']:.2f} s; residual indentation "
                     f"{g(r['residual_indentation'])} m, first yield "
-                    f"{g(r['first_yield_force'])} N")
+                    f"{g(r['first_yield_force'])} N ({g(x['first_yield_vs_johnson'])} of "
+                    f"Johnson's), below it ({x['elastic_increments']} increments) within "
+                    f"{g(x.get('elastic_vs_hertz_max'))} of Hertz and "
+                    f"{g(x.get('elastic_vs_sneddon_max'))} of Sneddon")
             if "error" in r:
                 e = r["error"]
                 text += (f"\n  error: force max {g(e['force_max_rel'])} rms "

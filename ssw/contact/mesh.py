@@ -10,6 +10,19 @@ and the largest is resolved by about ``1 / growth`` elements. The plate is a str
 ``1 + growth`` from ``size_contact`` at the axis, through the thickness a progression of
 the same ratio from ``size_contact`` at the loaded top face, with at least ``plate_layers``
 layers. Elements are 6-node (quadratic) triangles.
+
+Two refinements serve a plastic path's elastic part (:mod:`ssw.contact.plastic_mesh`);
+both are off by default, and a mesh without them is the one the settings always gave:
+
+* a plateau (``near_size > 0``): the mesh of the element ``near_size`` at the contact
+  point, ``clip(growth d, near_size, size_max)``, made finer within ``near_size /
+  near_growth`` of it, where the elements grow as ``near_growth`` times the distance from
+  ``size_contact`` on: ``h(d) = min(clip(growth d, near_size, size_max), max(near_growth d,
+  size_contact))`` there (gmsh Thresholds, the inner one cut off at the plateau's edge by
+  a step);
+* spots (``spot_size > 0``): about each point of ``spot_points`` (radius, depth below the
+  loaded surface) the element is ``spot_size`` within ``spot_radius``, growing by
+  ``spot_growth`` of the distance beyond (a gmsh Min with the rest).
 """
 
 from __future__ import annotations
@@ -41,6 +54,12 @@ class MeshSettings:
     subgrade_depth: float = 0.0  # m, a lift of this thickness on a subgrade below (0: none)
     subgrade_ratio: float = 1.0  # subgrade E / the lift's E
     subgrade_nu: float = 0.0  # the subgrade's Poisson's ratio
+    near_size: float = 0.0  # m, the element at the contact point outside a plateau (0: none)
+    near_growth: float = 0.0  # element size / distance within the plateau, -
+    spot_size: float = 0.0  # m, element size in spots (balls about points; 0: none)
+    spot_points: tuple = ()  # ((r m, depth m below the loaded surface), ...): the spots
+    spot_radius: float = 0.0  # m, the spots' radius (spot_size within it)
+    spot_growth: float = 0.0  # element size / distance beyond a spot, -
 
 
 @dataclass(frozen=True)
@@ -173,7 +192,7 @@ def _build(gmsh, t: float, rp: float, s: MeshSettings) -> Mesh:
     field.setNumber(thr, "SizeMax", s.size_max)
     field.setNumber(thr, "DistMin", s.size_contact / s.growth)
     field.setNumber(thr, "DistMax", s.size_max / s.growth)
-    background = thr
+    background = _refinements(occ, field, dist, thr, top, s)
     field.setAsBackgroundMesh(background)
     for opt in ("MeshSizeExtendFromBoundary", "MeshSizeFromPoints", "MeshSizeFromCurvature"):
         gmsh.option.setNumber(f"Mesh.{opt}", 0)
@@ -214,6 +233,51 @@ def _build(gmsh, t: float, rp: float, s: MeshSettings) -> Mesh:
     return Mesh(nodes, tri, body, top, rp if t > 0 else 0.0,
                 s.soil_radius, s.soil_depth, s.base, s.lateral, subgrade, s.subgrade_ratio,
                 s.subgrade_nu)
+
+
+
+def _refinements(occ, field, dist: int, thr: int, top: float, s: MeshSettings) -> int:
+    """The background field of the refinements (module docstring), from the distance field
+    ``dist`` to the contact point and its threshold ``thr`` (whose bounds the plateau
+    changes); ``thr`` itself when both are off. ``top``: the loaded surface's height, m."""
+    background = thr
+    if s.near_size > 0:  # a finer grading inside a plateau (module docstring)
+        # outside: the mesh of the element near_size at the contact point
+        field.setNumber(thr, "SizeMin", s.near_size)
+        field.setNumber(thr, "DistMin", s.near_size / s.growth)
+        fine = field.add("Threshold")  # inside: near_growth times the distance
+        field.setNumber(fine, "InField", dist)
+        field.setNumber(fine, "SizeMin", s.size_contact)
+        field.setNumber(fine, "SizeMax", s.size_max)
+        field.setNumber(fine, "DistMin", s.size_contact / s.near_growth)
+        field.setNumber(fine, "DistMax", s.size_max / s.near_growth)
+        edge = s.near_size / s.near_growth
+        step = field.add("Threshold")  # none beyond the plateau's edge
+        field.setNumber(step, "InField", dist)
+        field.setNumber(step, "SizeMin", 1e-3 * s.size_contact)
+        field.setNumber(step, "SizeMax", 1e3 * s.size_max)
+        field.setNumber(step, "DistMin", edge)
+        field.setNumber(step, "DistMax", edge * (1.0 + 1e-9))
+        inside = field.add("Max")
+        field.setNumbers(inside, "FieldsList", [fine, step])
+        background = field.add("Min")
+        field.setNumbers(background, "FieldsList", [thr, inside])
+    if s.spot_size > 0 and s.spot_points:  # balls refined about points (module docstring)
+        pts = [occ.addPoint(r, top - depth, 0.0) for r, depth in s.spot_points]
+        occ.synchronize()
+        d_s = field.add("Distance")
+        field.setNumbers(d_s, "PointsList", pts)
+        spot = field.add("Threshold")
+        field.setNumber(spot, "InField", d_s)
+        field.setNumber(spot, "SizeMin", s.spot_size)
+        field.setNumber(spot, "SizeMax", s.size_max)
+        field.setNumber(spot, "DistMin", s.spot_radius)
+        field.setNumber(spot, "DistMax", s.spot_radius + (s.size_max - s.spot_size)
+                        / s.spot_growth)
+        finer = field.add("Min")
+        field.setNumbers(finer, "FieldsList", [background, spot])
+        background = finer
+    return background
 
 
 def _check_orientation(nodes: np.ndarray, tri: np.ndarray) -> None:

@@ -100,6 +100,13 @@ def register(sub: argparse._SubParsersAction) -> None:
     o.add_argument("--output", help="the result JSON (with its provenance)")
     o.add_argument("--csv", help="the candidates' table (CSV)")
     o.add_argument("--plot", help="the Pareto front and sensitivity curves (PNG)")
+    o.add_argument("--output-device", metavar="FILE",
+                   help="the recommended device as a device YAML that every command takes "
+                   "(--device FILE): the base device with the design's beads, sensor, "
+                   "striker and plate (ssw.design.device_file)")
+    o.add_argument("--output-device-rank", type=int, default=1, metavar="K",
+                   help="with --output-device: the candidate of rank K instead (default 1: "
+                   "the recommended)")
     add_device_options(p, walls=("fem",))
     add_json_flag(p)
     p.set_defaults(func=run, human=human)
@@ -195,6 +202,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         inputs = {k: v for k, v in vars(args).items() if k not in ("func", "human", "json")}
         inputs["spec"] = res["spec"]
     _write(args, res, inputs, write_table, plot)
+    _output_device(args, res)
     return res
 
 
@@ -217,7 +225,7 @@ def _families(items: list[str] | None) -> list[tuple[float, str]] | None:
 
 def _run_device(args: argparse.Namespace) -> dict[str, Any]:
     """``ssw design --space device`` (:func:`ssw.design.device_search.run_device_design`)."""
-    from ssw.cli._device import chain_context
+    from ssw.cli._device import chain_context, contact_for_bead
     from ssw.config import library
     from ssw.design.device_search import run_device_design, with_plastic_check
     from ssw.design.device_spec import DeviceSpec
@@ -247,6 +255,7 @@ def _run_device(args: argparse.Namespace) -> dict[str, Any]:
         res = merged.to_dict()
         inputs = {"merge": list(args.merge), "plastic_hits": merged.spec.plastic_hits}
         _write_device(args, res, inputs)
+        _output_device(args, res)
         return res
     ctx = chain_context(args, numerics_only=True)
     plate_spec = _spec(args, ctx)
@@ -273,7 +282,8 @@ def _run_device(args: argparse.Namespace) -> dict[str, Any]:
     mats = ctx.calibration.materials() if ctx.calibration is not None else library(cfg)
     ref = None if args.no_reference else point_of(p, dev.bead_material, dev.plate_material)
     families = _families(args.family)
-    result = run_device_design(space, spec, p, mats, dict(cfg.get("contact", {})),
+    # the config's contact lengths are its device's bead's: scaled to the base device's
+    result = run_device_design(space, spec, p, mats, contact_for_bead(cfg, p.bead_radius),
                                dev.full_scale_force, ref, jobs=max(1, int(args.jobs)),
                                families=families, parts=_part(args.part))
     if families is None and args.part is None:  # a family's or part's run: the merge strikes
@@ -284,7 +294,28 @@ def _run_device(args: argparse.Namespace) -> dict[str, Any]:
     inputs["spec"] = res["spec"]
     inputs["space"] = res["space"]
     _write_device(args, res, inputs)
+    _output_device(args, res, ctx)
     return res
+
+
+def _output_device(args: argparse.Namespace, res: dict[str, Any], ctx: Any = None) -> None:
+    """``--output-device``: the candidate of rank ``--output-device-rank`` as a device YAML
+    on the base device of ``ctx`` (default: that of ``--config``/``--device``/
+    ``--calibration``) with the design's materials."""
+    if not args.output_device:
+        if args.output_device_rank != 1:
+            raise ConfigError("--output-device-rank", args.output_device_rank,
+                              "with --output-device FILE")
+        return
+    from ssw.cli._device import chain_context, contact_for_bead
+    from ssw.config import library
+    from ssw.design.device_file import write_designed_device
+
+    ctx = ctx if ctx is not None else chain_context(args, numerics_only=True)
+    mats = ctx.calibration.materials() if ctx.calibration is not None else library(ctx.cfg)
+    write_designed_device(args.output_device, res, args.output_device_rank, ctx.device, mats,
+                          contact=contact_for_bead(ctx.cfg, ctx.params.bead_radius),
+                          base_radius=ctx.params.bead_radius)
 
 
 def _merge_base(args: argparse.Namespace, merged: Any) -> tuple[Any, dict[str, Any]]:

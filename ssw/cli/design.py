@@ -96,6 +96,14 @@ def register(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--merge", nargs="+", metavar="JSON",
                    help="rank together the results of several ssw design runs (written "
                    "with --output) instead of computing")
+    g.add_argument("--predict", action="store_true",
+                   help="with --space device: the 95 %% interval of E that ssw measure "
+                   "would report with the recommended and the base device, per hit and per "
+                   "point of --point-hits hits, at the TOF and the features levels "
+                   "(ssw identify's information, the calibration's covariance and model "
+                   "error: ssw.design.predict)")
+    g.add_argument("--point-hits", type=int, default=5, metavar="N",
+                   help="with --predict: hits of one measured point (default 5)")
     o = p.add_argument_group("outputs")
     o.add_argument("--output", help="the result JSON (with its provenance)")
     o.add_argument("--csv", help="the candidates' table (CSV)")
@@ -166,6 +174,9 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.design.output import plot, write_table
     from ssw.design.run import merge_results, run_design
 
+    if args.predict:
+        raise ConfigError("--predict", True, "with --space device (the plate design's "
+                          "devices are the base device's chain: ssw identify on it)")
     if args.merge and args.plastic_hits is not None:
         raise ConfigError("--plastic-hits", args.plastic_hits,
                           "not with --merge (it strikes the plates of one design run)")
@@ -253,6 +264,7 @@ def _run_device(args: argparse.Namespace) -> dict[str, Any]:
             base, mats = _merge_base(args, merged)
             merged = with_plastic_check(merged, base, mats, jobs=max(1, int(args.jobs)))
         res = merged.to_dict()
+        _predict(args, res)
         inputs = {"merge": list(args.merge), "plastic_hits": merged.spec.plastic_hits}
         _write_device(args, res, inputs)
         _output_device(args, res)
@@ -290,12 +302,34 @@ def _run_device(args: argparse.Namespace) -> dict[str, Any]:
         result = with_plastic_check(result, p, mats, jobs=max(1, int(args.jobs)))
     res = result.to_dict()
     res.update({"device_name": dev.name, "device_source": dev.source, "wall": "fem"})
+    _predict(args, res, ctx)
     inputs = {k: v for k, v in vars(args).items() if k not in ("func", "human", "json")}
     inputs["spec"] = res["spec"]
     inputs["space"] = res["space"]
     _write_device(args, res, inputs)
     _output_device(args, res, ctx)
     return res
+
+
+def _predict(args: argparse.Namespace, res: dict[str, Any], ctx: Any = None) -> None:
+    """``--predict``: the predicted measurement (:mod:`ssw.design.predict`) into ``res``
+    (``prediction``), on the base device of ``ctx`` (default: that of ``--config``/
+    ``--device``/``--calibration``)."""
+    if not args.predict:
+        return
+    if not args.point_hits >= 1:
+        raise ConfigError("--point-hits", args.point_hits, "an integer >= 1")
+    from ssw.cli._device import chain_context, contact_for_bead
+    from ssw.config import library
+    from ssw.daq.settings import settings_from_config
+    from ssw.design.predict import model_error_of, predicted_measurement
+
+    ctx = ctx if ctx is not None else chain_context(args, numerics_only=True)
+    mats = ctx.calibration.materials() if ctx.calibration is not None else library(ctx.cfg)
+    res["prediction"] = predicted_measurement(
+        res, ctx.params, mats, contact_for_bead(ctx.cfg, ctx.params.bead_radius),
+        settings_from_config(ctx.cfg, ctx.device), point_hits=args.point_hits,
+        calibration=ctx.calibration, model_error=model_error_of(ctx.calibration))
 
 
 def _output_device(args: argparse.Namespace, res: dict[str, Any], ctx: Any = None) -> None:

@@ -116,3 +116,25 @@ def test_calibration_and_model_error_terms(design, chain):
                                                          tof.systematic[0]), rel=1e-6)
     # the features level: the calibration's term is there, and no TOF model error
     assert out["features"].calibration[0] > 0 and out["features"].systematic[0] == 0
+
+
+def test_features_objective_ranks_by_the_predicted_interval(design, tmp_path):
+    """``--objective features`` recommends the device of the pool whose worst per-point
+    features interval is smallest; the resolution's recommended device is in the pool."""
+    import json
+
+    from ssw.cli import main
+
+    res, d = design
+    out = tmp_path / "obj.json"
+    assert main(["design", "--space", "device", "--config", str(d / "config.yaml"),
+                 "--calibration", "none", "--merge", str(d / "design.json"), "--objective",
+                 "features", "--objective-pool", "2", "--output", str(out)]) == 0
+    got = json.loads(out.read_text())
+    ranking = got["objective_ranking"]["candidates"]
+    assert len(ranking) == 2 and ranking[0]["worst_half_width"] <= ranking[1][
+        "worst_half_width"]
+    assert got["recommended"]["label"] == ranking[0]["label"]
+    hw = got["prediction"]["devices"]["recommended"]["features"]["point"]["half_width"]
+    assert max(hw) == pytest.approx(ranking[0]["worst_half_width"], rel=1e-12)
+    assert res["recommended"]["label"] in [r["label"] for r in ranking]

@@ -104,6 +104,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "error: ssw.design.predict)")
     g.add_argument("--point-hits", type=int, default=5, metavar="N",
                    help="with --predict: hits of one measured point (default 5)")
+    g.add_argument("--objective", choices=("tof", "features"), default="tof",
+                   help="with --space device: rank by the TOF's resolution (default) or by "
+                   "the predicted interval of E per point at the features level among the "
+                   "--objective-pool best devices of that ranking (implies --predict)")
+    g.add_argument("--objective-pool", type=int, default=4, metavar="K",
+                   help="with --objective features: devices predicted (default 4)")
     o = p.add_argument_group("outputs")
     o.add_argument("--output", help="the result JSON (with its provenance)")
     o.add_argument("--csv", help="the candidates' table (CSV)")
@@ -174,9 +180,10 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.design.output import plot, write_table
     from ssw.design.run import merge_results, run_design
 
-    if args.predict:
-        raise ConfigError("--predict", True, "with --space device (the plate design's "
-                          "devices are the base device's chain: ssw identify on it)")
+    if args.predict or args.objective != "tof":
+        raise ConfigError("--predict/--objective", args.objective,
+                          "with --space device (the plate design's devices are the base "
+                          "device's chain: ssw identify on it)")
     if args.merge and args.plastic_hits is not None:
         raise ConfigError("--plastic-hits", args.plastic_hits,
                           "not with --merge (it strikes the plates of one design run)")
@@ -315,21 +322,32 @@ def _predict(args: argparse.Namespace, res: dict[str, Any], ctx: Any = None) -> 
     """``--predict``: the predicted measurement (:mod:`ssw.design.predict`) into ``res``
     (``prediction``), on the base device of ``ctx`` (default: that of ``--config``/
     ``--device``/``--calibration``)."""
-    if not args.predict:
+    if not (args.predict or args.objective != "tof"):
         return
     if not args.point_hits >= 1:
         raise ConfigError("--point-hits", args.point_hits, "an integer >= 1")
+    if not args.objective_pool >= 1:
+        raise ConfigError("--objective-pool", args.objective_pool, "an integer >= 1")
     from ssw.cli._device import chain_context, contact_for_bead
     from ssw.config import library
     from ssw.daq.settings import settings_from_config
-    from ssw.design.predict import model_error_of, predicted_measurement
+    from ssw.design.predict import (
+        device_prediction,
+        model_error_of,
+        predicted_measurement,
+        rank_by_level,
+    )
 
     ctx = ctx if ctx is not None else chain_context(args, numerics_only=True)
     mats = ctx.calibration.materials() if ctx.calibration is not None else library(ctx.cfg)
-    res["prediction"] = predicted_measurement(
-        res, ctx.params, mats, contact_for_bead(ctx.cfg, ctx.params.bead_radius),
-        settings_from_config(ctx.cfg, ctx.device), point_hits=args.point_hits,
-        calibration=ctx.calibration, model_error=model_error_of(ctx.calibration))
+    contact = contact_for_bead(ctx.cfg, ctx.params.bead_radius)
+    settings = settings_from_config(ctx.cfg, ctx.device)
+    kw = {"point_hits": args.point_hits, "calibration": ctx.calibration,
+          "model_error": model_error_of(ctx.calibration)}
+    if args.objective != "tof":
+        rank_by_level(res, args.objective, args.objective_pool, lambda c: device_prediction(
+            c, res["spec"], ctx.params, mats, contact, settings, **kw))
+    res["prediction"] = predicted_measurement(res, ctx.params, mats, contact, settings, **kw)
 
 
 def _output_device(args: argparse.Namespace, res: dict[str, Any], ctx: Any = None) -> None:

@@ -243,8 +243,6 @@ def predicted_measurement(result: dict[str, Any], base: Any, materials: dict[str
         ``statement``, ``point_hits``, ``soil_E`` and per device (``recommended``,
         ``reference``) per level the interval per hit and per point and the terms.
     """
-    from ssw.design.device_eval import scaled_contact
-    from ssw.design.space import DevicePoint
 
     spec = result["spec"]
     out: dict[str, Any] = {
@@ -261,23 +259,36 @@ def predicted_measurement(result: dict[str, Any], base: Any, materials: dict[str
         "model_error": model_error, "devices": {}}
     for name in ("recommended", "reference"):
         c = result.get(name)
-        if c is None:
-            continue
-        point = DevicePoint.from_dict(c)
-        p = point.params(base, materials)
-        wall = {"contact": scaled_contact({**contact, "interface": p.plate_interface},
-                                          p.bead_radius / base.bead_radius)}
-        idx = soil_indices(len(c["soil_E"]))
-        E = np.asarray(c["soil_E"], float)[idx]
-        arr = {k: np.asarray(c[k], float)[idx] for k in ("tof_E", "noise_E", "spread_E",
-                                                         "bias_E")}
-        scatter = np.sqrt(spec["tof_scatter"]**2 + arr["noise_E"]**2 + arr["spread_E"]**2)
-        levels = predict(p, wall, E, float(spec["soil_nu"]), settings, tof=arr["tof_E"],
-                         tof_scatter=scatter, noise_rms=float(spec["noise_rms"]),
-                         bias=arr["bias_E"], calibration=calibration,
-                         model_error=model_error)
-        out["devices"][name] = {
-            "label": c.get("label") or point.label(), "soil_E": E.tolist(),
+        if c is not None:
+            out["devices"][name] = device_prediction(
+                c, spec, base, materials, contact, settings, point_hits=point_hits,
+                calibration=calibration, model_error=model_error)
+    return out
+
+
+def device_prediction(c: dict[str, Any], spec: dict[str, Any], base: Any,
+                      materials: dict[str, Any], contact: dict[str, Any], settings: Any, *,
+                      point_hits: int = 5, calibration: Any = None,
+                      model_error: float | None = None) -> dict[str, Any]:
+    """The predicted intervals of one candidate of a device design (its JSON record) at the
+    ends and the middle of its soils (:func:`predicted_measurement`'s parameters; ``spec``
+    the design's JSON ``spec``)."""
+    from ssw.design.device_eval import scaled_contact
+    from ssw.design.space import DevicePoint
+
+    point = DevicePoint.from_dict(c)
+    p = point.params(base, materials)
+    wall = {"contact": scaled_contact({**contact, "interface": p.plate_interface},
+                                      p.bead_radius / base.bead_radius)}
+    idx = soil_indices(len(c["soil_E"]))
+    E = np.asarray(c["soil_E"], float)[idx]
+    arr = {k: np.asarray(c[k], float)[idx] for k in ("tof_E", "noise_E", "spread_E",
+                                                     "bias_E")}
+    scatter = np.sqrt(spec["tof_scatter"]**2 + arr["noise_E"]**2 + arr["spread_E"]**2)
+    levels = predict(p, wall, E, float(spec["soil_nu"]), settings, tof=arr["tof_E"],
+                     tof_scatter=scatter, noise_rms=float(spec["noise_rms"]),
+                     bias=arr["bias_E"], calibration=calibration, model_error=model_error)
+    return {"label": c.get("label") or point.label(), "soil_E": E.tolist(),
             "tof_scatter_hit": scatter.tolist(),
             **{lv: {"hit": interval_record(E, lp.sigma(1)),
                     "point": interval_record(E, lp.sigma(point_hits)),
@@ -285,7 +296,60 @@ def predicted_measurement(result: dict[str, Any], base: Any, materials: dict[str
                                         "calibration": lp.calibration.tolist(),
                                         "systematic": lp.systematic.tolist()}}
                for lv, lp in levels.items()}}
-    return out
+
+
+def rank_by_level(result: dict[str, Any], level: str, pool: int, predictor: Any
+                  ) -> dict[str, Any]:
+    """``--objective features``: the first ``pool`` feasible candidates of the design's
+    ranking (its resolution's; hard-feasible ones when none is feasible) ranked by the
+    largest predicted 95 % half-width of E per point over the soils at ``level``; the best
+    becomes the recommended device.
+
+    Parameters
+    ----------
+    result : dict
+        The device design's JSON (changed in place: ``recommended``, ``objective``).
+    level : str
+        ``tof`` or ``features``.
+    pool : int
+        Candidates predicted.
+    predictor : callable
+        Candidate record -> :func:`device_prediction`'s record.
+
+    Returns
+    -------
+    dict
+        ``result``.
+    """
+    cands = result["candidates"]
+    ok = [c for c in cands if c["feasible"]] or [c for c in cands if c["hard_feasible"]] \
+        or cands
+    scored = []
+    for c in ok[:pool]:
+        d = predictor(c)
+        hw = d[level]["point"]["half_width"]
+        worst = float("inf") if any(v is None for v in hw) else float(max(hw))
+        scored.append((worst, c, d))
+    scored.sort(key=lambda t: t[0])
+    worst, best, _ = scored[0]
+    old = result["recommended"]
+    from ssw.design.space import DevicePoint
+
+    label = DevicePoint.from_dict(best).label()
+    reasons = [f"the smallest worst-case predicted 95 % half-width of E per point at the "
+               f"{level} level, {100 * worst:.3g} %, among the {len(scored)} best devices "
+               "of the resolution's ranking (--objective " + level + ")"]
+    same = DevicePoint.from_dict(old).key == DevicePoint.from_dict(best).key
+    reasons += old.get("reasons", []) if same else [
+        f"the resolution's recommended device: {old.get('label')} (dE/E "
+        f"{old['resolution']:.3g}; this one {best['resolution']:.3g})"]
+    result["recommended"] = {**best, "label": label, "reasons": reasons,
+                             "plastic": best.get("plastic")}
+    result["objective_ranking"] = {
+        "level": level, "pool": len(scored),
+        "candidates": [{"label": DevicePoint.from_dict(c).label(), "resolution":
+                        c["resolution"], "worst_half_width": w} for w, c, _ in scored]}
+    return result
 
 
 def worst_half_width(pred: dict[str, Any], device: str, level: str, per: str = "point"

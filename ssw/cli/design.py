@@ -90,6 +90,10 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "yielding as von Mises (the plate's dent; default design.device."
                    "plastic_hits, 0: off; with --merge on the merged ranking, the base device "
                    "of --config/--calibration)")
+    g.add_argument("--size", type=int, metavar="N",
+                   help="with --space device: about N evaluations (the scan grown to at "
+                   "most 3/4 of N, the rest in bounded searches from the best devices: "
+                   "ssw.design.device_search.sized; default: the config's space)")
     g.add_argument("--part", metavar="I/N",
                    help="with --space device and --family: only the family's chains I, I+N, "
                    "... (the workflow's scatter; no plastic check, the merge strikes)")
@@ -299,6 +303,10 @@ def _run_device(args: argparse.Namespace) -> dict[str, Any]:
                       tof_scatter_source=plate_spec.tof_scatter_source,
                       sample_rate=plate_spec.sample_rate, **kw)
     mats = ctx.calibration.materials() if ctx.calibration is not None else library(cfg)
+    if args.size is not None:
+        from ssw.design.device_search import sized
+
+        space, spec = sized(space, spec, args.size)
     ref = None if args.no_reference else point_of(p, dev.bead_material, dev.plate_material)
     families = _families(args.family)
     # the config's contact lengths are its device's bead's: scaled to the base device's

@@ -184,6 +184,9 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.design.output import plot, write_table
     from ssw.design.run import merge_results, run_design
 
+    if args.size is not None:
+        raise ConfigError("--size", args.size, "with --space device (the plate design's "
+                          "budget: --scan-points, --thickness-tol)")
     if args.predict or args.objective != "tof":
         raise ConfigError("--predict/--objective", args.objective,
                           "with --space device (the plate design's devices are the base "

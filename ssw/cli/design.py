@@ -114,6 +114,15 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "--objective-pool best devices of that ranking (implies --predict)")
     g.add_argument("--objective-pool", type=int, default=4, metavar="K",
                    help="with --objective features: devices predicted (default 4)")
+    g.add_argument("--prototype", metavar="FOLDER",
+                   help="with --space device: a virtual prototype of the recommended device "
+                   "(its recordings in FOLDER): 3 reference and 4 unseen samples across the "
+                   "range simulated (striker scatter, the DAQ's noise and filter), "
+                   "calibrated and measured at the TOF level; the achieved errors and "
+                   "interval widths beside the predicted (ssw.design.prototype)")
+    g.add_argument("--striker-cov", type=float, default=0.01,
+                   help="with --prototype: the striker speed's relative scatter from hit to "
+                   "hit (default 0.01)")
     o = p.add_argument_group("outputs")
     o.add_argument("--output", help="the result JSON (with its provenance)")
     o.add_argument("--csv", help="the candidates' table (CSV)")
@@ -187,8 +196,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     if args.size is not None:
         raise ConfigError("--size", args.size, "with --space device (the plate design's "
                           "budget: --scan-points, --thickness-tol)")
-    if args.predict or args.objective != "tof":
-        raise ConfigError("--predict/--objective", args.objective,
+    if args.predict or args.objective != "tof" or args.prototype:
+        raise ConfigError("--predict/--objective/--prototype", args.objective,
                           "with --space device (the plate design's devices are the base "
                           "device's chain: ssw identify on it)")
     if args.merge and args.plastic_hits is not None:
@@ -279,6 +288,7 @@ def _run_device(args: argparse.Namespace) -> dict[str, Any]:
             merged = with_plastic_check(merged, base, mats, jobs=max(1, int(args.jobs)))
         res = merged.to_dict()
         _predict(args, res)
+        _prototype(args, res)
         inputs = {"merge": list(args.merge), "plastic_hits": merged.spec.plastic_hits}
         _write_device(args, res, inputs)
         _output_device(args, res)
@@ -321,6 +331,7 @@ def _run_device(args: argparse.Namespace) -> dict[str, Any]:
     res = result.to_dict()
     res.update({"device_name": dev.name, "device_source": dev.source, "wall": "fem"})
     _predict(args, res, ctx)
+    _prototype(args, res, ctx)
     inputs = {k: v for k, v in vars(args).items() if k not in ("func", "human", "json")}
     inputs["spec"] = res["spec"]
     inputs["space"] = res["space"]
@@ -359,6 +370,31 @@ def _predict(args: argparse.Namespace, res: dict[str, Any], ctx: Any = None) -> 
         rank_by_level(res, args.objective, args.objective_pool, lambda c: device_prediction(
             c, res["spec"], ctx.params, mats, contact, settings, **kw))
     res["prediction"] = predicted_measurement(res, ctx.params, mats, contact, settings, **kw)
+
+
+def _prototype(args: argparse.Namespace, res: dict[str, Any], ctx: Any = None) -> None:
+    """``--prototype FOLDER``: the recommended device simulated, calibrated and measured
+    (:func:`ssw.design.prototype.run_prototype`) into ``res`` (``prototype``)."""
+    if not args.prototype:
+        return
+    if not (args.striker_cov >= 0):
+        raise ConfigError("--striker-cov", args.striker_cov, "a relative scatter >= 0")
+    from ssw.chain.params import numerics_of
+    from ssw.cli._device import chain_context, contact_for_bead
+    from ssw.config import library
+    from ssw.daq.settings import settings_from_config
+    from ssw.design.device_file import designed_device
+    from ssw.design.prototype import run_prototype
+
+    ctx = ctx if ctx is not None else chain_context(args, numerics_only=True)
+    cal = ctx.calibration
+    mats = cal.materials() if cal is not None else library(ctx.cfg)
+    numerics = dict(cal.numerics) if cal is not None else numerics_of(ctx.cfg)
+    dev = designed_device(res, res["recommended"], ctx.device, mats, "prototype")
+    res["prototype"] = run_prototype(
+        dev, mats, numerics, {"contact": contact_for_bead(ctx.cfg, dev.bead_radius)},
+        settings_from_config(ctx.cfg, dev), tuple(res["spec"]["soil_E"]),
+        float(res["spec"]["soil_nu"]), args.prototype, striker_cov=args.striker_cov)
 
 
 def _output_device(args: argparse.Namespace, res: dict[str, Any], ctx: Any = None) -> None:

@@ -161,6 +161,16 @@ def human(res: dict[str, Any]) -> str:
         from ssw.design.predict import human_lines
 
         lines += human_lines(res["prediction"])
+    if res.get("prototype"):  # ssw.design.prototype
+        pt = res["prototype"]
+        lines.append(f"virtual prototype ({pt['hits']} hits per sample, striker scatter "
+                     f"{100 * pt['striker_cov']:g} %): calibrated "
+                     + ", ".join(f"{k} {v:.4g}" for k, v in pt["calibration"].items()))
+        for r in pt["unseen"]:
+            lines.append(f"  E {r['E_true'] / 1e6:.4g} MPa: measured {r['E'] / 1e6:.4g} MPa "
+                         f"({100 * r['error']:+.3g} %), 95 % width {100 * r['width']:.3g} % "
+                         f"(predicted {100 * r['width_predicted']:.3g} %), "
+                         + ("inside" if r["inside"] else "OUTSIDE"))
     for chk in res.get("plastic_check") or []:
         head = (f"{chk['hits']} hits, {chk['label']} on E {chk['soil_E']:.4g} Pa (von Mises "
                 f"Y {chk['soil_yield_stress']:.3g} Pa): ")

@@ -61,8 +61,18 @@ def candidate_at(result: dict[str, Any], rank: int) -> dict[str, Any]:
 
 
 def device_name(path: str | Path) -> str:
-    """A device name (``[A-Za-z0-9_.-]+``) from a file name: its stem, other characters
-    replaced by ``_``."""
+    """A device name (``[A-Za-z0-9_.-]+``) from a file name.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The device file.
+
+    Returns
+    -------
+    str
+        Its stem, other characters replaced by ``_`` (``designed`` if empty).
+    """
     return re.sub(r"[^A-Za-z0-9_.-]", "_", Path(path).stem) or "designed"
 
 
@@ -111,7 +121,24 @@ def designed_device(result: dict[str, Any], candidate: dict[str, Any], base: Any
 
 def header(result: dict[str, Any], candidate: dict[str, Any], rank: int,
            contact: dict[str, Any] | None) -> str:
-    """The device file's comment lines (module docstring)."""
+    """The device file's comment lines (module docstring).
+
+    Parameters
+    ----------
+    result : dict
+        The design's JSON.
+    candidate : dict
+        The candidate written.
+    rank : int
+        Its 1-based rank.
+    contact : dict or None
+        The ``contact:`` settings its fem wall used (lengths in m), or None.
+
+    Returns
+    -------
+    str
+        Lines starting with ``# ``.
+    """
     space = "device" if result.get("ssw_kind") == "design_device" else "plate"
     lo, hi = result["spec"]["soil_E"]
     label = candidate.get("label") or (

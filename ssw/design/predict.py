@@ -63,7 +63,18 @@ class LevelPrediction:
     systematic: np.ndarray
 
     def sigma(self, hits: int) -> np.ndarray:
-        """Standard deviation of ``ln E`` of a point of ``hits`` hits."""
+        """Standard deviation of ``ln E`` of a point.
+
+        Parameters
+        ----------
+        hits : int
+            Hits of the point (the noise averages over them, the other terms do not).
+
+        Returns
+        -------
+        numpy.ndarray
+            (k,) over the soils.
+        """
         return np.sqrt(self.noise_hit**2 / hits + self.calibration**2 + self.systematic**2)
 
 
@@ -185,9 +196,19 @@ def predict(params: Any, wall_options: dict[str, Any], soil_E: np.ndarray, soil_
 
 
 def model_error_of(calibration: Any) -> float | None:
-    """The relative TOF model error a calibration states (its ``model_term().tau``, where
-    the calibration file has one), else None: the hook of :func:`predict`'s
-    ``model_error``."""
+    """The relative TOF model error a calibration states: the hook of :func:`predict`'s
+    ``model_error``.
+
+    Parameters
+    ----------
+    calibration : ssw.calibration.Calibration or None
+        The calibration.
+
+    Returns
+    -------
+    float or None
+        Its ``model_term().tau`` where its file has a model term, else None.
+    """
     term = getattr(calibration, "model_term", None)
     if not callable(term):
         return None
@@ -196,13 +217,38 @@ def model_error_of(calibration: Any) -> float | None:
 
 
 def soil_indices(n: int) -> list[int]:
-    """The soils predicted of a grid of ``n``: its ends and its middle."""
+    """The soils predicted of a grid: its ends and its middle.
+
+    Parameters
+    ----------
+    n : int
+        Soils of the grid.
+
+    Returns
+    -------
+    list of int
+        Their indices, sorted, distinct.
+    """
     return sorted({0, (n - 1) // 2, n - 1})
 
 
 def interval_record(E: np.ndarray, sigma: np.ndarray) -> dict[str, list[float]]:
-    """The 95 % interval ``E exp(+-1.96 sigma)`` (Pa) and its relative half-width
-    ``sinh(1.96 sigma)`` (JSON lists; None where not identified)."""
+    """The 95 % interval ``E exp(+-1.96 sigma)`` and its relative half-width
+    ``sinh(1.96 sigma)``.
+
+    Parameters
+    ----------
+    E : numpy.ndarray
+        (k,) Pa, the moduli.
+    sigma : numpy.ndarray
+        (k,) standard deviations of ``ln E``.
+
+    Returns
+    -------
+    dict
+        ``lo``, ``hi`` (Pa), ``half_width``, ``sigma_lnE``: JSON lists, None where E is
+        not identified.
+    """
     def lst(x: np.ndarray) -> list[float | None]:
         return [float(v) if np.isfinite(v) else None for v in x]
 
@@ -270,9 +316,36 @@ def device_prediction(c: dict[str, Any], spec: dict[str, Any], base: Any,
                       materials: dict[str, Any], contact: dict[str, Any], settings: Any, *,
                       point_hits: int = 5, calibration: Any = None,
                       model_error: float | None = None) -> dict[str, Any]:
-    """The predicted intervals of one candidate of a device design (its JSON record) at the
-    ends and the middle of its soils (:func:`predicted_measurement`'s parameters; ``spec``
-    the design's JSON ``spec``)."""
+    """The predicted intervals of one candidate of a device design at the ends and the
+    middle of its soils.
+
+    Parameters
+    ----------
+    c : dict
+        The candidate's JSON record (its point and per-soil arrays).
+    spec : dict
+        The design's JSON ``spec`` (TOF scatter s, noise N, nu).
+    base : ssw.chain.params.ChainParams
+        The base device's chain.
+    materials : dict
+        The materials library.
+    contact : dict
+        The ``contact:`` settings for the base device's bead.
+    settings : ssw.daq.settings.DaqSettings
+        The acquisition.
+    point_hits : int
+        Hits of one measured point.
+    calibration : ssw.calibration.Calibration or None
+        Its covariance enters.
+    model_error : float or None
+        The relative TOF model error.
+
+    Returns
+    -------
+    dict
+        ``label``, ``soil_E``, ``tof_scatter_hit`` and per level the interval per hit and
+        per point and the terms.
+    """
     from ssw.design.device_eval import scaled_contact
     from ssw.design.space import DevicePoint
 
@@ -354,14 +427,41 @@ def rank_by_level(result: dict[str, Any], level: str, pool: int, predictor: Any
 
 def worst_half_width(pred: dict[str, Any], device: str, level: str, per: str = "point"
                      ) -> float:
-    """The largest relative half-width over the soils of one device's interval (inf where
-    E is not identified)."""
+    """The largest relative half-width over the soils of one device's interval.
+
+    Parameters
+    ----------
+    pred : dict
+        :func:`predicted_measurement`'s record.
+    device : str
+        ``recommended`` or ``reference``.
+    level : str
+        ``tof`` or ``features``.
+    per : str
+        ``hit`` or ``point``.
+
+    Returns
+    -------
+    float
+        The half-width (inf where E is not identified).
+    """
     hw = pred["devices"][device][level][per]["half_width"]
     return float("inf") if any(v is None for v in hw) else float(max(hw))
 
 
 def human_lines(pred: dict[str, Any]) -> list[str]:
-    """The predicted intervals as lines of text (relative half-widths, %)."""
+    """The predicted intervals as lines of text.
+
+    Parameters
+    ----------
+    pred : dict
+        :func:`predicted_measurement`'s record.
+
+    Returns
+    -------
+    list of str
+        Relative half-widths in %, per hit / per point, per device and level.
+    """
     lines = [f"predicted 95 % interval of E (+-, relative), per hit and per "
              f"{pred['point_hits']}-hit point"
              + (f"; calibration {pred['calibration']}" if pred["calibration"] else

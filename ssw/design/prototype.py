@@ -38,8 +38,22 @@ REFERENCES, UNSEEN, HITS = 3, 4, 5
 
 def soils(soil_E: tuple[float, float], references: int, unseen: int
           ) -> tuple[np.ndarray, np.ndarray]:
-    """Pa: the references (log-spaced, ends included) and the unseen samples (centres of
-    equal cells in ``ln E``)."""
+    """The moduli of a prototype's samples.
+
+    Parameters
+    ----------
+    soil_E : tuple of float
+        (lo, hi) Pa.
+    references : int
+        Reference samples (log-spaced, ends included).
+    unseen : int
+        Unseen samples (centres of equal cells in ``ln E``).
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        Pa, the references' and the unseen samples' moduli.
+    """
     a, b = np.log(soil_E[0]), np.log(soil_E[1])
     refs = np.exp(np.linspace(a, b, references))
     new = np.exp(a + (b - a) * (np.arange(unseen) + 0.5) / unseen)

@@ -137,7 +137,7 @@ def header(result: dict[str, Any], candidate: dict[str, Any], rank: int,
     Returns
     -------
     str
-        Lines starting with ``# ``.
+        Comment lines (each starts with a hash and a space).
     """
     space = "device" if result.get("ssw_kind") == "design_device" else "plate"
     lo, hi = result["spec"]["soil_E"]

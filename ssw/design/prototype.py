@@ -127,8 +127,12 @@ def run_prototype(device: Any, materials: dict[str, Any], numerics: dict[str, An
         Where the recordings are written.
     striker_cov : float
         Relative standard deviation of the striker's speed from hit to hit.
-    references, unseen, hits : int
-        Reference samples, unseen samples, hits per sample.
+    references : int
+        Reference samples.
+    unseen : int
+        Unseen samples.
+    hits : int
+        Hits per sample.
     seed : int
         Seeds each sample's recording (``seed + i``).
 

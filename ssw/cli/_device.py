@@ -150,6 +150,39 @@ def check_device(cal: Any, device: Any, materials: dict[str, Any], spec: str | N
                       (f"this command's device {device.name}", mine))
 
 
+def check_bead_material(key: str, over: dict[str, Any], materials: dict[str, Any]) -> None:
+    """Refuse a bead material named by ``--bead-material`` that the explicit bead values
+    (``--bead-density``, ``--bead-E``, ``--bead-nu``) contradict.
+
+    Parameters
+    ----------
+    key : str
+        The material key (``--bead-material``).
+    over : dict
+        The model flags given (``bead_density`` kg/m^3, ``bead_E`` Pa, ``bead_nu``).
+    materials : dict
+        The materials library (key -> Material).
+
+    Raises
+    ------
+    ConfigError
+        An unknown key (naming the library's), or a value that differs from the
+        material's by more than :data:`ssw.cli._flags.SAME_REL`.
+    """
+    from ssw.cli._flags import same
+
+    if key not in materials:
+        raise ConfigError("--bead-material", key,
+                          f"a material of the library: {', '.join(sorted(materials))}")
+    m = materials[key]
+    for field, flag, mine in (("bead_density", "--bead-density", m.density),
+                              ("bead_E", "--bead-E", m.E), ("bead_nu", "--bead-nu", m.nu)):
+        if field in over and not same(over[field], mine):
+            raise ConfigError(flag, over[field],
+                              f"{mine!r}, the value of --bead-material {key} (drop one of "
+                              "the two: the material names the beads' values)")
+
+
 def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
                   numerics_only: bool = False) -> ChainContext:
     """Resolve config, calibration, device, params and wall (module docstring)."""
@@ -185,6 +218,8 @@ def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
     numerics = dict(cal.numerics) if cal is not None else numerics_of(cfg)
     numerics.update(over)
     mats = cal.materials() if cal is not None else library(cfg)
+    if "bead_material" in changes:
+        check_bead_material(changes["bead_material"], over, mats)
     params = chain_params(device, mats, **numerics)
     if numerics_only:
         return ChainContext(cfg, device, cal, params, "", {})
@@ -222,6 +257,33 @@ def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
     return ChainContext(cfg, device, cal, params, wall, opts, sample, plain)
 
 
+def contact_for_bead(cfg: dict[str, Any], bead_radius: float) -> dict[str, Any]:
+    """The config's ``contact:`` settings for a bead of radius ``bead_radius`` (m): their
+    lengths (:data:`ssw.design.device_eval.CONTACT_LENGTHS`) are those of the config's
+    device's bead, scaled by ``bead_radius`` over its radius, so that a device scaled in
+    every length meshes alike in its own units (the device design's meshes:
+    :func:`ssw.design.device_eval.scaled_contact`). The config's own device: unchanged.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+    bead_radius : float
+        m, the command's bead radius.
+
+    Returns
+    -------
+    dict
+        The settings (a copy).
+    """
+    from ssw.config import device_of
+    from ssw.design.device_eval import scaled_contact
+
+    contact = dict(cfg.get("contact", {}))
+    own = device_of(cfg).bead_radius
+    return contact if bead_radius == own else scaled_contact(contact, bead_radius / own)
+
+
 def wall_law(args: argparse.Namespace, cfg: dict[str, Any], cal: Any, params: Any,
              E: Any, nu: Any) -> tuple[str, dict[str, Any]]:
     """The last-contact law and its options (module docstring, step 5)."""
@@ -240,7 +302,7 @@ def wall_law(args: argparse.Namespace, cfg: dict[str, Any], cal: Any, params: An
 
         return law, {"k_table": args.k_table or k_table_file(cfg)}
     if law == "fem":
-        return law, {"contact": dict(cfg.get("contact", {}))}
+        return law, {"contact": contact_for_bead(cfg, params.bead_radius)}
     if law == "table":
         if args.curve:
             return law, {"curve": args.curve}

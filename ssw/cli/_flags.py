@@ -113,6 +113,9 @@ FLAGS: tuple[Flag, ...] = (
          "striker dropped from this height, m (speed sqrt(2 g h))", float),
     Flag("--preload", DEVICE, "preload", True, "constant force on bead 1, N", float),
     Flag("--bead-radius", DEVICE, "bead_radius", True, "bead radius, m", float),
+    Flag("--bead-material", DEVICE, "bead_material", True,
+         "bead material key (materials library: its density, E and nu; --bead-density, "
+         "--bead-E, --bead-nu must agree with it)"),
     Flag("--plate-material", DEVICE, "plate_material", True,
          "plate material key (materials library)"),
     Flag("--plate-thickness", DEVICE, "plate_thickness", True,

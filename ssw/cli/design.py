@@ -90,16 +90,50 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "yielding as von Mises (the plate's dent; default design.device."
                    "plastic_hits, 0: off; with --merge on the merged ranking, the base device "
                    "of --config/--calibration)")
+    g.add_argument("--size", type=int, metavar="N",
+                   help="with --space device: about N evaluations (the scan grown to at "
+                   "most 3/4 of N, the rest in bounded searches from the best devices: "
+                   "ssw.design.device_search.sized; default: the config's space)")
     g.add_argument("--part", metavar="I/N",
                    help="with --space device and --family: only the family's chains I, I+N, "
                    "... (the workflow's scatter; no plastic check, the merge strikes)")
     g.add_argument("--merge", nargs="+", metavar="JSON",
                    help="rank together the results of several ssw design runs (written "
                    "with --output) instead of computing")
+    g.add_argument("--predict", action="store_true",
+                   help="with --space device: the 95 %% interval of E that ssw measure "
+                   "would report with the recommended and the base device, per hit and per "
+                   "point of --point-hits hits, at the TOF and the features levels "
+                   "(ssw identify's information, the calibration's covariance and model "
+                   "error: ssw.design.predict)")
+    g.add_argument("--point-hits", type=int, default=5, metavar="N",
+                   help="with --predict: hits of one measured point (default 5)")
+    g.add_argument("--objective", choices=("tof", "features"), default="tof",
+                   help="with --space device: rank by the TOF's resolution (default) or by "
+                   "the predicted interval of E per point at the features level among the "
+                   "--objective-pool best devices of that ranking (implies --predict)")
+    g.add_argument("--objective-pool", type=int, default=4, metavar="K",
+                   help="with --objective features: devices predicted (default 4)")
+    g.add_argument("--prototype", metavar="FOLDER",
+                   help="with --space device: a virtual prototype of the recommended device "
+                   "(its recordings in FOLDER): 3 reference and 4 unseen samples across the "
+                   "range simulated (striker scatter, the DAQ's noise and filter), "
+                   "calibrated and measured at the TOF level; the achieved errors and "
+                   "interval widths beside the predicted (ssw.design.prototype)")
+    g.add_argument("--striker-cov", type=float, default=0.01,
+                   help="with --prototype: the striker speed's relative scatter from hit to "
+                   "hit (default 0.01)")
     o = p.add_argument_group("outputs")
     o.add_argument("--output", help="the result JSON (with its provenance)")
     o.add_argument("--csv", help="the candidates' table (CSV)")
     o.add_argument("--plot", help="the Pareto front and sensitivity curves (PNG)")
+    o.add_argument("--output-device", metavar="FILE",
+                   help="the recommended device as a device YAML that every command takes "
+                   "(--device FILE): the base device with the design's beads, sensor, "
+                   "striker and plate (ssw.design.device_file)")
+    o.add_argument("--output-device-rank", type=int, default=1, metavar="K",
+                   help="with --output-device: the candidate of rank K instead (default 1: "
+                   "the recommended)")
     add_device_options(p, walls=("fem",))
     add_json_flag(p)
     p.set_defaults(func=run, human=human)
@@ -159,6 +193,13 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.design.output import plot, write_table
     from ssw.design.run import merge_results, run_design
 
+    if args.size is not None:
+        raise ConfigError("--size", args.size, "with --space device (the plate design's "
+                          "budget: --scan-points, --thickness-tol)")
+    if args.predict or args.objective != "tof" or args.prototype:
+        raise ConfigError("--predict/--objective/--prototype", args.objective,
+                          "with --space device (the plate design's devices are the base "
+                          "device's chain: ssw identify on it)")
     if args.merge and args.plastic_hits is not None:
         raise ConfigError("--plastic-hits", args.plastic_hits,
                           "not with --merge (it strikes the plates of one design run)")
@@ -195,6 +236,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         inputs = {k: v for k, v in vars(args).items() if k not in ("func", "human", "json")}
         inputs["spec"] = res["spec"]
     _write(args, res, inputs, write_table, plot)
+    _output_device(args, res)
     return res
 
 
@@ -217,7 +259,7 @@ def _families(items: list[str] | None) -> list[tuple[float, str]] | None:
 
 def _run_device(args: argparse.Namespace) -> dict[str, Any]:
     """``ssw design --space device`` (:func:`ssw.design.device_search.run_device_design`)."""
-    from ssw.cli._device import chain_context
+    from ssw.cli._device import chain_context, contact_for_bead
     from ssw.config import library
     from ssw.design.device_search import run_device_design, with_plastic_check
     from ssw.design.device_spec import DeviceSpec
@@ -245,8 +287,11 @@ def _run_device(args: argparse.Namespace) -> dict[str, Any]:
             base, mats = _merge_base(args, merged)
             merged = with_plastic_check(merged, base, mats, jobs=max(1, int(args.jobs)))
         res = merged.to_dict()
+        _predict(args, res)
+        _prototype(args, res)
         inputs = {"merge": list(args.merge), "plastic_hits": merged.spec.plastic_hits}
         _write_device(args, res, inputs)
+        _output_device(args, res)
         return res
     ctx = chain_context(args, numerics_only=True)
     plate_spec = _spec(args, ctx)
@@ -271,20 +316,105 @@ def _run_device(args: argparse.Namespace) -> dict[str, Any]:
                       tof_scatter_source=plate_spec.tof_scatter_source,
                       sample_rate=plate_spec.sample_rate, **kw)
     mats = ctx.calibration.materials() if ctx.calibration is not None else library(cfg)
+    if args.size is not None:
+        from ssw.design.device_search import sized
+
+        space, spec = sized(space, spec, args.size)
     ref = None if args.no_reference else point_of(p, dev.bead_material, dev.plate_material)
     families = _families(args.family)
-    result = run_device_design(space, spec, p, mats, dict(cfg.get("contact", {})),
+    # the config's contact lengths are its device's bead's: scaled to the base device's
+    result = run_device_design(space, spec, p, mats, contact_for_bead(cfg, p.bead_radius),
                                dev.full_scale_force, ref, jobs=max(1, int(args.jobs)),
                                families=families, parts=_part(args.part))
     if families is None and args.part is None:  # a family's or part's run: the merge strikes
         result = with_plastic_check(result, p, mats, jobs=max(1, int(args.jobs)))
     res = result.to_dict()
     res.update({"device_name": dev.name, "device_source": dev.source, "wall": "fem"})
+    _predict(args, res, ctx)
+    _prototype(args, res, ctx)
     inputs = {k: v for k, v in vars(args).items() if k not in ("func", "human", "json")}
     inputs["spec"] = res["spec"]
     inputs["space"] = res["space"]
     _write_device(args, res, inputs)
+    _output_device(args, res, ctx)
     return res
+
+
+def _predict(args: argparse.Namespace, res: dict[str, Any], ctx: Any = None) -> None:
+    """``--predict``: the predicted measurement (:mod:`ssw.design.predict`) into ``res``
+    (``prediction``), on the base device of ``ctx`` (default: that of ``--config``/
+    ``--device``/``--calibration``)."""
+    if not (args.predict or args.objective != "tof"):
+        return
+    if not args.point_hits >= 1:
+        raise ConfigError("--point-hits", args.point_hits, "an integer >= 1")
+    if not args.objective_pool >= 1:
+        raise ConfigError("--objective-pool", args.objective_pool, "an integer >= 1")
+    from ssw.cli._device import chain_context, contact_for_bead
+    from ssw.config import library
+    from ssw.daq.settings import settings_from_config
+    from ssw.design.predict import (
+        device_prediction,
+        model_error_of,
+        predicted_measurement,
+        rank_by_level,
+    )
+
+    ctx = ctx if ctx is not None else chain_context(args, numerics_only=True)
+    mats = ctx.calibration.materials() if ctx.calibration is not None else library(ctx.cfg)
+    contact = contact_for_bead(ctx.cfg, ctx.params.bead_radius)
+    settings = settings_from_config(ctx.cfg, ctx.device)
+    kw = {"point_hits": args.point_hits, "calibration": ctx.calibration,
+          "model_error": model_error_of(ctx.calibration)}
+    if args.objective != "tof":
+        rank_by_level(res, args.objective, args.objective_pool, lambda c: device_prediction(
+            c, res["spec"], ctx.params, mats, contact, settings, **kw))
+    res["prediction"] = predicted_measurement(res, ctx.params, mats, contact, settings, **kw)
+
+
+def _prototype(args: argparse.Namespace, res: dict[str, Any], ctx: Any = None) -> None:
+    """``--prototype FOLDER``: the recommended device simulated, calibrated and measured
+    (:func:`ssw.design.prototype.run_prototype`) into ``res`` (``prototype``)."""
+    if not args.prototype:
+        return
+    if not (args.striker_cov >= 0):
+        raise ConfigError("--striker-cov", args.striker_cov, "a relative scatter >= 0")
+    from ssw.chain.params import numerics_of
+    from ssw.cli._device import chain_context, contact_for_bead
+    from ssw.config import library
+    from ssw.daq.settings import settings_from_config
+    from ssw.design.device_file import designed_device
+    from ssw.design.prototype import run_prototype
+
+    ctx = ctx if ctx is not None else chain_context(args, numerics_only=True)
+    cal = ctx.calibration
+    mats = cal.materials() if cal is not None else library(ctx.cfg)
+    numerics = dict(cal.numerics) if cal is not None else numerics_of(ctx.cfg)
+    dev = designed_device(res, res["recommended"], ctx.device, mats, "prototype")
+    res["prototype"] = run_prototype(
+        dev, mats, numerics, {"contact": contact_for_bead(ctx.cfg, dev.bead_radius)},
+        settings_from_config(ctx.cfg, dev), tuple(res["spec"]["soil_E"]),
+        float(res["spec"]["soil_nu"]), args.prototype, striker_cov=args.striker_cov)
+
+
+def _output_device(args: argparse.Namespace, res: dict[str, Any], ctx: Any = None) -> None:
+    """``--output-device``: the candidate of rank ``--output-device-rank`` as a device YAML
+    on the base device of ``ctx`` (default: that of ``--config``/``--device``/
+    ``--calibration``) with the design's materials."""
+    if not args.output_device:
+        if args.output_device_rank != 1:
+            raise ConfigError("--output-device-rank", args.output_device_rank,
+                              "with --output-device FILE")
+        return
+    from ssw.cli._device import chain_context, contact_for_bead
+    from ssw.config import library
+    from ssw.design.device_file import write_designed_device
+
+    ctx = ctx if ctx is not None else chain_context(args, numerics_only=True)
+    mats = ctx.calibration.materials() if ctx.calibration is not None else library(ctx.cfg)
+    write_designed_device(args.output_device, res, args.output_device_rank, ctx.device, mats,
+                          contact=contact_for_bead(ctx.cfg, ctx.params.bead_radius),
+                          base_radius=ctx.params.bead_radius)
 
 
 def _merge_base(args: argparse.Namespace, merged: Any) -> tuple[Any, dict[str, Any]]:

@@ -72,7 +72,8 @@ def plot(path: str | Path, result: dict[str, Any]) -> None:
     from ssw.plotting import pyplot, save_png
 
     plt = pyplot()
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.4))
+    pred = result.get("prediction")
+    fig, axes = plt.subplots(1, 3 if pred else 2, figsize=(16 if pred else 11, 4.4))
     # a device whose TOF hardly moves with E (dE/E >= 1: no measurement) is left out
     cands = [c for c in result["candidates"] if c["resolution"] < 1.0]
     mats = sorted({c["bead_material"] for c in cands})
@@ -104,12 +105,35 @@ def plot(path: str | Path, result: dict[str, Any]) -> None:
         ax.set_ylabel("worst-case resolution dE/E")
         ax.grid(alpha=0.3, which="both")
     axes[0].legend(fontsize=6)
+    if pred:
+        _plot_prediction(axes[2], pred)
     lo, hi = result["spec"]["soil_E"]
     fig.suptitle(f"ssw design --space device: soils {lo / 1e6:g}-{hi / 1e6:g} MPa "
                  f"(nu {result['spec']['soil_nu']:g}); recommended: "
                  f"{result['recommended']['label']}", fontsize=9)
     fig.tight_layout()
     save_png(fig, path, dpi=130)
+
+
+def _plot_prediction(ax: Any, pred: dict[str, Any]) -> None:
+    """The predicted 95 % half-width of E per point against the soil's modulus, the
+    recommended (solid) and the base device (dashed), at each level
+    (:mod:`ssw.design.predict`)."""
+    for name, style in (("recommended", "-"), ("reference", "--")):
+        d = pred["devices"].get(name)
+        if d is None:
+            continue
+        for lv, color in (("tof", "C0"), ("features", "C3")):
+            hw = [float("nan") if v is None else 100 * v
+                  for v in d[lv]["point"]["half_width"]]
+            ax.plot(d["soil_E"], hw, style, color=color, marker="o", ms=3,
+                    label=f"{name if name == 'recommended' else 'base'}, {lv}")
+    ax.set_xscale("log")
+    ax.set_yscale("log")
+    ax.set_xlabel("soil modulus E (Pa)")
+    ax.set_ylabel(f"predicted 95 % half-width of E per {pred['point_hits']}-hit point (%)")
+    ax.grid(alpha=0.3, which="both")
+    ax.legend(fontsize=6)
 
 
 def human(res: dict[str, Any]) -> str:
@@ -133,6 +157,20 @@ def human(res: dict[str, Any]) -> str:
     if rec.get("validity"):  # ssw.validity, the worst soil of the range
         lines.append("  checks failing on some soil of the range: "
                      + ("; ".join(rec["checks_failed"]) or "none"))
+    if res.get("prediction"):  # ssw.design.predict
+        from ssw.design.predict import human_lines
+
+        lines += human_lines(res["prediction"])
+    if res.get("prototype"):  # ssw.design.prototype
+        pt = res["prototype"]
+        lines.append(f"virtual prototype ({pt['hits']} hits per sample, striker scatter "
+                     f"{100 * pt['striker_cov']:g} %): calibrated "
+                     + ", ".join(f"{k} {v:.4g}" for k, v in pt["calibration"].items()))
+        for r in pt["unseen"]:
+            lines.append(f"  E {r['E_true'] / 1e6:.4g} MPa: measured {r['E'] / 1e6:.4g} MPa "
+                         f"({100 * r['error']:+.3g} %), 95 % width {100 * r['width']:.3g} % "
+                         f"(predicted {100 * r['width_predicted']:.3g} %), "
+                         + ("inside" if r["inside"] else "OUTSIDE"))
     for chk in res.get("plastic_check") or []:
         head = (f"{chk['hits']} hits, {chk['label']} on E {chk['soil_E']:.4g} Pa (von Mises "
                 f"Y {chk['soil_yield_stress']:.3g} Pa): ")

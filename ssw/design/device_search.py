@@ -350,6 +350,66 @@ def merge_device_results(results: list[dict[str, Any]]) -> DeviceDesignResult:
                               sum(r["cpu_time"] for r in results), plastic)
 
 
+#: Share of a sized design's evaluations its scan may take (:func:`sized`); the rest go to
+#: the bounded searches from the best devices.
+SCAN_SHARE = 0.75
+
+
+def sized(space: DeviceSpace, spec: DeviceSpec, n: int) -> tuple[DeviceSpace, DeviceSpec]:
+    """The space and spec of a design of about ``n`` evaluations (``--size N``).
+
+    The scan of each continuous variable in turn (the order of
+    :data:`ssw.design.space.CONTINUOUS`) triples its points while it holds at most
+    :data:`SCAN_SHARE` of ``n``: the centres of ``3 k`` equal cells hold those of ``k``
+    (:meth:`ssw.design.space.Interval.scan_values`), so the grown scan holds every device
+    of the space's own. The rest goes to the bounded searches, which start from the best
+    devices of distinct chains and plate materials (the front's neighbourhood):
+    ``finalists`` = the rest over ``refine_evaluations`` (at least the spec's), each search
+    the rest over the finalists (at least the spec's ``refine_evaluations``). A space whose
+    scan alone exceeds ``n`` is kept.
+
+    Parameters
+    ----------
+    space : ssw.design.space.DeviceSpace
+        The devices searched.
+    spec : ssw.design.device_spec.DeviceSpec
+        The question (its ``finalists`` and ``refine_evaluations``).
+    n : int
+        Evaluations wanted (>= 1).
+
+    Returns
+    -------
+    tuple
+        The grown space and the spec with its search budget.
+
+    Raises
+    ------
+    ConfigError
+        ``n`` < 1.
+    """
+    from ssw.design.space import CONTINUOUS
+    from ssw.errors import ConfigError
+
+    if not (isinstance(n, int) and n >= 1):
+        raise ConfigError("--size", n, "a number of evaluations >= 1")
+    k = 0
+    while True:
+        name = CONTINUOUS[k % len(CONTINUOUS)]
+        iv = getattr(space, name)
+        grown = replace(space, **{name: replace(iv, scan=3 * iv.scan)})
+        if grown.size > SCAN_SHARE * n:
+            break
+        space, k = grown, k + 1
+    rest = n - space.size
+    if rest <= 0 or spec.refine_evaluations == 0:
+        return space, spec
+    pairs = sum(len(space.chains(d)) for d in space.bead_diameters) * len(
+        space.plate_materials)
+    finalists = int(min(pairs, max(spec.finalists, rest // spec.refine_evaluations)))
+    return space, replace(spec, finalists=finalists, refine_evaluations=max(
+        spec.refine_evaluations, rest // finalists))
+
+
 def best_of_pairs(ordered: list[DeviceCandidate], n: int) -> list[DeviceCandidate]:
     """The finalists: the first ``n`` devices of distinct chains and plate materials.
 

@@ -295,9 +295,9 @@ def parse_nu(text: str | float) -> float | tuple[float, float]:
 
 
 #: Terms of the TOF budget that a fit of the records replaces (the scatter of the hits and
-#: the peak picking's sampling error are in the fit's own residuals; the TOF model's
-#: discrepancy, :func:`ssw.modulus.model_discrepancy`, by the fit's own, its
-#: error scaled by ``sqrt(chi2 / dof)``).
+#: the peak picking's sampling error are in the fit's own residuals; the TOF model's error,
+#: :func:`ssw.modulus.model_term`, by the records' own: their calibration's floor and the
+#: fit's ``sqrt(chi2 / dof)``).
 _FIT_REPLACES = ("tof", "tof (stated scatter)", "sampling", MODEL_TERM)
 
 
@@ -316,9 +316,12 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
     the notes). E's standard error in ``ln E`` is the fit's, scaled by ``sqrt(chi2 / dof)``
     when the model does not reach the noise (a model-discrepancy term, stated), and with
     a floor by the square root of the hits (the model's error is common to a sample's
-    hits and does not average down over them); it
-    replaces the TOF's scatter and sampling terms of ``m``'s budget, whose other terms
-    (calibration, Poisson's ratio, wall, integrator) stay. ``chi2`` and its quantile flag
+    hits and does not average down over them); with a floor the budget names its two
+    shares, ``{level} fit`` (the noise's weights alone at the optimum,
+    :func:`ssw.calibration.waveform.noise_std`) and ``model ({level})`` (the rest: the
+    model-error floor and the misfit, :mod:`ssw.calibration.model_error`). These
+    replace the TOF's scatter, sampling and model-error terms of ``m``'s budget, whose other
+    terms (calibration, Poisson's ratio, wall, integrator) stay. ``chi2`` and its quantile flag
     a recording the model does not explain (a clipped hit, a yielding sample, a time
     offset the trigger does not explain): beyond
     :data:`ssw.calibration.waveform.FLAG_QUANTILE` the measurement says so in its notes and
@@ -378,6 +381,7 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
         device_globals,
         fit,
         initial_state,
+        noise_std,
         propagated,
     )
     from ssw.modulus import COVERAGE_Z
@@ -412,7 +416,12 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
         # average down over them as the weights assume (the noise's, far smaller, is
         # scaled with it: conservative)
         u_fit *= float(np.sqrt(hits.n))
-    contrib[f"{level} fit"] = u_fit
+        # the budget names the model's share: what the noise's weights alone leave of it
+        u_noise = min(noise_std(setup, f, Column("E", 0)), u_fit)
+        contrib[f"{level} fit"] = u_noise
+        contrib[f"model ({level})"] = float(np.sqrt(u_fit**2 - u_noise**2))
+    else:
+        contrib[f"{level} fit"] = u_fit
     if covariance and covariance.get("names"):
         C = propagated(setup, f, list(covariance["names"]), np.asarray(covariance["matrix"]))
         contrib.pop("calibration", None)

@@ -51,6 +51,7 @@ from typing import Any
 
 import numpy as np
 
+from ssw.calibration.model_error import FLOOR_CONFIDENCE, floor_bound
 from ssw.daq.model import Acquisition, filter_fine, fine_grid, trigger_time
 from ssw.device import PARAMETERS as DEVICE_PARAMETERS
 from ssw.device import Parameter
@@ -898,10 +899,6 @@ class _Explained:
         return np.inf if lost > self.lost(current) else float(r @ r)
 
 
-#: The confidence of the model-error floor's upper bound (:func:`model_floor`).
-FLOOR_CONFIDENCE = 0.95
-
-
 def global_covariance(f: Fit, hits: float = 1.0) -> tuple[list[str], np.ndarray]:
     """The covariance of a fit's free globals in their scaled coordinates
     (:func:`coordinate`), scaled by the misfit (:attr:`Fit.misfit`), every per-hit
@@ -925,6 +922,33 @@ def global_covariance(f: Fit, hits: float = 1.0) -> tuple[list[str], np.ndarray]
     j = [i for i, c in enumerate(f.free) if c.index < 0]
     hits = hits if any(f.floor.values()) else 1.0
     return [f.free[i].name for i in j], f.cov_x[np.ix_(j, j)] * f.misfit * hits
+
+
+def noise_std(setup: Setup, f: Fit, col: Column) -> float:
+    """The standard error of ``col`` (its scaled coordinate) at a fit's optimum with the
+    noise's weights alone: what the fit would give if the model were the device (the
+    model-error floor and the misfit's scaling left out; the rest of a fit's standard error
+    is the model's, :func:`ssw.measure.measure_information`).
+
+    Parameters
+    ----------
+    setup : Setup
+        The fit's model and records.
+    f : Fit
+        The fit.
+    col : Column
+        One of its free parameters.
+
+    Returns
+    -------
+    float
+        The standard error, scaled coordinate.
+    """
+    bare = replace(setup, floor={}, runs=0)
+    _, J, _ = _residuals(bare, f.state, list(f.free), {c.name for c in f.free})
+    setup.runs += bare.runs
+    j = f.free.index(col)
+    return float(np.sqrt(max(np.linalg.pinv(J.T @ J)[j, j], 0.0)))
 
 
 def propagated(setup: Setup, f: Fit, names: list[str], cov: np.ndarray) -> np.ndarray:
@@ -958,58 +982,16 @@ def propagated(setup: Setup, f: Fit, names: list[str], cov: np.ndarray) -> np.nd
     return S @ np.asarray(cov, float) @ S.T
 
 
-def floor_bound(r: np.ndarray, sigma: np.ndarray, scale: np.ndarray, dof: float,
-                confidence: float = FLOOR_CONFIDENCE) -> float:
-    """The upper confidence bound of a relative model-error floor ``phi`` from residuals
-    ``r_i ~ N(0, sigma_i^2 + phi^2 s_i^2)``: the root of ``sum_i r_i^2 / (sigma_i^2 +
-    phi^2 s_i^2) = chi2.ppf(1 - confidence, dof)`` (the left side falls as ``phi``
-    grows), 0 where the noise alone explains them.
-
-    Parameters
-    ----------
-    r : numpy.ndarray
-        (n,) residuals.
-    sigma : numpy.ndarray
-        (n,) the noise's standard deviations.
-    scale : numpy.ndarray
-        (n,) the scale the floor is relative to (``|s_i|``).
-    dof : float
-        The residuals' degrees of freedom (their share of a fit's).
-    confidence : float
-        The bound's confidence.
-
-    Returns
-    -------
-    float
-        ``phi`` (dimensionless).
-    """
-    from scipy import stats
-    from scipy.optimize import brentq
-
-    rr, sig, sc = np.asarray(r, float) ** 2, np.asarray(sigma, float) ** 2, \
-        np.asarray(scale, float) ** 2
-    target = float(stats.chi2.ppf(1.0 - confidence, max(dof, 1e-3)))
-
-    def excess(phi: float) -> float:
-        return float(np.sum(rr / (sig + phi**2 * sc))) - target
-
-    if excess(0.0) <= 0.0:
-        return 0.0
-    hi = float(np.sqrt(np.sum(rr) / max(np.sum(sc), 1e-300) * rr.size / target))
-    while excess(hi) > 0.0:
-        hi *= 2.0
-    return float(brentq(excess, 0.0, hi, xtol=1e-12 * hi, rtol=1e-6))
-
-
 def model_floor(setup: Setup, f: Fit) -> dict[str, float]:
     """The model-error floor the references' residuals call for: per observation kind (each
     feature; the samples of a waveform) the relative standard deviation ``phi`` that, added
     in quadrature to the noise's, brings that kind's chi^2 at the fit ``f`` down to the
     lower :data:`FLOOR_CONFIDENCE` quantile of a chi^2 of its share of the degrees of
     freedom: the upper confidence bound of ``phi`` (the Birge ratio of each kind, Birge
-    1932, which the TOF level's :func:`ssw.modulus.model_discrepancy` also uses, made 1 at
-    the bound rather than at the point estimate: a kind with a handful of observations
-    per reference gives a floor that samples outside the references' range exceed)::
+    1932, made 1 at the bound rather than at the point estimate: a kind with a handful of
+    observations per reference gives a floor that samples outside the references' range
+    exceed; the estimator of every level, :mod:`ssw.calibration.model_error`, which the TOF
+    level's ``tau`` also uses)::
 
         sum_i r_i^2 / (sigma_i^2 + phi^2 s_i^2) = chi2.ppf(1 - FLOOR_CONFIDENCE, n_k dof / n)
 
@@ -1050,7 +1032,8 @@ def model_floor(setup: Setup, f: Fit) -> dict[str, float]:
     for k in kinds:
         s = ok & (obs.kind == k)
         if np.any(s):
-            out[k] = floor_bound(r[s], obs.sigma[s], scale[s], share * np.count_nonzero(s))
+            out[k] = floor_bound(r[s], obs.sigma[s], scale[s], share * np.count_nonzero(s),
+                                 FLOOR_CONFIDENCE)
     return out
 
 
@@ -1299,14 +1282,21 @@ def _bounds(setup: Setup, free: list[Column]) -> tuple[np.ndarray, np.ndarray]:
 def calibrate_records(samples: list[Hits], params: Any, wall: str,
                       wall_options: dict[str, Any], acq: Acquisition, level: str,
                       trigger_level: float, tof_scatter: float,
-                      free_globals: tuple[str, ...] = GLOBALS, scan: bool = True) -> Fit:
+                      free_globals: tuple[str, ...] = GLOBALS, scan: bool = True,
+                      gain: float = 1.0,
+                      start_grid: tuple[tuple[float, ...], tuple[float, ...]] | None = None,
+                      refine_levels: int = REFINE_LEVELS) -> Fit:
     """Fit the device's global parameters to reference records (every sample's E known):
     every one of ``free_globals`` with each hit's striker speed, time offset and delay.
 
     1. The start: when the sensor's mass and the dashpot may be freed, the best point of
        a grid of them (:func:`global_start`, weights with the floor
-       :data:`START_FLOOR`) refined around it (:func:`refine_start`), else the device's
-       values (weights: the noise).
+       :data:`START_FLOOR`) refined around it (:func:`refine_start`); else (or with
+       ``scan`` False) the device's values, each hit's parameters fitted to the records
+       with the globals held, and the model-error floor those residuals call for
+       (:func:`model_floor`) in the weights of what follows (so that a first fit of the
+       globals is not drawn by the noise's weights alone where the model cannot reach
+       the records: a calibration of the waveform from the features' one).
     2. A fit of every free parameter; then the model-error floor estimated from its
        residuals (:func:`model_floor`: each kind's chi^2 brought to its share of the
        degrees of freedom) and the fit again with it, until the floor settles
@@ -1342,6 +1332,13 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
         Start from :func:`global_start` when the sensor's mass and the dashpot may be
         freed; False: from ``params`` (a calibration of the same records at another level,
         e.g. the waveform's from the features').
+    gain : float
+        The DAQ gain's start (another level's calibration's).
+    start_grid : tuple or None
+        The global start's sensor masses (multiples of the device's) and dashpots (N s/m);
+        None: :data:`START_SENSOR_MASS` by :data:`START_DAMPING`.
+    refine_levels : int
+        Refinements of the global start (:func:`refine_start`).
 
     Returns
     -------
@@ -1361,7 +1358,7 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
                           "references with a known E")
     setup = Setup(params, wall, dict(wall_options), acq, level, samples, trigger_level,
                   tof_scatter=tof_scatter)
-    glob = device_globals(params)
+    glob = device_globals(params, gain)
     E = np.array([s.E for s in samples], float)
     v0 = float(params.striker_velocity)
     n_h = setup.n_hits
@@ -1371,9 +1368,12 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     kinds = FEATURES if level == "features" else ("waveform",)
     if scan and {"sensor_mass", "damping"} <= set(free_globals):
         setup.floor = dict.fromkeys(kinds, START_FLOOR)
-        state, scan = refine_start(setup, glob, E, v0, *global_start(setup, glob, E, v0))
-    else:
-        state, scan = initial_state(setup, glob, E, v0), []
+        state, scan = refine_start(setup, glob, E, v0, *global_start(
+            setup, glob, E, v0, *(start_grid or (None, None))), levels=refine_levels)
+    else:  # the device's globals; each hit's own parameters, and the floor they leave
+        hits_only = fit(setup, initial_state(setup, glob, E, v0), per_hit)
+        state, scan = hits_only.state, []
+        setup.floor = model_floor(setup, hits_only)
     f = fit(setup, state, free + per_hit)
     for _ in range(FLOOR_PASSES):  # the floor: the start's, then the residuals' own
         floor = model_floor(setup, f)
@@ -1430,14 +1430,29 @@ def with_fit(cal: Any, f: Fit, level: str) -> Any:
             "values": {k: v for k, (v, _) in fitted.items()},
             "std_scaled": {k: s for k, (_, s) in fitted.items()},
             "gain": float(f.state.globals["gain"]),
-            "start": f.start,
+            "start": [{**pt, "chi2": float(pt["chi2"]) if np.isfinite(pt["chi2"]) else None}
+                      for pt in f.start],  # None: the point leaves observations unexplained
             "striker_velocity_per_hit": [float(v) for v in f.state.striker_velocity],
             "chi2": f.chi2, "chi2_dof": f.dof, "chi2_quantile": f.quantile,
             "flagged": f.flagged, "unexplained": f.unexplained, "converged": f.converged,
             "runs": f.runs, "floor": dict(f.floor)}
     names, cov = global_covariance(f, hits=len(f.state.striker_velocity) / len(f.state.E))
     info["covariance"] = {"names": names, "matrix": cov.tolist()}
+    if "information" in cal.provenance:  # the level this one started from
+        info["from"] = {k: v for k, v in cal.provenance["information"].items()
+                        if k not in ("start", "from")}
     parameters = {**cal.parameters, **{k: v for k, v in changes.items()
                                        if k in cal.parameters}}
+    warnings = [w for w in cal.warnings if not w.startswith("RECORDS")]
+    warnings.append(f"RECORDS ({level}): the model-error floor of the records' fit, in the "
+                    "weights of every measurement through the calibration at this level: "
+                    + (", ".join(f"{k} {v:.2g}" for k, v in f.floor.items()) or "none"))
+    if f.flagged or not f.converged:
+        warnings.append(f"RECORDS ({level}): the fit of the references' records "
+                        + ("did not converge" if not f.converged else "")
+                        + (" and " if f.flagged and not f.converged else "")
+                        + (f"is flagged (chi2 {f.chi2:.4g} on {f.dof}, "
+                           f"{f.unexplained} observation(s) unexplained)" if f.flagged else ""))
     return replace(cal, device=cal.device.with_(**changes), parameters=parameters,
-                   numerics=numerics, provenance={**cal.provenance, "information": info})
+                   numerics=numerics, provenance={**cal.provenance, "information": info},
+                   warnings=warnings)

@@ -181,7 +181,7 @@ def _with_information(args: argparse.Namespace, ctx: Any, cal: Any) -> Any:
                       coupling=settings.coupling)
     levels = calibrate_levels(cal, samples, acq, args.information, trigger_level=trig,
                               tof_scatter=float(scatter), wall=ctx.wall,
-                              wall_options=ctx.wall_options)
+                              wall_options=ctx.wall_options, loo=not args.no_loo)
     return levels[args.information]
 
 

@@ -207,6 +207,17 @@ def test_a_misfit_beyond_its_statistics_calibrates_with_its_model_error_stated(
     assert out["warnings"][0].startswith("MODEL ERROR")
     assert main(args) == 0
     assert "MODEL ERROR" in capsys.readouterr().out
+    # ssw invert through the file: the term in its budget, the reference's E inside
+    from ssw.modulus import MODEL_TERM
+
+    dev_file = tmp_path / "nominal.yaml"
+    write_device(dev_file, dev.with_(preload=3.0))
+    assert main(["invert", "--tof", repr(float(tofs[1])), "--tof-std", "1e-6", "--soil-nu",
+                 "0.33", "--device", str(dev_file), "--calibration", str(path), "--law",
+                 "hertz", "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert res["contributions_pct"][MODEL_TERM] > 0
+    assert res["E_low"] < 123e6 < res["E_high"]
 
 
 def test_mixed_tof_uncertainties_are_refused(no_preload):

@@ -5,11 +5,14 @@ calibrated device once more canonically (one plain run, as ``ssw tof --calibrati
 and predicts each reference's E from a calibration made without it (leave-one-out: the
 honest estimate of the error on an unseen sample).
 
-The file (JSON, ``ssw_kind = "calibration"``) holds the calibrated device, its nominal
+The file (JSON, ``ssw_kind = "calibration"``, :data:`SCHEMA_VERSION`, checked against
+``ssw/data/calibration.schema.yaml`` when read) holds the calibrated device, its nominal
 version, the identified values with their standard errors and covariance, the singular
-values, the residuals, the leave-one-out predictions, the wall law and the numerics it was
-made with, the materials, and the provenance. Every chain command takes it
-(``--calibration FILE``) and runs the calibrated device with that wall law and numerics.
+values, the residuals, the leave-one-out predictions, the model-error term where the
+references reject the model (``model_error``) and the fit's findings (``warnings``), the
+wall law and the numerics it was made with, the materials, and the provenance. Every chain
+command takes it (``--calibration FILE``) and runs the calibrated device with that wall law
+and numerics.
 """
 
 from __future__ import annotations
@@ -267,6 +270,13 @@ def calibrate(
 ) -> Calibration:
     """Identify ``free`` device parameters from ``refs`` (see :mod:`ssw.calibration.fit`).
 
+    Where the references reject the model (their chi^2 with the stated TOF uncertainties
+    beyond its 95 % quantile) the calibration carries a relative TOF model error in its
+    weights, its covariance and every interval made through it (``model_error``,
+    :mod:`ssw.calibration.model_error`); a fit that did not converge, leaves a direction
+    unidentified (no covariance then) or has no degree of freedom answers with that stated
+    (``warnings``, :func:`ssw.calibration.fit.fit_warnings`). Only the input is refused.
+
     Parameters
     ----------
     refs : list of ssw.calibration.model.Reference
@@ -304,6 +314,20 @@ def calibrate(
         device's (a later measurement names its own).
     reference_sample : ssw.sample.Sample or None
         The references' sample, recorded in the provenance; None: half-spaces.
+
+    Returns
+    -------
+    Calibration
+        The calibrated device, its fit and its findings.
+
+    Raises
+    ------
+    ConfigError
+        No reference, fewer references than parameters freed
+        (:func:`ssw.calibration.fit.check_enough`), mixed TOF uncertainties.
+    CalibrationError
+        A reference TOF the device cannot produce
+        (:func:`ssw.calibration.fit.check_producible`).
     """
     from ssw.tof import api
 

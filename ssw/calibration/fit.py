@@ -599,7 +599,22 @@ def identify(
 
 def degrees_of_freedom(fit: Fit) -> int:
     """The references' degrees of freedom at a fit: references minus the free parameters
-    no bound holds (integers included: each is fitted, by the scan)."""
+    no bound holds (integers included: each is fitted, by the scan).
+
+    With ``Fit.chi2`` (the stated uncertainties' chi^2) it is what an information criterion
+    of a model (a dissipation law) needs: ``AIC = chi2 + 2 k``, ``BIC = chi2 + k ln n``,
+    ``k = n - dof`` the parameters fitted (Burnham & Anderson 2002, sec. 2.2).
+
+    Parameters
+    ----------
+    fit : Fit
+        The identification.
+
+    Returns
+    -------
+    int
+        ``n - k`` (may be 0 or less: nothing to test the model on).
+    """
     return int(fit.residuals.size - (len(fit.names) - len(fit.at_bound)))
 
 

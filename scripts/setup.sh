@@ -8,6 +8,10 @@
 #           wheel, which mpi4py's binary wheel loads too; its mpiexec is .venv/bin/mpiexec.
 #           Nothing is built; the packages' bytecode is compiled at install (29 s of CPU,
 #           49 s of wall time at a load of 7-10, 2 cores; 12 s without the bytecode).
+#           PETSc's libraries find the mpich wheel's libmpi.so.12 (in .venv/lib) only once
+#           mpi4py has loaded it: scripts/_ssw_petsc_first.py, installed with a .pth line,
+#           does that before any import of petsc4py, slepc4py or dolfinx, so that any
+#           script run by the venv's Python imports them by itself (0.2-0.4 ms per start).
 #   source  SSW_PETSC=source (or no Python >= 3.12 found): PETSc and petsc4py built from
 #           their sdists against Debian's MPICH, mpi4py from its sdist against the same
 #           mpicc: 15 minutes of CPU (10-13 minutes on 2 quiet cores), once (pip caches the
@@ -59,12 +63,25 @@ from ssw.chain.kernel import library
 library()
 from ssw.contact.petsc_solver import _petsc
 from mpi4py import MPI
-assert _petsc().COMM_WORLD.getSize() == MPI.COMM_WORLD.Get_size()" >/dev/null 2>&1
+assert _petsc().COMM_WORLD.getSize() == MPI.COMM_WORLD.Get_size()" >/dev/null 2>&1 &&
+  # and petsc4py by itself, as a user's own script imports it
+  "$VENV/bin/python" -c "from petsc4py import PETSc; PETSc.COMM_WORLD.getSize()" \
+    >/dev/null 2>&1
+}
+# The binary route's start-up hook (scripts/_ssw_petsc_first.py): the mpich wheel's MPI
+# loaded before the first import of petsc4py's, slepc4py's or DOLFINx's libraries.
+install_petsc_first() {
+  local site
+  site=$("$VENV/bin/python" -c 'import sysconfig; print(sysconfig.get_path("purelib"))')
+  cp scripts/_ssw_petsc_first.py "$site/_ssw_petsc_first.py"
+  echo "import _ssw_petsc_first" > "$site/_ssw_petsc_first.pth"
+  "$VENV/bin/python" -m compileall -q "$site/_ssw_petsc_first.py" >/dev/null
 }
 # The stamp of a set-up of this tree for route and Python "$1" (e.g. "binary 3.12.1").
 stamp_of() {
-  printf '%s/.ssw-setup-%s' "$VENV" "$( (cat scripts/setup.sh constraints.txt pyproject.toml \
-    setup.py ssw/chain/_step.c; echo "$1") | sha256sum | cut -c1-16)"
+  printf '%s/.ssw-setup-%s' "$VENV" "$( (cat scripts/setup.sh scripts/_ssw_petsc_first.py \
+    constraints.txt pyproject.toml setup.py ssw/chain/_step.c; echo "$1") |
+    sha256sum | cut -c1-16)"
 }
 # ssw's own bytecode, brought up to date on every call (one process: 0.05 s when it is; a
 # pool of workers, -j 0, costs 0.3 s to start and pays only for a full compile)
@@ -206,7 +223,8 @@ uvpip() { "$VENV/bin/uv" pip "$1" --quiet --python "$VENV/bin/python" "${@:2}"; 
 
 if [ "$ROUTE" = binary ]; then
   log "installing ssw, its pinned dependencies and the binary PETSc stack"
-  uvpip install --compile-bytecode "${C[@]}" pip -e ".[dev,petsc]"
+  uvpip install --compile-bytecode "${C[@]}" pip -e ".[dev,petsc,study]"
+  install_petsc_first
 else
   # The three builds go through pip, whose wheel cache keeps the built PETSc for the next
   # venv: uv's cache of a registry sdist's build was seen to build PETSc again here.
@@ -227,7 +245,7 @@ else
     MPICC="$MPICC" pip install "${C[@]}" --no-binary=mpi4py mpi4py
   fi
   log "installing ssw and its pinned dependencies"
-  uvpip install --compile-bytecode "${C[@]}" -e ".[dev]"
+  uvpip install --compile-bytecode "${C[@]}" -e ".[dev,study]"
 fi
 
 check_imports || {

@@ -19,6 +19,12 @@ while the run goes (the workflow's ``onstart`` handler, ``workflow/rules/common.
   settings are switched to it) or stops at once naming the flag; :class:`LostJobsWatch`
   stops a run whose jobs Slurm no longer shows as queued or running while Snakemake still
   waits for them.
+* **A job that pends forever.** A partition that never schedules it, a constraint no node
+  has, a hold: Slurm keeps it ``PENDING``, and every check above sees a queued job. The
+  same watch reports a job pending longer than its limit, with the reason ``squeue`` gives,
+  then stops the run or waits, reporting again after each further limit
+  (:class:`ssw.pending.PendingWatch`; the job resources ``ssw_pending_s`` and
+  ``ssw_on_pending``, :func:`ssw.pending.pending_limit`, which the SLURM profile sets).
 
 The plugin's behaviour quoted here is that of its version pinned in ``constraints.txt``
 (``snakemake_executor_plugin_slurm/__init__.py``, ``Executor.check_active_jobs``).
@@ -34,6 +40,7 @@ from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
 from ssw.errors import ConfigError, SswError
+from ssw.pending import PendingLimit, PendingWatch
 
 #: ``AccountingStorageType`` of a cluster without accounting storage (no ``sacct``).
 NO_ACCOUNTING = "accounting_storage/none"
@@ -423,9 +430,32 @@ def short_job_age(cluster: SlurmConfig, status: str,
             "(ssw.cluster.LostJobsWatch). Ask for MinJobAge >= 300 s.")
 
 
+def parse_job_lines(text: str) -> dict[str, tuple[str, str]]:
+    """Job id -> (state, reason) in ``ID|STATE[|REASON]`` lines (:func:`squeue_command`;
+    ``squeue -o '%i|%T'``, ``sacct --parsable2 -o JobIdRaw,State``).
+
+    Parameters
+    ----------
+    text : str
+        The command's output.
+
+    Returns
+    -------
+    dict[str, tuple[str, str]]
+        The state's first word (``sacct`` writes ``CANCELLED by 0``), upper case, and the
+        reason as given (``""`` when the line has none).
+    """
+    out = {}
+    for line in text.splitlines():
+        jid, _, rest = line.partition("|")
+        state, _, reason = rest.partition("|")
+        if jid.strip() and state.strip():
+            out[jid.strip()] = (state.split()[0].upper(), reason.strip())
+    return out
+
+
 def parse_job_states(text: str) -> dict[str, str]:
-    """Job id -> state in ``ID|STATE`` lines (``squeue -o '%i|%T'``, ``sacct --parsable2
-    -o JobIdRaw,State``).
+    """Job id -> state in ``ID|STATE[|REASON]`` lines (:func:`parse_job_lines`).
 
     Parameters
     ----------
@@ -435,14 +465,26 @@ def parse_job_states(text: str) -> dict[str, str]:
     Returns
     -------
     dict[str, str]
-        The state's first word (``sacct`` writes ``CANCELLED by 0``), upper case.
+        The state's first word, upper case.
     """
-    out = {}
-    for line in text.splitlines():
-        jid, sep, state = line.partition("|")
-        if sep and jid.strip() and state.strip():
-            out[jid.strip()] = state.split()[0].upper()
-    return out
+    return {jid: state for jid, (state, _) in parse_job_lines(text).items()}
+
+
+def squeue_command(run_id: str) -> list[str]:
+    """The ``squeue`` query of a run's jobs: id, state and Slurm's reason for the state.
+
+    Parameters
+    ----------
+    run_id : str
+        The run's Slurm job name (the executor plugin names every job of a run by its run
+        ID).
+
+    Returns
+    -------
+    list[str]
+        The command and its arguments (``ID|STATE|REASON`` lines, every state).
+    """
+    return ["squeue", "--format=%i|%T|%r", "--states=all", "--noheader", "--name", run_id]
 
 
 @dataclass
@@ -587,28 +629,39 @@ def slurm_timing(environ: Mapping[str, str]) -> SlurmTiming:
     return SlurmTiming(vanish_s, poll_s, min(pause_s, PLUGIN_MAX_STATUS_INTERVAL_S))
 
 
-def watch_lost_jobs(query: Callable[[], Mapping[str, str] | None],
+def watch_lost_jobs(query: Callable[[], Mapping[str, tuple[str, str]] | None],
                     waiting: Callable[[], Sequence[str]],
                     on_lost: Callable[[str], None], stall_s: float,
-                    vanish_s: float = VANISH_GRACE_S, poll_s: float = WATCH_POLL_S) -> Any:
+                    vanish_s: float = VANISH_GRACE_S, poll_s: float = WATCH_POLL_S,
+                    limits: Callable[[], Mapping[str, tuple[str, PendingLimit]]] | None = None,
+                    on_note: Callable[[str], None] | None = None) -> Any:
     """Start a daemon thread that calls ``on_lost`` once when a run's jobs are lost
-    (:class:`LostJobsWatch`).
+    (:class:`LostJobsWatch`) or pend beyond their limit with the action ``stop``
+    (:class:`ssw.pending.PendingWatch`), and ``on_note`` with each report of jobs pending
+    beyond their limit with the action ``wait``.
 
     Parameters
     ----------
-    query : Callable[[], Mapping[str, str] | None]
-        Job id -> state of the run's jobs as the controller lists them (the executor
-        plugin's ``squeue`` query; None when the query fails).
+    query : Callable[[], Mapping[str, tuple[str, str]] | None]
+        Job id -> (state, reason) of the run's jobs as the controller lists them
+        (:func:`squeue_command`, :func:`query_jobs`; None when the query fails).
     waiting : Callable[[], Sequence[str]]
         The cluster jobs Snakemake waits for.
     on_lost : Callable[[str], None]
-        Called with the message; the thread ends after it.
+        Called with the message that stops the run (``Lost cluster jobs: ...``, ``Cluster
+        jobs pending beyond their limit: ...``); the thread ends after it.
     stall_s : float
         ``LostJobsWatch.stall_s``, s.
     vanish_s : float
         ``LostJobsWatch.vanish_s``, s.
     poll_s : float
         Seconds between two looks.
+    limits : Callable[[], Mapping[str, tuple[str, PendingLimit]]] or None
+        Slurm job id -> (job name, :class:`ssw.pending.PendingLimit`) of the run's jobs
+        (None: every job gets the defaults). A ConfigError it raises (a job's limit that
+        is not allowed) is passed to ``on_lost``.
+    on_note : Callable[[str], None] or None
+        Called with each report of the ``wait`` action (None: not reported).
 
     Returns
     -------
@@ -619,17 +672,32 @@ def watch_lost_jobs(query: Callable[[], Mapping[str, str] | None],
     import time
 
     watch = LostJobsWatch(vanish_s, stall_s)
+    pending = PendingWatch()
 
     def loop() -> None:
         while True:
             time.sleep(poll_s)
             try:
-                jobs = list(waiting())
+                names = list(waiting())
             except RuntimeError:  # Snakemake changed its set of running jobs meanwhile
                 continue
-            msg = watch.step(time.monotonic(), jobs, query() if jobs else {})
+            jobs = query() if names else {}
+            now = time.monotonic()
+            if jobs:
+                try:
+                    stop, note = pending.step(now, jobs, limits() if limits else {})
+                except ConfigError as exc:
+                    on_lost(str(exc))
+                    return
+                if stop is not None:
+                    on_lost(stop)
+                    return
+                if note is not None and on_note is not None:
+                    on_note(note)
+            states = None if jobs is None else {j: st for j, (st, _) in jobs.items()}
+            msg = watch.step(now, names, states)
             if msg is not None:
-                on_lost(msg)
+                on_lost(f"Lost cluster jobs: {msg}")
                 return
 
     thread = threading.Thread(target=loop, name="ssw-lost-jobs-watch", daemon=True)
@@ -637,24 +705,22 @@ def watch_lost_jobs(query: Callable[[], Mapping[str, str] | None],
     return thread
 
 
-def query_states(command: str) -> dict[str, str] | None:
-    """Job id -> state from a status command (``ID|STATE`` lines); None when it fails.
+def query_jobs(command: Sequence[str]) -> dict[str, tuple[str, str]] | None:
+    """Job id -> (state, reason) from a status command (``ID|STATE[|REASON]`` lines, such as
+    :func:`squeue_command`'s); None when it fails.
 
     Parameters
     ----------
-    command : str
-        The command line (split with ``shlex.split``, run without a shell).
+    command : Sequence[str]
+        The command and its arguments (run without a shell).
 
     Returns
     -------
-    dict[str, str] or None
-        :func:`parse_job_states` of its output.
+    dict[str, tuple[str, str]] or None
+        :func:`parse_job_lines` of its output.
     """
-    import shlex
-
     try:
-        out = subprocess.run(shlex.split(command), capture_output=True, text=True,
-                             timeout=60)
+        out = subprocess.run(list(command), capture_output=True, text=True, timeout=60)
     except (OSError, subprocess.SubprocessError):
         return None
-    return parse_job_states(out.stdout) if out.returncode == 0 else None
+    return parse_job_lines(out.stdout) if out.returncode == 0 else None

@@ -69,7 +69,7 @@ def validate_config(cfg: dict[str, Any]) -> dict[str, Any]:
     Returns ``cfg``. Raises :class:`.ConfigError` on the first problem (the deepest error of
     the schema, so that the message names the offending field).
     """
-    from ssw.schema import first_file_error, path_of
+    from ssw.schema import first_file_error, message_of, path_of
 
     check_moved_keys(cfg)
     err = first_file_error(SCHEMA_PATH, cfg)
@@ -77,7 +77,7 @@ def validate_config(cfg: dict[str, Any]) -> dict[str, Any]:
         hint = ""
         if isinstance(err.instance, str) and _looks_numeric(err.instance):
             hint = " (YAML reads a number like 1.0e6 as text: write 1.0e+6)"
-        raise ConfigError(path_of(err), err.instance, err.message + hint)
+        raise ConfigError(path_of(err), err.instance, message_of(err) + hint)
     check_config(cfg)
     return cfg
 
@@ -357,8 +357,10 @@ def check_points(points: list[dict[str, Any]], field: str = "survey.points") -> 
     seen = set()
     for i, pt in enumerate(points):
         pid = pt["id"]
-        if not re.fullmatch(r"[A-Za-z0-9_.-]+", pid):
-            raise ConfigError(f"{field}[{i}].id", pid, "letters, digits, _ . -")
+        if not re.fullmatch(r"[A-Za-z0-9_][A-Za-z0-9_.-]*", pid):
+            raise ConfigError(f"{field}[{i}].id", pid,
+                              "letters, digits, _ . - (not starting with . or -), as the "
+                              "schema's $defs/id")
         if pid in seen:
             raise ConfigError(f"{field}[{i}].id", pid, "an id used once")
         seen.add(pid)

@@ -3,8 +3,11 @@
 A device holds everything physical about one instrument (schema
 ``ssw/data/device.schema.yaml``): the chain (bead count, material, radius, any preload on its
 top), the sensor particle (position, mass, which force it reads), the striker (mass, speed or
-drop height), the plate under the last bead (material, thickness, diameter, interface) and
-the DAQ force sensor (model, sensitivity, range). The thesis's device is the default
+drop height), the plate under the last bead (material, thickness, diameter, interface), the
+DAQ force sensor (model, sensitivity, range) and the dissipation of its contacts (a law and
+its coefficient: the source of truth of the chain's ``damping``; a study config's
+``chain.damping`` or the ``--damping`` flag replaces the coefficient, ``--damping-law`` the
+law). The thesis's device is the default
 (``ssw/data/devices/thesis.yaml``, linked from ``config/devices/``).
 
 Devices are found by path, or by name among the shipped devices. Study configs name one
@@ -39,6 +42,9 @@ DEFAULT_DEVICE = "thesis"
 STANDARD_GRAVITY = 9.80665
 #: V, the input range of the DAQ module (NI 9234: +-5 V; REFERENCE.md).
 DAQ_RANGE_V = 5.0
+#: The contacts' dissipation laws a device may state (the chain implements each:
+#: :data:`ssw.chain.dissipation.LAWS`, which holds their units and formulas).
+DISSIPATION_LAWS = ("dashpot", "kuwabara_kono", "hunt_crossley")
 
 
 @dataclass(frozen=True)
@@ -57,6 +63,10 @@ class Device:
     plate_material : material key or ``none``; plate_thickness : m (0: no plate);
     plate_diameter : m; plate_interface : ``frictionless`` | ``bonded`` | ``unilateral``.
     sensor_model : text; sensitivity : V/N; sensor_range : N.
+    dissipation_law : the contacts' dissipation law (:data:`DISSIPATION_LAWS`: ``dashpot``
+    ``c d'``, ``kuwabara_kono`` ``c sqrt(d) d'``, ``hunt_crossley`` ``c F_el(d) d'``);
+    dissipation : its coefficient ``c`` >= 0 in the law's unit (N s/m, N s/m^1.5, s/m; 0:
+    conservative).
     tof_scatter : s, the stated standard deviation of one hit's TOF on a uniform sample
     (None: not stated); tof_scatter_source : where it comes from.
     source : where the device was read from (not part of its physics).
@@ -79,6 +89,8 @@ class Device:
     sensor_model: str
     sensitivity: float
     sensor_range: float
+    dissipation_law: str = "dashpot"
+    dissipation: float = 0.0
     tof_scatter: float | None = None
     tof_scatter_source: str = ""
     description: str = ""
@@ -110,6 +122,12 @@ class Device:
         if self.plate_interface not in ("frictionless", "bonded", "unilateral"):
             raise ConfigError("plate.interface", self.plate_interface,
                               "frictionless | bonded | unilateral")
+        if self.dissipation_law not in DISSIPATION_LAWS:
+            raise ConfigError("dissipation.law", self.dissipation_law,
+                              " | ".join(DISSIPATION_LAWS) + " (or --damping-law)")
+        if not (np.isfinite(self.dissipation) and self.dissipation >= 0):
+            raise ConfigError("dissipation.coefficient", self.dissipation,
+                              "a coefficient >= 0 in the law's unit (0: conservative)")
 
     # ------------------------------------------------------------------ derived
     @property
@@ -175,15 +193,22 @@ class Device:
                       "diameter": self.plate_diameter, "interface": self.plate_interface},
             "daq_sensor": {"model": self.sensor_model, "sensitivity": self.sensitivity,
                            "range": self.sensor_range},
+            "dissipation": {"law": self.dissipation_law, "coefficient": self.dissipation},
             "repeatability": {"tof_std": self.tof_scatter, "source": self.tof_scatter_source},
         }
 
     def physics_dict(self) -> dict[str, Any]:
         """Every physical field, flat (no name, description, sources, nor the stated TOF
-        scatter: a measured property of the device, not part of its model)."""
+        scatter: a measured property of the device, not part of its model). A device
+        without dissipation (coefficient 0, whatever the law's name) leaves the dissipation
+        out: its physics, and the digest a calibration records of it, are those of a
+        device file that states none."""
         d = asdict(self)
         for k in ("name", "description", "source", "tof_scatter", "tof_scatter_source"):
             d.pop(k)
+        if self.dissipation == 0:
+            d.pop("dissipation_law")
+            d.pop("dissipation")
         return d
 
 
@@ -196,7 +221,8 @@ _YAML_FIELDS = {
     "plate_material": "plate.material", "plate_thickness": "plate.thickness",
     "plate_diameter": "plate.diameter", "plate_interface": "plate.interface",
     "sensor_model": "daq_sensor.model", "sensitivity": "daq_sensor.sensitivity",
-    "sensor_range": "daq_sensor.range",
+    "sensor_range": "daq_sensor.range", "dissipation_law": "dissipation.law",
+    "dissipation": "dissipation.coefficient",
 }
 
 
@@ -228,6 +254,7 @@ def device_from_dict(data: dict[str, Any], source: str = "") -> Device:
     if v is None:
         v = float(np.sqrt(2.0 * STANDARD_GRAVITY * st["drop_height"]))
     ch, se, pl, daq = d["chain"], d["sensor"], d["plate"], d["daq_sensor"]
+    dis = d["dissipation"]
     return Device(
         name=d["name"], description=str(d.get("description", "")).strip(),
         beads=int(ch["beads"]), bead_material=ch["bead_material"],
@@ -241,6 +268,7 @@ def device_from_dict(data: dict[str, Any], source: str = "") -> Device:
         plate_diameter=float(pl["diameter"]), plate_interface=pl["interface"],
         sensor_model=daq["model"], sensitivity=float(daq["sensitivity"]),
         sensor_range=float(daq["range"]),
+        dissipation_law=dis["law"], dissipation=float(dis["coefficient"]),
         tof_scatter=None if d["repeatability"].get("tof_std") is None
         else float(d["repeatability"]["tof_std"]),
         tof_scatter_source=str(d["repeatability"].get("source", "")), source=source,

@@ -160,3 +160,41 @@ def plot_lift(res: LiftErrors, path: str) -> None:
     ax.set_title(f"lift E1 = {res.E1 / 1e6:g} MPa, nu {res.nu:g}: half-space reading")
     ax.legend(fontsize=8)
     save_png(fig, path)
+
+
+def half_space_departure(params: Any, E: Any, nu: Any, tof: Any,
+                         half_space_options: dict[str, Any]) -> np.ndarray:
+    """The relative error of E a half-space reading makes on a stated finite sample: the
+    sample's TOF ``tof`` (s) at ``E`` (Pa), ``nu`` read through the fem wall of the
+    half-space (``half_space_options``: the device's ``contact`` settings without the
+    sample), to first order ``ln(tof / TOF_half) / (d ln TOF_half / d ln E)`` (the exact
+    forward sensitivity, :func:`ssw.tof.api.tof_derivatives`; the ``finite_sample`` check of
+    :mod:`ssw.validity`).
+
+    Parameters
+    ----------
+    params : ssw.chain.params.ChainParams
+        The chain.
+    E : array_like
+        Pa, broadcast with ``nu`` and ``tof``.
+    nu : array_like
+        -.
+    tof : array_like
+        s, the TOFs on the sample.
+    half_space_options : dict
+        The fem wall's options of the half-space (its ``contact``, ``operators``).
+
+    Returns
+    -------
+    numpy.ndarray
+        (n,) relative error of E (signed; > 0: the half-space reading is too stiff).
+    """
+    from ssw.tof.api import tof_derivatives
+
+    E, nu = (np.atleast_1d(np.asarray(x, float)) for x in np.broadcast_arrays(E, nu))
+    opts = {k: v for k, v in half_space_options.items() if k in ("contact", "operators")}
+    res = tof_derivatives(E, nu, params, "fem", derivatives=("E",), strict=False, **opts)
+    half = np.asarray(res.tof, float)
+    slope = E * np.asarray(res.dtof["E"], float) / half
+    return np.log(np.asarray(tof, float) / half) / slope
+

@@ -10,6 +10,7 @@ fields of some materials and inherit the rest from ``realistic``.
 from __future__ import annotations
 
 import math
+import re
 from dataclasses import dataclass, fields
 from pathlib import Path
 from typing import Any
@@ -20,6 +21,9 @@ from ssw.yamlio import safe_load
 #: The library shipped with ssw (package data; ``config/materials.yaml`` links to it).
 DEFAULT_LIBRARY = Path(__file__).resolve().parent / "data" / "materials.yaml"
 BASE_SET = "realistic"
+#: A material key: letters, digits and underscores (keys enter scene ids, file names,
+#: wildcards and commands; the study config's ``$defs/name``).
+KEY_PATTERN = r"[A-Za-z0-9_]+"
 
 
 @dataclass(frozen=True)
@@ -79,7 +83,8 @@ class Strength:
         if unknown:
             raise ConfigError(f"materials.{key}.strength", sorted(unknown),
                               f"fields of {', '.join(sorted(known))}")
-        st = cls(**{k: (str(v) if k == "source" else None if v is None else float(v))
+        st = cls(**{k: (str(v) if k == "source" else None if v is None
+                        else number(f"materials.{key}.strength.{k}", v))
                     for k, v in data.items()})
         st.check(key)
         return st
@@ -87,7 +92,31 @@ class Strength:
 
 @dataclass(frozen=True)
 class Material:
-    """An isotropic linear-elastic material, with its strengths where known. SI units."""
+    """An isotropic linear-elastic material, with its strengths where known. SI units.
+
+    Attributes
+    ----------
+    key : str
+        Its key in the library: letters, digits and underscores (:data:`KEY_PATTERN`).
+    name : str
+        What it is.
+    E : float
+        Young's modulus, Pa (finite, > 0).
+    nu : float
+        Poisson's ratio (finite, in (-1, 0.5]).
+    density : float
+        kg/m^3 (finite, > 0).
+    source : str
+        Where the values come from.
+    strength : Strength
+        Its strengths, where known.
+
+    Raises
+    ------
+    ConfigError
+        Naming ``materials.<key>.<field>`` and the value, for a key or a value outside
+        these bounds (NaN and infinities included).
+    """
 
     key: str
     name: str
@@ -98,12 +127,43 @@ class Material:
     strength: Strength = Strength()
 
     def __post_init__(self) -> None:
+        if not (isinstance(self.key, str) and re.fullmatch(KEY_PATTERN, self.key)):
+            raise ConfigError(f"materials.{self.key}", self.key,
+                              "a key of letters, digits and underscores (it enters file names "
+                              "and commands)")
+        for name in ("E", "nu", "density"):
+            v = getattr(self, name)
+            if not math.isfinite(v):
+                raise ConfigError(f"materials.{self.key}.{name}", v,
+                                  "a finite number (NaN and infinities are refused)")
         if not self.E > 0:
             raise ConfigError(f"materials.{self.key}.E", self.E, "Young's modulus must be > 0 Pa")
         if not -1.0 < self.nu <= 0.5:
             raise ConfigError(f"materials.{self.key}.nu", self.nu, "must lie in (-1, 0.5]")
         if not self.density > 0:
             raise ConfigError(f"materials.{self.key}.density", self.density, "must be > 0 kg/m^3")
+
+
+def number(field: str, value: Any) -> float:
+    """``value`` as a float, or :class:`.ConfigError` naming ``field`` when it is not a
+    number (text, a list, a bool).
+
+    Parameters
+    ----------
+    field : str
+        The library field, e.g. ``materials.pla.E``.
+    value : Any
+        The value read from the library.
+
+    Returns
+    -------
+    float
+        The number (its finiteness and range are the caller's checks).
+    """
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise ConfigError(field, value, "a number in SI units (YAML reads 1.0e6 as text: "
+                          "write 1.0e+6)")
+    return float(value)
 
 
 def load_library(path: str | Path | None = None) -> dict[str, dict[str, Any]]:
@@ -128,9 +188,9 @@ def material_set(name: str = BASE_SET, path: str | Path | None = None) -> dict[s
         out[key] = Material(
             key=key,
             name=str(vals["name"]),
-            E=float(vals["E"]),
-            nu=float(vals["nu"]),
-            density=float(vals["density"]),
+            E=number(f"materials.{key}.E", vals["E"]),
+            nu=number(f"materials.{key}.nu", vals["nu"]),
+            density=number(f"materials.{key}.density", vals["density"]),
             source=str(vals["source"]),
             strength=Strength.from_dict(key, vals["strength"]) if vals.get("strength")
             else Strength(),

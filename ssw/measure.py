@@ -164,6 +164,7 @@ def pooled_tof(recordings: list[Any], tof_options: Any = None) -> dict[str, Any]
         accepted += res.accepted.tolist()
         reasons += [f"{Path(rec.path).name}: {r}" for r in (*res.reasons, *rec.dropped)]
         rates.add(float(res.sample_rate))
+    dropped = sum(len(rec.dropped) for rec in recordings)  # on reading (NaN, clipped)
     t = np.array([v for v, a in zip(per_hit, accepted, strict=True) if a], float)
     if t.size == 0:
         raise RecordingError("no accepted hit in " + ", ".join(r.path for r in recordings))
@@ -172,14 +173,15 @@ def pooled_tof(recordings: list[Any], tof_options: Any = None) -> dict[str, Any]
     return {"tof_mean": float(np.mean(t)), "tof_std": std,
             "tof_sem": std / np.sqrt(t.size), "n_accepted": int(t.size),
             "n_hits": len(per_hit), "tof_per_hit": per_hit, "accepted": accepted,
-            "rejections": reasons, "sample_rate": min(rates)}
+            "rejections": reasons, "sample_rate": min(rates), "n_dropped": dropped}
 
 
 def measure(
     recordings: list[Any], nu: float | tuple[float, float], params: Any, wall: str,
     wall_options: dict[str, Any] | None = None, *, calibration: Any = None,
     tof_options: Any = None, device: Any = None, strength: float | None = None,
-    sample_range: list[dict[str, Any]] | None = None,
+    sample_range: list[dict[str, Any]] | None = None, strengths: Any = None,
+    stresses: str = "fem",
 ) -> Measurement:
     """E with its 95 % interval from the recordings of one test point (module docstring).
 
@@ -210,6 +212,14 @@ def measure(
         sample thickness (``ssw measure --sample-thickness LO:HI``; the central E is the
         middle one's, ``wall_options``): the spread of E between them enters the
         budget as a uniform term, ``|ln(E_hi / E_lo)| / (2 sqrt 3)`` (``sample``).
+    strengths : ssw.validity.Strengths or None
+        The strengths of the beads and the plate (:func:`ssw.validity.strengths_of`): with
+        them, the measurement carries its checks (``validity``: :func:`ssw.validity.assess`
+        of the chain at the measured E), the sample's yield against
+        ``strength`` when given, else against ``ssw design``'s stated assumption, named in
+        the entry.
+    stresses : str
+        The checks' stress mode (:data:`ssw.validity.STRESS_MODES`).
     """
     from ssw.modulus import estimate_moduli
 
@@ -250,7 +260,11 @@ def measure(
 
     notes = [*est.notes, *notes]
     extra: dict[str, Any] = {"dlnTOF_dlnE": est.dlnTOF_dlnE,
-                             "wall_extrapolated": est.extrapolated}
+                             "wall_extrapolated": est.extrapolated,
+                             "n_dropped": pool["n_dropped"]}
+    if strengths is not None:
+        extra.update(_checks(est, params, wall, wall_options, strengths, strength, stresses,
+                             notes))
     if strength is not None:
         yc = yield_check(est.E, est.nu, params, wall_options, strength)
         extra.update(yc)
@@ -272,6 +286,30 @@ def measure(
         synthetic=any(bool(r.meta.get("synthetic", False)) for r in recordings),
         missing=missing, extra=extra,
     )
+
+
+def _checks(est: Any, params: Any, wall: str, wall_options: dict[str, Any] | None,
+            strengths: Any, strength: float | None, stresses: str, notes: list[str]
+            ) -> dict[str, Any]:
+    """The checks of a measurement at its E (the chain run there,
+    :func:`ssw.tof.sweep.run_sweep`, and :func:`ssw.validity.assess`), the sample's
+    ``strength`` (Pa) when known; a note when the sample may have yielded under an assumed
+    strength."""
+    from dataclasses import replace as _replace
+
+    from ssw.tof.sweep import run_sweep
+
+    if strength is not None:
+        strengths = _replace(strengths, sample=float(strength),
+                             sample_source=strengths.sample_source or "stated")
+    v = run_sweep(params, np.array([est.E]), np.array([est.nu]), wall, strengths=strengths,
+                  stresses=stresses, **dict(wall_options or {})).validity
+    if "sample_yield" in v.values and "sample_yield" in v.assumed \
+            and not v.holds("sample_yield")[0]:
+        notes.append(f"the sample may have yielded under the bead: its yield index is "
+                     f"{v.values['sample_yield'][0]:.3g} against the assumed strength "
+                     f"({v.assumed['sample_yield']}): state its strength to decide")
+    return v.to_dict(0)
 
 
 def parse_nu(text: str | float) -> float | tuple[float, float]:

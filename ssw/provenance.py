@@ -6,7 +6,8 @@ Every result ssw writes records (:func:`record`):
   it is a git checkout (else None), ``dirty`` whether it had uncommitted changes;
 * ``source_sha256``: a hash of the package's source files that produced it
   (:func:`source_hash`: the static import closure of the modules named, so a change in a
-  module the result does not depend on does not change it);
+  module the result does not depend on does not change it), each as the process loaded it
+  (``ssw.LOADED``): a file edited while the process runs labels nothing it made;
 * ``inputs_sha256``: :func:`digest` of every input that made it (the command's options,
   the config's slice it read, the devices, materials and files it read: each file by its
   own digest);
@@ -33,7 +34,7 @@ from collections.abc import Iterable, Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
-from ssw import __version__
+from ssw import LOADED, __version__
 from ssw.errors import SswError
 
 PACKAGE_DIR = Path(__file__).resolve().parent
@@ -168,13 +169,21 @@ def module_closure(modules: Iterable[str], packages: bool = True) -> list[Path]:
 
 
 @functools.lru_cache(maxsize=1024)
-def _source_bytes(path: Path) -> bytes:
-    """A source file's bytes, read once per process (the steps' closures share most)."""
+def _disk_bytes(path: Path) -> bytes:
+    """A source file's bytes on disk, read once per process (the steps' closures share
+    most)."""
     return path.read_bytes()
 
 
+def _source_bytes(path: Path) -> bytes:
+    """A source file's bytes as this process loaded it (``ssw.LOADED``), or, for a module
+    it has not loaded, as on disk at the first call (what it would load)."""
+    loaded = LOADED.get(str(path))
+    return loaded[0] if loaded is not None else _disk_bytes(path)
+
+
 @functools.lru_cache(maxsize=64)
-def _source_hash(modules: tuple[str, ...], packages: bool = True) -> str:
+def _source_hash(modules: tuple[str, ...], packages: bool, loaded: int) -> str:
     h = hashlib.sha256()
     for p in module_closure(modules, packages):
         h.update(str(p.relative_to(PACKAGE_DIR)).encode() + b"\0")
@@ -184,16 +193,49 @@ def _source_hash(modules: tuple[str, ...], packages: bool = True) -> str:
 
 def source_hash(modules: Iterable[str], packages: bool = True) -> str:
     """Hash of the source of ``modules`` and everything of ssw they import (statically, see
-    :func:`module_closure`; ``packages``: with the parent packages' ``__init__``). Data
-    files (schemas, materials, devices) enter results through their values, which are
-    inputs, not through this hash."""
-    return _source_hash(tuple(sorted(set(modules))), packages)
+    :func:`module_closure`; ``packages``: with the parent packages' ``__init__``), each file
+    as this process loaded it (``ssw.LOADED``: an edit made since does not change it), a
+    module it has not loaded as on disk. Data files (schemas, materials, devices) enter
+    results through their values, which are inputs, not through this hash.
+
+    Parameters
+    ----------
+    modules : iterable of str
+        Module names (``ssw.contact.operators``).
+    packages : bool
+        Whether the parent packages' ``__init__`` count (what runs when they are imported).
+
+    Returns
+    -------
+    str
+        :data:`DIGEST_HEX` hex digits of a SHA-256 of the files' paths and bytes.
+    """
+    # keyed on the number of modules loaded: one loaded since the last call hashes as loaded
+    return _source_hash(tuple(sorted(set(modules))), packages, len(LOADED))
+
+
+def changed_since_loaded() -> str | None:
+    """The first module of ssw (its path) whose file differs on disk from what this process
+    loaded (modified, replaced or removed since), or None."""
+    for path, (_, stat) in sorted(LOADED.items()):
+        try:
+            st = Path(path).stat()
+        except OSError:
+            return path
+        if (st.st_mtime_ns, st.st_size) != stat:
+            return path
+    return None
 
 
 @functools.lru_cache(maxsize=1)
 def git_state() -> tuple[str | None, bool | None]:
-    """(commit, dirty) of the git checkout holding the package, or (None, None) when the
-    package is not in one (an installed wheel) or git is unavailable."""
+    """(commit, dirty) of the git checkout holding the package at the first call, or (None,
+    None) when the package is not in one (an installed wheel) or git is unavailable.
+
+    ``dirty``: the code that ran is not the commit's: ssw has uncommitted changes, or a
+    module this process loaded changed on disk since (:func:`changed_since_loaded`). A warm
+    process (``ssw.warmstart``) calls it once its imports are done; its forks inherit it.
+    """
     root = PACKAGE_DIR.parent
     if not (root / ".git").exists():
         return None, None
@@ -206,7 +248,7 @@ def git_state() -> tuple[str | None, bool | None]:
                                 capture_output=True, text=True, timeout=10, check=True).stdout
     except (OSError, subprocess.SubprocessError):
         return None, None
-    return commit or None, bool(status.strip())
+    return commit or None, bool(status.strip()) or changed_since_loaded() is not None
 
 
 def current_command() -> str:

@@ -8,6 +8,11 @@ ssw's numbers, the K(E, nu) table and the other study tables are rendered here a
 tables (numbers to 6 significant digits, long tables cut at ``MAX_ROWS`` rows with the
 file's row count), one page per stage, which the report opens inline. The note under each
 table comes from ``workflow/report/captions.yaml`` (file-name glob -> text).
+
+Checks. A table's columns named after a check of :mod:`ssw.validity` (``contact_strain``,
+``sample_yield [1]``, ``check_plate_yield``, ``sample_yield_upper_bound``) hold that check's
+values: a value above the check's limit is drawn as failing (red), and the page says under
+the table what each check tests, its limit and the source of the limit.
 """
 
 from __future__ import annotations
@@ -28,6 +33,7 @@ STYLE = """body{font-family:sans-serif;margin:1em;color:#222}
 table{border-collapse:collapse;font-size:12px;margin:0.5em 0 1.5em 0}
 td,th{border:1px solid #bbb;padding:2px 6px;text-align:right}th{background:#eee}
 td.text{text-align:left}.note{font-size:13px;color:#444;max-width:60em}
+td.fail{background:#f6c6c6;font-weight:bold}
 h2{font-size:16px;border-bottom:1px solid #888}"""
 
 
@@ -57,16 +63,59 @@ def _cell(cell: str) -> str:
     return f"<td>{html.escape(f'{v:.6g}')}</td>"
 
 
+def check_of(header: str) -> str | None:
+    """The check (:data:`ssw.validity.RULES`) a column's header names, or None."""
+    from ssw.validity import RULES
+
+    name = header.split("[")[0].strip()
+    name = name.removeprefix("check_").removesuffix("_upper_bound")
+    return name if name in RULES else None
+
+
+def _check_cell(cell: str, check: str) -> str:
+    """A check's value, drawn as failing above the check's limit."""
+    from ssw.validity import RULES
+
+    try:
+        v = float(cell)
+    except ValueError:
+        return _cell(cell)
+    fails = not v <= RULES[check].limit
+    return f"<td{' class=fail' if fails else ''}>{html.escape(f'{v:.6g}')}</td>"
+
+
+def checks_note(headers: list[str]) -> str:
+    """What the check columns among ``headers`` test: limit and source ('' if none)."""
+    from ssw.validity import RULES
+
+    names = list(dict.fromkeys(c for c in map(check_of, headers) if c))
+    if not names:
+        return ""
+    items = "".join(f"<li><b>{html.escape(k)}</b> &le; {RULES[k].limit:g}: "
+                    f"{html.escape(RULES[k].quantity)} ({html.escape(RULES[k].assumption)}; "
+                    f"{html.escape(RULES[k].source)})</li>" for k in names)
+    return ("<p class='note'>Checks of the assumptions (ssw.validity; red: the value is "
+            "above its limit, the number was computed beyond that assumption):</p>"
+            f"<ul class='note'>{items}</ul>")
+
+
 def csv_table(path: Path, max_rows: int = MAX_ROWS) -> str:
-    """An HTML table of a CSV file (lines starting with '#' skipped; first ``max_rows`` rows)."""
+    """An HTML table of a CSV file (lines starting with '#' skipped; first ``max_rows`` rows;
+    check columns drawn as failing above their limit, and explained under the table)."""
     with Path(path).open(newline="") as fh:
         rows = list(csv.reader(line for line in fh if not line.startswith("#")))
     if not rows:
         return "<p class='note'>(empty table)</p>"
     head, body = rows[0], rows[1:]
+    checks = [check_of(h) for h in head]
     out = ["<table><tr>" + "".join(f"<th>{html.escape(h)}</th>" for h in head) + "</tr>"]
-    out += ["<tr>" + "".join(_cell(c) for c in r) + "</tr>" for r in body[:max_rows]]
+    out += ["<tr>" + "".join(_check_cell(c, k) if k else _cell(c)
+                             for c, k in zip(r, checks, strict=False)) + "</tr>"
+            for r in body[:max_rows]]
     out.append("</table>")
+    note = checks_note(head)
+    if note:
+        out.append(note)
     if len(body) > max_rows:
         out.append(f"<p class='note'>First {max_rows} of {len(body)} rows; all of them in "
                    f"{html.escape(Path(path).name)} (the report's download of it).</p>")

@@ -16,7 +16,10 @@ view, as in ISO 14253-1's conformity zones):
 * ``inconclusive``: the interval straddles the target (measure more hits, or accept the
   risk knowingly), or the interval lacks a term of its budget (``missing_terms`` of the
   measurement: too few hits to estimate the TOF's scatter, an uncalibrated device, a wall
-  law without a stated error): an incomplete interval decides nothing;
+  law without a stated error): an incomplete interval decides nothing; or a check of the
+  measurement's assumptions fails (its ``validity``, :mod:`ssw.validity`: the sample
+  yielded, the contact left small strain, ...): E was computed beyond its model, and the
+  row's ``reason`` names the checks;
 * ``no target``: none was given.
 
 Where the points are: ``x``/``y`` (m) in the survey's own plane, named by ``survey.frame``
@@ -236,6 +239,8 @@ class SurveyRow:
     longitude: float | None
     layer: str | None
     synthetic: bool
+    checks_failed: str = ""  # the measurement's failing checks (ssw.validity), "; "-joined
+    reason: str = ""  # why the verdict is inconclusive, when it is
 
 
 def point_target(point: dict[str, Any]) -> float | None:
@@ -247,18 +252,54 @@ def point_target(point: dict[str, Any]) -> float | None:
     return None
 
 
-def verdict(E_low: float, E_high: float, target: float | None, complete: bool = True) -> str:
-    """The conformity verdict of an interval against a target (module docstring): an
-    interval that lacks a term of its budget (``complete`` False) is inconclusive."""
+def verdict(E_low: float, E_high: float, target: float | None, complete: bool = True,
+            failed: tuple[str, ...] | list[str] = ()) -> str:
+    """The conformity verdict of an interval against a target (module docstring).
+
+    Parameters
+    ----------
+    E_low : float
+        The interval's low end, Pa.
+    E_high : float
+        Its high end, Pa.
+    target : float or None
+        The point's target, Pa (None: no target).
+    complete : bool
+        Whether the interval has every term of its budget (False: inconclusive).
+    failed : sequence of str
+        The measurement's failing checks (:mod:`ssw.validity`; any: inconclusive).
+
+    Returns
+    -------
+    str
+        One of ``VERDICTS``: ``pass``, ``fail``, ``inconclusive``, ``no target``.
+    """
     if target is None:
         return "no target"
-    if not complete:
+    if not complete or failed:
         return "inconclusive"
     if E_low >= target:
         return "pass"
     if E_high < target:
         return "fail"
     return "inconclusive"
+
+
+def verdict_reason(E_low: float, E_high: float, target: float | None, complete: bool,
+                   failed: tuple[str, ...] | list[str], missing: str = "") -> str:
+    """Why :func:`verdict` is ``inconclusive`` ("" otherwise): the failing checks, the
+    missing budget terms, or the interval straddling the target (same parameters, Pa;
+    ``missing`` the missing terms in words)."""
+    if verdict(E_low, E_high, target, complete, failed) != "inconclusive":
+        return ""
+    why = []
+    if failed:
+        why.append("checks failed: " + "; ".join(failed))
+    if not complete:
+        why.append(f"interval incomplete: {missing}" if missing else "interval incomplete")
+    if not why:
+        why.append("the interval straddles the target")
+    return " | ".join(why)
 
 
 def point_wgs84(point: dict[str, Any], frame: Frame) -> tuple[float | None, float | None]:
@@ -320,15 +361,16 @@ def survey_table(points: list[dict[str, Any]], results: list[dict[str, Any]],
         ref = pt.get("reference_E")
         rng = r.get("nu_range")
         lat, lon = point_wgs84(pt, frame)
+        missing = "; ".join(f"{k}: {v}" for k, v in (r.get("missing_terms") or {}).items())
+        failed = point_checks_failed(r)
+        lo, hi, complete = float(r["E_low"]), float(r["E_high"]), not r.get("missing_terms")
         rows.append(SurveyRow(
-            id=pt["id"], E=float(r["E"]), E_low=float(r["E_low"]), E_high=float(r["E_high"]),
+            id=pt["id"], E=float(r["E"]), E_low=lo, E_high=hi,
             E_u_pct=float(r["E_u_pct"]), target_E=tgt,
             reference_E=None if ref is None else float(ref),
             ratio=None if ref is None else float(r["E"]) / float(ref),
-            verdict=verdict(float(r["E_low"]), float(r["E_high"]), tgt,
-                            not r.get("missing_terms")),
-            missing_terms="; ".join(f"{k}: {v}" for k, v in
-                                    (r.get("missing_terms") or {}).items()),
+            verdict=verdict(lo, hi, tgt, complete, failed),
+            missing_terms=missing,
             tof_mean=float(r["tof_mean"]),
             tof_sem=float("nan") if r.get("tof_sem") is None else float(r["tof_sem"]),
             n_accepted=int(r["n_accepted"]), n_hits=int(r["n_hits"]), nu=float(r["nu"]),
@@ -337,8 +379,18 @@ def survey_table(points: list[dict[str, Any]], results: list[dict[str, Any]],
             x=pt.get("x"), y=pt.get("y"), latitude=lat, longitude=lon,
             layer=pt.get("layer"),
             synthetic=bool(r.get("synthetic", False)),
+            checks_failed="; ".join(failed),
+            reason=verdict_reason(lo, hi, tgt, complete, failed, missing),
         ))
     return rows
+
+
+def point_checks_failed(result: dict[str, Any]) -> list[str]:
+    """The failing checks of a point's ``ssw measure --json`` result (its ``validity``
+    entries, :func:`ssw.validity.describe`); none for a result without checks."""
+    from ssw.validity import describe
+
+    return [describe(e) for e in result.get("validity") or [] if not e.get("holds", True)]
 
 
 UNITS = {"E": "Pa", "E_low": "Pa", "E_high": "Pa", "E_u_pct": "%", "target_E": "Pa",
@@ -429,8 +481,12 @@ def plot_survey(path: str | Path, rows: list[SurveyRow], title: str = "") -> Non
                     label=r.verdict if r.verdict not in [q.verdict for q in rows[:i]] else None)
         if r.target_E is not None:
             ax.plot([i - 0.3, i + 0.3], [r.target_E / 1e6] * 2, "k--", lw=1)
+        if r.checks_failed:  # E computed beyond its model's assumptions
+            ax.annotate("!", (i, r.E_high / 1e6), textcoords="offset points",
+                        xytext=(0, 4), ha="center", fontsize=11, fontweight="bold",
+                        color=VERDICT_COLORS["inconclusive"])
     ax.set_xticks(xs, [r.id for r in rows], rotation=45, ha="right")
-    ax.set_ylabel("E (MPa), 95 % interval; dashed: target")
+    ax.set_ylabel("E (MPa), 95 % interval; dashed: target; !: a check failed")
     fit_title(fig, synthetic_title(title, rows, "Survey: modulus per test point"))
     ax.grid(alpha=0.3)
     ax.legend(fontsize=8)
@@ -521,8 +577,10 @@ def map_figure(rows: list[SurveyRow], title: str = "", frame: Frame | None = Non
                        color=VERDICT_COLORS[v], edgecolors="k", zorder=3,
                        label=f"{v} ({len(idx)})")
     for (px, py), r in zip(pts, sel, strict=True):
-        ax.annotate(f"{r.id} {r.E / 1e6:.0f} MPa", (px, py), textcoords="offset points",
-                    xytext=(7, 5), fontsize=8)
+        label = f"{r.id} {r.E / 1e6:.0f} MPa"
+        if r.checks_failed:  # the names of the failing checks (ssw.validity)
+            label += "\n! " + ", ".join(c.split(" ", 1)[0] for c in r.checks_failed.split("; "))
+        ax.annotate(label, (px, py), textcoords="offset points", xytext=(7, 5), fontsize=8)
     # room around the points (at least 5 m each way), the same metre on both axes
     ax.update_datalim([pts.min(axis=0) - pad, pts.max(axis=0) + pad])
     ax.autoscale_view()
@@ -604,7 +662,8 @@ def survey_geojson(rows: list[SurveyRow], frame: Frame | None = None, title: str
     dict[str, Any]
         The FeatureCollection; each feature's properties hold the point's id, verdict and
         moduli with their units in the names (``E_Pa``, ``E_low_Pa``, ``E_high_Pa``,
-        ``target_E_Pa``, ``E_u_pct``).
+        ``target_E_Pa``, ``E_u_pct``), its failing checks (``checks_failed``, a list) and
+        the reason of an inconclusive verdict (``reason``).
     """
     frame = frame or Frame()
     located = [r for r in rows if r.x is not None or r.latitude is not None]
@@ -633,7 +692,9 @@ def survey_geojson(rows: list[SurveyRow], frame: Frame | None = None, title: str
                  "E_high_Pa": r.E_high, "E_u_pct": _number(r.E_u_pct),
                  "target_E_Pa": _number(r.target_E), "ratio": _number(r.ratio),
                  "layer": r.layer, "n_accepted": r.n_accepted, "n_hits": r.n_hits,
-                 "missing_terms": r.missing_terms or None, "synthetic": r.synthetic}
+                 "missing_terms": r.missing_terms or None, "synthetic": r.synthetic,
+                 "checks_failed": r.checks_failed.split("; ") if r.checks_failed else [],
+                 "reason": r.reason or None}
         if r.x is not None:
             props |= {"x_m": float(r.x), "y_m": float(r.y)}
         if not wgs84:

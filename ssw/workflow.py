@@ -167,23 +167,50 @@ def calibrated_inputs(cfg: dict[str, Any], results: str = RESULTS) -> dict[str, 
     return inputs
 
 
-def wall_flags(cfg: dict[str, Any], inputs: Any, results: str = RESULTS) -> str:
-    """``ssw`` flags naming the wall law and its inputs."""
-    flags = f"--law {wall_law(cfg)}"
+def wall_flags(cfg: dict[str, Any], inputs: Any, results: str = RESULTS) -> list[str]:
+    """``ssw`` arguments naming the wall law and its inputs.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+    inputs : snakemake.io.InputFiles
+        The job's inputs (``k_table`` or ``curves`` when the law reads them).
+    results : str
+        The results folder.
+
+    Returns
+    -------
+    list of str
+        One argument per item (a rule quotes each: ``{params.wall:q}``), e.g.
+        ``["--law", "fit", "--k-table", "results/fit/sets/set3_soil/k_table.h5"]``.
+    """
+    args = ["--law", wall_law(cfg)]
     keys = set(inputs.keys())
     if "k_table" in keys:
-        flags += f" --k-table {inputs.k_table}"
+        args += ["--k-table", str(inputs.k_table)]
     if "curves" in keys:
-        flags += f" --contact-dir {results}/contact"
-    return flags
+        args += ["--contact-dir", f"{results}/contact"]
+    return args
 
 
-def calibration_flag(inputs: Any) -> str:
+def calibration_flag(inputs: Any) -> list[str]:
     """``--calibration FILE`` when the job's inputs hold the calibration, else ``none``
-    (a job never picks up a calibration its rule does not depend on)."""
+    (a job never picks up a calibration its rule does not depend on).
+
+    Parameters
+    ----------
+    inputs : snakemake.io.InputFiles
+        The job's inputs.
+
+    Returns
+    -------
+    list of str
+        The flag and its value, one argument each (a rule quotes each).
+    """
     if "calibration" in inputs.keys():
-        return f"--calibration {inputs.calibration}"
-    return "--calibration none"
+        return ["--calibration", str(inputs.calibration)]
+    return ["--calibration", "none"]
 
 
 def sweep_scene_ids(cfg: dict[str, Any]) -> list[str]:
@@ -513,20 +540,45 @@ def runtime_min(step: str, size: int) -> int:
     return int(-(-(base + per * size) // 1))
 
 
-def mpi_launch(resources: Any) -> str:
-    """The MPI launcher of a job with resources ``tasks`` > 1 (``<mpi> -n <tasks> ``, the
-    launcher from resources ``mpi``, default ``mpiexec``); empty for one task."""
+def mpi_launch(resources: Any) -> list[str]:
+    """The MPI launcher of a job with resources ``tasks`` > 1, else nothing.
+
+    Parameters
+    ----------
+    resources : snakemake.io.Resources
+        The job's resources: ``tasks`` (ranks) and ``mpi`` (the launcher's command line,
+        default ``mpiexec``; e.g. ``srun`` or ``srun --mpi=pmi2`` on a cluster).
+
+    Returns
+    -------
+    list of str
+        ``[*launcher words, "-n", tasks]``, one argument each (a rule quotes each); empty
+        for one task.
+    """
+    import shlex
+
     tasks = int(getattr(resources, "tasks", 1) or 1)
     if tasks <= 1:
-        return ""
+        return []
     launcher = getattr(resources, "mpi", None) or "mpiexec"
-    return f"{launcher} -n {tasks} "
+    return [*shlex.split(str(launcher)), "-n", str(tasks)]
 
 
-def mpi_flag(resources: Any) -> str:
+def mpi_flag(resources: Any) -> list[str]:
     """``--mpi`` for a job with resources ``tasks`` > 1 (its command splits its work over
-    the ranks), else empty."""
-    return "--mpi" if int(getattr(resources, "tasks", 1) or 1) > 1 else ""
+    the ranks), else nothing.
+
+    Parameters
+    ----------
+    resources : snakemake.io.Resources
+        The job's resources.
+
+    Returns
+    -------
+    list of str
+        ``["--mpi"]`` or ``[]``.
+    """
+    return ["--mpi"] if int(getattr(resources, "tasks", 1) or 1) > 1 else []
 
 
 def end_of_run() -> int:
@@ -607,6 +659,52 @@ def cap_status_pause(executor: Any, pause_s: float) -> None:
     executor.check_active_jobs = capped
 
 
+#: The executors whose spawned jobs' command lines name the interpreter unquoted
+#: (snakemake-interface-executor-plugins 9.4, ``format_job_exec``): (module, class).
+_SPAWNING_EXECUTORS = (
+    ("snakemake_interface_executor_plugins.executors.remote", "RemoteExecutor"),
+    ("snakemake_executor_plugin_slurm_jobstep", "Executor"),
+    ("snakemake.executors.local", "Executor"),
+)
+
+
+def quote_job_python() -> list[str]:
+    """Quote the interpreter in the command lines of the jobs Snakemake spawns.
+
+    An executor that runs a job as ``python -m snakemake ...`` (the Slurm submission's, the
+    Slurm job step's inside each job, the local one's for a ``run:`` rule) puts
+    ``sys.executable`` into the command line unquoted, its other arguments quoted: a venv
+    under a folder whose name holds a space (``~/My Projects/ssw/.venv``) makes every such
+    job fail with ``/home/me/My: not found`` (snakemake issue 3211). Each executor class of
+    ``_SPAWNING_EXECUTORS`` already imported (Snakemake loads the run's executor
+    plugin before it reads the Snakefile; none is imported here) gets a
+    ``get_python_executable`` whose answer is shell-quoted (unchanged for a path without
+    special characters). Idempotent.
+
+    Returns
+    -------
+    list of str
+        The classes changed by this call, ``module.Class``.
+    """
+    import shlex
+    import sys
+
+    changed = []
+    for module, name in _SPAWNING_EXECUTORS:
+        cls = getattr(sys.modules.get(module), name, None)
+        plain = getattr(cls, "get_python_executable", None)
+        if cls is None or plain is None or getattr(plain, "ssw_quoted", False):
+            continue
+
+        def quoted(self: Any, _plain: Any = plain) -> str:
+            return shlex.quote(str(_plain(self)))
+
+        quoted.ssw_quoted = True  # type: ignore[attr-defined]
+        cls.get_python_executable = quoted
+        changed.append(f"{module}.{name}")
+    return changed
+
+
 def prepare_slurm_run(workflow: Any) -> list[str]:
     """Make a Snakemake run on Slurm see its jobs end, before anything is submitted.
 
@@ -614,9 +712,11 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
     (:func:`ssw.cluster.status_command`; or a ConfigError naming the flag), every job must
     fit a node (:func:`check_cluster_fit`), the pause between two status queries stops
     growing at the run's limit (:func:`ssw.cluster.slurm_timing`, :func:`cap_status_pause`),
-    and a watch stops the run with a message when its jobs are lost
-    (:func:`ssw.cluster.watch_lost_jobs`, with the executor plugin's own ``squeue`` query of
-    the run's jobs).
+    and a watch stops the run with a message when its jobs are lost, and when a job pends
+    beyond its limit stops the run or reports the job, as its resources ``ssw_pending_s``
+    and ``ssw_on_pending`` say (:func:`ssw.cluster.watch_lost_jobs`, with a ``squeue``
+    query of the run's jobs by the run's job name, as the executor plugin's own, and
+    Slurm's reason for each state).
 
     Parameters
     ----------
@@ -636,9 +736,8 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
     import os
     import shutil
 
-    from snakemake_executor_plugin_slurm import job_status_query as plugin_query
-
     from ssw import cluster
+    from ssw.pending import pending_limit
 
     notes = []
     settings = workflow.executor_settings
@@ -667,23 +766,42 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
     if run_id is None:
         notes.append("the lost-jobs watch is off: the Slurm executor has no run ID")
         return notes
-    # The controller's view of the run's jobs (the plugin's squeue query): with squeue as the
-    # status command a job it no longer lists is lost to the run after the short grace; with
-    # sacct (history kept in slurmdbd, which may lag) only after the longest patience.
-    command = plugin_query.query_job_status_squeue(run_id)
+    # The controller's view of the run's jobs (squeue, by the run's job name, as the plugin's
+    # own query, with Slurm's reason for each state): with squeue as the status command a
+    # job it no longer lists is lost to the run after the short grace; with sacct (history
+    # kept in slurmdbd, which may lag) only after the longest patience. A job pending beyond
+    # its limit (its resources ssw_pending_s, ssw_on_pending) stops the run or is reported.
+    command = cluster.squeue_command(run_id)
 
     def waiting() -> list[str]:
         return sorted(_job_name(j) for j in list(scheduler.running) if not j.is_local)
 
+    known: dict[str, tuple[str, Any]] = {}
+
+    def limits() -> dict[str, tuple[str, Any]]:
+        # the jobs submitted so far (the plugin empties its list while a status query runs:
+        # what was known stays known)
+        known.update({str(info.external_jobid): (_job_name(info.job),
+                                                 pending_limit(info.job.resources))
+                      for info in list(getattr(executor, "active_jobs", ()))
+                      if info.external_jobid is not None and str(info.external_jobid)
+                      not in known})
+        return known
+
     def lost(message: str) -> None:
         from snakemake_interface_common.exceptions import WorkflowError
 
-        scheduler.executor_error_callback(WorkflowError(f"Lost cluster jobs: {message}"))
+        scheduler.executor_error_callback(WorkflowError(message))
+
+    def note(message: str) -> None:
+        from snakemake.logging import logger
+
+        logger.warning(f"ssw cluster check: {message}")
 
     stall_s = pause_s + timing.vanish_s + float(workflow.execution_settings.latency_wait)
     vanish_s = timing.vanish_s if used == "squeue" else stall_s
-    cluster.watch_lost_jobs(lambda: cluster.query_states(command), waiting, lost, stall_s,
-                            vanish_s, timing.poll_s)
+    cluster.watch_lost_jobs(lambda: cluster.query_jobs(command), waiting, lost, stall_s,
+                            vanish_s, timing.poll_s, limits, note)
     return notes
 
 
@@ -759,13 +877,26 @@ def report_tables(targets: list[Any], categories: dict[str, str], results: str =
 
 
 def report_page_args(output: Any, tables: dict[str, list[str]], categories: dict[str, str]
-                     ) -> str:
-    """``ssw report --page OUTPUT TITLE CSV...`` for every stage's tables page."""
-    import shlex
+                     ) -> list[str]:
+    """``ssw report`` arguments ``--page OUTPUT TITLE CSV...`` for every stage's tables
+    page.
 
-    return " ".join(
-        f"--page {shlex.join([getattr(output, st), f'{categories[st]}: tables', *ts])}"
-        for st, ts in tables.items())
+    Parameters
+    ----------
+    output : snakemake.io.OutputFiles
+        The job's outputs, one per stage.
+    tables : dict
+        Stage -> its CSV tables (:func:`report_tables`).
+    categories : dict
+        Stage -> its report category (:func:`report_categories`).
+
+    Returns
+    -------
+    list of str
+        One argument per item (a rule quotes each: ``{params.pages:q}``).
+    """
+    return [a for st, ts in tables.items()
+            for a in ("--page", str(getattr(output, st)), f"{categories[st]}: tables", *ts)]
 
 
 def survey_points(cfg: dict[str, Any]) -> list[str]:

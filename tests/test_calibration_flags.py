@@ -48,6 +48,8 @@ def _invert(capsys, path, tof, *flags):
     (["--bead-E", "100e9", "--bead-nu", "0.3"], "bead_E", 100e9),
     (["--bead-density", "7000"], "bead_density", 7000.0),
     (["--damping", "2"], "damping", 2.0),
+    (["--damping-law", "kuwabara_kono", "--damping", "300"], "damping_law",
+     "kuwabara_kono"),
     (["--no-gravity", "--sensor-reads", "upper"], "gravity", False),
 ])
 def test_calibrate_and_its_consumers_take_the_same_flags(flags, field, value, tmp_path,
@@ -108,6 +110,8 @@ def test_a_consumer_runs_the_calibrated_model_with_or_without_its_flags(flags, u
 
 @pytest.mark.parametrize(("flags", "named", "calibrated"), [
     (["--damping", "2"], "--damping = 2.0", "damping = 1.0"),
+    (["--damping-law", "hunt_crossley"], "--damping-law = 'hunt_crossley'",
+     "damping_law = 'dashpot'"),
     (["--bead-E", "100e9"], "--bead-E = 100000000000.0", "bead_E = 200000000000.0"),
     (["--striker-velocity", "0.5"], "--striker-velocity = 0.5",
      "identified striker_velocity = "),

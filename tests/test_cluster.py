@@ -8,6 +8,7 @@ import time
 import pytest
 
 from ssw import cluster as cl
+from ssw import pending as pd
 from ssw.errors import ConfigError, SswError
 
 # `scontrol show config` of scripts/slurm-local.sh's cluster (Slurm 22.05), abridged.
@@ -77,6 +78,100 @@ def test_job_states_are_parsed_from_squeue_and_sacct():
                                                                 "13": "PENDING"}
     assert cl.parse_job_states("14|CANCELLED by 0\n15_2|COMPLETED\n") == {
         "14": "CANCELLED", "15_2": "COMPLETED"}
+    # squeue_command's lines carry Slurm's reason (squeue -o %r; a reason may hold spaces)
+    text = ("21|PENDING|JobHeldUser\n22|PENDING|ReqNodeNotAvail, UnavailableNodes:n1\n"
+            "23|RUNNING|None\n")
+    assert cl.parse_job_lines(text) == {
+        "21": ("PENDING", "JobHeldUser"),
+        "22": ("PENDING", "ReqNodeNotAvail, UnavailableNodes:n1"),
+        "23": ("RUNNING", "None")}
+    assert cl.parse_job_states(text) == {"21": "PENDING", "22": "PENDING", "23": "RUNNING"}
+    cmd = cl.squeue_command("run-1")
+    assert cmd[0] == "squeue" and "--format=%i|%T|%r" in cmd and cmd[-2:] == ["--name", "run-1"]
+
+
+def test_a_jobs_pending_limit_comes_from_its_resources_or_the_defaults():
+    assert pd.pending_limit({}) == pd.PendingLimit(pd.PENDING_LIMIT_S, pd.ON_PENDING)
+    assert (pd.PENDING_LIMIT_S, pd.ON_PENDING) == (3600.0, "stop")
+    assert pd.pending_limit({"ssw_pending_s": 90, "ssw_on_pending": "wait"}) == \
+        pd.PendingLimit(90.0, "wait")
+    assert pd.pending_limit({"ssw_on_pending": "'wait'"}).action == "wait"
+    for res, field in [({"ssw_pending_s": 0}, "resources ssw_pending_s"),
+                       ({"ssw_pending_s": "soon"}, "resources ssw_pending_s"),
+                       ({"ssw_on_pending": "retry"}, "resources ssw_on_pending")]:
+        with pytest.raises(ConfigError) as err:
+            pd.pending_limit(res)
+        assert err.value.field == field and "--set-resources" in str(err.value)
+
+
+HELD = {"7": ("PENDING", "JobHeldUser"), "8": ("RUNNING", "None")}
+
+
+def test_a_job_pending_beyond_its_limit_stops_the_run_with_squeues_reason():
+    watch = pd.PendingWatch()
+    limits = {"7": ("slow[i=0]", pd.PendingLimit(60, "stop"))}
+    assert watch.step(0, HELD, limits) == (None, None)
+    assert watch.step(59, HELD, limits) == (None, None)
+    stop, note = watch.step(60, HELD, limits)
+    assert note is None and stop is not None
+    assert "slow[i=0] (Slurm job 7) pending for 60 s, limit 60 s" in stop
+    assert "squeue's reason: JobHeldUser" in stop and "ssw_on_pending=wait" in stop
+    assert "Slurm job 8" not in stop  # running: not pending
+
+
+def test_a_waiting_run_reports_a_pending_job_once_per_limit():
+    watch = pd.PendingWatch()
+    limits = {"7": ("slow[i=0]", pd.PendingLimit(60, "wait"))}
+    reports = [t for t in range(0, 200, 5) if watch.step(t, HELD, limits)[1] is not None]
+    assert reports == [60, 120, 180]
+    assert all(watch.step(t, HELD, limits)[0] is None for t in range(200, 300, 5))
+
+
+def test_a_job_that_starts_is_forgotten_and_counts_anew_if_it_pends_again():
+    watch = pd.PendingWatch()
+    limits = {"7": ("a", pd.PendingLimit(60, "stop"))}
+    assert watch.step(0, HELD, limits) == (None, None)
+    assert watch.step(50, {"7": ("RUNNING", "None")}, limits) == (None, None)
+    assert watch.step(55, HELD, limits) == (None, None)   # requeued: pending from 55
+    assert watch.step(114, HELD, limits) == (None, None)
+    assert watch.step(115, HELD, limits)[0] is not None
+    # a pending job the run has no limit for: named by its id, the defaults
+    watch = pd.PendingWatch()
+    assert watch.step(0, HELD, {}) == (None, None)
+    stop, _ = watch.step(pd.PENDING_LIMIT_S, HELD, {})
+    assert stop is not None and "Slurm job 7 (Slurm job 7) pending for 3600 s" in stop
+
+
+def test_the_watch_thread_stops_a_run_whose_job_pends_beyond_its_limit():
+    got, notes = [], []
+    thread = cl.watch_lost_jobs(lambda: dict(HELD), lambda: ["slow[i=0]", "slow[i=1]"],
+                                got.append, stall_s=100, vanish_s=100, poll_s=0.02,
+                                limits=lambda: {"7": ("slow[i=0]", pd.PendingLimit(0.1,
+                                                                                  "stop"))},
+                                on_note=notes.append)
+    thread.join(timeout=5)
+    assert not thread.is_alive() and len(got) == 1 and not notes
+    assert "slow[i=0] (Slurm job 7)" in got[0] and "JobHeldUser" in got[0]
+
+
+def test_the_watch_thread_reports_a_pending_job_and_waits():
+    got, notes = [], []
+    cl.watch_lost_jobs(lambda: dict(HELD), lambda: ["slow[i=0]"], got.append, stall_s=100,
+                       vanish_s=100, poll_s=0.02,
+                       limits=lambda: {"7": ("slow[i=0]", pd.PendingLimit(0.1, "wait"))},
+                       on_note=notes.append)
+    time.sleep(0.5)
+    assert not got and 2 <= len(notes) <= 6, notes
+    assert "JobHeldUser" in notes[0] and "The run waits" in notes[0]
+
+
+def test_a_jobs_limit_that_is_not_allowed_stops_the_run_naming_the_resource():
+    got = []
+    thread = cl.watch_lost_jobs(
+        lambda: dict(HELD), lambda: ["a"], got.append, stall_s=100, vanish_s=100,
+        poll_s=0.02, limits=lambda: {"7": ("a", pd.pending_limit({"ssw_pending_s": -1}))})
+    thread.join(timeout=5)
+    assert len(got) == 1 and "ssw_pending_s" in got[0]
 
 
 def test_vanished_jobs_are_lost_after_the_grace_not_before():
@@ -119,7 +214,7 @@ def test_ended_jobs_the_plugin_no_longer_reports_are_lost_after_its_longest_paus
 
 def test_the_watch_thread_calls_back_once_and_ends():
     got = []
-    states = iter([{"1": "RUNNING"}, {}, {}, {}, {}, {}])
+    states = iter([{"1": ("RUNNING", "None")}, {}, {}, {}, {}, {}])
     thread = cl.watch_lost_jobs(lambda: next(states), lambda: ["job"], got.append,
                                 stall_s=100, vanish_s=0.05, poll_s=0.02)
     thread.join(timeout=5)

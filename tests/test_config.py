@@ -107,11 +107,9 @@ def test_a_remembered_validation_gives_the_filled_config_itself(tmp_path, monkey
                                                                 thesis_raw):
     """The disk memo of valid (schema, config) pairs (ssw.schema.first_file_error) returns
     exactly what jsonschema's validation fills in, key order included, and never stands in
-    for a config it has not seen: an invalid one is still refused after a valid one."""
+    for a config it has not seen: an invalid one is still refused after a valid one, and
+    one with a NaN is neither accepted nor remembered."""
     import json
-    import os
-    import subprocess
-    import sys
 
     monkeypatch.setenv("SSW_CACHE_DIR", str(tmp_path))
     fresh = validate_config(copy.deepcopy(thesis_raw))
@@ -125,14 +123,52 @@ def test_a_remembered_validation_gives_the_filled_config_itself(tmp_path, monkey
     bad["contact"]["steps"] = -3
     with pytest.raises(ConfigError, match=r"contact\.steps"):
         validate_config(bad)
-    # a second process finds the pair remembered and does not load jsonschema at all
-    code = ("import sys, yaml; from ssw.config import DEFAULT_CONFIG, validate_config; "
-            "validate_config(yaml.safe_load(DEFAULT_CONFIG.read_text())); "
-            "print('jsonschema' in sys.modules)")
-    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         check=True, env={**os.environ,
-                                          "SSW_CACHE_DIR": str(tmp_path)})
-    assert run.stdout.strip() == "False"
+    kept = sorted((tmp_path / "schema").glob("*.json"))
+    nan = copy.deepcopy(thesis_raw)
+    nan["contact"]["reach_energy"] = float("nan")
+    with pytest.raises(ConfigError, match=r"contact\.reach_energy = nan"):
+        validate_config(nan)
+    assert sorted((tmp_path / "schema").glob("*.json")) == kept
+
+
+def _config_memo(folder):
+    """The remembered validation of a study config in ``folder`` (the one with ``sets``)."""
+    import json
+
+    memos = [p for p in (folder / "schema").glob("*.json")
+             if "sets" in json.loads(p.read_text())]
+    assert len(memos) == 1, memos
+    return memos[0]
+
+
+@pytest.mark.parametrize(("edit", "reason"), [
+    # a default the config does not set, made invalid: the schema refuses it again
+    (lambda m: m["chain"].update(wall_dynamics="bogus"), r"chain\.wall_dynamics"),
+    # a value of the config itself changed (valid): the memo is another config's
+    (lambda m: m["contact"].update(steps=999), "does not hold the document"),
+    # a default left out: validating it again fills it, so it was not the filled config
+    (lambda m: m["chain"].pop("wall_dynamics"), "fills defaults"),
+])
+def test_a_remembered_validation_that_fails_again_is_discarded(tmp_path, monkeypatch,
+                                                                thesis_raw, edit, reason):
+    """A memo is validated again when read: one that does not hold its config, fails the
+    schema or lacks a default is discarded with a warning naming why, the config itself is
+    validated and the right memo written in its place."""
+    import json
+
+    from ssw.schema import MemoWarning
+
+    monkeypatch.setenv("SSW_CACHE_DIR", str(tmp_path))
+    fresh = validate_config(copy.deepcopy(thesis_raw))
+    memo = _config_memo(tmp_path)
+    assert json.loads(memo.read_text()) == fresh
+    changed = json.loads(memo.read_text())
+    edit(changed)
+    memo.write_text(json.dumps(changed))
+    with pytest.warns(MemoWarning, match=reason):
+        got = validate_config(copy.deepcopy(thesis_raw))
+    assert json.dumps(got) == json.dumps(fresh)
+    assert memo.read_text() == json.dumps(fresh)
 
 
 def test_a_process_that_turns_memo_writes_off_validates_and_writes_nothing(tmp_path,

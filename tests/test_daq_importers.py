@@ -248,12 +248,14 @@ def test_imported_hits_are_checked_for_clipping_against_the_device(tmp_path, suf
     full = load_device().full_scale_force
     assert full == pytest.approx(5.0 / 11.24e-3)
     _, f = pulses(4)
-    f[:, 1] = np.minimum(f[:, 1] * 10.0, full)  # hit 1 saturates at full scale
+    f[:, 1] = np.minimum(f[:, 1] * 10.0, full)  # the second hit saturates at full scale
     rec = Recording("mem", {"pretrigger_samples": 64}, RATE,
                     tuple(RecordedHit(i, f[:, i].copy(), 64) for i in range(4)))
     path = write_any(tmp_path / f"c{suffix}", rec)
+    # the hit as the written file names it: its column, its channel, its MAT column
+    name = {".csv": "hit_0001", ".tdms": "hit_0001", ".mat": "force column 2"}[suffix]
     assert len(read_any(path).hits) == 4  # without a range: nothing to check against
-    with pytest.raises(RecordingError, match="hit 1 is clipped"):
+    with pytest.raises(RecordingError, match=f"{name} is clipped"):
         read_any(path, full_scale=full)
     kept = read_any(path, full_scale=full, clipped="drop")
-    assert len(kept.hits) == 3 and "hit 1 is clipped" in kept.dropped[0]
+    assert len(kept.hits) == 3 and f"{name} is clipped" in kept.dropped[0]

@@ -134,7 +134,7 @@ def test_clipped_hit_is_an_error_or_dropped(tmp_path):
     recs = two_pulse_records(2)
     recs[1] = np.minimum(recs[1] * 20, S.full_scale_force)  # flat top at +5 V
     path = run_session(ListBackend(recs), S, tmp_path / "c.h5", sample_id="x", n_hits=2)
-    with pytest.raises(RecordingError, match="hit 1 is clipped"):
+    with pytest.raises(RecordingError, match="hit_0001 is clipped"):  # its dataset's name
         read_recording(path)
     rec = read_recording(path, clipped="drop")
     assert len(rec.hits) == 1 and "clipped" in rec.dropped[0]

@@ -55,3 +55,40 @@ def test_settings_from_the_study_config():
     assert s.hits == 3 and s.sample_rate == 51200.0 and s.physical_channel == "cDAQ1Mod1/ai0"
     with pytest.raises(ConfigError, match=r"daq\.bogus"):
         settings_from_config({"daq": {"bogus": 1}})
+
+
+def _float_fields(cls) -> list[str]:
+    from dataclasses import fields
+
+    return [f.name for f in fields(cls) if isinstance(getattr(cls(), f.name), float)]
+
+
+def test_settings_built_in_code_refuse_nan_and_infinities():
+    """Every number of the settings, made NaN, +inf or -inf in code (no schema on the way):
+    refused naming the field. Without it a NaN sensitivity passes every bound (clipping
+    would never be detected) and an infinite timeout would wait forever."""
+    from ssw.daq.settings import SimulationSettings
+
+    bad = (float("nan"), float("inf"), float("-inf"))
+    names = _float_fields(DaqSettings)
+    assert {"sensitivity", "sample_rate", "timeout", "trigger_level", "max_force"} <= set(names)
+    for i, name in enumerate(names):
+        with pytest.raises(ConfigError, match=rf"^daq\.{name} = {bad[i % 3]!r} is not allowed"):
+            DaqSettings(**{name: bad[i % 3]})
+    sim = _float_fields(SimulationSettings)
+    assert {"noise_rms", "trigger_jitter", "striker_velocity_cov"} <= set(sim)
+    for i, name in enumerate(sim):
+        with pytest.raises(ConfigError, match=rf"^daq\.simulation\.{name} = "):
+            DaqSettings(simulation=SimulationSettings(**{name: bad[i % 3]}))
+
+
+def test_settings_from_a_config_refuse_nan_in_overrides_and_in_the_config():
+    """A command-line override and the config's daq section both refuse a NaN."""
+    cfg = load_config()
+    with pytest.raises(ConfigError, match=r"daq\.timeout = inf"):
+        settings_from_config(cfg, timeout=float("inf"))
+    raw = {**cfg, "daq": {**cfg["daq"], "trigger_level": float("nan")}}
+    from ssw.config import validate_config
+
+    with pytest.raises(ConfigError, match=r"daq\.trigger_level = nan"):
+        validate_config(raw)

@@ -73,6 +73,36 @@ def test_json_states_the_question_and_every_candidate(design):
     assert "thesis" in res["spec"]["tof_scatter_source"]
 
 
+def test_candidates_carry_their_checks(design, chain):
+    """Each candidate checks its assumptions over the soils (ssw.validity) from what its
+    evaluation computed: the contact's small strain is Hertz's sqrt(d / R) of its peak
+    indentations, its sample's and plate's yield its own indices (the sample's at the
+    stated assumption 0.01 E, named), the beads' from the chain's largest bead-bead force;
+    its record states the worst over the soils, and the table one column per check."""
+    res, out = design
+    params = chain[0]
+    for c in res["candidates"]:
+        ch = {k: np.asarray(v) for k, v in c["checks_E"].items()}
+        d = np.asarray(c["peak_indentation_E"])
+        np.testing.assert_allclose(ch["contact_strain"], np.sqrt(d / params.bead_radius),
+                                   rtol=1e-12)
+        np.testing.assert_allclose(ch["plate_deflection"], d / c["thickness"], rtol=1e-12)
+        np.testing.assert_array_equal(ch["sample_yield"], c["soil_yield_E"])
+        np.testing.assert_array_equal(ch["plate_yield"], c["plate_yield_E"])
+        assert {"bead_yield", "pulse_separation", "wall_reach"} <= set(ch)
+        assert "0.01 E" in c["checks_assumed"]["sample_yield"]
+        worst = {e["check"]: e for e in c["validity"]}
+        assert worst["sample_yield"]["value"] == pytest.approx(c["soil_yield_index"])
+        assert worst["plate_yield"]["holds"] == (c["plate_yield_index"] <= 1.0)
+        assert ("plate_yield" in " ".join(c["checks_failed"])) == (
+            c["plate_yield_index"] > 1.0)
+    head = next(ln for ln in out.with_suffix(".csv").read_text().splitlines()
+                if not ln.startswith("#"))
+    assert head.endswith("recommended,check_contact_strain,check_plate_deflection,"
+                         "check_wall_reach,check_pulse_separation,check_bead_yield,"
+                         "check_sample_yield,check_plate_yield,checks_failed")
+
+
 def test_thesis_plate_is_a_candidate_with_its_own_chain(design, chain):
     """The device's 0.4 mm PLA plate is evaluated (source ``reference``) and its TOFs are
     the chain's with the fem wall of that plate."""

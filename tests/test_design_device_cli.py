@@ -7,6 +7,7 @@ default space is timed by ``ssw bench design``.
 
 from __future__ import annotations
 
+import csv
 import json
 from pathlib import Path
 
@@ -70,7 +71,11 @@ def test_outputs_written(design):
     lines = (d / "design.csv").read_text().splitlines()
     rows = [x for x in lines if not x.startswith("#")]
     assert len(rows) == 1 + len(res["candidates"])
-    assert sum(r.endswith(",True,False") or r.endswith(",True,True") for r in rows) == 1
+    table = list(csv.DictReader(rows))
+    assert sum(r["recommended"] == "True" for r in table) == 1
+    # each device's checks (ssw.validity), the worst over the soils, after its flags
+    assert list(table[0])[-1] == "checks_failed" and "check_bead_yield" in table[0]
+    assert all(r["check_bead_yield"] for r in table)
     assert (d / "design.png").stat().st_size > 1000
 
 

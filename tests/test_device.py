@@ -1,5 +1,6 @@
-"""The device file: schema, defaults, overrides, round trip; and the chain physics it adds
-(a preload on the column, what the sensor reads), checked against analytic truth."""
+"""The device file: schema, defaults, overrides, round trip, its dissipation as the source of
+truth of the chain's; and the chain physics it adds (a preload on the column, what the
+sensor reads), checked against analytic truth."""
 
 from __future__ import annotations
 
@@ -8,7 +9,7 @@ import pytest
 import yaml
 
 from ssw.chain.integrate import simulate
-from ssw.chain.params import Batch, chain_params
+from ssw.chain.params import Batch, chain_params, numerics_of
 from ssw.chain.run import run_peaks
 from ssw.chain.statics import initial_state, static_contact_forces
 from ssw.device import (
@@ -34,7 +35,8 @@ def test_the_thesis_device_is_shipped_and_default():
 
 
 def test_round_trip(tmp_path):
-    d = load_device().with_(preload=2.5, sensor_mass=0.04, sensor_reads="lower")
+    d = load_device().with_(preload=2.5, sensor_mass=0.04, sensor_reads="lower",
+                            dissipation_law="hunt_crossley", dissipation=0.02)
     write_device(tmp_path / "d.yaml", d, "# a test device")
     back = load_device(tmp_path / "d.yaml")
     assert back.with_(source="") == d.with_(source="")
@@ -61,6 +63,8 @@ def test_more_beads_keep_the_beads_below_the_sensor():
     (("striker", "velocity"), -1.0, "striker.velocity"),
     (("daq_sensor", "sensitivity"), 0.0, "daq_sensor.sensitivity"),
     (("chain", "preload"), -1.0, "chain.preload"),
+    (("dissipation", "law"), "tsuji", "dissipation.law"),
+    (("dissipation", "coefficient"), -1.0, "dissipation.coefficient"),
 ])
 def test_bad_fields_are_refused_naming_them(path, value, field):
     raw = load_device().to_dict()
@@ -88,6 +92,55 @@ def test_chain_params_carry_the_device_and_its_materials():
     assert p.n_beads == 20 and p.preload == 3.0 and p.steps_per_contact == 60
     assert p.bead_E == mats["chrome_steel"].E and p.plate_E == mats["pla"].E
     assert p.plate_nu == mats["pla"].nu and p.plate_diameter == pytest.approx(49.5e-3)
+
+
+def test_the_device_is_the_source_of_truth_of_the_dissipation():
+    """A device file without ``dissipation:`` is conservative (the dashpot at 0: the
+    shipped device and the default study unchanged); the device's law and coefficient reach
+    the chain; the config's ``chain.damping`` (null by default) replaces the coefficient
+    when given, in the device law's unit, and ``--damping`` / ``--damping-law`` replace
+    them for one command."""
+    import argparse
+
+    from ssw.cli._device import add_device_options, chain_context
+    from ssw.config import load_config
+
+    raw = load_device().to_dict()
+    del raw["dissipation"]
+    d = device_from_dict(raw)
+    assert (d.dissipation_law, d.dissipation) == ("dashpot", 0.0)
+    mats = material_set()
+    cfg = load_config(None)
+    assert cfg["chain"]["damping"] is None and "damping" not in numerics_of(cfg)
+    p = chain_params(load_device(), mats, **numerics_of(cfg))
+    assert (p.damping_law, p.damping) == ("dashpot", 0.0)
+    kk = load_device().with_(dissipation_law="kuwabara_kono", dissipation=1.5e3)
+    p = chain_params(kk, mats, **numerics_of(cfg))
+    assert (p.damping_law, p.damping) == ("kuwabara_kono", 1.5e3)
+    over = {**cfg, "chain": {**cfg["chain"], "damping": 900.0}}
+    p = chain_params(kk, mats, **numerics_of(over))
+    assert (p.damping_law, p.damping) == ("kuwabara_kono", 900.0)
+    parser = argparse.ArgumentParser()
+    add_device_options(parser)
+    args = parser.parse_args(["--calibration", "none", "--wall", "hertz", "--damping-law",
+                              "hunt_crossley", "--damping", "0.02"])
+    ctx = chain_context(args)
+    assert (ctx.params.damping_law, ctx.params.damping) == ("hunt_crossley", 0.02)
+
+
+def test_a_conservative_devices_digest_does_not_depend_on_the_laws_name():
+    """A calibration records the digest of the device's physics: a device without
+    dissipation digests the same whatever its law's name (so calibrations made before the
+    device stated its dissipation still apply), and a coefficient changes it."""
+    from ssw.calibration.file import device_digest
+
+    mats = material_set()
+    base = load_device()
+    same = base.with_(dissipation_law="kuwabara_kono")
+    damped = base.with_(dissipation=1.0)
+    assert device_digest(same, mats) == device_digest(base, mats)
+    assert device_digest(damped, mats) != device_digest(base, mats)
+    assert "dissipation" not in base.physics_dict() and "dissipation" in damped.physics_dict()
 
 
 # ------------------------------------------------------------------ chain physics it adds
@@ -171,7 +224,7 @@ def test_device_file_yaml_is_documented():
 
     text = (DEVICES_DIR / "thesis.yaml").read_text()
     data = yaml.safe_load(text)
-    for section in ("chain", "sensor", "striker", "plate", "daq_sensor"):
+    for section in ("chain", "sensor", "striker", "plate", "daq_sensor", "dissipation"):
         for key in data[section]:
             line = next(ln for ln in text.splitlines() if ln.strip().startswith(f"{key}:"))
             assert "#" in line or (section == "chain" and key == "bead_material") or (

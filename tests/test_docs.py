@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import hashlib
 import re
+import shlex
 import shutil
 import subprocess
 import sys
@@ -44,7 +45,7 @@ def test_make_docs_builds_without_warnings(tmp_path):
     cache.mkdir(parents=True, exist_ok=True)
     r = subprocess.run(
         ["make", "-o", "setup", "docs", f"VENV={Path(sys.prefix)}",
-         f"DOCS_OUT={tmp_path / 'html'}", f"SPHINXOPTS=-a -d {cache}"],
+         f"DOCS_OUT={tmp_path / 'html'}", f"SPHINXOPTS=-a -d {shlex.quote(str(cache))}"],
         cwd=ROOT, capture_output=True, text=True, timeout=900,
     )
     if r.returncode != 0:

@@ -6,9 +6,11 @@ route's wheel or the source route's build); the rules' conda environment
 from __future__ import annotations
 
 import importlib.metadata
+import json
 import os
 import re
 import subprocess
+import sys
 import tomllib
 from pathlib import Path
 
@@ -38,7 +40,8 @@ def _pins() -> dict[str, str]:
 
 def _runtime(route: str) -> set[str]:
     meta = tomllib.loads((ROOT / "pyproject.toml").read_text())["project"]
-    names = [*meta["dependencies"], *meta["optional-dependencies"][ROUTE_EXTRAS[route]]]
+    extras = meta["optional-dependencies"]
+    names = [*meta["dependencies"], *extras["study"], *extras[ROUTE_EXTRAS[route]]]
     return {re.split(r"[<>=\[ ;]", n)[0].lower() for n in names}
 
 
@@ -110,3 +113,49 @@ def test_setup_refuses_an_unknown_route():
                          text=True, env={**os.environ, "SSW_PETSC": "conda"}, timeout=60)
     assert run.returncode != 0
     assert "SSW_PETSC = 'conda' is not allowed: binary (the default) or source" in run.stderr
+
+
+#: What a process that imports petsc4py (and mpi4py) by itself reports: PETSc's version,
+#: its world size against MPI's, and every MPI library it mapped (one, or two MPIs).
+_PETSC_ALONE = """
+import json, re, sys
+{first}
+from mpi4py import MPI
+maps = open("/proc/self/maps").read()
+# a map's path is its sixth field to the line's end: it may hold spaces
+mpis = sorted({{p for p in re.findall(r"^(?:\\S+\\s+){{5}}(/.*/libmpi(?:ch)?\\.so[.\\d]*)$",
+                                     maps, re.M)}})
+print(json.dumps([".".join(map(str, PETSc.Sys.getVersion())), PETSc.COMM_WORLD.getSize(),
+                  MPI.COMM_WORLD.Get_size(), *mpis]))
+"""
+
+
+@pytest.mark.parametrize("first", [
+    "from petsc4py import PETSc",
+    "import petsc4py; petsc4py.init([]); from petsc4py import PETSc",
+])
+def test_petsc4py_imports_by_itself(first):
+    """A user's script beside ssw: petsc4py without ssw or dolfinx_solver imported first runs
+    the pinned PETSc on one MPI library (the binary route: the mpich wheel's, which the
+    start-up hook of scripts/setup.sh loads first; the source route: the system's MPICH)."""
+    run = subprocess.run([sys.executable, "-c", _PETSC_ALONE.format(first=first)],
+                         capture_output=True, text=True, timeout=120)
+    assert run.returncode == 0, run.stderr[-2000:]
+    version, petsc_size, mpi_size, *mpis = json.loads(run.stdout.splitlines()[0])
+    assert version == _pins()["petsc"]
+    assert petsc_size == mpi_size == 1
+    assert len({os.path.realpath(p) for p in mpis}) == 1, mpis
+    if _installed("dolfinx-solver-real") is not None:  # binary route: the wheel's MPI
+        assert Path(os.path.realpath(mpis[0])).parent == Path(sys.prefix) / "lib"
+
+
+def test_the_start_up_hook_loads_nothing_until_petsc_is_imported():
+    """Every start of the venv's Python runs the hook (binary route): it must not import
+    MPI, PETSc or dolfinx_solver for a script that does not use them."""
+    code = ("import sys; print(*sorted(m for m in ('_ssw_petsc_first', 'dolfinx_solver', "
+            "'mpi4py', 'mpi4py.MPI', 'petsc4py', 'numpy') if m in sys.modules))")
+    run = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
+                         timeout=60, check=True)
+    loaded = run.stdout.split()
+    binary = _installed("dolfinx-solver-real") is not None
+    assert loaded == (["_ssw_petsc_first"] if binary else [])

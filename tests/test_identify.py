@@ -3,7 +3,9 @@ identify``), against independent truth: a TOF level of one observation per hit h
 one and, the device known, E's uncertainty is the TOF scatter over the TOF's slope (the
 slope from central differences of independent runs, not the forward sensitivities); a
 half-space (Hertz wall) sees E and nu only through E / (1 - nu^2), so no level separates
-them, and every level identifies E once nu is known."""
+them, and every level identifies E once nu is known; the contact dissipation is the
+coefficient of the device's law, in the law's unit and scale (its TOF-level column the
+TOF's slope in that coefficient, from central differences of independent runs)."""
 
 from __future__ import annotations
 
@@ -64,3 +66,40 @@ def test_identify_cli_states_its_criterion(capsys):
     for level in r["levels"].values():
         assert len(level["singular_values"]) == 8 and len(level["correlation"]) == 8
     assert r["noise"]["tof_scatter"] == pytest.approx(SCATTER)
+
+
+
+def test_the_contact_dissipation_is_the_laws_coefficient_in_its_own_unit():
+    """With Kuwabara-Kono contacts the report states the dissipation in N s/m^1.5 on the
+    law's scale (1.5e3 N s/m^1.5: the criterion's tenth is 150 N s/m^1.5), and the TOF
+    level's rank-one row holds the TOF's slope in that coefficient times the scale,
+    ``sigma |v_c| scatter / sqrt(hits) = |dTOF/dc| scale``, the slope from fourth-order
+    central differences of TOFs of independent runs (within 1e-4); ``--damping-law``
+    reaches the command's chain."""
+    import argparse
+
+    from ssw.chain.dissipation import LAWS
+    from ssw.cli._device import add_device_options, chain_context
+
+    law, c = LAWS["kuwabara_kono"], 1.5e3
+    p = ChainParams(damping=c, damping_law=law.name)
+    res = identifiability(p, "hertz", {}, E, NU, DaqSettings(), hits=HITS,
+                          tof_scatter=SCATTER)
+    r = res.as_dict()
+    assert r["damping_law"] == law.name and r["units"]["damping"] == law.unit
+    assert r["coordinates"]["damping"] == f"linear, scale {law.scale:g} {law.unit}"
+    assert f"{0.1 * law.scale:g} {law.unit}" in r["criterion"]
+    assert law.formula in r["labels"]["damping"]
+    tof = res.levels["tof"]
+    j = tof.names.index("damping")
+    got = tof.singular_values[0] * abs(tof.vectors[j, 0]) * SCATTER / np.sqrt(HITS)
+    h = 1e-3 * c
+    T = [float(api.tof(E, NU, p.with_(damping=c + o * h), "hertz")) for o in (-2, -1, 1, 2)]
+    slope = (T[0] - 8 * T[1] + 8 * T[2] - T[3]) / (12 * h)  # s per N s/m^1.5
+    assert got == pytest.approx(abs(slope) * law.scale, rel=1e-4)
+    parser = argparse.ArgumentParser()
+    add_device_options(parser)
+    args = parser.parse_args(["--damping-law", law.name, "--damping", str(c),
+                              "--calibration", "none", "--wall", "hertz"])
+    ctx = chain_context(args, E, NU)
+    assert (ctx.params.damping_law, ctx.params.damping) == (law.name, c)

@@ -335,3 +335,88 @@ def test_killed_contact_batch_leaves_only_complete_curves(tmp_path: Path, sig: i
     assert sorted(p.name for p in out.glob("*.h5")) == sorted(f"{i}.h5" for i in ids)
     for name, force in done.items():
         np.testing.assert_array_equal(read_curve(out / name).force, force)
+
+
+#: The tiny study's Set 1 fit and the two contact families it reads (three jobs).
+SET1_FIT = ("results/fit/deviation_set1_materials.csv",
+            "results/fit/sets/set1_materials/k_table.csv")
+
+
+def _run_processes(work: Path, socket: str) -> list[str]:
+    """The live processes of a run in ``work``: working folder in it (its jobs, the forks
+    that run them), or naming its warm process's socket (the warm process's command line,
+    its callers' environment)."""
+    out = []
+    for d in Path("/proc").iterdir():
+        if not d.name.isdigit() or int(d.name) == os.getpid():
+            continue
+        try:
+            cwd = os.readlink(d / "cwd")
+            found = [(d / name).read_bytes() for name in ("cmdline", "environ")]
+        except OSError:  # gone, or a zombie
+            continue
+        if cwd.startswith(str(work)) or any(socket.encode() in text for text in found):
+            out.append(f"{d.name}: {found[0].replace(bytes(1), b' ')[:160]!r}")
+    return out
+
+
+def _forked_command_runs(pid: int) -> bool:
+    """Whether the fork ``pid`` runs its command (``ssw.cli``'s SIGTERM handler set, the
+    warm process's SIGCHLD handler gone: its ``SigCgt`` mask)."""
+    try:
+        status = Path(f"/proc/{pid}/status").read_text()
+    except OSError:
+        return False
+    mask = int(next(x for x in status.splitlines() if x.startswith("SigCgt:")).split()[1], 16)
+    return bool(mask >> (signal.SIGTERM - 1) & 1) and not mask >> (signal.SIGCHLD - 1) & 1
+
+
+def test_a_warm_process_killed_mid_study_leaves_no_process_and_the_rerun_agrees(
+        tmp_path: Path, ci_study: Path) -> None:
+    """The run's warm process SIGKILLed while it serves a job of the tiny study (Set 1's
+    fit and its two contact families): the job's caller stops the command and fails with a
+    message naming SSW_WARM_START=0, the run fails, no process of it is left, and the rerun
+    (a new warm process) writes the same tables and curves as the uninterrupted tiny study
+    (``ci_study``)."""
+    config = ROOT / "config" / "ci.yaml"
+
+    def cmd(work: Path) -> list[str]:
+        return [str(VENV_BIN / "snakemake"), "--snakefile", str(ROOT / "workflow" / "Snakefile"),
+                "--profile", str(PROFILE), "--cores", "2", "--configfile", str(config),
+                "--directory", str(work), *SET1_FIT]
+
+    ref, cut = ci_study, tmp_path / "cut"
+    log = cut / "results" / "logs" / "warm-start.log"
+    proc = subprocess.Popen(cmd(cut), cwd=ROOT, env=_env(), start_new_session=True,
+                            stdout=subprocess.DEVNULL, stderr=subprocess.PIPE, text=True)
+    end, served = time.monotonic() + 300, None
+    while served is None:
+        assert time.monotonic() < end and proc.poll() is None, "no job was served"
+        lines = log.read_text().splitlines() if log.exists() else []
+        running = [int(x.split()[1].rstrip(":")) for x in lines if x.startswith("pid ")]
+        served = next((p for p in running if _forked_command_runs(p)), None)
+        time.sleep(0.01)
+    head = lines[0]  # "ssw warm start: pid N, ...; listening at SOCKET"
+    warm, socket = int(head.split("pid ")[1].split(",")[0]), head.split("listening at ")[1]
+    os.kill(warm, signal.SIGKILL)
+    _, err = proc.communicate(timeout=600)
+    assert proc.returncode != 0, err[-3000:]
+    job_logs = "".join(p.read_text() for p in (cut / "results" / "logs").rglob("*.log"))
+    assert "SSW_WARM_START=0" in job_logs, err[-3000:]
+    time.sleep(0.5)  # any straggler of the run's end
+    assert _run_processes(cut, socket) == []
+    rerun = subprocess.run(cmd(cut), cwd=ROOT, env=_env(), capture_output=True, text=True,
+                           timeout=600)
+    assert rerun.returncode == 0, rerun.stderr[-3000:]
+    files = sorted(p.relative_to(cut) for p in (cut / "results").rglob("*")
+                   if p.suffix in {".h5", ".csv"})
+    assert len(files) >= 5 and all(n.parts[1] in ("contact", "fit") for n in files), files
+    for name in files:
+        if name.suffix == ".csv":
+            assert (cut / name).read_text() == (ref / name).read_text(), name
+            continue
+        a, b = read_datasets(cut / name), read_datasets(ref / name)
+        assert sorted(a) == sorted(b), name
+        for key in a:
+            assert np.array_equal(a[key], b[key], equal_nan=np.asarray(a[key]).dtype.kind == "f"), \
+                f"{name}:{key}"

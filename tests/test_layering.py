@@ -18,7 +18,7 @@ PKG = Path(__file__).resolve().parent.parent / "ssw"
 #: Each area (a module or subpackage of ssw) and the areas it may import. An area not
 #: listed may import nothing of ssw but the foundation.
 FOUNDATION = {"ssw", "errors", "provenance", "schema", "roots", "hertz", "materials", "h5io",
-              "plotting", "progress", "curve", "yamlio"}
+              "plotting", "progress", "curve", "yamlio", "cachefile"}
 DATA = {"device", "config", "sample", "constitutive"}
 ALLOWED: dict[str, set[str]] = {
     # foundation: errors at the very bottom
@@ -28,6 +28,8 @@ ALLOWED: dict[str, set[str]] = {
     "materials": {"errors", "yamlio"}, "provenance": {"errors", "ssw"},
     "h5io": {"errors", "ssw", "provenance"}, "plotting": {"h5io"}, "progress": set(),
     "curve": {"errors", "h5io"},
+    # a disk cache's files: their format version and the shapes they promise
+    "cachefile": {"h5io"},
     # data
     "device": FOUNDATION, "sample": FOUNDATION, "constitutive": FOUNDATION,
     "config": FOUNDATION | {"device", "sample", "constitutive"},
@@ -40,22 +42,26 @@ ALLOWED: dict[str, set[str]] = {
     "dynamics": FOUNDATION | DATA | {"contact", "chain"},
     "walls": FOUNDATION | DATA | {"contact", "chain", "fit", "dynamics"},
     # the device's TOF on a sample: the chain on a law named in ssw.walls
-    "tof": FOUNDATION | DATA | {"contact", "chain", "fit", "walls"},
+    # the checks of a result's assumptions: pure functions of a run, its contact stresses
+    "validity": FOUNDATION | DATA | {"chain", "signal", "walls"},
+    "tof": FOUNDATION | DATA | {"contact", "chain", "fit", "walls", "validity"},
     "daq": FOUNDATION | DATA | {"chain", "signal", "walls", "tof"},
     # applications
     "modulus": FOUNDATION | DATA | {"chain", "walls", "tof"},
     "calibration": FOUNDATION | DATA | {"chain", "walls", "tof", "signal", "daq", "modulus"},
     "measure": FOUNDATION | DATA | {"modulus", "signal", "daq", "chain", "walls", "tof",
-                                    "calibration", "contact"},
-    "survey": FOUNDATION | DATA,
+                                    "calibration", "contact", "validity"},
+    "survey": FOUNDATION | DATA | {"validity"},
     "validation": FOUNDATION | DATA | {"calibration", "chain", "walls", "tof", "daq",
-                                       "modulus", "signal"},
+                                       "modulus", "signal", "validity", "measure"},
     "design": FOUNDATION | DATA | {"contact", "chain", "walls", "tof", "fit", "modulus",
-                                   "signal", "daq"},
+                                   "signal", "daq", "validity"},
     "lift": FOUNDATION | DATA | {"contact", "chain", "tof", "fit"},
-    "report": FOUNDATION,
-    "cluster": FOUNDATION,
-    "workflow": FOUNDATION | DATA | {"cluster", "survey"},
+    "report": FOUNDATION | {"validity"},
+    # a cluster job pending beyond its limit; the cluster's watch of its jobs
+    "pending": FOUNDATION,
+    "cluster": FOUNDATION | {"pending"},
+    "workflow": FOUNDATION | DATA | {"cluster", "survey", "pending"},
 }
 # the top: the command line, the benchmarks, and the warm start (it forks the command line
 # from a process that imported all of it)

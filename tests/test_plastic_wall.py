@@ -202,6 +202,10 @@ def test_tof_hits_cli(capsys):
     assert [r["hit"] for r in rows] == [1, 2]
     assert res["soil_model"]["yield_stress"] == Y  # the library's strength, not fitted
     assert rows[1]["permanent_set"] >= rows[0]["permanent_set"] > 0
+    # its checks: small strain and the plastic law's reach at the largest indentation; the
+    # yield is the plastic model's own (ssw.validity)
+    assert {e["check"] for e in res["validity"]} == {"contact_strain", "wall_reach"}
+    assert set(res["checks_skipped"]) == {"sample_yield", "plate_yield"}
     assert main([*args, "--plate-thickness", "4e-4", "--json"]) == 0
     plated = json.loads(capsys.readouterr().out)
     assert plated["plate_thickness"] == 4e-4 and plated["plate_material"] == "pla"

@@ -13,6 +13,7 @@ the window, every result of every category is viewed; every image must have load
 from __future__ import annotations
 
 import os
+import shlex
 import shutil
 import subprocess
 import sys
@@ -159,6 +160,7 @@ def check_report(report: Path, shots: Path) -> dict:
 
 TINY = """
 import os
+import shlex
 import sys
 sys.path.insert(0, "{root}")
 from ssw.config import load_config
@@ -168,7 +170,7 @@ REPORT = os.path.join("{root}", "workflow", "report")
 CATEGORIES = report_categories(load_config(os.path.join("{root}", "config", "config.yaml")))
 
 
-PLOT = "{python} " + os.path.join(workflow.basedir, "plot.py")
+PLOT = "{python} " + shlex.quote(os.path.join(workflow.basedir, "plot.py"))
 
 
 report: os.path.join(REPORT, "workflow.rst")
@@ -250,8 +252,8 @@ rule report_tables:
         report("results/report/tables_{{stage}}.html", caption=os.path.join(REPORT, "tables.rst"),
                category=lambda wc: CATEGORIES[wc.stage], subcategory="Tables")
     shell:
-        "{python} -m ssw report {{input.tables}} --captions {{input.captions}} "
-        "--output {{output}}"
+        "{python} -m ssw report {{input.tables:q}} --captions {{input.captions:q}} "
+        "--output {{output:q}}"
 """
 
 
@@ -282,7 +284,8 @@ open(sys.argv[1], "wb").write(png)
 def tiny_report(tmp_path_factory):
     work = tmp_path_factory.mktemp("report")
     (work / "plot.py").write_text(PLOT_SCRIPT)
-    (work / "Snakefile").write_text(textwrap.dedent(TINY.format(root=ROOT, python=sys.executable)))
+    (work / "Snakefile").write_text(
+        textwrap.dedent(TINY.format(root=ROOT, python=shlex.quote(sys.executable))))
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     css = str(ROOT / "workflow" / "report" / "report.css")
     for args in (["--cores", "2"], ["--report", "report.html", "--report-stylesheet", css]):

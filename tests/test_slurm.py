@@ -49,9 +49,11 @@ LOCAL_CLUSTER_ARGS = [
 # What the workflow's onstart does on Slurm (workflow/rules/common.smk), for the test
 # workflows here: the status command the cluster needs, the job sizes, the lost-jobs watch.
 CLUSTER_CHECK = f"""
+import shlex
 import sys
 sys.path.insert(0, {str(ROOT)!r})
 import ssw.workflow as sswwf
+sswwf.quote_job_python()
 
 
 onstart:
@@ -209,7 +211,7 @@ TINY_SNAKEFILE = textwrap.dedent('''
             " sh -c 'echo rank=${{PMI_RANK}} size=${{PMI_SIZE}}' | sort > {output}"
 
 
-    SWEEP = (f"ssw tof-sweep --config {config['study_config']} --law hertz"
+    SWEEP = (f"ssw tof-sweep --config {shlex.quote(config['study_config'])} --law hertz"
              " --soil-E-min 1e7 --soil-E-max 1e8 --soil-E-step 3e7 --soil-nu 0.3 0.5")
 
 
@@ -230,8 +232,8 @@ TINY_SNAKEFILE = textwrap.dedent('''
             "{resources.mpi} -n {resources.tasks} {SWEEP} --mpi --output {output} > /dev/null"
 
 
-    CONTACT = (f"ssw contact --config {config['study_config']} --soil-E 5e7 --soil-nu 0.3"
-               " --plate-thickness 0 --steps 20")
+    CONTACT = (f"ssw contact --config {shlex.quote(config['study_config'])} --soil-E 5e7"
+               " --soil-nu 0.3 --plate-thickness 0 --steps 20")
 
 
     rule contact_serial:
@@ -568,6 +570,102 @@ def test_jobs_that_vanish_from_slurm_stop_the_run_with_a_message(tmp_path: Path,
     # STATUS_PAUSE_S) and its own shutdown
     assert exit_s <= message_s + STATUS_PAUSE_S + 15, (exit_s, message_s)
     print(f"vanished jobs: message after {message_s:.0f} s, exit after {exit_s:.0f} s")
+
+
+HELD_SNAKEFILE = textwrap.dedent('''
+    rule all:
+        input:
+            "out/held.txt",
+
+
+    rule held:
+        output:
+            "out/held.txt",
+        resources:
+            slurm_extra="'--hold'",
+        shell:
+            "touch {output}"
+''')
+
+
+def _run_held(tmp_path: Path, resources: list[str], marker: str, reports: int,
+              poll_s: float, timeout_s: float = 150) -> tuple[str, list[float], bool, int]:
+    """Run HELD_SNAKEFILE through the profile (its one job submitted held: Slurm keeps it
+    pending, squeue's reason JobHeldUser), with ``--set-resources`` ``resources``, until
+    ``marker`` is in the log ``reports`` times: the log, the seconds from the job's first
+    sight in squeue to each of those reports, whether Snakemake was still running after the
+    last (then it is stopped with SIGINT), and its exit status."""
+    (tmp_path / "Snakefile").write_text(CLUSTER_CHECK + HELD_SNAKEFILE)
+    cmd = [str(SNAKEMAKE), "--directory", str(tmp_path), "--profile", str(PROFILE),
+           *LOCAL_CLUSTER_ARGS, "--slurm-jobname-prefix", JOB_PREFIX,
+           "--set-resources", *resources]
+    env = {**_env(), "SSW_SLURM_WATCH_POLL_S": str(poll_s)}
+    log_path = tmp_path / "snakemake.log"
+    with open(log_path, "w") as log:
+        proc = subprocess.Popen(cmd, cwd=tmp_path, env=env, stdout=log,
+                                stderr=subprocess.STDOUT, text=True)
+    seen: list[float] = []
+    running = False
+    try:
+        deadline = time.monotonic() + 120
+        while time.monotonic() < deadline and not _test_jobs():
+            assert proc.poll() is None, log_path.read_text()[-3000:]
+            time.sleep(0.5)
+        assert _test_jobs(), f"the held job was not submitted within 120 s: {_test_jobs()}"
+        t0 = time.monotonic()
+        while len(seen) < reports and time.monotonic() - t0 < timeout_s:
+            if log_path.read_text().count(marker) > len(seen):
+                seen.append(time.monotonic() - t0)
+            elif proc.poll() is not None:
+                break
+            time.sleep(0.5)
+        running = proc.poll() is None
+        if running and "pending beyond their limit" in log_path.read_text():
+            proc.wait(timeout=60)  # stopped: Snakemake ends after its current pause
+    finally:
+        if proc.poll() is None:
+            proc.send_signal(signal.SIGINT)
+            try:
+                proc.wait(timeout=60)
+            except subprocess.TimeoutExpired:
+                proc.kill()
+                proc.wait()
+        cancel_test_jobs()
+    return log_path.read_text(), seen, running, proc.returncode
+
+
+def test_a_job_that_pends_beyond_its_limit_stops_the_run_with_squeues_reason(
+        tmp_path: Path, slurm_cluster: str) -> None:
+    """A job Slurm never starts (held) stops the run once it has pended its limit (the job
+    resource ssw_pending_s, here 8 s for the rule; the profile's own is an hour), with a
+    message naming the job and squeue's reason for it: within the limit and two looks of
+    the watch (SSW_SLURM_WATCH_POLL_S, here 2 s)."""
+    limit_s, poll_s = 8.0, 2.0
+    text, seen, _, status = _run_held(tmp_path, [f"held:ssw_pending_s={limit_s:g}"],
+                                      "pending beyond their limit", 1, poll_s)
+    assert seen, text[-3000:]
+    assert status != 0, text[-3000:]
+    assert "Cluster jobs pending beyond their limit: 1 job(s): held (Slurm job" in text
+    assert "squeue's reason: JobHeldUser" in text and f"limit {limit_s:g} s" in text
+    assert limit_s - poll_s - 1 <= seen[0] <= limit_s + 2 * poll_s + 15, (seen, text[-2000:])
+    print(f"held job: the run stopped {seen[0]:.0f} s after it was queued "
+          f"(limit {limit_s:g} s)")
+
+
+def test_a_run_told_to_wait_reports_a_pending_job_and_keeps_waiting(
+        tmp_path: Path, slurm_cluster: str) -> None:
+    """The same held job with ssw_on_pending=wait: the run reports it with squeue's reason
+    after its limit, again after a further limit, and goes on waiting (then it is
+    interrupted and the job cancelled)."""
+    limit_s, poll_s = 6.0, 2.0
+    text, seen, running, _ = _run_held(
+        tmp_path, [f"held:ssw_pending_s={limit_s:g}", "held:ssw_on_pending=wait"],
+        "The run waits for them", 2, poll_s)
+    assert len(seen) == 2 and running, (seen, running, text[-3000:])
+    assert "ssw cluster check: 1 cluster job(s) pend beyond their limit: held" in text
+    assert "squeue's reason: JobHeldUser" in text and "Cluster jobs pending" not in text
+    assert limit_s - poll_s - 1 <= seen[0] <= limit_s + 2 * poll_s + 15, (seen, text[-2000:])
+    assert limit_s - poll_s <= seen[1] - seen[0] <= limit_s + 2 * poll_s + 5, seen
 
 
 @pytest.mark.slow

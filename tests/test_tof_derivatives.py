@@ -2,14 +2,15 @@
 differences of converged TOFs (the same runs at perturbed parameters, a second method), the
 methods' labels, and the sensor waveform's derivatives.
 
-Truth: fourth-order central differences (one-sided at a bound of 0) of TOFs computed at
-the same fixed step, at two relative steps (1e-4, 2e-4); the TOF is smooth in its
-parameters to ~1e-10 (tests/test_chain_smooth.py), so the differences converge: the two
-steps agree within 1e-4 (the finer one's truncation is 1/15 of their difference) and the
-finer one is taken. The forward derivative must match within 1e-4 relative (the required
-bound; measured 1e-9 - 2e-5), relative to the parameter's largest derivative over the three
-scenes (a derivative near 0, at a TOF's extremum in that parameter, has no relative
-accuracy of its own).
+Truth: fourth-order central differences (one-sided at a bound of 0) of TOFs, each computed
+at the step its parameters give (the step moves with the striker's speed and masses, as a
+run of ``ssw tof`` at the perturbed value does), at two relative steps (1e-4, 2e-4); the TOF
+is smooth in its parameters to ~1e-10 (tests/test_chain_smooth.py), so the differences
+converge: the two steps agree within 1e-4 (the finer one's truncation is 1/15 of their
+difference) and the finer one is taken. The forward derivative must match within 1e-4
+relative (the required bound; measured 1e-9 - 2e-5), relative to the parameter's largest
+derivative over the three scenes (a derivative near 0, at a TOF's extremum in that
+parameter, has no relative accuracy of its own).
 """
 
 from __future__ import annotations
@@ -29,10 +30,10 @@ NU3 = np.array([0.34, 0.33, 0.30])
 TOL = 1e-4
 
 
-def _central(params: ChainParams, make_wall, name: str, dt: float, rel: float
+def _central(params: ChainParams, make_wall, name: str, dt: float | None, rel: float
              ) -> np.ndarray:
-    """Fourth-order differences of TOFs at the fixed step ``dt`` (the test's own: each
-    perturbed TOF from its own run)."""
+    """Fourth-order differences of TOFs at the fixed step ``dt``, or (None) each at its own
+    step (the test's own: each perturbed TOF from its own run)."""
     w0 = make_wall(E3)
     b0 = Batch.of(params, E3.size)
     values = {"E": E3, "striker_velocity": b0.striker_velocity, "preload": b0.preload,
@@ -54,11 +55,11 @@ def _central(params: ChainParams, make_wall, name: str, dt: float, rel: float
 
 
 def _check(params: ChainParams, make_wall, names: tuple[str, ...]) -> dict[str, float]:
-    pk, run = run_peaks(params, make_wall(E3), derivatives=names)
+    pk, _ = run_peaks(params, make_wall(E3), derivatives=names)
     worst = {}
     for j, name in enumerate(names):
-        fine = _central(params, make_wall, name, run.dt, 1e-4)
-        coarse = _central(params, make_wall, name, run.dt, 2e-4)
+        fine = _central(params, make_wall, name, None, 1e-4)
+        coarse = _central(params, make_wall, name, None, 2e-4)
         # the differences converged: at twice the step the fourth-order truncation is 16x
         # larger, so the finer one errs by ~1/15 of their difference
         scale = np.max(np.abs(fine))  # relative to the parameter's largest derivative
@@ -73,23 +74,38 @@ def _check(params: ChainParams, make_wall, names: tuple[str, ...]) -> dict[str, 
     pytest.param({}, id="thesis-device"),
     pytest.param({"preload": 5.0, "damping": 2.0, "sensor_reads": "upper"},
                  id="preload-dashpot-upper", marks=pytest.mark.slow),
+    pytest.param({"preload": 2.0, "damping": 1.5e3, "damping_law": "kuwabara_kono"},
+                 id="preload-kuwabara-kono"),
+    pytest.param({"damping": 2.5e-2, "damping_law": "hunt_crossley", "sensor_reads": "lower",
+                  "striker_mass": 0.012}, id="hunt-crossley-lower-light-striker"),
 ])
 def test_forward_derivatives_of_the_hertz_wall_match_central_differences(device):
-    """Every parameter (E, striker speed, preload, sensor and striker masses, dashpot) on
-    the thesis device (preload and dashpot 0: one-sided differences) and on a device with a
-    preload, a dashpot and the sensor read at its upper contact."""
+    """Every parameter (E, striker speed, preload, sensor and striker masses, the
+    dissipation coefficient) on the thesis device (preload and dissipation 0: one-sided
+    differences), on a device with a preload, a dashpot and the sensor read at its upper
+    contact, with a preload and Kuwabara-Kono contacts, and with Hunt-Crossley contacts,
+    the sensor read at its lower contact and a light striker (whose contact with bead 1,
+    not the last bead's on a rigid flat, sets the step)."""
     p = ChainParams().with_(**device)
     _check(p, lambda E: build_wall("hertz", p, E, NU3), tuple(PARAMETERS))
 
 
-def test_forward_derivatives_of_the_reduced_dynamic_wall_match_central_differences():
+@pytest.mark.parametrize("device", [
+    pytest.param({"damping": 1.0}, id="dashpot"),
+    pytest.param({"damping": 2.5e-2, "damping_law": "hunt_crossley"}, id="hunt-crossley",
+                 marks=pytest.mark.slow),
+])
+def test_forward_derivatives_of_the_reduced_dynamic_wall_match_central_differences(device):
     """The reduced dynamic wall (a stateful wall with an exact tangent: its quasi-static law,
-    dashpot and participating masses differentiated line by line), soil 1800 kg/m^3, with
-    a contact dashpot: E (through the law and the soil's impedance), the sensor's mass and
-    the dashpot (the device's other parameters enter the chain, not the wall)."""
-    p = ChainParams(damping=1.0)
+    dashpot and participating masses differentiated line by line, the step's explicit
+    ``dt`` too), soil 1800 kg/m^3, with a contact dashpot or Hunt-Crossley contacts (whose
+    damping at the wall follows the wall's force, the soil's dashpot and inertia
+    included): E (through the law and the soil's impedance), the striker's speed (which
+    moves the step), the sensor's mass and the dissipation coefficient."""
+    p = ChainParams(**device)
     _check(p, lambda E: build_wall("hertz", p, E, NU3, dynamics="reduced",
-                                   soil_density=1800.0), ("E", "sensor_mass", "damping"))
+                                   soil_density=1800.0),
+           ("E", "striker_velocity", "sensor_mass", "damping"))
 
 
 def test_dE_of_the_fit_wall_follows_the_k_table_interpolant():
@@ -176,9 +192,12 @@ def test_the_methods_are_labelled_honestly():
 
 def test_the_plastic_wall_is_differentiated_by_central_differences():
     """The plastic wall (history-dependent, no tangent) is labelled ``central``: its
-    striker-speed derivative equals the test's own fourth-order differences at the stated
-    step, and is close to the elastic sample's (a sample far below yield: 445 MPa, von
-    Mises 50 MPa)."""
+    striker-speed derivative (differences at the base step plus the step's share) agrees
+    with the test's own fourth-order differences of TOFs each run at its own step within
+    1e-4 (measured 2.2e-5 at relative steps 1e-4 and 3e-5: the plastic wall's TOF is smooth
+    in the step only to ~25 % of the step's share, 1e-4 of this derivative, as its yield
+    events fall on steps), and is close to the elastic sample's (a sample far below yield:
+    445 MPa, von Mises 50 MPa)."""
     from ssw.constitutive import model_from
 
     p = ChainParams(plate_thickness=0.0)
@@ -189,9 +208,9 @@ def test_the_plastic_wall_is_differentiated_by_central_differences():
     w = build_wall("plastic", p, 445e6, 0.3, soil_model=model)
     st = stencil("striker_velocity", np.array([p.striker_velocity]))
     tofs = [run_peaks(Batch.of(p, 1, {"striker_velocity": p.striker_velocity + o * st.h}),
-                      w, dt=res.dt)[0].tof for o in st.offsets]
+                      w)[0].tof for o in st.offsets]
     assert float(res.dtof["striker_velocity"]) == pytest.approx(
-        float(st.derivative(tofs)[0]), rel=1e-12)
+        float(st.derivative(tofs)[0]), rel=1e-4)
     elastic = api.tof_derivatives(445e6, 0.3, p, "hertz", derivatives=("striker_velocity",))
     assert float(res.dtof["striker_velocity"]) == pytest.approx(
         float(elastic.dtof["striker_velocity"]), rel=0.05)
@@ -200,7 +219,8 @@ def test_the_plastic_wall_is_differentiated_by_central_differences():
 def test_sensor_waveform_derivatives_at_recorded_times():
     """d(sensor)/dE and d(sensor)/d(striker speed) on the dense output at NI 9234 sample
     times (19.5 us, not on the integrator's grid) match central differences of the dense
-    output of perturbed runs (at the same step) to 1e-6 of their largest value."""
+    output of perturbed runs (each at its own step: the striker speed moves it) to 1e-6 of
+    their largest value."""
     from ssw.chain.dense import evaluate
     from ssw.chain.integrate import simulate
 
@@ -208,18 +228,17 @@ def test_sensor_waveform_derivatives_at_recorded_times():
     times = np.arange(5e-5, 2.4e-3, 1 / 51200)
     got = api.sensor_derivatives(123e6, 0.33, p, "hertz", times=times,
                                  derivatives=("E", "striker_velocity"), t_end=2.5e-3)
-    dt = got.run.dt
     for j, name in enumerate(got.names):
         st = stencil(name, np.array([123e6 if name == "E" else p.striker_velocity]))
         S = []
         for o in st.offsets:
             x = float(st.h[0] * o)
             if name == "E":
-                run = simulate(p, build_wall("hertz", p, 123e6 + x, 0.33), dt=dt,
-                               t_end=2.5e-3, stop_early=False)
+                run = simulate(p, build_wall("hertz", p, 123e6 + x, 0.33), t_end=2.5e-3,
+                               stop_early=False)
             else:
                 run = simulate(p.with_(striker_velocity=p.striker_velocity + x),
-                               build_wall("hertz", p, 123e6, 0.33), dt=dt, t_end=2.5e-3,
+                               build_wall("hertz", p, 123e6, 0.33), t_end=2.5e-3,
                                stop_early=False)
             S.append(evaluate(run, times)[0][:, 0])
         fd = st.derivative(S)

@@ -10,6 +10,7 @@ names.
 
 from __future__ import annotations
 
+import re
 import shutil
 from pathlib import Path
 
@@ -163,8 +164,8 @@ def test_slurm_profile_dry_run_shows_each_jobs_resources(tmp_path):
     for fam, ids in fams.items():
         block = next(b for b in blocks if b.startswith("contact_batch:")
                      and f"family={fam}\n" in b)
-        assert f"mem_mb={mem_mb('contact', len(ids))}," in block, block
-        assert f"runtime={runtime_min('contact', len(ids))}," in block, block
+        assert re.search(rf"\bmem_mb={mem_mb('contact', len(ids))}\b", block), block
+        assert re.search(rf"\bruntime={runtime_min('contact', len(ids))}\b", block), block
     sweep = next(b for b in blocks if b.startswith("tof_sweep:"))
     assert "tasks=1" in sweep and f"mem_mb={mem_mb('sweep', 0)}" in sweep
     assert not (tmp_path / "results").exists()

@@ -89,11 +89,25 @@ def register(kinds: argparse._SubParsersAction) -> None:
 def job_records(workdir: Path, since: float = 0.0) -> list[dict[str, Any]]:
     """One record per job of a run in ``workdir`` from its ``benchmark:`` files
     (``results/benchmarks/<stage>/<job>.tsv``): stage, job, wall s, peak memory MB, and
-    the CPU time (s) of its ``ssw`` processes (:func:`usage_records`, None when it left
-    none: Snakemake's own sampled ``cpu_time`` misses the end of a job, and a job served by
-    the warm process runs outside the processes Snakemake samples); the peak memory is the
-    ``ssw`` process's own when it left a record, else Snakemake's sample; only files
-    written after ``since`` (Unix s)."""
+    the CPU time (s) of its ``ssw`` processes (:func:`usage_records`), else the record's
+    own ``cpu_time`` (Snakemake samples a job's processes every 0.5 s and misses the end
+    of a job it ran itself; for a command the warm process served, the record holds the
+    fork's whole account, :mod:`ssw.warmstart.run`), else None; the peak memory is the
+    ``ssw`` process's own when it left a record, else the record's; only files written
+    after ``since`` (Unix s).
+
+    Parameters
+    ----------
+    workdir : Path
+        The run's working folder.
+    since : float
+        Unix time (s): older files are left out.
+
+    Returns
+    -------
+    list of dict
+        ``stage``, ``job``, ``s``, ``max_rss_mb``, ``cpu_s`` and ``startup_s`` per job.
+    """
     usage = usage_records(workdir, since)
     out = []
     root = workdir / BENCHMARKS
@@ -108,19 +122,24 @@ def job_records(workdir: Path, since: float = 0.0) -> list[dict[str, Any]]:
             seconds = float(row["s"])
         except (KeyError, ValueError):
             continue
-        rss = row.get("max_rss", "NA")
         rel = tsv.relative_to(root)
         job = str(rel.with_suffix(""))
         use = usage.get(job) or usage.get(LOG_OF.get(job, ""))
-        # the ssw process's own peak when it left a record: a job served by the warm
-        # process (ssw.warmstart) runs in a fork outside the tree Snakemake samples
         peak = (use["max_rss_mb"] if use and use.get("max_rss_mb")
-                else float(rss) if rss not in ("NA", "-", "") else None)
+                else _number(row.get("max_rss")))
         out.append({"stage": rel.parts[0] if len(rel.parts) > 1 else "other",
                     "job": job, "s": seconds, "max_rss_mb": peak,
-                    "cpu_s": use["cpu_s"] if use else None,
+                    "cpu_s": use["cpu_s"] if use else _number(row.get("cpu_time")),
                     "startup_s": use["startup_s"] if use else None})
     return out
+
+
+def _number(text: str | None) -> float | None:
+    """A benchmark record's figure, or None where Snakemake had none (``NA``, ``-``)."""
+    try:
+        return float(text) if text is not None else None
+    except ValueError:
+        return None
 
 
 def stage_times(records: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:

@@ -22,7 +22,12 @@ Stated here (:func:`summarize`):
 * **identified** (:data:`IDENTIFIED_U`): a parameter whose marginal standard uncertainty,
   every other parameter free, is at most 0.1 in its scaled coordinate: 10 % of its value
   for a log-scaled parameter (E, the masses, the striker speed, the gain), a tenth of its
-  scale for the others (0.05 for nu, 0.5 N for the preload, 0.5 N s/m for the dashpot).
+  scale for the others (0.05 for nu, 0.5 N for the preload, a tenth of the dissipation
+  law's typical coefficient for the contact dissipation: 0.5 N s/m for the dashpot,
+  :func:`ssw.chain.dissipation.parameter`).
+
+The contact dissipation (``damping``) is the coefficient of the device's law
+(:mod:`ssw.chain.dissipation`), in the law's unit and scaled coordinate.
 
 References
 ----------
@@ -217,9 +222,12 @@ class Identifiability:
         Level -> :class:`Information` over E alone, nu and the device known (a calibrated
         device's measurement).
     values : dict
-        The parameters' values, SI.
+        The parameters' values, SI (``damping`` in its law's unit).
     noise : dict
         ``tof_scatter`` (s per hit), ``noise_rms`` (N), ``hits``, ``sample_rate`` (S/s).
+    damping_law : str
+        The contacts' dissipation law (:mod:`ssw.chain.dissipation`): the unit and scale
+        of ``damping``, the contact dissipation.
     """
 
     levels: dict[str, Information]
@@ -227,22 +235,35 @@ class Identifiability:
     device_known: dict[str, Information]
     values: dict[str, float]
     noise: dict[str, float]
+    damping_law: str = "dashpot"
 
     def as_dict(self) -> dict[str, Any]:
-        """JSON-ready (the criterion stated; ``std``: :func:`natural` units)."""
+        """JSON-ready (the criterion stated; ``std``: :func:`natural` units; ``labels``:
+        each parameter's name in words, the contact dissipation's with its law)."""
         from ssw.calibration.waveform import parameter
+        from ssw.chain.dissipation import law_of
 
+        law = law_of(self.damping_law)
+
+        def par(n: str) -> Any:
+            return parameter(n, self.damping_law)
+
+        tenth = f"{IDENTIFIED_U * law.scale:g} {law.unit}"
         return {
             "criterion": (f"identified: marginal standard uncertainty <= {IDENTIFIED_U} in "
                           "the scaled coordinate (10 % of the value for E, the masses, the "
                           "striker speed and the gain; 0.05 for nu; 0.5 N for the preload; "
-                          "0.5 N s/m for the dashpot), every other parameter free"),
+                          f"{tenth} for the contact dissipation, {law.name}), every other "
+                          "parameter free"),
             "values": dict(self.values), "noise": dict(self.noise),
-            "coordinates": {n: ("log" if parameter(n).log else
-                                f"linear, scale {parameter(n).scale:g} {parameter(n).unit}")
+            "damping_law": law.name,
+            "labels": {**{n: n for n in INTEREST},
+                       "damping": f"contact dissipation ({law.name}: {law.formula})"},
+            "coordinates": {n: ("log" if par(n).log else
+                                f"linear, scale {par(n).scale:g} {par(n).unit}")
                             for n in INTEREST},
-            "units": {n: parameter(n).unit for n in INTEREST},
-            "std": {view: {lv: natural(info) for lv, info in d.items()}
+            "units": {n: par(n).unit for n in INTEREST},
+            "std": {view: {lv: natural(info, self.damping_law) for lv, info in d.items()}
                     for view, d in (("levels", self.levels), ("nu_known", self.nu_known),
                                     ("device_known", self.device_known))},
             "levels": {k: v.as_dict() for k, v in self.levels.items()},
@@ -251,14 +272,28 @@ class Identifiability:
         }
 
 
-def natural(info: Information) -> dict[str, float | None]:
+def natural(info: Information, damping_law: str = "dashpot") -> dict[str, float | None]:
     """Marginal standard uncertainties in natural units: relative (a fraction) for a
-    log-scaled parameter, SI for the others (None: not estimable)."""
+    log-scaled parameter, SI for the others (the contact dissipation's in the unit of
+    ``damping_law``; None: not estimable).
+
+    Parameters
+    ----------
+    info : Information
+        The summary.
+    damping_law : str
+        The contacts' dissipation law (:mod:`ssw.chain.dissipation`).
+
+    Returns
+    -------
+    dict
+        Name -> the uncertainty, or None.
+    """
     from ssw.calibration.waveform import parameter
 
     out: dict[str, float | None] = {}
     for n, s in zip(info.names, info.std, strict=True):
-        p = parameter(n)
+        p = parameter(n, damping_law)
         out[n] = None if not np.isfinite(s) else float(s if p.log else s * p.scale)
     return out
 
@@ -278,7 +313,8 @@ def identifiability(params: Any, wall: str, wall_options: dict[str, Any], E: flo
     Parameters
     ----------
     params : ChainParams
-        The device's chain (its striker speed, preload, masses, damping: the values).
+        The device's chain (its striker speed, preload, masses, dissipation coefficient:
+        the values; its dissipation law, ``damping_law``, the coefficient's unit).
     wall : str
         The wall law.
     wall_options : dict
@@ -341,7 +377,7 @@ def identifiability(params: Any, wall: str, wall_options: dict[str, Any], E: flo
     levels, known, alone = {}, {}, {}
     device = tuple(n for n in INTEREST if n != "E")
     def scale_of(name: str) -> float:
-        return parameter(name).scale
+        return parameter(name, params.damping_law).scale
 
     scale_nu = scale_of("nu")
     for level in ("features", "waveform"):
@@ -385,4 +421,4 @@ def identifiability(params: Any, wall: str, wall_options: dict[str, Any], E: flo
     alone = {"tof": given(A, INTEREST, device, hits), **alone}
     return Identifiability(levels, known, alone, values,
                            {"tof_scatter": tof_scatter, "noise_rms": acq.noise,
-                            "hits": hits, "sample_rate": fs})
+                            "hits": hits, "sample_rate": fs}, params.damping_law)

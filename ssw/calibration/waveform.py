@@ -102,8 +102,14 @@ def device_globals(params: Any, gain: float = 1.0) -> dict[str, float]:
             "gain": float(gain)}
 
 
-def parameter(name: str) -> Parameter:
-    """The parameter ``name`` of :data:`PARAMETERS` (ConfigError listing them otherwise)."""
+def parameter(name: str, law: str | None = None) -> Parameter:
+    """The parameter ``name`` of :data:`PARAMETERS` (ConfigError listing them otherwise);
+    ``damping`` under the dissipation ``law`` when given (its unit, range and scale:
+    :func:`ssw.chain.dissipation.parameter`)."""
+    if name == "damping" and law is not None:
+        from ssw.chain.dissipation import parameter as dissipation_parameter
+
+        return dissipation_parameter(law)
     if name not in PARAMETERS:
         raise ConfigError("parameter", name, f"one of {', '.join(PARAMETERS)}")
     return PARAMETERS[name]
@@ -676,7 +682,7 @@ def coordinate(setup: Setup, col: Column) -> tuple[bool, float]:
         return False, 1.0 / setup.acq.sample_rate
     if col.name == "delay":
         return False, setup.tof_scatter
-    p = parameter(col.name)
+    p = parameter(col.name, setup.params.damping_law if col.name == "damping" else None)
     return p.log, p.scale
 
 
@@ -1187,7 +1193,8 @@ def refine_start(setup: Setup, globals_: dict[str, float], E: Any, speed: float,
     dc = dampings[1] - dampings[0]
     best = min(p["chi2"] for p in scan)
     offsets = np.arange(REFINE_POINTS) - (REFINE_POINTS - 1) // 2
-    lo, hi = parameter("damping").lower, parameter("damping").upper
+    lo, hi = (parameter("damping", setup.params.damping_law).lower,
+              parameter("damping", setup.params.damping_law).upper)
     scan = list(scan)
     for _ in range(levels):
         dm, dc = dm / 3.0, dc / 3.0
@@ -1272,7 +1279,7 @@ def _bounds(setup: Setup, free: list[Column]) -> tuple[np.ndarray, np.ndarray]:
     """The scaled coordinates' bounds of ``free`` (each parameter's range)."""
     lo, hi = np.empty(len(free)), np.empty(len(free))
     for j, c in enumerate(free):
-        p = parameter(c.name)
+        p = parameter(c.name, setup.params.damping_law if c.name == "damping" else None)
         log, scale = coordinate(setup, c)
         lo[j], hi[j] = ((np.log(p.lower), np.log(p.upper)) if log
                         else (p.lower / scale, p.upper / scale))

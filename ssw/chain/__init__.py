@@ -1,6 +1,7 @@
 """Stage II: dynamics of the bead chain and the time of flight (TOF).
 
-Modules: :mod:`~ssw.chain.params` (the chain), :mod:`~ssw.chain.wall` (last-contact laws),
+Modules: :mod:`~ssw.chain.params` (the chain), :mod:`~ssw.chain.dissipation` (the contacts'
+dissipation laws), :mod:`~ssw.chain.wall` (last-contact laws),
 :mod:`~ssw.chain.statics` (gravity precompression), :mod:`~ssw.chain.integrate` (batched
 velocity Verlet), :mod:`~ssw.chain.tof` (peak picking), :mod:`~ssw.chain.run` (runs of
 prebuilt walls, a truncated record refused), :mod:`~ssw.chain.baseline` (scipy DOP853

@@ -1,13 +1,15 @@
 /* The chain's velocity-Verlet step, compiled (ssw.chain.kernel loads it through ctypes).
 
-   The physics is documented in ssw/chain/integrate.py (the scheme, the dashpot's predicted
-   velocity, the forward sensitivities) and ssw/chain/impulse.py (the contact laws averaged
-   over the step's relative motion: psi, its series far from events, the dashpot's closed
-   share Phi). Arrays are C-contiguous doubles: bead quantities (N, n), their sensitivities
-   (N, n, k), positions and velocities stacked (2, N, n) and (2, N, n, k); contact j joins
-   beads j and j + 1, contact N - 1 is the wall (its force, and its sensitivities, are
-   written by the caller before ssw_forces: any wall law, with or without state; or, for
-   a piecewise-linear law, ssw.walls.fem.PiecewiseLinearWall, by the step itself).
+   The physics is documented in ssw/chain/integrate.py (the scheme, the damping's predicted
+   velocity, the forward sensitivities, the time step's own column), ssw/chain/impulse.py
+   (the contact laws averaged over the step's relative motion: psi, its series far from
+   events, the dashpot's closed share Phi, the averaged sqrt) and ssw/chain/dissipation.py
+   (the dissipation laws). Arrays are C-contiguous doubles: bead quantities (N, n), their
+   sensitivities (N, n, k), positions and velocities stacked (2, N, n) and (2, N, n, k);
+   contact j joins beads j and j + 1, contact N - 1 is the wall (its force, and its
+   sensitivities, are written by the caller before ssw_forces: any wall law, with or
+   without state; or, for a piecewise-linear law, ssw.walls.fem.PiecewiseLinearWall, by
+   the step itself).
 
    No Python C-API: a plain shared library, built by setuptools with the package (setup.py)
    and checked against this file's hash by its loader (SSW_STEP_SOURCE). */
@@ -24,29 +26,36 @@
 #define SSW_STEP_SOURCE "unknown"
 #endif
 
-/* ssw.chain.impulse.FAR and SERIES */
+/* ssw.chain.impulse.FAR, SERIES and ROOT_SERIES */
 #define FAR 20.0
 #define C1 (1.0 / 16.0)
 #define C2 (1.0 / 640.0)
+#define R1 (1.0 / 48.0)
+#define R2 (1.0 / 384.0)
+#define R3 (3.0 / 4096.0)
+
+/* ssw.chain.dissipation.LAWS' codes */
+enum { DASHPOT = 0, KUWABARA_KONO = 1, HUNT_CROSSLEY = 2 };
 
 typedef struct {
     int N, n, k;          /* beads, active scenes, sensitivity columns (0: none) */
-    int predict;          /* the dashpot's velocity and share are needed */
-    int damped_tangent;   /* damping > 0 with sensitivities: the share's own slopes */
-    int c_D, c_P;         /* columns of the damping and the preload (-1: none) */
+    int predict;          /* the damping's velocity and factor are needed */
+    int damped_tangent;   /* damping > 0 with sensitivities: the factor's own slopes */
+    int law;              /* the dissipation law (DASHPOT, KUWABARA_KONO, HUNT_CROSSLEY) */
+    int c_D, c_P, c_T;    /* columns of the damping, the preload, the time step (-1: none) */
     int n_mass;           /* masses differentiated (<= 2): rows and columns */
     int mass_row[2], mass_col[2];
-    double A, dt, damping, g;
+    double A, dt, damping, g; /* N/m^1.5, s, the law's coefficient, m/s^2 */
     double *z;            /* (2, N, n) u, v (m, m/s) */
     double *acc;          /* (N, n) m/s^2, the last accelerations (replaced) */
     double *inv_m;        /* (N, n) 1/kg */
     double *preload;      /* (n) N on bead 1, or NULL */
     double *f;            /* (N, n) N, written; row N - 1 holds the wall's force on entry */
-    double *power;        /* (n) W, the dashpots' dissipation rate, or NULL */
+    double *power;        /* (n) W, the damping's dissipation rate, or NULL */
     double *ZT;           /* (2, N, n, k) */
     double *Acc;          /* (N, n, k), the last accelerations' sensitivities (replaced) */
     double *dF;           /* (N, n, k), written; row N - 1 holds the wall's on entry */
-    double *work;         /* scratch: 8 N n + N n k doubles */
+    double *work;         /* scratch: 9 N n + N n k doubles */
     /* the record (ssw_record): the sensor's two contacts, the wall force, their
        sensitivities, in block buffers whose scene axis has stride n_rec (the run's first n);
        the largest wall indentation and bead-bead forces so far (n) and (N - 1, n) */
@@ -65,12 +74,15 @@ typedef struct {
 
 const char *ssw_step_source(void) { return SSW_STEP_SOURCE; }
 
-/* FAR, C1 and C2, for the loader's check against ssw.chain.impulse */
+/* FAR, C1, C2, R1, R2 and R3, for the loader's check against ssw.chain.impulse */
 void ssw_step_constants(double *out)
 {
     out[0] = FAR;
     out[1] = C1;
     out[2] = C2;
+    out[3] = R1;
+    out[4] = R2;
+    out[5] = R3;
 }
 
 /* (y)_+^(7/2) and (y)_+^(5/2) */
@@ -217,7 +229,8 @@ static inline double sqrt_lane(double v) { return sqrt(v); }
 FAR_FORCES(far_forces, 1, SQRT1, )
 #endif
 
-/* The hat-weighted share Phi(d / a) of the step a contact is closed, and its slopes. */
+/* The hat-weighted share Phi(d / a) of the step a contact is closed, and its slopes (the
+   dashpot's factor). */
 static inline double closed_share(double d, double a, double *gd, double *ga)
 {
     double x = d / a;
@@ -234,6 +247,52 @@ static inline double closed_share(double d, double a, double *gd, double *ga)
         *ga = 0.0;
     }
     return d > 0.0 ? 1.0 : 0.0;
+}
+
+/* (y)_+^(5/2) and (y)_+^(3/2) */
+static inline void pow_half(double y, double *p25, double *p15)
+{
+    if (y > 0.0) {
+        double q = y * sqrt(y);
+        *p15 = q;
+        *p25 = q * y;
+    } else {
+        *p15 = 0.0;
+        *p25 = 0.0;
+    }
+}
+
+/* The Kuwabara-Kono factor: the hat average of sqrt(d_+) over the step's relative motion
+   (impulse.py), a^(1/2) P(x), x = d / a, P = [(x + 1)_+^(5/2) - 2 x_+^(5/2) + (x - 1)_+^(5/2)]
+   / (15/4) near an event (-1 < x < FAR), else sqrt(d_+) (1 - r R1 - r^2 R2 - r^3 R3), r =
+   min(1 / x^2, 1); with gd, ga its slopes in d and in a (1/m^(1/2), 0 for d_+ = 0 far). */
+static inline double root_share(double d, double a, double *gd, double *ga)
+{
+    const double x = d / a;
+    if (near_event(x)) {
+        double u0, u1, u2, w0, w1, w2;
+        pow_half(x + 1.0, &u0, &w0);
+        pow_half(x, &u1, &w1);
+        pow_half(x - 1.0, &u2, &w2);
+        const double P = (u0 - 2.0 * u1 + u2) / 3.75, sa = sqrt(a);
+        if (gd) {
+            const double P1 = (w0 - 2.0 * w1 + w2) / 1.5;
+            *gd = P1 / sa;
+            *ga = (0.5 * P - x * P1) / sa;
+        }
+        return sa * P;
+    }
+    const double dp = d > 0.0 ? d : 0.0, sq = sqrt(dp);
+    double r = 1.0 / (x * x);
+    if (!(r < 1.0))
+        r = 1.0;
+    const double q = 1.0 - r * (R1 + r * (R2 + r * R3));
+    if (gd) {
+        const double q1 = -(R1 + r * (2.0 * R2 + 3.0 * r * R3));
+        *gd = dp > 0.0 ? (0.5 * q - 2.0 * r * q1) / sq : 0.0;
+        *ga = dp > 0.0 ? 2.0 * a * q1 / (dp * sq) : 0.0;
+    }
+    return sq * q;
 }
 
 /* A piecewise-linear law F = a_j + b_j d on [d_j, d_(j+1)] at the indentation x (one row of
@@ -340,7 +399,9 @@ void ssw_record(const ssw_chain *c, int row)
     }
 }
 
-/* The step's first half: v += dt/2 acc, u += dt v (and the same for the sensitivities). */
+/* The step's first half: v += dt/2 acc, u += dt v (and the same for the sensitivities; the
+   time step's column, c_T, also differentiates the explicit dt: V += acc / 2, U += dt acc
+   / 2 + v). */
 void ssw_drift(const ssw_chain *c)
 {
     const int Nn = c->N * c->n, m = Nn * c->k;
@@ -356,6 +417,13 @@ void ssw_drift(const ssw_chain *c)
             V[i] += half * c->Acc[i];
             U[i] += dt * V[i];
         }
+        if (c->c_T >= 0)
+            for (int i = 0; i < Nn; i++) {
+                const long r = (long)i * c->k + c->c_T;
+                const double ha = 0.5 * c->acc[i];
+                V[r] += ha;
+                U[r] += dt * ha + v[i];
+            }
     }
 }
 
@@ -368,19 +436,115 @@ static void contact_forces(const ssw_chain *c, double *w_x, double *w_fd, double
     far_forces((c->N - 1) * n, u, u + n, v, v + n, c->dt, c->A, w_x, c->f, w_fd, w_fa);
 }
 
+/* The damping factor K of one contact by the law (dissipation.py), averaged over the step's
+   relative motion (d, a = |delta|): the dashpot's closed share, the Kuwabara-Kono averaged
+   sqrt, or the Hunt-Crossley elastic force fe (the averaged Hertz force of a bead-bead
+   contact, the wall's force at the wall) with its slopes fe_d, fe_a; with gd: dK/dd,
+   dK/da (0 at the wall for Hunt-Crossley: the wall's own sensitivities, dF, carry it). */
+static inline __attribute__((always_inline)) double damping_factor(
+    int law, double d, double a, double fe, double fe_d, double fe_a, double *gd, double *ga)
+{
+    if (law == KUWABARA_KONO)
+        return root_share(d, a, gd, ga);
+    if (law == HUNT_CROSSLEY) {
+        if (gd) {
+            *gd = fe_d;
+            *ga = fe_a;
+        }
+        return fe;
+    }
+    return closed_share(d, a, gd, ga);
+}
+
+/* Per contact, at the drifted state: the relative velocity's sign times dt and the Hertz
+   slope fa times it (with the tangent), and with the damping (predict) its predicted
+   velocity, its factor K (damping_factor), c K dvp added to f (and to the power), K's
+   slopes; the time step's column, its explicit dt slope w_et. The work rows are
+   ssw_forces'. */
+static inline __attribute__((always_inline)) void contact_rates(const ssw_chain *c, int law,
+                                                                int has_old)
+{
+    const int N = c->N, n = c->n, Nn = N * n, tangent = c->k > 0;
+    const int c_T = tangent ? c->c_T : -1;
+    const double dt = c->dt, half = 0.5 * dt, cd = c->damping;
+    const double *u = c->z, *v = c->z + Nn, *acc = c->acc;
+    double *f = c->f, *power = c->power;
+    const int predict = c->predict, damped = c->damped_tangent;
+    double *w_fd = c->work, *w_fa = w_fd + Nn, *w_sdt = w_fa + Nn, *w_dvp = w_sdt + Nn;
+    double *w_sh = w_dvp + Nn, *w_gd = w_sh + Nn, *w_ga = w_gd + Nn, *w_x = w_ga + Nn;
+    double *w_et = w_x + Nn;
+    for (int j = 0; j < N; j++) {
+        const int last = j == N - 1;
+        for (int i = 0; i < n; i++) {
+            const int q = j * n + i;
+            const double d = last ? u[q] : u[q] - u[q + n];
+            const double dv = last ? v[q] : v[q] - v[q + n];
+            const double a = fabs(dv) * dt;
+            /* the Hertz force's slope in |delta| (a bead-bead contact's) */
+            double fe_a = 0.0;
+            if (tangent) {
+                const double sg =
+                    dv > 0.0 ? 1.0 : (dv < 0.0 ? -1.0 : (dv == 0.0 ? 0.0 : dv));
+                w_sdt[q] = sg * dt;
+                if (!last) {
+                    fe_a = w_fa[q];
+                    w_fa[q] *= w_sdt[q];
+                }
+                if (c_T >= 0)
+                    w_et[q] = fe_a * fabs(dv);
+            }
+            if (predict) {
+                double dvp = dv;
+                if (has_old)
+                    dvp += half * (last ? acc[q] : acc[q] - acc[q + n]);
+                /* Hunt-Crossley's factor: the contact's elastic force and its slopes */
+                double fe = 0.0, fe_d = 0.0;
+                if (law == HUNT_CROSSLEY) {
+                    fe = f[q];
+                    fe_d = tangent && !last ? w_fd[q] : 0.0;
+                }
+                double gd = 0.0, ga = 0.0;
+                const double sh = damping_factor(law, d, a, fe, fe_d, fe_a,
+                                                 damped ? &gd : 0, damped ? &ga : 0);
+                if (cd > 0.0) {
+                    f[q] += cd * dvp * sh;
+                    if (power)
+                        power[i] += cd * dvp * dvp * sh;
+                }
+                if (tangent) {
+                    w_dvp[q] = dvp;
+                    w_sh[q] = sh;
+                    w_gd[q] = gd;
+                    w_ga[q] = ga;
+                    if (c_T >= 0 && cd > 0.0) {
+                        /* the predicted velocity's explicit dt: acc_old / 2 */
+                        const double ao = !has_old ? 0.0 : last ? acc[q] : acc[q] - acc[q + n];
+                        w_et[q] += cd * (dvp * ga * fabs(dv) + 0.5 * sh * ao);
+                    }
+                }
+            }
+        }
+    }
+}
+
 /* Contact forces, accelerations and (k > 0) their sensitivities at the drifted state; with
    kick, the step's second half v += dt/2 acc. has_old: acc (and Acc) hold the last step's
-   accelerations (the dashpot's predicted velocity v + dt/2 acc_old); 0 at the start. */
+   accelerations (the damping's predicted velocity v + dt/2 acc_old); 0 at the start. The
+   damping of a closed contact is c K dvp (damping_factor; dvp the predicted relative
+   velocity), its tangent c (K dDVP + dvp (K_d dD + K_a sign(dv) dt dDV)); the time step's
+   column adds each force's explicit slope in dt (the averaging's |delta| = |dv| dt, the
+   predicted velocity's dt/2 acc_old), w_et. */
 void ssw_forces(const ssw_chain *c, int has_old, int kick)
 {
     const int N = c->N, n = c->n, k = c->k, Nn = N * n;
     const double dt = c->dt, half = 0.5 * dt, cd = c->damping;
-    const double *u = c->z, *v = c->z + Nn;
     double *f = c->f, *acc = c->acc;
-    /* per contact: fd, fa sign(dv) dt, sign(dv) dt, dvp, share, gd, ga, x = d / |delta| */
+    /* per contact (contact_rates): fd, fa sign(dv) dt, sign(dv) dt, dvp, factor K, K_d, K_a,
+       x = d / |delta|, the explicit dt slope */
     double *w_fd = c->work, *w_fa = w_fd + Nn, *w_sdt = w_fa + Nn, *w_dvp = w_sdt + Nn;
     double *w_sh = w_dvp + Nn, *w_gd = w_sh + Nn, *w_ga = w_gd + Nn, *w_x = w_ga + Nn;
-    const int tangent = k > 0;
+    double *w_et = w_x + Nn;
+    const int tangent = k > 0, law = c->law, c_T = tangent ? c->c_T : -1;
 
     if (c->K1)
         wall_row(c);
@@ -388,41 +552,13 @@ void ssw_forces(const ssw_chain *c, int has_old, int kick)
         memset(c->power, 0, sizeof(double) * n);
     contact_forces(c, w_x, tangent ? w_fd : 0, tangent ? w_fa : 0);
     if (tangent || c->predict) {
-        for (int j = 0; j < N; j++) {
-            const int last = j == N - 1;
-            for (int i = 0; i < n; i++) {
-                const int q = j * n + i;
-                const double d = last ? u[q] : u[q] - u[q + n];
-                const double dv = last ? v[q] : v[q] - v[q + n];
-                const double a = fabs(dv) * dt;
-                if (tangent) {
-                    const double sg =
-                        dv > 0.0 ? 1.0 : (dv < 0.0 ? -1.0 : (dv == 0.0 ? 0.0 : dv));
-                    w_sdt[q] = sg * dt;
-                    if (!last)
-                        w_fa[q] *= w_sdt[q];
-                }
-                if (c->predict) {
-                    double dvp = dv;
-                    if (has_old)
-                        dvp += half * (last ? acc[q] : acc[q] - acc[q + n]);
-                    double gd = 0.0, ga = 0.0;
-                    const double sh = closed_share(d, a, c->damped_tangent ? &gd : 0,
-                                                   c->damped_tangent ? &ga : 0);
-                    if (cd > 0.0) {
-                        f[q] += cd * dvp * sh;
-                        if (c->power)
-                            c->power[i] += cd * dvp * dvp * sh;
-                    }
-                    if (tangent) {
-                        w_dvp[q] = dvp;
-                        w_sh[q] = sh;
-                        w_gd[q] = gd;
-                        w_ga[q] = ga;
-                    }
-                }
-            }
-        }
+        /* one loop per law: the law a constant in each (the dashpot's the loop it was) */
+        if (c->law == KUWABARA_KONO)
+            contact_rates(c, KUWABARA_KONO, has_old);
+        else if (c->law == HUNT_CROSSLEY)
+            contact_rates(c, HUNT_CROSSLEY, has_old);
+        else
+            contact_rates(c, DASHPOT, has_old);
     }
     /* m_i a_i = F_(i-1) - F_i (+ P on bead 1) + m_i g, into acc (its old values are not
        needed any more), and with kick v += dt/2 acc; row by row, each a vector loop */
@@ -458,6 +594,8 @@ void ssw_forces(const ssw_chain *c, int has_old, int kick)
                 const double dvp = w_dvp[q], sh = w_sh[q];
                 const double tD = cd * dvp * w_gd[q], tV = cd * dvp * w_ga[q] * sdt;
                 const double tP = cd * sh;
+                /* Hunt-Crossley at the wall: c F_w dvp moves with the wall's own dF */
+                const int hc_wall = last && law == HUNT_CROSSLEY && cd > 0.0;
                 for (int p = 0; p < k; p++) {
                     const int r = q * k + p;
                     const double dD = last ? U[r] : U[r] - U[r + n * k];
@@ -468,9 +606,13 @@ void ssw_forces(const ssw_chain *c, int has_old, int kick)
                         if (has_old)
                             dDVP += half * (last ? Acc[r] : Acc[r] - Acc[r + n * k]);
                         df += tP * dDVP + tV * dDV + tD * dD;
+                        if (hc_wall)
+                            df += cd * dvp * dF[r];
                     }
                     if (p == c->c_D)
                         df += dvp * sh;
+                    if (p == c_T)
+                        df += w_et[q];
                     dF[r] = df;
                 }
             }
@@ -498,6 +640,9 @@ void ssw_forces(const ssw_chain *c, int has_old, int kick)
             double *Vw = c->ZT + m;
             for (int r = 0; r < m; r++)
                 Vw[r] += half * Acc[r];
+            if (c_T >= 0)
+                for (int q = 0; q < Nn; q++)
+                    Vw[(long)q * k + c_T] += 0.5 * acc[q];
         }
     }
 }

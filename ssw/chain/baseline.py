@@ -5,9 +5,11 @@ The yardstick of ``ssw bench chain`` and of the integrator's order test
 :mod:`ssw.chain.integrate` (same equations, a different method)::
 
     m_i u_i'' = F_{i-1} - F_i + m_i g + P delta_{i1},   F_j = A [u_j - u_{j+1}]_+^(3/2)
-    (+ c (v_j - v_{j+1}) while closed),   F_{N-1} = C_w [u_{N-1}]_+^n_w (+ c v_{N-1}),
+    (+ c g_j (v_j - v_{j+1}) while closed),   F_{N-1} = C_w [u_{N-1}]_+^n_w (+ c g v_{N-1}),
 
-``P`` the preload on bead 1, ``c`` the contact dashpot; the sensor reads the mean of its
+``P`` the preload on bead 1, ``c g d'`` the contacts' damping by the device's law
+(:mod:`ssw.chain.dissipation`: ``g`` 1, ``sqrt(d)`` or the contact's elastic force, at its
+point value); the sensor reads the mean of its
 two contact forces, or its upper (``F_{s-1}``) or lower (``F_s``) one. It is
 self-contained where sharing code could hide an error in :mod:`ssw.chain` (a wrong
 precompression or a peak-location bias shared by both sides would cancel in a
@@ -24,7 +26,8 @@ comparison):
   carries ``P + g sum_{k=1..j} m_k``, the wall ``P + g sum_{k=1..N-1} m_k``, ``P`` the
   preload on bead 1), checked against the right-hand side (beads 1..N-1 at rest);
 * **time of flight** (:func:`tof_rule`): the sensor force and its exact time derivative
-  ``dF_j/dt = 3/2 A sqrt(d_j) (v_j - v_{j+1})`` (+ ``c (a_j - a_{j+1})``) are sampled
+  ``dF_j/dt = 3/2 A sqrt(d_j) (v_j - v_{j+1})`` (+ ``c (g' d'^2 + g (a_j - a_{j+1}))``) are
+  sampled
   from DOP853's dense output, and each peak is located as the root of the cubic Hermite
   interpolant's derivative between the two samples where ``dF/dt`` changes sign (no
   parabola through three force samples, nor the quintic dense output of
@@ -81,13 +84,15 @@ class ChainModel:
     preload : float
         N on bead 1.
     damping : float
-        N s/m.
+        The dissipation coefficient (the law's unit).
     sensor : int
         The sensor's index.
     reads : str
         ``mean|upper|lower``.
     v0 : float
         m/s, the striker's speed.
+    law : str
+        The dissipation law (``dashpot``, ``kuwabara_kono``, ``hunt_crossley``).
     """
 
     masses: np.ndarray
@@ -100,6 +105,7 @@ class ChainModel:
     sensor: int
     reads: str
     v0: float
+    law: str = "dashpot"
 
     @property
     def n(self) -> int:
@@ -211,7 +217,20 @@ def chain_model(params: ChainParams, wall: Any) -> ChainModel:
         g=params.g if params.gravity else 0.0, preload=float(getattr(params, "preload", 0.0)),
         damping=float(params.damping), sensor=params.sensor_index,
         reads=str(getattr(params, "sensor_reads", "mean")), v0=params.striker_velocity,
+        law=str(getattr(params, "damping_law", "dashpot")),
     )
+
+
+def _factor(law: str, d: np.ndarray, f_el: np.ndarray) -> tuple[Any, Any]:
+    """The law's damping factor ``g`` of closed contacts (overlap ``d > 0``, elastic force
+    ``f_el``) and its slope ``dg/dd`` per unit of ``df_el/dd``'s factor (``hunt_crossley``:
+    the caller's ``df_el/dd``): ``(1, 0)``, ``(sqrt(d), 1 / (2 sqrt(d)))``, ``(f_el, 1)``."""
+    if law == "kuwabara_kono":
+        sq = np.sqrt(d)
+        return sq, 0.5 / np.where(sq > 0, sq, np.inf)
+    if law == "hunt_crossley":
+        return f_el, 1.0
+    return 1.0, 0.0
 
 
 def _forces(mod: ChainModel, u: np.ndarray, v: np.ndarray) -> np.ndarray:
@@ -221,6 +240,7 @@ def _forces(mod: ChainModel, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     np.maximum(d, 0.0, out=d)
     if mod.damping:
         closed = d > 0
+        overlap = d.copy() if mod.law == "kuwabara_kono" else None
     d *= np.sqrt(d)
     d *= mod.A
     w = np.maximum(u[-1], 0.0)
@@ -228,8 +248,10 @@ def _forces(mod: ChainModel, u: np.ndarray, v: np.ndarray) -> np.ndarray:
     coef = mod.wall_coef.reshape(shape)
     f[-1] = coef * w * np.sqrt(w) if mod.hertzian else coef * w ** mod.wall_exp.reshape(shape)
     if mod.damping:
-        f[:-1] += mod.damping * (v[:-1] - v[1:]) * closed
-        f[-1] += mod.damping * v[-1] * (w > 0)
+        g_c = _factor(mod.law, overlap, f[:-1])[0] if mod.law != "dashpot" else 1.0
+        g_w = _factor(mod.law, w, f[-1])[0] if mod.law != "dashpot" else 1.0
+        f[:-1] += mod.damping * g_c * (v[:-1] - v[1:]) * closed
+        f[-1] += mod.damping * g_w * v[-1] * (w > 0)
     return f
 
 
@@ -283,9 +305,9 @@ def static_state(mod: ChainModel) -> tuple[np.ndarray, np.ndarray]:
 def _sensor(mod: ChainModel, u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Sensor force (N) and its time derivative (N/s) for states ``u, v`` (N, n, m).
 
-    A contact's force is ``A d^1.5`` plus, with damping, its dashpot ``c (v_j - v_{j+1})``
-    while closed (what a force sensor in the contact feels); its rate ``3/2 A sqrt(d) d'``
-    plus ``c (a_j - a_{j+1})``.
+    A contact's force is ``A d^1.5`` plus, with damping, ``c g (v_j - v_{j+1})`` while
+    closed (what a force sensor in the contact feels); its rate ``3/2 A sqrt(d) d'`` plus
+    ``c (g' d'^2 + g (a_j - a_{j+1}))``.
     """
     s = mod.sensor
     acc = _acceleration(mod, u, v) if mod.damping else None
@@ -295,8 +317,12 @@ def _sensor(mod: ChainModel, u: np.ndarray, v: np.ndarray) -> tuple[np.ndarray, 
         dv = v[j] - v[j + 1]
         f, r = mod.A * d**1.5, 1.5 * mod.A * np.sqrt(d) * dv
         if acc is not None:
-            f = f + mod.damping * dv * (d > 0)
-            r = r + mod.damping * (acc[j] - acc[j + 1]) * (d > 0)
+            g, g1 = _factor(mod.law, d, f)
+            if mod.law == "hunt_crossley":
+                g1 = 1.5 * mod.A * np.sqrt(d)
+            closed = d > 0
+            r = r + mod.damping * (g1 * dv * dv + g * (acc[j] - acc[j + 1])) * closed
+            f = f + mod.damping * g * dv * closed
         return f, r
 
     (fu, ru), (fl, rl) = contact(s - 1), contact(s)

@@ -24,7 +24,11 @@ TOF:
     dt*/dp = -dt (dH'/dp)(theta*) / H''(theta*),
 
 ``dH'/dp`` the same combination of the samples' forward sensitivities (``Run.dsensor``,
-:mod:`ssw.chain.sensitivity`). The peak's height moves as ``dH/dp`` (``H' = 0`` there). With
+:mod:`ssw.chain.sensitivity`). The peak's height moves as ``dH/dp`` (``H' = 0`` there). The
+step's own column (:data:`ssw.chain.sensitivity.STEP`, a run's derivative with respect to
+``dt`` at a fixed number of steps) also moves the record's times ``t_i = i dt``: the peak's
+``dt*/d dt`` gains ``i + theta*``, and the dense output at a fixed time ``t`` gains ``-(dS/dt)
+(t - t_0) / dt`` (its phase ``theta`` moves). With
 the contact forces of :mod:`ssw.chain.impulse` (smooth through contact events) the TOF is
 smooth in the parameters to ~1e-10 (``ssw bench smooth``).
 
@@ -50,6 +54,7 @@ from typing import Any
 
 import numpy as np
 
+from ssw.chain.sensitivity import STEP
 from ssw.chain.tof import Peaks, check_selection, parabolic
 from ssw.signal.rule import RULE, PeakRule, Selection, select
 
@@ -246,6 +251,8 @@ def dense_peaks(run: Any, *, rule: PeakRule = RULE, strict: bool = True) -> Peak
             dtheta = -dH1 / np.where(ok, H2, -1.0)[:, None]
             nan = np.where(ok, 0.0, np.nan)[:, None]
             out[f"dt_{name}"] = run.dt * dtheta + nan
+            if (c_T := run.tangent.col(STEP)) is not None:  # the record's times n dt
+                out[f"dt_{name}"][:, c_T] += i + theta
             out[f"df_{name}"] = dH - run.dsensor[0] + nan
     nan = np.where(bad, np.nan, 0.0)
     return Peaks(
@@ -280,7 +287,8 @@ def evaluate(run: Any, t: np.ndarray, *, tangent: bool = False, rate: bool = Fal
     -------
     tuple
         ``S`` (m, n) N and ``dS`` (m, n, k) N per unit of each parameter (None without
-        ``tangent``); with ``rate`` a third item, ``dS/dt`` (m, n) N/s.
+        ``tangent``; the step's column, :data:`ssw.chain.sensitivity.STEP`, at the fixed
+        times ``t``); with ``rate`` a third item, ``dS/dt`` (m, n) N/s.
     """
     t = np.asarray(t, float)
     n = run.sensor.shape[1]
@@ -297,8 +305,11 @@ def evaluate(run: Any, t: np.ndarray, *, tangent: bool = False, rate: bool = Fal
     b0 = _basis_at(powers)  # (m n, 6)
     S = (b0 * Y).sum(axis=1).reshape(m, n)
     dS = None if dY is None else (b0[:, :, None] * dY).sum(axis=1).reshape(m, n, -1)
-    if not rate:
+    c_T = None if dS is None else run.tangent.col(STEP)
+    if not rate and c_T is None:
         return S, dS
     dpw = np.concatenate([np.zeros((theta.size, 1)), np.arange(1, 6) * powers[:, :5]], axis=1)
     S1 = (_basis_at(dpw) * Y).sum(axis=1).reshape(m, n) / run.dt
-    return S, dS, S1
+    if c_T is not None:  # at a fixed time the phase moves with the step: -(i + theta) dS/dt
+        dS[:, :, c_T] -= S1 * (ii + theta).reshape(m, n)
+    return (S, dS, S1) if rate else (S, dS)

@@ -31,7 +31,24 @@ relative, and nearer the independent DOP853 solution (10 MPa: -7.4e-5 instead of
 The dashpot ``c d'`` acts with the hat-weighted share ``Phi(d / |delta|)`` of the two
 half-steps the contact is closed (``Phi`` the hat's distribution function: 0 below -1,
 ``(1 + x)^2 / 2`` to 0, ``1 - (1 - x)^2 / 2`` to 1, 1 beyond), the exact average of its
-switch along the linear motion, C1 (unchanged away from events). The wall's law applies at
+switch along the linear motion, C1 (unchanged away from events).
+
+Every dissipation law (:mod:`ssw.chain.dissipation`, damping ``c g(d) d'``) acts the same
+way: the rate ``d'`` is the predicted new one, and its factor ``g`` the hat average of
+``g(d + s d')`` along the step's linear motion, the second difference of ``g``'s double
+antiderivative over ``delta^2``, everywhere (so that no switch between a point value and the
+average breaks the smoothness): the dashpot's ``Phi`` (``g = [d > 0]``); the Kuwabara-Kono
+factor (``g = sqrt(d_+)``)::
+
+    <sqrt> = |delta|^(1/2) [(x + 1)_+^(5/2) - 2 x_+^(5/2) + (x - 1)_+^(5/2)] / (15/4),
+
+C1 through the event, and far from it (``d >= FAR |delta|``) its series ``sqrt(d) [1 - r /
+48 - r^2 / 384 - 3 r^3 / 4096 - ...]`` (the hat's moments ``<s^2> = 1/6``, ``<s^4> =
+1/15``, ``<s^6> = 1/28`` times ``g``'s derivatives; truncation ``r^4 / 3500 < 1e-14``
+there); the Hunt-Crossley factor (``g = F_el``) is the averaged Hertz force itself. Point
+evaluation instead would bring back the event's phase the averaging removes: the factor
+``sqrt(d)`` has an infinite slope at ``d = 0``, so its point value's error near an event is
+``O(dt^(1/2))`` relative, not ``O(dt^2)``. The wall's law applies at
 its point value (any law, and the same for a stateful wall's static limit: walls that
 coincide give one TOF); the thesis device's wall stays closed under the chain's weight
 through the first hit, so it has no event to smooth.
@@ -54,3 +71,8 @@ FAR = 20.0
 #: + r^3 / 4096 + ...``: the terms ``delta^2 G''''/12 + delta^4 G^(6)/360 + ...`` of the
 #: second difference of ``G = d^(7/2) / (35/4)``.
 SERIES = (1.0 / 16.0, 1.0 / 640.0)
+#: Coefficients of ``r``, ``r^2`` and ``r^3`` of the averaged square root's series
+#: ``<sqrt> / d^(1/2) = 1 - r / 48 - r^2 / 384 - 3 r^3 / 4096 - ...`` (their negatives): the
+#: terms ``delta^2 g^(2) / 12 + delta^4 g^(4) / 360 + delta^6 g^(6) / 20160`` of ``g =
+#: d^(1/2)``.
+ROOT_SERIES = (1.0 / 48.0, 1.0 / 384.0, 3.0 / 4096.0)

@@ -6,9 +6,11 @@ Equations of motion (REFERENCE.md "The chain"; Nesterenko 2001, Daraio et al. 20
     m_i u_i'' = F_{i-1} - F_i + m_i g + P delta_{i1},   F_j = A [u_j - u_{j+1}]_+^(3/2)
     (j = 0..N-2),   F_{N-1} = wall law at [u_{N-1}]_+,   F_{-1} = 0,
 
-with ``P`` the device's preload on bead 1, plus, when ``damping > 0``, a dashpot
-``c (v_j - v_{j+1})`` in every closed contact (evaluated at the new time's velocity,
-predicted as ``v_{n+1/2} + dt/2 a_n``, which keeps the scheme second order). The striker
+with ``P`` the device's preload on bead 1, plus, when ``damping > 0``, the damping of the
+device's dissipation law (:mod:`ssw.chain.dissipation`: ``c g(d) d'``, ``g`` 1, ``sqrt(d)``
+or the elastic force) in every closed contact, ``d' = v_j - v_{j+1}`` (``v_{N-1}`` at the
+wall) evaluated at the new time's velocity, predicted as ``v_{n+1/2} + dt/2 a_n``, which
+keeps the scheme second order. The striker
 speed, the preload and the masses may differ from scene to scene
 (:class:`ssw.chain.params.Batch`: a calibration scan advances many parameter sets in one
 run). The last contact is any wall: a law of the indentation (:class:`ssw.chain.wall.Wall`)
@@ -18,7 +20,7 @@ the same way whatever the wall.
 
 Method: velocity Verlet (Stormer-Verlet; Hairer, Lubich & Wanner 2006, *Geometric Numerical
 Integration*, sec. I.1.4): explicit, second order, one force evaluation per step; near a
-contact's opening or closing the Hertz force and the dashpot's switch are averaged along
+contact's opening or closing the Hertz force and the damping's factor are averaged along
 the step's relative motion (:mod:`ssw.chain.impulse`), so that the discrete solution is
 smooth in its parameters. Its energy error stays small (the rattling beads lose 2e-5 of
 the striker's energy over 3 ms at 80 steps per contact, ``tests/test_device.py``) and the
@@ -39,9 +41,11 @@ Forward sensitivities (``derivatives=``, :mod:`ssw.chain.sensitivity`): the deri
 ``u`` and ``v`` with respect to ``k`` parameters, (N, n, k), advanced by the same step
 differentiated line by line, from the derivatives of the initial statics
 (:func:`ssw.chain.statics.initial_tangent`); the run keeps the sensor's, ``Run.dsensor``.
-They cost nothing when not asked.
+They cost nothing when not asked. On request a run also carries the step's own column
+(:data:`ssw.chain.sensitivity.STEP`): its derivative with respect to ``dt`` at a fixed
+number of steps, for the chain rule through :func:`time_step` (:func:`step_tangent`).
 
-The step's arithmetic (forces, dashpots, accelerations, kicks, drift, sensitivities, the
+The step's arithmetic (forces, damping, accelerations, kicks, drift, sensitivities, the
 sensor's record and the peaks) and the stop rule's are one compiled kernel,
 :mod:`ssw.chain.kernel`; this module drives it and keeps what varies by wall, the records
 and the stop rule's state. When nothing is done in Python between two steps (the step
@@ -65,9 +69,10 @@ from typing import Any
 
 import numpy as np
 
+from ssw.chain.dissipation import law_of
 from ssw.chain.kernel import Stepper, stop_update
 from ssw.chain.params import Batch, ChainParams
-from ssw.chain.sensitivity import Tangent, tangent_of
+from ssw.chain.sensitivity import STEP, Tangent, tangent_of
 from ssw.chain.statics import (
     initial_state,
     initial_tangent,
@@ -116,7 +121,7 @@ class Run:
     energy : numpy.ndarray or None
         (n_t, n) J: kinetic + elastic - the work potential of gravity and the preload +
         what left the chain (a stateful wall's stored and dissipated energy instead of a
-        potential; the dashpots' work): constant up to the integrator's error.
+        potential; the contacts' damping work): constant up to the integrator's error.
     peak_wall_indentation : numpy.ndarray
         (n,) m, the largest ``u_{N-1}``.
     stop_time : numpy.ndarray
@@ -127,7 +132,7 @@ class Run:
         (n_t, n) J, what a stateful wall stores (with ``record_energy``).
     dissipated : numpy.ndarray or None
         (n_t, n) J, what left the chain for good: the wall's dissipated or radiated energy
-        and the dashpots' work (with ``record_energy``).
+        and the contacts' damping work (with ``record_energy``).
     tangent : Tangent or None
         The parameters of the sensitivities.
     dsensor : numpy.ndarray or None
@@ -302,6 +307,91 @@ def time_step(params: ChainParams | Batch, wall: Wall) -> float:
     return min(float(np.min(b.contact_time())), t_wall) / p.steps_per_contact
 
 
+def _wall_equivalent(b: Batch, wall: Wall, d_ref: np.ndarray, a_rigid: float,
+                     with_E: bool) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Per scene, the Hertz coefficient of :func:`time_step`'s wall term at the scene's own
+    impact overlap ``d_ref`` (the rigid flat's, or the wall's where it is stiffer), its
+    slope in ``d_ref`` and in the soil's modulus: ``he = F(d) / d^1.5``, ``dhe/dd = F'(d) /
+    d^1.5 - 1.5 he / d``, ``dhe/dE = dF/dE / d^1.5`` (0 for the rigid flat)."""
+    he, he_d, he_E = np.full(b.n, a_rigid), np.zeros(b.n), np.zeros(b.n)
+    if not float(np.max(wall.hertz_equivalent(float(np.min(d_ref))))) > a_rigid:
+        return he, he_d, he_E
+    for i in range(b.n):  # a wall stiffer than a rigid flat: no physical wall is
+        wi, d = wall.take(np.array([i])), float(d_ref[i])
+        h = float(wi.hertz_equivalent(d)[0])
+        if h > a_rigid:
+            x = np.array([d])
+            he[i] = h
+            he_d[i] = float(wi.dforce_dd(x)[0]) / d**1.5 - 1.5 * h / d
+            if with_E:
+                he_E[i] = float(wi.dforce_dE(x)[0]) / d**1.5
+    return he, he_d, he_E
+
+
+def step_tangent(params: ChainParams | Batch, wall: Wall, dt: float,
+                 names: tuple[str, ...]) -> np.ndarray:
+    """The derivative of the time step (:func:`time_step`) with respect to each parameter,
+    per scene: the chain rule's ``d dt / d theta`` for a TOF run at the step its parameters
+    give.
+
+    A scene's own step is ``min(t_bb, t_w) / steps_per_contact``, Hertz contact times
+    ``t = 2.9432 (5 m / (4 A))^(2/5) v^(-1/5)`` (Johnson 1985, eq. 11.24) of the striker on
+    bead 1 (``m = m0 m1 / (m0 + m1)``, ``A`` the beads') and of the last bead on a rigid flat
+    (``m`` the last bead's, ``A`` the flat's, or the wall's Hertz equivalent at the impact's
+    peak overlap ``d_ref = (5 m v^2 / (4 A))^(2/5)`` where that is stiffer), so ``d ln t =
+    2/5 d ln m - 2/5 d ln A - 1/5 d ln v``. A batch takes its shortest step: a scene whose
+    own step is the batch's moves it (ties: each scene as if alone, which is what a batch of
+    scenes sharing their striker and masses gives), any other scene's step term is 0.
+
+    Parameters
+    ----------
+    params : ChainParams or Batch
+        The chain.
+    wall : Wall
+        The last contact (its ``hertz_equivalent``; ``dforce_dd``, ``dforce_dE`` for a wall
+        stiffer than a rigid flat).
+    dt : float
+        s, the run's step (:func:`time_step` of the batch).
+    names : tuple of str
+        Names of :data:`ssw.chain.sensitivity.PARAMETERS`.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n, len(names)) s per unit of each parameter.
+    """
+    from ssw.hertz import contact_time as hertz_time
+
+    b = params if isinstance(params, Batch) else Batch.of(params, wall.n)
+    p = b.params
+    m0, m1, v = b.masses[:, 0], b.masses[:, 1], b.striker_velocity
+    d_ref = impact_scales(b)[0]
+    a_rigid = 4.0 / 3.0 * np.sqrt(p.bead_radius) / p.bead_compliance
+    he, he_d, he_E = _wall_equivalent(b, wall, d_ref, a_rigid, "E" in names)
+    t_bb = b.contact_time()
+    t_w = hertz_time(b.masses[:, -1], he, v)
+    own = np.minimum(t_bb, t_w) / p.steps_per_contact
+    bb = t_bb <= t_w
+    sets = own <= dt * (1.0 + 1e-12)
+    s_d = he_d * d_ref / he  # d ln he / d ln d_ref
+    # d ln m_eff per unit of m0 and of m1; d ln d_ref = 2/5 d ln m_eff + 4/5 d ln v
+    lm0, lm1 = m1 / (m0 * (m0 + m1)), m0 / (m1 * (m0 + m1))
+    sensor_is_1 = p.sensor_index == 1 and not p.uniform
+    out = np.zeros((b.n, len(names)))
+    for j, name in enumerate(names):
+        if name == "striker_velocity":
+            dln = np.where(bb, -0.2 / v, -0.2 / v - 0.4 * s_d * 0.8 / v)
+        elif name == "striker_mass" or (name == "sensor_mass" and sensor_is_1):
+            lm = lm0 if name == "striker_mass" else lm1
+            dln = np.where(bb, 0.4 * lm, -0.4 * s_d * 0.4 * lm)
+        elif name == "E":
+            dln = np.where(bb, 0.0, -0.4 * he_E / he)
+        else:
+            continue
+        out[:, j] = np.where(sets, own * dln, 0.0)
+    return out
+
+
 class _StopRule:
     """Per-scene state of the early-stop rule (module docstring), over the active scenes
     (:meth:`keep` drops the stopped ones): ``F`` (9, n) the rows :data:`FLOATS`, ``B``
@@ -385,7 +475,8 @@ def simulate(
         update; ``ssw.progress``).
     derivatives : Tangent or str or sequence of str or None
         Parameters (:data:`ssw.chain.sensitivity.PARAMETERS`) whose forward sensitivities
-        the run carries (``dsensor``); None: none (no extra cost).
+        the run carries (``dsensor``), at the run's fixed step, and the step's own column
+        (:data:`ssw.chain.sensitivity.STEP`) if named; None: none (no extra cost).
 
     Returns
     -------
@@ -395,8 +486,9 @@ def simulate(
     Raises
     ------
     ConfigError
-        Sensitivities asked of a stateful wall without ``advance_tangent``, or with an
-        ``initial`` state, or with a wall step other than ``dt``.
+        Sensitivities asked of a stateful wall without ``advance_tangent`` (the step's
+        column: without ``step_tangent``), or with an ``initial`` state, or with a wall
+        step other than ``dt``.
     """
     n = wall.n
     b = params if isinstance(params, Batch) else Batch.of(params, n)
@@ -410,7 +502,7 @@ def simulate(
     t_end = float(t_end if t_end is not None else p.t_max)
     n_steps = int(np.ceil(t_end / dt - 1e-9))
     N, s = p.n_beads, p.sensor_index
-    A, damping = p.bead_coefficient, p.damping
+    A, damping, law = p.bead_coefficient, p.damping, law_of(p.damping_law, "chain.damping_law")
     inv_m_all = np.ascontiguousarray((1.0 / b.masses).T)  # (N, n)
     g_acc = p.g if p.gravity else 0.0
     F0 = static_contact_forces(b)  # (n, N)
@@ -428,6 +520,11 @@ def simulate(
                           "differentiate its TOF by central differences, ssw.tof.api)")
     if tg is not None and initial is not None:
         raise ConfigError("derivatives", list(tg.names), "none with a given initial state")
+    c_T = None if tg is None else tg.col(STEP)
+    if c_T is not None and stateful and not getattr(wall, "step_tangent", False):
+        raise ConfigError("derivatives", list(tg.names),
+                          f"none of the step ({STEP}) for the {type(wall).__name__} (its "
+                          "advance_tangent does not differentiate the step)")
     c_D = None if tg is None else tg.col("damping")
     predict = damping > 0.0 or c_D is not None
     half = 0.5 * dt
@@ -460,15 +557,17 @@ def simulate(
             dE_all[:, c_E] = 1.0
         dE = dE_all
         tstate = wall.start_tangent(wstate, ZT[0, -1], dE) if stateful else None
+        # the step's column for a stateful wall: d dt / d column
+        step_opt = {} if c_T is None else {"ddt": np.eye(tg.k)[c_T]}
         df_wall = None
         if stateful:
             df_wall = wall.dforce_dd(u_last)[:, None] * ZT[0, -1]
             if c_E is not None:
                 df_wall[:, c_E] += wall.dforce_dE(u_last)
-    consts = dict(A=A, dt=dt, damping=damping, g=g_acc, predict=predict,
+    consts = dict(A=A, dt=dt, damping=damping, law=law.code, g=g_acc, predict=predict,
                   damped_tangent=tg is not None and damping > 0.0,
                   c_D=-1 if c_D is None else c_D, c_P=-1 if c_P is None else c_P,
-                  c_E=-1 if c_E is None else c_E,
+                  c_E=-1 if c_E is None else c_E, c_T=-1 if c_T is None else c_T,
                   mass_at=list(zip(mass_rows.tolist(), mass_cols.tolist(), strict=True)))
     ch = Stepper(N, n, 0 if tg is None else tg.k, consts, inv_m_all,
                  preload_all if has_preload else None, record_energy and damping > 0.0)
@@ -519,7 +618,7 @@ def simulate(
         shapes.update(dsensor=(tg.k,))
     if record_energy:
         shapes.update(energy=(), energy_wall=(), dissipated=())
-        w_dash = np.zeros(n)  # the dashpots' work so far (J)
+        w_dash = np.zeros(n)  # the damping's work so far (J)
         p_dash = ch.power.copy() if ch.power is not None else np.zeros(n)
     if record_forces:
         shapes["forces"] = (N,)
@@ -580,7 +679,7 @@ def simulate(
                 u_last = ch.z[0, -1].copy()
                 if tg is not None:
                     f_wall, df_wall, wstate, tstate = w.advance_tangent(
-                        wstate, tstate, u_last, ch.ZT[0, -1], dt, dE)
+                        wstate, tstate, u_last, ch.ZT[0, -1], dt, dE, **step_opt)
                 else:
                     f_wall, wstate = w.advance(wstate, u_last, dt)
             if writes_wall:

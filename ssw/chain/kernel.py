@@ -2,7 +2,8 @@
 
 One implementation of the step's arithmetic (:func:`ssw.chain.integrate.simulate` keeps the
 walls, the records and the stop rule's state): the contact forces averaged over the step's
-relative motion (:mod:`ssw.chain.impulse`), the contact dashpots at the predicted velocity,
+relative motion (:mod:`ssw.chain.impulse`), the contacts' damping at the predicted velocity
+(by the law of :mod:`ssw.chain.dissipation`),
 the accelerations with the preload and gravity, the two half kicks and the drift of velocity
 Verlet, and the forward sensitivities of all of them (:mod:`ssw.chain.sensitivity`); a block
 of whole steps in one call (:meth:`Stepper.advance`) and the early-stop rule
@@ -33,7 +34,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ssw.chain.impulse import FAR, SERIES
+from ssw.chain.impulse import FAR, ROOT_SERIES, SERIES
 from ssw.errors import ConfigError, SswError
 
 _D = ctypes.POINTER(ctypes.c_double)
@@ -44,13 +45,20 @@ REBUILD = ("run `bash scripts/setup.sh` (or `pip install -e .`) in the ssw check
            "a C compiler (Debian: apt-get install gcc libc6-dev)")
 
 
+#: Scratch doubles of the step per contact (``ssw_chain.work``: this many ``N n`` blocks,
+#: then ``N n k``).
+WORK_BLOCKS = 9
+
+
 class _Chain(ctypes.Structure):
-    """The C ``ssw_chain`` (``_step.c``): sizes, constants and the arrays' addresses."""
+    """The C ``ssw_chain`` (``_step.c``): sizes, constants and the arrays' addresses, field by
+    field in the C declaration's order."""
 
     _fields_ = [
         ("N", ctypes.c_int), ("n", ctypes.c_int), ("k", ctypes.c_int),
         ("predict", ctypes.c_int), ("damped_tangent", ctypes.c_int),
-        ("c_D", ctypes.c_int), ("c_P", ctypes.c_int),
+        ("law", ctypes.c_int),
+        ("c_D", ctypes.c_int), ("c_P", ctypes.c_int), ("c_T", ctypes.c_int),
         ("n_mass", ctypes.c_int), ("mass_row", ctypes.c_int * 2),
         ("mass_col", ctypes.c_int * 2),
         ("A", ctypes.c_double), ("dt", ctypes.c_double), ("damping", ctypes.c_double),
@@ -99,11 +107,12 @@ def library() -> ctypes.CDLL:
         raise SswError(f"the compiled chain step ({spec.origin}) was built from another "
                        f"{SOURCE.name} (source {built}, now {source_digest()}): {REBUILD}")
     lib.ssw_step_constants.argtypes = [_D]
-    got = np.empty(3)
+    got = np.empty(6)
     lib.ssw_step_constants(got.ctypes.data_as(_D))
-    if not np.array_equal(got, [FAR, *SERIES]):
-        raise SswError(f"{SOURCE.name} and ssw.chain.impulse disagree on FAR and SERIES "
-                       f"({got.tolist()} against {[FAR, *SERIES]})")
+    if not np.array_equal(got, [FAR, *SERIES, *ROOT_SERIES]):
+        raise SswError(f"{SOURCE.name} and ssw.chain.impulse disagree on FAR, SERIES and "
+                       f"ROOT_SERIES ({got.tolist()} against "
+                       f"{[FAR, *SERIES, *ROOT_SERIES]})")
     ref = ctypes.POINTER(_Chain)
     lib.ssw_drift.argtypes = [ref]
     lib.ssw_drift.restype = None
@@ -249,7 +258,7 @@ class Stepper:
 
     Arrays (C-contiguous, SI): ``z`` (2, N, n) positions and velocities, ``acc`` (N, n) the
     last accelerations, ``f`` (N, n) the contact forces (row N - 1 the wall's: set it before
-    :meth:`forces`), ``power`` (n,) the dashpots' dissipation rate, ``peak_u`` (n,) the
+    :meth:`forces`), ``power`` (n,) the damping's dissipation rate, ``peak_u`` (n,) the
     largest wall indentation and ``peak_f`` (N - 1, n) the largest bead-bead forces (from
     :meth:`start_record`); with ``k``: ``ZT`` (2, N, n, k), ``Acc`` and ``dF`` (N, n, k),
     the wall's row of ``dF`` set by the caller.
@@ -263,21 +272,23 @@ class Stepper:
     k : int
         Sensitivity columns (0: none).
     consts : dict
-        ``A`` (N/m^1.5), ``dt`` (s), ``damping`` (N s/m), ``g`` (m/s^2), ``predict``,
-        ``damped_tangent`` (bool), ``c_D``, ``c_P``, ``c_E`` (int, -1: none), ``mass_at``
-        (list of (bead, column)).
+        ``A`` (N/m^1.5), ``dt`` (s), ``damping`` (the law's coefficient, its unit), ``law``
+        (the law's ``code``, :class:`ssw.chain.dissipation.DissipationLaw`), ``g`` (m/s^2),
+        ``predict``, ``damped_tangent`` (bool), ``c_D``, ``c_P``, ``c_E``, ``c_T`` (int,
+        -1: none; ``c_T`` the time step's column), ``mass_at`` (list of (bead, column)).
     inv_m : numpy.ndarray
         (N, n) 1/kg.
     preload : numpy.ndarray or None
         (n,) N on bead 1.
     power : bool
-        Keep the dashpots' dissipation rate.
+        Keep the damping's dissipation rate.
     """
 
     def __init__(self, N: int, n: int, k: int, consts: dict, inv_m: np.ndarray,
                  preload: np.ndarray | None, power: bool) -> None:
-        if N * n * (8 + k) > MAX_INDEX:
-            raise ConfigError("scenes", n, f"at most {MAX_INDEX // (N * (8 + k))} per run of "
+        if N * n * (WORK_BLOCKS + k) > MAX_INDEX:
+            raise ConfigError("scenes", n, f"at most {MAX_INDEX // (N * (WORK_BLOCKS + k))} "
+                              f"per run of "
                               f"{N} beads with {k} sensitivities (the compiled step indexes "
                               "its arrays with C ints): run the scenes in batches")
         self.N, self.n, self.k, self.consts = N, n, k, consts
@@ -298,11 +309,12 @@ class Stepper:
 
     def _bind(self) -> None:
         N, n, k, c = self.N, self.n, self.k, self.consts
-        self.work = np.empty(8 * N * n + N * n * k)
+        self.work = np.empty(WORK_BLOCKS * N * n + N * n * k)
         rows = [i for i, _ in c["mass_at"]] + [0, 0]
         cols = [j for _, j in c["mass_at"]] + [0, 0]
         self._c = _Chain(
-            N, n, k, int(c["predict"]), int(c["damped_tangent"]), c["c_D"], c["c_P"],
+            N, n, k, int(c["predict"]), int(c["damped_tangent"]), int(c.get("law", 0)),
+            c["c_D"], c["c_P"], int(c.get("c_T", -1)),
             len(c["mass_at"]), (ctypes.c_int * 2)(*rows[:2]), (ctypes.c_int * 2)(*cols[:2]),
             c["A"], c["dt"], c["damping"], c["g"],
             _ptr(self.z), _ptr(self.acc), _ptr(self.inv_m), _ptr(self.preload), _ptr(self.f),

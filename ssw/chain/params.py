@@ -9,8 +9,11 @@ its own mass (``sensor_mass``), and its signal the mean of its two contact force
 
 The physical values come from a device (:class:`ssw.device.Device`, YAML files in
 ``config/devices/``; the thesis's device is the default), the numerics (time steps, gravity,
-damping, the fit law) from the study config's ``chain:`` section:
-:meth:`ChainParams.from_config`. The dataclass defaults below are those of the thesis device.
+the fit law) from the study config's ``chain:`` section: :meth:`ChainParams.from_config`.
+The contacts' dissipation (its law, :mod:`ssw.chain.dissipation`, and coefficient) is the
+device's (``dissipation:``); the config's ``chain.damping``, when given (not null), replaces
+the coefficient, as a flag replaces a device field (``--damping``, ``--damping-law``). The
+dataclass defaults below are those of the thesis device.
 """
 
 from __future__ import annotations
@@ -20,6 +23,7 @@ from typing import Any
 
 import numpy as np
 
+from ssw.chain.dissipation import DEFAULT_LAW, law_of
 from ssw.errors import ConfigError
 from ssw.hertz import effective_modulus, hertz_coefficient, sphere_sphere_coefficient
 
@@ -60,7 +64,12 @@ class ChainParams:
     g : float
         m/s^2.
     damping : float
-        N s/m, viscous dashpot in every closed contact (0: conservative, the default).
+        The dissipation coefficient ``c`` of every closed contact, in the unit of
+        ``damping_law`` (the dashpot's N s/m; 0: conservative, the default).
+    damping_law : str
+        The contacts' dissipation law, a name of :data:`ssw.chain.dissipation.LAWS`: the
+        damping force ``c d'`` (``dashpot``), ``c sqrt(d) d'`` (``kuwabara_kono``) or ``c
+        F_el(d) d'`` (``hunt_crossley``) in each closed contact.
     plate_material : str
         The plate under the last bead (the thesis's PLA): the ``fit`` wall's K-table group.
     plate_thickness : float
@@ -102,6 +111,7 @@ class ChainParams:
     gravity: bool = True
     g: float = STANDARD_GRAVITY
     damping: float = 0.0
+    damping_law: str = DEFAULT_LAW
     plate_material: str = "pla"
     plate_thickness: float = 0.4e-3
     plate_E: float = 3.5e9
@@ -131,8 +141,10 @@ class ChainParams:
                 raise ConfigError(f"chain.{name}", val, "must be > 0 kg (or null: a bead's)")
         if not -1.0 < self.bead_nu <= 0.5:
             raise ConfigError("chain.bead_nu", self.bead_nu, "must lie in (-1, 0.5]")
-        if self.damping < 0:
-            raise ConfigError("chain.damping", self.damping, "must be >= 0 N s/m")
+        law = law_of(self.damping_law, "chain.damping_law")
+        if not (np.isfinite(self.damping) and self.damping >= 0):
+            raise ConfigError("chain.damping", self.damping,
+                              f"a coefficient >= 0 {law.unit} ({law.name}: {law.formula})")
         if self.fit_law not in ("k_hertz", "power"):
             raise ConfigError("fit.law", self.fit_law, "k_hertz | power")
         if self.preload < 0 or not np.isfinite(self.preload):
@@ -266,7 +278,8 @@ def chain_params(device: Any, materials: dict[str, Any] | None = None, **numeric
         The materials library (key -> Material; default: the shipped one, ``realistic``).
     **numerics
         The non-device fields of ChainParams (``steps_per_contact``, ``t_max``,
-        ``gravity``, ``damping``, ``fit_law``, ...).
+        ``gravity``, ``fit_law``, ...), and ``damping``, ``damping_law`` replacing the
+        device's dissipation.
 
     Returns
     -------
@@ -300,6 +313,7 @@ def chain_params(device: Any, materials: dict[str, Any] | None = None, **numeric
         "plate_material": device.plate_material if device.has_plate else "none",
         "plate_thickness": device.plate_thickness, "plate_diameter": device.plate_diameter,
         "plate_interface": device.plate_interface,
+        "damping_law": device.dissipation_law, "damping": device.dissipation,
     }
     if device.has_plate:
         plate = material(device.plate_material, "plate.material")
@@ -322,16 +336,20 @@ def numerics_of(cfg: dict[str, Any]) -> dict[str, Any]:
     Returns
     -------
     dict
-        ``gravity``, ``damping``, ``fit_law``, ``steps_per_contact``, ``t_max``.
+        ``gravity``, ``fit_law``, ``steps_per_contact``, ``t_max``, and ``damping`` when the
+        config gives it (not null: it replaces the device's dissipation coefficient, in
+        the unit of the device's law).
     """
     ch = cfg.get("chain", {})
-    return {
+    out = {
         "gravity": ch.get("gravity", ChainParams.gravity),
-        "damping": ch.get("damping", ChainParams.damping),
         "fit_law": cfg.get("fit", {}).get("law", ChainParams.fit_law),
         "steps_per_contact": ch.get("steps_per_contact", ChainParams.steps_per_contact),
         "t_max": ch.get("t_max", ChainParams.t_max),
     }
+    if ch.get("damping") is not None:
+        out["damping"] = ch["damping"]
+    return out
 
 
 #: ChainParams fields that may take one value per scene inside one batched run.

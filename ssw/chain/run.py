@@ -15,10 +15,11 @@ from typing import Any
 import numpy as np
 
 from ssw.chain.dense import dense_peaks
-from ssw.chain.integrate import Run, simulate
+from ssw.chain.integrate import Run, simulate, step_tangent, time_step
 from ssw.chain.params import Batch, ChainParams
+from ssw.chain.sensitivity import MOVES_STEP, STEP, Tangent, tangent_of
 from ssw.chain.tof import Peaks, check_selection
-from ssw.chain.wall import Wall, hertz_wall
+from ssw.chain.wall import Wall, hertz_wall, is_stateful
 from ssw.errors import SolverError
 from ssw.signal.rule import select
 
@@ -52,6 +53,63 @@ def check_complete(run: Run, params: ChainParams) -> None:
         )
 
 
+def step_derivatives(params: ChainParams | Batch, wall: Any, tangent: Tangent | None
+                     ) -> np.ndarray | None:
+    """The step's derivatives for a run at the step its parameters give (no ``dt`` fixed),
+    when the run must carry the step's own column (:data:`ssw.chain.sensitivity.STEP`) for
+    the chain rule: a parameter of ``tangent`` moves the step (some derivative of
+    :func:`ssw.chain.integrate.step_tangent` is not 0: the striker's speed and mass, the
+    sensor's mass at bead 1, E of a wall stiffer than a rigid flat), the step's column is
+    not asked itself, and the wall can differentiate it (any wall without state; a stateful
+    one with ``step_tangent``). Otherwise None: the run carries no extra column.
+
+    Parameters
+    ----------
+    params : ChainParams or Batch
+        The chain.
+    wall : Wall
+        The last contact.
+    tangent : Tangent or None
+        The parameters.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        (n, k) s per unit of each parameter, or None.
+    """
+    if tangent is None or STEP in tangent.names:  # the step's column itself is asked
+        return None
+    if not any(n in MOVES_STEP for n in tangent.names):
+        return None
+    if is_stateful(wall) and not getattr(wall, "step_tangent", False):
+        return None
+    b = params if isinstance(params, Batch) else Batch.of(params, wall.n)
+    ddt = step_tangent(b, wall, time_step(b, wall), tangent.names)
+    return ddt if np.any(ddt) else None
+
+
+def chain_step(x: np.ndarray | None, ddt: np.ndarray) -> np.ndarray | None:
+    """The chain rule through the step: ``x[:, :k] + x[:, k] ddt`` of derivatives ``x``
+    (n, k + 1) whose last column is the step's (:data:`ssw.chain.sensitivity.STEP`), with
+    ``ddt`` (n, k) the step's derivatives (:func:`ssw.chain.integrate.step_tangent`).
+
+    Parameters
+    ----------
+    x : numpy.ndarray or None
+        (..., n, k + 1) per unit of each parameter, then per second of step.
+    ddt : numpy.ndarray
+        (n, k) s per unit of each parameter.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        (..., n, k) the total derivatives (None for None).
+    """
+    if x is None:
+        return None
+    return x[..., :-1] + x[..., -1:] * ddt
+
+
 def run_peaks(params: ChainParams | Batch, wall: Wall, *, strict: bool = True,
               dt: float | None = None, on_progress: Any = None, derivatives: Any = None
               ) -> tuple[Peaks, Run]:
@@ -81,7 +139,11 @@ def run_peaks(params: ChainParams | Batch, wall: Wall, *, strict: bool = True,
     derivatives : Tangent or str or sequence of str or None
         Parameters to differentiate the peaks with respect to
         (:mod:`ssw.chain.sensitivity`): the Peaks then carry ``dt_incident``,
-        ``dt_reflected``, ... and ``dtof`` (n, k).
+        ``dt_reflected``, ... and ``dtof`` (n, k). Without ``dt`` the step is the
+        parameters' own (:func:`ssw.chain.integrate.time_step`), and the derivatives
+        include its dependence on them (the run carries the step's column where it moves,
+        :func:`step_derivatives`, and the chain rule with
+        :func:`ssw.chain.integrate.step_tangent`); with ``dt`` the step is held fixed.
 
     Returns
     -------
@@ -95,7 +157,10 @@ def run_peaks(params: ChainParams | Batch, wall: Wall, *, strict: bool = True,
     RecordingError
         (strict) a scene has no incident or no reflected peak.
     """
-    run = simulate(params, wall, dt=dt, on_progress=on_progress, derivatives=derivatives)
+    tg = tangent_of(derivatives)
+    ddt = step_derivatives(params, wall, tg) if dt is None else None
+    carried = tg.with_step() if ddt is not None else tg
+    run = simulate(params, wall, dt=dt, on_progress=on_progress, derivatives=carried)
     b = params if isinstance(params, Batch) else Batch.of(params, wall.n)
     p = b.params
     pk = dense_peaks(run, strict=False)
@@ -110,7 +175,7 @@ def run_peaks(params: ChainParams | Batch, wall: Wall, *, strict: bool = True,
         t_end = min(2.0 * t_end, T_END_CAP)
         idx = np.flatnonzero(nan)
         sub = simulate(b.take(idx), wall.take(idx), dt=run.dt, t_end=t_end,
-                       on_progress=on_progress, derivatives=derivatives)
+                       on_progress=on_progress, derivatives=carried)
         sp = dense_peaks(sub, strict=False)
         for k, c in cols.items():
             if c is not None:
@@ -130,7 +195,10 @@ def run_peaks(params: ChainParams | Batch, wall: Wall, *, strict: bool = True,
             c[gone] = np.nan
     if cols["dense"] is not None:
         cols["dense"][gone] = False
-    return Peaks(**cols, tangent=run.tangent), run
+    if ddt is not None:
+        for k in ("dt_incident", "dt_reflected", "df_incident", "df_reflected"):
+            cols[k] = chain_step(cols[k], ddt)
+    return Peaks(**cols, tangent=tg), run
 
 
 def peak_wall_indentation(soil_E: Any, soil_nu: Any, params: ChainParams) -> np.ndarray:

@@ -9,10 +9,10 @@ Lubich & Wanner 2006, sec. VI.5 for variational equations of symplectic maps):
     V <- V + dt/2 A,   U <- U + dt V,   A <- da/du U + da/dv V' + da/dp,   V <- V + dt/2 A,
 
 ``A = da/dp`` along the discrete trajectory, ``V'`` the derivative of the velocity the
-dashpot is evaluated at. The result is the exact derivative of the *discrete* solution at
-the run's fixed step ``dt`` (the step is a numerical setting, held fixed: a run with a
-perturbed parameter and the same ``dt`` differs by the derivative times the perturbation,
-to second order). How each parameter enters (:data:`PARAMETERS`):
+damping is evaluated at. The result is the exact derivative of the *discrete* solution at
+the run's fixed step ``dt`` (a run with a perturbed parameter and the same ``dt`` differs
+by the derivative times the perturbation, to second order). How each parameter enters
+(:data:`PARAMETERS`):
 
 * ``E`` (Pa): the soil's modulus, through the wall law only: ``dF_wall/dE`` at fixed
   indentation (``wall.dforce_dE``; a stateful wall's ``advance_tangent``), and the static
@@ -22,10 +22,23 @@ to second order). How each parameter enters (:data:`PARAMETERS`):
 * ``sensor_mass``, ``striker_mass`` (kg): the masses of the sensor particle and of the
   striker (the statics' weights, the accelerations ``F / m``); a ``uniform`` chain's
   sensor has a bead's mass whatever ``sensor_mass`` says (derivative 0);
-* ``damping`` (N s/m): the contact dashpot ``c (v_j - v_{j+1})`` of every closed contact.
+* ``damping`` (the law's unit: N s/m for the dashpot): the dissipation coefficient ``c``
+  of every closed contact, whatever its law (:mod:`ssw.chain.dissipation`).
 
 The same names are the device's calibratable continuous parameters
-(:data:`ssw.device.PARAMETERS`) plus the soil's modulus and the dashpot.
+(:data:`ssw.device.PARAMETERS`) plus the soil's modulus and the dissipation.
+
+The step itself. The step is a fixed fraction of a Hertz contact time at the striker speed
+(:func:`ssw.chain.integrate.time_step`), so a TOF computed at the step its parameters give
+moves with the striker's speed and mass (``t_c ~ (m^2 / v)^(1/5)``: 1-3e-4 of the striker
+speed's derivative on the thesis device) through the step as well. A run may carry the
+step's own column, :data:`STEP` (``dt``, s): the derivative of the discrete solution with
+respect to ``dt`` at a fixed number of steps, the scheme differentiated line by line in its
+explicit ``dt`` too (the drift's and the kicks' ``dt``, the averaging's ``|delta| = |d'|
+dt``, the predicted velocity's ``dt/2 a``); the record's times ``t_n = n dt`` enter on the
+dense output (:mod:`ssw.chain.dense`). The chain rule with the step's analytic derivative
+(:func:`ssw.chain.integrate.step_tangent`) then gives the derivative of the TOF a run at the
+parameters' own step computes (:func:`ssw.chain.run.run_peaks` without ``dt``).
 """
 
 from __future__ import annotations
@@ -47,6 +60,32 @@ PARAMETERS: dict[str, str] = {
 }
 
 
+def units(damping_law: str) -> dict[str, str]:
+    """:data:`PARAMETERS`' SI units with the dissipation coefficient's in the law's unit.
+
+    Parameters
+    ----------
+    damping_law : str
+        A name of :data:`ssw.chain.dissipation.LAWS`.
+
+    Returns
+    -------
+    dict
+        Name -> unit.
+    """
+    from ssw.chain.dissipation import law_of
+
+    return {**PARAMETERS, "damping": law_of(damping_law, "chain.damping_law").unit}
+
+
+#: The time step's own column (s): carried on request (module docstring), not a parameter.
+STEP = "dt"
+#: Parameters the step depends on (:func:`ssw.chain.integrate.time_step`: the Hertz contact
+#: time of the striker on bead 1 and of the last bead on a rigid flat; ``sensor_mass``
+#: when the sensor is bead 1, ``E`` only for a wall stiffer than a rigid flat).
+MOVES_STEP = ("striker_velocity", "striker_mass", "sensor_mass", "E")
+
+
 @dataclass(frozen=True)
 class Tangent:
     """The parameters a run differentiates with respect to (the columns of its
@@ -55,16 +94,26 @@ class Tangent:
     Attributes
     ----------
     names : tuple of str
-        Names of :data:`PARAMETERS`, each at most once.
+        Names of :data:`PARAMETERS`, each at most once, and :data:`STEP` (the step's own
+        column).
     """
 
     names: tuple[str, ...]
 
     def __post_init__(self) -> None:
-        bad = [n for n in self.names if n not in PARAMETERS]
+        bad = [n for n in self.names if n not in PARAMETERS and n != STEP]
         if bad or len(set(self.names)) != len(self.names) or not self.names:
             raise ConfigError("derivatives", list(self.names),
                               f"one or more distinct names of {', '.join(PARAMETERS)}")
+
+    @property
+    def parameters(self) -> tuple[str, ...]:
+        """The names without :data:`STEP`."""
+        return tuple(n for n in self.names if n != STEP)
+
+    def with_step(self) -> Tangent:
+        """These columns and the step's (:data:`STEP`) last."""
+        return self if STEP in self.names else Tangent((*self.names, STEP))
 
     @property
     def k(self) -> int:

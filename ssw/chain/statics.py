@@ -12,6 +12,9 @@ is ``sqrt(2 g h)``).
 
 Every function takes a :class:`ssw.chain.params.Batch` (per-scene striker speed, preload and
 masses) or a plain :class:`ssw.chain.params.ChainParams` (the same values for every scene).
+The contacts' dissipation (any law of :mod:`ssw.chain.dissipation`) acts on moving contacts
+only: the chain at rest, and its derivative with respect to the dissipation coefficient
+(zero), do not depend on it, nor on the time step.
 """
 
 from __future__ import annotations

@@ -14,8 +14,11 @@ for the same inputs):
 3. the device: the calibration's (calibrated) device, else ``--device`` (a YAML file or a
    shipped device's name), else the config's ``device:``; device flags (``--beads``,
    ``--striker-velocity``, ``--preload``, ...) override single fields;
-4. numerics and model (time steps, gravity, damping, bead material, uniform sensor, fit
-   law): the calibration's, else the config's; flags override;
+4. numerics and model (time steps, gravity, bead material, uniform sensor, fit law): the
+   calibration's, else the config's; flags override. The contacts' dissipation (its law
+   and coefficient) is the device's (its ``dissipation:``), replaced by the calibration's,
+   else by the config's ``chain.damping`` when not null, then by ``--damping`` and
+   ``--damping-law``;
 5. the wall law and its dynamics: the calibration's, else ``--law``, else the config's
    ``chain.wall_law`` (and ``chain.wall_dynamics``).
 

@@ -30,6 +30,7 @@ from typing import Any
 
 import numpy as np
 
+from ssw.chain.dissipation import LAWS as DISSIPATION_LAWS
 from ssw.errors import ConfigError
 
 #: Where a flag's value goes.
@@ -127,7 +128,13 @@ FLAGS: tuple[Flag, ...] = (
     Flag("--bead-density", MODEL, "bead_density", True, "bead density, kg/m^3", float),
     Flag("--bead-E", MODEL, "bead_E", True, "bead Young's modulus, Pa", float),
     Flag("--bead-nu", MODEL, "bead_nu", True, "bead Poisson's ratio", float),
-    Flag("--damping", MODEL, "damping", True, "contact dashpot, N s/m (default 0)", float),
+    Flag("--damping", MODEL, "damping", True, "the contacts' dissipation coefficient, in "
+         "the unit of the law (--damping-law: dashpot N s/m, kuwabara_kono N s/m^1.5, "
+         "hunt_crossley s/m); default: the device's (dissipation: in its file), else the "
+         "config's chain.damping", float),
+    Flag("--damping-law", MODEL, "damping_law", True, "the contacts' dissipation law: "
+         "dashpot c d', kuwabara_kono c sqrt(d) d', hunt_crossley c F_el(d) d' (default: the "
+         "device's)", choices=tuple(DISSIPATION_LAWS)),
     Flag("--steps-per-contact", MODEL, "steps_per_contact", False,
          "time steps per Hertz contact time (the discretization: a calibration's consumer "
          "may refine it)", int),

@@ -26,6 +26,66 @@ def _params_dict(params: Any) -> dict[str, Any]:
     return {f"chain_{k}": v for k, v in asdict(params).items()}
 
 
+def context_strengths(ctx: Any, sample: Any = None, source: str = "") -> Any:
+    """The strengths of the yield checks (:func:`ssw.validity.strengths_of`) of a resolved
+    chain context: its device's beads and plate in its materials (the calibration's, else
+    the config's library), the sample's ``sample`` (Pa, one or one per scene) from
+    ``source`` when known."""
+    from ssw.config import library
+    from ssw.validity import strengths_of
+
+    mats = ctx.calibration.materials() if ctx.calibration is not None else library(ctx.cfg)
+    return strengths_of(ctx.params, mats, ctx.device.bead_material, sample=sample,
+                        sample_source=source)
+
+
+def sample_statement(sample: Any) -> str:
+    """The stated sample geometry a ``finite_sample`` check rests on, in words."""
+    d = sample.to_dict()
+    parts = [f"thickness {d['thickness'] * 1e3:g} mm"]
+    if d.get("radius") is not None:
+        parts.append(f"radius {d['radius'] * 1e3:g} mm")
+    parts += [f"base {d['base']}", f"side {d['lateral']}"]
+    return "the sample as stated: " + ", ".join(parts)
+
+
+def finite_sample_validity(ctx: Any, E: Any, nu: Any, tof: Any) -> Any:
+    """The ``finite_sample`` check of TOFs ``tof`` (s) on the context's stated sample at
+    ``E`` (Pa), ``nu`` (:func:`ssw.lift.half_space_departure`), or None without a
+    stated sample."""
+    from ssw.lift import half_space_departure
+    from ssw.validity import finite_sample
+
+    if ctx.sample is None:
+        return None
+    dep = half_space_departure(ctx.params, E, nu, tof, ctx.device_wall_options or {})
+    return finite_sample(dep, sample_statement(ctx.sample))
+
+
+def add_stress_checks_option(p: argparse.ArgumentParser, default: str) -> None:
+    """``--stress-checks`` (:data:`ssw.validity.STRESS_MODES`)."""
+    from ssw.validity import STRESS_MODES
+
+    p.add_argument("--stress-checks", choices=STRESS_MODES, default=default,
+                   help="the yield checks of the sample and the plate (validity): fem (the "
+                   "contact FEM's stresses at the peak wall force), bound (the sample's "
+                   "Hertz upper bound only; no plate check) or none (default "
+                   f"{default})")
+
+
+def human_with_validity(res: dict[str, Any]) -> str:
+    """The generic human summary without the validity fields, then one line per check."""
+    from ssw.cli import _human
+    from ssw.validity import human_lines
+
+    rest = {k: v for k, v in res.items()
+            if k not in ("validity", "checks_failed", "checks_skipped")}
+    lines = [_human(rest)]
+    if "validity" in res:
+        lines += human_lines(res["validity"], res.get("checks_skipped"))
+    return "\n".join(lines)
+
+
 # ---------------------------------------------------------------------------- ssw chain
 def run_chain(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.h5io import atomic_h5, write_dataset
@@ -69,6 +129,7 @@ DERIVATIVES = ("auto", "forward", "central", "none")
 
 def run_tof(args: argparse.Namespace) -> dict[str, Any]:
     from ssw.chain.sensitivity import PARAMETERS
+    from ssw.chain.sensitivity import units as sensitivity_units
     from ssw.tof.api import peaks, tof_derivatives
 
     if args.hits is not None or args.soil_model is not None or args.plate_model is not None:
@@ -79,7 +140,7 @@ def run_tof(args: argparse.Namespace) -> dict[str, Any]:
     ctx = chain_context(args, args.soil_E, args.soil_nu)
     params = ctx.params
     method = args.derivatives
-    units = {f"dtof_d{k}": f"s/({u})" for k, u in PARAMETERS.items()}
+    units = {f"dtof_d{k}": f"s/({u})" for k, u in sensitivity_units(params.damping_law).items()}
     if ctx.wall_options.get("dynamics") == "fem":
         from ssw.dynamics.api import fem_tof, fem_tof_derivatives
 
@@ -102,7 +163,7 @@ def run_tof(args: argparse.Namespace) -> dict[str, Any]:
             out.update(derivative_method=dict.fromkeys(PARAMETERS, "none"),
                        derivative_note="--derivatives central: central differences of the "
                        "dynamic FEM wall's TOF, two FEM runs per parameter")
-        return out
+        return {**out, **_quasi_static_validity(args, ctx).to_dict(0)}
     if method == "none":
         pk, run = peaks(args.soil_E, args.soil_nu, params, ctx.wall, **ctx.wall_options)
         extra: dict[str, Any] = {"derivative_method": dict.fromkeys(PARAMETERS, "none")}
@@ -119,7 +180,38 @@ def run_tof(args: argparse.Namespace) -> dict[str, Any]:
         "f_reflected": float(pk.f_reflected[0]), "dt": run.dt,
         "peak_wall_indentation": float(run.peak_wall_indentation[0]),
         "striker_velocity": params.striker_velocity, **extra,
+        **_point_validity(args, ctx, pk, run).to_dict(0),
     }
+
+
+def _quasi_static_validity(args: argparse.Namespace, ctx: Any) -> Any:
+    """The checks of the dynamic FEM wall's point, from the quasi-static chain at the same
+    ``--soil-E``/``--soil-nu`` (its peak indentation, pulses and stresses; each entry says
+    so)."""
+    from dataclasses import replace
+
+    from ssw.tof.sweep import run_sweep
+
+    opts = {k: v for k, v in ctx.wall_options.items() if k not in ("dynamics", "soil_density")}
+    v = run_sweep(ctx.params, np.array([float(args.soil_E)]), np.array([float(args.soil_nu)]),
+                  ctx.wall, strengths=context_strengths(ctx), stresses=args.stress_checks,
+                  **opts).validity
+    said = "from the quasi-static chain at the same E (the dynamic FEM wall keeps no run)"
+    return replace(v, notes={k: "; ".join(filter(None, [v.notes.get(k), said]))
+                             for k in v.values})
+
+
+def _point_validity(args: argparse.Namespace, ctx: Any, pk: Any, run: Any) -> Any:
+    """The checks of ``ssw tof``'s run at ``--soil-E``/``--soil-nu`` (ssw.validity)."""
+    from ssw.validity import assess, fem_options
+    from ssw.walls import build_wall
+
+    E, nu = np.atleast_1d(float(args.soil_E)), np.atleast_1d(float(args.soil_nu))
+    wall = build_wall(ctx.wall, ctx.params, E, nu, **ctx.wall_options)
+    v = assess(ctx.params, E, nu, run, pk, wall, strengths=context_strengths(ctx),
+               stresses=args.stress_checks, **fem_options(ctx.wall, ctx.wall_options))
+    fs = finite_sample_validity(ctx, E, nu, pk.tof)
+    return v if fs is None else v.merged(fs)
 
 
 def _run_hits(args: argparse.Namespace) -> dict[str, Any]:
@@ -173,7 +265,24 @@ def _run_hits(args: argparse.Namespace) -> dict[str, Any]:
         "exact_reach": float(res.wall.exact_reach[0]),
         "beyond_exact_reach": bool(res.wall.d_max0[0] > res.wall.exact_reach[0]),
         "striker_velocity": ctx.params.striker_velocity,
+        **_hits_validity(ctx.params, res.wall).to_dict(0),
     }
+
+
+def _hits_validity(params: Any, wall: Any) -> Any:
+    """The checks of ``--hits`` (ssw.validity) at the sample's largest indentation over the
+    hits: small strain at the contact and in the plate, the plastic wall's reach; the
+    sample's and the plate's yield are the plastic model's own (skipped, said why)."""
+    from ssw.validity import Validity, contact_radius_ratio, plate_deflection_ratio
+
+    d = np.asarray(wall.d_max0[:1], float)
+    vals = {"contact_strain": contact_radius_ratio(d, params.bead_radius),
+            "wall_reach": d / np.asarray(wall.exact_reach[:1], float)}
+    if params.plate_thickness > 0:
+        vals["plate_deflection"] = plate_deflection_ratio(d, params.plate_thickness)
+    why = "modelled: the plastic wall's set and dissipation per hit"
+    return Validity(vals, notes=dict.fromkeys(vals, "at the largest indentation over the hits"),
+                    skipped={"sample_yield": why, "plate_yield": why})
 
 
 def _human_hits(res: dict[str, Any]) -> str:
@@ -193,6 +302,10 @@ def _human_hits(res: dict[str, Any]) -> str:
               f"{r['dissipated']:.4e}" for r in res["hits"]]
     lines.append(f"TOF std over the hits {res['tof_std']:.3e} s"
                  + ("; beyond the tabulated reach" if res["beyond_exact_reach"] else ""))
+    if "validity" in res:
+        from ssw.validity import human_lines
+
+        lines += human_lines(res["validity"], res.get("checks_skipped"))
     return "\n".join(lines)
 
 
@@ -216,6 +329,7 @@ def _sweep_points(args: argparse.Namespace, cfg: dict[str, Any]) -> tuple[np.nda
 
 def run_tof_sweep(args: argparse.Namespace) -> dict[str, Any] | None:
     import time
+    from dataclasses import replace
 
     from ssw.config import load_config
     from ssw.tof.sweep import chunk_slice, run_sweep, write_csv, write_sweep
@@ -238,7 +352,11 @@ def run_tof_sweep(args: argparse.Namespace) -> dict[str, Any] | None:
     t0 = time.perf_counter()
     with progress_bar(E.size, desc="TOF sweep", unit="pt",
                       enabled=False if comm is not None and comm.Get_rank() else None) as bar:
-        sw = run_sweep(params, E, nu, wall, comm=comm, on_progress=bar, **opts)
+        sw = run_sweep(params, E, nu, wall, comm=comm, on_progress=bar,
+                       strengths=context_strengths(ctx), stresses=args.stress_checks, **opts)
+    if ctx.sample is not None and sw.validity is not None:  # its half-space reading
+        fs = finite_sample_validity(ctx, sw.soil_E, sw.soil_nu, sw.tof)
+        sw = replace(sw, validity=sw.validity.merged(fs))
     wall_time = time.perf_counter() - t0
     if comm is not None and comm.Get_rank() != 0:
         return None  # rank 0 writes and reports
@@ -254,10 +372,14 @@ def run_tof_sweep(args: argparse.Namespace) -> dict[str, Any] | None:
         from ssw.tof.sweep import plot_fig8
 
         plot_fig8(args.plot, sw.sorted(), f"TOF vs soil modulus, {wall} wall (cf. thesis Fig 8)")
+    checks = sw.validity.columns()
     return {
         **ctx.inputs(), "soil_E": sw.soil_E, "soil_nu": sw.soil_nu, "tof": sw.tof,
         "points": int(sw.tof.size), "wall_time": wall_time,
         "ranks": 1 if comm is None else comm.Get_size(),
+        "validity": {k: v.tolist() for k, v in checks.items()},
+        "validity_meta": sw.validity.meta(),
+        "points_failing_checks": int(sum(bool(x) for x in checks["checks_failed"])),
     }
 
 
@@ -328,7 +450,8 @@ def run_invert(args: argparse.Namespace) -> dict[str, Any]:
         return {**ctx.inputs(), "E": float(res.E), "E_low": float(res.E_low),
                 "E_high": float(res.E_high), "interval": "E(TOF -+ tof_std) on the sweep",
                 "interval_clipped": bool(res.clipped), "tof_range": list(res.tof_range),
-                "E_range": list(res.E_range)}
+                "E_range": list(res.E_range),
+                **_inverse_validity(args, ctx, float(res.E), nu).to_dict(0)}
     from ssw.modulus import estimate_moduli
 
     nu_arg = np.array(nu, float) if isinstance(nu, tuple) else nu
@@ -340,7 +463,20 @@ def run_invert(args: argparse.Namespace) -> dict[str, Any]:
         "Poisson's ratio range, wall law and integrator contributions",
         "contributions_pct": {k: 100.0 * v for k, v in est.contributions.items()},
         "E_range": list(E_range),
+        **_inverse_validity(args, ctx, float(est.E), est.nu).to_dict(0),
     }
+
+
+def _inverse_validity(args: argparse.Namespace, ctx: Any, E: float, nu: float) -> Any:
+    """The checks of an inverted E (the chain run at E, nu: ssw.tof.sweep.run_sweep), with
+    the stated sample's half-space reading of ``--tof``."""
+    from ssw.tof.sweep import run_sweep
+
+    v = run_sweep(ctx.params, np.array([E]), np.array([nu]), ctx.wall,
+                  strengths=context_strengths(ctx), stresses=args.stress_checks,
+                  **ctx.wall_options).validity
+    fs = finite_sample_validity(ctx, E, nu, args.tof)
+    return v if fs is None else v.merged(fs)
 
 
 def register(sub: argparse._SubParsersAction) -> None:
@@ -378,8 +514,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "auto (exact forward sensitivities where the wall states its "
                    "derivatives, else central differences; the dynamic FEM wall only with "
                    "central), forward, central or none")
+    add_stress_checks_option(p, "fem")
     add_json_flag(p)
-    p.set_defaults(func=run_tof)
+    p.set_defaults(func=run_tof, human=human_with_validity)
 
     p = sub.add_parser("tof-sweep", help="TOF over a grid of soil E and nu (batched)",
                        description="TOF(E, nu); without --soil-E-min the config's "
@@ -397,6 +534,7 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--output", help="output HDF5 (kind tof_sweep)")
     p.add_argument("--csv", help="also write this CSV")
     p.add_argument("--plot", help="also draw the Fig 8 style PNG (a whole sweep: one chunk)")
+    add_stress_checks_option(p, "bound")
     add_json_flag(p)
     p.set_defaults(func=run_tof_sweep)
 
@@ -420,5 +558,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--soil-E-min", type=float, default=10.0e6, help="range searched, Pa")
     p.add_argument("--soil-E-max", type=float, default=1000.0e6, help="range searched, Pa")
     p.add_argument("--table", help="use a stored sweep (tof_sweep HDF5) instead of the model")
+    add_stress_checks_option(p, "fem")
     add_json_flag(p)
-    p.set_defaults(func=run_invert)
+    p.set_defaults(func=run_invert, human=human_with_validity)

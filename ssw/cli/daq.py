@@ -176,17 +176,19 @@ def run_tof_recording(args: argparse.Namespace) -> dict[str, Any]:
                                          "layout") if k in rec.meta}
     bound = opts.bound(float(np.nanmax(res.f_incident))) if np.any(res.accepted) else None
     return {"file": args.file, **meta, **res.to_dict(), "dropped": list(rec.dropped),
-            "min_tof": bound}
+            "n_dropped": len(rec.dropped), "min_tof": bound}
 
 
 def _human_tof(r: dict[str, Any]) -> str:
-    lines = [f"{r.get('file', r.get('output'))}: {r['n_accepted']} of {r['n_hits']} hits "
-             f"accepted",
+    dropped = r.get("n_dropped", 0)
+    lines = [f"{r.get('file', r.get('output'))}: {r['n_accepted']} of "
+             f"{r['n_hits'] + dropped} hits accepted"
+             + (f" ({dropped} dropped on reading)" if dropped else ""),
              f"TOF mean {r['tof_mean'] * 1e3:.5f} ms, std {r['tof_std'] * 1e6:.3f} us, "
              f"COV {r['tof_cov_pct']:.3f} %"]
     if "true_tof" in r:
         lines.append(f"simulated wave's TOF {r['true_tof'] * 1e3:.5f} ms")
-    lines += [f"rejected: {x}" for x in r["rejections"]]
+    lines += [f"rejected: {x}" for x in [*r.get("dropped", []), *r["rejections"]]]
     return "\n".join(lines)
 
 

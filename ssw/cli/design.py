@@ -176,7 +176,8 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
         mats = ctx.calibration.materials() if ctx.calibration is not None else library(ctx.cfg)
         contact = dict(ctx.cfg.get("contact", {}))
         res = run_design(spec, ctx.params, mats, contact, reference=not args.no_reference,
-                         jobs=max(1, int(args.jobs))).to_dict()
+                         jobs=max(1, int(args.jobs)),
+                         bead_material=ctx.device.bead_material).to_dict()
         if args.plastic_hits is not None:
             from ssw.design.hits_check import hits_check
 
@@ -370,6 +371,9 @@ def human(res: dict[str, Any]) -> str:
         lines.append(f"... {len(res['candidates']) - 25} more")
     lines.append(f"recommended: {rec['material']} {rec['thickness'] * 1e3:.4g} mm")
     lines += [f"  - {r}" for r in rec["reasons"]]
+    if rec.get("validity"):
+        lines.append("  checks failing on some soil of the range: "
+                     + ("; ".join(rec["checks_failed"]) or "none"))
     lines.append(f"{res['evaluations']} candidates in {res['wall_time']:.1f} s")
     for chk in res.get("plastic_check") or []:
         tofs = ", ".join(f"{h['tof'] * 1e3:.4f}" for h in chk["hits"])

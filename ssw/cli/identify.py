@@ -1,7 +1,7 @@
 """``ssw identify``: what TOF, features and the whole waveform identify on one sample.
 
     ssw identify [--device D] --soil-E PA [--soil-nu NU] [--hits N] [--tof-scatter S]
-                 [--noise-rms N] [device flags] [--json]
+                 [--noise-rms N] [--damping-law LAW] [--damping C] [device flags] [--json]
 
 :func:`ssw.calibration.information.identifiability` for the (calibrated) device at the
 noise of a real recording: one hit's TOF scatters by ``--tof-scatter`` (default: the
@@ -10,7 +10,9 @@ device's stated scatter, the thesis's 1.53e-5 s), every feature and sample by th
 marginal standard uncertainties (scaled coordinates: relative for E, the masses, the
 striker speed and the gain), which are identified (at most 0.1 there, every other
 parameter free), the singular values and the strongest correlations; ``--json`` prints
-everything.
+everything. The contact dissipation is the coefficient of the device's dissipation law
+(``--damping-law``: dashpot, kuwabara_kono, hunt_crossley; ``--damping`` its value), in the
+law's own unit and scale (:mod:`ssw.chain.dissipation`).
 """
 
 from __future__ import annotations
@@ -63,12 +65,14 @@ def _human(r: dict[str, Any]) -> str:
              "marginal standard uncertainty (relative for E, the masses, the striker speed and "
              "the gain; SI for the others), * = identified"]
     names = r["levels"]["tof"]["parameters"]
-    lines.append(f"{'parameter':18}" + "".join(f"{lv:>22}" for lv in LEVELS))
+    label = {n: ("contact dissipation" if n == "damping" else n) for n in names}
+    lines.append(f"{r['labels']['damping']}: its coefficient, in {r['units']['damping']}")
+    lines.append(f"{'parameter':20}" + "".join(f"{lv:>22}" for lv in LEVELS))
     for view, title in (("levels", "every other parameter free"),
                         ("nu_known", "nu known")):
         lines.append(f"-- {title}")
         for name in names:
-            row = f"{name:18}"
+            row = f"{label[name]:20}"
             for lv in LEVELS:
                 d = r[view][lv]
                 if name not in d["parameters"]:
@@ -79,7 +83,7 @@ def _human(r: dict[str, Any]) -> str:
                 cell = _cell(s, r["coordinates"][name] == "log", r["units"][name])
                 row += f"{cell + mark:>22}"
             lines.append(row)
-    row = f"{'E, device known':18}"
+    row = f"{'E, device known':20}"
     for lv in LEVELS:
         s = r["std"]["device_known"][lv]["E"]
         mark = "*" if "E" in r["device_known"][lv]["identified"] else " "
@@ -104,8 +108,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     p = sub.add_parser(
         "identify", help="what TOF, features and the whole waveform identify on a sample",
         description="Singular values, marginal uncertainties and correlations of E, nu, the "
-        "striker speed, the preload, the sensor and striker masses, the contact dashpot and "
-        "the DAQ gain from (a) the TOF, (b) the waveform's features, (c) the whole "
+        "striker speed, the preload, the sensor and striker masses, the contact dissipation "
+        "(the coefficient of the device's law, --damping-law) and the DAQ gain from (a) the "
+        "TOF, (b) the waveform's features, (c) the whole "
         "waveform, at the noise of a real recording (the TOF scatter per hit, the NI "
         "9234's noise floor); which of them each level identifies. SI units.")
     p.add_argument("--soil-E", type=float, required=True, help="the sample's modulus, Pa")

@@ -34,16 +34,43 @@ def run_measure(args: argparse.Namespace) -> dict[str, Any]:
     recs = [read_any(f, **_format_options(f, ropts)) for f in args.files]
     if args.lowpass is None:
         args.lowpass = ctx.cfg.get("validation", {}).get("lowpass")
+    from ssw.cli.chain import context_strengths, finite_sample_validity
+
+    source = ("--sample-strength" if args.sample_strength is not None else
+              f"the library's {args.sample_material}" if args.sample_material else "")
     m = measure(recs, nu, ctx.params, ctx.wall, ctx.wall_options,
                 calibration=ctx.calibration, tof_options=tof_options(args, ctx.params),
                 device=ctx.device, strength=sample_strength(args, ctx),
-                sample_range=_sample_range(args, ctx))
+                sample_range=_sample_range(args, ctx),
+                strengths=context_strengths(ctx, source=source),
+                stresses=args.stress_checks)
     if args.information != "tof":
         m = _with_information(args, ctx, recs, m)
     out = {**ctx.inputs(), **m.to_dict()}
+    if ctx.sample is not None and "validity" in out:  # the stated sample, read as modelled
+        fs = finite_sample_validity(ctx, m.E, m.nu, m.tof_mean)
+        _add_checks(out, fs.to_dict(0))
     if args.lift_thickness is not None:
         out.update(_lift_check(args, ctx, m, out["notes"]))
+        _add_checks(out, _lift_validity(args, out).to_dict(0))
     return out
+
+
+def _add_checks(out: dict[str, Any], more: dict[str, Any]) -> None:
+    """Add the entries of ``more`` (:meth:`ssw.validity.Validity.to_dict`) to a result's."""
+    out["validity"] = [*out.get("validity", []), *more["validity"]]
+    out["checks_failed"] = [*out.get("checks_failed", []), *more["checks_failed"]]
+
+
+def _lift_validity(args: argparse.Namespace, out: dict[str, Any]) -> Any:
+    """The ``finite_sample`` check of a lift read as a half-space: its worst error over the
+    subgrades (:func:`_lift_check`)."""
+    from ssw.validity import finite_sample
+
+    errs = out["lift_error"]
+    return finite_sample([max(abs(v) for v in errs.values())],
+                         f"a {args.lift_thickness * 1e3:g} mm lift on subgrades of "
+                         f"{', '.join(errs)} x its modulus (--subgrade-ratio)")
 
 
 def _with_information(args: argparse.Namespace, ctx: Any, recs: list[Any], m: Any) -> Any:
@@ -173,7 +200,8 @@ def _human(r: dict[str, Any]) -> str:
         f"TOF {r['tof_mean'] * 1e3:.5f} ms +- "
         + (f"{r['tof_sem'] * 1e6:.2f} us (standard error)" if r["tof_sem"] is not None
            else "? (scatter not estimable)")
-        + f" from {r['n_accepted']} of {r['n_hits']} hits in {len(r['files'])} file(s)",
+        + f" from {r['n_accepted']} of {r['n_hits'] + r.get('n_dropped', 0)} hits in "
+        f"{len(r['files'])} file(s)",
         "uncertainty of E (1 sigma): {:.2f} % = {}".format(
             r["E_u_pct"], ", ".join(f"{k} {v:.2f} %" for k, v in r["contributions_pct"].items())),
     ]
@@ -189,6 +217,10 @@ def _human(r: dict[str, Any]) -> str:
                      + ", ".join(f"{k} {v['value']:.4g} +- {v['std']:.2g}"
                                  for k, v in r["identified"].items()))
     lines += [f"NOT IN THE INTERVAL: {k}: {v}" for k, v in r.get("missing_terms", {}).items()]
+    if "validity" in r:
+        from ssw.validity import human_lines
+
+        lines += human_lines(r["validity"], r.get("checks_skipped"))
     lines += [f"note: {n}" for n in r["notes"]]
     lines += [f"rejected: {x}" for x in r["rejections"]]
     if r["synthetic"]:
@@ -216,6 +248,9 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "(default 0.5,2)")
     p.add_argument("--sample-material", metavar="KEY",
                    help="the sample's material in the library (its strength, e.g. pcf15)")
+    from ssw.cli.chain import add_stress_checks_option
+
+    add_stress_checks_option(p, "fem")
     p.add_argument("--information", choices=("tof", "features", "waveform"), default="tof",
                    help="what of the records E comes from: the TOF (default), the features "
                    "(TOF, amplitude ratios, secondary reflection, pulse widths) or the whole "

@@ -72,6 +72,8 @@ def _human(r: dict[str, Any]) -> str:
         tgt = "-" if p["target_E"] is None else f"{p['target_E'] / 1e6:.0f}"
         lines.append(f"{p['id']:10} {p['E'] / 1e6:8.1f} {p['E_low'] / 1e6:8.1f}-"
                      f"{p['E_high'] / 1e6:<8.1f} {tgt:>8} {p['verdict']:>13}")
+    lines += [f"{p['id']:10} {p['verdict']}: {p['reason']}" for p in r["points"]
+              if p.get("reason")]
     lines.append(", ".join(f"{k}: {v}" for k, v in r["verdicts"].items()))
     return "\n".join(lines)
 

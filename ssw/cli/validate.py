@@ -31,9 +31,13 @@ def run_validate(args: argparse.Namespace) -> dict[str, Any]:
     # the reflected peak only after the device's shortest physical round trip
     tof_opts = TofOptions(lowpass=val.get("lowpass"), min_hits=val.get("min_hits", 3),
                           chain=ChainPath.from_params(params))
+    from ssw.cli.chain import context_strengths
+
     rows = validate_samples(cfg, params, wall, opts, root=args.root, tof_options=tof_opts,
                             calibration=ctx.calibration,
-                            full_scale=ctx.device.full_scale_force)
+                            full_scale=ctx.device.full_scale_force,
+                            strengths=context_strengths(ctx),
+                            stresses=args.stress_checks)
     out: dict[str, Any] = {**ctx.inputs(), "samples": [r.to_dict() for r in rows],
                            "E_range": list(E_range)}
     if args.outdir:
@@ -82,6 +86,9 @@ def _human(r: dict[str, Any]) -> str:
             f"{s['E_diff_pct']:6.2f} {loo:>9}  {s['tof_source']}")
         budget = ", ".join(f"{k} {v:.2f} %" for k, v in s["E_contributions_pct"].items())
         lines.append(f"{'':8} uncertainty of E (1 sigma): {s['E_u_pct']:.2f} % = {budget}")
+        if s.get("validity"):
+            lines.append(f"{'':8} checks failed at its E: "
+                         + ("; ".join(s["checks_failed"]) or "none"))
     lines += [f"wrote {p}" for p in r.get("outputs", [])]
     return "\n".join(lines)
 
@@ -97,5 +104,10 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--sweep", nargs="+",
                    help="the chain's TOF(E, nu) sweep HDF5 (or its parts), drawn in Fig 10")
     add_device_options(p)
+    from ssw.cli.chain import add_stress_checks_option
+
+    # bound: the study's validation stays cheap (the contact FEM's stresses factor one
+    # soil body per sample's Poisson's ratio, 0.45 s each); fem on request
+    add_stress_checks_option(p, "bound")
     add_json_flag(p)
     p.set_defaults(func=run_validate, human=_human)

@@ -17,13 +17,16 @@ Johnson, K. L. (1985). *Contact Mechanics*. Cambridge, sec. 4.2 and 6.1.
 
 from __future__ import annotations
 
+from typing import Any
+
 import numpy as np
 
 
-def hertz_peak_pressure(force: np.ndarray, E: float, nu: float, radius: float) -> np.ndarray:
+def hertz_peak_pressure(force: np.ndarray, E: Any, nu: Any, radius: float) -> np.ndarray:
     """``p0 = (6 F E*^2 / (pi^3 R^2))^(1/3)`` (Pa) of forces ``F`` (N) on a half-space of
-    ``E`` (Pa), ``nu`` under a rigid sphere of ``radius`` (m)."""
-    Es = float(E) / (1.0 - float(nu) ** 2)
+    ``E`` (Pa), ``nu`` (scalars, or arrays broadcast with ``F``) under a rigid sphere of
+    ``radius`` (m)."""
+    Es = np.asarray(E, float) / (1.0 - np.asarray(nu, float) ** 2)
     F = np.asarray(force, float)
     return np.cbrt(6.0 * F * Es * Es / (np.pi ** 3 * float(radius) ** 2))
 

@@ -35,7 +35,10 @@ file is written under a temporary name, flushed to disk (``fsync``, then the fol
 renamed into place, so concurrent jobs on a shared file system never see a partial file
 (two jobs building the same operator both write a complete copy; the last rename wins). A
 file that cannot be read back whole (truncated, corrupt: a crash, a full disk, another
-system's copy) is removed and rebuilt, never used.
+system's copy), of another format version, or missing an array or holding one of another
+shape than its record promises or its geometry needs, is removed and rebuilt with a
+:class:`~ssw.cachefile.CacheWarning`, never used (:mod:`ssw.cachefile`; the formats:
+:data:`LAYOUT_FORMAT`, :data:`MODEL_FORMAT`, :data:`BODY_FORMAT`).
 """
 
 from __future__ import annotations
@@ -54,6 +57,8 @@ from typing import Any
 import numpy as np
 from scipy.linalg import cho_factor, cho_solve
 
+from ssw.cachefile import CacheFormat, read_arrays, write_arrays
+from ssw.cachefile import CacheWarning as CacheWarning  # where the cache's users look
 from ssw.contact.mesh import Mesh, MeshSettings, build_mesh
 from ssw.errors import ConfigError, SolverError
 
@@ -64,8 +69,9 @@ ZONE_SHARE = 0.5
 ZONE_QUANTUM = 1.0e-4
 #: Largest zone as a share of the sphere radius (the gap formula needs r < R).
 ZONE_LIMIT = 0.95
-#: Version of the operators' file format.
-FORMAT = 1
+#: Version of the operators' file format (in each file's record, :mod:`ssw.cachefile`, and
+#: in the cache key). 2: every file carries its record (kind, version, shapes).
+FORMAT = 2
 
 
 def sphere_gap0(r: np.ndarray, radius: float) -> np.ndarray:
@@ -241,10 +247,10 @@ class OperatorStore:
             self._models.move_to_end(key)
             return self._models[key]
         path = self._path(key, "model")
-        model = _model_from_arrays(_load(path))
+        model = _model_from_arrays(read_arrays(path, MODEL_FORMAT))
         if model is None:
             model = _build_model(geom)
-            _save(path, _model_arrays(model))
+            write_arrays(path, MODEL_FORMAT, _model_arrays(model))
         self._models[key] = model
         while len(self._models) > MODELS_KEPT:  # the last few meshes (about 1 MB each)
             self._models.popitem(last=False)
@@ -256,13 +262,13 @@ class OperatorStore:
         if key in self._layouts:
             return self._layouts[key]
         path = self._path(key, "layout")
-        data = _load(path)
+        data = read_arrays(path, LAYOUT_FORMAT)
         if data is not None:
             lay = Layout(data["r"], data["weight"], data["iface_r"], data["iface_comp"],
                          int(data["nodes"]), int(data["elements"]))
         else:
             lay = self._model(geom).layout
-            _save(path, {k: np.asarray(v) for k, v in asdict(lay).items()})
+            write_arrays(path, LAYOUT_FORMAT, asdict(lay))
         self._layouts[key] = lay
         return lay
 
@@ -278,7 +284,7 @@ class OperatorStore:
             self.hits["memory"] += 1
             return self._bodies[key]
         path = self._path(geom.key(), f"{which}-{key}")
-        data = _load(path)
+        data = read_arrays(path, BODY_FORMAT, {"dofs": _body_dofs(self.layout(geom), which)})
         if data is not None:
             op = BodyOperator(data["S"], json.loads(str(data["stats"])))
             self.hits["disk"] += 1
@@ -295,7 +301,7 @@ class OperatorStore:
                     factor[0], LeadingBlock(factor[1], factor[0].n_int))
                 while len(_FACTORS) > _KEPT[0]:
                     _FACTORS.popitem(last=False)
-            _save(path, {"S": op.S, "stats": np.asarray(json.dumps(op.stats))})
+            write_arrays(path, BODY_FORMAT, {"S": op.S, "stats": json.dumps(op.stats)})
             self.hits["built"] += 1
             self._cost["count"] += 1
             for k in ("wall_mesh", "wall_assemble", "wall_factor"):
@@ -307,51 +313,6 @@ class OperatorStore:
         return None if self.directory is None else self.directory / geom_key / f"{name}.npz"
 
 
-def _load(path: Path | None) -> dict[str, np.ndarray] | None:
-    """The arrays of a cache file, or None if absent; a file that cannot be read back whole
-    (truncated, corrupt) is removed and None returned (the operator is rebuilt)."""
-    if path is None or not path.is_file():
-        return None
-    try:
-        with np.load(path, allow_pickle=False) as f:
-            data = {k: f[k] for k in f.files}  # every member read: zip CRCs checked
-    except Exception as exc:  # a damaged file fails in many ways (zip, npy header tokens,
-        # sizes); whatever the failure, the file is not used
-        _discard(path, exc)
-        return None
-    return data
-
-
-class CacheWarning(UserWarning):
-    """A cached operator could not be read back whole and is rebuilt."""
-
-
-def _discard(path: Path, reason: Exception) -> None:
-    """Remove an unreadable cache file (another process may have replaced it already)."""
-    import warnings
-
-    warnings.warn(f"rebuilding the unreadable cached operator {path} ({reason})",
-                  CacheWarning, stacklevel=3)
-    try:
-        path.unlink()
-    except OSError:
-        pass
-
-
-def _save(path: Path | None, arrays: dict[str, np.ndarray]) -> None:
-    """Write a cache file atomically and durably (a failure to write only costs a rebuild
-    later): a temporary file in the same folder, fsync'd, renamed, the folder fsync'd."""
-    if path is None:
-        return
-    from ssw.h5io import atomic_path
-
-    try:
-        with atomic_path(path, durable=True) as tmp, open(tmp, "wb") as fh:
-            np.savez(fh, **arrays)
-    except OSError:
-        return
-
-
 #: The scalar fields of a :class:`~ssw.contact.mesh.Mesh` and their types (the disk cache
 #: keeps them as 0-d arrays).
 _MESH_SCALARS = {"top": float, "plate_radius": float, "soil_radius": float,
@@ -359,6 +320,49 @@ _MESH_SCALARS = {"top": float, "plate_radius": float, "soil_radius": float,
                  "subgrade_nu": float}
 #: The array fields of a :class:`_Model` besides its mesh and layout.
 _MODEL_ARRAYS = ("nodes", "tri", "free", "cand", "iface_nodes", "iface_comp")
+
+#: The shapes of a :class:`Layout`'s arrays: ``nc`` contact candidates, ``ni`` retained
+#: interface dofs.
+_LAYOUT_SHAPES: dict[str, tuple[str | int, ...]] = {
+    "r": ("nc",), "weight": ("nc",), "iface_r": ("ni",), "iface_comp": ("ni",),
+    "nodes": (), "elements": ()}
+_LAYOUT_KINDS = {"r": "f", "weight": "f", "iface_r": "f", "iface_comp": "iu",
+                 "nodes": "iu", "elements": "iu"}
+#: ``layout.npz``: a geometry's retained dofs (:meth:`OperatorStore.layout`).
+LAYOUT_FORMAT = CacheFormat("contact.layout", FORMAT, _LAYOUT_SHAPES, _LAYOUT_KINDS,
+                            what="layout")
+#: ``model.npz``: a geometry's mesh (``mesh_*``: as many nodes and elements as its layout
+#: counts, ``per_el`` nodes per element), its nodes after the interface split (``n``),
+#: contact candidates (``nc``) and retained interface dofs (``ni``), and its layout
+#: (``layout_*``).
+MODEL_FORMAT = CacheFormat(
+    "contact.model", FORMAT,
+    {"mesh_nodes": ("layout_nodes", 2), "mesh_tri": ("layout_elements", "per_el"),
+     "mesh_body": ("layout_elements",), "mesh_subgrade": ("layout_elements",),
+     **{f"mesh_{k}": () for k in _MESH_SCALARS},
+     "nodes": ("n", 2), "tri": ("layout_elements", "per_el"), "free": ("n", 2),
+     "cand": ("nc",),
+     "iface_nodes": ("ni", 2), "iface_comp": ("ni",),
+     **{f"layout_{k}": v for k, v in _LAYOUT_SHAPES.items()}},
+    {"mesh_nodes": "f", "mesh_tri": "iu", "mesh_body": "iu", "mesh_subgrade": "b",
+     **{f"mesh_{k}": "U" if t is str else "f" for k, t in _MESH_SCALARS.items()},
+     "nodes": "f", "tri": "iu", "free": "b", "cand": "iu", "iface_nodes": "iu",
+     "iface_comp": "iu", **{f"layout_{k}": v for k, v in _LAYOUT_KINDS.items()}},
+    optional=frozenset({"mesh_subgrade"}), what="mesh")
+#: ``plate-*.npz``, ``soil-*.npz``: a body's condensed operator ``S`` on its ``dofs``
+#: retained dofs (the plate's candidates and interface dofs; the soil's interface dofs, or
+#: its candidates without a plate) and the stats of its condensation (JSON text).
+BODY_FORMAT = CacheFormat("contact.body", FORMAT, {"S": ("dofs", "dofs"), "stats": ()},
+                          {"S": "f", "stats": "U"}, what="operator")
+
+
+def _body_dofs(layout: Layout, which: str) -> int:
+    """The retained dofs of a body's operator: the plate's candidates and interface dofs;
+    the soil's interface dofs under a plate, else the candidates."""
+    nc, ni = layout.r.size, layout.iface_r.size
+    if which == "plate":
+        return nc + ni
+    return ni if ni else nc
 
 
 def _model_arrays(model: _Model) -> dict[str, np.ndarray]:
@@ -373,20 +377,17 @@ def _model_arrays(model: _Model) -> dict[str, np.ndarray]:
 
 
 def _model_from_arrays(data: dict[str, np.ndarray] | None) -> _Model | None:
-    """The model a disk-cache file holds (:func:`_model_arrays`), or None (no file, or one
-    of another layout: rebuilt)."""
+    """The model a disk-cache file holds (:func:`_model_arrays`; checked against
+    :data:`MODEL_FORMAT` when read), or None (no usable file: rebuilt)."""
     if data is None:
         return None
-    try:
-        mesh = Mesh(data["mesh_nodes"], data["mesh_tri"], data["mesh_body"],
-                    subgrade=data.get("mesh_subgrade"),
-                    **{k: t(data[f"mesh_{k}"]) for k, t in _MESH_SCALARS.items()})
-        lay = Layout(data["layout_r"], data["layout_weight"], data["layout_iface_r"],
-                     data["layout_iface_comp"], int(data["layout_nodes"]),
-                     int(data["layout_elements"]))
-        parts = {k: data[k] for k in _MODEL_ARRAYS}
-    except KeyError:
-        return None
+    mesh = Mesh(data["mesh_nodes"], data["mesh_tri"], data["mesh_body"],
+                subgrade=data.get("mesh_subgrade"),
+                **{k: t(data[f"mesh_{k}"]) for k, t in _MESH_SCALARS.items()})
+    lay = Layout(data["layout_r"], data["layout_weight"], data["layout_iface_r"],
+                 data["layout_iface_comp"], int(data["layout_nodes"]),
+                 int(data["layout_elements"]))
+    parts = {k: data[k] for k in _MODEL_ARRAYS}
     return _Model(mesh, parts["nodes"], parts["tri"], mesh.body, parts["free"], parts["cand"],
                   parts["iface_nodes"], parts["iface_comp"], lay, 0.0)
 

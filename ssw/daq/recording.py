@@ -167,7 +167,12 @@ class RecordingWriter:
 
 @dataclass(frozen=True)
 class RecordedHit:
-    """One hit read back: force (N), its trigger index, flags and metadata."""
+    """One hit read back: force (N), its trigger index, flags and metadata.
+
+    ``index`` counts the file's hits from 0; ``label`` is the hit's name as the file gives
+    it (a CSV column's header, a TDMS channel's name, an HDF5 dataset's name), which every
+    message about the hit uses (:attr:`name`: the label, else ``hit k`` counted from 1).
+    """
 
     index: int
     force: np.ndarray
@@ -175,6 +180,12 @@ class RecordedHit:
     clipped: bool = False
     timestamp_utc: str = ""
     extra: dict[str, Any] = field(default_factory=dict)
+    label: str = ""
+
+    @property
+    def name(self) -> str:
+        """The hit's name in messages: its label, else ``hit k`` (k from 1)."""
+        return self.label or f"hit {self.index + 1}"
 
 
 @dataclass(frozen=True)
@@ -204,7 +215,13 @@ def check_hits(
     path: str, hits: list[RecordedHit], *, record_samples: int | None, full_scale: float | None,
     clipped: str,
 ) -> tuple[list[RecordedHit], list[str]]:
-    """Apply the readers' checks; return the kept hits and the reasons hits were dropped."""
+    """Apply the readers' checks; return the kept hits and the reasons hits were dropped.
+
+    A hit with non-finite samples (NaN or inf: a gap or an overflow in the record) is
+    dropped with its reason, whatever ``clipped`` says, and the other hits kept, as a dead
+    hit is rejected by the TOF picking (:func:`ssw.signal.tof.session_tof`); every message
+    names a hit as the file labels it (:attr:`RecordedHit.name`).
+    """
     if clipped not in CLIP_POLICIES:
         raise ConfigError("clipped", clipped, f"one of {CLIP_POLICIES}")
     if not hits:
@@ -215,16 +232,21 @@ def check_hits(
         n = h.force.size
         if record_samples is not None and n != record_samples:
             raise RecordingError(
-                f"{path}: hit {h.index} is truncated: {n} samples, record_samples = "
+                f"{path}: {h.name} is truncated: {n} samples, record_samples = "
                 f"{record_samples}"
             )
         if n < 8:
-            raise RecordingError(f"{path}: hit {h.index} has {n} samples; at least 8 needed")
-        if not np.all(np.isfinite(h.force)):
-            raise RecordingError(f"{path}: hit {h.index} holds non-finite samples")
+            raise RecordingError(f"{path}: {h.name} has {n} samples; at least 8 needed")
+        bad = int(np.count_nonzero(~np.isfinite(h.force)))
+        if bad:
+            first = int(np.flatnonzero(~np.isfinite(h.force))[0])
+            dropped.append(f"{h.name}: {bad} of {n} samples are not finite (NaN or inf, "
+                           f"the first at sample {first}): a gap in the record; the hit is "
+                           "rejected, the others used")
+            continue
         clip = h.clipped or (full_scale is not None and is_clipped(h.force, full_scale))
         if clip:
-            msg = (f"hit {h.index} is clipped (overrange at the NI 9234's +-5 V, "
+            msg = (f"{h.name} is clipped (overrange at the NI 9234's +-5 V, "
                    f"|F| >= {CLIP_FRACTION} x {full_scale} N)")
             if clipped == "raise":
                 raise RecordingError(f"{path}: {msg}; re-record it or read with clipped='drop'")
@@ -256,7 +278,9 @@ def read_recording(path: str | Path, *, clipped: str = "raise",
     ------
     RecordingError
         The file is unreadable (truncated HDF5), not a recording, in other units than N,
-        holds no hits, a hit is shorter than ``record_samples``, or a hit is clipped.
+        holds no hits, a hit is shorter than ``record_samples``, a hit is clipped (with
+        ``clipped="raise"``), or no hit is left (a hit with non-finite samples is dropped,
+        named by its dataset, ``hit_0002``).
     """
     import h5py
 
@@ -297,6 +321,7 @@ def read_recording(path: str | Path, *, clipped: str = "raise",
                 clipped=bool(ds.attrs.get("clipped", False)),
                 timestamp_utc=str(_attr(ds.attrs.get("timestamp_utc", ""))),
                 extra=json.loads(_attr(ds.attrs.get("extra_json", "{}"))),
+                label=name,
             ))
     scales = [x for x in (meta.get("full_scale_force"), full_scale) if x is not None]
     kept, dropped = check_hits(

@@ -124,8 +124,39 @@ class DaqSettings:
         return asdict(self)
 
 
+def check_finite(s: DaqSettings) -> None:
+    """Raise :class:`.ConfigError` naming ``daq.<field>`` (or ``daq.simulation.<field>``)
+    for a number of ``s`` that is NaN or infinite.
+
+    Settings built in code do not pass the config schema, which refuses them; NaN passes
+    every bound of :func:`check_settings` (a NaN sensitivity would never detect clipping,
+    an infinite timeout would wait forever).
+
+    Parameters
+    ----------
+    s : DaqSettings
+        The settings.
+    """
+    import math
+    from dataclasses import fields
+
+    for prefix, obj in (("daq", s), ("daq.simulation", s.simulation)):
+        for f in fields(obj):
+            v = getattr(obj, f.name)
+            if isinstance(v, int | float) and not isinstance(v, bool) and not math.isfinite(v):
+                raise ConfigError(f"{prefix}.{f.name}", v,
+                                  "a finite number (NaN and infinities are refused)")
+
+
 def check_settings(s: DaqSettings) -> None:
-    """Raise :class:`.ConfigError` unless ``s`` is a configuration the NI 9234 accepts."""
+    """Raise :class:`.ConfigError` unless ``s`` is a configuration the NI 9234 accepts.
+
+    Parameters
+    ----------
+    s : DaqSettings
+        The settings; every number finite (:func:`check_finite`), then the module's rules.
+    """
+    check_finite(s)
     rate_divisor(s.sample_rate)
     if s.coupling not in ("AC", "DC"):
         raise ConfigError("daq.coupling", s.coupling, "AC or DC")

@@ -112,6 +112,14 @@ class DeviceCandidate:
     step: str = "shared"
     wall_time: float = 0.0
     limits: dict[str, float] = field(default_factory=dict, compare=False)
+    checks_E: dict[str, np.ndarray] = field(default_factory=dict, compare=False)
+    checks_assumed: dict[str, str] = field(default_factory=dict, compare=False)
+
+    def validity(self) -> Any:
+        """The checks over the soils (:class:`ssw.validity.Validity`, one scene per E)."""
+        from ssw.validity import Validity
+
+        return Validity(dict(self.checks_E), dict(self.checks_assumed))
 
     # ------------------------------------------------------------------ indices
     @property
@@ -186,6 +194,12 @@ class DeviceCandidate:
             "violations": self.violations, "wall_time": self.wall_time}
         if arrays:
             d.update({k: getattr(self, k).tolist() for k in ARRAYS})
+        if self.checks_E:  # the worst over the soils, and (with arrays) every soil's
+            worst = self.validity().worst()
+            d.update(validity=worst.entries(0), checks_failed=worst.failed(0),
+                     checks_assumed=dict(self.checks_assumed))
+            if arrays:
+                d["checks_E"] = {k: v.tolist() for k, v in self.checks_E.items()}
         return d
 
     @classmethod
@@ -196,7 +210,10 @@ class DeviceCandidate:
                                             "mass", "length", "plate_mass_ratio")}
         return cls(point=DevicePoint.from_dict(d), **arr, **scalars, source=d["source"],
                    step=d["step"], wall_time=float(d.get("wall_time", 0.0)),
-                   limits=dict(limits))
+                   limits=dict(limits),
+                   checks_E={k: np.asarray(v, float) for k, v in
+                             d.get("checks_E", {}).items()},
+                   checks_assumed=dict(d.get("checks_assumed", {})))
 
 
 def _bead_strength(material: Any) -> float:
@@ -240,6 +257,7 @@ class _Scenes:
     sampled: Any
     step: str
     wall_time: float
+    checks: dict[str, np.ndarray] = field(default_factory=dict)
 
 
 def _dynamics(members: list[tuple[DevicePoint, Any]], spec: DeviceSpec, contact: Any,
@@ -250,6 +268,12 @@ def _dynamics(members: list[tuple[DevicePoint, Any]], spec: DeviceSpec, contact:
     from ssw.design.sampling import sampled_tof
     from ssw.signal.rule import RULE
     from ssw.signal.tof import shortest_round_trip
+    from ssw.validity import (
+        contact_radius_ratio,
+        plate_deflection_ratio,
+        pulse_overlap,
+        reach_ratio,
+    )
     from ssw.walls.fem import concatenate, fem_wall
 
     t0 = time.perf_counter()
@@ -265,17 +289,12 @@ def _dynamics(members: list[tuple[DevicePoint, Any]], spec: DeviceSpec, contact:
             "sensor_mass": rep(lambda p: p.masses[p.sensor_index])}
     b = Batch.of(base, wall.n, vary)
     pk, run = run_peaks(b, wall, strict=False, derivatives=("E",))
-    s = run.sensor - run.sensor[0]
-    t = run.t[:, None]
-    between = (t >= pk.t_incident[None]) & (t <= pk.t_reflected[None])
-    valley = np.maximum(np.where(between & np.isfinite(s), s, np.inf).min(axis=0), 0.0)
-    smaller = np.minimum(pk.f_incident, pk.f_reflected)
-    # a scene run again for longer (ssw.chain.run) keeps its first record: its reflected
-    # peak may lie beyond it, where its pulses cannot be judged
+    # the valley between the pulses over the rule's gap share of the smaller (infinite
+    # where the reflected peak is not on the record: a scene run again for longer keeps
+    # its first record)
+    overlap = pulse_overlap(run, pk)
     seen = np.isfinite(pk.tof) & (pk.t_reflected <= run.t[-1])
     with np.errstate(divide="ignore", invalid="ignore"):
-        overlap = np.where(seen & (smaller > 0), valley / (RULE.gap_fraction * smaller),
-                           np.inf)
         detection = np.where(pk.f_reflected > 0,
                              RULE.noise_k * spec.noise_rms / pk.f_reflected, np.inf)
         # the shortest physical round trip at the incident pulse's force over the TOF:
@@ -291,15 +310,20 @@ def _dynamics(members: list[tuple[DevicePoint, Any]], spec: DeviceSpec, contact:
     sensor_peak = np.nanmax(run.sensor, axis=0)
     d_peak = run.peak_wall_indentation
     f_wall = wall.force(d_peak)
+    reach = reach_ratio(wall, d_peak)
     wall_time = (time.perf_counter() - t0) / len(members)
     out = []
     for j, (point, p) in enumerate(members):
         sl = slice(j * n_E, (j + 1) * n_E)
         sub = type(sampled)(*(getattr(sampled, f.name)[sl] for f in fields(sampled)))
+        checks = {"contact_strain": contact_radius_ratio(d_peak[sl], p.bead_radius),
+                  "plate_deflection": plate_deflection_ratio(d_peak[sl], p.plate_thickness)}
+        if reach is not None:
+            checks["wall_reach"] = reach[sl]
         out.append(_Scenes(point, p, E, pk.tof[sl], pk.dtof[sl, 0], d_peak[sl], f_wall[sl],
                            sensor_peak[sl], float(np.nanmax(run.peak_contact_force[sl])),
                            overlap[sl], detection[sl], round_trip[sl], sub, step,
-                           wall_time))
+                           wall_time, checks))
     return out
 
 
@@ -409,5 +433,12 @@ def evaluate(items: list[tuple[DevicePoint, Any]], spec: DeviceSpec,
             bead_yield_index=float(bead_index),
             range_index=float(np.nanmax(sc.sensor_peak) / full_scale), mass=mass,
             length=length, plate_mass_ratio=float(plate_mass / p.bead_mass), source=source,
-            step=sc.step, wall_time=sc.wall_time, limits=spec.limits))
+            step=sc.step, wall_time=sc.wall_time, limits=spec.limits,
+            checks_E={**sc.checks, "pulse_separation": sc.overlap,
+                      "bead_yield": np.full(sc.E.size, float(bead_index)),
+                      "sample_yield": soil_vm[i] / spec.soil_yield_stress(sc.E),
+                      "plate_yield": plate_vm[i] / Y_plate},
+            checks_assumed={} if spec.soil_strength is not None else {
+                "sample_yield": f"Y_soil = {spec.soil_strength_ratio:g} E (ssw design's "
+                                "stated assumption: --soil-strength states one)"}))
     return out

@@ -25,7 +25,8 @@ _KEY = ("bead_material", "bead_diameter", "beads", "sensor_index", "sensor_mass_
 
 def table_text(result: dict[str, Any]) -> str:
     """The candidates of a device design as CSV (ranked; the recommended and the base
-    device flagged)."""
+    device flagged; then each check's worst value over the soils, ``check_<name>``, and
+    ``checks_failed``: :mod:`ssw.validity`)."""
     def key(c: dict[str, Any]) -> tuple[Any, ...]:
         return tuple(c[k] for k in _KEY)
 
@@ -38,12 +39,20 @@ def table_text(result: dict[str, Any]) -> str:
             return f"{v:.6g}"
         return '"' + str(v).replace('"', "'") + '"' if "," in str(v) else str(v)
 
+    from ssw.design.output import check_columns
+
+    checks = check_columns(result["candidates"])
+    tail = [f"check_{k}" for k in checks] + (["checks_failed"] if checks else [])
     lines = [",".join((*COLUMNS, *(f"plastic_{k}" for k in PLASTIC_COLUMNS), "recommended",
-                       "base_device"))]
+                       "base_device", *tail))]
     for c in result["candidates"]:
         pl = c.get("plastic") or {}
+        got = {e["check"]: e for e in c.get("validity", [])}
         vals = [c[k] for k in COLUMNS] + [pl.get(k) for k in PLASTIC_COLUMNS] + [
             key(c) == rec, key(c) == ref]
+        if checks:  # each check's worst over the soils (ssw.validity), then the failing
+            vals += [got[k]["value"] if k in got else None for k in checks]
+            vals.append(";".join(k for k in checks if k in got and not got[k]["holds"]))
         lines.append(",".join(cell(v) for v in vals))
     return "\n".join(lines) + "\n"
 
@@ -121,6 +130,9 @@ def human(res: dict[str, Any]) -> str:
     lines.append(f"{'feasible':20s} {rec['feasible']!s:>12s} "
                  + (f"{ref['feasible']!s:>12s}" if ref else ""))
     lines += [f"  - {r}" for r in rec["reasons"]]
+    if rec.get("validity"):  # ssw.validity, the worst soil of the range
+        lines.append("  checks failing on some soil of the range: "
+                     + ("; ".join(rec["checks_failed"]) or "none"))
     for chk in res.get("plastic_check") or []:
         head = (f"{chk['hits']} hits, {chk['label']} on E {chk['soil_E']:.4g} Pa (von Mises "
                 f"Y {chk['soil_yield_stress']:.3g} Pa): ")

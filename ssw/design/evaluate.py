@@ -26,7 +26,12 @@ of the design (:attr:`ssw.design.spec.DesignSpec.grid`):
    (:func:`ssw.contact.stress.contact_stresses`, from the wall's force at ``d_k``: the
    rigid sphere's path is not traced again), and with the plate's yield stress and the
    soil's the yield indices;
-5. mass: ``rho pi D^2 t / 4`` against a bead's.
+5. mass: ``rho pi D^2 t / 4`` against a bead's;
+6. the checks of its assumptions over the soils (:mod:`ssw.validity`, from what 1-4
+   computed: the contact's and the plate's small strain at ``d_k``, the wall law's reach,
+   the pulses' separation at the sensor, the beads', the plate's and the soil's yield, the
+   soil's at the design's strength or its stated assumption): ``checks_E``, and in its
+   record the worst over the soils (``validity``, ``checks_failed``).
 
 The indices of the candidate are the worst over the soils: the smallest sensitivity, the
 coarsest resolution, the largest yield indices.
@@ -74,6 +79,14 @@ class Candidate:
     source: str = "search"
     wall_time: float = 0.0
     limits: dict[str, float] = field(default_factory=dict, compare=False)
+    checks_E: dict[str, np.ndarray] = field(default_factory=dict, compare=False)
+    checks_assumed: dict[str, str] = field(default_factory=dict, compare=False)
+
+    def validity(self) -> Any:
+        """The checks over the soils (:class:`ssw.validity.Validity`, one scene per E)."""
+        from ssw.validity import Validity
+
+        return Validity(dict(self.checks_E), dict(self.checks_assumed))
 
     # ------------------------------------------------------------------ indices
     @property
@@ -148,7 +161,18 @@ class Candidate:
             "plate_yield_E": self.plate_yield_E.tolist(),
             "soil_yield_E": self.soil_yield_E.tolist(),
             "wall_time": self.wall_time,
+            **self._checks_record(),
         }
+
+    def _checks_record(self) -> dict[str, Any]:
+        """The record's checks: the worst over the soils (``validity``, ``checks_failed``),
+        every soil's values (``checks_E``) and what they assumed (``checks_assumed``)."""
+        if not self.checks_E:
+            return {}
+        worst = self.validity().worst()
+        return {"validity": worst.entries(0), "checks_failed": worst.failed(0),
+                "checks_E": {k: v.tolist() for k, v in self.checks_E.items()},
+                "checks_assumed": dict(self.checks_assumed)}
 
     @classmethod
     def from_dict(cls, d: dict[str, Any], limits: dict[str, float]) -> Candidate:
@@ -162,7 +186,10 @@ class Candidate:
                    striker_velocity=float(d["striker_velocity"]), **arr,
                    plate_yield_stress=float(d["plate_yield_stress"]), mass=float(d["mass"]),
                    mass_ratio=float(d["mass_ratio"]), source=d.get("source", "search"),
-                   wall_time=float(d.get("wall_time", 0.0)), limits=dict(limits))
+                   wall_time=float(d.get("wall_time", 0.0)), limits=dict(limits),
+                   checks_E={k: np.asarray(v, float) for k, v in
+                             d.get("checks_E", {}).items()},
+                   checks_assumed=dict(d.get("checks_assumed", {})))
 
 
 def quantize(thickness: float) -> float:
@@ -204,11 +231,15 @@ class Evaluator:
         The ``contact`` settings of the fem wall (mesh, zone).
     store : ssw.contact.operators.OperatorStore or None
         The contact operators (default: the process's, disk-cached).
+    bead_material : str or None
+        The beads' material key (the device's): its strength for the beads' check.
     """
 
     def __init__(self, spec: DesignSpec, params: ChainParams, materials: dict[str, Material],
-                 contact: dict[str, Any] | None = None, store: Any = None) -> None:
+                 contact: dict[str, Any] | None = None, store: Any = None,
+                 bead_material: str | None = None) -> None:
         self.spec, self.params, self.materials = spec, params, materials
+        self.bead_material = bead_material
         self.contact = {**(contact or {}), "interface": params.plate_interface}
         self.store = store
         self.seen: dict[tuple[str, float, float, float], Candidate] = {}
@@ -289,6 +320,7 @@ class Evaluator:
         from ssw.chain.integrate import time_step
         from ssw.chain.run import run_peaks
         from ssw.tof.api import forward_ok, tof_derivatives
+        from ssw.validity import pulse_overlap
         from ssw.walls.fem import concatenate
 
         spec = self.spec
@@ -297,6 +329,7 @@ class Evaluator:
         tof: list[np.ndarray] = [np.empty(0)] * n
         dtof: list[np.ndarray] = [np.empty(0)] * n
         d_chain: list[np.ndarray] = [np.empty(0)] * n
+        pulses: list[tuple[np.ndarray, np.ndarray]] = [(np.empty(0), np.empty(0))] * n
         if all(forward_ok(w, ("E",))["E"] for w in walls):
             # one run per time step (the step depends on the chain alone unless a wall is
             # stiffer than a rigid flat): the same step, hence the same TOF, as alone
@@ -306,26 +339,32 @@ class Evaluator:
             for dt, idx in groups.items():
                 pk, run = run_peaks(ps[idx[0]], concatenate([walls[i] for i in idx]), dt=dt,
                                     derivatives=("E",))
+                overlap = pulse_overlap(run, pk)
                 for j, i in enumerate(idx):
                     sl = slice(j * E.size, (j + 1) * E.size)
                     tof[i], dtof[i] = pk.tof[sl], pk.dtof[sl, 0]
                     d_chain[i] = run.peak_wall_indentation[sl]
+                    pulses[i] = (overlap[sl], run.peak_contact_force[sl])
         else:  # a law without dF/dE (the unilateral interface): central differences
             for i, p in enumerate(ps):
                 res = tof_derivatives(E, spec.soil_nu, p, "fem", derivatives=("E",),
                                       contact=self.contact, operators=self.store)
                 tof[i], dtof[i] = np.asarray(res.tof, float), res.dtof["E"]
                 d_chain[i] = res.run.peak_wall_indentation
+                pulses[i] = (pulse_overlap(res.run, res.peaks), res.run.peak_contact_force)
         share = (time.perf_counter() - t0) / n
-        return [self._candidate(*key, src, ps[i], walls[i], tof[i], dtof[i], d_chain[i], share)
+        return [self._candidate(*key, src, ps[i], walls[i], tof[i], dtof[i], d_chain[i], share,
+                                pulses[i])
                 for i, (key, src) in enumerate(zip(keys, sources, strict=True))]
 
     def _candidate(self, material: str, t: float, D: float, v: float, source: str,
                    p: ChainParams, wall: Any, tof: np.ndarray, dtof: np.ndarray,
-                   d_chain: np.ndarray, shared: float) -> Candidate:
+                   d_chain: np.ndarray, shared: float,
+                   pulses: tuple[np.ndarray, np.ndarray] | None = None) -> Candidate:
         """A candidate from its chain's TOF, ``dTOF/dE`` and peak wall indentation: its
         stresses at the wall's force there (the path of the rigid sphere not traced again);
-        ``shared`` (s) its share of the batch's time."""
+        ``shared`` (s) its share of the batch's time; ``pulses`` the run's pulse overlap
+        and largest bead-bead force per soil (:meth:`_checks`)."""
         from ssw.walls.fem import peak_stresses
 
         t0 = time.perf_counter()
@@ -337,13 +376,47 @@ class Evaluator:
         st = peak_stresses(p, E, spec.soil_nu, d_chain, contact=self.contact,
                            operators=self.store, force=wall.force(d_chain))
         mass = m.density * np.pi * 0.25 * D * D * t
+        plate_yield, soil_yield = st.plate.peak / Y, st.soil.peak / spec.soil_yield_stress(E)
+        checks, assumed = self._checks(p, wall, d_chain, pulses, plate_yield, soil_yield)
         return Candidate(
             material=material, thickness=t, plate_diameter=D, striker_velocity=v,
             soil_E=E, tof_E=tof, sensitivity_E=sens,
             resolution_E=spec.tof_uncertainty / (tof * sens),
             peak_force_E=st.force, peak_indentation_E=d_chain,
             plate_von_mises_E=st.plate.peak, soil_von_mises_E=st.soil.peak,
-            plate_yield_E=st.plate.peak / Y,
-            soil_yield_E=st.soil.peak / spec.soil_yield_stress(E),
+            plate_yield_E=plate_yield, soil_yield_E=soil_yield,
             plate_yield_stress=Y, mass=float(mass), mass_ratio=float(mass / p.bead_mass),
-            source=source, wall_time=shared + time.perf_counter() - t0, limits=self.limits)
+            source=source, wall_time=shared + time.perf_counter() - t0, limits=self.limits,
+            checks_E=checks, checks_assumed=assumed)
+
+    def _checks(self, p: ChainParams, wall: Any, d: np.ndarray,
+                pulses: tuple[np.ndarray, np.ndarray] | None, plate_yield: np.ndarray,
+                soil_yield: np.ndarray) -> tuple[dict[str, np.ndarray], dict[str, str]]:
+        """The candidate's checks per soil (:mod:`ssw.validity`) from what its evaluation
+        computed, and the assumption its soil's yield rests on."""
+        from ssw.validity import (
+            contact_radius_ratio,
+            first_yield_index,
+            plate_deflection_ratio,
+            reach_ratio,
+        )
+
+        vals = {"contact_strain": contact_radius_ratio(d, p.bead_radius),
+                "plate_deflection": plate_deflection_ratio(d, p.plate_thickness)}
+        reach = reach_ratio(wall, d)
+        if reach is not None:
+            vals["wall_reach"] = reach
+        bead = self.materials.get(self.bead_material) if self.bead_material else None
+        bead_st = getattr(bead, "strength", None)
+        bead_y = None if bead_st is None else (bead_st.yield_stress or bead_st.compressive)
+        if pulses is not None:
+            vals["pulse_separation"] = pulses[0]
+            if bead_y is not None:
+                vals["bead_yield"] = first_yield_index(pulses[1], p.bead_E, p.bead_nu,
+                                                       p.bead_radius, bead_y)
+        vals["sample_yield"], vals["plate_yield"] = soil_yield, plate_yield
+        spec = self.spec
+        assumed = {} if spec.soil_strength is not None else {
+            "sample_yield": f"Y_soil = {spec.soil_strength_ratio:g} E (ssw design's stated "
+                            "assumption: --soil-strength states one)"}
+        return {k: np.asarray(v, float) for k, v in vals.items()}, assumed

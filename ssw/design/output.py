@@ -14,17 +14,35 @@ COLUMNS = ("material", "thickness", "plate_diameter", "striker_velocity", "sourc
            "soil_peak_strain", "mass_ratio", "feasible", "merit")
 
 
+def check_columns(candidates: list[dict[str, Any]]) -> list[str]:
+    """The checks (:data:`ssw.validity.RULES` order) any candidate's record carries."""
+    from ssw.validity import RULES
+
+    have = {e["check"] for c in candidates for e in c.get("validity", [])}
+    return [k for k in RULES if k in have]
+
+
 def table_text(result: dict[str, Any]) -> str:
     """The candidates of an ``ssw design`` result as CSV (best merit first; the recommended
-    one flagged)."""
+    one flagged). After ``recommended``, each check's worst value over the soils
+    (``check_<name>``, dimensionless; :mod:`ssw.validity`) and ``checks_failed`` (their
+    names, ``;``-joined)."""
     rec = result["recommended"]
     key = (rec["material"], rec["thickness"], rec["plate_diameter"], rec["striker_velocity"])
-    lines = [",".join((*COLUMNS, "recommended"))]
+    checks = check_columns(result["candidates"])
+    tail = [f"check_{k}" for k in checks] + (["checks_failed"] if checks else [])
+    lines = [",".join((*COLUMNS, "recommended", *tail))]
     for c in result["candidates"]:
         mine = (c["material"], c["thickness"], c["plate_diameter"], c["striker_velocity"])
         vals = [c[k] for k in COLUMNS]
-        lines.append(",".join(f"{v:.6g}" if isinstance(v, float) else str(v) for v in vals)
-                     + f",{mine == key}")
+        line = (",".join(f"{v:.6g}" if isinstance(v, float) else str(v) for v in vals)
+                + f",{mine == key}")
+        if checks:
+            got = {e["check"]: e for e in c.get("validity", [])}
+            line += "," + ",".join("" if k not in got or got[k]["value"] is None
+                                   else f"{got[k]['value']:.4g}" for k in checks)
+            line += "," + ";".join(k for k in checks if k in got and not got[k]["holds"])
+        lines.append(line)
     return "\n".join(lines) + "\n"
 
 

@@ -62,15 +62,16 @@ def _combos(spec: DesignSpec) -> list[tuple[str, float | None, float | None]]:
 
 
 def _search_task(args: tuple[Any, ...]) -> tuple[Search, list[Candidate]]:
-    spec, params, materials, contact, combo = args
-    ev = Evaluator(spec, params, materials, contact)
+    spec, params, materials, contact, combo, bead_material = args
+    ev = Evaluator(spec, params, materials, contact, bead_material=bead_material)
     s = search(ev, *combo)
     return s, list(ev.seen.values())
 
 
 def run_design(spec: DesignSpec, params: ChainParams, materials: dict[str, Material],
                contact: dict[str, Any] | None = None, *, reference: bool = True,
-               jobs: int = 1, store: Any = None) -> DesignResult:
+               jobs: int = 1, store: Any = None, bead_material: str | None = None
+               ) -> DesignResult:
     """Search every material (module docstring) and rank the candidates.
 
     Parameters
@@ -89,13 +90,15 @@ def run_design(spec: DesignSpec, params: ChainParams, materials: dict[str, Mater
         Processes (one search each; 1: this process).
     store : ssw.contact.operators.OperatorStore or None
         The contact operators of this process (default: the process's).
+    bead_material : str or None
+        The beads' material key (the device's): the candidates' bead check.
     """
     t0 = time.perf_counter()
     for key in spec.materials:
         if key not in materials:
             raise ConfigError("--materials", key,
                               f"materials of the library: {', '.join(sorted(materials))}")
-    ev = Evaluator(spec, params, materials, contact, store)
+    ev = Evaluator(spec, params, materials, contact, store, bead_material=bead_material)
     cands: list[Candidate] = []
     combos = _combos(spec)
     ref: tuple[tuple[str, float, str], ...] = ()
@@ -110,8 +113,8 @@ def run_design(spec: DesignSpec, params: ChainParams, materials: dict[str, Mater
         from concurrent.futures import ProcessPoolExecutor
 
         with ProcessPoolExecutor(max_workers=min(jobs, len(combos))) as pool:
-            out = list(pool.map(_search_task, [(spec, params, materials, contact, c)
-                                               for c in combos]))
+            out = list(pool.map(_search_task, [(spec, params, materials, contact, c,
+                                                bead_material) for c in combos]))
     else:
         # the device's plate is evaluated with the first search's scan (one chain run)
         out = [(search(ev, *c, extra=ref if i == 0 else ()), [])

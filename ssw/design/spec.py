@@ -47,9 +47,11 @@ from typing import Any
 import numpy as np
 
 from ssw.errors import ConfigError
+from ssw.validity import SOIL_STRENGTH_RATIO as _VALIDITY_RATIO
 
-#: Default soil strength as a share of its modulus (module docstring).
-SOIL_STRENGTH_RATIO = 0.01
+#: Default soil strength as a share of its modulus (module docstring): the one stated
+#: assumption every result's yield check names (:data:`ssw.validity.SOIL_STRENGTH_RATIO`).
+SOIL_STRENGTH_RATIO = _VALIDITY_RATIO
 #: Default thickness range searched, m.
 THICKNESS = (1.0e-4, 3.0e-3)
 #: Default plate materials.

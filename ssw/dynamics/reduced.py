@@ -42,7 +42,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, ClassVar
 
 import numpy as np
 
@@ -93,6 +93,8 @@ class ReducedWall:
     m_r: float = M_R
     k_p: float = K_P
     dt: float | None = None
+    #: :meth:`advance_tangent` differentiates the step too (``ddt``).
+    step_tangent: ClassVar[bool] = True
 
     def __post_init__(self) -> None:
         if np.any(self.rho < 0) or np.any(self.G <= 0):
@@ -185,7 +187,8 @@ class ReducedWall:
         return np.array(D0, float), np.array(D0, float)
 
     def advance_tangent(self, st: ReducedState, tst: tuple[np.ndarray, np.ndarray],
-                        d: np.ndarray, D: np.ndarray, dt: float, dE: np.ndarray
+                        d: np.ndarray, D: np.ndarray, dt: float, dE: np.ndarray,
+                        ddt: np.ndarray | None = None
                         ) -> tuple[np.ndarray, np.ndarray, ReducedState, tuple]:
         """:meth:`advance` and its exact derivative.
 
@@ -203,6 +206,10 @@ class ReducedWall:
             s.
         dE : numpy.ndarray
             (n, k), the derivatives of the soil's modulus (Pa per unit of each parameter).
+        ddt : numpy.ndarray or None
+            (k,), the derivatives of the step (s per unit of each parameter; the chain's
+            step column, ``ssw.chain.sensitivity.STEP``): the differences' explicit ``dt``,
+            ``dv/ddt = -v / dt``, ``dacc/ddt = -2 acc / dt``.
 
         Returns
         -------
@@ -248,6 +255,9 @@ class ReducedWall:
             dm += ((-3.0 * f_m * kt - 2.0 * f_p) * k2 / E)[:, None] * dE
         dv = (3.0 * D - 4.0 * D1 + D0) / (2.0 * dt)
         dacc = (D - 2.0 * D1 + D0) / dt**2
+        if ddt is not None:
+            dv = dv - (v / dt)[:, None] * ddt[None, :]
+            dacc = dacc - (2.0 * acc / dt)[:, None] * ddt[None, :]
         dF = dF_qs + dC * v[:, None] + C[:, None] * dv + dm * acc[:, None] + m[:, None] * dacc
         dF *= on[:, None]
         return F, dF, ReducedState(d, st.d1, diss, dt), (np.array(D, float), D1)

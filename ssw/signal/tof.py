@@ -208,6 +208,7 @@ class TofResult:
     f_incident: np.ndarray
     f_reflected: np.ndarray
     sample_rate: float
+    labels: tuple[str, ...] = ()  # each hit's name, as its file labels it
 
     @property
     def n_accepted(self) -> int:
@@ -235,6 +236,7 @@ class TofResult:
             "n_hits": int(self.tof.size), "n_accepted": self.n_accepted,
             "tof_per_hit": [None if not np.isfinite(v) else float(v) for v in self.tof],
             "accepted": self.accepted.tolist(), "rejections": list(self.reasons),
+            "hits": list(self.labels) or [f"hit {i + 1}" for i in range(self.tof.size)],
             "f_incident": self.f_incident.tolist(), "f_reflected": self.f_reflected.tolist(),
             "sample_rate": self.sample_rate,
         }
@@ -255,6 +257,7 @@ def outliers(tof: np.ndarray, rate: float) -> np.ndarray:
 def session_tof(
     forces: list[np.ndarray], rate: float, n_pre: int, *, clipped: list[bool] | None = None,
     opts: TofOptions | None = None, source: str = "recording",
+    labels: list[str] | None = None,
 ) -> TofResult:
     """Apply the per-hit TOF and the rejection rule to a session's records.
 
@@ -272,28 +275,34 @@ def session_tof(
         The peak rule, bound and rejection rule (default ``TofOptions()``).
     source : str
         Name used in error messages.
+    labels : list of str or None
+        Each hit's name as its file labels it (a CSV column's header, a channel's name),
+        used in every reason; default ``hit k`` counted from 1.
     """
     opts = opts or TofOptions()
     n = len(forces)
     if n == 0:
         raise RecordingError(f"{source}: empty recording: no hits")
+    names = list(labels) if labels is not None else [f"hit {i + 1}" for i in range(n)]
+    if len(names) != n:
+        raise ConfigError("labels", len(names), f"one name per hit ({n})")
     tof = np.full(n, np.nan)
     fi = np.full(n, np.nan)
     fr = np.full(n, np.nan)
     reasons: list[str] = []
     for i, f in enumerate(forces):
         if clipped is not None and clipped[i]:
-            reasons.append(f"hit {i}: clipped")
+            reasons.append(f"{names[i]}: clipped")
             continue
         try:
             pp = hit_peaks(f, rate, n_pre, opts)
         except PeakError as exc:
-            reasons.append(f"hit {i}: {exc}")
+            reasons.append(f"{names[i]}: {exc}")
             continue
         tof[i], fi[i], fr[i] = pp.tof, pp.f_incident, pp.f_reflected
     out = outliers(tof, rate)
     for i in np.flatnonzero(out):
-        reasons.append(f"hit {i}: TOF {tof[i] * 1e3:.4f} ms is an outlier (> {OUTLIER_K} "
+        reasons.append(f"{names[i]}: TOF {tof[i] * 1e3:.4f} ms is an outlier (> {OUTLIER_K} "
                        "robust sigmas from the median)")
     accepted = np.isfinite(tof) & ~out
     k = int(accepted.sum())
@@ -305,7 +314,7 @@ def session_tof(
         why = f"; rejected: {'; '.join(reasons)}" if reasons else ""
         raise RecordingError(f"{source}: {k} of {n} hits accepted, at least {opts.min_hits} "
                              f"needed{how}{why}")
-    return TofResult(tof, accepted, tuple(reasons), fi, fr, float(rate))
+    return TofResult(tof, accepted, tuple(reasons), fi, fr, float(rate), tuple(names))
 
 
 def recording_tof(recording, opts: TofOptions | None = None) -> TofResult:
@@ -315,4 +324,5 @@ def recording_tof(recording, opts: TofOptions | None = None) -> TofResult:
         [h.force for h in hits], recording.sample_rate,
         int(recording.meta.get("pretrigger_samples", hits[0].trigger_index)),
         clipped=[h.clipped for h in hits], opts=opts, source=recording.path,
+        labels=[h.name for h in hits],
     )

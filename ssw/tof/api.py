@@ -16,21 +16,28 @@
 ``soil_density=`` for the soil's inertia). The chain itself (:mod:`ssw.chain`) knows only the
 wall protocol: :func:`ssw.chain.run.run_peaks` runs walls already built.
 
-Derivatives. A TOF is the discrete scheme's at the run's fixed time step (a numerical
-setting, held fixed: a derivative is that of the TOF a run with the same step gives). Two
+Derivatives. A TOF is the discrete scheme's, at the time step its parameters give
+(:func:`ssw.chain.integrate.time_step`, a fixed fraction of a Hertz contact time at the
+striker's speed): a derivative is that of the TOF a run at the perturbed parameters gives,
+its step's dependence on the striker's speed and masses included (the chain rule through
+the step, :func:`ssw.chain.integrate.step_tangent`; 1-3e-4 of the striker speed's
+derivative on the thesis device). Given a step (``dt=``), the step is held fixed. Two
 methods, named in every result:
 
 * ``forward``: forward sensitivities carried by the integrator
-  (:mod:`ssw.chain.sensitivity`) and the dense peak's implicit derivative
-  (:mod:`ssw.chain.dense`): exact for the discrete TOF. Every wall whose law states its
-  derivatives: ``rigid``, ``hertz``, ``fit`` (through the K table's interpolant), ``fem``
-  (implicit differentiation of the condensed contact problem; not with the unilateral
-  interface, for E), the reduced dynamic wall;
+  (:mod:`ssw.chain.sensitivity`, the step's own column among them) and the dense peak's
+  implicit derivative (:mod:`ssw.chain.dense`): exact for the discrete TOF. Every wall
+  whose law states its derivatives: ``rigid``, ``hertz``, ``fit`` (through the K table's
+  interpolant), ``fem`` (implicit differentiation of the condensed contact problem; not
+  with the unilateral interface, for E), the reduced dynamic wall;
 * ``central``: fourth-order differences of TOFs at the same step
   (:func:`ssw.chain.sensitivity.stencil`: central, one-sided at a bound, a preload or a
-  dashpot of 0), relative step :data:`ssw.chain.sensitivity.CENTRAL_STEP`, every
-  perturbation in one batched run: the walls without a tangent (``plastic``, a ``table``
-  wall's E) and on request (``method="central"``).
+  dissipation of 0), relative step :data:`ssw.chain.sensitivity.CENTRAL_STEP`, every
+  perturbation in one batched run, plus the step's share: the same differences of the
+  TOF in the step times the step's analytic derivative: the walls without a tangent
+  (``plastic``, a ``table`` wall's E) and on request (``method="central"``). A wall built
+  for one step (the elastodynamic FEM wall, ``wall.dt``) holds its step: its derivatives
+  are at that step.
 """
 
 from __future__ import annotations
@@ -40,10 +47,18 @@ from typing import Any
 
 import numpy as np
 
-from ssw.chain.integrate import Run, simulate, time_step
+from ssw.chain.integrate import Run, simulate, step_tangent, time_step
 from ssw.chain.params import Batch, ChainParams
-from ssw.chain.run import run_peaks
-from ssw.chain.sensitivity import CENTRAL_STEP, PARAMETERS, stencil, tangent_of
+from ssw.chain.run import chain_step, run_peaks, step_derivatives
+from ssw.chain.sensitivity import (
+    CENTRAL_STEP,
+    MOVES_STEP,
+    PARAMETERS,
+    STEP,
+    stencil,
+    tangent_of,
+    units,
+)
 from ssw.chain.tof import Peaks
 from ssw.errors import ConfigError
 from ssw.walls import build_wall
@@ -96,7 +111,9 @@ def peaks(
         Forward sensitivities to carry (:func:`ssw.chain.run.run_peaks`); the wall must
         have them (:func:`tof_derivatives` chooses).
     dt : float or None
-        s, the time step (default: :func:`ssw.chain.integrate.time_step` of the batch).
+        s, the time step (default: :func:`ssw.chain.integrate.time_step` of the batch, and
+        the derivatives include its dependence on the parameters; given, it is held
+        fixed).
     **wall_options
         The wall builder's keywords.
 
@@ -157,7 +174,8 @@ class TofDerivatives:
     tof : numpy.ndarray
         s, the broadcast shape of the inputs.
     dtof : dict
-        Parameter name -> s per SI unit of the parameter (same shape).
+        Parameter name -> s per SI unit of the parameter (same shape), the step's
+        dependence on it included (module docstring).
     method : dict
         Parameter name -> ``forward`` or ``central`` (module docstring).
     step : dict
@@ -166,7 +184,9 @@ class TofDerivatives:
     peaks : Peaks
         The base run's peaks (flat), with ``dt_*``/``df_*`` for the forward parameters.
     run : Run
-        The base run; its ``dsensor`` holds the sensor signal's forward sensitivities.
+        The base run; its ``dsensor`` holds the sensor signal's forward sensitivities at
+        its step (``run.tangent``'s columns: the step's own last where a parameter moves
+        it).
     dt : float
         s, the fixed step of every run.
     """
@@ -178,6 +198,7 @@ class TofDerivatives:
     peaks: Peaks
     run: Run
     dt: float
+    #: parameter name -> its SI unit (the dissipation coefficient's is its law's)
     units: dict[str, str] = field(default_factory=lambda: dict(PARAMETERS))
 
     def as_dict(self, index: int = 0) -> dict[str, Any]:
@@ -206,11 +227,15 @@ def forward_ok(w: Any, names: tuple[str, ...]) -> dict[str, bool]:
     -------
     dict
         Name -> True where the wall states the tangent the forward sensitivity needs (a
-        stateful wall its ``advance_tangent``; ``E`` its ``dforce_dE``).
+        stateful wall its ``advance_tangent``, and for a parameter that moves the step its
+        ``step_tangent``; ``E`` its ``dforce_dE``).
     """
     stateful = hasattr(w, "advance")
     tangent = not stateful or hasattr(w, "advance_tangent")
     ok = {name: tangent for name in names}
+    if stateful and tangent and not getattr(w, "step_tangent", False):
+        for name in set(names) & set(MOVES_STEP):
+            ok[name] = name == "E"  # E moves no physical wall's step
     if "E" in names and tangent:
         try:
             w.dforce_dE(np.zeros(w.n))
@@ -222,11 +247,14 @@ def forward_ok(w: Any, names: tuple[str, ...]) -> dict[str, bool]:
 def central_differences(
     soil_E: np.ndarray, soil_nu: np.ndarray, params: ChainParams, wall: str,
     names: tuple[str, ...], *, dt: float, vary: dict[str, np.ndarray] | None = None,
-    step: float = CENTRAL_STEP, strict: bool = True, **wall_options: Any,
+    step: float = CENTRAL_STEP, strict: bool = True, moving_step: bool = True,
+    **wall_options: Any,
 ) -> tuple[dict[str, np.ndarray], dict[str, float]]:
     """Central differences of TOFs at the fixed step ``dt``, every perturbation of ``E``
-    and of the per-scene fields in one batched run (the dashpot, one ChainParams field, in
-    its own runs).
+    and of the per-scene fields in one batched run (the dissipation, one ChainParams field,
+    in its own runs); with ``moving_step``, plus the step's share of each parameter that
+    moves it: the same differences of the TOF in the step, times the step's analytic
+    derivative (:func:`ssw.chain.integrate.step_tangent`).
 
     Parameters
     ----------
@@ -248,6 +276,9 @@ def central_differences(
         Relative step (:data:`ssw.chain.sensitivity.CENTRAL_STEP`).
     strict : bool
         As :func:`peaks`.
+    moving_step : bool
+        ``dt`` is the parameters' own step (:func:`ssw.chain.integrate.time_step`), which
+        moves with them; False: held fixed.
     **wall_options
         The law's options.
 
@@ -295,6 +326,17 @@ def central_differences(
             st = stencil(name, values[name], step)
             out[name] = st.derivative(list(blocks[j: j + st.offsets.size]))
             j += st.offsets.size
+    movers = tuple(k for k in names if k in MOVES_STEP)
+    if moving_step and movers:
+        w = build_wall(wall, params, soil_E, soil_nu, **wall_options)
+        ddt = step_tangent(base, w, dt, movers)
+        if getattr(w, "dt", None) is None and np.any(ddt):  # else the wall holds its step
+            st = stencil(STEP, np.array([dt]), step)
+            tofs = [run_peaks(base, w, strict=strict, dt=dt + o * float(st.h[0]))[0].tof
+                    for o in st.offsets]
+            dT = st.derivative(tofs)
+            for j, name in enumerate(movers):
+                out[name] = out[name] + dT * ddt[:, j]
     return out, used
 
 
@@ -360,7 +402,8 @@ def tof_derivatives(
         raise ConfigError("derivatives", bad, f"parameters the {wall} wall has forward "
                           "sensitivities for (or method auto/central)")
     forward = tuple(k for k in names if ok[k])
-    pk, run = run_peaks(b, w, strict=strict, dt=dt, derivatives=forward or None)
+    # the step is the parameters' own (dt None: run_peaks differentiates it too)
+    pk, run = run_peaks(b, w, strict=strict, derivatives=forward or None)
     dtof: dict[str, np.ndarray] = {}
     meth: dict[str, str] = {}
     steps: dict[str, float] = {}
@@ -376,7 +419,8 @@ def tof_derivatives(
             meth[name], steps[name] = "central", used[name]
     order = {k: dtof[k].reshape(shape) for k in names}
     return TofDerivatives(pk.tof.reshape(shape), order, {k: meth[k] for k in names},
-                          {k: steps[k] for k in names}, pk, run, dt)
+                          {k: steps[k] for k in names}, pk, run, dt,
+                          units(params.damping_law))
 
 
 def sensor_signal(
@@ -438,11 +482,14 @@ class SensorDerivatives:
     sensor : numpy.ndarray
         (m, n) N, the dense output (:func:`ssw.chain.dense.evaluate`).
     dsensor : numpy.ndarray
-        (m, n, k) N per SI unit of each parameter.
+        (m, n, k) N per SI unit of each parameter (at the parameters' own step, its
+        dependence on them included, unless the step was given).
     names : tuple of str
         The parameters (the last axis of ``dsensor``).
     run : Run
-        The run (its samples and their sensitivities at every step, ``run.dsensor``).
+        The run (its samples and their sensitivities at every step, ``run.dsensor``, at
+        its fixed step: ``run.tangent``'s columns, the step's own last where a parameter
+        moves it).
     rate : numpy.ndarray or None
         (m, n) N/s, the time derivative of ``sensor`` (with ``rate=True``).
     """
@@ -488,8 +535,10 @@ def sensor_derivatives(
         Also the signal's time derivative (``SensorDerivatives.rate``, N/s): what a shift
         in time (a trigger's offset) changes.
     dt : float or None
-        s, the time step (default :func:`ssw.chain.integrate.time_step` of the batch; a
-        fit fixes it, so that its runs compare one discretization).
+        s, the time step (default :func:`ssw.chain.integrate.time_step` of the batch, and
+        the derivatives include its dependence on the parameters through the run's step
+        column and :func:`ssw.chain.integrate.step_tangent`; a fit fixes it, so that its
+        runs compare one discretization, and the derivatives are at that step).
     **wall_options
         The law's options.
 
@@ -507,10 +556,13 @@ def sensor_derivatives(
         opts["with_dE"] = True
     w = build_wall(wall, params, E, nu, **opts)
     b = Batch.of(params, w.n, flat) if flat else params
-    run = simulate(b, w, derivatives=tg, t_end=t_end, stop_early=t_end is None, dt=dt)
+    ddt = step_derivatives(b, w, tg) if dt is None else None
+    run = simulate(b, w, derivatives=tg if ddt is None else tg.with_step(), t_end=t_end,
+                   stop_early=t_end is None, dt=dt)
     t = run.t if times is None else np.asarray(times, float)
     out = evaluate(run, t, tangent=True, rate=rate)
-    return SensorDerivatives(t, out[0], out[1], tg.names, run, out[2] if rate else None)
+    dS = out[1] if ddt is None else chain_step(out[1], ddt)
+    return SensorDerivatives(t, out[0], dS, tg.names, run, out[2] if rate else None)
 
 
 def sensor_force(

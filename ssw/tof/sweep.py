@@ -20,6 +20,7 @@ from ssw.errors import ConfigError, SswError
 from ssw.h5io import atomic_h5, check_kind, read_inputs, write_dataset
 from ssw.plotting import pyplot, save_png
 from ssw.tof.api import peaks
+from ssw.validity import Validity
 
 KIND = "tof_sweep"
 FIELDS = ("soil_E", "soil_nu", "tof", "t_incident", "f_incident", "f_reflected")
@@ -37,11 +38,13 @@ class Sweep:
     t_incident: np.ndarray  # s, incident peak time at the sensor
     f_incident: np.ndarray  # N, incident peak above the static force
     f_reflected: np.ndarray  # N, reflected peak above the static force
+    validity: Validity | None = None  # the checks of each point (ssw.validity)
 
     def sorted(self) -> Sweep:
         """Points ordered by (nu, E)."""
         order = np.lexsort((self.soil_E, self.soil_nu))
-        return Sweep(*(getattr(self, k)[order] for k in FIELDS))
+        return Sweep(*(getattr(self, k)[order] for k in FIELDS),
+                     validity=None if self.validity is None else self.validity.take(order))
 
     def curve(self, soil_nu: float) -> tuple[np.ndarray, np.ndarray]:
         """``(E, TOF)`` at one Poisson's ratio, E increasing."""
@@ -73,27 +76,43 @@ def run_sweep(
     *,
     comm: Any = None,
     on_progress: Any = None,
+    strengths: Any = None,
+    stresses: str = "bound",
     **wall_options: Any,
 ) -> Sweep:
     """TOF at the flat points ``(soil_E[i], soil_nu[i])``, split over ``comm``'s ranks.
 
     ``wall_options`` with a per-point sequence (``curve=[...]``, ``K=[...]``) are split
     along with the points; ``on_progress(k)`` is told when ``k`` of this rank's points
-    finish.
+    finish. With ``strengths`` (:class:`ssw.validity.Strengths`) every point also gets its
+    checks (:func:`ssw.validity.assess` of the same run; ``stresses`` its mode: ``bound``
+    by default, the contact FEM's stresses only with ``fem``).
     """
+    from ssw.validity import assess, fem_options
+    from ssw.walls import build_wall
+
     E, nu = (np.asarray(x, float).ravel() for x in (soil_E, soil_nu))
     size, rank = (1, 0) if comm is None else (comm.Get_size(), comm.Get_rank())
     mine = np.arange(rank, E.size, size)
     opts = {k: _part(v, mine, E.size) for k, v in wall_options.items()}
     cols = np.full((len(FIELDS) - 2, E.size), np.nan)
+    checks = None
     if mine.size:
-        pk, _ = peaks(E[mine], nu[mine], params, wall, on_progress=on_progress, **opts)
+        pk, run = peaks(E[mine], nu[mine], params, wall, on_progress=on_progress, **opts)
         cols[:, mine] = [pk.tof, pk.t_incident, pk.f_incident, pk.f_reflected]
+        if strengths is not None:
+            w = build_wall(wall, params, E[mine], nu[mine], **opts)
+            checks = assess(params, E[mine], nu[mine], run, pk, w, strengths=strengths,
+                            stresses=stresses, **fem_options(wall, opts))
     if comm is not None and size > 1:
-        parts = comm.allgather((mine, cols[:, mine]))
-        for idx, vals in parts:
+        parts = comm.allgather((mine, cols[:, mine], checks))
+        for idx, vals, _ in parts:
             cols[:, idx] = vals
-    return Sweep(E, nu, *cols)
+        if strengths is not None:
+            got = [(idx, v) for idx, _, v in parts if v is not None]
+            order = np.argsort(np.concatenate([idx for idx, _ in got]))
+            checks = Validity.concat([v for _, v in got]).take(order)
+    return Sweep(E, nu, *cols, validity=checks)
 
 
 def _part(value: Any, idx: np.ndarray, n: int) -> Any:
@@ -107,6 +126,35 @@ def write_sweep(path: str | Path, sweep: Sweep, inputs: dict[str, Any]) -> None:
     with atomic_h5(path, kind=KIND, inputs=inputs) as f:
         for k in FIELDS:
             write_dataset(f, k, getattr(sweep, k), UNITS[k])
+        if sweep.validity is not None:
+            _write_validity(f, sweep.validity)
+
+
+#: HDF5 group of a sweep's checks: one dataset per check, attribute ``meta_json``.
+VALIDITY_GROUP = "validity"
+
+
+def _write_validity(f: Any, v: Validity) -> None:
+    """The checks of every point as datasets of :data:`VALIDITY_GROUP` (unit 1), what they
+    rest on as its ``meta_json`` attribute."""
+    from ssw.h5io import to_json
+
+    g = f.create_group(VALIDITY_GROUP)
+    for k, vals in v.values.items():
+        write_dataset(g, k, vals, "1")
+    g.attrs["meta_json"] = to_json(v.meta())
+
+
+def _read_validity(f: Any) -> Validity | None:
+    """The checks :func:`_write_validity` stored, or None (a sweep without them)."""
+    import json
+
+    if VALIDITY_GROUP not in f:
+        return None
+    g = f[VALIDITY_GROUP]
+    meta = json.loads(g.attrs["meta_json"])
+    return Validity({k: g[k][()] for k in g}, meta["assumed"], meta["bound"], meta["notes"],
+                    meta["skipped"])
 
 
 def read_sweep(path: str | Path) -> tuple[Sweep, dict[str, Any]]:
@@ -118,7 +166,7 @@ def read_sweep(path: str | Path) -> tuple[Sweep, dict[str, Any]]:
         raise SswError(f"no TOF sweep at {p}")
     with h5py.File(p, "r") as f:
         check_kind(f, KIND)
-        return Sweep(*(f[k][()] for k in FIELDS)), read_inputs(f)
+        return Sweep(*(f[k][()] for k in FIELDS), validity=_read_validity(f)), read_inputs(f)
 
 
 def model_digest(params: ChainParams, wall: str, wall_options: dict[str, Any]) -> str:
@@ -159,7 +207,10 @@ def require_same_model(sweep_inputs: dict[str, Any], path: str | Path, params: C
 
 def merge_sweeps(sweeps: list[Sweep]) -> Sweep:
     """One sweep of all points, ordered by (nu, E); duplicates are an error."""
-    cat = Sweep(*(np.concatenate([getattr(s, k) for s in sweeps]) for k in FIELDS)).sorted()
+    checks = ([s.validity for s in sweeps] if all(s.validity is not None for s in sweeps)
+              else None)
+    cat = Sweep(*(np.concatenate([getattr(s, k) for s in sweeps]) for k in FIELDS),
+                validity=None if checks is None else Validity.concat(checks)).sorted()
     key = np.stack([cat.soil_nu, cat.soil_E])
     if cat.soil_E.size > 1 and np.any(np.all(np.diff(key, axis=1) == 0, axis=0)):
         raise SswError("merged sweep chunks overlap: a point appears twice")
@@ -167,7 +218,9 @@ def merge_sweeps(sweeps: list[Sweep]) -> Sweep:
 
 
 def write_csv(path: str | Path, sweep: Sweep) -> None:
-    """CSV with a header naming the units."""
+    """CSV with a header naming the units; with the sweep's checks, one column per check
+    (its value, dimensionless; ``_upper_bound`` after the name of an upper bound) and
+    ``checks_failed`` (the failing checks' names, ``;``-joined) after the TOF columns."""
     import io
 
     from ssw.h5io import write_csv_text
@@ -176,7 +229,25 @@ def write_csv(path: str | Path, sweep: Sweep) -> None:
     data = np.column_stack([getattr(sweep, k) for k in FIELDS])
     buf = io.StringIO()
     np.savetxt(buf, data, delimiter=",", header=head, comments="", fmt="%.10g")
-    write_csv_text(path, buf.getvalue(), {k: getattr(sweep, k) for k in FIELDS})
+    text = buf.getvalue()
+    record = {k: getattr(sweep, k) for k in FIELDS}
+    if sweep.validity is not None:
+        text = _with_checks(text, sweep.validity)
+        record["validity"] = {k: sweep.validity.values[k] for k in sweep.validity.values}
+    write_csv_text(path, text, record)
+
+
+def _with_checks(text: str, v: Validity) -> str:
+    """CSV ``text`` (a header and one line per point) with the check columns appended."""
+    cols = v.columns()
+    names = [k for k in cols if k != "checks_failed"]
+    head = [f"{k}_upper_bound" if v.bound.get(k) == "upper" else k for k in names]
+    lines = text.rstrip("\n").split("\n")
+    out = [lines[0] + "," + ",".join([*head, "checks_failed"])]
+    for i, line in enumerate(lines[1:]):
+        vals = [f"{cols[k][i]:.4g}" for k in names]
+        out.append(line + "," + ",".join([*vals, str(cols["checks_failed"][i])]))
+    return "\n".join(out) + "\n"
 
 
 def plot_fig8(path: str | Path, sweep: Sweep, title: str = "") -> None:

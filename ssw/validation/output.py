@@ -25,14 +25,33 @@ COLUMNS = {
 }
 
 
+def check_names(rows: list[SampleResult]) -> list[str]:
+    """The checks (:data:`ssw.validity.RULES` order) any row carries."""
+    from ssw.validity import RULES
+
+    have = {e["check"] for r in rows for e in r.validity}
+    return [k for k in RULES if k in have]
+
+
 def to_csv_text(rows: list[SampleResult]) -> str:
-    """CSV text; the header names each column with its unit, ``name [unit]``."""
+    """CSV text; the header names each column with its unit, ``name [unit]``. After the
+    thesis's columns, each check's value (dimensionless, ``[1]``; ``_upper_bound`` after the
+    name of an upper bound; empty where a row has none) and ``checks_failed`` (the failing
+    checks, ``;``-joined)."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
-    w.writerow([f"{k} [{u}]" if u else k for k, u in COLUMNS.items()])
+    checks = check_names(rows)
+    bounds = {e["check"] for r in rows for e in r.validity if e.get("bound") == "upper"}
+    tail = ([f"{k}_upper_bound [1]" if k in bounds else f"{k} [1]" for k in checks]
+            + (["checks_failed"] if checks else []))
+    w.writerow([f"{k} [{u}]" if u else k for k, u in COLUMNS.items()] + tail)
     for r in rows:
         d = r.to_dict()
-        w.writerow(["" if d[k] is None else d[k] for k in COLUMNS])
+        vals = {e["check"]: e["value"] for e in r.validity}
+        failed = ";".join(e["check"] for e in r.validity if not e["holds"])
+        w.writerow(["" if d[k] is None else d[k] for k in COLUMNS]
+                   + ["" if vals.get(k) is None else vals[k] for k in checks]
+                   + ([failed] if checks else []))
     return buf.getvalue()
 
 

@@ -3,7 +3,8 @@
 For each sample of config ``validation.samples`` (thesis defaults PCF 08, 15, 30):
 
 * ``tof_sim``: the chain model's TOF at the manufacturer's E and nu
-  (:func:`ssw.tof.api.tof`, the config's wall law);
+  (:func:`ssw.tof.sweep.run_sweep`, the config's wall law), with the checks of that run's
+  assumptions (``validity``, ``checks_failed``: :mod:`ssw.validity`);
 * ``tof_measured``: the mean TOF of the sample's recording (:mod:`ssw.signal.tof`, with its
   hit rejection rule) when ``recordings`` is given, else the thesis's published mean
   (``tof_published``, Table 2);
@@ -71,6 +72,8 @@ class SampleResult:
     tof_sim_published: float | None = None
     E_published: float | None = None
     E_cov_published: float | None = None
+    validity: list[dict[str, Any]] = field(default_factory=list)
+    checks_failed: list[str] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
         return asdict(self)
@@ -104,7 +107,7 @@ def inverse_range(wall: str, wall_options: dict[str, Any], params: Any) -> tuple
 def validate_samples(
     cfg: dict[str, Any], params: Any, wall: str, wall_options: dict[str, Any], *,
     root: str | Path = ".", tof_options: Any = None, calibration: Any = None,
-    full_scale: float | None = None,
+    full_scale: float | None = None, strengths: Any = None, stresses: str = "bound",
 ) -> list[SampleResult]:
     """Compute the validation rows of every sample in ``cfg['validation']['samples']``.
 
@@ -113,15 +116,19 @@ def validate_samples(
     paths start from; ``calibration`` the :class:`ssw.calibration.Calibration` (its
     covariance enters the E intervals, its leave-one-out rows the E_loo column);
     ``full_scale`` (N) the device's largest unclipped force, the recordings' hits are
-    checked against.
+    checked against; ``strengths`` (:class:`ssw.validity.Strengths`: the beads' and the
+    plate's) gives each row the checks of the chain's run at its manufacturer's E (the run
+    of ``tof_sim``; its sample's yield against its library strength,
+    :func:`sample_strengths`), with the stress mode ``stresses``
+    (:data:`ssw.validity.STRESS_MODES`).
     """
     from ssw.calibration.references import from_config
     from ssw.config import library
     from ssw.daq.importers import read_any
     from ssw.modulus import estimate_moduli
     from ssw.signal.tof import recording_tof
-    from ssw.tof import api
     from ssw.tof.inverse import invert_batch
+    from ssw.tof.sweep import run_sweep
 
     samples = cfg.get("validation", {}).get("samples", [])
     if not samples:
@@ -131,7 +138,13 @@ def validate_samples(
     mats = library(cfg)
     E_man = np.array([mats[s["material"]].E for s in samples])
     nus = np.array([mats[s["material"]].nu for s in samples])
-    tof_sim = np.asarray(api.tof(E_man, nus, params, wall, **wall_options), dtype=float)
+    # the model's TOF at the manufacturer's E; its run's checks (ssw.validity) are the row's
+    sim = run_sweep(params, E_man, nus, wall, **wall_options,
+                    **({} if strengths is None else
+                       {"strengths": sample_strengths(samples, mats, strengths),
+                        "stresses": stresses}))
+    tof_sim = np.asarray(sim.tof, dtype=float)
+    checks = sim.validity
     # measured TOFs and their standard errors: what the calibration uses
     refs = {r.id: r for r in from_config(cfg, params, wall, wall_options, root=root,
                                          tof_options=tof_options, require_std=False,
@@ -196,6 +209,26 @@ def validate_samples(
             tof_published=smp.get("tof_published"),
             tof_sim_published=smp.get("tof_sim_published"),
             E_published=smp.get("E_published"), E_cov_published=smp.get("E_cov_published"),
+            validity=[] if checks is None else checks.entries(i),
+            checks_failed=[] if checks is None else checks.failed(i),
             **extra,
         ))
     return rows
+
+
+def sample_strengths(samples: list[dict[str, Any]], mats: dict[str, Any],
+                     strengths: Any) -> Any:
+    """``strengths`` (:class:`ssw.validity.Strengths`: the beads' and the plate's) with each
+    sample's own: its library material's uniaxial strength
+    (:func:`ssw.measure.uniaxial_strength`), NaN (the stated assumption) where it has
+    none."""
+    from dataclasses import replace
+
+    from ssw.measure import uniaxial_strength
+
+    Y = [uniaxial_strength(getattr(mats[s["material"]], "strength", None)) for s in samples]
+    src = "; ".join(f"{s['id']}: the library's {s['material']} "
+                    f"({'none stated' if y is None else f'{y:.4g} Pa'})"
+                    for s, y in zip(samples, Y, strict=True))
+    return replace(strengths, sample=np.array([np.nan if y is None else y for y in Y], float),
+                   sample_source=src)

@@ -44,9 +44,9 @@ rule calibration:
         root=RECORDINGS_ROOT,
         wall=lambda wc, input: sswwf.wall_flags(config, input, RESULTS),
     shell:
-        "python -m ssw --inputs-sha256 {params.digest} calibrate --from-config "
-        "--config {params.config} {params.wall} --root {params.root} --calibration none "
-        "--output {output.cal} --json > {output.json} 2> {log}"
+        "python -m ssw --inputs-sha256 {params.digest:q} calibrate --from-config "
+        "--config {params.config:q} {params.wall:q} --root {params.root:q} "
+        "--calibration none --output {output.cal:q} --json > {output.json:q} 2> {log:q}"
 
 
 # One interleaved part of the TOF sweep, batched; with resources `tasks` > 1 its ranks
@@ -78,9 +78,9 @@ rule tof_sweep:
         launch=lambda wc, resources: sswwf.mpi_launch(resources),
         mpi=lambda wc, resources: sswwf.mpi_flag(resources),
     shell:
-        "{params.launch}python -m ssw --inputs-sha256 {params.digest} tof-sweep "
-        "--config {params.config} {params.chain} {params.mpi} --part {wildcards.scatteritem} "
-        "--output {output} > {log} 2>&1"
+        "{params.launch:q} python -m ssw --inputs-sha256 {params.digest:q} tof-sweep "
+        "--config {params.config:q} {params.chain:q} {params.mpi:q} "
+        "--part {wildcards.scatteritem:q} --output {output:q} > {log:q} 2>&1"
 
 
 # The parts of the sweep merged: one table, its CSV and the Fig 8 style plot.
@@ -106,8 +106,8 @@ rule sweep_figure:
         inputs=inputs_of("sweep_figure"),
         digest=digest_of("sweep_figure"),
     shell:
-        "python -m ssw --inputs-sha256 {params.digest} tof-merge {input} --output {output.h5} "
-        "--csv {output.csv} --plot {output.fig8} > {log} 2>&1"
+        "python -m ssw --inputs-sha256 {params.digest:q} tof-merge {input:q} "
+        "--output {output.h5:q} --csv {output.csv:q} --plot {output.fig8:q} > {log:q} 2>&1"
 
 
 CHAIN_TARGETS = [

@@ -1,15 +1,13 @@
 # Config validation and the input functions shared by the stages. The only place that
-# validates the config: the JSON schema (snakemake.utils.validate fills its defaults), then
-# the checks a schema cannot express (ssw.config.check_config). What each job reads of the
+# validates the config: ssw.config.validate_config, as every ssw command does (the JSON
+# schema through ssw.schema, which fills its defaults and refuses NaN and infinities, then
+# the checks a schema cannot express, ssw.config.check_config). What each job reads of the
 # study is ssw.workflow.Study.inputs: the rules pass it as a param, so that Snakemake reruns
 # a job exactly when its inputs change (docs/CONTRACTS.md, "Exact reruns").
 import copy
 import os
-import shlex
 import sys
 from pathlib import Path
-
-from snakemake.utils import validate
 
 # the repository: the package ssw and the config's relative paths (recordings) start there
 REPO = Path(workflow.basedir).resolve().parent
@@ -27,11 +25,14 @@ import ssw.workflow as sswwf  # noqa: E402
 os.environ.update(
     PATH=os.pathsep.join([os.path.dirname(sys.executable), os.getenv("PATH", "")])
 )
-SSW_ROOT = shlex.quote(str(REPO))
+SSW_ROOT = str(REPO)
 shell.prefix(
-    "set -euo pipefail; export PYTHONPATH={SSW_ROOT}${{PYTHONPATH:+:$PYTHONPATH}}; "
+    "set -euo pipefail; export PYTHONPATH={SSW_ROOT:q}${{PYTHONPATH:+:$PYTHONPATH}}; "
 )
 SSW_ENV = "../envs/ssw.yaml"
+# Jobs that Snakemake spawns as `python -m snakemake ...` (on Slurm, and the job step inside
+# each job: both read this file) name the interpreter quoted, as every other argument.
+sswwf.quote_job_python()
 
 # A study config is complete by itself: `--configfile other.yaml` replaces
 # config/config.yaml instead of being merged into it (`--config key=value` still applies).
@@ -42,9 +43,7 @@ if workflow.overwrite_configfiles:
 # Parsing this file (a run, a dry run, a lint) reads the validations the jobs remembered
 # (ssw.schema) and writes none: a dry run writes nothing.
 sswschema.set_memo_writes(False)
-sswcfg.check_moved_keys(config)
-validate(config, schema="../schemas/config.schema.yaml")
-sswcfg.check_config(config)
+sswcfg.validate_config(config)
 
 RESULTS = sswwf.RESULTS
 LOGS = f"{RESULTS}/logs"
@@ -105,10 +104,9 @@ def calibrated_inputs(wildcards):
 
 
 def chain_flags(wildcards, input):
-    """The wall law's flags and --calibration for the inputs the job has."""
-    return " ".join(
-        [sswwf.wall_flags(config, input, RESULTS), sswwf.calibration_flag(input)]
-    )
+    """The wall law's flags and --calibration for the inputs the job has (a list of
+    arguments: the rules quote each, `{params.chain:q}`)."""
+    return [*sswwf.wall_flags(config, input, RESULTS), *sswwf.calibration_flag(input)]
 
 
 # ---- fit stage (workflow/rules/fit.smk)

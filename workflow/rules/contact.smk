@@ -50,5 +50,6 @@ rule contact_batch:
         digest=lambda wc: digest_of("contact", wc.family),
         config=STUDY_CONFIG,
     shell:
-        "python -m ssw --inputs-sha256 {params.digest} contact --family {wildcards.family} "
-        "--config {params.config} --output-dir {output} > {log} 2>&1"
+        "python -m ssw --inputs-sha256 {params.digest:q} contact "
+        "--family {wildcards.family:q} --config {params.config:q} --output-dir {output:q} "
+        "> {log:q} 2>&1"

@@ -52,9 +52,10 @@ rule design_material:
         config=STUDY_CONFIG,
         calibration=lambda wc, input: sswwf.calibration_flag(input),
     shell:
-        "python -m ssw --inputs-sha256 {params.digest} design --soil-range {wildcards.soil} "
-        "--materials {wildcards.material} --config {params.config} {params.calibration} "
-        "--output {output.json} > {log} 2>&1"
+        "python -m ssw --inputs-sha256 {params.digest:q} design "
+        "--soil-range {wildcards.soil:q} --materials {wildcards.material:q} "
+        "--config {params.config:q} {params.calibration:q} --output {output.json:q} "
+        "> {log:q} 2>&1"
 
 
 # One soil range: every material's candidates ranked together, the table and the figure.
@@ -89,8 +90,8 @@ rule design_table:
         inputs=lambda wc: inputs_of("design_table", wc.soil),
         digest=lambda wc: digest_of("design_table", wc.soil),
     shell:
-        "python -m ssw --inputs-sha256 {params.digest} design --merge {input} "
-        "--output {output.json} --csv {output.csv} --plot {output.plot} > {log} 2>&1"
+        "python -m ssw --inputs-sha256 {params.digest:q} design --merge {input:q} "
+        "--output {output.json:q} --csv {output.csv:q} --plot {output.plot:q} > {log:q} 2>&1"
 
 
 DESIGN_TARGETS = expand(
@@ -149,9 +150,10 @@ rule design_device_family:
         family=lambda wc: DEVICE_FAMILIES[wc.family],
         part=lambda wc: sswwf.scatter_part(wc.scatteritem),
     shell:
-        "python -m ssw --inputs-sha256 {params.digest} design --space device "
-        "--soil-range {wildcards.soil} --family {params.family} --part {params.part} "
-        "--config {params.config} {params.calibration} --output {output.json} > {log} 2>&1"
+        "python -m ssw --inputs-sha256 {params.digest:q} design --space device "
+        "--soil-range {wildcards.soil:q} --family {params.family:q} --part {params.part:q} "
+        "--config {params.config:q} {params.calibration:q} --output {output.json:q} "
+        "> {log:q} 2>&1"
 
 
 rule design_device_table:
@@ -194,9 +196,9 @@ rule design_device_table:
         config=STUDY_CONFIG,
         calibration=lambda wc, input: sswwf.calibration_flag(input),
     shell:
-        "python -m ssw --inputs-sha256 {params.digest} design --space device "
-        "--merge {input.parts} --config {params.config} {params.calibration} "
-        "--output {output.json} --csv {output.csv} --plot {output.plot} > {log} 2>&1"
+        "python -m ssw --inputs-sha256 {params.digest:q} design --space device "
+        "--merge {input.parts:q} --config {params.config:q} {params.calibration:q} "
+        "--output {output.json:q} --csv {output.csv:q} --plot {output.plot:q} > {log:q} 2>&1"
 
 
 DESIGN_TARGETS += (

@@ -56,9 +56,10 @@ if ONE_SOIL_SETS:
                 os.path.dirname(os.path.dirname(output.k_table[0]))
             ),
         shell:
-            "python -m ssw --inputs-sha256 {params.digest} fit-set {wildcards.set} {input} "
-            "--outdir {params.outdir} --contact-figure {output.contact_figure} "
-            "--config {params.config} > {log} 2>&1"
+            "python -m ssw --inputs-sha256 {params.digest:q} fit-set {wildcards.set:q} "
+            "{input:q} --outdir {params.outdir:q} "
+            "--contact-figure {output.contact_figure:q} --config {params.config:q} "
+            "> {log:q} 2>&1"
 
 
 if GRID_SETS:
@@ -91,8 +92,8 @@ if GRID_SETS:
                 os.path.dirname(os.path.dirname(output.k_table[0]))
             ),
         shell:
-            "python -m ssw --inputs-sha256 {params.digest} fit-set {wildcards.set} {input} "
-            "--outdir {params.outdir} --config {params.config} > {log} 2>&1"
+            "python -m ssw --inputs-sha256 {params.digest:q} fit-set {wildcards.set:q} "
+            "{input:q} --outdir {params.outdir:q} --config {params.config:q} > {log:q} 2>&1"
 
 
 FIT_TARGETS = []

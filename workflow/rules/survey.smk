@@ -40,9 +40,9 @@ rule survey_point:
         nu=lambda wc: sswwf.survey_nu(config, wc.point),
         chain=chain_flags,
     shell:
-        "python -m ssw --inputs-sha256 {params.digest} measure {input.recordings} "
-        "--soil-nu {params.nu} --config {params.config} {params.chain} --json "
-        "> {output.json} 2> {log}"
+        "python -m ssw --inputs-sha256 {params.digest:q} measure {input.recordings:q} "
+        "--soil-nu {params.nu:q} --config {params.config:q} {params.chain:q} --json "
+        "> {output.json:q} 2> {log:q}"
 
 
 # The survey table, verdicts and figures.
@@ -82,14 +82,14 @@ rule survey_table:
         digest=digest_of("survey_table"),
         config=STUDY_CONFIG,
         map=lambda wc, output: (
-            f"--map {output.map} --geojson {output.geojson}"
+            ["--map", output.map, "--geojson", output.geojson]
             if "map" in output.keys()
-            else ""
+            else []
         ),
     shell:
-        "python -m ssw --inputs-sha256 {params.digest} survey-table {input} "
-        "--config {params.config} --csv {output.csv} --h5 {output.h5} --plot {output.plot} "
-        "{params.map} > {log} 2>&1"
+        "python -m ssw --inputs-sha256 {params.digest:q} survey-table {input:q} "
+        "--config {params.config:q} --csv {output.csv:q} --h5 {output.h5:q} "
+        "--plot {output.plot:q} {params.map:q} > {log:q} 2>&1"
 
 
 SURVEY_TARGETS = list(rules.survey_table.output) if SURVEY_POINTS else []

@@ -53,9 +53,10 @@ rule validation:
         outdir=lambda wc, output: os.path.dirname(output.csv),
         chain=chain_flags,
     shell:
-        "python -m ssw --inputs-sha256 {params.digest} validate --config {params.config} "
-        "{params.chain} --root {params.root} --sweep {input.sweep} "
-        "--outdir {params.outdir} --json > {output.json} 2> {log}"
+        "python -m ssw --inputs-sha256 {params.digest:q} validate "
+        "--config {params.config:q} {params.chain:q} --root {params.root:q} "
+        "--sweep {input.sweep:q} --outdir {params.outdir:q} --json > {output.json:q} "
+        "2> {log:q}"
 
 
 # The study report is Snakemake's own, built after the run:
@@ -103,8 +104,8 @@ rule report_tables:
             output, REPORT_TABLES, REPORT_CATEGORIES
         ),
     shell:
-        "python -m ssw --inputs-sha256 {params.digest} report {params.pages} "
-        "--captions {input.captions} > {log} 2>&1"
+        "python -m ssw --inputs-sha256 {params.digest:q} report {params.pages:q} "
+        "--captions {input.captions:q} > {log:q} 2>&1"
 
 
 VALIDATION_TARGETS = [*rules.validation.output, *rules.report_tables.output]

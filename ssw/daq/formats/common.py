@@ -134,9 +134,11 @@ def pretrigger(t: np.ndarray | None, n: int) -> int:
 
 
 def make_recording(path: str, data: np.ndarray | list[np.ndarray], rate: float, n_pre: int,
-                   meta: dict[str, Any], clipped: str, full_scale: float | None) -> Recording:
-    """A :class:`~ssw.daq.recording.Recording` of hits (columns of ``data``, N) after the readers'
-    checks."""
+                   meta: dict[str, Any], clipped: str, full_scale: float | None,
+                   labels: list[str] | None = None) -> Recording:
+    """A :class:`~ssw.daq.recording.Recording` of hits (columns of ``data``, N) after the
+    readers' checks; ``labels`` name the hits as the file does (a column's header, a
+    channel's name; default ``hit k`` from 1)."""
     cols = [np.asarray(c, dtype=np.float64) for c in
             (data if isinstance(data, list) else np.atleast_2d(np.asarray(data).T))]
     if not cols or cols[0].size == 0:
@@ -146,7 +148,11 @@ def make_recording(path: str, data: np.ndarray | list[np.ndarray], rate: float, 
     # each hit at its own length (a TDMS file may hold 359- and 360-sample hits): the TOF
     # is picked hit by hit
     n = max(c.size for c in cols)
-    hits = [RecordedHit(i, np.ascontiguousarray(c), n_pre) for i, c in enumerate(cols)]
+    if labels is not None and len(labels) != len(cols):
+        raise RecordingError(f"{path}: {len(labels)} hit names for {len(cols)} hits")
+    hits = [RecordedHit(i, np.ascontiguousarray(c), n_pre,
+                        label=labels[i] if labels is not None else "")
+            for i, c in enumerate(cols)]
     kept, dropped = check_hits(path, hits, record_samples=None, full_scale=full_scale,
                                clipped=clipped)
     meta = {"units": "N", "sample_rate": rate, "pretrigger_samples": n_pre,

@@ -4,7 +4,8 @@ Reading. Lines starting with ``#`` are comments; the delimiter is the first of `
 ``;``, tab found in the header. A column named ``t``/``time`` or whose unit is a time gives
 the sample times (s unless its header gives a unit; 0 at the trigger when the axis starts
 before 0, else the first 5 % of the record is the baseline); every other column is
-one hit, a force or a sensor voltage. Units come from the header (:mod:`.common`:
+one hit, a force or a sensor voltage, named by its header (``hit3``: every message about
+the hit says ``hit3``). Units come from the header (:mod:`.common`:
 ``force [N]``, ``force_N``, ``time_s``, ``voltage_V``); ``units=`` gives the unit of hit
 columns whose header has none, and must agree with any header that has one. Without a
 time column, ``sample_rate`` (S/s) is required.
@@ -119,7 +120,10 @@ def read(path: str | Path, *, units: str | None = None, sensitivity: float | Non
         raise RecordingError(f"{p}: no time column ('time_s', 'time [s]'); pass the sample "
                              "rate (S/s, --sample-rate)")
     n_pre = pretrigger(t, data.shape[0])
-    return make_recording(p, forces, rate, n_pre, {"format": "csv"}, clipped, full_scale)
+    # each hit named by its column's header, without its unit ("hit3", "hit_0002")
+    labels = [parsed[i][0] or header[i].strip() for i in cols]
+    return make_recording(p, forces, rate, n_pre, {"format": "csv"}, clipped, full_scale,
+                          labels)
 
 
 def write(path: str | Path, rec: Recording, **_: object) -> Path:

@@ -2,8 +2,9 @@
 
 Variables: ``force`` (N) or ``voltage`` (V) of shape (n_samples, n_hits) or
 (n_samples,), and ``fs`` (S/s) or ``t`` (s, 0 at the trigger when it starts before 0);
-optional ``sensitivity`` (V/N) and ``units`` (the unit of ``force``/``voltage`` when it is
-not N/V, e.g. ``lbf``, ``mV``). Written files hold ``force`` (N), ``t`` and ``fs``.
+the hits named ``force column k`` (k from 1); optional ``sensitivity`` (V/N) and
+``units`` (the unit of ``force``/``voltage`` when it is not N/V, e.g. ``lbf``, ``mV``).
+Written files hold ``force`` (N), ``t`` and ``fs``.
 """
 
 from __future__ import annotations
@@ -68,8 +69,11 @@ def read(path: str | Path, *, units: str | None = None, sensitivity: float | Non
     else:
         raise RecordingError(f"{p}: neither 'fs' (S/s) nor 't' (s) is stored; pass the "
                              "sample rate (--sample-rate)")
-    return make_recording(p, [data[:, i] for i in range(data.shape[1])], rate,
-                          pretrigger(t, data.shape[0]), {"format": "mat"}, clipped, full_scale)
+    k = data.shape[1]
+    labels = [var if k == 1 else f"{var} column {i + 1}" for i in range(k)]
+    return make_recording(p, [data[:, i] for i in range(k)], rate,
+                          pretrigger(t, data.shape[0]), {"format": "mat"}, clipped, full_scale,
+                          labels)
 
 
 def write(path: str | Path, rec: Recording, **_: object) -> Path:

@@ -11,13 +11,14 @@ group, or ``sample_rate``, gives the rate. ``units=`` stands in for a missing
 Two layouts (``split=None`` tells them apart):
 
 * **one channel per hit** (several data channels of equal length): each channel is one
-  record; the pretrigger is ``-wf_start_offset / wf_increment`` samples when the offset is
-  negative, else the first 5 % of the record;
+  record, named by the channel; the pretrigger is ``-wf_start_offset / wf_increment``
+  samples when the offset is negative, else the first 5 % of the record;
 * **one long channel** (a single data channel longer than one record): the hits are cut
   out with the trigger rule of the simulated backend and the ring-buffer software trigger
   (:mod:`ssw.daq.trigger`): level, slope, pretrigger and record length from ``trigger``
   (a :class:`ssw.daq.trigger.TriggerRule`), else from the file's ``ssw_trigger_*``
-  properties (written by :func:`write_stream`), else the ``daq:`` defaults.
+  properties (written by :func:`write_stream`), else the ``daq:`` defaults; the hits are
+  named ``<channel> record k`` (k from 1).
 
 References
 ----------
@@ -133,8 +134,9 @@ def read(path: str | Path, *, units: str | None = None, sensitivity: float | Non
                 "record")
         meta = {"format": "tdms", "layout": "one long channel, split by the trigger rule",
                 "trigger_level": rule.level, "trigger_slope": rule.slope}
+        name = data[0][1].name
         return make_recording(p, hits, rate, rule.pretrigger_samples, meta, clipped,
-                              full_scale)
+                              full_scale, [f"{name} record {k + 1}" for k in range(len(hits))])
     n = forces[0].size
     t = (np.arange(n) / rate + offsets[0]) if offsets[0] < 0 else None
     if len(set(offsets)) != 1:
@@ -142,7 +144,7 @@ def read(path: str | Path, *, units: str | None = None, sensitivity: float | Non
                              f"{sorted(set(offsets))} s; one trigger position expected")
     return make_recording(p, forces, rate, pretrigger(t, n),
                           {"format": "tdms", "layout": "one channel per hit"}, clipped,
-                          full_scale)
+                          full_scale, [ch.name for _, ch, _ in data])
 
 
 def _rate(props: dict[str, Any], gname: str, times: list, sample_rate: float | None,

@@ -77,8 +77,9 @@ def calibrate_levels(cal: Any, samples: list[Any], acq: Any, level: str, *,
     wall_options : dict or None
         Its options.
     start_grid : tuple or None
-        The features' global start grid (sensor masses, multiples of the device's; dashpots,
-        N s/m); None: the default one.
+        The features' global start grid (sensor masses, multiples of the device's; contact
+        dissipation coefficients in the unit of the device's law, N s/m for the dashpot);
+        None: the default one (:func:`ssw.calibration.waveform.start_damping`).
     refine_levels : int or None
         Refinements of that start; None: the default.
     loo : bool

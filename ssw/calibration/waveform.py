@@ -1053,7 +1053,8 @@ def model_floor(setup: Setup, f: Fit) -> dict[str, float]:
 #: stops in a basin of its own (measured: from the nominal device, 1.0x and 6.4 N s/m;
 #: from 1.3x and 3 N s/m, 1.25x and 7.8 N s/m), hence a grid of 0.1 bead by 1 N s/m.
 START_SENSOR_MASS = tuple(np.round(np.arange(1.0, 2.0 + 1e-9, 0.1), 1))
-#: The contact dashpots of the global start's grid, N s/m.
+#: The contact dashpots of the global start's grid, N s/m; under another dissipation law
+#: the same grid in that law's scale (:func:`start_damping`).
 START_DAMPING = tuple(float(c) for c in range(11))
 #: Model runs of each grid point's fit of the per-hit parameters.
 START_ITERATIONS = 8
@@ -1083,6 +1084,31 @@ FLOOR_PASSES = 4
 FLOOR_RTOL = 0.1
 
 
+def start_damping(law: str) -> tuple[float, ...]:
+    """The global start's contact dissipation coefficients under the dissipation ``law``:
+    :data:`START_DAMPING` (dashpots, N s/m) times the law's typical coefficient over the
+    dashpot's (:data:`ssw.chain.dissipation.LAWS`: the same damping forces at the thesis
+    chain's impact, so the grid spans the same dissipation under every law; the dashpot's
+    own grid unchanged).
+
+    Parameters
+    ----------
+    law : str
+        A dissipation law's name (:data:`ssw.chain.dissipation.LAWS`).
+
+    Returns
+    -------
+    tuple of float
+        The coefficients, in the law's unit.
+    """
+    from ssw.chain.dissipation import DEFAULT_LAW, LAWS, law_of
+
+    if law == DEFAULT_LAW:
+        return START_DAMPING
+    ratio = law_of(law).scale / LAWS[DEFAULT_LAW].scale
+    return tuple(float(c * ratio) for c in START_DAMPING)
+
+
 def global_start(setup: Setup, globals_: dict[str, float], E: Any, speed: float,
                  sensor_mass: tuple[float, ...] | None = None,
                  damping: tuple[float, ...] | None = None) -> tuple[State, list[dict]]:
@@ -1109,7 +1135,9 @@ def global_start(setup: Setup, globals_: dict[str, float], E: Any, speed: float,
         The sensor masses of the grid, multiples of ``globals_["sensor_mass"]`` (default
         :data:`START_SENSOR_MASS`).
     damping : tuple of float or None
-        N s/m, the dashpots of the grid (default :data:`START_DAMPING`).
+        The contact dissipation coefficients of the grid, in the unit of the device's law
+        (``setup.params.damping_law``; default :func:`start_damping` of it: the dashpot's
+        :data:`START_DAMPING`, N s/m).
 
     Returns
     -------
@@ -1125,7 +1153,7 @@ def global_start(setup: Setup, globals_: dict[str, float], E: Any, speed: float,
                     scene_sensor_mass=np.repeat(masses, n_h))
     replica = np.arange(tiled.n_hits) // n_h
     best, best_chi2, scan = None, np.inf, []
-    for c in (START_DAMPING if damping is None else damping):
+    for c in (start_damping(setup.params.damping_law) if damping is None else damping):
         g = {**globals_, "damping": float(c)}
         f = _fit_points(tiled, initial_state(tiled, g, np.tile(E, n_g), speed), n_g,
                         START_ITERATIONS)
@@ -1342,8 +1370,9 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     gain : float
         The DAQ gain's start (another level's calibration's).
     start_grid : tuple or None
-        The global start's sensor masses (multiples of the device's) and dashpots (N s/m);
-        None: :data:`START_SENSOR_MASS` by :data:`START_DAMPING`.
+        The global start's sensor masses (multiples of the device's) and contact
+        dissipation coefficients (the unit of ``params.damping_law``; N s/m for the
+        dashpot); None: :data:`START_SENSOR_MASS` by :func:`start_damping` of the law.
     refine_levels : int
         Refinements of the global start (:func:`refine_start`).
 

@@ -12,6 +12,8 @@
   floors);
 * :mod:`~ssw.calibration.records`: the calibration refined by the references' records, the
   features and then the whole waveform (:mod:`~ssw.calibration.waveform`);
+* :mod:`~ssw.calibration.laws`: the contacts' dissipation laws compared on the references'
+  records by AIC and BIC (``ssw calibrate --compare-laws``);
 * :mod:`~ssw.calibration.file`: the calibration file (JSON: the calibrated device, the
   identified values, their covariance, the model-error term, the wall law, the provenance;
   checked against ``ssw/data/calibration.schema.yaml`` when read) and

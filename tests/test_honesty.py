@@ -29,9 +29,20 @@ every unseen E inside its interval, within 5 %, the interval at least 2x narrowe
 TOF level's; through that level the clipped and the yielding recordings flagged, the offset
 one flagged or without effect on E.
 
-``python tests/test_honesty.py`` prints the table (the full study: 20-30 min on 2 cores);
-``test_the_as_built_device_calibrates_at_every_level_small`` is its smaller variant (3 hits
-a sample, the two extreme unseen moduli, a start grid around the device, no bad records).
+``python tests/test_honesty.py`` prints the table (the full study: 20-30 min of CPU);
+``test_the_as_built_device_is_honest_small`` is its smaller variant in the default suite
+(the TOF and features levels, 3 hits a sample, the unseen 20 MPa alone, the start grid cut
+to one point, no bad records: 135 s of CPU, 19 min of wall time on 2 cores at a load
+average of 10-16, 2026-11-29).
+
+Measured (2026-11-29, the smaller variant): the references reject the TOF model (chi^2 381
+on 2 degrees of freedom), ``tau`` = 2.7 %; 20 MPa comes out -4.7 % inside a 63 % wide TOF
+interval (``model (TOF)`` 12.4 % of its 1-sigma budget). The features calibration frees
+only the preload and the sensor's mass (the dissipation, the striker and the gain not
+identified from that start) with floors of 0.3-19 % (the widths' largest: no dashpot
+reproduces Tsuji's pulses from softer sensor contacts): -5.4 % inside a 64 % wide interval.
+Honest at both levels, sharper at neither: the check that asserts sharpness there is the
+slow study's report, not an assertion (:func:`check` returns the levels that meet it).
 """
 
 from __future__ import annotations
@@ -299,16 +310,18 @@ def test_the_as_built_dissipation_is_of_a_dashpots_size():
     assert np.isfinite(chain_tof(445e6, 0.30, V, **DEVICES["as_built"]))
 
 
-def test_the_as_built_device_is_honest_at_every_level_small(tmp_path):
-    """The study's smaller variant: 4 hits a sample, the unseen 20 MPa alone (below every
-    reference: where the waveform's per-sample floor alone left E 27 % low inside a 10 %
-    interval, unflagged), the features' start grid cut to the full grid's best point (1.4 x
-    a bead, 8 N s/m: the grid's search is the slow study's), no bad records. Every level
-    calibrates and is honest: the TOF level's interval, with its model term, holds the true
-    E; each records' level's holds it or is flagged."""
-    rows = study(tmp_path, hits=4, unseen=[UNSEEN[0]], start_grid=((1.4,), (8.0,)),
-                 refine_levels=0, bad=False)
-    check(rows, LEVELS)
+def test_the_as_built_device_is_honest_small(tmp_path):
+    """The study's smaller variant (module docstring): the TOF and features levels, 3 hits a
+    sample, the unseen 20 MPa alone (below every reference: where the waveform's per-sample
+    floor alone left E 27 % low inside a 10 % interval, unflagged), the features' start
+    grid cut to the full grid's best point (1.4 x a bead, 8 N s/m: the grid's search is the
+    slow study's), no bad records. Both levels calibrate and are honest: the TOF level's
+    interval, with its model term, holds the true E (without the term it would be under 1 %
+    wide around an E 4.7 % low); the features level's holds it or is flagged."""
+    levels = ("tof", "features")
+    rows = study(tmp_path, hits=3, unseen=[UNSEEN[0]], levels=levels,
+                 start_grid=((1.4,), (8.0,)), refine_levels=0, bad=False)
+    check(rows, levels)
 
 
 @pytest.mark.slow

@@ -118,3 +118,20 @@ def test_the_records_of_a_hunt_crossley_device_prefer_its_law(tmp_path):
     assert r["distinct"] == {"aic": True, "bic": True}, rows
     assert rows["dashpot"]["delta_bic"] > INDISTINCT
     assert rows["hunt_crossley"]["coefficient"] == pytest.approx(true_c, rel=0.1), rows
+
+
+def test_the_human_output_states_each_law_and_the_finding():
+    """``ssw calibrate``'s human output prints each law's coefficient with its unit, chi^2,
+    k, n and the criteria's differences, and the comparison's statement."""
+    from ssw.cli.calibrate import _human
+
+    r = summarize([_score("dashpot", 100.0, 10, 400),
+                   _score("hunt_crossley", 80.0, 10, 400)], "features")
+    text = _human({"device_name": "d", "wall": "hertz", "references": [], "parameters": {},
+                   "parameter_std": {}, "at_bound": {}, "drop_height": 0.01,
+                   "singular_values": [], "unidentified": [], "warnings": [], "loo": [],
+                   "alternatives": [], "output": None, "law_comparison": r})
+    lines = text.splitlines()
+    dash = next(line for line in lines if line.strip().startswith("dashpot"))
+    assert dash.split()[-2:] == ["20.0", "20.0"]  # its AIC and BIC above Hunt-Crossley's
+    assert "prefer hunt_crossley" in lines[-1]

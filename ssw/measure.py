@@ -333,9 +333,9 @@ def parse_nu(text: str | float) -> float | tuple[float, float]:
 
 
 #: Terms of the TOF budget that a fit of the records replaces (the scatter of the hits and
-#: the peak picking's sampling error are in the fit's own residuals; the TOF model's
-#: discrepancy, :func:`ssw.modulus.model_discrepancy`, by the fit's own, its
-#: error scaled by ``sqrt(chi2 / dof)``).
+#: the peak picking's sampling error are in the fit's own residuals; the TOF model's error,
+#: :func:`ssw.modulus.model_term`, by the records' own: their calibration's floor and the
+#: fit's ``sqrt(chi2 / dof)``).
 _FIT_REPLACES = ("tof", "tof (stated scatter)", "sampling", MODEL_TERM)
 
 
@@ -344,7 +344,8 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
                         trigger_level: float, tof_scatter: float,
                         full_scale: float | None = None, gain: float = 1.0,
                         floor: dict[str, float] | None = None,
-                        covariance: dict[str, Any] | None = None) -> Measurement:
+                        covariance: dict[str, Any] | None = None,
+                        model_loo: float | None = None) -> Measurement:
     """E from the records' features or whole waveforms (``ssw measure --information``),
     starting from the TOF measurement ``m`` of the same recordings.
 
@@ -354,9 +355,12 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
     the notes). E's standard error in ``ln E`` is the fit's, scaled by ``sqrt(chi2 / dof)``
     when the model does not reach the noise (a model-discrepancy term, stated), and with
     a floor by the square root of the hits (the model's error is common to a sample's
-    hits and does not average down over them); it
-    replaces the TOF's scatter and sampling terms of ``m``'s budget, whose other terms
-    (calibration, Poisson's ratio, wall, integrator) stay. ``chi2`` and its quantile flag
+    hits and does not average down over them); with a floor the budget names its two
+    shares, ``{level} fit`` (the noise's weights alone at the optimum,
+    :func:`ssw.calibration.waveform.noise_std`) and ``model ({level})`` (the rest: the
+    model-error floor and the misfit, :mod:`ssw.calibration.model_error`). These
+    replace the TOF's scatter, sampling and model-error terms of ``m``'s budget, whose other
+    terms (calibration, Poisson's ratio, wall, integrator) stay. ``chi2`` and its quantile flag
     a recording the model does not explain (a clipped hit, a yielding sample, a time
     offset the trigger does not explain): beyond
     :data:`ssw.calibration.waveform.FLAG_QUANTILE` the measurement says so in its notes and
@@ -396,6 +400,10 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
         it replaces the TOF calibration's term of the budget by its own, propagated
         through the fit (:func:`ssw.calibration.waveform.propagated`), since the fit
         replaces what the TOF calibration fitted (the striker speed) by each hit's own.
+    model_loo : float or None
+        The calibration's model-error term in ``ln E`` at this level, from its references'
+        leave-one-out predictions (:func:`ssw.calibration.records.with_loo`); it enters
+        the budget as ``model ({level} leave-one-out)``.
 
     Returns
     -------
@@ -406,18 +414,8 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
         ``fit_runs``.
     """
     from ssw.calibration.information import IDENTIFIED_U
-    from ssw.calibration.waveform import (
-        FLAG_QUANTILE,
-        Column,
-        Hits,
-        Setup,
-        State,
-        coordinate,
-        device_globals,
-        fit,
-        initial_state,
-        propagated,
-    )
+    from ssw.calibration.records import fit_modulus, modulus_budget
+    from ssw.calibration.waveform import FLAG_QUANTILE, Hits, coordinate
     from ssw.modulus import COVERAGE_Z
 
     forces, kt = [], []
@@ -431,30 +429,17 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
     n = min(len(f) for f in forces)
     hits = Hits.of(np.stack([forces[i][:n] for i in keep]), [kt[i] for i in keep],
                    m.sample_rate, E=None, nu=m.nu, full_scale=full_scale)
-    setup = Setup(params, wall, dict(wall_options or {}), acquisition, level, [hits],
-                  trigger_level, tof_scatter=tof_scatter, floor=dict(floor or {}))
-    glob = device_globals(params, gain)
-    v0 = float(params.striker_velocity)
-    setup.fix_step(State(np.array([m.E]), np.full(hits.n, 1.5 * v0), np.zeros(hits.n),
-                         np.zeros(hits.n), glob))
-    state = initial_state(setup, glob, [m.E], v0)
-    free = [Column("E", 0)] + [Column(name, h) for name in
-                               ("striker_velocity", "time_offset", "delay")
-                               for h in range(hits.n)]
-    f = fit(setup, state, free)
+    f, setup = fit_modulus(hits, params, wall, wall_options, acquisition, level,
+                           trigger_level=trigger_level, tof_scatter=tof_scatter, gain=gain,
+                           floor=floor, E0=m.E)
     E = float(f.state.E[0])
     contrib = {k: v for k, v in m.contributions.items() if k not in _FIT_REPLACES}
-    u_fit = f.std(Column("E", 0))
-    if any((floor or {}).values()):
-        # the model's error is the same on every hit of the sample: its share does not
-        # average down over them as the weights assume (the noise's, far smaller, is
-        # scaled with it: conservative)
-        u_fit *= float(np.sqrt(hits.n))
-    contrib[f"{level} fit"] = u_fit
-    if covariance and covariance.get("names"):
-        C = propagated(setup, f, list(covariance["names"]), np.asarray(covariance["matrix"]))
+    terms = modulus_budget(setup, f, level, floor, covariance)
+    if f"calibration ({level})" in terms:  # the records' globals replace the TOF's
         contrib.pop("calibration", None)
-        contrib[f"calibration ({level})"] = float(np.sqrt(max(C[0, 0], 0.0)))
+    contrib.update(terms)
+    if model_loo:
+        contrib[f"model ({level} leave-one-out)"] = float(model_loo)
     u = float(np.sqrt(sum(v**2 for v in contrib.values())))
     notes = [x for x in m.notes if "TOF term" not in x and MODEL_TERM not in x]
     if any(floor.values() if floor else ()):
@@ -463,6 +448,10 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
                      "residuals; common to the hits, so E's fit error is scaled by the square "
                      "root of their number): "
                      + ", ".join(f"{k} {v:.2g}" for k, v in floor.items()))
+    if model_loo:
+        notes.append(f"the calibration's references, each predicted as an unseen sample at "
+                     f"this level, call for a model term of {100 * model_loo:.3g} % in E "
+                     f"(95 % upper bound): 'model ({level} leave-one-out)'")
     if f.misfit > 1.0:
         notes.append(f"the model leaves chi2/dof = {f.misfit:.3g} of the records unexplained: "
                      f"E's fit error is scaled by sqrt({f.misfit:.3g}) (a model-discrepancy "

@@ -15,11 +15,14 @@ JCGM 100:2008, sec. 5.1: independent contributions add in quadrature):
   fit's interpolation error, the FEM's discretisation error): a wall stiffer by ``(1 + e)``
   is a soil stiffer by about ``(1 + e)`` (exactly so for a Hertzian wall on a rigid bead),
   so ``u = e``;
-* ``model (references' leave-one-out)``: when the calibration's references do not fit
-  within their stated TOF uncertainties (chi^2 beyond its 95 % quantile), the root mean
-  square of their leave-one-out errors in ``ln E`` (:func:`model_discrepancy`; between the
-  degrees of freedom and that quantile stated in a note, not added); absent otherwise, so a
-  measurement through a calibration its references do not reject is unchanged;
+* ``model (TOF)``: where the calibration's references reject its model (their chi^2 with
+  the stated TOF uncertainties beyond its 95 % quantile), the calibration carries a relative
+  TOF model error ``tau`` (:mod:`ssw.calibration.model_error`: the upper confidence bound
+  of the references' misfit, also in the calibration's weights and so in its covariance); a
+  sample's TOF departs from the model as a reference's does, so ``u = tau / |k|``
+  (:func:`model_term`). Below that quantile there is no term (a calibration its references
+  do not reject gives the same interval to the digit); above the degrees of freedom a note
+  says so;
 * ``integrator``: the TOF error of the time step, ``c (80 / steps_per_contact)^2`` with
   ``c`` the relative error measured at 80 steps against an independent DOP853 solution
   (:data:`INTEGRATOR_REL_ERROR_80`), ``u = c / |k|``.
@@ -174,11 +177,11 @@ def estimate_moduli(
     force_error = getattr(w, "force_error", None)
     if force_error is not None:
         force_error = np.broadcast_to(np.asarray(force_error, float), (k,))
-    disc = model_discrepancy(calibration)
+    tau, cal_notes = model_term(calibration)
     out = []
     for i in range(k):
         contrib: dict[str, float] = {}
-        notes: list[str] = []
+        notes: list[str] = list(cal_notes)
         missing: dict[str, str] = {}
         kk = float(slope[i])
         if np.isnan(S[i]):
@@ -198,15 +201,14 @@ def estimate_moduli(
                                   "positive definite: recalibrate)")
             contrib["calibration"] = float(np.sqrt(var))
         elif calibration is not None:
-            missing["calibration"] = ("the calibration has no covariance (as many parameters "
-                                      "as references without TOF uncertainties)")
+            missing["calibration"] = (
+                "the calibration has no covariance (its references do not identify every "
+                "parameter, or as many parameters as references without TOF uncertainties)")
         else:
             missing["calibration"] = ("uncalibrated device: the uncertainty of its "
                                       "parameters is not known")
-        if disc is not None:  # the references' misfit beyond their TOF uncertainties
-            if disc[2]:
-                contrib[MODEL_TERM] = disc[0]
-            notes.append(disc[1])
+        if tau is not None:  # the references reject the model: its error, the sample's
+            contrib[MODEL_TERM] = float(tau / abs(kk))
         if ranged[i]:
             contrib["poisson"] = float(abs(lnE_hi[i] - lnE_lo[i]) / np.sqrt(12.0))
         if beyond[i]:
@@ -230,29 +232,22 @@ def estimate_moduli(
     return out
 
 
-#: The budget's name of a calibration's model-discrepancy term (:func:`model_discrepancy`).
-MODEL_TERM = "model (references' leave-one-out)"
-#: The chi^2 quantile beyond which the references reject the model (the term enters).
-MODEL_REJECT = 0.95
+#: The budget's name of a calibration's model-error term (:func:`model_term`).
+MODEL_TERM = "model (TOF)"
 
 
-def model_discrepancy(cal: Any) -> tuple[float, str, bool] | None:
-    """The model-discrepancy term of a measurement through ``cal``: the references'
-    leave-one-out prediction errors' root mean square in ``ln E``, when the references'
-    misfit exceeds what their stated TOF uncertainties explain; None otherwise.
+def model_term(cal: Any) -> tuple[float | None, list[str]]:
+    """The TOF model's relative error ``tau`` a measurement through ``cal`` carries, and
+    the notes every such measurement states.
 
-    Two gates on the calibration's ``chi^2`` with ``n - q`` degrees of freedom (references
-    minus the free parameters no bound holds). Above its 95 % quantile the references reject
-    the model: its covariance, conditional on the model, leaves the model's error out, and
-    the term (the root mean square ``sqrt(mean(ln(E_pred / E)^2))`` of the calibration's
-    leave-one-out predictions, :func:`ssw.calibration.calibrate`, a standard uncertainty of
-    ``ln E``) enters the interval. Between its degrees of freedom (a Birge ratio above 1;
-    Birge 1932, the Particle Data Group's scale factor) and that quantile the misfit is a
-    warning, not a rejection: the term is stated in a note with its size, and the interval
-    is the calibration's own (so a measurement through a calibration that its references
-    do not reject is unchanged to the digit). Calibrations without given TOF uncertainties
-    (their weights 1 % of each TOF, the covariance already scaled by ``chi^2 / (n - q)``)
-    and those without leave-one-out predictions get none.
+    ``tau`` is the calibration's own (:class:`ssw.calibration.model_error.ModelError`, the
+    upper confidence bound of a relative TOF error estimated from the references' misfit
+    where they reject the model, Birge 1932, Paule & Mandel 1982; one estimator at every
+    level, :mod:`ssw.calibration.model_error`); its term in ``ln E`` is ``tau / |d ln TOF /
+    d ln E|`` at the sample. None where the references do not reject the model: between
+    their degrees of freedom and the rejection quantile (a Birge ratio above 1) a note says
+    so and the interval is the calibration's own. The calibration's findings
+    (``warnings``: no convergence, a direction not identified) are notes too.
 
     Parameters
     ----------
@@ -261,40 +256,34 @@ def model_discrepancy(cal: Any) -> tuple[float, str, bool] | None:
 
     Returns
     -------
-    tuple of (float, str, bool) or None
-        The standard uncertainty in ``ln E``, a note that states it, and whether it enters
-        the interval; or None.
+    tuple of (float or None, list of str)
+        ``tau`` (1) or None, and the notes.
 
     References
     ----------
     R. T. Birge, "The calculation of errors by the method of least squares", Phys. Rev.
-    40, 207 (1932); R. L. Workman et al. (Particle Data Group), "Review of particle
-    physics", Prog. Theor. Exp. Phys. 2022, 083C01, introduction sec. 5.2.
+    40, 207 (1932); R. C. Paule and J. Mandel, "Consensus values and weighting factors",
+    J. Res. Natl. Bur. Stand. 87, 377 (1982).
     """
-    from scipy.special import chdtri  # the chi^2 law's inverse survival function
-    # (scipy.stats is a 0.4 s import for this one number)
-
-    if cal is None or not cal.loo or "given" not in str(cal.provenance.get("weights", "")):
-        return None
+    if cal is None:
+        return None, []
+    notes = [f"the calibration: {w}" for w in cal.warnings
+             if not w.startswith(("MODEL ERROR", "RECORDS"))]  # (those: stated below, or by
+    # a fit of records, ssw.measure.measure_information)
+    term = cal.model_term()
+    if term is not None:
+        notes.append(f"{term.note()}: the term '{MODEL_TERM}' is tau / |d ln TOF / d ln E| "
+                     "at the sample")
+        return term.tau, notes
     chi2 = cal.provenance.get("chi2")
     dof = len(cal.references) - (len(cal.free) - len(cal.at_bound))
-    if chi2 is None or dof < 1 or not chi2 > dof:
-        return None
-    err = np.array([np.log(r["E_predicted"] / r["E"]) for r in cal.loo
-                    if r.get("E_predicted") is not None])
-    if err.size == 0:
-        return None
-    u = float(np.sqrt(np.mean(err**2)))
-    rejected = bool(chi2 > chdtri(dof, 1.0 - MODEL_REJECT))
-    what = ("the references reject the model at 5 %, and the term" if rejected else
-            "below its 95 % quantile the interval is the calibration's own; the term")
-    note = (f"the references' chi2 {chi2:.3g} exceeds its {dof} degree(s) of freedom: the "
-            "model does not reach them within their TOF uncertainties; "
-            f"{what} '{MODEL_TERM}' ({100 * u:.3g} %, the root mean square of their "
-            "leave-one-out errors in E) "
-            + ("carries its error into the interval" if rejected else
-               "would widen it (add it in quadrature to read the model's error)"))
-    return u, note, rejected
+    if ("given" in str(cal.provenance.get("weights", "")) and chi2 is not None and dof >= 1
+            and chi2 > dof):
+        notes.append(f"the references' chi2 {chi2:.3g} exceeds its {dof} degree(s) of "
+                     "freedom (the model does not reach them within their TOF "
+                     "uncertainties) but stays below its 95 % quantile: the model is not "
+                     "rejected and the interval is the calibration's own")
+    return None, notes
 
 
 class Estimator:
@@ -305,7 +294,8 @@ class Estimator:
     its guards and its secant refinement on the forward model), on the device's forward
     grid computed once (:func:`ssw.tof.inverse.forward_grid`, one batched run): the same
     recording gives the same E live and in ``ssw measure``. The contributions that do not
-    depend on the TOF's scatter (calibration, Poisson's ratio, wall law, integrator) come
+    depend on the TOF's scatter (calibration, the TOF model's error where the calibration
+    carries one, Poisson's ratio, wall law, integrator) come
     from one full :func:`estimate_moduli` at the first estimate's TOF and are kept (they
     change slowly with E); the TOF's own contribution is recomputed at every call, with the
     grid's interpolated slope ``d ln E / d TOF``.

@@ -170,18 +170,42 @@ def test_a_non_monotone_tof_calibrates_on_one_sample_alone(device):
     assert abs(np.log(other / cal.parameters["striker_velocity"])) > 0.05
 
 
-def test_parameters_the_data_cannot_separate_are_refused_and_named(device, reference_tofs):
-    """Two parameters from one reference: the calibration is refused (no number the data
-    do not support), and the message names the combination the singular values show is not
-    identified."""
-    from ssw.errors import CalibrationError
-
+def test_more_parameters_than_references_are_refused_naming_the_flag(device, reference_tofs):
+    """Two parameters from one reference (one TOF): the input cannot determine them, so the
+    calibration is refused before any run, naming --free and the way on."""
     E, nu = SOILS[0]
-    with pytest.raises(CalibrationError, match="do not identify") as exc:
+    with pytest.raises(ConfigError, match="--free") as exc:
         calibrate([Reference(E, nu, reference_tofs[(E, nu)], 2.0e-6)], device,
                   ["striker_velocity", "preload"], materials=material_set(),
                   numerics=NUMERICS, wall="hertz", loo=False, scan_points=6)
-    assert "striker_velocity" in str(exc.value) and "preload" in str(exc.value)
+    assert "at most 1 parameter" in str(exc.value) and "add references" in str(exc.value)
+
+
+def test_parameters_the_references_cannot_separate_answer_labelled(device, reference_tofs,
+                                                                   tmp_path):
+    """Two references on the same soil carry one TOF's information: the striker speed and
+    the preload are not separated (a singular value below the floor). The calibration still
+    answers: the direction is named, there are no standard errors, the file says NOT
+    IDENTIFIED, and a measurement through it lists the calibration's term as missing."""
+    from ssw.modulus import estimate_moduli
+
+    E, nu = SOILS[0]
+    T = reference_tofs[(E, nu)]
+    refs = [Reference(E, nu, T, 2.0e-6, id="a"), Reference(E, nu, T * (1 + 1e-4), 2.0e-6,
+                                                           id="b")]
+    cal = calibrate(refs, device, ["striker_velocity", "preload"], materials=material_set(),
+                    numerics=NUMERICS, wall="hertz", loo=False, scan_points=6)
+    assert cal.unidentified and "striker_velocity" in cal.unidentified[0]
+    assert cal.covariance is None and cal.parameter_std is None
+    assert any(w.startswith("NOT IDENTIFIED") for w in cal.warnings)
+    path = tmp_path / "c.json"
+    write_calibration(path, cal)
+    back = load_calibration(path)
+    assert back.warnings == cal.warnings
+    est = estimate_moduli([T], [1e-6], [nu], back.chain_params(), "hertz",
+                          calibration=back)[0]
+    assert "calibration" in est.missing and "do not identify" in est.missing["calibration"]
+    assert any("NOT IDENTIFIED" in n for n in est.notes)
 
 
 @pytest.mark.parametrize(("text", "field"), [

@@ -130,7 +130,7 @@ def test_a_hit_on_a_yielding_sample_is_flagged(yielding, level):
 
 def test_calibrate_with_the_waveform_frees_what_the_records_identify(capsys, tmp_path,
                                                                      monkeypatch):
-    """Three simulated references of the nominal device (the simulated backend runs the
+    """Two simulated references of the nominal device (the simulated backend runs the
     chain at its own step; the fit at another): the waveform calibration frees the device's
     globals it identifies and finds the nominal sensor mass, a zero dashpot and unit gain.
     The global start's grid is cut to the nominal point (the device is nominal; the grid's
@@ -156,6 +156,11 @@ def test_calibrate_with_the_waveform_frees_what_the_records_identify(capsys, tmp
     assert abs(info["values"].get("damping", 0.0)) < 0.5
     assert info["gain"] == pytest.approx(1.0, rel=0.01)
     assert json.loads(out.read_text())["provenance"]["information"]["freed"] == info["freed"]
+    # the waveform started from the features' calibration; without the references'
+    # leave-one-out check (--no-loo) the file says its intervals lack that term
+    assert info["from"]["level"] == "features"
+    assert any(w.startswith("RECORDS (waveform): no leave-one-out check")
+               for w in r["warnings"])
 
 
 def test_a_fit_whose_model_lacks_observations_the_record_has_is_flagged():

@@ -7,8 +7,16 @@
   many problems in one batched model run per iteration;
 * :mod:`~ssw.calibration.fit`: global scan, refinement, the covariance conditional on the
   parameters a bound holds, singular values, leave-one-out subsets;
+* :mod:`~ssw.calibration.model_error`: the model's own error where the references' misfit
+  exceeds their uncertainties (one estimator at every level: the TOF's ``tau``, the records'
+  floors);
+* :mod:`~ssw.calibration.records`: the calibration refined by the references' records, the
+  features and then the whole waveform (:mod:`~ssw.calibration.waveform`);
+* :mod:`~ssw.calibration.laws`: the contacts' dissipation laws compared on the references'
+  records by AIC and BIC (``ssw calibrate --compare-laws``);
 * :mod:`~ssw.calibration.file`: the calibration file (JSON: the calibrated device, the
-  identified values, their covariance, the wall law, the provenance) and
+  identified values, their covariance, the model-error term, the wall law, the provenance;
+  checked against ``ssw/data/calibration.schema.yaml`` when read) and
   :func:`~ssw.calibration.file.calibrate`, the whole procedure.
 """
 

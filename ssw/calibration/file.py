@@ -5,32 +5,44 @@ calibrated device once more canonically (one plain run, as ``ssw tof --calibrati
 and predicts each reference's E from a calibration made without it (leave-one-out: the
 honest estimate of the error on an unseen sample).
 
-The file (JSON, ``ssw_kind = "calibration"``) holds the calibrated device, its nominal
+The file (JSON, ``ssw_kind = "calibration"``, :data:`SCHEMA_VERSION`, checked against
+``ssw/data/calibration.schema.yaml`` when read) holds the calibrated device, its nominal
 version, the identified values with their standard errors and covariance, the singular
-values, the residuals, the leave-one-out predictions, the wall law and the numerics it was
-made with, the materials, and the provenance. Every chain command takes it
-(``--calibration FILE``) and runs the calibrated device with that wall law and numerics.
+values, the residuals, the leave-one-out predictions, the model-error term where the
+references reject the model (``model_error``) and the fit's findings (``warnings``), the
+wall law and the numerics it was made with, the materials, and the provenance. Every chain
+command takes it (``--calibration FILE``) and runs the calibrated device with that wall law
+and numerics.
 """
 
 from __future__ import annotations
 
 import json
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from datetime import UTC, datetime
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
-from ssw.calibration.fit import check_fit, identify, leave_one_out_sets, theta_dict
+from ssw.calibration.fit import (
+    check_enough,
+    fit_warnings,
+    identify,
+    leave_one_out_sets,
+    theta_dict,
+)
 from ssw.calibration.model import Reference, TofModel
 from ssw.chain.params import chain_params
 from ssw.device import Device, device_from_dict, parameter
-from ssw.errors import CalibrationError, ConfigError
+from ssw.errors import ConfigError
 
 KIND = "calibration"
-SCHEMA_VERSION = 1
+#: The file format's version (2: the model-error term and the fit's findings).
+SCHEMA_VERSION = 2
+#: The calibration file's JSON Schema (``load_calibration`` checks every file against it).
+SCHEMA_PATH = Path(__file__).resolve().parent.parent / "data" / "calibration.schema.yaml"
 
 
 @dataclass(frozen=True)
@@ -57,6 +69,8 @@ class Calibration:
     device_sha256: str = ""
     path: str = ""
     covariance_parameters: tuple[str, ...] = ()
+    model_error: dict[str, Any] | None = None
+    warnings: list[str] = field(default_factory=list)
 
     @property
     def residuals(self) -> list[float]:
@@ -78,6 +92,13 @@ class Calibration:
         """The covariance (SI) of ``covariance_parameters``, or None."""
         return None if self.covariance is None else np.asarray(self.covariance, float)
 
+    def model_term(self) -> Any:
+        """The TOF model's error term (:class:`ssw.calibration.model_error.ModelError`), or
+        None where the references do not reject the model."""
+        from ssw.calibration.model_error import ModelError
+
+        return ModelError.from_dict(self.model_error)
+
     def continuous(self) -> tuple[str, ...]:
         """The continuous free parameters, in order (the covariance is over those of them
         no bound holds: ``covariance_parameters``)."""
@@ -95,19 +116,74 @@ class Calibration:
             "alternatives": self.alternatives, "wall": self.wall, "numerics": self.numerics,
             "material_set": self.material_set, "materials_file": self.materials_file,
             "at_bound": dict(self.at_bound), "device_sha256": self.device_sha256,
+            "model_error": self.model_error, "warnings": list(self.warnings),
             "provenance": self.provenance,
         }
 
 
 def write_calibration(path: str | Path, cal: Calibration) -> None:
-    """Write the calibration file atomically."""
+    """Write the calibration file atomically.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file (JSON).
+    cal : Calibration
+        The calibration.
+
+    Raises
+    ------
+    ValueError
+        A value that is not finite (the file would be refused on reading), naming it.
+    """
     from ssw.h5io import atomic_write_text, to_json
 
-    atomic_write_text(path, to_json(cal.to_dict()) + "\n")
+    d = json.loads(to_json(cal.to_dict()))
+    bad = non_finite(d)
+    if bad:
+        raise ValueError(f"calibration field {bad} is not finite: not written")
+    atomic_write_text(path, json.dumps(d) + "\n")
+
+
+def non_finite(obj: Any, where: str = "") -> str | None:
+    """The dotted path of the first number in a JSON document that is NaN or infinite
+    (JSON Schema's bounds let them through), or None."""
+    if isinstance(obj, float) and not np.isfinite(obj):
+        return where or "(top level)"
+    items = (obj.items() if isinstance(obj, dict) else enumerate(obj)
+             if isinstance(obj, list) else ())
+    for k, v in items:
+        found = non_finite(v, f"{where}.{k}" if where else str(k))
+        if found:
+            return found
+    return None
 
 
 def load_calibration(path: str | Path) -> Calibration:
-    """Read a calibration file written by :func:`write_calibration` (``ssw calibrate``)."""
+    """Read a calibration file written by :func:`write_calibration` (``ssw calibrate``).
+
+    The file is checked against its JSON Schema (``ssw/data/calibration.schema.yaml``,
+    through :func:`ssw.schema.first_file_error`), NaN and infinities are refused anywhere,
+    and the covariance must be square over its parameters, symmetric and positive definite
+    (:func:`check_covariance`); each refusal names the field.
+
+    Parameters
+    ----------
+    path : str or Path
+        The file.
+
+    Returns
+    -------
+    Calibration
+        The calibration.
+
+    Raises
+    ------
+    ConfigError
+        A file that is not a readable calibration of this format, naming the field.
+    """
+    from ssw.schema import first_file_error, path_of
+
     p = Path(path)
     try:
         d = json.loads(p.read_text())
@@ -117,11 +193,18 @@ def load_calibration(path: str | Path) -> Calibration:
         raise ConfigError("--calibration", str(p),
                           "a calibration file written by `ssw calibrate --output FILE.json`")
     if d.get("schema_version") != SCHEMA_VERSION:
-        raise ConfigError("--calibration", str(p),
-                          f"calibration schema version {SCHEMA_VERSION} (found "
-                          f"{d.get('schema_version')}): recalibrate with this ssw")
+        raise ConfigError(f"{p}: schema_version", d.get("schema_version"),
+                          f"calibration schema version {SCHEMA_VERSION}: the file was "
+                          "written by an older ssw (version 2 adds the model-error term, "
+                          "model_error, and the fit's findings, warnings): recalibrate with "
+                          "this ssw (ssw calibrate ... --output FILE.json)")
+    bad = non_finite(d)
+    if bad:
+        raise ConfigError(f"{p}: {bad}", "NaN or infinity", "a finite number")
+    err = first_file_error(SCHEMA_PATH, d)
+    if err is not None:
+        raise ConfigError(f"{p}: {path_of(err)}", err.instance, err.message)
     free = tuple(d["free"])
-    cont = tuple(n for n in free if parameter(n).kind == "continuous")
     cal = Calibration(
         device=device_from_dict(d["device"], f"{p} (device)"),
         device_nominal=device_from_dict(d["device_nominal"], f"{p} (device_nominal)"),
@@ -129,24 +212,14 @@ def load_calibration(path: str | Path) -> Calibration:
         covariance=d["covariance"], singular_values=d["singular_values"],
         unidentified=d["unidentified"], references=d["references"], loo=d["loo"],
         alternatives=d["alternatives"], wall=d["wall"], numerics=d["numerics"],
-        material_set=d.get("material_set", "realistic"),
-        materials_file=d.get("materials_file"), provenance=d.get("provenance", {}),
-        at_bound=_at_bound(d.get("at_bound", {})),
-        device_sha256=d.get("device_sha256", ""), path=str(p),
-        # a file without the list has its covariance over every continuous free parameter
-        covariance_parameters=tuple(d.get("covariance_parameters", cont)),
+        material_set=d["material_set"], materials_file=d["materials_file"],
+        provenance=d["provenance"], at_bound=dict(d["at_bound"]),
+        device_sha256=d["device_sha256"], path=str(p),
+        covariance_parameters=tuple(d["covariance_parameters"]),
+        model_error=d["model_error"], warnings=list(d["warnings"]),
     )
     check_covariance(cal, str(p))
     return cal
-
-
-def _at_bound(value: Any) -> dict[str, str]:
-    """``{name: lower | upper}`` of a file's ``at_bound``. Files of older ssw versions list
-    names (a parameter within one difference step of its bound, still in the covariance,
-    differentiated one-sidedly): none is held there."""
-    if isinstance(value, dict):
-        return {str(k): str(v) for k, v in value.items()}
-    return {}
 
 
 def check_covariance(cal: Calibration, source: str) -> None:
@@ -197,6 +270,13 @@ def calibrate(
 ) -> Calibration:
     """Identify ``free`` device parameters from ``refs`` (see :mod:`ssw.calibration.fit`).
 
+    Where the references reject the model (their chi^2 with the stated TOF uncertainties
+    beyond its 95 % quantile) the calibration carries a relative TOF model error in its
+    weights, its covariance and every interval made through it (``model_error``,
+    :mod:`ssw.calibration.model_error`); a fit that did not converge, leaves a direction
+    unidentified (no covariance then) or has no degree of freedom answers with that stated
+    (``warnings``, :func:`ssw.calibration.fit.fit_warnings`). Only the input is refused.
+
     Parameters
     ----------
     refs : list of ssw.calibration.model.Reference
@@ -234,6 +314,20 @@ def calibrate(
         device's (a later measurement names its own).
     reference_sample : ssw.sample.Sample or None
         The references' sample, recorded in the provenance; None: half-spaces.
+
+    Returns
+    -------
+    Calibration
+        The calibrated device, its fit and its findings.
+
+    Raises
+    ------
+    ConfigError
+        No reference, fewer references than parameters freed
+        (:func:`ssw.calibration.fit.check_enough`), mixed TOF uncertainties.
+    CalibrationError
+        A reference TOF the device cannot produce
+        (:func:`ssw.calibration.fit.check_producible`).
     """
     from ssw.tof import api
 
@@ -244,12 +338,13 @@ def calibrate(
     model = TofModel(device, tuple(free), np.array([r.E for r in refs]),
                      np.array([r.nu for r in refs]), materials, dict(numerics), wall, opts,
                      on_run=on_run)
+    check_enough(len(refs), model.free)
     subsets = leave_one_out_sets(len(refs)) if loo else []
     fit, subs = identify(model, refs, ranges=ranges, subsets=subsets, scan_points=scan_points)
-    problems = check_fit(fit, len(refs))
-    if problems:
-        raise CalibrationError("the calibration is refused (nothing written): "
-                               + "; ".join(problems))
+    warnings = fit_warnings(fit)
+    if any(w.startswith("the covariance is not") for w in warnings):
+        fit = replace(fit, covariance=None, std=None)  # a covariance no consumer can use
+    merr = None if fit.model_error is None else fit.model_error.to_dict()
     values = theta_dict(model.free, fit.theta)
     cal_device = device.with_(**values)
     params = chain_params(cal_device, materials, **numerics)
@@ -274,8 +369,11 @@ def calibrate(
             "wall_time_s": time.perf_counter() - t0, "scan_points": fit.scan_points,
             "parameter_sets_evaluated": model.evaluations, "batched_runs": model.runs,
             "converged": fit.converged, "chi2": fit.chi2,
-            "weights": "given TOF uncertainties" if fit.weights_known else
+            "weights": ("given TOF uncertainties" + (
+                f" and a relative TOF model error tau = {merr['tau']:.4g} (the references "
+                "reject the model)" if merr else "")) if fit.weights_known else
             "1 % of each TOF, covariance scaled by chi2/(n - q), q its parameters",
+            "model_error_tau": None if merr is None else merr["tau"],
             "reference_sample": None if reference_sample is None else reference_sample.to_dict(),
             **(provenance or {})}
     return Calibration(
@@ -289,7 +387,7 @@ def calibrate(
         numerics=dict(numerics),
         material_set=material_set, materials_file=materials_file, provenance=prov,
         at_bound=dict(fit.at_bound), device_sha256=device_digest(device, materials),
-        covariance_parameters=fit.covariance_names,
+        covariance_parameters=fit.covariance_names, model_error=merr, warnings=warnings,
     )
 
 
@@ -368,7 +466,8 @@ def _loo_predictions(model: TofModel, refs: list[Reference], subs: dict, materia
             "id": r.id, "E": r.E, "nu": r.nu, "tof": r.tof,
             "E_predicted": float(E_pred[i]) if ok else None,
             "error_pct": float(100.0 * (E_pred[i] - r.E) / r.E) if ok else None,
-            "parameters": theta_dict(model.free, sol.theta), "chi2": sol.chi2,
+            "parameters": theta_dict(model.free, sol.theta),
+            "chi2": float(sol.chi2) if np.isfinite(sol.chi2) else None,
             "singular_values": sol.singular_values.tolist(), "identified": sol.identified,
             "reason": reasons[i], "at_bound": dict(sol.at_bound),
         })

@@ -40,6 +40,19 @@ data identify: a direction ``v`` with a small singular value ``sigma`` moves the
 standard uncertainty only when the parameters move by ``1/sigma`` along ``v`` (scaled
 units), i.e. the data cannot separate the parameters mixed in ``v``; below 1 (more than an
 e-fold) the calibration says so and gives no standard errors (:data:`IDENTIFIED_MIN`).
+
+Model error. Where the references' chi^2 with their stated TOF uncertainties exceeds its
+95 % quantile (:func:`ssw.calibration.model_error.rejects`, ``n - q`` degrees of freedom,
+:func:`degrees_of_freedom`), the model does not describe the device to the references'
+precision: the fit is repeated with a relative TOF model error ``tau`` in the weights,
+``std_i^2 + tau^2 T_i^2``, ``tau`` the upper confidence bound its residuals call for,
+re-estimated until it settles (:func:`_with_model_error`; :mod:`ssw.calibration.model_error`
+states the estimator and why). The covariance and the leave-one-out fits then use those
+weights; ``Fit.chi2`` stays the references' chi^2 with their stated uncertainties and
+``Fit.model_error`` states the term. A calibration is refused only for its input (TOFs the
+device cannot produce, :func:`check_producible`; fewer references than parameters freed,
+:func:`check_enough`); a fit that does not converge, leaves a direction unidentified or
+needs the model-error term answers with the finding stated (:func:`fit_warnings`).
 """
 
 from __future__ import annotations
@@ -52,6 +65,14 @@ import numpy as np
 
 from ssw.calibration.lm import LM_FTOL, LM_ITERATIONS, Problem, active_set, levenberg_marquardt
 from ssw.calibration.model import Reference, TofModel
+from ssw.calibration.model_error import (
+    PASSES,
+    RTOL,
+    ModelError,
+    chi2_cdf,
+    floor_bound,
+    rejects,
+)
 from ssw.calibration.residuals import (
     Derivatives,
     Observations,
@@ -155,6 +176,7 @@ class Fit:
     covariance_names: tuple[str, ...] = ()  # the continuous free ones no bound holds
     at_bound: dict[str, str] = field(default_factory=dict)
     tof_range: np.ndarray | None = None  # (n, 2) s: the TOFs the scan's device can give
+    model_error: ModelError | None = None  # the references reject the model: its term
 
 
 # --------------------------------------------------------------------- scan
@@ -558,12 +580,81 @@ def identify(
     sols = _lm_batch(model, obs, search_derivs, problems, rng)
     best, others = _pick(sols, to_x(nominal, model.free), model)
     fit, at_best = _uncertainty(model, obs, derivs, known, best, others, rng, grid.shape[0])
+    if known and rejects(fit.chi2, degrees_of_freedom(fit)):
+        # the references reject the model: its error enters the weights (module docstring)
+        stated = obs.std
+        obs, best, merr = _with_model_error(model, obs, search_derivs, best, rng,
+                                            degrees_of_freedom(fit), fit.chi2)
+        fit, at_best = _uncertainty(model, obs, derivs, known, best, others, rng,
+                                    grid.shape[0])
+        fit = replace(fit, chi2=float(np.sum((fit.residuals / stated) ** 2)),
+                      model_error=replace(merr, chi2_with_term=fit.chi2))
     fit = replace(fit, tof_range=tof_range)
     if not subsets:
         return fit, {}
     subs = refine_subsets(model, obs, search_derivs, best.theta, list(subsets), rng,
                           at_start=at_best)
     return fit, subs
+
+
+def degrees_of_freedom(fit: Fit) -> int:
+    """The references' degrees of freedom at a fit: references minus the free parameters
+    no bound holds (integers included: each is fitted, by the scan).
+
+    With ``Fit.chi2`` (the stated uncertainties' chi^2) it is what an information criterion
+    of a model (a dissipation law) needs: ``AIC = chi2 + 2 k``, ``BIC = chi2 + k ln n``,
+    ``k = n - dof`` the parameters fitted (Burnham & Anderson 2002, sec. 2.2).
+
+    Parameters
+    ----------
+    fit : Fit
+        The identification.
+
+    Returns
+    -------
+    int
+        ``n - k`` (may be 0 or less: nothing to test the model on).
+    """
+    return int(fit.residuals.size - (len(fit.names) - len(fit.at_bound)))
+
+
+def _with_model_error(model: TofModel, obs: Observations, derivs: Derivatives,
+                      best: Solution, ranges: dict[str, tuple[float, float]], dof: int,
+                      chi2: float) -> tuple[Observations, Solution, ModelError]:
+    """The fit with a relative TOF model error ``tau`` in the weights
+    (:mod:`ssw.calibration.model_error`): ``tau`` the upper confidence bound the residuals
+    of the last fit call for (:func:`ssw.calibration.model_error.floor_bound`, relative to
+    each measured TOF), the parameters refitted from ``best`` with the weights ``std^2 +
+    tau^2 TOF^2`` (the bounded Levenberg-Marquardt of the main fit), until ``tau`` settles
+    (:data:`ssw.calibration.model_error.RTOL`, at most
+    :data:`ssw.calibration.model_error.PASSES` fits).
+
+    Returns
+    -------
+    tuple
+        The observations with the term's weights, the last fit's solution and the
+        :class:`ssw.calibration.model_error.ModelError` (its ``chi2_with_term`` to fill).
+    """
+    T, s = obs.values, obs.std
+    cont = model.continuous
+    cont_idx = [model.free.index(n) for n in cont]
+    int_idx = [model.free.index(n) for n in model.integers]
+    key = tuple(range(T.size))
+    tau_used, sol, settled, passes = None, best, False, 0
+    eff = obs
+    while passes < PASSES and not settled:
+        passes += 1
+        tau = floor_bound(sol.tof_model - T, s, T, dof)
+        settled = tau_used is not None and abs(tau - tau_used) <= RTOL * tau
+        eff = Observations(T, np.hypot(s, tau * T), obs.reference, obs.kind)
+        start = (key, to_x(sol.theta[cont_idx], cont), sol.theta[int_idx])
+        new = _lm_batch(model, eff, derivs, [start], ranges)[0]
+        if np.isfinite(new.chi2):
+            sol = new
+        tau_used = tau
+    merr = ModelError(float(tau_used), float(chi2), int(dof), chi2_cdf(chi2, dof), np.nan,
+                      passes, bool(settled))
+    return eff, sol, merr
 
 
 def _uncertainty(model: TofModel, obs: Observations, derivs: Derivatives, known: bool,
@@ -618,8 +709,6 @@ def _coord(name: str) -> str:
 #: Margin of the producible TOF range: a reference up to this fraction beyond the scan's
 #: extremes may still be reached between its grid points or just past its ranges' corners.
 PRODUCIBLE_MARGIN = 0.05
-#: Quantile of chi^2 beyond which the misfit is refused (with given TOF uncertainties).
-CHI2_QUANTILE = 0.999
 
 
 def check_producible(refs: list[Reference], tof: np.ndarray,
@@ -650,30 +739,60 @@ def check_producible(refs: list[Reference], tof: np.ndarray,
     return np.stack([lo, hi], axis=1)
 
 
-def check_fit(fit: Fit, n: int) -> list[str]:
-    """Why a fit cannot be trusted (empty: it can): not converged, parameters the references
-    do not identify, chi^2 beyond its :data:`CHI2_QUANTILE` quantile for ``n - p`` degrees
-    of freedom (with given TOF uncertainties), a covariance that is not finite and positive
-    definite."""
-    from scipy.special import chdtri  # chi^2 inverse survival function (scipy.stats is
-    # a 0.8 s import for this one number)
+def check_enough(n: int, free: tuple[str, ...]) -> None:
+    """ConfigError unless ``n`` references (one TOF each) can determine the ``free``
+    parameters: at least as many references as parameters freed.
 
+    Parameters
+    ----------
+    n : int
+        The references.
+    free : tuple of str
+        The parameters freed.
+
+    Raises
+    ------
+    ConfigError
+        Fewer references than free parameters.
+    """
+    if n < len(free):
+        raise ConfigError("--free", list(free),
+                          f"at most {n} parameter(s) with {n} reference(s), one TOF each: "
+                          "free fewer (--free NAME), or add references (--reference, "
+                          "--reference-recording)")
+
+
+def fit_warnings(fit: Fit) -> list[str]:
+    """What a user of a calibration must know of its fit (empty: nothing): the model's error
+    term where the references reject the model, a least squares that did not converge,
+    directions the references do not identify (no standard errors then), no degree of
+    freedom to test the model on, a covariance that is not finite and positive definite.
+    None of these refuses the calibration: it answers, labelled (README "Calibration").
+
+    Parameters
+    ----------
+    fit : Fit
+        The identification.
+
+    Returns
+    -------
+    list of str
+        One sentence per finding.
+    """
     out = []
+    if fit.model_error is not None:
+        out.append(fit.model_error.note())
     if not fit.converged:
-        out.append("the least squares did not converge (Levenberg-Marquardt stalled or ran "
-                   "out of iterations)")
+        out.append("NOT CONVERGED: the least squares did not converge (Levenberg-Marquardt "
+                   "stalled or ran out of iterations): the values are its last iterate")
     if fit.unidentified:
-        out.append("the references do not identify every free parameter: "
-                   + "; ".join(fit.unidentified) + " (free fewer parameters, or add "
+        out.append("NOT IDENTIFIED: the references do not identify every free parameter: "
+                   + "; ".join(fit.unidentified) + " (no standard errors: the intervals "
+                   "through the calibration lack its term; free fewer parameters, or add "
                    "references that tell them apart)")
-    p = int(fit.singular_values.size)
-    if fit.weights_known and n > p:
-        limit = float(chdtri(n - p, 1.0 - CHI2_QUANTILE))
-        if fit.chi2 > limit:
-            out.append(f"chi^2 = {fit.chi2:.4g} exceeds its {CHI2_QUANTILE:.1%} quantile "
-                       f"{limit:.4g} for {n - p} degrees of freedom: the model cannot fit the "
-                       "references within their uncertainties (residuals "
-                       + ", ".join(f"{x:+.3g} s" for x in fit.residuals) + ")")
+    if fit.weights_known and degrees_of_freedom(fit) < 1:
+        out.append("as many references as parameters fitted: no degree of freedom to test "
+                   "the model on, its error is not estimated (add references)")
     if fit.covariance is not None:
         C = np.asarray(fit.covariance, float)
         if not np.all(np.isfinite(C)) or np.any(np.linalg.eigvalsh(0.5 * (C + C.T)) <= 0):

@@ -51,6 +51,7 @@ from typing import Any
 
 import numpy as np
 
+from ssw.calibration.model_error import FLOOR_CONFIDENCE, floor_bound
 from ssw.daq.model import Acquisition, filter_fine, fine_grid, trigger_time
 from ssw.device import PARAMETERS as DEVICE_PARAMETERS
 from ssw.device import Parameter
@@ -904,10 +905,6 @@ class _Explained:
         return np.inf if lost > self.lost(current) else float(r @ r)
 
 
-#: The confidence of the model-error floor's upper bound (:func:`model_floor`).
-FLOOR_CONFIDENCE = 0.95
-
-
 def global_covariance(f: Fit, hits: float = 1.0) -> tuple[list[str], np.ndarray]:
     """The covariance of a fit's free globals in their scaled coordinates
     (:func:`coordinate`), scaled by the misfit (:attr:`Fit.misfit`), every per-hit
@@ -931,6 +928,33 @@ def global_covariance(f: Fit, hits: float = 1.0) -> tuple[list[str], np.ndarray]
     j = [i for i, c in enumerate(f.free) if c.index < 0]
     hits = hits if any(f.floor.values()) else 1.0
     return [f.free[i].name for i in j], f.cov_x[np.ix_(j, j)] * f.misfit * hits
+
+
+def noise_std(setup: Setup, f: Fit, col: Column) -> float:
+    """The standard error of ``col`` (its scaled coordinate) at a fit's optimum with the
+    noise's weights alone: what the fit would give if the model were the device (the
+    model-error floor and the misfit's scaling left out; the rest of a fit's standard error
+    is the model's, :func:`ssw.measure.measure_information`).
+
+    Parameters
+    ----------
+    setup : Setup
+        The fit's model and records.
+    f : Fit
+        The fit.
+    col : Column
+        One of its free parameters.
+
+    Returns
+    -------
+    float
+        The standard error, scaled coordinate.
+    """
+    bare = replace(setup, floor={}, runs=0)
+    _, J, _ = _residuals(bare, f.state, list(f.free), {c.name for c in f.free})
+    setup.runs += bare.runs
+    j = f.free.index(col)
+    return float(np.sqrt(max(np.linalg.pinv(J.T @ J)[j, j], 0.0)))
 
 
 def propagated(setup: Setup, f: Fit, names: list[str], cov: np.ndarray) -> np.ndarray:
@@ -964,58 +988,16 @@ def propagated(setup: Setup, f: Fit, names: list[str], cov: np.ndarray) -> np.nd
     return S @ np.asarray(cov, float) @ S.T
 
 
-def floor_bound(r: np.ndarray, sigma: np.ndarray, scale: np.ndarray, dof: float,
-                confidence: float = FLOOR_CONFIDENCE) -> float:
-    """The upper confidence bound of a relative model-error floor ``phi`` from residuals
-    ``r_i ~ N(0, sigma_i^2 + phi^2 s_i^2)``: the root of ``sum_i r_i^2 / (sigma_i^2 +
-    phi^2 s_i^2) = chi2.ppf(1 - confidence, dof)`` (the left side falls as ``phi``
-    grows), 0 where the noise alone explains them.
-
-    Parameters
-    ----------
-    r : numpy.ndarray
-        (n,) residuals.
-    sigma : numpy.ndarray
-        (n,) the noise's standard deviations.
-    scale : numpy.ndarray
-        (n,) the scale the floor is relative to (``|s_i|``).
-    dof : float
-        The residuals' degrees of freedom (their share of a fit's).
-    confidence : float
-        The bound's confidence.
-
-    Returns
-    -------
-    float
-        ``phi`` (dimensionless).
-    """
-    from scipy import stats
-    from scipy.optimize import brentq
-
-    rr, sig, sc = np.asarray(r, float) ** 2, np.asarray(sigma, float) ** 2, \
-        np.asarray(scale, float) ** 2
-    target = float(stats.chi2.ppf(1.0 - confidence, max(dof, 1e-3)))
-
-    def excess(phi: float) -> float:
-        return float(np.sum(rr / (sig + phi**2 * sc))) - target
-
-    if excess(0.0) <= 0.0:
-        return 0.0
-    hi = float(np.sqrt(np.sum(rr) / max(np.sum(sc), 1e-300) * rr.size / target))
-    while excess(hi) > 0.0:
-        hi *= 2.0
-    return float(brentq(excess, 0.0, hi, xtol=1e-12 * hi, rtol=1e-6))
-
-
 def model_floor(setup: Setup, f: Fit) -> dict[str, float]:
     """The model-error floor the references' residuals call for: per observation kind (each
     feature; the samples of a waveform) the relative standard deviation ``phi`` that, added
     in quadrature to the noise's, brings that kind's chi^2 at the fit ``f`` down to the
     lower :data:`FLOOR_CONFIDENCE` quantile of a chi^2 of its share of the degrees of
     freedom: the upper confidence bound of ``phi`` (the Birge ratio of each kind, Birge
-    1932, which the TOF level's :func:`ssw.modulus.model_discrepancy` also uses, made 1 at
-    the bound rather than at the point estimate: a kind with a handful of observations
-    per reference gives a floor that samples outside the references' range exceed)::
+    1932, made 1 at the bound rather than at the point estimate: a kind with a handful of
+    observations per reference gives a floor that samples outside the references' range
+    exceed; the estimator of every level, :mod:`ssw.calibration.model_error`, which the TOF
+    level's ``tau`` also uses)::
 
         sum_i r_i^2 / (sigma_i^2 + phi^2 s_i^2) = chi2.ppf(1 - FLOOR_CONFIDENCE, n_k dof / n)
 
@@ -1056,7 +1038,8 @@ def model_floor(setup: Setup, f: Fit) -> dict[str, float]:
     for k in kinds:
         s = ok & (obs.kind == k)
         if np.any(s):
-            out[k] = floor_bound(r[s], obs.sigma[s], scale[s], share * np.count_nonzero(s))
+            out[k] = floor_bound(r[s], obs.sigma[s], scale[s], share * np.count_nonzero(s),
+                                 FLOOR_CONFIDENCE)
     return out
 
 
@@ -1070,7 +1053,8 @@ def model_floor(setup: Setup, f: Fit) -> dict[str, float]:
 #: stops in a basin of its own (measured: from the nominal device, 1.0x and 6.4 N s/m;
 #: from 1.3x and 3 N s/m, 1.25x and 7.8 N s/m), hence a grid of 0.1 bead by 1 N s/m.
 START_SENSOR_MASS = tuple(np.round(np.arange(1.0, 2.0 + 1e-9, 0.1), 1))
-#: The contact dashpots of the global start's grid, N s/m.
+#: The contact dashpots of the global start's grid, N s/m; under another dissipation law
+#: the same grid in that law's scale (:func:`start_damping`).
 START_DAMPING = tuple(float(c) for c in range(11))
 #: Model runs of each grid point's fit of the per-hit parameters.
 START_ITERATIONS = 8
@@ -1100,6 +1084,31 @@ FLOOR_PASSES = 4
 FLOOR_RTOL = 0.1
 
 
+def start_damping(law: str) -> tuple[float, ...]:
+    """The global start's contact dissipation coefficients under the dissipation ``law``:
+    :data:`START_DAMPING` (dashpots, N s/m) times the law's typical coefficient over the
+    dashpot's (:data:`ssw.chain.dissipation.LAWS`: the same damping forces at the thesis
+    chain's impact, so the grid spans the same dissipation under every law; the dashpot's
+    own grid unchanged).
+
+    Parameters
+    ----------
+    law : str
+        A dissipation law's name (:data:`ssw.chain.dissipation.LAWS`).
+
+    Returns
+    -------
+    tuple of float
+        The coefficients, in the law's unit.
+    """
+    from ssw.chain.dissipation import DEFAULT_LAW, LAWS, law_of
+
+    if law == DEFAULT_LAW:
+        return START_DAMPING
+    ratio = law_of(law).scale / LAWS[DEFAULT_LAW].scale
+    return tuple(float(c * ratio) for c in START_DAMPING)
+
+
 def global_start(setup: Setup, globals_: dict[str, float], E: Any, speed: float,
                  sensor_mass: tuple[float, ...] | None = None,
                  damping: tuple[float, ...] | None = None) -> tuple[State, list[dict]]:
@@ -1126,7 +1135,9 @@ def global_start(setup: Setup, globals_: dict[str, float], E: Any, speed: float,
         The sensor masses of the grid, multiples of ``globals_["sensor_mass"]`` (default
         :data:`START_SENSOR_MASS`).
     damping : tuple of float or None
-        N s/m, the dashpots of the grid (default :data:`START_DAMPING`).
+        The contact dissipation coefficients of the grid, in the unit of the device's law
+        (``setup.params.damping_law``; default :func:`start_damping` of it: the dashpot's
+        :data:`START_DAMPING`, N s/m).
 
     Returns
     -------
@@ -1142,7 +1153,7 @@ def global_start(setup: Setup, globals_: dict[str, float], E: Any, speed: float,
                     scene_sensor_mass=np.repeat(masses, n_h))
     replica = np.arange(tiled.n_hits) // n_h
     best, best_chi2, scan = None, np.inf, []
-    for c in (START_DAMPING if damping is None else damping):
+    for c in (start_damping(setup.params.damping_law) if damping is None else damping):
         g = {**globals_, "damping": float(c)}
         f = _fit_points(tiled, initial_state(tiled, g, np.tile(E, n_g), speed), n_g,
                         START_ITERATIONS)
@@ -1306,14 +1317,21 @@ def _bounds(setup: Setup, free: list[Column]) -> tuple[np.ndarray, np.ndarray]:
 def calibrate_records(samples: list[Hits], params: Any, wall: str,
                       wall_options: dict[str, Any], acq: Acquisition, level: str,
                       trigger_level: float, tof_scatter: float,
-                      free_globals: tuple[str, ...] = GLOBALS, scan: bool = True) -> Fit:
+                      free_globals: tuple[str, ...] = GLOBALS, scan: bool = True,
+                      gain: float = 1.0,
+                      start_grid: tuple[tuple[float, ...], tuple[float, ...]] | None = None,
+                      refine_levels: int = REFINE_LEVELS) -> Fit:
     """Fit the device's global parameters to reference records (every sample's E known):
     every one of ``free_globals`` with each hit's striker speed, time offset and delay.
 
     1. The start: when the sensor's mass and the dashpot may be freed, the best point of
        a grid of them (:func:`global_start`, weights with the floor
-       :data:`START_FLOOR`) refined around it (:func:`refine_start`), else the device's
-       values (weights: the noise).
+       :data:`START_FLOOR`) refined around it (:func:`refine_start`); else (or with
+       ``scan`` False) the device's values, each hit's parameters fitted to the records
+       with the globals held, and the model-error floor those residuals call for
+       (:func:`model_floor`) in the weights of what follows (so that a first fit of the
+       globals is not drawn by the noise's weights alone where the model cannot reach
+       the records: a calibration of the waveform from the features' one).
     2. A fit of every free parameter; then the model-error floor estimated from its
        residuals (:func:`model_floor`: each kind's chi^2 brought to its share of the
        degrees of freedom) and the fit again with it, until the floor settles
@@ -1349,6 +1367,14 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
         Start from :func:`global_start` when the sensor's mass and the dashpot may be
         freed; False: from ``params`` (a calibration of the same records at another level,
         e.g. the waveform's from the features').
+    gain : float
+        The DAQ gain's start (another level's calibration's).
+    start_grid : tuple or None
+        The global start's sensor masses (multiples of the device's) and contact
+        dissipation coefficients (the unit of ``params.damping_law``; N s/m for the
+        dashpot); None: :data:`START_SENSOR_MASS` by :func:`start_damping` of the law.
+    refine_levels : int
+        Refinements of the global start (:func:`refine_start`).
 
     Returns
     -------
@@ -1368,7 +1394,7 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
                           "references with a known E")
     setup = Setup(params, wall, dict(wall_options), acq, level, samples, trigger_level,
                   tof_scatter=tof_scatter)
-    glob = device_globals(params)
+    glob = device_globals(params, gain)
     E = np.array([s.E for s in samples], float)
     v0 = float(params.striker_velocity)
     n_h = setup.n_hits
@@ -1378,9 +1404,12 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     kinds = FEATURES if level == "features" else ("waveform",)
     if scan and {"sensor_mass", "damping"} <= set(free_globals):
         setup.floor = dict.fromkeys(kinds, START_FLOOR)
-        state, scan = refine_start(setup, glob, E, v0, *global_start(setup, glob, E, v0))
-    else:
-        state, scan = initial_state(setup, glob, E, v0), []
+        state, scan = refine_start(setup, glob, E, v0, *global_start(
+            setup, glob, E, v0, *(start_grid or (None, None))), levels=refine_levels)
+    else:  # the device's globals; each hit's own parameters, and the floor they leave
+        hits_only = fit(setup, initial_state(setup, glob, E, v0), per_hit)
+        state, scan = hits_only.state, []
+        setup.floor = model_floor(setup, hits_only)
     f = fit(setup, state, free + per_hit)
     for _ in range(FLOOR_PASSES):  # the floor: the start's, then the residuals' own
         floor = model_floor(setup, f)
@@ -1437,14 +1466,29 @@ def with_fit(cal: Any, f: Fit, level: str) -> Any:
             "values": {k: v for k, (v, _) in fitted.items()},
             "std_scaled": {k: s for k, (_, s) in fitted.items()},
             "gain": float(f.state.globals["gain"]),
-            "start": f.start,
+            "start": [{**pt, "chi2": float(pt["chi2"]) if np.isfinite(pt["chi2"]) else None}
+                      for pt in f.start],  # None: the point leaves observations unexplained
             "striker_velocity_per_hit": [float(v) for v in f.state.striker_velocity],
             "chi2": f.chi2, "chi2_dof": f.dof, "chi2_quantile": f.quantile,
             "flagged": f.flagged, "unexplained": f.unexplained, "converged": f.converged,
             "runs": f.runs, "floor": dict(f.floor)}
     names, cov = global_covariance(f, hits=len(f.state.striker_velocity) / len(f.state.E))
     info["covariance"] = {"names": names, "matrix": cov.tolist()}
+    if "information" in cal.provenance:  # the level this one started from
+        info["from"] = {k: v for k, v in cal.provenance["information"].items()
+                        if k not in ("start", "from")}
     parameters = {**cal.parameters, **{k: v for k, v in changes.items()
                                        if k in cal.parameters}}
+    warnings = [w for w in cal.warnings if not w.startswith("RECORDS")]
+    warnings.append(f"RECORDS ({level}): the model-error floor of the records' fit, in the "
+                    "weights of every measurement through the calibration at this level: "
+                    + (", ".join(f"{k} {v:.2g}" for k, v in f.floor.items()) or "none"))
+    if f.flagged or not f.converged:
+        warnings.append(f"RECORDS ({level}): the fit of the references' records "
+                        + ("did not converge" if not f.converged else "")
+                        + (" and " if f.flagged and not f.converged else "")
+                        + (f"is flagged (chi2 {f.chi2:.4g} on {f.dof}, "
+                           f"{f.unexplained} observation(s) unexplained)" if f.flagged else ""))
     return replace(cal, device=cal.device.with_(**changes), parameters=parameters,
-                   numerics=numerics, provenance={**cal.provenance, "information": info})
+                   numerics=numerics, provenance={**cal.provenance, "information": info},
+                   warnings=warnings)

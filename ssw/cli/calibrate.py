@@ -13,8 +13,17 @@ acts on the calibrated model and is recorded in the file; one it cannot honour i
 
 Prints (``--json``) ``{"parameters": {NAME: value}, "parameter_std": {...},
 "singular_values": [...], "residuals": [...], "loo": [{"E", "E_predicted", "error_pct"}],
-...inputs}`` and writes the calibration file (:mod:`ssw.calibration.file`) with
-``--output``. SI units.
+"model_error": {...} | null, "warnings": [...], ...inputs}`` and writes the calibration
+file (:mod:`ssw.calibration.file`) with ``--output``. SI units. With ``--compare-laws``
+(``--information features|waveform``) it also fits the references' records under each
+dissipation law and reports each law's chi^2, parameter count, AIC and BIC and which the
+data prefer (``law_comparison``, :mod:`ssw.calibration.laws`; the calibration itself stays
+under the device's law). Where the references reject
+the model (chi^2 beyond its 95 % quantile) the calibration carries a relative TOF model
+error (``model_error``, :mod:`ssw.calibration.model_error`) instead of refusing; a fit that
+did not converge or leaves a direction unidentified answers with that stated
+(``warnings``). It refuses only its input: TOFs the device cannot produce, fewer references
+than parameters freed.
 """
 
 from __future__ import annotations
@@ -74,6 +83,9 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
         raise ConfigError("--calibration", args.calibration,
                           "none here: a calibration starts from a device (--device)")
     args.calibration = "none"
+    if args.compare_laws and args.information == "tof":
+        raise ConfigError("--compare-laws", True, "with --information features or waveform "
+                          "(the records identify the contacts' dissipation; TOFs do not)")
     ctx = chain_context(args)
     if ctx.wall == "table":
         raise ConfigError("--law", "table", "fem | hertz | fit | rigid (a law at any E)")
@@ -136,7 +148,8 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
         "at_bound": cal.at_bound, "covariance_parameters": list(cal.covariance_parameters),
         "covariance": cal.covariance, "singular_values": cal.singular_values,
         "unidentified": cal.unidentified, "residuals": cal.residuals,
-        "references": cal.references,
+        "references": cal.references, "model_error": cal.model_error,
+        "warnings": list(cal.warnings),
         "loo": cal.loo, "alternatives": cal.alternatives,
         "drop_height": cal.device.drop_height, "output": args.output,
         "wall_time": cal.provenance["wall_time_s"],
@@ -145,14 +158,19 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
     }
     if "information" in cal.provenance:
         out["information"] = cal.provenance["information"]
+    if "law_comparison" in cal.provenance:
+        out["law_comparison"] = cal.provenance["law_comparison"]
     return out
 
 
 def _with_information(args: argparse.Namespace, ctx: Any, cal: Any) -> Any:
-    """The TOF calibration ``cal`` refined by a fit of the reference recordings' features
-    or waveforms (:func:`ssw.calibration.waveform.calibrate_records`): the device's globals
-    they identify are freed, the others held."""
-    from ssw.calibration.waveform import Hits, calibrate_records, with_fit
+    """The TOF calibration ``cal`` refined by the reference recordings' features, and then
+    their whole waveforms (:func:`ssw.calibration.records.calibrate_levels`): the device's
+    globals they identify are freed, the others held; with ``--compare-laws`` the records
+    fitted under each dissipation law too (:func:`ssw.calibration.laws.compare_laws`, in
+    the provenance's ``law_comparison``)."""
+    from ssw.calibration.records import calibrate_levels
+    from ssw.calibration.waveform import Hits
     from ssw.daq.importers import read_any
     from ssw.daq.model import Acquisition
     from ssw.daq.settings import settings_from_config
@@ -172,9 +190,20 @@ def _with_information(args: argparse.Namespace, ctx: Any, cal: Any) -> Any:
     scatter = ctx.device.tof_scatter or 1.53e-5  # the thesis's scatter when none is stated
     acq = Acquisition(sample_rate=float(rate), sensitivity=ctx.device.sensitivity,
                       coupling=settings.coupling)
-    f = calibrate_records(samples, cal.chain_params(), ctx.wall, ctx.wall_options, acq,
-                          args.information, trig, float(scatter))
-    return with_fit(cal, f, args.information)
+    levels = calibrate_levels(cal, samples, acq, args.information, trigger_level=trig,
+                              tof_scatter=float(scatter), wall=ctx.wall,
+                              wall_options=ctx.wall_options, loo=not args.no_loo)
+    out = levels[args.information]
+    if args.compare_laws:
+        from dataclasses import replace
+
+        from ssw.calibration.laws import compare_laws
+
+        cmp = compare_laws(samples, cal.chain_params(), ctx.wall, ctx.wall_options, acq,
+                           args.information, trigger_level=trig,
+                           tof_scatter=float(scatter))
+        out = replace(out, provenance={**out.provenance, "law_comparison": cmp})
+    return out
 
 
 def _tof_options(params: Any, lowpass: float | None = None, min_hits: int = 3) -> Any:
@@ -204,6 +233,7 @@ def _human(r: dict[str, Any]) -> str:
     lines.append(f"  (striker drop height {r['drop_height'] * 1e3:.3g} mm)")
     lines.append("  singular values: " + ", ".join(f"{s:.3g}" for s in r["singular_values"]))
     lines += [f"  not identified: {u}" for u in r["unidentified"]]
+    lines += [f"  {w}" for w in r["warnings"]]
     lines.append(f"{'reference':10} {'E MPa':>8} {'nu':>5} {'TOF ms':>9} {'model ms':>9} "
                  f"{'resid %':>8}")
     for ref in r["references"]:
@@ -225,6 +255,26 @@ def _human(r: dict[str, Any]) -> str:
                                  "unidentified direction stays at the full calibration)")
     for alt in r["alternatives"]:
         lines.append(f"  another solution within chi2 + 1: {alt}")
+    info = r.get("information")
+    if info:
+        lines.append(f"the references' records ({info['level']}): freed "
+                     + (", ".join(f"{k} = {v:.6g}" for k, v in info["values"].items())
+                        or "nothing") + f"; DAQ gain {info['gain']:.5g}; chi2 "
+                     f"{info['chi2']:.4g} on {info['chi2_dof']}"
+                     + (" FLAGGED" if info["flagged"] else "")
+                     + ("" if info["converged"] else " (not converged)"))
+    cmp = r.get("law_comparison")
+    if cmp:
+        lines.append(f"dissipation laws on the references' records ({cmp['level']}):")
+        lines.append(f"  {'law':14} {'coefficient':>22} {'chi2':>10} {'k':>4} {'n':>6} "
+                     f"{'dAIC':>9} {'dBIC':>9}")
+        for row in cmp["laws"]:
+            d = {c: ("    (n/a)" if row[f"delta_{c}"] is None else f"{row[f'delta_{c}']:9.1f}")
+                 for c in ("aic", "bic")}
+            lines.append(f"  {row['law']:14} {row['coefficient']:11.4g} {row['unit']:>10} "
+                         f"{row['chi2']:10.4g} {row['parameters']:4d} "
+                         f"{row['observations']:6d} {d['aic']} {d['bic']}")
+        lines.append(f"  {cmp['statement']}")
     if r["output"]:
         lines.append(f"wrote {r['output']}")
     return "\n".join(lines)
@@ -263,6 +313,12 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "or then also their features or whole waveforms, which free the device's "
                    "preload, masses, contact dashpot and DAQ gain where they identify them "
                    "(said in the output's information.freed)")
+    p.add_argument("--compare-laws", action="store_true",
+                   help="with --information features or waveform: also fit the reference "
+                   "records under each contact dissipation law (dashpot, kuwabara_kono, "
+                   "hunt_crossley) and report each law's chi2, parameter count, AIC and BIC "
+                   "and which the data prefer (law_comparison; the calibration stays under "
+                   "the device's law, --damping-law; each law's fit costs a calibration)")
     p.add_argument("--soil-model", choices=PLASTIC_MODELS,
                    help="the references as plastic samples of this model, each with its "
                    "material's strengths (--from-config): the plastic wall's first hit on the "

@@ -1,7 +1,7 @@
 """Short human summaries of command results: the lines a person reads at a terminal.
 
 A command's ``run(args)`` returns its whole result (SI units); ``--json`` prints all of it.
-Without ``--json``, :func:`ssw.cli.main` prints the command's ``human(result)``: the
+Without ``--json``, ``ssw.cli.main`` prints the command's ``human(result)``: the
 printers here (``ssw tof``, ``ssw invert``) and :func:`default`, the short summary of any
 command without its own printer (its scalar fields, lists counted, nested dictionaries
 left to ``--json``). The validity checks (:mod:`ssw.validity`) always read as one line:
@@ -102,8 +102,19 @@ def _grid_checks_lines(values: dict[str, Any], meta: dict[str, Any]) -> list[str
 
 
 def derivatives_line(res: dict[str, Any]) -> str | None:
-    """``dTOF/d...`` of a result in one line (``dtof_d<parameter>``, s per SI unit), with
-    the method that gave them; None when the result has none."""
+    """``dTOF/d...`` of a result in one line, with the method that gave them.
+
+    Parameters
+    ----------
+    res : dict
+        A result with ``dtof_d<parameter>`` fields (s per the parameter's SI unit),
+        ``derivative_units`` and ``derivative_method`` (:mod:`ssw.chain.sensitivity`).
+
+    Returns
+    -------
+    str or None
+        The line, or None when the result has no derivative.
+    """
     units = res.get("derivative_units") or {}
     keys = [k for k in res if k.startswith("dtof_d") and res[k] is not None]
     if not keys:
@@ -115,7 +126,19 @@ def derivatives_line(res: dict[str, Any]) -> str | None:
 
 
 def device_line(res: dict[str, Any]) -> str:
-    """``device NAME, WALL wall, calibration FILE`` of a result that ran a device."""
+    """``device NAME, WALL wall, calibration FILE`` of a result that ran a device.
+
+    Parameters
+    ----------
+    res : dict
+        A result with ``device_name``, ``wall`` and ``calibration_file``
+        (:func:`ssw.cli._device.chain_context`'s inputs).
+
+    Returns
+    -------
+    str
+        The phrase.
+    """
     cal = res.get("calibration_file") or "none"
     return (f"device {res.get('device_name', '?')}, {res.get('wall', '?')} wall, "
             f"calibration {cal}")
@@ -129,7 +152,7 @@ def tof(res: dict[str, Any]) -> str:
     Parameters
     ----------
     res : dict
-        The result of :func:`ssw.cli.chain.run_tof` (one soil; the dynamic FEM wall's
+        The result of ``ssw.cli.chain.run_tof`` (one soil; the dynamic FEM wall's
         result has no peaks but the quasi-static TOFs).
 
     Returns
@@ -169,7 +192,7 @@ def invert(res: dict[str, Any]) -> str:
     Parameters
     ----------
     res : dict
-        The result of :func:`ssw.cli.chain.run_invert` (the model's inverse, or with
+        The result of ``ssw.cli.chain.run_invert`` (the model's inverse, or with
         ``--table`` a stored sweep's).
 
     Returns

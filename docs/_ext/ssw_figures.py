@@ -3,7 +3,7 @@
 ``{ssw-figure} NAME`` (a recipe of ``docs/figures/recipes.py``) places a figure drawn by
 ssw's own plotting code: the study's PNG under ``results/`` when ``make study`` (or ``ssw
 bench``) wrote it, else the PNG of a small run of the public command, made now and cached
-in ``build/docs-figures/`` under a key of the recipe and ssw's source (a build after an
+in ``build/docs-figures/`` under a key of the recipe's command and ssw's source (a build after an
 edit of the pages alone reuses it; an edit of ssw's code makes it again). The caption says
 which of the two it is and the command. A command that fails is a warning, so
 ``sphinx-build -W`` fails.
@@ -79,7 +79,7 @@ def make(name: str) -> tuple[Path, str]:
         if not png.is_file():
             png.write_bytes(data)
         return png, f"From the study's results (`results/{recipe.result}`, `make study`)."
-    key = hashlib.sha256(f"{recipe!r}{source_key()}".encode()).hexdigest()[:16]
+    key = hashlib.sha256(f"{recipe.command!r}{source_key()}".encode()).hexdigest()[:16]
     png = CACHE / f"{name}-{key}.png"
     said = (f"Made when this site was built, by a small run: `{_shown(recipe)}` "
             f"({recipe.small}); after `make study` the site shows the study's own figure.")

@@ -80,8 +80,9 @@ RECIPES: dict[str, Recipe] = {
         small="three mesh levels, 200 increments a curve, timed once on the machine that "
         "built this page (`ssw bench contact`: five levels, 1000 increments)"),
     "design-pareto": Recipe(
-        caption="The plate design: sensitivity to the soil's modulus against the sample's "
-        "yield index, one point per candidate plate; the Pareto front marked.",
+        caption="The plate design: each candidate plate's worst-case sensitivity to the "
+        "soil's modulus against the sample's yield index (the trade-off the design ranks), "
+        "and the sensitivity over the soil range of the recommended and the device's plate.",
         result="design/figures/thesis_pareto.png",
         command=("design", "--config", "{root}/config/config.yaml", "--calibration", "none",
                  "--soil-range", "thesis", "--materials", "pla", "--output",

@@ -26,6 +26,7 @@ extensions = [
     "sphinx.ext.mathjax",
     "numpydoc",
     "ssw_docs",
+    "ssw_figures",
 ]
 
 source_suffix = {".md": "markdown", ".rst": "restructuredtext"}

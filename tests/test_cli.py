@@ -1,4 +1,5 @@
-"""The ssw command line: --help everywhere, --json echoes inputs, errors are one line."""
+"""The ssw command line: --help everywhere and grouped, --json echoes inputs, human output
+is a short summary, errors are one line."""
 
 import json
 import subprocess
@@ -26,14 +27,83 @@ def test_every_subcommand_has_help_and_json(cmd, capsys):
         assert "--json" in out
 
 
-def test_top_level_help_lists_every_subcommand(capsys):
-    """`ssw --help` formats every subcommand's one-line help (a stray % breaks it)."""
+def _help_sections(out: str) -> dict[str, list[str]]:
+    """Section title -> the command names listed under it (an indented first word; a long
+    name's help wraps onto the next line)."""
+    import re
+
+    sections: dict[str, list[str]] = {}
+    title = None
+    for line in out.splitlines():
+        if line and not line.startswith(" ") and line.endswith(":"):
+            title = line[:-1]
+            sections[title] = []
+        elif title is not None and (m := re.match(r"^  ([a-z][\w-]*)(\s|$)", line)):
+            sections[title].append(m.group(1))
+    return sections
+
+
+def test_top_level_help_groups_every_subcommand_once(capsys):
+    """`ssw --help` lists every subcommand exactly once, under the section of its group
+    (ssw.cli.GROUPS: the study, the instrument, design, analysis, tools), and none in the
+    section of commands no group names; its one-line helps format (a stray % breaks it)."""
+    from ssw.cli import GROUPS, UNGROUPED
+
     with pytest.raises(SystemExit) as exc:
         main(["--help"])
     assert exc.value.code == 0
-    out = capsys.readouterr().out
-    for cmd in _subcommands():
-        assert cmd in out
+    sections = _help_sections(capsys.readouterr().out)
+    listed = [c for t, cmds in sections.items() if t != "options" for c in cmds]
+    assert sorted(listed) == _subcommands()  # each exactly once
+    assert UNGROUPED not in sections, f"commands in no group of ssw.cli.GROUPS: " \
+        f"{sections.get(UNGROUPED)}"
+    for title, names in GROUPS.items():
+        assert sections[title] == [n for n in names if n in listed], title
+    for word in ("the study", "the instrument", "design", "analysis", "tools"):
+        assert any(t.startswith(word) for t in sections), word
+
+
+def test_design_help_says_plates_and_whole_devices(capsys):
+    """`ssw design` designs the plate or the whole device (--space); its help says both."""
+    with pytest.raises(SystemExit):
+        main(["--help"])
+    out = " ".join(capsys.readouterr().out.split())
+    assert "design plates" in out and "whole devices" in out
+
+
+def test_tof_human_output_is_a_short_summary(capsys):
+    """`ssw tof` without --json: at most 15 lines holding the TOF (the --json result's, to
+    the 10 ns printed), the peaks, the checks in one line and the derivatives in one line."""
+    args = ["tof", "--soil-E", "50e6", "--soil-nu", "0.3", "--law", "hertz",
+            "--stress-checks", "bound"]
+    assert main(args) == 0
+    lines = capsys.readouterr().out.strip().splitlines()
+    assert main([*args, "--json"]) == 0
+    res = json.loads(capsys.readouterr().out)
+    assert len(lines) <= 15, lines
+    assert lines[0].startswith(f"TOF {res['tof'] * 1e3:.5f} ms"), lines[0]
+    assert [ln for ln in lines if ln.startswith("checks:")] != []
+    failed = [e["check"] for e in res["validity"] if not e["holds"]]
+    check_line = next(ln for ln in lines if ln.startswith("checks:"))
+    assert all(name in check_line for name in failed), (failed, check_line)
+    deriv = [ln for ln in lines if ln.startswith("dTOF/d")]
+    assert len(deriv) == 1 and "E " in deriv[0] and "striker_velocity" in deriv[0]
+    assert not any("{" in ln for ln in lines), "a dictionary dumped"
+
+
+def test_generic_summary_leaves_dictionaries_to_json():
+    """A command without its own printer: scalars shown, nested dictionaries and long lists
+    left to --json (and the summary says so), a grid's checks counted against their limits."""
+    from ssw.cli._summary import MORE, default
+
+    out = default({"valid": True, "tof": [1e-3] * 10, "device_values": {"beads": 20},
+                   "validity": {"contact_strain": [0.1, 0.3], "wall_reach": [0.5, 0.5]},
+                   "validity_meta": {"rules": {"contact_strain": {"limit": 0.2},
+                                               "wall_reach": {"limit": 1.0}}}})
+    lines = out.splitlines()
+    assert lines[0] == "valid: True" and lines[1].startswith("tof: 10 values")
+    assert "contact_strain fails at 1 of 2" in out and "wall_reach holds" in out
+    assert "beads" not in out and lines[-1] == MORE
 
 
 def test_check_config_json_echoes_inputs(capsys):

@@ -61,6 +61,28 @@ def test_make_docs_builds_without_warnings(tmp_path):
     assert "contact.mesh_growth" in config_ref and "chain.wall_law" in config_ref
     cli_ref = (html / "reference" / "cli.html").read_text()
     assert "--reference-recording" in cli_ref and "ssw-bench-chain" in cli_ref
+    _assert_generated_figures(html)
+
+
+#: The pages that open with a figure made by the build (docs/_ext/ssw_figures.py).
+FIGURE_PAGES = ["study", *(f"physics/{p.stem}" for p in sorted(
+    (ROOT / "docs" / "physics").glob("*.md")))]
+
+
+def _assert_generated_figures(html: Path) -> None:
+    """The study page and each physics page hold an <img> of a PNG the build made (its
+    ``ssw-generated`` class, a non-empty PNG in the site's ``_images``), before any other
+    content of the page."""
+    for page in FIGURE_PAGES:
+        text = (html / f"{page}.html").read_text()
+        imgs = re.findall(r"<img [^>]*>", text)
+        made = [i for i in imgs if "ssw-generated" in i]
+        assert made, f"{page}: no figure made by the build"
+        src = re.search(r'src="([^"]+)"', made[0]).group(1)
+        png = (html / page).parent / src
+        assert png.is_file() and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", (page, src)
+        body = text[text.index("<h1"):]
+        assert body.index(made[0]) < body.index("<p>"), f"{page}: the figure does not open it"
 
 
 # ---------------------------------------------------------------------------- README links

@@ -75,13 +75,75 @@ def _command_of(argv: Sequence[str]) -> str | None:
     return None
 
 
+#: ``ssw --help``'s sections: title -> the commands it lists, in order. A command in no
+#: section is listed under :data:`UNGROUPED` (``tests/test_cli.py`` fails on one).
+GROUPS: dict[str, tuple[str, ...]] = {
+    "the study (the workflow's jobs: contact FEM, fits, TOF sweeps, figures)": (
+        "contact", "contact-plot", "fit-set", "fit-table", "fit-plot", "tof-sweep",
+        "tof-merge", "validate"),
+    "the instrument (record, read and calibrate the device)": (
+        "acquire", "tof-recording", "measure", "calibrate", "identify", "survey-table"),
+    "design (plates and whole devices)": ("design", "lift-study"),
+    "analysis (one soil, one curve, one question)": (
+        "tof", "invert", "chain", "dynamic-tof", "dynamic-study", "fit", "fit-range",
+        "fit-deviation", "fit-tof-impact", "fit-calibrate-soil", "fit-thesis-statements"),
+    "tools": ("check-config", "report", "bench"),
+}
+
+#: The section of a command missing from :data:`GROUPS`.
+UNGROUPED = "other commands"
+
+
+class _GroupedParser(argparse.ArgumentParser):
+    """The top-level parser, whose help lists the subcommands by :data:`GROUPS` (argparse
+    lists a subparsers action as one flat section; its per-command help lines are reused)."""
+
+    def format_help(self) -> str:
+        """The usage, the description, one section per group of commands, the options.
+
+        Returns
+        -------
+        str
+            The help text.
+        """
+        sub = next((a for a in self._actions if isinstance(a, argparse._SubParsersAction)),
+                   None)
+        if sub is None:
+            return super().format_help()
+        fmt = self._get_formatter()
+        fmt.add_usage(self.usage, self._actions, self._mutually_exclusive_groups)
+        fmt.add_text(self.description)
+        rows = {a.dest: a for a in sub._choices_actions}
+        sections = [(t, [rows.pop(n) for n in names if n in rows])
+                    for t, names in GROUPS.items()]
+        sections.append((UNGROUPED, list(rows.values())))
+        for title, actions in sections:
+            if actions:
+                fmt.start_section(title)
+                fmt.add_arguments(actions)
+                fmt.end_section()
+        for group in self._action_groups:
+            actions = [a for a in group._group_actions if a is not sub]
+            if actions:
+                fmt.start_section(group.title)
+                fmt.add_text(group.description)
+                fmt.add_arguments(actions)
+                fmt.end_section()
+        fmt.add_text(self.epilog)
+        return fmt.format_help()
+
+
 def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     """The ``ssw`` parser: every command, or, when ``argv`` names one, only the module that
     defines it (``ssw --help`` and an unknown command still see them all)."""
-    parser = argparse.ArgumentParser(
+    parser = _GroupedParser(
         prog="ssw",
-        description="Solitary strain wave device studies: contact FEM, modified Hertz fits, "
-        "chain dynamics, acquisition and validation. SI units throughout.",
+        description="Solitary strain wave (SSW) device: the soil's Young's modulus from the "
+        "time of flight of a solitary wave in a chain of spheres. Contact FEM, modified "
+        "Hertz fits, chain dynamics, acquisition, calibration, design and validation; SI "
+        "units throughout.",
+        epilog="`ssw COMMAND --help` for a command's options; `--json` on any command "
+        "prints its whole result with every input that produced it.",
     )
     parser.add_argument("--version", action="version", version=f"ssw {__version__}")
     parser.add_argument(
@@ -107,15 +169,10 @@ def _inputs(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def _human(result: dict[str, Any]) -> str:
-    lines = []
-    for k, v in result.items():
-        if isinstance(v, list | tuple) and len(v) > 6:
-            lines.append(f"{k}: [{len(v)} values: {v[0]!r} ... {v[-1]!r}]")
-        elif isinstance(v, dict):
-            lines.append(f"{k}: {{{', '.join(map(str, v))}}}")
-        else:
-            lines.append(f"{k}: {v}")
-    return "\n".join(lines)
+    """The short summary of a command without its own printer (:func:`ssw.cli._summary.default`)."""
+    from ssw.cli._summary import default
+
+    return default(result)
 
 
 def _terminate(signum: int, frame: object) -> None:

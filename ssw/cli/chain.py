@@ -14,7 +14,7 @@ from typing import Any
 
 import numpy as np
 
-from ssw.cli import add_json_flag
+from ssw.cli import _summary, add_json_flag
 from ssw.cli._device import add_device_options, chain_context
 from ssw.cli._soil import add_plate_model_options, add_soil_model_options
 from ssw.errors import ConfigError
@@ -71,19 +71,6 @@ def add_stress_checks_option(p: argparse.ArgumentParser, default: str) -> None:
                    "contact FEM's stresses at the peak wall force), bound (the sample's "
                    "Hertz upper bound only; no plate check) or none (default "
                    f"{default})")
-
-
-def human_with_validity(res: dict[str, Any]) -> str:
-    """The generic human summary without the validity fields, then one line per check."""
-    from ssw.cli import _human
-    from ssw.validity import human_lines
-
-    rest = {k: v for k, v in res.items()
-            if k not in ("validity", "checks_failed", "checks_skipped")}
-    lines = [_human(rest)]
-    if "validity" in res:
-        lines += human_lines(res["validity"], res.get("checks_skipped"))
-    return "\n".join(lines)
 
 
 # ---------------------------------------------------------------------------- ssw chain
@@ -516,7 +503,7 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "central), forward, central or none")
     add_stress_checks_option(p, "fem")
     add_json_flag(p)
-    p.set_defaults(func=run_tof, human=human_with_validity)
+    p.set_defaults(func=run_tof, human=_summary.tof)
 
     p = sub.add_parser("tof-sweep", help="TOF over a grid of soil E and nu (batched)",
                        description="TOF(E, nu); without --soil-E-min the config's "
@@ -560,4 +547,4 @@ def register(sub: argparse._SubParsersAction) -> None:
     p.add_argument("--table", help="use a stored sweep (tof_sweep HDF5) instead of the model")
     add_stress_checks_option(p, "fem")
     add_json_flag(p)
-    p.set_defaults(func=run_invert, human=human_with_validity)
+    p.set_defaults(func=run_invert, human=_summary.invert)

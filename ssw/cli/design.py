@@ -37,8 +37,12 @@ def register(sub: argparse._SubParsersAction) -> None:
 
     p = sub.add_parser(
         "design",
-        help="optimize the plate (material x thickness) for sensitivity to the soil's modulus",
-        description=__doc__.split("\n\n")[0],
+        help="design plates (material x thickness) and whole devices (beads, striker, plate)"
+        " for resolution of the soil's modulus over a range of soils",
+        description="Design the plate under the chain (--space plate, the default: material, "
+        "thickness; optionally diameter and striker speed) or the whole device (--space "
+        "device: beads, sensor, striker, drop, plate) that resolves the soil's modulus best "
+        "over a range of soils while the plate stays elastic and the sample yields least.",
     )
     g = p.add_argument_group("the question")
     g.add_argument("--space", choices=("plate", "device"), default="plate",

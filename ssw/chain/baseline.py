@@ -109,6 +109,7 @@ class ChainModel:
 
     @property
     def n(self) -> int:
+        """Number of scenes (the wall laws' count)."""
         return int(self.wall_coef.size)
 
     @property
@@ -118,10 +119,12 @@ class ChainModel:
 
     @property
     def inv_masses(self) -> np.ndarray:
+        """Inverse masses (1/kg), one per bead."""
         return 1.0 / self.masses
 
     @property
     def N(self) -> int:
+        """Number of beads (the striker included)."""
         return int(self.masses.size)
 
 

@@ -235,7 +235,18 @@ class ChainParams:
         return float(contact_time(m_eff, self.bead_coefficient, self.striker_velocity))
 
     def with_(self, **changes: Any) -> ChainParams:
-        """A copy with ``changes`` (``dataclasses.replace``)."""
+        """A copy with ``changes`` (``dataclasses.replace``).
+
+        Parameters
+        ----------
+        **changes : Any
+            Field names and their new values (SI units, as the fields).
+
+        Returns
+        -------
+        ChainParams
+            The changed copy.
+        """
         return replace(self, **changes)
 
     # ------------------------------------------------------------------ config
@@ -428,7 +439,18 @@ class Batch:
         )
 
     def take(self, idx: np.ndarray) -> Batch:
-        """The scenes ``idx``."""
+        """The scenes ``idx``.
+
+        Parameters
+        ----------
+        idx : numpy.ndarray
+            Integer indices of the scenes to keep, (k,); may repeat.
+
+        Returns
+        -------
+        Batch
+            The batch of the selected scenes (the same chain parameters).
+        """
         idx = np.asarray(idx)
         return Batch(self.params, int(idx.size), self.striker_velocity[idx], self.preload[idx],
                      self.masses[idx])

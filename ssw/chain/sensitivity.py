@@ -121,7 +121,18 @@ class Tangent:
         return len(self.names)
 
     def col(self, name: str) -> int | None:
-        """Column of ``name`` (None if not requested)."""
+        """Column of ``name`` (None if not requested).
+
+        Parameters
+        ----------
+        name : str
+            A parameter's name.
+
+        Returns
+        -------
+        int or None
+            Its column in the tangent, or None.
+        """
         return self.names.index(name) if name in self.names else None
 
 
@@ -191,7 +202,20 @@ class Stencil:
     h: np.ndarray
 
     def derivative(self, values: list[np.ndarray]) -> np.ndarray:
-        """The derivative from the values at the offsets (one array each)."""
+        """The derivative from the values at the offsets (one array each).
+
+        ``sum_i w_i f(x + o_i h) / (denominator h)``.
+
+        Parameters
+        ----------
+        values : list of numpy.ndarray
+            The quantity at each offset of :attr:`offsets`, in their order, (n,) each.
+
+        Returns
+        -------
+        numpy.ndarray
+            The derivative (the quantity's unit per the parameter's), (n,).
+        """
         total = sum(w * v for w, v in zip(self.weights, values, strict=True))
         return total / (self.denominator * self.h)
 

@@ -46,7 +46,28 @@ class SpherePath:
 
 def hill_pressure(c: np.ndarray, a: float, b: float, Y: float) -> np.ndarray:
     """Inner pressure (Pa) of Hill's elastic-plastic sphere with the plastic front at ``c``
-    (``a <= c <= b``): ``2Y ln(c/a) + (2Y/3)(1 - c^3/b^3)``."""
+    (``a <= c <= b``): ``2Y ln(c/a) + (2Y/3)(1 - c^3/b^3)``.
+
+    Parameters
+    ----------
+    c : numpy.ndarray
+        Radius of the plastic front (m).
+    a : float
+        Inner radius (m).
+    b : float
+        Outer radius (m).
+    Y : float
+        Yield stress (Pa).
+
+    Returns
+    -------
+    numpy.ndarray
+        Inner pressure (Pa), the shape of ``c``.
+
+    References
+    ----------
+    Hill, R. (1950). *The Mathematical Theory of Plasticity*, Oxford, ch. V.
+    """
     c = np.asarray(c, float)
     return 2.0 * Y * np.log(c / a) + (2.0 * Y / 3.0) * (1.0 - (c / b) ** 3)
 
@@ -57,6 +78,37 @@ def solve_sphere(model, E: float, nu: float, a: float, b: float, u_a: np.ndarray
 
     Raises SolverError when an increment's Newton iteration does not converge (residual
     below ``tol`` times the reaction's scale within ``max_iter`` iterations).
+
+    Parameters
+    ----------
+    model : Any
+        The constitutive model (:mod:`ssw.constitutive`).
+    E : float
+        Young's modulus (Pa), > 0.
+    nu : float
+        Poisson's ratio, in (-1, 0.5).
+    a : float
+        Inner radius (m).
+    b : float
+        Outer radius (m).
+    u_a : numpy.ndarray
+        Inner radial displacements (m), one per increment, in order.
+    elements : int
+        Number of radial elements.
+    tol : float
+        Relative tolerance of the Newton residual.
+    max_iter : int
+        Most Newton iterations per increment.
+
+    Returns
+    -------
+    SpherePath
+        The path: pressures (Pa), yield ratios, Gauss radii (m), plastic flags and iterations.
+
+    Raises
+    ------
+    SolverError
+        If an increment's Newton iteration does not converge.
     """
     ne = int(elements)
     xv = np.linspace(a, b, ne + 1)

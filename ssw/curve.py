@@ -51,7 +51,15 @@ class ForceCurve:
 
 
 def write_curve(path: str | Path, curve: ForceCurve) -> None:
-    """Write ``curve`` to ``path`` atomically."""
+    """Write ``curve`` to ``path`` atomically.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The HDF5 file to write.
+    curve : ForceCurve
+        The force-indentation curve (SI).
+    """
     with atomic_h5(path, kind=KIND, inputs=curve.inputs) as f:
         write_dataset(f, "delta", curve.delta, "m", "indentation of the rigid sphere")
         write_dataset(f, "force", curve.force, "N", "reaction force on the sphere")

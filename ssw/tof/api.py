@@ -203,7 +203,18 @@ class TofDerivatives:
 
     def as_dict(self, index: int = 0) -> dict[str, Any]:
         """Scene ``index``'s values for a JSON record: ``tof``, ``dtof_d<name>``,
-        ``derivative_method`` and ``derivative_units`` (s per unit)."""
+        ``derivative_method`` and ``derivative_units`` (s per unit).
+
+        Parameters
+        ----------
+        index : int
+            The scene.
+
+        Returns
+        -------
+        dict
+            The record (s and s per parameter unit).
+        """
         out: dict[str, Any] = {"tof": float(np.ravel(self.tof)[index])}
         for name, d in self.dtof.items():
             out[f"dtof_d{name}"] = float(np.ravel(d)[index])

@@ -60,7 +60,18 @@ class FitResult:
     scene: dict[str, Any] = field(default_factory=dict)
 
     def predict(self, delta: ArrayLike) -> NDArray[np.float64]:
-        """Force (N) of the fitted law at ``delta`` (m)."""
+        """Force (N) of the fitted law at ``delta`` (m).
+
+        Parameters
+        ----------
+        delta : array_like
+            Indentations (m).
+
+        Returns
+        -------
+        numpy.ndarray
+            Force (N), the shape of ``delta``.
+        """
         law = get_law(self.law)
         return law.evaluate(self.params, np.asarray(delta, float), self.hertz_coefficient)
 
@@ -71,7 +82,20 @@ class FitResult:
 
 
 def scene_inputs(curve: ForceCurve, **overrides: Any) -> dict[str, Any]:
-    """Scene quantities of ``curve`` (soil_E, soil_nu, radius, plate_*), overrides first."""
+    """Scene quantities of ``curve`` (soil_E, soil_nu, radius, plate_*), overrides first.
+
+    Parameters
+    ----------
+    curve : ForceCurve
+        The force-indentation curve (SI).
+    **overrides : Any
+        Values that replace the curve's (SI); None leaves the curve's.
+
+    Returns
+    -------
+    dict
+        ``soil_E`` (Pa), ``soil_nu``, ``radius`` (m) and the plate's quantities.
+    """
     src = dict(curve.inputs)
     if isinstance(src.get("scene"), dict):
         src = {**src["scene"], **src}

@@ -89,7 +89,20 @@ class GridInterpolant:
         """``dp/dE`` (unit of p per Pa) of the interpolant at the broadcast of ``soil_E``
         (Pa) and ``soil_nu``: the PCHIP rows' derivative in ``log E`` (continuous: PCHIP
         is C1), ``dp/dE = p g'(log E) / E`` for log values (``g = log p``), ``g' / E``
-        otherwise, mixed linearly in nu as the values are."""
+        otherwise, mixed linearly in nu as the values are.
+
+        Parameters
+        ----------
+        soil_E : array_like
+            Soil Young's modulus (Pa).
+        soil_nu : array_like
+            Soil Poisson's ratio.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``dp/dE`` (unit of p per Pa), the broadcast shape.
+        """
         E, nu = np.broadcast_arrays(np.asarray(soil_E, float), np.asarray(soil_nu, float))
         E = _snap(E, self.E, "soil_E", "Pa")
         nu = _snap(nu, self.nu, "soil_nu", "")

@@ -58,13 +58,46 @@ class Hits:
 
 
 def dissipated(wall: Any, d_max: np.ndarray) -> np.ndarray:
-    """(n,) J: the energy the sample lost since virgin, at the history ``d_max`` (m)."""
+    """(n,) J: the energy the sample lost since virgin, at the history ``d_max`` (m).
+
+    Parameters
+    ----------
+    wall : PlasticWall
+        The sample.
+    d_max : numpy.ndarray
+        Largest indentations of the history (m), (n,).
+
+    Returns
+    -------
+    numpy.ndarray
+        Dissipated energy (J), (n,).
+    """
     return wall.energies(np.zeros(wall.n), d_max)[1]
 
 
 def run_hits(params: ChainParams, wall: Any, hits: int) -> Hits:
     """``hits`` consecutive hits of the chain ``params`` on the virgin sample ``wall`` (a
-    :class:`ssw.walls.plastic.PlasticWall`)."""
+    :class:`ssw.walls.plastic.PlasticWall`).
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    wall : PlasticWall
+        The virgin sample.
+    hits : int
+        Number of hits, >= 1.
+
+    Returns
+    -------
+    Hits
+        Each hit's TOF (s), peaks, permanent sets (m) and dissipated energies (J).
+
+    Raises
+    ------
+    ConfigError
+        If ``hits`` is not an integer >= 1.
+    """
     from ssw.chain.run import run_peaks
     from ssw.chain.statics import static_contact_forces
 

@@ -66,10 +66,14 @@ class DynamicTof:
 
     @property
     def error(self) -> np.ndarray:
+        """Relative TOF error of the quasi-static half-space law, ``tof_half_space / tof_dynamic -
+        1``.
+        """
         return self.tof_half_space / self.tof_dynamic - 1.0
 
     @property
     def error_box(self) -> np.ndarray:
+        """Relative TOF error of the static box law, ``tof_static / tof_dynamic - 1``."""
         return self.tof_static / self.tof_dynamic - 1.0
 
 

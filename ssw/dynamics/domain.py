@@ -73,7 +73,22 @@ class DomainSpec:
 
 
 def domain_size(soil: Material, plate_radius: float, spec: DomainSpec) -> float:
-    """Radius = depth (m) of the dynamic domain (module docstring)."""
+    """Radius = depth (m) of the dynamic domain (module docstring).
+
+    Parameters
+    ----------
+    soil : Material
+        The soil (Pa, -, kg/m^3).
+    plate_radius : float
+        Plate radius (m).
+    spec : DomainSpec
+        The domain sizing.
+
+    Returns
+    -------
+    float
+        Radius = depth of the domain (m).
+    """
     if spec.domain is not None:
         return float(spec.domain)
     lo = max(spec.min_domain, MIN_PLATE_RADII * plate_radius)
@@ -82,7 +97,22 @@ def domain_size(soil: Material, plate_radius: float, spec: DomainSpec) -> float:
 
 
 def mesh_settings(soil: Material, plate_radius: float, spec: DomainSpec) -> MeshSettings:
-    """Mesh settings of :func:`ssw.contact.mesh.build_mesh` for the dynamic scene."""
+    """Mesh settings of :func:`ssw.contact.mesh.build_mesh` for the dynamic scene.
+
+    Parameters
+    ----------
+    soil : Material
+        The soil (Pa, -, kg/m^3).
+    plate_radius : float
+        Plate radius (m).
+    spec : DomainSpec
+        The domain sizing.
+
+    Returns
+    -------
+    MeshSettings
+        The mesh settings (m).
+    """
     L = domain_size(soil, plate_radius, spec)
     h_wave = soil.c_s / (spec.f_max * spec.wave_elements)
     size_max = float(min(h_wave, L / 4.0)) if spec.size_max is None else spec.size_max

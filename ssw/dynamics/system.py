@@ -124,15 +124,34 @@ class DynamicSystem:
 
     @property
     def ndof(self) -> int:
+        """Number of free degrees of freedom."""
         return self.static.ndof
 
     @property
     def scale(self) -> float:
+        """Stiffness scale of the static operators (N/m)."""
         return self.static.scale
 
     def stiffness_triplets(self, mass_factor: float = 0.0, damping_factor: float = 0.0
                            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """COO triplets of ``(K + Kb + mass_factor M + damping_factor C) / scale``."""
+        """COO triplets of ``(K + Kb + mass_factor M + damping_factor C) / scale``.
+
+        Parameters
+        ----------
+        mass_factor : float
+            Factor of ``M`` (1/s^2).
+        damping_factor : float
+            Factor of ``C`` (1/s).
+
+        Returns
+        -------
+        rows : numpy.ndarray
+            Row indices.
+        cols : numpy.ndarray
+            Column indices.
+        vals : numpy.ndarray
+            Values (dimensionless, scaled).
+        """
         extra = (self.Kb + mass_factor * self.M + damping_factor * self.C).tocoo()
         s = self.static
         return (np.concatenate([s.rows, extra.row]), np.concatenate([s.cols, extra.col]),
@@ -148,7 +167,22 @@ class DynamicSystem:
         return (k.tocsr() + self.Kb).tocsr()
 
     def energy(self, u: np.ndarray, v: np.ndarray) -> tuple[float, float]:
-        """Kinetic ``v M v / 2`` and strain ``u (K + Kb) u / 2`` energies (J)."""
+        """Kinetic ``v M v / 2`` and strain ``u (K + Kb) u / 2`` energies (J).
+
+        Parameters
+        ----------
+        u : numpy.ndarray
+            Displacements (m), (ndof,).
+        v : numpy.ndarray
+            Velocities (m/s), (ndof,).
+
+        Returns
+        -------
+        kinetic : float
+            Kinetic energy (J).
+        strain : float
+            Strain energy (J).
+        """
         return (0.5 * float(np.einsum("i,i->", v, self.M @ v)),
                 0.5 * float(np.einsum("i,i->", u, self.K @ u)))
 
@@ -162,6 +196,18 @@ def without_mass(system: DynamicSystem, dofs: np.ndarray) -> DynamicSystem:
     the contact stress is a smooth function of time. The mass removed, that of the
     contact candidates' surface layer (elements of ``~0.1 r`` at radius ``r``), is
     ``O(h)`` of the participating mass and vanishes with mesh refinement.
+
+    Parameters
+    ----------
+    system : DynamicSystem
+        The operators.
+    dofs : numpy.ndarray
+        The contact dofs.
+
+    Returns
+    -------
+    DynamicSystem
+        The system with those rows and columns of ``M`` zeroed.
 
     References
     ----------
@@ -209,6 +255,37 @@ def boundary_matrices(
     Consistent boundary matrices ``int N_a N_b k 2 pi r ds`` over the soil's faces
     ``r = L_r`` and ``z = -L_z`` (4-point Gauss along each quadratic edge), normal and
     tangential components as in the module docstring.
+
+    Parameters
+    ----------
+    nodes : numpy.ndarray
+        Node coordinates (r, z) (m), (n_nodes, 2).
+    tri : numpy.ndarray
+        Quadratic triangles, (n_el, 6).
+    body : numpy.ndarray
+        Body of each element (0: soil).
+    udof : numpy.ndarray
+        Dof number of each node's components (negative: fixed), (n_nodes, 2).
+    ndof : int
+        Number of dofs.
+    L_r : float
+        Radius of the domain (m).
+    L_z : float
+        Depth of the domain (m).
+    soil : Material
+        The soil (Pa, -, kg/m^3).
+
+    Returns
+    -------
+    C : scipy.sparse.csr_matrix
+        Dashpot matrix (N s/m).
+    Kb : scipy.sparse.csr_matrix
+        Spring matrix (N/m).
+
+    References
+    ----------
+    Lysmer, J. and Kuhlemeyer, R. L. (1969). Finite dynamic model for infinite media.
+    *J. Eng. Mech. Div.* 95(EM4), 859-877.
     """
     from scipy.sparse import coo_matrix
 

@@ -117,6 +117,35 @@ def plate_on_soil(plate: tuple[float, float] | None, thickness: float,
     on a rigid base, ``bonded`` (the FEM's fixed bottom) or ``sliding`` (frictionless), or
     bonded to an ``elastic`` half-space of ``base_E`` (Pa), ``base_nu`` (a lift on a
     subgrade).
+
+    Parameters
+    ----------
+    plate : tuple of float or None
+        The plate's ``(E, nu)`` (Pa, -), or None.
+    thickness : float
+        Plate thickness (m).
+    soil : tuple of float
+        The soil's ``(E, nu)`` (Pa, -).
+    interface : str
+        The plate-soil interface.
+    soil_depth : float or None
+        Depth of the soil layer (m); None: a half-space.
+    base : str
+        Below the layer: ``bonded``, ``sliding`` or ``elastic``.
+    base_E : float or None
+        Young's modulus of an elastic base (Pa).
+    base_nu : float or None
+        Poisson's ratio of an elastic base.
+
+    Returns
+    -------
+    Stack
+        The stack.
+
+    Raises
+    ------
+    ConfigError
+        If the interface is unknown.
     """
     layers: list[Layer] = []
     ifaces: list[str] = []

@@ -56,7 +56,25 @@ class LcpResult:
 
 def sphere_surface(r: NDArray, radius: float) -> NDArray[np.float64]:
     """Height (m) of a sphere of ``radius`` above its lowest point at radius ``r`` (m):
-    ``r^2 / (R + sqrt(R^2 - r^2))`` (no cancellation for small r)."""
+    ``r^2 / (R + sqrt(R^2 - r^2))`` (no cancellation for small r).
+
+    Parameters
+    ----------
+    r : numpy.ndarray
+        Radii (m), < ``radius``.
+    radius : float
+        Sphere radius (m).
+
+    Returns
+    -------
+    numpy.ndarray
+        Heights (m).
+
+    Raises
+    ------
+    SolverError
+        If a radius is not below the sphere's.
+    """
     r = np.asarray(r, float)
     if np.any(r >= radius):
         raise SolverError("a collocation radius lies beyond the sphere's radius: "

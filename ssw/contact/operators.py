@@ -77,7 +77,25 @@ FORMAT = 2
 def sphere_gap0(r: np.ndarray, radius: float) -> np.ndarray:
     """Gap (m) at zero indentation between a sphere of ``radius`` and the flat at radius
     ``r``: ``R - sqrt(R^2 - r^2)`` written as ``r^2 / (R + sqrt(R^2 - r^2))`` (no
-    cancellation at small ``r``: relative accuracy of a few ulp)."""
+    cancellation at small ``r``: relative accuracy of a few ulp).
+
+    Parameters
+    ----------
+    r : numpy.ndarray
+        Radii (m), < ``radius``.
+    radius : float
+        Sphere radius (m).
+
+    Returns
+    -------
+    numpy.ndarray
+        Gaps (m).
+
+    Raises
+    ------
+    SolverError
+        If a radius is not below the sphere's.
+    """
     r = np.asarray(r, float)
     if np.any(r >= radius):
         raise SolverError("contact candidate beyond the sphere's radius: shrink the zone")
@@ -106,7 +124,29 @@ def _geometry_key(geom: Geometry) -> str:
 
 def zone_of(radius: float, candidate_factor: float, delta_end: float,
             plate_radius: float | None = None) -> float:
-    """Candidate zone radius (m) for a sphere of ``radius`` pushed to ``delta_end`` (m)."""
+    """Candidate zone radius (m) for a sphere of ``radius`` pushed to ``delta_end`` (m).
+
+    Parameters
+    ----------
+    radius : float
+        Sphere radius (m).
+    candidate_factor : float
+        Zone radius in units of ``sqrt(R delta_end)``.
+    delta_end : float
+        Deepest indentation (m).
+    plate_radius : float or None
+        Plate radius (m), a bound; None or 0: none.
+
+    Returns
+    -------
+    float
+        Zone radius (m).
+
+    Raises
+    ------
+    ConfigError
+        If the zone would reach too far into the sphere's radius.
+    """
     zone = np.floor(ZONE_SHARE * radius / ZONE_QUANTUM) * ZONE_QUANTUM
     need = candidate_factor * np.sqrt(radius * delta_end)
     if need > zone:
@@ -122,7 +162,31 @@ def zone_of(radius: float, candidate_factor: float, delta_end: float,
 
 def geometry_of(contact: dict[str, Any], plate_thickness: float, radius: float,
                 delta_end: float, interface: str) -> Geometry:
-    """The :class:`Geometry` of a scene from its (filled) ``contact`` settings."""
+    """The :class:`Geometry` of a scene from its (filled) ``contact`` settings.
+
+    Parameters
+    ----------
+    contact : dict
+        The filled contact settings (SI).
+    plate_thickness : float
+        Plate thickness (m).
+    radius : float
+        Sphere radius (m).
+    delta_end : float
+        Deepest indentation (m).
+    interface : str
+        The plate-soil interface.
+
+    Returns
+    -------
+    Geometry
+        The geometry.
+
+    Raises
+    ------
+    ConfigError
+        If the soil radius is not larger than the plate's.
+    """
     from ssw.contact.mesh import mesh_settings
 
     plate_radius = 0.5 * float(contact["plate_diameter"]) if plate_thickness > 0 else 0.0
@@ -257,7 +321,18 @@ class OperatorStore:
         return model
 
     def layout(self, geom: Geometry) -> Layout:
-        """The retained dofs of ``geom`` (from memory, disk, or by meshing it)."""
+        """The retained dofs of ``geom`` (from memory, disk, or by meshing it).
+
+        Parameters
+        ----------
+        geom : Geometry
+            The scene's geometry (m).
+
+        Returns
+        -------
+        Layout
+            The retained dofs.
+        """
         key = geom.key()
         if key in self._layouts:
             return self._layouts[key]
@@ -274,7 +349,27 @@ class OperatorStore:
 
     def body(self, geom: Geometry, which: str, nu: float) -> BodyOperator:
         """The condensed operator of the ``plate`` or the ``soil`` of ``geom`` at Poisson's
-        ratio ``nu`` (unit E)."""
+        ratio ``nu`` (unit E).
+
+        Parameters
+        ----------
+        geom : Geometry
+            The scene's geometry (m).
+        which : str
+            ``plate`` or ``soil``.
+        nu : float
+            Poisson's ratio.
+
+        Returns
+        -------
+        BodyOperator
+            The condensed operator (unit E).
+
+        Raises
+        ------
+        ConfigError
+            If ``which`` is neither, or the plate has no thickness.
+        """
         if which not in ("plate", "soil"):
             raise ConfigError("body", which, "plate | soil")
         if which == "plate" and geom.plate_thickness <= 0:
@@ -549,7 +644,36 @@ def coupled_stiffness(
     """The condensed plate and soil assembled on their retained dofs: ``K`` (Pa m-scaled),
     the plate's dofs ``p_map`` (candidates, then interface) and the soil's ``s_map``
     (interface) in it, and ``off`` the interface nodes whose plate and soil dofs are two
-    (``unilateral``: every node off the axis; else none, the interface is shared)."""
+    (``unilateral``: every node off the axis; else none, the interface is shared).
+
+    Parameters
+    ----------
+    plate_S : numpy.ndarray
+        Plate's condensed stiffness (unit E).
+    soil_S : numpy.ndarray
+        Soil's condensed stiffness (unit E).
+    plate_E : float
+        Plate's Young's modulus (Pa).
+    soil_E : float
+        Soil's Young's modulus (Pa).
+    layout : Layout
+        The retained dofs.
+    nc : int
+        Number of sphere candidates.
+    unilateral : bool
+        Whether the interface is unilateral.
+
+    Returns
+    -------
+    K : numpy.ndarray
+        Coupled stiffness.
+    p_map : numpy.ndarray
+        Plate dofs in ``K``.
+    s_map : numpy.ndarray
+        Soil dofs in ``K``.
+    off : numpy.ndarray
+        Interface nodes with two dofs.
+    """
     ni = layout.iface_r.size
     p_map = np.arange(nc + ni)
     s_map = nc + np.arange(ni)

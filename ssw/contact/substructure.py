@@ -108,6 +108,30 @@ def body_dofs(
     elimination order (nodes of the body only). Internal dofs follow ``order``, a node's
     u_r, u_z, p in turn, except the pressures of nodes without a free displacement, which
     come after every other internal dof.
+
+    Parameters
+    ----------
+    tri : numpy.ndarray
+        Quadratic triangles (node indices, gmsh order), (ne, 6).
+    free : numpy.ndarray
+        Free displacement components, (n, 2) bool.
+    b_nodes : numpy.ndarray
+        Nodes of the retained dofs.
+    b_comps : numpy.ndarray
+        Components of the retained dofs.
+    order : numpy.ndarray
+        Node elimination order.
+
+    Returns
+    -------
+    udof : numpy.ndarray
+        Displacement dofs, (n, 2).
+    pdof : numpy.ndarray
+        Pressure dofs, (n,).
+    ndof : int
+        Number of dofs.
+    n_internal : int
+        Number of internal dofs.
     """
     n = free.shape[0]
     vertex = np.zeros(n, dtype=bool)
@@ -153,6 +177,18 @@ def schur_complement(K: Any, n_int: int) -> tuple[np.ndarray, float, int, bool]:
     pivot-free LU in the given order when its backward error is at most
     :data:`ssw.contact.lu.BACKWARD_ERROR_TOL` (module docstring), else from a pivoted LU of
     ``K_II`` and one solve per column of ``K_IB``.
+
+    Parameters
+    ----------
+    K : scipy.sparse matrix
+        The square stiffness.
+    n_int : int
+        Number of internal dofs (they come first).
+
+    Returns
+    -------
+    tuple
+        ``(S, backward_error, nnz, pivoted)``.
     """
     return schur_factor(K, n_int)[:4]
 
@@ -278,7 +314,32 @@ def body_matrix(
 ) -> BodyMatrix:
     """The u-p stiffness (unit E) of the body meshed by ``tri`` with the retained dofs
     ``(b_nodes, b_comps)`` last (arguments as :func:`condense_body`); ``E`` and ``nu`` may
-    vary by element (a lift on a subgrade: E relative to the lift's)."""
+    vary by element (a lift on a subgrade: E relative to the lift's).
+
+    Parameters
+    ----------
+    nodes : numpy.ndarray
+        Node coordinates (r, z) (m), (n, 2).
+    tri : numpy.ndarray
+        Quadratic triangles (node indices, gmsh order), (ne, 6).
+    nu : array_like
+        Poisson's ratio, scalar or per element.
+    free : numpy.ndarray
+        Free displacement components, (n, 2) bool.
+    b_nodes : numpy.ndarray
+        Nodes of the retained dofs.
+    b_comps : numpy.ndarray
+        Components of the retained dofs.
+    order_nodes : callable
+        ``order_nodes(rows, cols, n)``: a fill-reducing permutation.
+    E : array_like
+        Young's modulus relative to the body's, scalar or per element.
+
+    Returns
+    -------
+    BodyMatrix
+        The u-p stiffness and its dof numbering.
+    """
     import scipy.sparse as sp
 
     from ssw.contact.assembly import node_graph

@@ -28,7 +28,23 @@ KIND = "contact_curve"
 
 @dataclass(frozen=True)
 class ForceCurve:
-    """A force-indentation curve. SI units; arrays of shape (n,)."""
+    """A force-indentation curve. SI units; arrays of shape (n,).
+
+    Parameters
+    ----------
+    delta : numpy.ndarray
+        Indentations (m).
+    force : numpy.ndarray
+        Forces (N).
+    contact_radius : numpy.ndarray
+        Contact radii (m).
+    inputs : dict
+        The scene's inputs (SI).
+    stats : dict
+        Solver statistics.
+    pressure : dict or None
+        Pressure profiles ``{"r": (nr,), "delta": (k,), "p": (k, nr)}`` (m, m, Pa), or None.
+    """
 
     delta: np.ndarray  # m
     force: np.ndarray  # N

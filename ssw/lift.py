@@ -37,7 +37,25 @@ REACH_MARGIN = 1.2
 @dataclass(frozen=True)
 class LiftErrors:
     """Apparent-modulus errors of a half-space reading: ``error[i, j]`` (relative) for
-    ``ratios[i]`` = E2 / E1 and ``thicknesses[j]`` (m); the lift's ``E1`` (Pa), ``nu``."""
+    ``ratios[i]`` = E2 / E1 and ``thicknesses[j]`` (m); the lift's ``E1`` (Pa), ``nu``.
+
+    Parameters
+    ----------
+    E1 : float
+        Young's modulus of the lift (Pa).
+    nu : float
+        Poisson's ratio of the lift.
+    subgrade_nu : float
+        Poisson's ratio of the subgrade.
+    ratios : numpy.ndarray
+        Subgrade moduli over ``E1``, (n_ratios,).
+    thicknesses : numpy.ndarray
+        Lift thicknesses (m), (n_thicknesses,).
+    error : numpy.ndarray
+        Relative error of the apparent modulus, (n_ratios, n_thicknesses).
+    tof : numpy.ndarray
+        Layered TOFs (s), (n_ratios, n_thicknesses).
+    """
 
     E1: float
     nu: float

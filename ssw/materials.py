@@ -30,18 +30,26 @@ KEY_PATTERN = r"[A-Za-z0-9_]+"
 class Strength:
     """What a material withstands before it yields or fails. SI units; None: not known.
 
-    Attributes
+    Parameters
     ----------
-    yield_stress : Pa, uniaxial (tensile) yield stress, the von Mises ``Y`` (metals, plates).
-    compressive : Pa, uniaxial compressive strength (foams: the plateau or yield stress in
+    yield_stress : float or None
+        Uniaxial (tensile) yield stress (Pa), the von Mises ``Y`` (metals, plates).
+    compressive : float or None
+        Uniaxial compressive strength (Pa) (foams: the plateau or yield stress in
         compression; soils: unconfined compressive strength).
-    tensile : Pa, uniaxial tensile strength.
-    cohesion : Pa, Mohr-Coulomb cohesion ``c``.
-    friction_angle : degrees, Mohr-Coulomb angle of internal friction ``phi``.
-    dilatancy_angle : degrees, ``psi`` (non-associated flow).
-    hardening : Pa, linear isotropic hardening modulus ``dY / d kappa`` of the von Mises
-        ``Y`` (``kappa`` the equivalent plastic strain; 0: perfectly plastic).
-    source : where the values come from.
+    tensile : float or None
+        Uniaxial tensile strength (Pa).
+    cohesion : float or None
+        Mohr-Coulomb cohesion ``c`` (Pa).
+    friction_angle : float or None
+        Mohr-Coulomb angle of internal friction ``phi`` (degrees).
+    dilatancy_angle : float or None
+        Dilatancy angle ``psi`` (degrees; non-associated flow).
+    hardening : float or None
+        Linear isotropic hardening modulus ``dY / d kappa`` of the von Mises ``Y`` (Pa;
+        ``kappa`` the equivalent plastic strain; 0: perfectly plastic).
+    source : str
+        Where the values come from.
     """
 
     yield_stress: float | None = None
@@ -124,7 +132,7 @@ class Strength:
 class Material:
     """An isotropic linear-elastic material, with its strengths where known. SI units.
 
-    Attributes
+    Parameters
     ----------
     key : str
         Its key in the library: letters, digits and underscores (:data:`KEY_PATTERN`).

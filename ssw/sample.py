@@ -42,7 +42,25 @@ LATERALS = ("free", "mould")
 
 @dataclass(frozen=True)
 class Sample:
-    """A finite cylindrical sample (module docstring). Lengths in m."""
+    """A finite cylindrical sample (module docstring). Lengths in m.
+
+    Parameters
+    ----------
+    thickness : float
+        Thickness (m).
+    radius : float or None
+        Radius (m); None with an elastic base.
+    base : str
+        Bottom condition: ``bonded``, ``sliding`` or ``elastic``.
+    lateral : str
+        Lateral condition: ``mould`` or ``free``.
+    lateral_size : str
+        How the radius was obtained (a box's sides), for the record.
+    base_E : float or None
+        Young's modulus of an elastic base (Pa).
+    base_nu : float or None
+        Poisson's ratio of an elastic base.
+    """
 
     thickness: float
     radius: float | None

@@ -69,7 +69,7 @@ STATIC_TOL = 1e-8
 class ChainModel:
     """The equations of motion, as numbers. SI units; ``n`` scenes share the chain.
 
-    Attributes
+    Parameters
     ----------
     masses : numpy.ndarray
         (N,) kg.
@@ -132,7 +132,7 @@ class ChainModel:
 class BaselineResult:
     """The reference's peaks and work.
 
-    Attributes
+    Parameters
     ----------
     tof : numpy.ndarray
         (n,) s.

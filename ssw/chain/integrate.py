@@ -106,7 +106,7 @@ RECORD_BYTES = 2**27
 class Run:
     """The record of a batched run. SI units; ``n`` scenes, ``k`` parameters.
 
-    Attributes
+    Parameters
     ----------
     t : numpy.ndarray
         (n_t,) s.

@@ -37,7 +37,7 @@ SENSOR_READS = ("mean", "upper", "lower")
 class ChainParams:
     """The chain and its numerics. SI units.
 
-    Attributes
+    Parameters
     ----------
     n_beads : int
         Beads including the striker (bead 0), >= 3.
@@ -227,7 +227,13 @@ class ChainParams:
         return self.wall_coefficient(soil_E, soil_nu) * e_star * c_w / E
 
     def contact_time(self) -> float:
-        """Hertz contact time (s) of two beads meeting at the striker speed (Johnson 11.24)."""
+        """Hertz contact time (s) of two beads meeting at the striker speed (Johnson 11.24).
+
+        Returns
+        -------
+        float
+            Contact time (s).
+        """
         from ssw.hertz import contact_time
 
         m = self.masses
@@ -372,7 +378,7 @@ class Batch:
     """The per-scene values of one batched run: a chain whose striker speed, preload and
     masses may differ from scene to scene (a calibration scan). SI units.
 
-    Attributes
+    Parameters
     ----------
     params : ChainParams
         Every other field.
@@ -456,7 +462,13 @@ class Batch:
                      self.masses[idx])
 
     def contact_time(self) -> np.ndarray:
-        """(n,) Hertz contact time (s) of the striker meeting bead 1 (Johnson 11.24)."""
+        """(n,) Hertz contact time (s) of the striker meeting bead 1 (Johnson 11.24).
+
+        Returns
+        -------
+        numpy.ndarray
+            Contact time (s), (n,).
+        """
         from ssw.hertz import contact_time
 
         m0, m1 = self.masses[:, 0], self.masses[:, 1]

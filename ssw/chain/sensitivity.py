@@ -91,7 +91,7 @@ class Tangent:
     """The parameters a run differentiates with respect to (the columns of its
     sensitivity arrays, in this order).
 
-    Attributes
+    Parameters
     ----------
     names : tuple of str
         Names of :data:`PARAMETERS`, each at most once, and :data:`STEP` (the step's own
@@ -112,7 +112,13 @@ class Tangent:
         return tuple(n for n in self.names if n != STEP)
 
     def with_step(self) -> Tangent:
-        """These columns and the step's (:data:`STEP`) last."""
+        """These columns and the step's (:data:`STEP`) last.
+
+        Returns
+        -------
+        Tangent
+            The tangent with the step's column last.
+        """
         return self if STEP in self.names else Tangent((*self.names, STEP))
 
     @property
@@ -184,7 +190,7 @@ class Stencil:
     """A difference stencil for one parameter: evaluate at ``value + offsets h`` and combine
     with :meth:`derivative`.
 
-    Attributes
+    Parameters
     ----------
     offsets : numpy.ndarray
         Offsets in steps.

@@ -26,7 +26,7 @@ from ssw.signal.rule import RULE, PeakRule, Selection, select
 class Peaks:
     """Picked peaks per column, shapes (n,).
 
-    Attributes
+    Parameters
     ----------
     t_incident : numpy.ndarray
         Incident peak times (s).

@@ -83,7 +83,7 @@ def force_indentation(force: Any, F: Any, start: np.ndarray) -> np.ndarray:
 class PowerWall:
     """``F = coef [d]_+^n`` per scene; shapes (n_scenes,).
 
-    Attributes
+    Parameters
     ----------
     coef : numpy.ndarray
         (n,) N/m^n.
@@ -249,6 +249,17 @@ class TableWall:
 
     ``g[k] = F(k h) / (k h)^1.5`` is interpolated linearly (exact for Hertz at any grid);
     beyond ``d_last = TABLE_CELLS h`` the force is ``F_last (d/d_last)^n_ext``.
+
+    Parameters
+    ----------
+    h : numpy.ndarray
+        Grid step per scene (m), (n,).
+    g : numpy.ndarray
+        ``F(k h) / (k h)^1.5`` per scene (N/m^1.5), (n, TABLE_CELLS + 1).
+    f_last : numpy.ndarray
+        Force at the table's last indentation (N), (n,).
+    n_ext : numpy.ndarray
+        Exponent of the power-law extension, (n,).
     """
 
     h: np.ndarray  # m, grid step per scene, (n,)
@@ -416,6 +427,13 @@ class Wall(Protocol):
     Every method is vectorized over the scenes: arrays of shape (n,), SI units.
     ``take(idx)`` selects scenes by index; ``idx`` may repeat one (a calibration scan
     tiles the walls of a few references over many parameter sets).
+
+    Parameters
+    ----------
+    *args : Any
+        Unused: a protocol is not instantiated.
+    **kwargs : Any
+        Unused: a protocol is not instantiated.
     """
 
     @property
@@ -552,6 +570,13 @@ class StatefulWall(Protocol):
     with respect to the ``k`` parameters, ``dE`` (n, k) those of the soil's modulus, ``dF``
     (n, k) the force's; a wall without them is differentiated by central differences of
     its TOF (:mod:`ssw.tof.api`).
+
+    Parameters
+    ----------
+    *args : Any
+        Unused: a protocol is not instantiated.
+    **kwargs : Any
+        Unused: a protocol is not instantiated.
     """
 
     @property

@@ -48,6 +48,19 @@ class Update:
     ``d stress / d strain``; ``state`` (n, 5) the new state; ``plastic`` (n,) bool, the
     step yielded; ``region`` (n,) int8, which return served (0 elastic, 1 smooth surface,
     2 a second surface, 3 a corner or apex), for the tests and the statistics.
+
+    Parameters
+    ----------
+    stress : numpy.ndarray
+        Stresses (Mandel, Pa), (n, 4).
+    tangent : numpy.ndarray
+        Consistent tangents (Pa), (n, 4, 4).
+    state : numpy.ndarray
+        New states, (n, 5).
+    plastic : numpy.ndarray
+        Whether the step yielded, (n,) bool.
+    region : numpy.ndarray
+        Which return served, (n,) int8.
     """
 
     stress: np.ndarray

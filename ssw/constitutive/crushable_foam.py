@@ -84,9 +84,14 @@ def shape_factor(plastic_poisson: float) -> float:
 class CrushableFoam:
     """Deshpande-Fleck crushable foam (module docstring).
 
-    compressive_strength : Pa, ``Y0`` (uniaxial compressive plateau).
-    hardening : Pa, ``H = dY / d kappa`` (>= 0).
-    plastic_poisson : the plastic Poisson's ratio in uniaxial compression, [0, 0.5].
+    Parameters
+    ----------
+    compressive_strength : float
+        ``Y0`` (Pa), the uniaxial compressive plateau.
+    hardening : float
+        ``H = dY / d kappa`` (Pa), >= 0.
+    plastic_poisson : float
+        The plastic Poisson's ratio in uniaxial compression, [0, 0.5].
     """
 
     compressive_strength: float

@@ -102,10 +102,18 @@ def cone(angle_deg: float, match: str) -> tuple[float, float]:
 class DruckerPrager:
     """Drucker-Prager with a tension cutoff (module docstring).
 
-    cohesion : Pa, ``c >= 0``.  friction_angle : degrees, [0, 90).
-    dilatancy_angle : degrees, [0, friction_angle]; None: the friction angle (associated).
-    tension_cutoff : Pa, the largest mean stress ``t`` (>= 0); None: the apex.
-    match : ``outer`` | ``inner`` | ``plane-strain`` (the Mohr-Coulomb match).
+    Parameters
+    ----------
+    cohesion : float
+        ``c`` (Pa), >= 0.
+    friction_angle : float
+        Degrees, [0, 90).
+    dilatancy_angle : float or None
+        Degrees, [0, friction_angle]; None: the friction angle (associated).
+    tension_cutoff : float or None
+        The largest mean stress ``t`` (Pa), >= 0; None: the apex.
+    match : str
+        The Mohr-Coulomb match: ``outer``, ``inner`` or ``plane-strain``.
     """
 
     cohesion: float

@@ -210,6 +210,11 @@ def pq_tangent(K: float, G: float, n: np.ndarray, J: np.ndarray, ratio: np.ndarr
         (n, 2, 2) ``[[dp/dp_tr, dp/dq_tr], [dq/dp_tr, dq/dq_tr]]``.
     ratio : numpy.ndarray
         (n,) ``q / q_tr`` (the shrink of the deviator; 1 where elastic).
+
+    Returns
+    -------
+    numpy.ndarray
+        Consistent tangent (Pa), (n, 4, 4).
     """
     # where the return left the trial alone (J = I, ratio = 1) the formula is the elastic
     # tangent K ONE ONE^T + 2 G P_DEV (sqrt(2/3) sqrt(6) = 2): evaluate it elsewhere only

@@ -34,7 +34,23 @@ _GP, _GW = np.polynomial.legendre.leggauss(3)
 class SpherePath:
     """The result of a driven path: per increment the inner displacement ``u_a`` (m), the
     inner pressure ``p`` (Pa), the largest yield ratio; and per increment and Gauss point
-    (``r_gauss``, m) whether it yielded (``plastic``), and the Newton iterations used."""
+    (``r_gauss``, m) whether it yielded (``plastic``), and the Newton iterations used.
+
+    Parameters
+    ----------
+    u_a : numpy.ndarray
+        Inner displacement per increment (m).
+    p : numpy.ndarray
+        Inner pressure per increment (Pa).
+    yield_ratio : numpy.ndarray
+        Largest yield ratio per increment.
+    r_gauss : numpy.ndarray
+        Gauss point radii (m).
+    plastic : numpy.ndarray
+        Whether each Gauss point yielded, per increment.
+    iterations : numpy.ndarray
+        Newton iterations per increment.
+    """
 
     u_a: np.ndarray
     p: np.ndarray

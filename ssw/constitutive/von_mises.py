@@ -35,7 +35,15 @@ from ssw.constitutive.tensors import SQRT_3_2, invariants, pq_tangent, stress_of
 class VonMises:
     """von Mises plasticity: uniaxial yield stress ``yield_stress`` (Pa) and linear
     isotropic hardening modulus ``hardening`` (Pa, ``dY / d kappa``; 0: perfectly
-    plastic)."""
+    plastic).
+
+    Parameters
+    ----------
+    yield_stress : float
+        Uniaxial yield stress (Pa).
+    hardening : float
+        Linear isotropic hardening modulus ``dY / d kappa`` (Pa); 0: perfectly plastic.
+    """
 
     yield_stress: float
     hardening: float = 0.0

@@ -81,6 +81,31 @@ class System:
     triplets and ``scale`` in N/m; pressure unknowns are ``p h_i / G`` (see the module
     docstring), so the displacement part of a solution ``K^-1 f`` is in m, and ``x^T K x``
     is the energy whatever the pressure scaling.
+
+    Parameters
+    ----------
+    rows : numpy.ndarray
+        Row indices of the triplets.
+    cols : numpy.ndarray
+        Column indices of the triplets.
+    vals : numpy.ndarray
+        Values of the triplets (nondimensional).
+    ndof : int
+        Number of dofs.
+    udof : numpy.ndarray
+        Index of (u_r, u_z) per node, (n, 2); -1 where fixed.
+    pdof : numpy.ndarray
+        Pressure index per node, (n,); -1 at midside nodes.
+    nodes : numpy.ndarray
+        Node coordinates (m), (n, 2).
+    tri : numpy.ndarray
+        Quadratic triangles, (ne, 6).
+    body : numpy.ndarray
+        Body of each element (0 soil, 1 plate).
+    iface : numpy.ndarray
+        (soil node, plate node) pairs, (m, 2).
+    scale : float
+        Stiffness scale (N/m).
     """
 
     rows: np.ndarray
@@ -380,6 +405,11 @@ def assemble(
         Where the rollers and the fixed bottom lie, as a multiple of the mesh's soil
         radius and depth (1: on its faces; 2: beyond them, a free truncation boundary as
         the dynamic wall's absorbing one).
+
+    Returns
+    -------
+    System
+        The assembled problem.
     """
     nodes, tri, pairs = split_interface(mesh)
     n = len(nodes)

@@ -173,6 +173,11 @@ def element_matrices(
         (ne,) or (ne, 3), Pa/m^k; the pressure unknown of a vertex is ``p / p_scale``
         (balances the blocks for LU: see :func:`ssw.contact.assembly.pressure_scale`). A
         (ne,) value applies to the element's three vertices.
+
+    Returns
+    -------
+    numpy.ndarray
+        Element matrices, (ne, 15, 15).
     """
     n2, g2 = p2_shape(QUAD_POINTS)
     n1 = p1_shape(QUAD_POINTS)

@@ -86,6 +86,25 @@ class LayeredSettings:
     for a half-space soil, or a depth (m) over a rigid base, ``soil_base`` ``bonded``
     (``u = 0``) or ``sliding`` (frictionless: ``u_z = 0``, no shear); ``quadrature``: the
     Hankel quadrature.
+
+    Parameters
+    ----------
+    ring_ratio : float
+        Ring width / radius in the graded zone.
+    ring_min : float
+        Smallest contact radius resolved at that ratio, relative to ``sqrt(R delta_1)``.
+    candidate_factor : float
+        Ring zone radius / ``sqrt(R delta_last)``.
+    soil_depth : float or None
+        Depth of the soil layer (m); None: a half-space.
+    soil_base : str
+        Below the layer: ``bonded``, ``sliding`` or ``elastic``.
+    base_E : float or None
+        Young's modulus of an elastic base (Pa).
+    base_nu : float or None
+        Poisson's ratio of an elastic base.
+    quadrature : Quadrature
+        The Hankel quadrature.
     """
 
     ring_ratio: float = 1.0 / 40.0
@@ -288,6 +307,11 @@ def solve_curve(soil: tuple[float, float], plate: tuple[float, float] | None,
         ``layered`` dict gives :class:`LayeredSettings` (unless ``settings`` is given).
     settings : LayeredSettings or None
         The oracle's discretization (rings, Hankel quadrature, soil depth).
+
+    Returns
+    -------
+    ForceCurve
+        The curve (N, m).
     """
     cfg = {"delta_max": 1.0e-4, "steps": 1000, "interface": "frictionless",
            "pressure_profiles": 5, **contact_cfg}

@@ -54,7 +54,17 @@ INTERFACES = ("bonded", "frictionless")
 
 @dataclass(frozen=True)
 class Layer:
-    """An elastic layer: Young's modulus ``E`` (Pa), Poisson's ratio ``nu``, ``thickness`` (m)."""
+    """An elastic layer: Young's modulus ``E`` (Pa), Poisson's ratio ``nu``, ``thickness`` (m).
+
+    Parameters
+    ----------
+    E : float
+        Young's modulus (Pa).
+    nu : float
+        Poisson's ratio.
+    thickness : float
+        Thickness (m).
+    """
 
     E: float
     nu: float
@@ -67,6 +77,17 @@ class Stack:
 
     ``interfaces[k]`` is the interface under ``layers[k]``; ``base_E = inf`` is a rigid
     base. No layers is the homogeneous half-space of the base.
+
+    Parameters
+    ----------
+    layers : tuple
+        The layers, top first.
+    interfaces : tuple
+        The interface under each layer.
+    base_E : float
+        Young's modulus of the base (Pa); inf: rigid.
+    base_nu : float
+        Poisson's ratio of the base.
     """
 
     layers: tuple[Layer, ...]

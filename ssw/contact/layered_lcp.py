@@ -43,7 +43,25 @@ class ZoneError(SolverError):
 
 @dataclass
 class LcpResult:
-    """Force (N), contact radius (m), the pressures (Pa) of chosen increments and counts."""
+    """Force (N), contact radius (m), the pressures (Pa) of chosen increments and counts.
+
+    Parameters
+    ----------
+    force : numpy.ndarray
+        Force per increment (N).
+    contact_radius : numpy.ndarray
+        Contact radius per increment (m).
+    profiles : dict
+        Pressure profiles of chosen increments (Pa), by increment.
+    active_sets : int
+        Number of active sets visited.
+    iterations : int
+        Number of LCP iterations.
+    general_solves : int
+        Number of general solves.
+    max_ring : int
+        Outermost active ring.
+    """
 
     force: NDArray[np.float64]
     contact_radius: NDArray[np.float64]

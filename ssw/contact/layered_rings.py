@@ -51,6 +51,19 @@ class Quadrature:
     ``order`` Gauss-Legendre points per panel; panels grow geometrically by ``growth``
     from ``xi_low`` (relative to the stack's longest length scale) and are no wider than
     ``width`` (in units of ``pi / r_max``); the integral stops at ``xi_max = t_max / h_1``.
+
+    Parameters
+    ----------
+    order : int
+        Gauss-Legendre points per panel.
+    growth : float
+        Geometric growth of the panels.
+    width : float
+        Largest panel width in units of ``pi / r_max``.
+    t_max : float
+        Upper limit ``xi_max h_1``.
+    xi_low : float
+        Start of the geometric panels, relative to the stack's longest length.
     """
 
     order: int = 8

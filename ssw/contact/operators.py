@@ -104,7 +104,21 @@ def sphere_gap0(r: np.ndarray, radius: float) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Geometry:
-    """What a model's mesh and retained dofs depend on. Lengths in m."""
+    """What a model's mesh and retained dofs depend on. Lengths in m.
+
+    Parameters
+    ----------
+    plate_thickness : float
+        Plate thickness (m); 0: no plate.
+    plate_radius : float
+        Plate radius (m).
+    mesh : MeshSettings
+        The mesh settings (m).
+    zone : float
+        Radius of the candidate zone on the top surface (m).
+    bonded : bool
+        Whether the interface shares u_r as well (bonded) or u_z only.
+    """
 
     plate_thickness: float  # 0: no plate
     plate_radius: float
@@ -113,7 +127,13 @@ class Geometry:
     bonded: bool  # the interface shares u_r as well (bonded) or u_z only
 
     def key(self) -> str:
-        """Hash of the geometry, the code and the library versions (hex)."""
+        """Hash of the geometry, the code and the library versions (hex).
+
+        Returns
+        -------
+        str
+            The hex digest.
+        """
         return _geometry_key(self)
 
 
@@ -210,6 +230,21 @@ class Layout:
     candidates, sorted by radius; ``iface_r``, ``iface_comp`` (n_i,): node radius (m) and
     component (0 = u_r, 1 = u_z) of the retained interface dofs (empty without a plate);
     ``nodes``, ``elements``: the mesh's counts.
+
+    Parameters
+    ----------
+    r : numpy.ndarray
+        Radii of the contact candidates (m), (n_c,), sorted.
+    weight : numpy.ndarray
+        Their surface weights ``int N_j 2 pi r ds`` (m^2), (n_c,).
+    iface_r : numpy.ndarray
+        Radii of the retained interface dofs' nodes (m), (n_i,).
+    iface_comp : numpy.ndarray
+        Their components (0 = u_r, 1 = u_z), (n_i,).
+    nodes : int
+        Number of mesh nodes.
+    elements : int
+        Number of mesh elements.
     """
 
     r: np.ndarray
@@ -222,7 +257,15 @@ class Layout:
 
 @dataclass(frozen=True)
 class BodyOperator:
-    """A body's condensed stiffness ``S`` at unit E (m = N/m per Pa) and how it was made."""
+    """A body's condensed stiffness ``S`` at unit E (m = N/m per Pa) and how it was made.
+
+    Parameters
+    ----------
+    S : numpy.ndarray
+        Condensed stiffness at unit E (m), (nb, nb).
+    stats : dict
+        How it was made (sizes, times in s).
+    """
 
     S: np.ndarray
     stats: dict[str, Any] = field(default_factory=dict)
@@ -263,7 +306,13 @@ def _code_hash() -> str:
 
 def cache_dir() -> Path | None:
     """The disk cache folder: ``$SSW_CACHE_DIR/contact`` (default ``~/.cache/ssw``); None
-    (memory only) when ``SSW_CACHE_DIR`` is ``none``, ``off`` or empty."""
+    (memory only) when ``SSW_CACHE_DIR`` is ``none``, ``off`` or empty.
+
+    Returns
+    -------
+    pathlib.Path or None
+        The folder, or None.
+    """
     from ssw.h5io import cache_root
 
     root = cache_root()
@@ -295,7 +344,13 @@ class OperatorStore:
 
     def pop_cost(self) -> dict[str, float]:
         """Operators built and seconds spent meshing, assembling and factoring them since
-        the last call (the cost a curve's stats charge to it)."""
+        the last call (the cost a curve's stats charge to it).
+
+        Returns
+        -------
+        dict
+            Operators built and seconds spent (s) by stage.
+        """
         out, self._cost = self._cost, {"count": 0, "wall_mesh": 0.0, "wall_assemble": 0.0,
                                        "wall_factor": 0.0}
         return out
@@ -624,6 +679,28 @@ class SceneLCP:
     or None: ``dW/dE_soil`` (no plate: ``-W / E``; a frictionless or bonded plate:
     ``-W (dH/dE) W``, ``dH/dE = E_p^2 Y^T S Y`` of the Schur complement ``H``; None for the
     unilateral interface), for the law's derivative in E (:mod:`ssw.walls.fem`).
+
+    Parameters
+    ----------
+    W : numpy.ndarray
+        Compliance (m/N), (m, m).
+    q0 : numpy.ndarray
+        Gaps at zero indentation (m), (m,).
+    q1 : numpy.ndarray
+        Gap change per unit indentation, (m,).
+    n_sphere : int
+        Number of sphere candidates (the first constraints).
+    r : numpy.ndarray
+        Radii of the sphere candidates (m).
+    weight : numpy.ndarray
+        Their surface weights (m^2).
+    tie : numpy.ndarray or None
+        Force the plate pulls on the soil's axis node per unit constraint force (N), (m,); None
+        unless unilateral.
+    dofs : int
+        Unknowns of the dense system.
+    dW_dE : numpy.ndarray or None
+        ``dW/dE_soil`` (m/N/Pa), (m, m), or None.
     """
 
     W: np.ndarray
@@ -826,7 +903,13 @@ _DEFAULT: OperatorStore | None = None
 
 
 def default_store() -> OperatorStore:
-    """The process-wide :class:`OperatorStore` (disk cache from ``$SSW_CACHE_DIR``)."""
+    """The process-wide :class:`OperatorStore` (disk cache from ``$SSW_CACHE_DIR``).
+
+    Returns
+    -------
+    OperatorStore
+        The store.
+    """
     global _DEFAULT
     if _DEFAULT is None or _DEFAULT.directory != cache_dir():
         _DEFAULT = OperatorStore()

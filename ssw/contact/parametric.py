@@ -76,6 +76,21 @@ class Path:
     ``lam0, lam1`` (k, m) N and N/m: ``lam = lam0 + delta lam1`` (0 off the active set);
     ``gap0, gap1`` (k, m) m and -: ``g = gap0 + delta gap1`` (0 on the active set);
     ``active`` (k, m) bool.
+
+    Parameters
+    ----------
+    breaks : numpy.ndarray
+        Piece breakpoints (m), (k + 1,).
+    lam0 : numpy.ndarray
+        Force intercepts (N), (k, m).
+    lam1 : numpy.ndarray
+        Force slopes (N/m), (k, m).
+    gap0 : numpy.ndarray
+        Gap intercepts (m), (k, m).
+    gap1 : numpy.ndarray
+        Gap slopes, (k, m).
+    active : numpy.ndarray
+        Active sets, (k, m) bool.
     """
 
     breaks: np.ndarray

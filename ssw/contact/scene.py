@@ -210,6 +210,12 @@ class MeshCache(OperatorStore):
     Scenes that differ only in materials (a set's soils under one plate) share the mesh
     and the nested-dissection order: gmsh and the ordering are deterministic, so reusing
     them gives the same numbers as building them again.
+
+    Parameters
+    ----------
+    directory : str or pathlib.Path or None
+        The disk cache folder; ``"env"``: :func:`ssw.contact.operators.cache_dir`; None: memory
+        only.
     """
 
     def __init__(self, directory: Any = "env") -> None:
@@ -640,6 +646,11 @@ def solve_scene(
         A mesh and operator cache shared by the scenes of a batch (None: the process's).
     engine : str
         ``substructured`` (default) or ``monolithic`` (the module docstring).
+
+    Returns
+    -------
+    ForceCurve
+        The curve (N, m), with the scene's inputs.
     """
     if scene.sample is not None:  # a finite block: the FEM's soil domain is the block
         contact_cfg = scene.sample.contact_settings(contact_cfg)

@@ -77,7 +77,17 @@ FIELDS_KEPT = 4
 @dataclass(frozen=True)
 class BodyPeak:
     """Peak von Mises stress of one body at each state. ``peak`` (n,) Pa; ``r``, ``z``
-    (n,) m where it occurs (z from the plate-soil interface, up)."""
+    (n,) m where it occurs (z from the plate-soil interface, up).
+
+    Parameters
+    ----------
+    peak : numpy.ndarray
+        Peak von Mises stress (Pa), (n,).
+    r : numpy.ndarray
+        Radius where it occurs (m), (n,).
+    z : numpy.ndarray
+        Height where it occurs, from the plate-soil interface, up (m), (n,).
+    """
 
     peak: np.ndarray
     r: np.ndarray
@@ -89,7 +99,21 @@ class ContactStress:
     """Stresses of contact states: ``delta`` (n,) m (rigid-sphere indentation), ``force``
     (n,) N on the sphere, ``plate`` (None without one) and ``soil`` peaks. ``fields``
     (when asked): per body, ``(r, z, von_mises)`` at every evaluation point, arrays
-    (n_points,) m, m and (n_points, n) Pa."""
+    (n_points,) m, m and (n_points, n) Pa.
+
+    Parameters
+    ----------
+    delta : numpy.ndarray
+        Rigid-sphere indentations (m), (n,).
+    force : numpy.ndarray
+        Forces on the sphere (N), (n,).
+    plate : BodyPeak or None
+        The plate's peaks, or None.
+    soil : BodyPeak
+        The soil's peaks.
+    fields : dict or None
+        Per body, ``(r, z, von_mises)`` (m, m, Pa) at every point, or None.
+    """
 
     delta: np.ndarray
     force: np.ndarray
@@ -507,6 +531,11 @@ def contact_stresses(
         (n,) N, the rigid sphere's force at each ``delta`` when the caller knows it (the
         chain's fem wall at its peak indentation): with ``bead``, the rigid sphere's path is
         then not traced again.
+
+    Returns
+    -------
+    ContactStress
+        The peaks (Pa, m) of the plate and the soil at each state.
     """
     from ssw.contact.parametric import trace
     from ssw.contact.scene import settings_of

@@ -47,7 +47,29 @@ from ssw.errors import SolverError
 class Condensation:
     """A body's condensed stiffness. ``S`` (nb, nb) m (N/m per Pa of the body's E) on the
     retained dofs in the order given; ``dofs`` the body's matrix size; ``backward_error``
-    of the factorization; ``pivoted``: the pivoted fallback was used; ``wall_*`` s."""
+    of the factorization; ``pivoted``: the pivoted fallback was used; ``wall_*`` s.
+
+    Parameters
+    ----------
+    S : numpy.ndarray
+        Condensed stiffness (m, N/m per Pa of E), (nb, nb).
+    dofs : int
+        The body's matrix size.
+    nnz_factor : int
+        Nonzeros of the factors.
+    backward_error : float
+        Backward error of the factorization.
+    pivoted : bool
+        Whether the pivoted fallback was used.
+    wall_assemble : float
+        Assembly time (s).
+    wall_factor : float
+        Factorization time (s).
+    body : BodyMatrix or None
+        The body's matrix, or None.
+    factor : Any
+        The factorization, or None.
+    """
 
     S: np.ndarray
     dofs: int
@@ -297,7 +319,25 @@ class LeadingBlock:
 class BodyMatrix:
     """A body's u-p stiffness at unit E, interior dofs first (``K[:n_int, :n_int]`` is
     ``K_II``), divided by ``scale`` (nondimensional); ``udof`` (n_local, 2) its displacement
-    dofs (-1: fixed), ``nodes``/``tri`` the body's own (local) mesh."""
+    dofs (-1: fixed), ``nodes``/``tri`` the body's own (local) mesh.
+
+    Parameters
+    ----------
+    K : scipy.sparse matrix
+        The u-p stiffness at unit E over ``scale``, interior dofs first.
+    n_int : int
+        Number of interior dofs.
+    ndof : int
+        Number of dofs.
+    scale : float
+        Its scale (N/m per Pa).
+    udof : numpy.ndarray
+        Displacement dofs, (n_local, 2); -1: fixed.
+    nodes : numpy.ndarray
+        The body's node coordinates (m).
+    tri : numpy.ndarray
+        The body's triangles (local indices).
+    """
 
     K: Any
     n_int: int
@@ -390,6 +430,11 @@ def condense_body(
         ``(rows, cols, n) -> permutation`` (nested dissection).
     E : float or numpy.ndarray
         The body's Young's modulus, Pa (1: the unit-E operator).
+
+    Returns
+    -------
+    Condensation
+        The condensed stiffness and how it was made.
     """
     t0 = time.perf_counter()
     bm = body_matrix(nodes, tri, nu, free, b_nodes, b_comps, order_nodes, E)

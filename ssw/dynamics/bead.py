@@ -79,6 +79,11 @@ def bead_compliance(r: np.ndarray, E_b: float, nu_b: float) -> np.ndarray:
         The bead's Young's modulus, Pa.
     nu_b : float
         The bead's Poisson's ratio.
+
+    Returns
+    -------
+    numpy.ndarray
+        Symmetric compliance (m/N), (m, m).
     """
     c_b = (1.0 - nu_b**2) / E_b
     b = tributary_edges(r)

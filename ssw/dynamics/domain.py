@@ -49,7 +49,31 @@ PLATE_LAYERS = 4
 
 @dataclass(frozen=True)
 class DomainSpec:
-    """How to size the dynamic domain (module docstring). SI units."""
+    """How to size the dynamic domain (module docstring). SI units.
+
+    Parameters
+    ----------
+    window : float
+        Time the contact's response must be free of reflections (s).
+    f_max : float
+        Highest frequency the mesh resolves (Hz).
+    wave_elements : float
+        Elements per shear wavelength at ``f_max``.
+    size_contact : float
+        Element size under the contact (m).
+    growth : float
+        Element size growth rate away from the contact.
+    plate_layers : int
+        Element layers through the plate.
+    min_domain : float
+        Smallest domain radius = depth (m).
+    max_domain : float
+        Largest domain radius = depth (m).
+    domain : float or None
+        A fixed domain radius = depth (m) instead of the wave-speed rule; None: the rule.
+    size_max : float or None
+        A fixed largest element (m) instead of the wave rule; None: the rule.
+    """
 
     window: float  # s, the time the contact's response must be free of reflections
     f_max: float = F_MAX  # Hz

@@ -57,7 +57,17 @@ WAKE = 1e-7
 @dataclass(frozen=True)
 class WallState:
     """One scene's wall state: the FEM state, whether the dynamics runs (``awake``) and
-    the bead's rest indentation ``d`` (m) while it does not."""
+    the bead's rest indentation ``d`` (m) while it does not.
+
+    Parameters
+    ----------
+    fem : State
+        The FEM state.
+    awake : bool
+        Whether the dynamics runs.
+    d : float
+        The bead's rest indentation (m) while dormant.
+    """
 
     fem: State
     awake: bool
@@ -74,6 +84,27 @@ class Scene:
     sphere's FEM at the indentation ``d / s``, ``s`` of
     :func:`ssw.chain.wall.compliance_scale`: the quasi-static walls' rule, for
     comparisons with them) or ``rigid`` (none).
+
+    Parameters
+    ----------
+    soil : Material
+        The soil (Pa, -, kg/m^3).
+    plate : Material or None
+        The plate, or None.
+    plate_thickness : float
+        Plate thickness (m); 0 without a plate.
+    plate_radius : float
+        Plate radius (m).
+    radius : float
+        Bead radius (m).
+    interface : str
+        The plate-soil interface.
+    bead_E : float or None
+        Bead's Young's modulus (Pa).
+    bead_nu : float or None
+        Bead's Poisson's ratio.
+    bead : str
+        How the bead's elasticity enters: ``compliance``, ``scale`` or ``rigid``.
     """
 
     soil: Material
@@ -364,6 +395,11 @@ class ContactFEM:
 class FEMWall:
     """A stateful wall over scenes, each a :class:`ContactFEM`
     (:class:`ssw.chain.wall.StatefulWall`). States are lists of :class:`WallState`.
+
+    Parameters
+    ----------
+    contacts : list of ContactFEM
+        One contact FEM per scene.
     """
 
     def __init__(self, contacts: list[ContactFEM]) -> None:
@@ -656,7 +692,13 @@ def fem_wall(
 
 class StaticFEMWall(FEMWall):
     """The same scenes' quasi-static law (density -> 0): the static LCP at every step, no
-    state (the reference of the quasi-static assumption on the same mesh)."""
+    state (the reference of the quasi-static assumption on the same mesh).
+
+    Parameters
+    ----------
+    contacts : list of ContactFEM
+        One contact FEM per scene.
+    """
 
     def start(self, d0: np.ndarray) -> np.ndarray:
         """The state: the bead indentations ``d0`` (m).

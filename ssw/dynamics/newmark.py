@@ -55,7 +55,23 @@ class State:
     """The discrete state at one time. ``u``, ``v``, ``a`` (ndof,) m, m/s, m/s^2 (the
     pressure entries are the scaled pressures and their rates); ``lam`` (m,) N, the contact
     forces; ``radiated`` J, the work absorbed by the dashpots so far; ``work`` J, the work
-    of the contact forces on the plate/soil so far."""
+    of the contact forces on the plate/soil so far.
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        Displacements (m), (ndof,) (pressure entries: scaled pressures).
+    v : numpy.ndarray
+        Velocities (m/s), (ndof,).
+    a : numpy.ndarray
+        Accelerations (m/s^2), (ndof,).
+    lam : numpy.ndarray
+        Contact forces (N), (m,).
+    radiated : float
+        Work absorbed by the dashpots so far (J).
+    work : float
+        Work of the contact forces on the plate and soil so far (J).
+    """
 
     u: np.ndarray
     v: np.ndarray
@@ -188,7 +204,15 @@ class Newmark:
 
 
 class Static:
-    """The static problem ``(K + Kb) u = G^T lam`` on the same dofs (one factorization)."""
+    """The static problem ``(K + Kb) u = G^T lam`` on the same dofs (one factorization).
+
+    Parameters
+    ----------
+    system : DynamicSystem
+        The dynamic system (its stiffness).
+    load_dofs : numpy.ndarray
+        The dofs the contact forces act on.
+    """
 
     def __init__(self, system: DynamicSystem, load_dofs: np.ndarray) -> None:
         self.system = system

@@ -141,6 +141,29 @@ class PunchImpedance:
     stiffness of the discrete punch on the dynamic mesh with its truncation boundary.
     a_eff : m.
     t, delta, force : the record (s, m, N).  dofs : size of the system.  domain : m.
+
+    Parameters
+    ----------
+    a0 : numpy.ndarray
+        Dimensionless frequencies, (n,).
+    k : numpy.ndarray
+        Normalized stiffness, (n,).
+    c : numpy.ndarray
+        Normalized damping, (n,).
+    K_static : float
+        Static stiffness of the discrete punch (N/m).
+    a_eff : float
+        Effective punch radius (m).
+    t : numpy.ndarray
+        Times of the record (s).
+    delta : numpy.ndarray
+        Punch displacement of the record (m).
+    force : numpy.ndarray
+        Punch force of the record (N).
+    dofs : int
+        Size of the system.
+    domain : float
+        Domain radius = depth (m).
     """
 
     a0: np.ndarray
@@ -179,6 +202,11 @@ def punch_impedance(
     wave_elements : float
         Elements per shear wavelength at the pulse's highest frequency (the far field's
         element size).
+
+    Returns
+    -------
+    PunchImpedance
+        Normalized impedance (``k``, ``c``), static stiffness (N/m) and the record.
     """
     cs = soil.c_s
     s = PULSE_WIDTH * radius / cs

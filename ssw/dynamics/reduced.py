@@ -66,7 +66,19 @@ MIN_STEP = 1e-15
 @dataclass(frozen=True)
 class ReducedState:
     """The last two indentations (m), shape (n,), the dissipated energy (J) and the step
-    (s) they are apart."""
+    (s) they are apart.
+
+    Parameters
+    ----------
+    d1 : numpy.ndarray
+        Last indentation (m), (n,).
+    d0 : numpy.ndarray
+        The one before (m), (n,).
+    dissipated : numpy.ndarray
+        Dissipated energy (J), (n,).
+    dt : float
+        Step between them (s); 0 at rest.
+    """
 
     d1: np.ndarray
     d0: np.ndarray
@@ -82,6 +94,27 @@ class ReducedWall:
     soil's shear modulus (Pa), Poisson's ratio, density (kg/m^3).  mu_p : (n,) the
     plate's areal density (kg/m^2, 0 without a plate).  c_r, m_r, k_p : the normalized
     dashpot, soil mass and plate mass.
+
+    Parameters
+    ----------
+    qs : Wall
+        The quasi-static wall.
+    G : numpy.ndarray
+        Soil's shear modulus (Pa), (n,).
+    nu : numpy.ndarray
+        Soil's Poisson's ratio, (n,).
+    rho : numpy.ndarray
+        Soil's density (kg/m^3), (n,).
+    mu_p : numpy.ndarray
+        Plate's areal density (kg/m^2), (n,); 0 without a plate.
+    c_r : float
+        Normalized radiation dashpot.
+    m_r : float
+        Normalized participating soil mass.
+    k_p : float
+        Plate's participating mass in units of ``mu_p pi a^2``.
+    dt : float or None
+        The step the wall was built for (s), or None.
     """
 
     qs: Any

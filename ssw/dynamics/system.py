@@ -70,7 +70,17 @@ MASS_WEIGHTS = 0.5 * np.array([0.225] + [0.132394152788506] * 3 + [0.12593918054
 
 @dataclass(frozen=True)
 class Material:
-    """An isotropic elastic solid: E (Pa), nu (-), density (kg/m^3)."""
+    """An isotropic elastic solid: E (Pa), nu (-), density (kg/m^3).
+
+    Parameters
+    ----------
+    E : float
+        Young's modulus (Pa).
+    nu : float
+        Poisson's ratio.
+    density : float
+        Density (kg/m^3).
+    """
 
     E: float
     nu: float
@@ -111,6 +121,25 @@ class DynamicSystem:
     :class:`ssw.contact.assembly.System`); ``M``, ``C`` and ``Kb`` are scipy CSR matrices
     (kg, N s/m, N/m) on the same dofs (zero rows at pressure dofs). ``soil`` and ``plate``
     are the materials; ``boundary`` names the truncation boundary.
+
+    Parameters
+    ----------
+    static : System
+        The stiffness (COO triplets of ``K / scale``) and the dof maps.
+    M : scipy.sparse.csr_matrix
+        Mass matrix (kg).
+    C : scipy.sparse.csr_matrix
+        Dashpot matrix of the boundary (N s/m).
+    Kb : scipy.sparse.csr_matrix
+        Spring matrix of the boundary (N/m).
+    soil : Material
+        The soil.
+    plate : Material or None
+        The plate, or None.
+    boundary : str
+        The truncation boundary: ``absorbing`` or ``fixed``.
+    mesh : Mesh
+        The mesh (m).
     """
 
     static: System
@@ -233,6 +262,11 @@ def mass_matrices(xy: np.ndarray, rho: np.ndarray) -> np.ndarray:
         (ne, 6, 2) node coordinates (r, z), m.
     rho : numpy.ndarray
         (ne,) density, kg/m^3.
+
+    Returns
+    -------
+    numpy.ndarray
+        Element mass matrices (kg), (ne, 6, 6).
     """
     n, _ = p2_shape(MASS_POINTS)
     det = triangle_jacobian(xy)[1]
@@ -351,6 +385,11 @@ def assemble_dynamic(
         fixed bottom, as the quasi-static FEM).
     order_nodes : callable
         ``(rows, cols, n) -> permutation`` (nested dissection).
+
+    Returns
+    -------
+    DynamicSystem
+        The assembled operators.
     """
     if boundary not in BOUNDARIES:
         raise ConfigError("dynamics.boundary", boundary, " | ".join(BOUNDARIES))

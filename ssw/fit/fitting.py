@@ -43,7 +43,37 @@ INPUT_KEYS: dict[str, tuple[str, ...]] = {
 
 @dataclass(frozen=True)
 class FitResult:
-    """A law fitted to one curve on ``[delta_lo, delta_hi]`` (m). SI units."""
+    """A law fitted to one curve on ``[delta_lo, delta_hi]`` (m). SI units.
+
+    Parameters
+    ----------
+    law : str
+        The law's registry name.
+    params : dict
+        Fitted parameters (their units: :attr:`Law.units`).
+    rms_rel_residual : float
+        RMS relative residual.
+    max_rel_residual : float
+        Largest relative residual.
+    nrms_residual : float
+        ``rms(F_fit - F) / max F`` on the range.
+    delta_lo : float
+        Lower end of the fit range (m).
+    delta_hi : float
+        Upper end of the fit range (m).
+    n_points : int
+        Number of curve samples fitted.
+    weighting : str
+        The residual weighting.
+    E_star : float
+        ``E_soil / (1 - nu_soil^2)`` (Pa).
+    radius : float
+        Indenter radius (m).
+    hertz_coefficient : float
+        ``4/3 E* sqrt(R)`` (N m^-1.5).
+    scene : dict
+        The curve's scene quantities (SI).
+    """
 
     law: str
     params: dict[str, float]
@@ -76,7 +106,13 @@ class FitResult:
         return law.evaluate(self.params, np.asarray(delta, float), self.hertz_coefficient)
 
     def as_dict(self) -> dict[str, Any]:
-        """Flat dict: the law's parameters at top level (e.g. ``"K"``), then the rest."""
+        """Flat dict: the law's parameters at top level (e.g. ``"K"``), then the rest.
+
+        Returns
+        -------
+        dict
+            The flat record (SI).
+        """
         d = asdict(self)
         return {**d.pop("params"), **d}
 

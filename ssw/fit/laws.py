@@ -42,7 +42,23 @@ LM_TOL = float(np.finfo(float).eps)
 
 @dataclass(frozen=True)
 class Law:
-    """A fit law: names of its parameters (with units), a fitter and an evaluator."""
+    """A fit law: names of its parameters (with units), a fitter and an evaluator.
+
+    Parameters
+    ----------
+    name : str
+        The registry name.
+    params : tuple
+        Names of its parameters.
+    units : tuple
+        Their units.
+    formula : str
+        The law's formula, as text.
+    fit : callable
+        ``fit(delta, force, hertz_coefficient, weighting) -> params``.
+    evaluate : callable
+        ``evaluate(params, delta, hertz_coefficient) -> force`` (N).
+    """
 
     name: str
     params: tuple[str, ...]

@@ -39,7 +39,27 @@ RANGE_MODES = ("chain", "fixed", "curve")
 
 @dataclass(frozen=True)
 class ChainEstimate:
-    """The chain quantities the energy bound needs. SI units."""
+    """The chain quantities the energy bound needs. SI units.
+
+    Parameters
+    ----------
+    beads : int
+        Number of beads, the striker included.
+    bead_radius : float
+        Bead radius (m).
+    bead_density : float
+        Bead density (kg/m^3).
+    bead_E : float
+        Bead's Young's modulus (Pa).
+    bead_nu : float
+        Bead's Poisson's ratio.
+    striker_velocity : float
+        Striker speed (m/s).
+    gravity : bool
+        Whether the chain's weight loads the wall.
+    preload : float
+        Constant force on bead 1 (N).
+    """
 
     beads: int  # including the striker
     bead_radius: float  # m
@@ -151,7 +171,23 @@ def peak_wall_indentation(
 
 @dataclass(frozen=True)
 class FitRange:
-    """A fit range (m) and how it was chosen."""
+    """A fit range (m) and how it was chosen.
+
+    Parameters
+    ----------
+    lo : float
+        Lower end (m).
+    hi : float
+        Upper end (m).
+    mode : str
+        The range mode of the config.
+    source : str
+        Where the upper end comes from: ``chain``, ``config`` or ``curve``.
+    needed : float
+        The upper end before clipping to the curve (m).
+    clipped : bool
+        Whether the curve stops short of ``needed``.
+    """
 
     lo: float
     hi: float
@@ -261,6 +297,11 @@ def fit_ranges(
         than its soil replaces the soil in the Hertz wall (``softer_half_space``).
     plate_nu : array_like or None
         The plates' Poisson's ratios.
+
+    Returns
+    -------
+    list of FitRange
+        One range (m) per scene.
     """
     E, nu = softer_half_space(soil_E, soil_nu, plate_E, plate_nu)
     dmax = np.atleast_1d(np.asarray(curve_delta_max, float))

@@ -56,7 +56,36 @@ def group_name(plate_material: str, plate_thickness: float) -> str:
 
 @dataclass
 class KTable:
-    """Fits of one plate over a soil grid; arrays have shape (n_nu, n_E). SI units."""
+    """Fits of one plate over a soil grid; arrays have shape (n_nu, n_E). SI units.
+
+    Parameters
+    ----------
+    plate_material : str
+        The plate's material key.
+    plate_thickness : float
+        Plate thickness (m).
+    radius : float
+        Indenter radius of the fits (m).
+    soil_E : numpy.ndarray
+        Soil moduli (Pa), increasing.
+    soil_nu : numpy.ndarray
+        Soil Poisson's ratios, increasing.
+    params : dict
+        law -> parameter -> values, (n_nu, n_E).
+    residuals : dict
+        law -> ``rms``/``max`` -> relative residuals, (n_nu, n_E).
+    delta_lo : numpy.ndarray
+        Lower end of each scene's fit range (m).
+    delta_hi : numpy.ndarray
+        Upper end of each scene's fit range (m).
+    weighting : str
+        The fits' residual weighting.
+
+    Other Parameters
+    ----------------
+    _interp : dict
+        Interpolants by quantity, built on first use (a cache).
+    """
 
     plate_material: str
     plate_thickness: float  # m
@@ -237,7 +266,13 @@ class KTable:
         return C * (dKp / Kp + 1.0 / E - np.log(self.power_ref) * dn), dn
 
     def interp_error(self) -> dict[str, float]:
-        """Stated maximum interpolation errors (relative), leave-one-out estimates."""
+        """Stated maximum interpolation errors (relative), leave-one-out estimates.
+
+        Returns
+        -------
+        dict
+            Relative error per interpolated quantity.
+        """
         out: dict[str, float] = {}
         if "K" in self._interp:
             e = self._interp["K"].loo_error()
@@ -259,7 +294,13 @@ class KTable:
         return out
 
     def rows(self) -> list[dict[str, Any]]:
-        """One dict per scene: plate, soil, every law's parameters and residuals."""
+        """One dict per scene: plate, soil, every law's parameters and residuals.
+
+        Returns
+        -------
+        list of dict
+            One row per scene (SI).
+        """
         out = []
         for j, nu in enumerate(self.soil_nu):
             for i, E in enumerate(self.soil_E):

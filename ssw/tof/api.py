@@ -169,7 +169,7 @@ def tof(
 class TofDerivatives:
     """A TOF with its derivatives (:func:`tof_derivatives`). SI units.
 
-    Attributes
+    Parameters
     ----------
     tof : numpy.ndarray
         s, the broadcast shape of the inputs.
@@ -189,6 +189,8 @@ class TofDerivatives:
         it).
     dt : float
         s, the fixed step of every run.
+    units : dict
+        Parameter name -> its SI unit (the dissipation coefficient's is its law's).
     """
 
     tof: np.ndarray
@@ -486,7 +488,7 @@ def sensor_signal(
 class SensorDerivatives:
     """The sensor signal at given times and its forward sensitivities. SI units.
 
-    Attributes
+    Parameters
     ----------
     t : numpy.ndarray
         (m,) s from the striker's first contact.

@@ -30,7 +30,25 @@ UNITS = {"soil_E": "Pa", "soil_nu": "1", "tof": "s", "t_incident": "s", "f_incid
 
 @dataclass(frozen=True)
 class Sweep:
-    """Sweep points, flat arrays of one length. SI units."""
+    """Sweep points, flat arrays of one length. SI units.
+
+    Parameters
+    ----------
+    soil_E : numpy.ndarray
+        Soil Young's modulus (Pa).
+    soil_nu : numpy.ndarray
+        Soil Poisson's ratio.
+    tof : numpy.ndarray
+        TOF (s).
+    t_incident : numpy.ndarray
+        Incident peak time at the sensor (s).
+    f_incident : numpy.ndarray
+        Incident peak above the static force (N).
+    f_reflected : numpy.ndarray
+        Reflected peak above the static force (N).
+    validity : Validity or None
+        The checks of each point (:mod:`ssw.validity`), or None.
+    """
 
     soil_E: np.ndarray  # Pa
     soil_nu: np.ndarray  # -
@@ -41,7 +59,13 @@ class Sweep:
     validity: Validity | None = None  # the checks of each point (ssw.validity)
 
     def sorted(self) -> Sweep:
-        """Points ordered by (nu, E)."""
+        """Points ordered by (nu, E).
+
+        Returns
+        -------
+        Sweep
+            The sweep reordered.
+        """
         order = np.lexsort((self.soil_E, self.soil_nu))
         return Sweep(*(getattr(self, k)[order] for k in FIELDS),
                      validity=None if self.validity is None else self.validity.take(order))

@@ -73,6 +73,25 @@ class PiecewiseLinearWall:
     ends. ``force_error``: relative 1-sigma force error of each scene's law, (n,) (None:
     unknown). ``da_dE``, ``db_dE`` (n, K + 1), N/Pa and N/m/Pa, or None: the pieces'
     coefficients' derivatives with respect to the soil's modulus (:func:`fem_wall`).
+
+    Parameters
+    ----------
+    d : numpy.ndarray
+        Breakpoints (m), (n, K + 1), increasing from 0.
+    a : numpy.ndarray
+        Intercepts of the pieces (N), (n, K + 1).
+    b : numpy.ndarray
+        Slopes of the pieces (N/m), (n, K + 1).
+    U : numpy.ndarray
+        Potential at the breakpoints (J), (n, K + 1).
+    d_exact : numpy.ndarray
+        Where the exact law ends (m), (n,).
+    force_error : numpy.ndarray or None
+        Relative 1-sigma force error per scene, (n,); None: unknown.
+    da_dE : numpy.ndarray or None
+        ``da/dE`` (N/Pa), (n, K + 1), or None.
+    db_dE : numpy.ndarray or None
+        ``db/dE`` (N/m/Pa), (n, K + 1), or None.
     """
 
     d: np.ndarray
@@ -517,7 +536,21 @@ class RigidLaw:
     the whole prefix path (every candidate of the zone), ``F = f0 + f1 delta`` on
     ``[breaks[j], breaks[j + 1]]`` (m, N, N/m), and ``df0``, ``df1`` their derivatives with
     respect to the soil's modulus (N/Pa, N/m/Pa; None: not computed). What a chain adds is
-    its own: the bead's compliance and the range its energy needs (``_chain_row``)."""
+    its own: the bead's compliance and the range its energy needs (``_chain_row``).
+
+    Parameters
+    ----------
+    breaks : numpy.ndarray
+        Piece breakpoints (m).
+    f0 : numpy.ndarray
+        Intercepts (N).
+    f1 : numpy.ndarray
+        Slopes (N/m).
+    df0 : numpy.ndarray or None
+        ``df0/dE`` (N/Pa), or None.
+    df1 : numpy.ndarray or None
+        ``df1/dE`` (N/m/Pa), or None.
+    """
 
     breaks: np.ndarray
     f0: np.ndarray

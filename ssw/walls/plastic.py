@@ -84,7 +84,21 @@ ENERGY_MARGIN = 3.0
 class Settings:
     """FEM settings of the tables: ``levels`` unloading curves, ``increments`` per path
     (loading: ``2 x``), mesh: element ``a / fine`` under the sphere, ``growth``, domain
-    ``domain x a`` (``a`` the contact radius at the reach)."""
+    ``domain x a`` (``a`` the contact radius at the reach).
+
+    Parameters
+    ----------
+    levels : int
+        Number of unloading curves.
+    increments : int
+        Increments per path (loading: twice).
+    fine : float
+        Element size under the sphere is ``a / fine``.
+    growth : float
+        Element size growth rate.
+    domain : float
+        Domain size in units of ``a`` (the contact radius at the reach).
+    """
 
     levels: int = 10
     increments: int = 12
@@ -99,7 +113,31 @@ class Tables:
     work ``W``; levels ``d_m`` (level 0 = ``d_e``), ``d_res``, shapes ``f`` and their
     cumulative integrals ``S`` on ``xi = k / SHAPE_CELLS``; ``elastic``: never yielded;
     ``d_res_interface`` the plate-sample interface's residual depth on the axis per level
-    (``d_res`` less the plate's permanent thinning; without a plate ``d_res``)."""
+    (``d_res`` less the plate's permanent thinning; without a plate ``d_res``).
+
+    Parameters
+    ----------
+    h : float
+        Virgin table step (m).
+    F : numpy.ndarray
+        Virgin force on ``d = h k`` (N).
+    W : numpy.ndarray
+        Its cumulative work (J).
+    d_m : numpy.ndarray
+        Level indentations (m); level 0 is ``d_e``.
+    d_res : numpy.ndarray
+        Residual indentations per level (m).
+    f : numpy.ndarray
+        Unloading shapes on ``xi = k / SHAPE_CELLS``.
+    S : numpy.ndarray
+        Their cumulative integrals.
+    elastic : bool
+        Whether the sample never yielded.
+    stats : dict
+        Solver statistics.
+    d_res_interface : numpy.ndarray or None
+        The plate-sample interface's residual depth per level (m); None: ``d_res``.
+    """
 
     h: float
     F: np.ndarray
@@ -229,7 +267,15 @@ def tables(E: float, nu: float, model: Any, radius: float, d_top: float,
 
 @dataclass(frozen=True)
 class PlasticState:
-    """Per scene: the indentation ``d`` and the largest one reached ``d_max`` (m)."""
+    """Per scene: the indentation ``d`` and the largest one reached ``d_max`` (m).
+
+    Parameters
+    ----------
+    d : numpy.ndarray
+        Indentations (m), (n,).
+    d_max : numpy.ndarray
+        Largest indentations reached (m), (n,).
+    """
 
     d: np.ndarray
     d_max: np.ndarray
@@ -246,6 +292,27 @@ class PlasticWall:
     level (None: ``d_res``). A :class:`ssw.chain.wall.Wall` (the law at the carried
     history) and a stateful wall (``start``, ``advance``, ``take_state``, ``energy``;
     docs/CONTRACTS.md).
+
+    Parameters
+    ----------
+    h : numpy.ndarray
+        Virgin table step (m), (n,).
+    F : numpy.ndarray
+        Virgin force (N), (n, VIRGIN_CELLS + 1).
+    W : numpy.ndarray
+        Virgin cumulative work (J), (n, VIRGIN_CELLS + 1).
+    d_m : numpy.ndarray
+        Level indentations (m), (n, L).
+    d_res : numpy.ndarray
+        Residual indentations per level (m), (n, L).
+    f : numpy.ndarray
+        Unloading shapes, (n, L, SHAPE_CELLS + 1).
+    S : numpy.ndarray
+        Their cumulative integrals, (n, L, SHAPE_CELLS + 1).
+    d_max0 : numpy.ndarray
+        The history the wall starts with (m), (n,).
+    d_res_interface : numpy.ndarray or None
+        The plate-sample interface's residual depth per level (m), (n, L); None: ``d_res``.
     """
 
     h: np.ndarray

@@ -215,7 +215,7 @@ class Stencil:
         Parameters
         ----------
         values : list of numpy.ndarray
-            The quantity at each offset of :attr:`offsets`, in their order, (n,) each.
+            The quantity at each offset of ``offsets``, in their order, (n,) each.
 
         Returns
         -------

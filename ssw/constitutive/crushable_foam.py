@@ -108,7 +108,8 @@ class CrushableFoam:
 
     @property
     def alpha(self) -> float:
-        """Shape factor ``alpha`` of the yield ellipse (:func:`shape_factor`), dimensionless."""
+        """Shape factor ``alpha`` of the yield ellipse, dimensionless
+        (:func:`ssw.constitutive.crushable_foam.shape_factor`)."""
         return shape_factor(self.plastic_poisson)
 
     @property

@@ -171,7 +171,7 @@ def number_dofs(
     pairs : numpy.ndarray
         Interface (soil, plate) node pairs, (m, 2).
     interface : str
-        The plate-soil interface (:data:`INTERFACES`).
+        The plate-soil interface (``INTERFACES``).
     order : numpy.ndarray
         Node elimination order, a permutation of ``range(n)``.
     soil_radius : float

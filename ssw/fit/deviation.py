@@ -244,7 +244,7 @@ def thesis_statements(
     cfg : dict
         The validated study config.
     solve : callable
-        ``solve(scene, cfg)`` returning the scene's :class:`ForceCurve`.
+        ``solve(scene, cfg)`` returning the scene's :class:`ssw.curve.ForceCurve`.
     material_sets : tuple of str
         The material sets to compare.
     sets : dict or None

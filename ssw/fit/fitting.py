@@ -50,7 +50,7 @@ class FitResult:
     law : str
         The law's registry name.
     params : dict
-        Fitted parameters (their units: :attr:`Law.units`).
+        Fitted parameters (their units: ``Law.units``).
     rms_rel_residual : float
         RMS relative residual.
     max_rel_residual : float

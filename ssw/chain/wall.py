@@ -439,6 +439,7 @@ class Wall(Protocol):
     @property
     def n(self) -> int:
         """Number of scenes."""
+        ...
 
     def force(self, d: np.ndarray) -> np.ndarray:
         """Wall force (N) at indentation ``d`` (m); 0 for ``d <= 0``.
@@ -495,6 +496,7 @@ class Wall(Protocol):
         Wall
             The law of the selected scenes.
         """
+        ...
 
     def hertz_equivalent(self, d_ref: float) -> np.ndarray:
         """``F(d_ref) / d_ref^1.5`` (N/m^1.5), for the time-step choice.
@@ -582,6 +584,7 @@ class StatefulWall(Protocol):
     @property
     def n(self) -> int:
         """Number of scenes."""
+        ...
 
     def force(self, d: np.ndarray) -> np.ndarray:
         """Force (N) of the state at rest at indentation ``d`` (the first step's).
@@ -596,6 +599,7 @@ class StatefulWall(Protocol):
         numpy.ndarray
             Force (N), (n,).
         """
+        ...
 
     def indentation(self, F: np.ndarray) -> np.ndarray:
         """Indentation (m) at rest under force ``F`` (the initial state's statics).
@@ -610,6 +614,7 @@ class StatefulWall(Protocol):
         numpy.ndarray
             Indentation (m), (n,).
         """
+        ...
 
     def hertz_equivalent(self, d_ref: float) -> np.ndarray:
         """``F(d_ref) / d_ref^1.5`` (N/m^1.5), for the time-step choice.
@@ -624,6 +629,7 @@ class StatefulWall(Protocol):
         numpy.ndarray
             Equivalent Hertz coefficient (N/m^1.5), (n,).
         """
+        ...
 
     def start(self, d0: np.ndarray) -> Any:
         """The state at rest with the last beads at ``d0``.
@@ -638,6 +644,7 @@ class StatefulWall(Protocol):
         Any
             The wall's state.
         """
+        ...
 
     def advance(self, state: Any, d: np.ndarray, dt: float) -> tuple[np.ndarray, Any]:
         """Integrate the wall's state over one step to the bead's new position.
@@ -656,6 +663,7 @@ class StatefulWall(Protocol):
         tuple
             ``(F, state)``: the force (N), (n,), and the state at the step's end.
         """
+        ...
 
     def energy(self, state: Any) -> tuple[np.ndarray, np.ndarray]:
         """Energy the wall holds and the energy it radiated or dissipated so far.
@@ -670,6 +678,7 @@ class StatefulWall(Protocol):
         tuple
             ``(stored, dissipated)``: J, (n,) each.
         """
+        ...
 
     def take(self, idx: np.ndarray) -> StatefulWall:
         """The scenes ``idx`` (may repeat).
@@ -684,6 +693,7 @@ class StatefulWall(Protocol):
         StatefulWall
             The wall of the selected scenes.
         """
+        ...
 
     def take_state(self, state: Any, idx: np.ndarray) -> Any:
         """The state of the scenes ``idx``.
@@ -700,6 +710,7 @@ class StatefulWall(Protocol):
         Any
             The state of the selected scenes.
         """
+        ...
 
 
 def is_stateful(wall: Any) -> bool:

@@ -28,7 +28,23 @@ KIND = "contact_curve"
 
 @dataclass(frozen=True)
 class ForceCurve:
-    """A force-indentation curve. SI units; arrays of shape (n,)."""
+    """A force-indentation curve. SI units; arrays of shape (n,).
+
+    Parameters
+    ----------
+    delta : numpy.ndarray
+        Indentations (m).
+    force : numpy.ndarray
+        Forces (N).
+    contact_radius : numpy.ndarray
+        Contact radii (m).
+    inputs : dict
+        The scene's inputs (SI).
+    stats : dict
+        Solver statistics.
+    pressure : dict or None
+        Pressure profiles ``{"r": (nr,), "delta": (k,), "p": (k, nr)}`` (m, m, Pa), or None.
+    """
 
     delta: np.ndarray  # m
     force: np.ndarray  # N
@@ -51,7 +67,15 @@ class ForceCurve:
 
 
 def write_curve(path: str | Path, curve: ForceCurve) -> None:
-    """Write ``curve`` to ``path`` atomically."""
+    """Write ``curve`` to ``path`` atomically.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The HDF5 file to write.
+    curve : ForceCurve
+        The force-indentation curve (SI).
+    """
     with atomic_h5(path, kind=KIND, inputs=curve.inputs) as f:
         write_dataset(f, "delta", curve.delta, "m", "indentation of the rigid sphere")
         write_dataset(f, "force", curve.force, "N", "reaction force on the sphere")

@@ -37,7 +37,25 @@ REACH_MARGIN = 1.2
 @dataclass(frozen=True)
 class LiftErrors:
     """Apparent-modulus errors of a half-space reading: ``error[i, j]`` (relative) for
-    ``ratios[i]`` = E2 / E1 and ``thicknesses[j]`` (m); the lift's ``E1`` (Pa), ``nu``."""
+    ``ratios[i]`` = E2 / E1 and ``thicknesses[j]`` (m); the lift's ``E1`` (Pa), ``nu``.
+
+    Parameters
+    ----------
+    E1 : float
+        Young's modulus of the lift (Pa).
+    nu : float
+        Poisson's ratio of the lift.
+    subgrade_nu : float
+        Poisson's ratio of the subgrade.
+    ratios : numpy.ndarray
+        Subgrade moduli over ``E1``, (n_ratios,).
+    thicknesses : numpy.ndarray
+        Lift thicknesses (m), (n_thicknesses,).
+    error : numpy.ndarray
+        Relative error of the apparent modulus, (n_ratios, n_thicknesses).
+    tof : numpy.ndarray
+        Layered TOFs (s), (n_ratios, n_thicknesses).
+    """
 
     E1: float
     nu: float
@@ -48,6 +66,14 @@ class LiftErrors:
     tof: np.ndarray  # (n_ratios, n_thicknesses) s
 
     def to_dict(self) -> dict[str, Any]:
+        """The result as plain lists and numbers (SI), with each ratio's warning thickness.
+
+        Returns
+        -------
+        dict
+            ``E1`` (Pa), ``nu``, ``subgrade_nu``, ``ratios``, ``thicknesses`` (m), ``error``,
+            ``tof`` (s) and ``warning_thickness`` (m or None, by ratio).
+        """
         return {"E1": self.E1, "nu": self.nu, "subgrade_nu": self.subgrade_nu,
                 "ratios": self.ratios.tolist(), "thicknesses": self.thicknesses.tolist(),
                 "error": self.error.tolist(), "tof": self.tof.tolist(),
@@ -91,7 +117,38 @@ def lift_errors(params: Any, E1: float, nu: float, ratios: Any, thicknesses: Any
     ``ratios`` x E1 (``subgrade_nu``, default ``nu``), read through the device's chain
     ``params`` as a half-space (module docstring): the layered TOFs inverted by
     :func:`ssw.tof.inverse.invert_batch` on the half-spaces' TOFs (``E_grid``, Pa: the
-    half-spaces; default 41 moduli over E1/5..5 E1, log-spaced)."""
+    half-spaces; default 41 moduli over E1/5..5 E1, log-spaced).
+
+    Parameters
+    ----------
+    params : Any
+        The device's chain parameters (:class:`ssw.chain.params.ChainParams`).
+    E1 : float
+        Young's modulus of the lift (Pa), > 0.
+    nu : float
+        Poisson's ratio of the lift.
+    ratios : array_like
+        Subgrade moduli as multiples of ``E1``, > 0.
+    thicknesses : array_like
+        Lift thicknesses (m), > 0.
+    subgrade_nu : float or None
+        Poisson's ratio of the subgrade; None: ``nu``.
+    energy : float
+        Impact energy of the contact curves' reach (J).
+    E_grid : array_like or None
+        Half-space moduli of the inversion (Pa); None: 41 log-spaced over E1/5..5 E1.
+
+    Returns
+    -------
+    LiftErrors
+        Relative errors of the apparent modulus and the layered TOFs (s).
+
+    Raises
+    ------
+    ConfigError
+        If a modulus, ratio or thickness is not > 0, or the half-spaces' TOFs do not
+        bracket every layered TOF.
+    """
     from ssw.tof import api
     from ssw.tof.inverse import ForwardGrid, invert_batch
 
@@ -126,7 +183,22 @@ def warning_thickness(res: LiftErrors, ratio: float, tolerance: float = 0.02) ->
     """The lift thickness (m) below which a half-space reading errs by more than
     ``tolerance`` on the subgrade ``ratio`` x E1: the error ~ c / h interpolated in
     ``ln h`` between the computed thicknesses; None when it stays within the tolerance
-    over them (or never does)."""
+    over them (or never does).
+
+    Parameters
+    ----------
+    res : LiftErrors
+        The computed errors.
+    ratio : float
+        The subgrade ratio (the nearest computed one is used).
+    tolerance : float
+        Largest accepted relative error.
+
+    Returns
+    -------
+    float or None
+        Thickness (m), or None.
+    """
     i = int(np.argmin(np.abs(res.ratios - ratio)))
     e = np.abs(res.error[i])
     h = res.thicknesses
@@ -141,7 +213,15 @@ def warning_thickness(res: LiftErrors, ratio: float, tolerance: float = 0.02) ->
 
 
 def plot_lift(res: LiftErrors, path: str) -> None:
-    """The errors against lift thickness, one line per subgrade ratio (PNG, atomic)."""
+    """The errors against lift thickness, one line per subgrade ratio (PNG, atomic).
+
+    Parameters
+    ----------
+    res : LiftErrors
+        The computed errors.
+    path : str
+        The PNG file to write.
+    """
     from ssw.plotting import pyplot, save_png
 
     plt = pyplot()

@@ -30,18 +30,26 @@ KEY_PATTERN = r"[A-Za-z0-9_]+"
 class Strength:
     """What a material withstands before it yields or fails. SI units; None: not known.
 
-    Attributes
+    Parameters
     ----------
-    yield_stress : Pa, uniaxial (tensile) yield stress, the von Mises ``Y`` (metals, plates).
-    compressive : Pa, uniaxial compressive strength (foams: the plateau or yield stress in
+    yield_stress : float or None
+        Uniaxial (tensile) yield stress (Pa), the von Mises ``Y`` (metals, plates).
+    compressive : float or None
+        Uniaxial compressive strength (Pa) (foams: the plateau or yield stress in
         compression; soils: unconfined compressive strength).
-    tensile : Pa, uniaxial tensile strength.
-    cohesion : Pa, Mohr-Coulomb cohesion ``c``.
-    friction_angle : degrees, Mohr-Coulomb angle of internal friction ``phi``.
-    dilatancy_angle : degrees, ``psi`` (non-associated flow).
-    hardening : Pa, linear isotropic hardening modulus ``dY / d kappa`` of the von Mises
-        ``Y`` (``kappa`` the equivalent plastic strain; 0: perfectly plastic).
-    source : where the values come from.
+    tensile : float or None
+        Uniaxial tensile strength (Pa).
+    cohesion : float or None
+        Mohr-Coulomb cohesion ``c`` (Pa).
+    friction_angle : float or None
+        Mohr-Coulomb angle of internal friction ``phi`` (degrees).
+    dilatancy_angle : float or None
+        Dilatancy angle ``psi`` (degrees; non-associated flow).
+    hardening : float or None
+        Linear isotropic hardening modulus ``dY / d kappa`` of the von Mises ``Y`` (Pa;
+        ``kappa`` the equivalent plastic strain; 0: perfectly plastic).
+    source : str
+        Where the values come from.
     """
 
     yield_stress: float | None = None
@@ -54,7 +62,19 @@ class Strength:
     source: str = ""
 
     def check(self, key: str) -> None:
-        """ConfigError naming ``materials.<key>.strength.<field>`` for a bad value."""
+        """ConfigError naming ``materials.<key>.strength.<field>`` for a bad value.
+
+        Parameters
+        ----------
+        key : str
+            The material's key in the library.
+
+        Raises
+        ------
+        ConfigError
+            If a strength is not finite or out of range, an angle lies outside
+            [0, 90) degrees, or strengths come without a source.
+        """
         for f in fields(self):
             v = getattr(self, f.name)
             if f.name == "source" or v is None:
@@ -75,7 +95,25 @@ class Strength:
 
     @classmethod
     def from_dict(cls, key: str, data: Any) -> Strength:
-        """A strength from the library's ``strength:`` mapping (checked)."""
+        """A strength from the library's ``strength:`` mapping (checked).
+
+        Parameters
+        ----------
+        key : str
+            The material's key in the library.
+        data : Any
+            The ``strength:`` mapping (Pa, degrees, ``source``).
+
+        Returns
+        -------
+        Strength
+            The checked strengths.
+
+        Raises
+        ------
+        ConfigError
+            If ``data`` is not a mapping, has unknown fields or bad values.
+        """
         if not isinstance(data, dict):
             raise ConfigError(f"materials.{key}.strength", data, "a mapping of strengths")
         known = {f.name for f in fields(cls)}
@@ -94,7 +132,7 @@ class Strength:
 class Material:
     """An isotropic linear-elastic material, with its strengths where known. SI units.
 
-    Attributes
+    Parameters
     ----------
     key : str
         Its key in the library: letters, digits and underscores (:data:`KEY_PATTERN`).
@@ -167,7 +205,23 @@ def number(field: str, value: Any) -> float:
 
 
 def load_library(path: str | Path | None = None) -> dict[str, dict[str, Any]]:
-    """Raw library: set name -> material key -> fields."""
+    """Raw library: set name -> material key -> fields.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path or None
+        The YAML materials library; None: the packaged one.
+
+    Returns
+    -------
+    dict
+        Set name -> material key -> fields, as in the YAML file.
+
+    Raises
+    ------
+    ConfigError
+        If the file does not exist or lacks the base set.
+    """
     p = Path(path) if path is not None else DEFAULT_LIBRARY
     if not p.is_file():
         raise ConfigError("materials_file", str(p), "an existing YAML materials library")
@@ -178,7 +232,25 @@ def load_library(path: str | Path | None = None) -> dict[str, dict[str, Any]]:
 
 
 def material_set(name: str = BASE_SET, path: str | Path | None = None) -> dict[str, Material]:
-    """All materials of set ``name`` (fields not in the set come from ``realistic``)."""
+    """All materials of set ``name`` (fields not in the set come from ``realistic``).
+
+    Parameters
+    ----------
+    name : str
+        The set's name.
+    path : str or pathlib.Path or None
+        The YAML materials library; None: the packaged one.
+
+    Returns
+    -------
+    dict
+        Material key -> :class:`Material` (SI).
+
+    Raises
+    ------
+    ConfigError
+        If the set is unknown or names materials not in the base set.
+    """
     lib = load_library(path)
     if name not in lib:
         raise ConfigError("material_set", name, f"one of {sorted(lib)}")
@@ -204,7 +276,29 @@ def material_set(name: str = BASE_SET, path: str | Path | None = None) -> dict[s
 def get_material(
     key: str, set_name: str = BASE_SET, path: str | Path | None = None, field: str = "material"
 ) -> Material:
-    """Material ``key`` of set ``set_name``; ``field`` names the setting for error messages."""
+    """Material ``key`` of set ``set_name``; ``field`` names the setting for error messages.
+
+    Parameters
+    ----------
+    key : str
+        The material's key.
+    set_name : str
+        The set's name.
+    path : str or pathlib.Path or None
+        The YAML materials library; None: the packaged one.
+    field : str
+        The setting's name, for error messages.
+
+    Returns
+    -------
+    Material
+        The material (SI).
+
+    Raises
+    ------
+    ConfigError
+        If ``key`` is not a material of the set.
+    """
     mats = material_set(set_name, path)
     if key not in mats:
         raise ConfigError(field, key, f"a material of the library: {', '.join(sorted(mats))}")

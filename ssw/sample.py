@@ -42,7 +42,25 @@ LATERALS = ("free", "mould")
 
 @dataclass(frozen=True)
 class Sample:
-    """A finite cylindrical sample (module docstring). Lengths in m."""
+    """A finite cylindrical sample (module docstring). Lengths in m.
+
+    Parameters
+    ----------
+    thickness : float
+        Thickness (m).
+    radius : float or None
+        Radius (m); None with an elastic base.
+    base : str
+        Bottom condition: ``bonded``, ``sliding`` or ``elastic``.
+    lateral : str
+        Lateral condition: ``mould`` or ``free``.
+    lateral_size : str
+        How the radius was obtained (a box's sides), for the record.
+    base_E : float or None
+        Young's modulus of an elastic base (Pa).
+    base_nu : float or None
+        Poisson's ratio of an elastic base.
+    """
 
     thickness: float
     radius: float | None
@@ -91,7 +109,18 @@ class Sample:
 
     def contact_settings(self, contact: dict[str, Any]) -> dict[str, Any]:
         """The ``contact`` settings of a scene on this sample: the FEM's soil domain is the
-        block (its radius and thickness) with the block's base and side conditions."""
+        block (its radius and thickness) with the block's base and side conditions.
+
+        Parameters
+        ----------
+        contact : dict
+            The scene's ``contact`` settings.
+
+        Returns
+        -------
+        dict
+            A copy with the sample's domain (m, Pa) and boundary conditions.
+        """
         if self.base == "elastic":  # the box, in two regions: the lift and its subgrade
             return {**contact, "subgrade_depth": float(self.thickness),
                     "subgrade_E": float(self.base_E), "subgrade_nu": float(self.base_nu)}
@@ -100,6 +129,14 @@ class Sample:
                 "soil_lateral": self.lateral}
 
     def to_dict(self) -> dict[str, Any]:
+        """The sample as a plain mapping (SI), the form :func:`sample_from_dict` reads.
+
+        Returns
+        -------
+        dict
+            ``thickness``, ``radius`` (m), ``base``, ``lateral`` and, where they apply,
+            ``base_E`` (Pa), ``base_nu`` and ``lateral_size``.
+        """
         out = {"thickness": self.thickness, "radius": self.radius, "base": self.base,
                "lateral": self.lateral}
         if self.base == "elastic":
@@ -111,7 +148,25 @@ class Sample:
 
 def equivalent_radius(side_a: float, side_b: float) -> float:
     """Radius (m) of the cylinder with the footprint area of an ``a x b`` box (m):
-    ``sqrt(a b / pi)``."""
+    ``sqrt(a b / pi)``.
+
+    Parameters
+    ----------
+    side_a : float
+        First side of the box (m).
+    side_b : float
+        Second side of the box (m).
+
+    Returns
+    -------
+    float
+        Equivalent radius (m).
+
+    Raises
+    ------
+    ConfigError
+        If a side is not > 0.
+    """
     if not (side_a > 0 and side_b > 0):
         raise ConfigError("sample.box", [side_a, side_b], "two sides > 0 m")
     return math.sqrt(side_a * side_b / math.pi)
@@ -119,7 +174,25 @@ def equivalent_radius(side_a: float, side_b: float) -> float:
 
 def sample_from_dict(d: dict[str, Any] | None, field: str = "sample") -> Sample | None:
     """A :class:`Sample` from a config mapping ``{thickness, radius | box: [a, b], base,
-    lateral}`` (SI), or None for none (the half-space)."""
+    lateral}`` (SI), or None for none (the half-space).
+
+    Parameters
+    ----------
+    d : dict or None
+        The config mapping (SI), or None.
+    field : str
+        The setting's name, for error messages.
+
+    Returns
+    -------
+    Sample or None
+        The sample, or None for the half-space.
+
+    Raises
+    ------
+    ConfigError
+        If the mapping is malformed or a value is out of range.
+    """
     if d is None:
         return None
     if not isinstance(d, dict):

@@ -69,7 +69,7 @@ STATIC_TOL = 1e-8
 class ChainModel:
     """The equations of motion, as numbers. SI units; ``n`` scenes share the chain.
 
-    Attributes
+    Parameters
     ----------
     masses : numpy.ndarray
         (N,) kg.
@@ -109,6 +109,7 @@ class ChainModel:
 
     @property
     def n(self) -> int:
+        """Number of scenes (the wall laws' count)."""
         return int(self.wall_coef.size)
 
     @property
@@ -118,10 +119,12 @@ class ChainModel:
 
     @property
     def inv_masses(self) -> np.ndarray:
+        """Inverse masses (1/kg), one per bead."""
         return 1.0 / self.masses
 
     @property
     def N(self) -> int:
+        """Number of beads (the striker included)."""
         return int(self.masses.size)
 
 
@@ -129,7 +132,7 @@ class ChainModel:
 class BaselineResult:
     """The reference's peaks and work.
 
-    Attributes
+    Parameters
     ----------
     tof : numpy.ndarray
         (n,) s.

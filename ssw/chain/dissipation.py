@@ -59,7 +59,7 @@ from ssw.errors import ConfigError
 class DissipationLaw:
     """One dissipation law of the contacts (module docstring).
 
-    Attributes
+    Parameters
     ----------
     name : str
         The law's name (a device file's ``dissipation.law``).

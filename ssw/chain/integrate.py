@@ -106,7 +106,7 @@ RECORD_BYTES = 2**27
 class Run:
     """The record of a batched run. SI units; ``n`` scenes, ``k`` parameters.
 
-    Attributes
+    Parameters
     ----------
     t : numpy.ndarray
         (n_t,) s.
@@ -158,7 +158,18 @@ class Run:
     peak_contact_force: np.ndarray | None = None
 
     def take(self, idx: np.ndarray) -> Run:
-        """The scenes ``idx`` (an index array) of the record."""
+        """The scenes ``idx`` (an index array) of the record.
+
+        Parameters
+        ----------
+        idx : numpy.ndarray
+            Integer indices of the scenes to keep, (k,); may repeat.
+
+        Returns
+        -------
+        Run
+            The record of the selected scenes (the time axis unchanged).
+        """
         def sel(x: np.ndarray | None, axis: int) -> np.ndarray | None:
             return None if x is None else np.take(x, idx, axis=axis)
 

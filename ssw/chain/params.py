@@ -37,7 +37,7 @@ SENSOR_READS = ("mean", "upper", "lower")
 class ChainParams:
     """The chain and its numerics. SI units.
 
-    Attributes
+    Parameters
     ----------
     n_beads : int
         Beads including the striker (bead 0), >= 3.
@@ -227,7 +227,13 @@ class ChainParams:
         return self.wall_coefficient(soil_E, soil_nu) * e_star * c_w / E
 
     def contact_time(self) -> float:
-        """Hertz contact time (s) of two beads meeting at the striker speed (Johnson 11.24)."""
+        """Hertz contact time (s) of two beads meeting at the striker speed (Johnson 11.24).
+
+        Returns
+        -------
+        float
+            Contact time (s).
+        """
         from ssw.hertz import contact_time
 
         m = self.masses
@@ -235,7 +241,18 @@ class ChainParams:
         return float(contact_time(m_eff, self.bead_coefficient, self.striker_velocity))
 
     def with_(self, **changes: Any) -> ChainParams:
-        """A copy with ``changes`` (``dataclasses.replace``)."""
+        """A copy with ``changes`` (``dataclasses.replace``).
+
+        Parameters
+        ----------
+        **changes : Any
+            Field names and their new values (SI units, as the fields).
+
+        Returns
+        -------
+        ChainParams
+            The changed copy.
+        """
         return replace(self, **changes)
 
     # ------------------------------------------------------------------ config
@@ -361,7 +378,7 @@ class Batch:
     """The per-scene values of one batched run: a chain whose striker speed, preload and
     masses may differ from scene to scene (a calibration scan). SI units.
 
-    Attributes
+    Parameters
     ----------
     params : ChainParams
         Every other field.
@@ -428,13 +445,30 @@ class Batch:
         )
 
     def take(self, idx: np.ndarray) -> Batch:
-        """The scenes ``idx``."""
+        """The scenes ``idx``.
+
+        Parameters
+        ----------
+        idx : numpy.ndarray
+            Integer indices of the scenes to keep, (k,); may repeat.
+
+        Returns
+        -------
+        Batch
+            The batch of the selected scenes (the same chain parameters).
+        """
         idx = np.asarray(idx)
         return Batch(self.params, int(idx.size), self.striker_velocity[idx], self.preload[idx],
                      self.masses[idx])
 
     def contact_time(self) -> np.ndarray:
-        """(n,) Hertz contact time (s) of the striker meeting bead 1 (Johnson 11.24)."""
+        """(n,) Hertz contact time (s) of the striker meeting bead 1 (Johnson 11.24).
+
+        Returns
+        -------
+        numpy.ndarray
+            Contact time (s), (n,).
+        """
         from ssw.hertz import contact_time
 
         m0, m1 = self.masses[:, 0], self.masses[:, 1]

@@ -91,7 +91,7 @@ class Tangent:
     """The parameters a run differentiates with respect to (the columns of its
     sensitivity arrays, in this order).
 
-    Attributes
+    Parameters
     ----------
     names : tuple of str
         Names of :data:`PARAMETERS`, each at most once, and :data:`STEP` (the step's own
@@ -112,7 +112,13 @@ class Tangent:
         return tuple(n for n in self.names if n != STEP)
 
     def with_step(self) -> Tangent:
-        """These columns and the step's (:data:`STEP`) last."""
+        """These columns and the step's (:data:`STEP`) last.
+
+        Returns
+        -------
+        Tangent
+            The tangent with the step's column last.
+        """
         return self if STEP in self.names else Tangent((*self.names, STEP))
 
     @property
@@ -121,7 +127,18 @@ class Tangent:
         return len(self.names)
 
     def col(self, name: str) -> int | None:
-        """Column of ``name`` (None if not requested)."""
+        """Column of ``name`` (None if not requested).
+
+        Parameters
+        ----------
+        name : str
+            A parameter's name.
+
+        Returns
+        -------
+        int or None
+            Its column in the tangent, or None.
+        """
         return self.names.index(name) if name in self.names else None
 
 
@@ -173,7 +190,7 @@ class Stencil:
     """A difference stencil for one parameter: evaluate at ``value + offsets h`` and combine
     with :meth:`derivative`.
 
-    Attributes
+    Parameters
     ----------
     offsets : numpy.ndarray
         Offsets in steps.
@@ -191,7 +208,20 @@ class Stencil:
     h: np.ndarray
 
     def derivative(self, values: list[np.ndarray]) -> np.ndarray:
-        """The derivative from the values at the offsets (one array each)."""
+        """The derivative from the values at the offsets (one array each).
+
+        ``sum_i w_i f(x + o_i h) / (denominator h)``.
+
+        Parameters
+        ----------
+        values : list of numpy.ndarray
+            The quantity at each offset of ``offsets``, in their order, (n,) each.
+
+        Returns
+        -------
+        numpy.ndarray
+            The derivative (the quantity's unit per the parameter's), (n,).
+        """
         total = sum(w * v for w, v in zip(self.weights, values, strict=True))
         return total / (self.denominator * self.h)
 

@@ -26,7 +26,7 @@ from ssw.signal.rule import RULE, PeakRule, Selection, select
 class Peaks:
     """Picked peaks per column, shapes (n,).
 
-    Attributes
+    Parameters
     ----------
     t_incident : numpy.ndarray
         Incident peak times (s).
@@ -80,7 +80,26 @@ def parabolic(y: np.ndarray, k: np.ndarray, cols: np.ndarray, *, near: bool = Fa
               ) -> tuple[np.ndarray, np.ndarray]:
     """Vertex offset (samples) and height of the parabola through ``y[k-1..k+1, col]``
     (``y`` (n_t, n), ``k`` and ``cols`` (m,) with ``1 <= k <= n_t - 2``; with ``near``,
-    ``y`` (3, m) holds only those samples): :func:`ssw.signal.peaks.parabolic_vertex`."""
+    ``y`` (3, m) holds only those samples): :func:`ssw.signal.peaks.parabolic_vertex`.
+
+    Parameters
+    ----------
+    y : numpy.ndarray
+        Samples, (n_t, n), or with ``near`` (3, m).
+    k : numpy.ndarray
+        Sample index of each peak, (m,).
+    cols : numpy.ndarray
+        Column of each peak, (m,).
+    near : bool
+        Whether ``y`` holds only the three samples around each peak.
+
+    Returns
+    -------
+    offset : numpy.ndarray
+        Vertex offset from ``k`` (samples), (m,).
+    height : numpy.ndarray
+        Vertex height (the unit of ``y``), (m,).
+    """
     pos, height = parabolic_vertex(y, k, cols, near=near)
     return pos - k, height
 

@@ -83,7 +83,7 @@ def force_indentation(force: Any, F: Any, start: np.ndarray) -> np.ndarray:
 class PowerWall:
     """``F = coef [d]_+^n`` per scene; shapes (n_scenes,).
 
-    Attributes
+    Parameters
     ----------
     coef : numpy.ndarray
         (n,) N/m^n.
@@ -110,17 +110,40 @@ class PowerWall:
 
     @property
     def n(self) -> int:
+        """Number of scenes."""
         return self.coef.shape[0]
 
     def force(self, d: np.ndarray) -> np.ndarray:
-        """Wall force (N) at indentation ``d`` (m), shape (n_scenes,)."""
+        """Wall force (N) at indentation ``d`` (m), shape (n_scenes,).
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Force (N), (n,); 0 for ``d <= 0``.
+        """
         dp = np.maximum(d, 0.0)
         if self.hertzian:
             return self.coef * dp * np.sqrt(dp)
         return self.coef * dp**self.exponent
 
     def dforce_dd(self, d: np.ndarray) -> np.ndarray:
-        """Tangent stiffness ``n coef d^(n-1)`` (N/m) at ``d`` (m); 0 for ``d <= 0``."""
+        """Tangent stiffness ``n coef d^(n-1)`` (N/m) at ``d`` (m); 0 for ``d <= 0``.
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Tangent stiffness (N/m), (n,).
+        """
         dp = np.maximum(d, 0.0)
         if self.hertzian:
             return 1.5 * self.coef * np.sqrt(dp)
@@ -128,7 +151,23 @@ class PowerWall:
 
     def dforce_dE(self, d: np.ndarray) -> np.ndarray:
         """``dF/dE`` (N/Pa) at fixed indentation ``d`` (m): ``dcoef/dE d^n + coef d^n ln(d)
-        dn/dE``; ConfigError when the builder did not state the law's E-dependence."""
+        dn/dE``; ConfigError when the builder did not state the law's E-dependence.
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``dF/dE`` (N/Pa), (n,).
+
+        Raises
+        ------
+        ConfigError
+            If the law was built without its E-dependence (``dcoef_dE`` is None).
+        """
         if self.dcoef_dE is None:
             raise ConfigError("wall", "a power law without its E-dependence",
                               "a law built by hertz_wall, fit_wall or rigid_wall")
@@ -140,23 +179,67 @@ class PowerWall:
         return out
 
     def potential(self, d: np.ndarray) -> np.ndarray:
-        """Stored energy ``coef d^(n+1) / (n+1)`` (J)."""
+        """Stored energy ``coef d^(n+1) / (n+1)`` (J).
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Stored energy (J), (n,); 0 for ``d <= 0``.
+        """
         dp = np.maximum(d, 0.0)
         return self.coef * dp ** (self.exponent + 1.0) / (self.exponent + 1.0)
 
     def indentation(self, F: np.ndarray) -> np.ndarray:
-        """Indentation (m) carrying force ``F`` (N), the inverse of :meth:`force`."""
+        """Indentation (m) carrying force ``F`` (N), the inverse of :meth:`force`.
+
+        Parameters
+        ----------
+        F : numpy.ndarray
+            Forces (N), (n,); values <= 0 give 0.
+
+        Returns
+        -------
+        numpy.ndarray
+            Indentation (m), (n,).
+        """
         return (np.maximum(F, 0.0) / self.coef) ** (1.0 / self.exponent)
 
     def take(self, idx: np.ndarray) -> PowerWall:
-        """The scenes ``idx`` (may repeat)."""
+        """The scenes ``idx`` (may repeat).
+
+        Parameters
+        ----------
+        idx : numpy.ndarray
+            Integer indices of the scenes to keep, (k,); may repeat.
+
+        Returns
+        -------
+        PowerWall
+            The law of the selected scenes.
+        """
         return PowerWall(self.coef[idx], self.exponent[idx], force_error=self.force_error,
                          dcoef_dE=None if self.dcoef_dE is None else self.dcoef_dE[idx],
                          dexponent_dE=None if self.dexponent_dE is None
                          else self.dexponent_dE[idx])
 
     def hertz_equivalent(self, d_ref: float) -> np.ndarray:
-        """``F(d_ref) / d_ref^1.5`` (N/m^1.5): a Hertz coefficient for time-step choice."""
+        """``F(d_ref) / d_ref^1.5`` (N/m^1.5): a Hertz coefficient for time-step choice.
+
+        Parameters
+        ----------
+        d_ref : float
+            Reference indentation (m), > 0.
+
+        Returns
+        -------
+        numpy.ndarray
+            Equivalent Hertz coefficient (N/m^1.5), (n,).
+        """
         return self.force(np.full(self.n, d_ref)) / d_ref**1.5
 
 
@@ -166,6 +249,17 @@ class TableWall:
 
     ``g[k] = F(k h) / (k h)^1.5`` is interpolated linearly (exact for Hertz at any grid);
     beyond ``d_last = TABLE_CELLS h`` the force is ``F_last (d/d_last)^n_ext``.
+
+    Parameters
+    ----------
+    h : numpy.ndarray
+        Grid step per scene (m), (n,).
+    g : numpy.ndarray
+        ``F(k h) / (k h)^1.5`` per scene (N/m^1.5), (n, TABLE_CELLS + 1).
+    f_last : numpy.ndarray
+        Force at the table's last indentation (N), (n,).
+    n_ext : numpy.ndarray
+        Exponent of the power-law extension, (n,).
     """
 
     h: np.ndarray  # m, grid step per scene, (n,)
@@ -175,6 +269,7 @@ class TableWall:
 
     @property
     def n(self) -> int:
+        """Number of scenes."""
         return self.h.shape[0]
 
     @property
@@ -184,6 +279,19 @@ class TableWall:
         return self.h * (self.g.shape[1] - 1)
 
     def force(self, d: np.ndarray) -> np.ndarray:
+        """Wall force (N) at indentation ``d`` (m): the interpolated table inside it, the
+        power-law extension beyond ``d_last``.
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Force (N), (n,); 0 for ``d <= 0``.
+        """
         dp = np.maximum(d, 0.0)
         cells = self.g.shape[1] - 1
         x = dp / self.h
@@ -200,7 +308,18 @@ class TableWall:
 
     def dforce_dd(self, d: np.ndarray) -> np.ndarray:
         """Tangent stiffness (N/m) of the tabulated law at ``d`` (m): ``g' d^1.5 + 1.5 g
-        d^0.5`` inside the table (``g`` linear in each cell), the extension's beyond."""
+        d^0.5`` inside the table (``g`` linear in each cell), the extension's beyond.
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Tangent stiffness (N/m), (n,).
+        """
         dp = np.maximum(d, 0.0)
         cells = self.g.shape[1] - 1
         x = dp / self.h
@@ -217,21 +336,65 @@ class TableWall:
 
     def dforce_dE(self, d: np.ndarray) -> np.ndarray:
         """Not available: a table is one FEM curve per scene, data for one modulus (the
-        ``fem`` wall is the same law as a function of E)."""
+        ``fem`` wall is the same law as a function of E).
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Raises
+        ------
+        ConfigError
+            Always: a table holds no E-dependence.
+        """
         raise ConfigError("wall", "table", "a law with its E-dependence for dF/dE: fem, fit, "
                           "hertz (a table wall's curve is data for one modulus)")
 
     def indentation(self, F: np.ndarray) -> np.ndarray:
         """Indentation carrying ``F`` (N): the root of the monotone law
-        (:func:`force_indentation`)."""
+        (:func:`force_indentation`).
+
+        Parameters
+        ----------
+        F : numpy.ndarray
+            Forces (N), (n,); values <= 0 give 0.
+
+        Returns
+        -------
+        numpy.ndarray
+            Indentation (m), (n,).
+        """
         return force_indentation(self.force, F, self.h * (self.g.shape[1] - 1))
 
     def take(self, idx: np.ndarray) -> TableWall:
-        """The scenes ``idx`` (may repeat)."""
+        """The scenes ``idx`` (may repeat).
+
+        Parameters
+        ----------
+        idx : numpy.ndarray
+            Integer indices of the scenes to keep, (k,); may repeat.
+
+        Returns
+        -------
+        TableWall
+            The tables of the selected scenes.
+        """
         return TableWall(self.h[idx], self.g[idx], self.f_last[idx], self.n_ext[idx])
 
     def hertz_equivalent(self, d_ref: float) -> np.ndarray:
-        """``F(d_ref) / d_ref^1.5`` (N/m^1.5)."""
+        """``F(d_ref) / d_ref^1.5`` (N/m^1.5).
+
+        Parameters
+        ----------
+        d_ref : float
+            Reference indentation (m), > 0.
+
+        Returns
+        -------
+        numpy.ndarray
+            Equivalent Hertz coefficient (N/m^1.5), (n,).
+        """
         return self.force(np.full(self.n, d_ref)) / d_ref**1.5
 
 
@@ -264,24 +427,90 @@ class Wall(Protocol):
     Every method is vectorized over the scenes: arrays of shape (n,), SI units.
     ``take(idx)`` selects scenes by index; ``idx`` may repeat one (a calibration scan
     tiles the walls of a few references over many parameter sets).
+
+    Parameters
+    ----------
+    *args : Any
+        Unused: a protocol is not instantiated.
+    **kwargs : Any
+        Unused: a protocol is not instantiated.
     """
 
     @property
-    def n(self) -> int: ...
+    def n(self) -> int:
+        """Number of scenes."""
+        ...
 
     def force(self, d: np.ndarray) -> np.ndarray:
-        """Wall force (N) at indentation ``d`` (m); 0 for ``d <= 0``."""
+        """Wall force (N) at indentation ``d`` (m); 0 for ``d <= 0``.
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Force (N), (n,).
+        """
 
     def potential(self, d: np.ndarray) -> np.ndarray:
-        """Stored energy ``int_0^d F`` (J)."""
+        """Stored energy ``int_0^d F`` (J).
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Stored energy (J), (n,).
+        """
 
     def indentation(self, F: np.ndarray) -> np.ndarray:
-        """Indentation (m) carrying the force ``F >= 0`` (N): the inverse of :meth:`force`."""
+        """Indentation (m) carrying the force ``F >= 0`` (N): the inverse of :meth:`force`.
 
-    def take(self, idx: np.ndarray) -> Wall: ...
+        Parameters
+        ----------
+        F : numpy.ndarray
+            Forces (N), (n,), >= 0.
+
+        Returns
+        -------
+        numpy.ndarray
+            Indentation (m), (n,).
+        """
+
+    def take(self, idx: np.ndarray) -> Wall:
+        """The scenes ``idx`` (may repeat).
+
+        Parameters
+        ----------
+        idx : numpy.ndarray
+            Integer indices of the scenes to keep, (k,); may repeat.
+
+        Returns
+        -------
+        Wall
+            The law of the selected scenes.
+        """
+        ...
 
     def hertz_equivalent(self, d_ref: float) -> np.ndarray:
-        """``F(d_ref) / d_ref^1.5`` (N/m^1.5), for the time-step choice."""
+        """``F(d_ref) / d_ref^1.5`` (N/m^1.5), for the time-step choice.
+
+        Parameters
+        ----------
+        d_ref : float
+            Reference indentation (m), > 0.
+
+        Returns
+        -------
+        numpy.ndarray
+            Equivalent Hertz coefficient (N/m^1.5), (n,).
+        """
 
 
 def force_and_tangent(wall: Wall, d: np.ndarray, with_E: bool
@@ -343,30 +572,160 @@ class StatefulWall(Protocol):
     with respect to the ``k`` parameters, ``dE`` (n, k) those of the soil's modulus, ``dF``
     (n, k) the force's; a wall without them is differentiated by central differences of
     its TOF (:mod:`ssw.tof.api`).
+
+    Parameters
+    ----------
+    *args : Any
+        Unused: a protocol is not instantiated.
+    **kwargs : Any
+        Unused: a protocol is not instantiated.
     """
 
     @property
-    def n(self) -> int: ...
+    def n(self) -> int:
+        """Number of scenes."""
+        ...
 
-    def force(self, d: np.ndarray) -> np.ndarray: ...
+    def force(self, d: np.ndarray) -> np.ndarray:
+        """Force (N) of the state at rest at indentation ``d`` (the first step's).
 
-    def indentation(self, F: np.ndarray) -> np.ndarray: ...
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
 
-    def hertz_equivalent(self, d_ref: float) -> np.ndarray: ...
+        Returns
+        -------
+        numpy.ndarray
+            Force (N), (n,).
+        """
+        ...
 
-    def start(self, d0: np.ndarray) -> Any: ...
+    def indentation(self, F: np.ndarray) -> np.ndarray:
+        """Indentation (m) at rest under force ``F`` (the initial state's statics).
 
-    def advance(self, state: Any, d: np.ndarray, dt: float) -> tuple[np.ndarray, Any]: ...
+        Parameters
+        ----------
+        F : numpy.ndarray
+            Forces (N), (n,), >= 0.
 
-    def energy(self, state: Any) -> tuple[np.ndarray, np.ndarray]: ...
+        Returns
+        -------
+        numpy.ndarray
+            Indentation (m), (n,).
+        """
+        ...
 
-    def take(self, idx: np.ndarray) -> StatefulWall: ...
+    def hertz_equivalent(self, d_ref: float) -> np.ndarray:
+        """``F(d_ref) / d_ref^1.5`` (N/m^1.5), for the time-step choice.
 
-    def take_state(self, state: Any, idx: np.ndarray) -> Any: ...
+        Parameters
+        ----------
+        d_ref : float
+            Reference indentation (m), > 0.
+
+        Returns
+        -------
+        numpy.ndarray
+            Equivalent Hertz coefficient (N/m^1.5), (n,).
+        """
+        ...
+
+    def start(self, d0: np.ndarray) -> Any:
+        """The state at rest with the last beads at ``d0``.
+
+        Parameters
+        ----------
+        d0 : numpy.ndarray
+            Initial indentations (m), (n,).
+
+        Returns
+        -------
+        Any
+            The wall's state.
+        """
+        ...
+
+    def advance(self, state: Any, d: np.ndarray, dt: float) -> tuple[np.ndarray, Any]:
+        """Integrate the wall's state over one step to the bead's new position.
+
+        Parameters
+        ----------
+        state : Any
+            The state at the step's start.
+        d : numpy.ndarray
+            Indentations (m) at the step's end, (n,).
+        dt : float
+            Time step (s).
+
+        Returns
+        -------
+        tuple
+            ``(F, state)``: the force (N), (n,), and the state at the step's end.
+        """
+        ...
+
+    def energy(self, state: Any) -> tuple[np.ndarray, np.ndarray]:
+        """Energy the wall holds and the energy it radiated or dissipated so far.
+
+        Parameters
+        ----------
+        state : Any
+            The wall's state.
+
+        Returns
+        -------
+        tuple
+            ``(stored, dissipated)``: J, (n,) each.
+        """
+        ...
+
+    def take(self, idx: np.ndarray) -> StatefulWall:
+        """The scenes ``idx`` (may repeat).
+
+        Parameters
+        ----------
+        idx : numpy.ndarray
+            Integer indices of the scenes to keep, (k,); may repeat.
+
+        Returns
+        -------
+        StatefulWall
+            The wall of the selected scenes.
+        """
+        ...
+
+    def take_state(self, state: Any, idx: np.ndarray) -> Any:
+        """The state of the scenes ``idx``.
+
+        Parameters
+        ----------
+        state : Any
+            The wall's state.
+        idx : numpy.ndarray
+            Integer indices of the scenes to keep, (k,); may repeat.
+
+        Returns
+        -------
+        Any
+            The state of the selected scenes.
+        """
+        ...
 
 
 def is_stateful(wall: Any) -> bool:
-    """Whether ``wall`` has internal state (:class:`StatefulWall`)."""
+    """Whether ``wall`` has internal state (:class:`StatefulWall`).
+
+    Parameters
+    ----------
+    wall : Any
+        A last-contact law.
+
+    Returns
+    -------
+    bool
+        True if it has an ``advance`` method.
+    """
     return hasattr(wall, "advance")
 
 

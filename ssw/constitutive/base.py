@@ -48,6 +48,19 @@ class Update:
     ``d stress / d strain``; ``state`` (n, 5) the new state; ``plastic`` (n,) bool, the
     step yielded; ``region`` (n,) int8, which return served (0 elastic, 1 smooth surface,
     2 a second surface, 3 a corner or apex), for the tests and the statistics.
+
+    Parameters
+    ----------
+    stress : numpy.ndarray
+        Stresses (Mandel, Pa), (n, 4).
+    tangent : numpy.ndarray
+        Consistent tangents (Pa), (n, 4, 4).
+    state : numpy.ndarray
+        New states, (n, 5).
+    plastic : numpy.ndarray
+        Whether the step yielded, (n,) bool.
+    region : numpy.ndarray
+        Which return served, (n,) int8.
     """
 
     stress: np.ndarray
@@ -59,20 +72,61 @@ class Update:
 
 def check_stress(model: Any, field: str, allowed: str, *, zero: bool = False) -> None:
     """Refuse a non-finite or negative stress (or modulus) ``field`` of a ``model`` (zero
-    too unless ``zero``), naming the field, its value and ``allowed``."""
+    too unless ``zero``), naming the field, its value and ``allowed``.
+
+    Parameters
+    ----------
+    model : Any
+        The constitutive model.
+    field : str
+        Name of its stress or modulus field (Pa).
+    allowed : str
+        What the field accepts (the error's text).
+    zero : bool
+        Whether 0 is accepted.
+
+    Raises
+    ------
+    ConfigError
+        If the value is not finite, negative, or zero without ``zero``.
+    """
     value = getattr(model, field)
     if not (np.isfinite(value) and (value >= 0 if zero else value > 0)):
         raise ConfigError(f"soil_model.{field}", value, allowed)
 
 
 def initial_state(n: int) -> np.ndarray:
-    """The virgin state of ``n`` points: no plastic strain, no hardening."""
+    """The virgin state of ``n`` points: no plastic strain, no hardening.
+
+    Parameters
+    ----------
+    n : int
+        Number of points.
+
+    Returns
+    -------
+    numpy.ndarray
+        Zeros, (n, STATE_SIZE).
+    """
     return np.zeros((int(n), STATE_SIZE))
 
 
 def number_text(x: float, unit: float = 1.0) -> str:
     """Short text of ``x / unit`` that reads back to ``x`` exactly (``g`` format when it
-    does, else the shortest round-trip text); file-name safe (``e+`` written ``e``)."""
+    does, else the shortest round-trip text); file-name safe (``e+`` written ``e``).
+
+    Parameters
+    ----------
+    x : float
+        The value (SI).
+    unit : float
+        The unit it is shown in (e.g. 1e6 for MPa).
+
+    Returns
+    -------
+    str
+        The text.
+    """
     x = float(x)
     shown = x / unit
     for text in (format(shown, "g"), repr(shown)):

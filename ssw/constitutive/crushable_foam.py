@@ -59,7 +59,23 @@ RTOL = 1e-13
 
 
 def shape_factor(plastic_poisson: float) -> float:
-    """``alpha = sqrt(9 (1 - 2 nu_p) / (2 (1 + nu_p)))`` (Deshpande & Fleck 2000, eq. 2.7)."""
+    """``alpha = sqrt(9 (1 - 2 nu_p) / (2 (1 + nu_p)))`` (Deshpande & Fleck 2000, eq. 2.7).
+
+    Parameters
+    ----------
+    plastic_poisson : float
+        Plastic Poisson's ratio ``nu_p``, in [0, 0.5].
+
+    Returns
+    -------
+    float
+        Shape factor ``alpha`` of the yield ellipse.
+
+    References
+    ----------
+    Deshpande, V. S. and Fleck, N. A. (2000). Isotropic constitutive models for metallic
+    foams. *J. Mech. Phys. Solids* 48, 1253-1283.
+    """
     nu = float(plastic_poisson)
     return float(np.sqrt(9.0 * (1.0 - 2.0 * nu) / (2.0 * (1.0 + nu))))
 
@@ -68,9 +84,14 @@ def shape_factor(plastic_poisson: float) -> float:
 class CrushableFoam:
     """Deshpande-Fleck crushable foam (module docstring).
 
-    compressive_strength : Pa, ``Y0`` (uniaxial compressive plateau).
-    hardening : Pa, ``H = dY / d kappa`` (>= 0).
-    plastic_poisson : the plastic Poisson's ratio in uniaxial compression, [0, 0.5].
+    Parameters
+    ----------
+    compressive_strength : float
+        ``Y0`` (Pa), the uniaxial compressive plateau.
+    hardening : float
+        ``H = dY / d kappa`` (Pa), >= 0.
+    plastic_poisson : float
+        The plastic Poisson's ratio in uniaxial compression, [0, 0.5].
     """
 
     compressive_strength: float
@@ -87,10 +108,13 @@ class CrushableFoam:
 
     @property
     def alpha(self) -> float:
+        """Shape factor ``alpha`` of the yield ellipse, dimensionless
+        (:func:`ssw.constitutive.crushable_foam.shape_factor`)."""
         return shape_factor(self.plastic_poisson)
 
     @property
     def key(self) -> str:
+        """Short file-name-safe text that tells two models apart (enters the scene id)."""
         text = f"foam-Y{number_text(self.compressive_strength, 1e6)}MPa"
         if self.hardening:
             text += f"-H{number_text(self.hardening, 1e6)}MPa"
@@ -104,16 +128,61 @@ class CrushableFoam:
         return float(self.compressive_strength)
 
     def params(self) -> dict[str, Any]:
+        """The model's parameters as a plain dict (SI units, angles in degrees).
+
+        Returns
+        -------
+        dict
+            ``model`` (the registry name) and each parameter.
+        """
         return {"model": self.name, "compressive_strength": self.compressive_strength,
                 "hardening": self.hardening, "plastic_poisson": self.plastic_poisson}
 
     def equivalent(self, p: np.ndarray, q: np.ndarray) -> np.ndarray:
-        """``sigma_hat`` (n,), Pa."""
+        """``sigma_hat`` (n,), Pa.
+
+        ``sigma_hat = sqrt((q^2 + alpha^2 p^2) / (1 + (alpha/3)^2))`` (Deshpande & Fleck
+        2000).
+
+        Parameters
+        ----------
+        p : numpy.ndarray
+            Mean stresses (Pa), (n,).
+        q : numpy.ndarray
+            Von Mises stresses (Pa), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Equivalent stress (Pa), (n,).
+        """
         a2 = self.alpha ** 2
         return np.sqrt((q * q + a2 * p * p) / (1.0 + a2 / 9.0))
 
     def update(self, E: float, nu: float, strain: np.ndarray, state: np.ndarray) -> Update:
-        """Return mapping of ``strain`` (n, 4) from ``state`` (n, 5) (module docstring)."""
+        """Return mapping of ``strain`` (n, 4) from ``state`` (n, 5) (module docstring).
+
+        Parameters
+        ----------
+        E : float
+            Young's modulus of the sample (Pa).
+        nu : float
+            Poisson's ratio of the sample, in (-1, 0.5).
+        strain : numpy.ndarray
+            Total strains (Mandel), (n, 4).
+        state : numpy.ndarray
+            State at the increment's start, (n, 5): plastic strain and hardening variable.
+
+        Returns
+        -------
+        Update
+            Stress (Pa), consistent tangent (Pa), new state, yield flags and return regions.
+
+        Raises
+        ------
+        ConfigError
+            If ``E`` is not > 0 or ``nu`` lies outside (-1, 0.5).
+        """
         K, G, p_tr, q_tr, n = trial(E, nu, strain, state[:, :4])
         a2, H = self.alpha ** 2, float(self.hardening)
         c = 1.0 + a2 / 9.0
@@ -173,7 +242,20 @@ class CrushableFoam:
                       yl.astype(np.int8))
 
     def yield_ratio(self, stress: np.ndarray, state: np.ndarray) -> np.ndarray:
-        """``sigma_hat / (Y0 + H kappa)`` (n,)."""
+        """``sigma_hat / (Y0 + H kappa)`` (n,).
+
+        Parameters
+        ----------
+        stress : numpy.ndarray
+            Stresses (Mandel, Pa), (n, 4).
+        state : numpy.ndarray
+            States, (n, 5) (column 4: the hardening variable).
+
+        Returns
+        -------
+        numpy.ndarray
+            Yield ratio, (n,): 1 on the yield surface, below 1 inside.
+        """
         p, q = invariants(stress)
         return self.equivalent(p, q) / (self.compressive_strength
                                         + self.hardening * state[:, 4])

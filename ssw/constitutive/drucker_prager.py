@@ -61,7 +61,30 @@ SQRT3 = float(np.sqrt(3.0))
 
 
 def cone(angle_deg: float, match: str) -> tuple[float, float]:
-    """``(eta, xi)`` of the cone matched to a Mohr-Coulomb angle (degrees)."""
+    """``(eta, xi)`` of the cone matched to a Mohr-Coulomb angle (degrees).
+
+    Parameters
+    ----------
+    angle_deg : float
+        Mohr-Coulomb friction (or dilatancy) angle (degrees).
+    match : str
+        The matching: ``outer``, ``inner`` or ``plane-strain``.
+
+    Returns
+    -------
+    tuple of float
+        ``(eta, xi)``, dimensionless.
+
+    Raises
+    ------
+    ConfigError
+        If ``match`` is none of the three.
+
+    References
+    ----------
+    de Souza Neto, E. A., Peric, D. and Owen, D. R. J. (2008). *Computational Methods for
+    Plasticity*, Wiley, ch. 6.
+    """
     a = np.radians(float(angle_deg))
     if match == "outer":
         d = SQRT3 * (3.0 - np.sin(a))
@@ -79,10 +102,18 @@ def cone(angle_deg: float, match: str) -> tuple[float, float]:
 class DruckerPrager:
     """Drucker-Prager with a tension cutoff (module docstring).
 
-    cohesion : Pa, ``c >= 0``.  friction_angle : degrees, [0, 90).
-    dilatancy_angle : degrees, [0, friction_angle]; None: the friction angle (associated).
-    tension_cutoff : Pa, the largest mean stress ``t`` (>= 0); None: the apex.
-    match : ``outer`` | ``inner`` | ``plane-strain`` (the Mohr-Coulomb match).
+    Parameters
+    ----------
+    cohesion : float
+        ``c`` (Pa), >= 0.
+    friction_angle : float
+        Degrees, [0, 90).
+    dilatancy_angle : float or None
+        Degrees, [0, friction_angle]; None: the friction angle (associated).
+    tension_cutoff : float or None
+        The largest mean stress ``t`` (Pa), >= 0; None: the apex.
+    match : str
+        The Mohr-Coulomb match: ``outer``, ``inner`` or ``plane-strain``.
     """
 
     cohesion: float
@@ -117,6 +148,7 @@ class DruckerPrager:
 
     @property
     def key(self) -> str:
+        """Short file-name-safe text that tells two models apart (enters the scene id)."""
         text = (f"dp-c{number_text(self.cohesion, 1e3)}kPa-phi"
                 f"{number_text(self.friction_angle)}")
         if self.dilatancy != self.friction_angle:
@@ -144,12 +176,41 @@ class DruckerPrager:
         return float(2.0 * self.cohesion * np.cos(a) / (1.0 - np.sin(a)))
 
     def params(self) -> dict[str, Any]:
+        """The model's parameters as a plain dict (SI units, angles in degrees).
+
+        Returns
+        -------
+        dict
+            ``model`` (the registry name) and each parameter.
+        """
         return {"model": self.name, "cohesion": self.cohesion,
                 "friction_angle": self.friction_angle, "dilatancy_angle": self.dilatancy,
                 "tension_cutoff": self.tension_cutoff, "match": self.match}
 
     def update(self, E: float, nu: float, strain: np.ndarray, state: np.ndarray) -> Update:
-        """Return mapping of ``strain`` (n, 4) from ``state`` (n, 5) (module docstring)."""
+        """Return mapping of ``strain`` (n, 4) from ``state`` (n, 5) (module docstring).
+
+        Parameters
+        ----------
+        E : float
+            Young's modulus of the sample (Pa).
+        nu : float
+            Poisson's ratio of the sample, in (-1, 0.5).
+        strain : numpy.ndarray
+            Total strains (Mandel), (n, 4).
+        state : numpy.ndarray
+            State at the increment's start, (n, 5): plastic strain and hardening variable.
+
+        Returns
+        -------
+        Update
+            Stress (Pa), consistent tangent (Pa), new state, yield flags and return regions.
+
+        Raises
+        ------
+        ConfigError
+            If ``E`` is not > 0 or ``nu`` lies outside (-1, 0.5).
+        """
         K, G, p_tr, q_tr, n = trial(E, nu, strain, state[:, :4])
         eta, xi, eta_b, t = self.constants
         c = float(self.cohesion)
@@ -190,7 +251,20 @@ class DruckerPrager:
 
     def yield_ratio(self, stress: np.ndarray, state: np.ndarray) -> np.ndarray:
         """``max((sqrt(J2) + eta p) / (xi c), p / t)`` (n,): 1 on the yield surface (inf
-        where a cohesionless cone is reached at positive ``sqrt(J2) + eta p``)."""
+        where a cohesionless cone is reached at positive ``sqrt(J2) + eta p``).
+
+        Parameters
+        ----------
+        stress : numpy.ndarray
+            Stresses (Mandel, Pa), (n, 4).
+        state : numpy.ndarray
+            States, (n, 5) (column 4: the hardening variable).
+
+        Returns
+        -------
+        numpy.ndarray
+            Yield ratio, (n,): 1 on the yield surface, below 1 inside.
+        """
         eta, xi, _, t = self.constants
         p, q = invariants(stress)
         lhs = q / SQRT3 + eta * p
@@ -202,6 +276,21 @@ class DruckerPrager:
 
 
 def elastic_strain(K: float, G: float, stress: np.ndarray) -> np.ndarray:
-    """``C^-1 sigma = p / (3 K) ONE + s / (2 G)`` (n, 4)."""
+    """``C^-1 sigma = p / (3 K) ONE + s / (2 G)`` (n, 4).
+
+    Parameters
+    ----------
+    K : float
+        Bulk modulus (Pa).
+    G : float
+        Shear modulus (Pa).
+    stress : numpy.ndarray
+        Stresses (Mandel, Pa), (n, 4).
+
+    Returns
+    -------
+    numpy.ndarray
+        Elastic strains (Mandel), (n, 4).
+    """
     p = stress @ ONE / 3.0
     return (p / (3.0 * K))[:, None] * ONE + (stress - p[:, None] * ONE) / (2.0 * G)

@@ -52,7 +52,25 @@ P_DEV = np.eye(4) - np.outer(ONE, ONE) / 3.0
 
 def bulk_shear(E: float, nu: float) -> tuple[float, float]:
     """Bulk and shear moduli (Pa) of Young's modulus ``E`` (Pa) and Poisson's ratio ``nu``
-    in (-1, 0.5): ``K = E / (3 (1 - 2 nu))``, ``G = E / (2 (1 + nu))``."""
+    in (-1, 0.5): ``K = E / (3 (1 - 2 nu))``, ``G = E / (2 (1 + nu))``.
+
+    Parameters
+    ----------
+    E : float
+        Young's modulus (Pa), > 0.
+    nu : float
+        Poisson's ratio, in (-1, 0.5).
+
+    Returns
+    -------
+    tuple of float
+        ``(K, G)`` (Pa).
+
+    Raises
+    ------
+    ConfigError
+        If ``E`` is not > 0 or ``nu`` lies outside (-1, 0.5).
+    """
     E, nu = float(E), float(nu)
     if not E > 0:
         raise ConfigError("soil_E", E, "a Young's modulus > 0 Pa")
@@ -63,14 +81,50 @@ def bulk_shear(E: float, nu: float) -> tuple[float, float]:
 
 
 def elastic_tangent(K: float, G: float) -> np.ndarray:
-    """Isotropic elasticity ``K ONE ONE^T + 2 G P_DEV`` (4, 4), Pa."""
+    """Isotropic elasticity ``K ONE ONE^T + 2 G P_DEV`` (4, 4), Pa.
+
+    Parameters
+    ----------
+    K : float
+        Bulk modulus (Pa).
+    G : float
+        Shear modulus (Pa).
+
+    Returns
+    -------
+    numpy.ndarray
+        Elasticity matrix (Mandel, Pa), (4, 4).
+    """
     return K * np.outer(ONE, ONE) + 2.0 * G * P_DEV
 
 
 def trial(E: float, nu: float, strain: np.ndarray, plastic_strain: np.ndarray
           ) -> tuple[float, float, np.ndarray, np.ndarray, np.ndarray]:
     """The elastic trial of a strain (n, 4) from the plastic strain (n, 4):
-    ``(K, G, p_tr (n,), q_tr (n,), n_tr (n, 4))``."""
+    ``(K, G, p_tr (n,), q_tr (n,), n_tr (n, 4))``.
+
+    Parameters
+    ----------
+    E : float
+        Young's modulus (Pa), > 0.
+    nu : float
+        Poisson's ratio, in (-1, 0.5).
+    strain : numpy.ndarray
+        Total strains (Mandel), (n, 4).
+    plastic_strain : numpy.ndarray
+        Plastic strains (Mandel), (n, 4).
+
+    Returns
+    -------
+    tuple
+        ``(K, G, p_tr, q_tr, n_tr)``: moduli (Pa), trial invariants (Pa), (n,), unit
+        deviatoric direction, (n, 4).
+
+    Raises
+    ------
+    ConfigError
+        If ``E`` is not > 0 or ``nu`` lies outside (-1, 0.5).
+    """
     K, G = bulk_shear(E, nu)
     ee = np.asarray(strain, float) - np.asarray(plastic_strain, float)
     p_tr = K * (ee @ ONE)
@@ -80,7 +134,20 @@ def trial(E: float, nu: float, strain: np.ndarray, plastic_strain: np.ndarray
 
 def deviator(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """``q = sqrt(3/2) |s|`` (n,) and the unit direction ``n = s / |s|`` (n, 4), 0 where
-    ``s = 0``, of deviatoric vectors ``s`` (n, 4)."""
+    ``s = 0``, of deviatoric vectors ``s`` (n, 4).
+
+    Parameters
+    ----------
+    s : numpy.ndarray
+        Deviatoric vectors (Mandel), (n, 4).
+
+    Returns
+    -------
+    q : numpy.ndarray
+        Equivalent value ``sqrt(3/2) |s|`` (the unit of ``s``), (n,).
+    n : numpy.ndarray
+        Unit directions, (n, 4).
+    """
     norm = np.sqrt(np.einsum("ni,ni->n", s, s))
     with np.errstate(invalid="ignore", divide="ignore"):
         n = np.where(norm[:, None] > 0, s / norm[:, None], 0.0)
@@ -88,14 +155,42 @@ def deviator(s: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 
 def invariants(stress: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Mean stress ``p`` (n,) and von Mises stress ``q`` (n,) of stresses (n, 4), Pa."""
+    """Mean stress ``p`` (n,) and von Mises stress ``q`` (n,) of stresses (n, 4), Pa.
+
+    Parameters
+    ----------
+    stress : numpy.ndarray
+        Stresses (Mandel, Pa), (n, 4).
+
+    Returns
+    -------
+    p : numpy.ndarray
+        Mean stress (Pa, tension positive), (n,).
+    q : numpy.ndarray
+        Von Mises stress (Pa), (n,).
+    """
     stress = np.asarray(stress, float)
     q, _ = deviator(stress @ P_DEV)
     return stress @ ONE / 3.0, q
 
 
 def stress_of(p: np.ndarray, q: np.ndarray, n: np.ndarray) -> np.ndarray:
-    """``sigma = p ONE + sqrt(2/3) q n`` (n, 4)."""
+    """``sigma = p ONE + sqrt(2/3) q n`` (n, 4).
+
+    Parameters
+    ----------
+    p : numpy.ndarray
+        Mean stresses (Pa), (n,).
+    q : numpy.ndarray
+        Von Mises stresses (Pa), (n,).
+    n : numpy.ndarray
+        Unit deviatoric directions, (n, 4).
+
+    Returns
+    -------
+    numpy.ndarray
+        Stresses (Mandel, Pa), (n, 4).
+    """
     return p[:, None] * ONE + SQRT_2_3 * q[:, None] * n
 
 
@@ -115,6 +210,11 @@ def pq_tangent(K: float, G: float, n: np.ndarray, J: np.ndarray, ratio: np.ndarr
         (n, 2, 2) ``[[dp/dp_tr, dp/dq_tr], [dq/dp_tr, dq/dq_tr]]``.
     ratio : numpy.ndarray
         (n,) ``q / q_tr`` (the shrink of the deviator; 1 where elastic).
+
+    Returns
+    -------
+    numpy.ndarray
+        Consistent tangent (Pa), (n, 4, 4).
     """
     # where the return left the trial alone (J = I, ratio = 1) the formula is the elastic
     # tangent K ONE ONE^T + 2 G P_DEV (sqrt(2/3) sqrt(6) = 2): evaluate it elsewhere only
@@ -132,5 +232,18 @@ def pq_tangent(K: float, G: float, n: np.ndarray, J: np.ndarray, ratio: np.ndarr
 
 
 def equivalent_plastic_work(stress: np.ndarray, dplastic: np.ndarray) -> np.ndarray:
-    """Plastic work density ``sigma : d eps_p`` (n,), J/m^3."""
+    """Plastic work density ``sigma : d eps_p`` (n,), J/m^3.
+
+    Parameters
+    ----------
+    stress : numpy.ndarray
+        Stresses (Mandel, Pa), (n, 4).
+    dplastic : numpy.ndarray
+        Plastic strain increments (Mandel), (n, 4).
+
+    Returns
+    -------
+    numpy.ndarray
+        Plastic work density (J/m^3), (n,).
+    """
     return np.einsum("ni,ni->n", stress, dplastic)

@@ -34,7 +34,23 @@ _GP, _GW = np.polynomial.legendre.leggauss(3)
 class SpherePath:
     """The result of a driven path: per increment the inner displacement ``u_a`` (m), the
     inner pressure ``p`` (Pa), the largest yield ratio; and per increment and Gauss point
-    (``r_gauss``, m) whether it yielded (``plastic``), and the Newton iterations used."""
+    (``r_gauss``, m) whether it yielded (``plastic``), and the Newton iterations used.
+
+    Parameters
+    ----------
+    u_a : numpy.ndarray
+        Inner displacement per increment (m).
+    p : numpy.ndarray
+        Inner pressure per increment (Pa).
+    yield_ratio : numpy.ndarray
+        Largest yield ratio per increment.
+    r_gauss : numpy.ndarray
+        Gauss point radii (m).
+    plastic : numpy.ndarray
+        Whether each Gauss point yielded, per increment.
+    iterations : numpy.ndarray
+        Newton iterations per increment.
+    """
 
     u_a: np.ndarray
     p: np.ndarray
@@ -46,7 +62,28 @@ class SpherePath:
 
 def hill_pressure(c: np.ndarray, a: float, b: float, Y: float) -> np.ndarray:
     """Inner pressure (Pa) of Hill's elastic-plastic sphere with the plastic front at ``c``
-    (``a <= c <= b``): ``2Y ln(c/a) + (2Y/3)(1 - c^3/b^3)``."""
+    (``a <= c <= b``): ``2Y ln(c/a) + (2Y/3)(1 - c^3/b^3)``.
+
+    Parameters
+    ----------
+    c : numpy.ndarray
+        Radius of the plastic front (m).
+    a : float
+        Inner radius (m).
+    b : float
+        Outer radius (m).
+    Y : float
+        Yield stress (Pa).
+
+    Returns
+    -------
+    numpy.ndarray
+        Inner pressure (Pa), the shape of ``c``.
+
+    References
+    ----------
+    Hill, R. (1950). *The Mathematical Theory of Plasticity*, Oxford, ch. V.
+    """
     c = np.asarray(c, float)
     return 2.0 * Y * np.log(c / a) + (2.0 * Y / 3.0) * (1.0 - (c / b) ** 3)
 
@@ -57,6 +94,37 @@ def solve_sphere(model, E: float, nu: float, a: float, b: float, u_a: np.ndarray
 
     Raises SolverError when an increment's Newton iteration does not converge (residual
     below ``tol`` times the reaction's scale within ``max_iter`` iterations).
+
+    Parameters
+    ----------
+    model : Any
+        The constitutive model (:mod:`ssw.constitutive`).
+    E : float
+        Young's modulus (Pa), > 0.
+    nu : float
+        Poisson's ratio, in (-1, 0.5).
+    a : float
+        Inner radius (m).
+    b : float
+        Outer radius (m).
+    u_a : numpy.ndarray
+        Inner radial displacements (m), one per increment, in order.
+    elements : int
+        Number of radial elements.
+    tol : float
+        Relative tolerance of the Newton residual.
+    max_iter : int
+        Most Newton iterations per increment.
+
+    Returns
+    -------
+    SpherePath
+        The path: pressures (Pa), yield ratios, Gauss radii (m), plastic flags and iterations.
+
+    Raises
+    ------
+    SolverError
+        If an increment's Newton iteration does not converge.
     """
     ne = int(elements)
     xv = np.linspace(a, b, ne + 1)

@@ -73,6 +73,11 @@ def principal_frame(stress: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndar
                                                  np.ndarray]:
     """The principal frame of axisymmetric tensors (n, 4) (Mandel; module docstring).
 
+    Parameters
+    ----------
+    stress : numpy.ndarray
+        Axisymmetric tensors (Mandel), (n, 4).
+
     Returns
     -------
     basis : (n, 3, 4) the eigenprojections ``E_A, E_B, E_t`` (A: the larger in-plane
@@ -126,6 +131,7 @@ class Tresca:
 
     @property
     def key(self) -> str:
+        """Short file-name-safe text that tells two models apart (enters the scene id)."""
         text = f"tresca-k{number_text(self.cohesion, 1e3)}kPa"
         if self.hardening:
             text += f"-H{number_text(self.hardening, 1e6)}MPa"
@@ -137,10 +143,39 @@ class Tresca:
         return 2.0 * float(self.cohesion)
 
     def params(self) -> dict[str, Any]:
+        """The model's parameters as a plain dict (SI units, angles in degrees).
+
+        Returns
+        -------
+        dict
+            ``model`` (the registry name) and each parameter.
+        """
         return {"model": self.name, "cohesion": self.cohesion, "hardening": self.hardening}
 
     def update(self, E: float, nu: float, strain: np.ndarray, state: np.ndarray) -> Update:
-        """Return mapping of ``strain`` (n, 4) from ``state`` (n, 5) (module docstring)."""
+        """Return mapping of ``strain`` (n, 4) from ``state`` (n, 5) (module docstring).
+
+        Parameters
+        ----------
+        E : float
+            Young's modulus of the sample (Pa).
+        nu : float
+            Poisson's ratio of the sample, in (-1, 0.5).
+        strain : numpy.ndarray
+            Total strains (Mandel), (n, 4).
+        state : numpy.ndarray
+            State at the increment's start, (n, 5): plastic strain and hardening variable.
+
+        Returns
+        -------
+        Update
+            Stress (Pa), consistent tangent (Pa), new state, yield flags and return regions.
+
+        Raises
+        ------
+        ConfigError
+            If ``E`` is not > 0 or ``nu`` lies outside (-1, 0.5).
+        """
         K, G = bulk_shear(E, nu)
         H = float(self.hardening)
         Ce = elastic_tangent(K, G)
@@ -201,7 +236,20 @@ class Tresca:
         return Update(stress, tangent, new, yl, region)
 
     def yield_ratio(self, stress: np.ndarray, state: np.ndarray) -> np.ndarray:
-        """``(s1 - s3) / (2 k + H kappa)`` (n,)."""
+        """``(s1 - s3) / (2 k + H kappa)`` (n,).
+
+        Parameters
+        ----------
+        stress : numpy.ndarray
+            Stresses (Mandel, Pa), (n, 4).
+        state : numpy.ndarray
+            States, (n, 5) (column 4: the hardening variable).
+
+        Returns
+        -------
+        numpy.ndarray
+            Yield ratio, (n,): 1 on the yield surface, below 1 inside.
+        """
         values = principal_frame(np.asarray(stress, float))[2]
         return (values.max(axis=1) - values.min(axis=1)) / (
             2.0 * self.cohesion + self.hardening * state[:, 4])

@@ -35,7 +35,15 @@ from ssw.constitutive.tensors import SQRT_3_2, invariants, pq_tangent, stress_of
 class VonMises:
     """von Mises plasticity: uniaxial yield stress ``yield_stress`` (Pa) and linear
     isotropic hardening modulus ``hardening`` (Pa, ``dY / d kappa``; 0: perfectly
-    plastic)."""
+    plastic).
+
+    Parameters
+    ----------
+    yield_stress : float
+        Uniaxial yield stress (Pa).
+    hardening : float
+        Linear isotropic hardening modulus ``dY / d kappa`` (Pa); 0: perfectly plastic.
+    """
 
     yield_stress: float
     hardening: float = 0.0
@@ -49,6 +57,7 @@ class VonMises:
 
     @property
     def key(self) -> str:
+        """Short file-name-safe text that tells two models apart (enters the scene id)."""
         text = f"vm-Y{number_text(self.yield_stress, 1e6)}MPa"
         if self.hardening:
             text += f"-H{number_text(self.hardening, 1e6)}MPa"
@@ -60,11 +69,40 @@ class VonMises:
         return float(self.yield_stress)
 
     def params(self) -> dict[str, Any]:
+        """The model's parameters as a plain dict (SI units, angles in degrees).
+
+        Returns
+        -------
+        dict
+            ``model`` (the registry name) and each parameter.
+        """
         return {"model": self.name, "yield_stress": self.yield_stress,
                 "hardening": self.hardening}
 
     def update(self, E: float, nu: float, strain: np.ndarray, state: np.ndarray) -> Update:
-        """Radial return of ``strain`` (n, 4) from ``state`` (n, 5) (module docstring)."""
+        """Radial return of ``strain`` (n, 4) from ``state`` (n, 5) (module docstring).
+
+        Parameters
+        ----------
+        E : float
+            Young's modulus of the sample (Pa).
+        nu : float
+            Poisson's ratio of the sample, in (-1, 0.5).
+        strain : numpy.ndarray
+            Total strains (Mandel), (n, 4).
+        state : numpy.ndarray
+            State at the increment's start, (n, 5): plastic strain and hardening variable.
+
+        Returns
+        -------
+        Update
+            Stress (Pa), consistent tangent (Pa), new state, yield flags and return regions.
+
+        Raises
+        ------
+        ConfigError
+            If ``E`` is not > 0 or ``nu`` lies outside (-1, 0.5).
+        """
         K, G, p_tr, q_tr, n = trial(E, nu, strain, state[:, :4])
         H = float(self.hardening)
         Yn = self.yield_stress + H * state[:, 4]
@@ -84,6 +122,19 @@ class VonMises:
                       yl.astype(np.int8))
 
     def yield_ratio(self, stress: np.ndarray, state: np.ndarray) -> np.ndarray:
-        """``q / (Y + H kappa)`` (n,)."""
+        """``q / (Y + H kappa)`` (n,).
+
+        Parameters
+        ----------
+        stress : numpy.ndarray
+            Stresses (Mandel, Pa), (n, 4).
+        state : numpy.ndarray
+            States, (n, 5) (column 4: the hardening variable).
+
+        Returns
+        -------
+        numpy.ndarray
+            Yield ratio, (n,): 1 on the yield surface, below 1 inside.
+        """
         _, q = invariants(stress)
         return q / (self.yield_stress + self.hardening * state[:, 4])

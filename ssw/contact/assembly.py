@@ -53,7 +53,20 @@ GEOM_TOL_REL = 1e-6
 
 def geometric_tolerance(nodes: np.ndarray, tri: np.ndarray) -> float:
     """Distance (m) below which a node counts as lying on a boundary line:
-    :data:`GEOM_TOL_REL` times the smallest element size of the mesh."""
+    :data:`GEOM_TOL_REL` times the smallest element size of the mesh.
+
+    Parameters
+    ----------
+    nodes : numpy.ndarray
+        Node coordinates (r, z) (m), (n, 2).
+    tri : numpy.ndarray
+        Quadratic triangles (node indices, gmsh order), (ne, 6).
+
+    Returns
+    -------
+    float
+        Tolerance (m).
+    """
     return GEOM_TOL_REL * float(np.min(element_sizes(nodes, tri)))
 
 
@@ -68,6 +81,31 @@ class System:
     triplets and ``scale`` in N/m; pressure unknowns are ``p h_i / G`` (see the module
     docstring), so the displacement part of a solution ``K^-1 f`` is in m, and ``x^T K x``
     is the energy whatever the pressure scaling.
+
+    Parameters
+    ----------
+    rows : numpy.ndarray
+        Row indices of the triplets.
+    cols : numpy.ndarray
+        Column indices of the triplets.
+    vals : numpy.ndarray
+        Values of the triplets (nondimensional).
+    ndof : int
+        Number of dofs.
+    udof : numpy.ndarray
+        Index of (u_r, u_z) per node, (n, 2); -1 where fixed.
+    pdof : numpy.ndarray
+        Pressure index per node, (n,); -1 at midside nodes.
+    nodes : numpy.ndarray
+        Node coordinates (m), (n, 2).
+    tri : numpy.ndarray
+        Quadratic triangles, (ne, 6).
+    body : numpy.ndarray
+        Body of each element (0 soil, 1 plate).
+    iface : numpy.ndarray
+        (soil node, plate node) pairs, (m, 2).
+    scale : float
+        Stiffness scale (N/m).
     """
 
     rows: np.ndarray
@@ -84,7 +122,22 @@ class System:
 
 
 def split_interface(mesh: Mesh) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Duplicate the interface nodes of the plate. Returns (nodes, tri, pairs (m, 2))."""
+    """Duplicate the interface nodes of the plate. Returns (nodes, tri, pairs (m, 2)).
+
+    Parameters
+    ----------
+    mesh : Mesh
+        The plate-on-soil mesh (m).
+
+    Returns
+    -------
+    nodes : numpy.ndarray
+        Node coordinates with the plate's interface copies appended (m).
+    tri : numpy.ndarray
+        Triangles, the plate's on the copies.
+    pairs : numpy.ndarray
+        (soil node, plate copy) pairs, (m, 2).
+    """
     if not np.any(mesh.body == 1):
         return mesh.nodes, mesh.tri, np.zeros((0, 2), dtype=np.int64)
     tol = geometric_tolerance(mesh.nodes, mesh.tri)
@@ -108,6 +161,41 @@ def number_dofs(
     """Global dof indices: ``udof`` (n, 2), ``pdof`` (n,), ``ndof``. -1 marks no dof.
 
     ``order`` is the elimination order of the nodes (a permutation of ``range(n)``).
+
+    Parameters
+    ----------
+    nodes : numpy.ndarray
+        Node coordinates (r, z) (m), (n, 2).
+    tri : numpy.ndarray
+        Quadratic triangles (node indices, gmsh order), (ne, 6).
+    pairs : numpy.ndarray
+        Interface (soil, plate) node pairs, (m, 2).
+    interface : str
+        The plate-soil interface (``INTERFACES``).
+    order : numpy.ndarray
+        Node elimination order, a permutation of ``range(n)``.
+    soil_radius : float
+        Radius of the soil domain (m).
+    soil_depth : float
+        Depth of the soil domain (m).
+    base : str
+        Bottom condition: ``bonded`` or ``sliding``.
+    lateral : str
+        Lateral condition: ``mould`` or ``free``.
+
+    Returns
+    -------
+    udof : numpy.ndarray
+        Displacement dofs, (n, 2).
+    pdof : numpy.ndarray
+        Pressure dofs, (n,).
+    ndof : int
+        Number of dofs.
+
+    Raises
+    ------
+    ConfigError
+        If the interface, base or lateral condition is unknown.
     """
     if interface not in INTERFACES:
         raise ConfigError("contact.interface", interface, " | ".join(INTERFACES))
@@ -144,7 +232,33 @@ def fixed_free(nodes: np.ndarray, tol: float, soil_radius: float,
     (symmetry); on the lateral boundary ``u_r = 0`` (``mould``: rollers, a rigid
     frictionless wall; the half-space box) or nothing (``free``); on the bottom ``u = 0``
     (``bonded``; the half-space box) or ``u_z = 0`` (``sliding``: a rigid frictionless
-    base)."""
+    base).
+
+    Parameters
+    ----------
+    nodes : numpy.ndarray
+        Node coordinates (r, z) (m), (n, 2).
+    tol : float
+        Geometric tolerance (m).
+    soil_radius : float
+        Radius of the soil domain (m).
+    soil_depth : float
+        Depth of the soil domain (m).
+    base : str
+        Bottom condition: ``bonded`` or ``sliding``.
+    lateral : str
+        Lateral condition: ``mould`` or ``free``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Free components, (n, 2) bool.
+
+    Raises
+    ------
+    ConfigError
+        If ``base`` or ``lateral`` is unknown.
+    """
     r, z = nodes[:, 0], nodes[:, 1]
     free = np.ones((len(nodes), 2), dtype=bool)
     free[r < tol, 0] = False  # symmetry axis
@@ -163,7 +277,20 @@ def fixed_free(nodes: np.ndarray, tol: float, soil_radius: float,
 
 
 def node_graph(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """COO (rows, cols) of the node adjacency graph (nodes sharing an element)."""
+    """COO (rows, cols) of the node adjacency graph (nodes sharing an element).
+
+    Parameters
+    ----------
+    tri : numpy.ndarray
+        Elements (node indices), (ne, k).
+
+    Returns
+    -------
+    rows : numpy.ndarray
+        Row indices.
+    cols : numpy.ndarray
+        Column indices.
+    """
     rr = np.repeat(tri, tri.shape[1], axis=1).ravel()
     cc = np.tile(tri, (1, tri.shape[1])).ravel()
     return rr, cc
@@ -171,7 +298,24 @@ def node_graph(tri: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def elimination_order(tri: np.ndarray, pairs: np.ndarray, n: int, order_nodes) -> np.ndarray:
     """Node elimination order: ``order_nodes`` on the graph where the two copies of an
-    interface node are one vertex (they may share dofs), each copy right after its twin."""
+    interface node are one vertex (they may share dofs), each copy right after its twin.
+
+    Parameters
+    ----------
+    tri : numpy.ndarray
+        Quadratic triangles (node indices, gmsh order), (ne, 6).
+    pairs : numpy.ndarray
+        Interface (soil, plate copy) node pairs, (m, 2).
+    n : int
+        Number of nodes.
+    order_nodes : callable
+        ``order_nodes(rows, cols, n)``: a fill-reducing permutation of a graph.
+
+    Returns
+    -------
+    numpy.ndarray
+        The node order, (n,).
+    """
     rep = np.arange(n)
     rep[pairs[:, 1]] = pairs[:, 0]
     perm = order_nodes(*node_graph(rep[tri]), n)
@@ -181,19 +325,58 @@ def elimination_order(tri: np.ndarray, pairs: np.ndarray, n: int, order_nodes) -
 
 
 def pow2(x: np.ndarray) -> np.ndarray:
-    """The power of two nearest to ``x`` (> 0) on a log scale: scaling by it is exact."""
+    """The power of two nearest to ``x`` (> 0) on a log scale: scaling by it is exact.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Positive values.
+
+    Returns
+    -------
+    numpy.ndarray
+        Powers of two, the shape of ``x``.
+    """
     return np.exp2(np.round(np.log2(x)))
 
 
 def element_sizes(nodes: np.ndarray, tri: np.ndarray) -> np.ndarray:
-    """(ne,) size of every element, m: ``sqrt(2 area)`` of its vertex triangle."""
+    """(ne,) size of every element, m: ``sqrt(2 area)`` of its vertex triangle.
+
+    Parameters
+    ----------
+    nodes : numpy.ndarray
+        Node coordinates (r, z) (m), (n, 2).
+    tri : numpy.ndarray
+        Quadratic triangles (node indices, gmsh order), (ne, 6).
+
+    Returns
+    -------
+    numpy.ndarray
+        Element sizes (m), (ne,).
+    """
     return np.sqrt(np.abs(triangle_jacobian(nodes[tri[:, :3]])[1]))
 
 
 def pressure_scale(nodes: np.ndarray, tri: np.ndarray, G: np.ndarray) -> np.ndarray:
     """(ne, 3) ``p_scale`` of the element vertices: ``G / h_i`` rounded to ``G`` times a
     power of two, ``h_i`` the smallest size of the elements at vertex ``i`` (a pressure
-    vertex belongs to one body, so all its elements agree)."""
+    vertex belongs to one body, so all its elements agree).
+
+    Parameters
+    ----------
+    nodes : numpy.ndarray
+        Node coordinates (r, z) (m), (n, 2).
+    tri : numpy.ndarray
+        Quadratic triangles (node indices, gmsh order), (ne, 6).
+    G : numpy.ndarray
+        Shear modulus of each element (Pa), (ne,).
+
+    Returns
+    -------
+    numpy.ndarray
+        Pressure scales (Pa/m), (ne, 3).
+    """
     h = element_sizes(nodes, tri)
     h_node = np.full(len(nodes), np.inf)
     np.minimum.at(h_node, tri[:, :3], h[:, None])
@@ -222,6 +405,11 @@ def assemble(
         Where the rollers and the fixed bottom lie, as a multiple of the mesh's soil
         radius and depth (1: on its faces; 2: beyond them, a free truncation boundary as
         the dynamic wall's absorbing one).
+
+    Returns
+    -------
+    System
+        The assembled problem.
     """
     nodes, tri, pairs = split_interface(mesh)
     n = len(nodes)
@@ -249,7 +437,26 @@ def assemble(
 
 def top_surface_weights(mesh_nodes: np.ndarray, tri: np.ndarray, top_elems: np.ndarray,
                         top: float, tol: float) -> np.ndarray:
-    """``int N_j 2 pi r ds`` (m^2) over the top surface for every node (0 off the surface)."""
+    """``int N_j 2 pi r ds`` (m^2) over the top surface for every node (0 off the surface).
+
+    Parameters
+    ----------
+    mesh_nodes : numpy.ndarray
+        Node coordinates (r, z) (m), (n, 2).
+    tri : numpy.ndarray
+        Quadratic triangles (node indices, gmsh order), (ne, 6).
+    top_elems : numpy.ndarray
+        Indices of the elements of the top body.
+    top : float
+        Height of the top surface (m).
+    tol : float
+        Geometric tolerance (m).
+
+    Returns
+    -------
+    numpy.ndarray
+        Surface weights (m^2), (n,).
+    """
     w = np.zeros(len(mesh_nodes))
     t6 = tri[top_elems]
     for a, b, m in ((0, 1, 3), (1, 2, 4), (2, 0, 5)):

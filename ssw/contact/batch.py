@@ -24,14 +24,40 @@ from ssw.config import Scene
 
 def group_key(scene: Scene) -> tuple[float, str, float]:
     """What a scene's operators depend on besides the mesh settings: (thickness, plate
-    material, soil nu)."""
+    material, soil nu).
+
+    Parameters
+    ----------
+    scene : Scene
+        A study scene.
+
+    Returns
+    -------
+    tuple
+        ``(plate_thickness m, plate material, soil nu)``.
+    """
     plate = scene.plate_material if scene.plate_thickness > 0 else "none"
     return (float(scene.plate_thickness), plate, float(scene.soil_nu))
 
 
 def rank_share(scenes: list[Scene], rank: int, size: int) -> list[int]:
     """Indices of the scenes rank ``rank`` of ``size`` solves: whole operator groups, dealt
-    largest first to the least loaded rank (a group's operators are built once)."""
+    largest first to the least loaded rank (a group's operators are built once).
+
+    Parameters
+    ----------
+    scenes : list of Scene
+        The batch.
+    rank : int
+        This rank.
+    size : int
+        Number of ranks.
+
+    Returns
+    -------
+    list of int
+        The scene indices, sorted.
+    """
     if size <= 1:
         return list(range(len(scenes)))
     groups: dict[tuple, list[int]] = {}
@@ -59,6 +85,37 @@ def solve_batch(
     (:func:`ssw.contact.solve_scene` or the layered oracle's); ``progress(i, n, scene,
     curve, path)`` is called after each scene (the CLI's log line). Returns one summary per
     scene solved here.
+
+    Parameters
+    ----------
+    scenes : list of Scene
+        The batch.
+    reach : list of float
+        Each scene's ``contact.delta_reach`` (m).
+    contact : dict
+        The contact settings.
+    radius : float
+        Indenter radius (m).
+    materials : dict
+        The materials library (SI).
+    out_dir : path-like
+        Directory of the curve files.
+    material_set : str
+        The material set's name (recorded in each curve).
+    solve_scene : callable
+        The engine's ``solve_scene``.
+    rank : int
+        This rank.
+    size : int
+        Number of ranks.
+    progress : callable or None
+        Called after each scene.
+
+    Returns
+    -------
+    list of dict
+        Per scene solved: id, output path, rank, largest force (N) and contact radius (m),
+        dofs and wall time (s).
     """
     from dataclasses import replace
     from pathlib import Path
@@ -88,7 +145,20 @@ def solve_batch(
 
 
 def gather(items: list[dict[str, Any]], size: int) -> list[dict[str, Any]] | None:
-    """Every rank's ``items`` on rank 0 (None on the others); ``items`` with one rank."""
+    """Every rank's ``items`` on rank 0 (None on the others); ``items`` with one rank.
+
+    Parameters
+    ----------
+    items : list of dict
+        This rank's items.
+    size : int
+        Number of ranks.
+
+    Returns
+    -------
+    list of dict or None
+        All items on rank 0, None on the others.
+    """
     if size <= 1:
         return items
     from ssw.contact.petsc_solver import _petsc

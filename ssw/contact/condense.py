@@ -77,7 +77,13 @@ class Condensed:
         return self._X
 
     def extend(self, k_new: int) -> None:
-        """Condense the sphere candidates up to index ``k_new`` (exclusive)."""
+        """Condense the sphere candidates up to index ``k_new`` (exclusive).
+
+        Parameters
+        ----------
+        k_new : int
+            Number of sphere candidates to condense.
+        """
         k_new = min(int(k_new), len(self.s_dofs))
         if k_new <= self.k:
             return
@@ -103,12 +109,38 @@ class Condensed:
         self.W = 0.5 * (w + w.T)
 
     def sphere_gap_change(self, lam: np.ndarray) -> np.ndarray:
-        """(ms,) change of every sphere candidate's gap under forces ``lam`` (m)."""
+        """(ms,) change of every sphere candidate's gap under forces ``lam`` (m).
+
+        Parameters
+        ----------
+        lam : numpy.ndarray
+            Constraint forces (N).
+
+        Returns
+        -------
+        numpy.ndarray
+            Gap changes (m), (ms,).
+        """
         return -(self._XS @ lam)
 
     def violated(self, g0_all: np.ndarray, lam: np.ndarray, tol: float) -> int:
         """Candidates to condense so that the farthest penetrating one is included, with a
-        margin (0 if none penetrates)."""
+        margin (0 if none penetrates).
+
+        Parameters
+        ----------
+        g0_all : numpy.ndarray
+            Initial gaps of every sphere candidate (m), (ms,).
+        lam : numpy.ndarray
+            Constraint forces (N).
+        tol : float
+            Penetration tolerance (m).
+
+        Returns
+        -------
+        int
+            Number of candidates to condense; 0 if none penetrates.
+        """
         if self.k == len(self.s_dofs):
             return 0
         rest = g0_all[self.k:] - self._XS[self.k:] @ lam

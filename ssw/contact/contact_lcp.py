@@ -46,7 +46,27 @@ FORCE_RTOL = 1e-12
 
 
 def sphere_gap(r: np.ndarray, radius: float, delta: float) -> np.ndarray:
-    """Initial gap (m) between a rigid sphere of ``radius`` pushed by ``delta`` and a flat."""
+    """Initial gap (m) between a rigid sphere of ``radius`` pushed by ``delta`` and a flat.
+
+    Parameters
+    ----------
+    r : numpy.ndarray
+        Radii (m), < ``radius``.
+    radius : float
+        Sphere radius (m).
+    delta : float
+        Indentation (m).
+
+    Returns
+    -------
+    numpy.ndarray
+        Gaps (m), the shape of ``r``.
+
+    Raises
+    ------
+    SolverError
+        If a radius is not below the sphere's.
+    """
     from ssw.contact.operators import sphere_gap0
 
     return sphere_gap0(r, radius) - delta
@@ -145,6 +165,24 @@ def edge_radius(r: np.ndarray, gap: np.ndarray, active: np.ndarray) -> float:
     The edge lies between the last active node and the next; near the edge of a smooth
     contact the gap opens as ``(r - a)^(3/2)`` (Johnson 1985, eq. 3.42), so ``gap^(2/3)``
     is extrapolated linearly from the two nodes beyond the last active one.
+
+    Parameters
+    ----------
+    r : numpy.ndarray
+        Radii of the sphere candidates (m), sorted.
+    gap : numpy.ndarray
+        Their gaps (m).
+    active : numpy.ndarray
+        Which are in contact (bool).
+
+    Returns
+    -------
+    float
+        Contact radius (m).
+
+    References
+    ----------
+    Johnson, K. L. (1985). *Contact Mechanics*, Cambridge University Press, eq. (3.42).
     """
     if not active.any():
         return 0.0

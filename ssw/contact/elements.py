@@ -35,6 +35,18 @@ def p2_shape(xi: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """P2 shape functions (nq, 6) and reference gradients (nq, 6, 2) at points (nq, 2).
 
     Node order: vertices 0, 1, 2, then midsides of edges 01, 12, 20 (gmsh order).
+
+    Parameters
+    ----------
+    xi : numpy.ndarray
+        Reference points, (nq, 2).
+
+    Returns
+    -------
+    n : numpy.ndarray
+        Shape functions, (nq, 6).
+    g : numpy.ndarray
+        Reference gradients, (nq, 6, 2).
     """
     s, t = xi[:, 0], xi[:, 1]
     l0, l1, l2 = 1 - s - t, s, t
@@ -79,7 +91,22 @@ def physical_gradients(xy: np.ndarray, g2: np.ndarray) -> tuple[np.ndarray, np.n
     """Gradients (ne, nq, 6, 2) in (r, z) of the P2 shape functions of straight-sided
     triangles ``xy`` (ne, 6, 2) m, from their reference gradients ``g2`` (nq, 6, 2)
     (:func:`p2_shape`), and the Jacobian determinants (ne,) m^2
-    (:func:`triangle_jacobian`): ``grad N = J^-T grad_ref N``."""
+    (:func:`triangle_jacobian`): ``grad N = J^-T grad_ref N``.
+
+    Parameters
+    ----------
+    xy : numpy.ndarray
+        Element node coordinates (m), (ne, 6, 2).
+    g2 : numpy.ndarray
+        Reference gradients, (nq, 6, 2).
+
+    Returns
+    -------
+    dn : numpy.ndarray
+        Gradients (1/m), (ne, nq, 6, 2).
+    det : numpy.ndarray
+        Jacobian determinants (m^2), (ne,).
+    """
     jac, det = triangle_jacobian(xy)
     inv = np.empty_like(jac)
     inv[:, 0, 0], inv[:, 1, 1] = jac[:, 1, 1] / det, jac[:, 0, 0] / det
@@ -93,12 +120,38 @@ def physical_gradients(xy: np.ndarray, g2: np.ndarray) -> tuple[np.ndarray, np.n
 
 
 def p1_shape(xi: np.ndarray) -> np.ndarray:
-    """P1 shape functions (nq, 3) at points (nq, 2)."""
+    """P1 shape functions (nq, 3) at points (nq, 2).
+
+    Parameters
+    ----------
+    xi : numpy.ndarray
+        Reference points, (nq, 2).
+
+    Returns
+    -------
+    numpy.ndarray
+        Shape functions, (nq, 3).
+    """
     return np.stack([1 - xi[:, 0] - xi[:, 1], xi[:, 0], xi[:, 1]], axis=1)
 
 
 def lame(E: np.ndarray, nu: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Shear modulus ``G = E / (2 (1 + nu))`` and compliance ``1/K = 3 (1 - 2 nu) / E`` (Pa)."""
+    """Shear modulus ``G = E / (2 (1 + nu))`` and compliance ``1/K = 3 (1 - 2 nu) / E`` (Pa).
+
+    Parameters
+    ----------
+    E : numpy.ndarray
+        Young's modulus (Pa).
+    nu : numpy.ndarray
+        Poisson's ratio.
+
+    Returns
+    -------
+    G : numpy.ndarray
+        Shear modulus (Pa).
+    inv_K : numpy.ndarray
+        Bulk compliance (1/Pa).
+    """
     E, nu = np.asarray(E, float), np.asarray(nu, float)
     return E / (2.0 * (1.0 + nu)), 3.0 * (1.0 - 2.0 * nu) / E
 
@@ -120,6 +173,11 @@ def element_matrices(
         (ne,) or (ne, 3), Pa/m^k; the pressure unknown of a vertex is ``p / p_scale``
         (balances the blocks for LU: see :func:`ssw.contact.assembly.pressure_scale`). A
         (ne,) value applies to the element's three vertices.
+
+    Returns
+    -------
+    numpy.ndarray
+        Element matrices, (ne, 15, 15).
     """
     n2, g2 = p2_shape(QUAD_POINTS)
     n1 = p1_shape(QUAD_POINTS)

@@ -26,7 +26,19 @@ def _label(c: ForceCurve, label_by: str) -> str:
 def plot_curves(
     curves: list[ForceCurve], output: str | Path, label_by: str = "material", title: str = ""
 ) -> None:
-    """Write a PNG of the curves (force N vs indentation mm) with their soils' Hertz laws."""
+    """Write a PNG of the curves (force N vs indentation mm) with their soils' Hertz laws.
+
+    Parameters
+    ----------
+    curves : list of ForceCurve
+        The curves (SI).
+    output : str or pathlib.Path
+        The PNG file, written atomically.
+    label_by : str
+        What the legend names (``material``, ...).
+    title : str
+        The figure's title; empty: none.
+    """
     import matplotlib
 
     matplotlib.use("Agg")

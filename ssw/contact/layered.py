@@ -86,6 +86,25 @@ class LayeredSettings:
     for a half-space soil, or a depth (m) over a rigid base, ``soil_base`` ``bonded``
     (``u = 0``) or ``sliding`` (frictionless: ``u_z = 0``, no shear); ``quadrature``: the
     Hankel quadrature.
+
+    Parameters
+    ----------
+    ring_ratio : float
+        Ring width / radius in the graded zone.
+    ring_min : float
+        Smallest contact radius resolved at that ratio, relative to ``sqrt(R delta_1)``.
+    candidate_factor : float
+        Ring zone radius / ``sqrt(R delta_last)``.
+    soil_depth : float or None
+        Depth of the soil layer (m); None: a half-space.
+    soil_base : str
+        Below the layer: ``bonded``, ``sliding`` or ``elastic``.
+    base_E : float or None
+        Young's modulus of an elastic base (Pa).
+    base_nu : float or None
+        Poisson's ratio of an elastic base.
+    quadrature : Quadrature
+        The Hankel quadrature.
     """
 
     ring_ratio: float = 1.0 / 40.0
@@ -120,7 +139,23 @@ class LayeredSettings:
 
     @classmethod
     def from_config(cls, values: dict[str, Any] | None) -> LayeredSettings:
-        """Settings from a dict (e.g. ``contact.layered``); quadrature keys under ``quadrature``."""
+        """Settings from a dict (e.g. ``contact.layered``); quadrature keys under ``quadrature``.
+
+        Parameters
+        ----------
+        values : dict or None
+            The settings (SI); None: the defaults.
+
+        Returns
+        -------
+        LayeredSettings
+            The settings.
+
+        Raises
+        ------
+        ConfigError
+            If a key is unknown.
+        """
         values = dict(values or {})
         quad = values.pop("quadrature", None)
         unknown = set(values) - {f for f in cls.__dataclass_fields__ if f != "quadrature"}
@@ -134,7 +169,27 @@ class LayeredSettings:
 def increments(delta_max: float, steps: int, delta_reach: float | None = None) -> np.ndarray:
     """Indentations (m): ``steps`` equal increments to ``delta_max`` and, when
     ``delta_reach`` is deeper, ``steps`` more to it (the contact contract of
-    docs/CONTRACTS.md, ``contact.delta_mode``)."""
+    docs/CONTRACTS.md, ``contact.delta_mode``).
+
+    Parameters
+    ----------
+    delta_max : float
+        Indentation of the uniform part (m), > 0.
+    steps : int
+        Number of increments to ``delta_max``, >= 1.
+    delta_reach : float or None
+        Indentation to continue to (m); None: stop at ``delta_max``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Indentations (m).
+
+    Raises
+    ------
+    ConfigError
+        If ``delta_max <= 0`` or ``steps < 1``.
+    """
     if not (delta_max > 0 and int(steps) >= 1):
         raise ConfigError("contact.delta_max/steps", (delta_max, steps), "> 0 m and >= 1")
     d = delta_max * np.arange(1, int(steps) + 1) / int(steps)
@@ -151,6 +206,31 @@ def solve_stack(stack: Stack, radius: float, deltas: np.ndarray,
 
     Returns the curve (stats filled, inputs empty) and the influence matrix, rings and
     LCP result (for tests and benchmarks).
+
+    Parameters
+    ----------
+    stack : Stack
+        The layered body (Pa, -, m).
+    radius : float
+        Sphere radius (m), > 0.
+    deltas : numpy.ndarray
+        Indentations (m), increasing.
+    settings : LayeredSettings or None
+        The settings; None: the defaults.
+    profiles : int
+        Number of pressure profiles to keep.
+
+    Returns
+    -------
+    curve : ForceCurve
+        The curve (N, m).
+    details : dict
+        Influence matrix (m/Pa), ring edges and points (m), areas (m^2), LCP result.
+
+    Raises
+    ------
+    ConfigError
+        If the radius is not > 0 or the candidate zone reaches the sphere's radius.
     """
     settings = settings or LayeredSettings()
     if not radius > 0:
@@ -227,6 +307,11 @@ def solve_curve(soil: tuple[float, float], plate: tuple[float, float] | None,
         ``layered`` dict gives :class:`LayeredSettings` (unless ``settings`` is given).
     settings : LayeredSettings or None
         The oracle's discretization (rings, Hankel quadrature, soil depth).
+
+    Returns
+    -------
+    ForceCurve
+        The curve (N, m).
     """
     cfg = {"delta_max": 1.0e-4, "steps": 1000, "interface": "frictionless",
            "pressure_profiles": 5, **contact_cfg}
@@ -263,7 +348,33 @@ def solve_scene(scene: Any, contact_cfg: dict[str, Any], indenter_radius: float,
                 materials: dict[str, Any], cache: object = None,
                 settings: LayeredSettings | None = None) -> ForceCurve:
     """The curve of one study scene (:class:`ssw.config.Scene`), as the FEM's
-    ``solve_scene`` (``cache`` is accepted for the same call and unused)."""
+    ``solve_scene`` (``cache`` is accepted for the same call and unused).
+
+    Parameters
+    ----------
+    scene : Scene
+        The study scene.
+    contact_cfg : dict
+        The contact settings.
+    indenter_radius : float
+        Sphere radius (m).
+    materials : dict
+        The materials library (SI).
+    cache : object
+        Unused.
+    settings : LayeredSettings or None
+        The settings; None: from ``contact_cfg``.
+
+    Returns
+    -------
+    ForceCurve
+        The curve (N, m).
+
+    Raises
+    ------
+    ConfigError
+        If the plate's material is unknown or the sample has a mould.
+    """
     plate = None
     key = scene.plate_material if scene.plate_thickness > 0 else "none"
     if scene.plate_thickness > 0:
@@ -288,7 +399,18 @@ def solve_scene(scene: Any, contact_cfg: dict[str, Any], indenter_radius: float,
 
 
 def describe(result: dict[str, Any]) -> str:
-    """Human summary of an ``ssw contact --engine layered`` result."""
+    """Human summary of an ``ssw contact --engine layered`` result.
+
+    Parameters
+    ----------
+    result : dict
+        The command's result.
+
+    Returns
+    -------
+    str
+        The summary.
+    """
     st = result["stats"]
     text = (f"scene {result.get('scene_id', '?')} (layered): F({result['delta'][-1]:.4g} m) = "
             f"{result['force'][-1]:.6g} N, contact radius {result['contact_radius'][-1]:.4g} m\n"

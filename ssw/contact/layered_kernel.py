@@ -54,7 +54,17 @@ INTERFACES = ("bonded", "frictionless")
 
 @dataclass(frozen=True)
 class Layer:
-    """An elastic layer: Young's modulus ``E`` (Pa), Poisson's ratio ``nu``, ``thickness`` (m)."""
+    """An elastic layer: Young's modulus ``E`` (Pa), Poisson's ratio ``nu``, ``thickness`` (m).
+
+    Parameters
+    ----------
+    E : float
+        Young's modulus (Pa).
+    nu : float
+        Poisson's ratio.
+    thickness : float
+        Thickness (m).
+    """
 
     E: float
     nu: float
@@ -67,6 +77,17 @@ class Stack:
 
     ``interfaces[k]`` is the interface under ``layers[k]``; ``base_E = inf`` is a rigid
     base. No layers is the homogeneous half-space of the base.
+
+    Parameters
+    ----------
+    layers : tuple
+        The layers, top first.
+    interfaces : tuple
+        The interface under each layer.
+    base_E : float
+        Young's modulus of the base (Pa); inf: rigid.
+    base_nu : float
+        Poisson's ratio of the base.
     """
 
     layers: tuple[Layer, ...]
@@ -117,6 +138,35 @@ def plate_on_soil(plate: tuple[float, float] | None, thickness: float,
     on a rigid base, ``bonded`` (the FEM's fixed bottom) or ``sliding`` (frictionless), or
     bonded to an ``elastic`` half-space of ``base_E`` (Pa), ``base_nu`` (a lift on a
     subgrade).
+
+    Parameters
+    ----------
+    plate : tuple of float or None
+        The plate's ``(E, nu)`` (Pa, -), or None.
+    thickness : float
+        Plate thickness (m).
+    soil : tuple of float
+        The soil's ``(E, nu)`` (Pa, -).
+    interface : str
+        The plate-soil interface.
+    soil_depth : float or None
+        Depth of the soil layer (m); None: a half-space.
+    base : str
+        Below the layer: ``bonded``, ``sliding`` or ``elastic``.
+    base_E : float or None
+        Young's modulus of an elastic base (Pa).
+    base_nu : float or None
+        Poisson's ratio of an elastic base.
+
+    Returns
+    -------
+    Stack
+        The stack.
+
+    Raises
+    ------
+    ConfigError
+        If the interface is unknown.
     """
     layers: list[Layer] = []
     ifaces: list[str] = []

@@ -43,7 +43,25 @@ class ZoneError(SolverError):
 
 @dataclass
 class LcpResult:
-    """Force (N), contact radius (m), the pressures (Pa) of chosen increments and counts."""
+    """Force (N), contact radius (m), the pressures (Pa) of chosen increments and counts.
+
+    Parameters
+    ----------
+    force : numpy.ndarray
+        Force per increment (N).
+    contact_radius : numpy.ndarray
+        Contact radius per increment (m).
+    profiles : dict
+        Pressure profiles of chosen increments (Pa), by increment.
+    active_sets : int
+        Number of active sets visited.
+    iterations : int
+        Number of LCP iterations.
+    general_solves : int
+        Number of general solves.
+    max_ring : int
+        Outermost active ring.
+    """
 
     force: NDArray[np.float64]
     contact_radius: NDArray[np.float64]
@@ -56,7 +74,25 @@ class LcpResult:
 
 def sphere_surface(r: NDArray, radius: float) -> NDArray[np.float64]:
     """Height (m) of a sphere of ``radius`` above its lowest point at radius ``r`` (m):
-    ``r^2 / (R + sqrt(R^2 - r^2))`` (no cancellation for small r)."""
+    ``r^2 / (R + sqrt(R^2 - r^2))`` (no cancellation for small r).
+
+    Parameters
+    ----------
+    r : numpy.ndarray
+        Radii (m), < ``radius``.
+    radius : float
+        Sphere radius (m).
+
+    Returns
+    -------
+    numpy.ndarray
+        Heights (m).
+
+    Raises
+    ------
+    SolverError
+        If a radius is not below the sphere's.
+    """
     r = np.asarray(r, float)
     if np.any(r >= radius):
         raise SolverError("a collocation radius lies beyond the sphere's radius: "

@@ -51,6 +51,19 @@ class Quadrature:
     ``order`` Gauss-Legendre points per panel; panels grow geometrically by ``growth``
     from ``xi_low`` (relative to the stack's longest length scale) and are no wider than
     ``width`` (in units of ``pi / r_max``); the integral stops at ``xi_max = t_max / h_1``.
+
+    Parameters
+    ----------
+    order : int
+        Gauss-Legendre points per panel.
+    growth : float
+        Geometric growth of the panels.
+    width : float
+        Largest panel width in units of ``pi / r_max``.
+    t_max : float
+        Upper limit ``xi_max h_1``.
+    xi_low : float
+        Start of the geometric panels, relative to the stack's longest length.
     """
 
     order: int = 8
@@ -74,7 +87,27 @@ def graded_edges(r_max: float, ratio: float, width_min: float) -> NDArray[np.flo
     """Ring edges (m) from 0 to at least ``r_max``: each ring ``max(width_min, ratio * b)``
     wide, ``b`` its inner radius (uniform near the axis, geometric beyond
     ``width_min / ratio``), so a contact of radius ``a >= width_min / ratio`` has rings of
-    relative width ``ratio`` at its edge."""
+    relative width ``ratio`` at its edge.
+
+    Parameters
+    ----------
+    r_max : float
+        Radius to cover (m), > 0.
+    ratio : float
+        Relative ring width, in (0, 1).
+    width_min : float
+        Smallest ring width (m), in (0, r_max).
+
+    Returns
+    -------
+    numpy.ndarray
+        Ring edges (m), from 0.
+
+    Raises
+    ------
+    ConfigError
+        If an argument is out of range.
+    """
     if not (r_max > 0 and 0 < ratio < 1 and 0 < width_min < r_max):
         raise ConfigError("rings", (r_max, ratio, width_min),
                           "r_max > 0, 0 < ratio < 1, 0 < width_min < r_max")
@@ -89,7 +122,28 @@ def graded_edges(r_max: float, ratio: float, width_min: float) -> NDArray[np.flo
 
 def disc_deflection(r: NDArray, b: NDArray, E: float, nu: float) -> NDArray[np.float64]:
     """Surface deflection (m) of a half-space (E Pa, nu) at radius ``r`` (m) under unit
-    pressure (1 Pa) on a disc of radius ``b`` (m); broadcasts (Johnson 1985, eq. 3.38-3.39)."""
+    pressure (1 Pa) on a disc of radius ``b`` (m); broadcasts (Johnson 1985, eq. 3.38-3.39).
+
+    Parameters
+    ----------
+    r : numpy.ndarray
+        Radii (m).
+    b : numpy.ndarray
+        Disc radii (m).
+    E : float
+        Young's modulus (Pa).
+    nu : float
+        Poisson's ratio.
+
+    Returns
+    -------
+    numpy.ndarray
+        Deflection per unit pressure (m/Pa), the broadcast shape.
+
+    References
+    ----------
+    Johnson, K. L. (1985). *Contact Mechanics*, Cambridge University Press, eqs. (3.38)-(3.39).
+    """
     from scipy.special import ellipe, ellipk
 
     r, b = np.broadcast_arrays(np.asarray(r, float), np.asarray(b, float))
@@ -105,14 +159,53 @@ def disc_deflection(r: NDArray, b: NDArray, E: float, nu: float) -> NDArray[np.f
 
 def halfspace_influence(points: NDArray, edges: NDArray, E: float,
                         nu: float) -> NDArray[np.float64]:
-    """``C_hs`` (m/Pa), shape (n_points, n_rings): rings of ``edges`` on a half-space."""
+    """``C_hs`` (m/Pa), shape (n_points, n_rings): rings of ``edges`` on a half-space.
+
+    Parameters
+    ----------
+    points : numpy.ndarray
+        Collocation radii (m), (n_points,).
+    edges : numpy.ndarray
+        Ring edges (m), (n_rings + 1,).
+    E : float
+        Young's modulus (Pa).
+    nu : float
+        Poisson's ratio.
+
+    Returns
+    -------
+    numpy.ndarray
+        Influence coefficients (m/Pa), (n_points, n_rings).
+    """
     disc = disc_deflection(points[:, None], edges[None, :], E, nu)
     return disc[:, 1:] - disc[:, :-1]
 
 
 def hankel_nodes(stack: Stack, r_max: float,
                  quad: Quadrature) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    """Nodes ``xi`` (1/m) and weights of the correction integral over ``[0, xi_max]``."""
+    """Nodes ``xi`` (1/m) and weights of the correction integral over ``[0, xi_max]``.
+
+    Parameters
+    ----------
+    stack : Stack
+        The layered body.
+    r_max : float
+        Radius of the candidate zone (m).
+    quad : Quadrature
+        The quadrature settings.
+
+    Returns
+    -------
+    xi : numpy.ndarray
+        Nodes (1/m).
+    w : numpy.ndarray
+        Weights (1/m).
+
+    Raises
+    ------
+    ConfigError
+        If the lower limit is not below the upper one.
+    """
     h1 = stack.layers[0].thickness
     E1 = stack.top[0]
     below = [lay.E for lay in stack.layers[1:]] + [stack.base_E]
@@ -141,6 +234,29 @@ def influence_matrix(stack: Stack, points: NDArray, edges: NDArray,
     Hankel nodes used (0 for a homogeneous half-space).
 
     ``points`` (m): collocation radii; ``edges`` (m, increasing from 0): ring edges.
+
+    Parameters
+    ----------
+    stack : Stack
+        The layered body.
+    points : numpy.ndarray
+        Collocation radii (m).
+    edges : numpy.ndarray
+        Ring edges (m), increasing from 0.
+    quad : Quadrature or None
+        The quadrature settings; None: the defaults.
+
+    Returns
+    -------
+    C : numpy.ndarray
+        Influence coefficients (m/Pa), (n_points, n_rings).
+    n_xi : int
+        Number of Hankel nodes.
+
+    Raises
+    ------
+    ConfigError
+        If the edges do not increase from 0.
     """
     from scipy.special import j0, j1
 

@@ -77,7 +77,25 @@ FORMAT = 2
 def sphere_gap0(r: np.ndarray, radius: float) -> np.ndarray:
     """Gap (m) at zero indentation between a sphere of ``radius`` and the flat at radius
     ``r``: ``R - sqrt(R^2 - r^2)`` written as ``r^2 / (R + sqrt(R^2 - r^2))`` (no
-    cancellation at small ``r``: relative accuracy of a few ulp)."""
+    cancellation at small ``r``: relative accuracy of a few ulp).
+
+    Parameters
+    ----------
+    r : numpy.ndarray
+        Radii (m), < ``radius``.
+    radius : float
+        Sphere radius (m).
+
+    Returns
+    -------
+    numpy.ndarray
+        Gaps (m).
+
+    Raises
+    ------
+    SolverError
+        If a radius is not below the sphere's.
+    """
     r = np.asarray(r, float)
     if np.any(r >= radius):
         raise SolverError("contact candidate beyond the sphere's radius: shrink the zone")
@@ -86,7 +104,21 @@ def sphere_gap0(r: np.ndarray, radius: float) -> np.ndarray:
 
 @dataclass(frozen=True)
 class Geometry:
-    """What a model's mesh and retained dofs depend on. Lengths in m."""
+    """What a model's mesh and retained dofs depend on. Lengths in m.
+
+    Parameters
+    ----------
+    plate_thickness : float
+        Plate thickness (m); 0: no plate.
+    plate_radius : float
+        Plate radius (m).
+    mesh : MeshSettings
+        The mesh settings (m).
+    zone : float
+        Radius of the candidate zone on the top surface (m).
+    bonded : bool
+        Whether the interface shares u_r as well (bonded) or u_z only.
+    """
 
     plate_thickness: float  # 0: no plate
     plate_radius: float
@@ -95,7 +127,13 @@ class Geometry:
     bonded: bool  # the interface shares u_r as well (bonded) or u_z only
 
     def key(self) -> str:
-        """Hash of the geometry, the code and the library versions (hex)."""
+        """Hash of the geometry, the code and the library versions (hex).
+
+        Returns
+        -------
+        str
+            The hex digest.
+        """
         return _geometry_key(self)
 
 
@@ -106,7 +144,29 @@ def _geometry_key(geom: Geometry) -> str:
 
 def zone_of(radius: float, candidate_factor: float, delta_end: float,
             plate_radius: float | None = None) -> float:
-    """Candidate zone radius (m) for a sphere of ``radius`` pushed to ``delta_end`` (m)."""
+    """Candidate zone radius (m) for a sphere of ``radius`` pushed to ``delta_end`` (m).
+
+    Parameters
+    ----------
+    radius : float
+        Sphere radius (m).
+    candidate_factor : float
+        Zone radius in units of ``sqrt(R delta_end)``.
+    delta_end : float
+        Deepest indentation (m).
+    plate_radius : float or None
+        Plate radius (m), a bound; None or 0: none.
+
+    Returns
+    -------
+    float
+        Zone radius (m).
+
+    Raises
+    ------
+    ConfigError
+        If the zone would reach too far into the sphere's radius.
+    """
     zone = np.floor(ZONE_SHARE * radius / ZONE_QUANTUM) * ZONE_QUANTUM
     need = candidate_factor * np.sqrt(radius * delta_end)
     if need > zone:
@@ -122,7 +182,31 @@ def zone_of(radius: float, candidate_factor: float, delta_end: float,
 
 def geometry_of(contact: dict[str, Any], plate_thickness: float, radius: float,
                 delta_end: float, interface: str) -> Geometry:
-    """The :class:`Geometry` of a scene from its (filled) ``contact`` settings."""
+    """The :class:`Geometry` of a scene from its (filled) ``contact`` settings.
+
+    Parameters
+    ----------
+    contact : dict
+        The filled contact settings (SI).
+    plate_thickness : float
+        Plate thickness (m).
+    radius : float
+        Sphere radius (m).
+    delta_end : float
+        Deepest indentation (m).
+    interface : str
+        The plate-soil interface.
+
+    Returns
+    -------
+    Geometry
+        The geometry.
+
+    Raises
+    ------
+    ConfigError
+        If the soil radius is not larger than the plate's.
+    """
     from ssw.contact.mesh import mesh_settings
 
     plate_radius = 0.5 * float(contact["plate_diameter"]) if plate_thickness > 0 else 0.0
@@ -146,6 +230,21 @@ class Layout:
     candidates, sorted by radius; ``iface_r``, ``iface_comp`` (n_i,): node radius (m) and
     component (0 = u_r, 1 = u_z) of the retained interface dofs (empty without a plate);
     ``nodes``, ``elements``: the mesh's counts.
+
+    Parameters
+    ----------
+    r : numpy.ndarray
+        Radii of the contact candidates (m), (n_c,), sorted.
+    weight : numpy.ndarray
+        Their surface weights ``int N_j 2 pi r ds`` (m^2), (n_c,).
+    iface_r : numpy.ndarray
+        Radii of the retained interface dofs' nodes (m), (n_i,).
+    iface_comp : numpy.ndarray
+        Their components (0 = u_r, 1 = u_z), (n_i,).
+    nodes : int
+        Number of mesh nodes.
+    elements : int
+        Number of mesh elements.
     """
 
     r: np.ndarray
@@ -158,7 +257,15 @@ class Layout:
 
 @dataclass(frozen=True)
 class BodyOperator:
-    """A body's condensed stiffness ``S`` at unit E (m = N/m per Pa) and how it was made."""
+    """A body's condensed stiffness ``S`` at unit E (m = N/m per Pa) and how it was made.
+
+    Parameters
+    ----------
+    S : numpy.ndarray
+        Condensed stiffness at unit E (m), (nb, nb).
+    stats : dict
+        How it was made (sizes, times in s).
+    """
 
     S: np.ndarray
     stats: dict[str, Any] = field(default_factory=dict)
@@ -199,7 +306,13 @@ def _code_hash() -> str:
 
 def cache_dir() -> Path | None:
     """The disk cache folder: ``$SSW_CACHE_DIR/contact`` (default ``~/.cache/ssw``); None
-    (memory only) when ``SSW_CACHE_DIR`` is ``none``, ``off`` or empty."""
+    (memory only) when ``SSW_CACHE_DIR`` is ``none``, ``off`` or empty.
+
+    Returns
+    -------
+    pathlib.Path or None
+        The folder, or None.
+    """
     from ssw.h5io import cache_root
 
     root = cache_root()
@@ -231,7 +344,13 @@ class OperatorStore:
 
     def pop_cost(self) -> dict[str, float]:
         """Operators built and seconds spent meshing, assembling and factoring them since
-        the last call (the cost a curve's stats charge to it)."""
+        the last call (the cost a curve's stats charge to it).
+
+        Returns
+        -------
+        dict
+            Operators built and seconds spent (s) by stage.
+        """
         out, self._cost = self._cost, {"count": 0, "wall_mesh": 0.0, "wall_assemble": 0.0,
                                        "wall_factor": 0.0}
         return out
@@ -257,7 +376,18 @@ class OperatorStore:
         return model
 
     def layout(self, geom: Geometry) -> Layout:
-        """The retained dofs of ``geom`` (from memory, disk, or by meshing it)."""
+        """The retained dofs of ``geom`` (from memory, disk, or by meshing it).
+
+        Parameters
+        ----------
+        geom : Geometry
+            The scene's geometry (m).
+
+        Returns
+        -------
+        Layout
+            The retained dofs.
+        """
         key = geom.key()
         if key in self._layouts:
             return self._layouts[key]
@@ -274,7 +404,27 @@ class OperatorStore:
 
     def body(self, geom: Geometry, which: str, nu: float) -> BodyOperator:
         """The condensed operator of the ``plate`` or the ``soil`` of ``geom`` at Poisson's
-        ratio ``nu`` (unit E)."""
+        ratio ``nu`` (unit E).
+
+        Parameters
+        ----------
+        geom : Geometry
+            The scene's geometry (m).
+        which : str
+            ``plate`` or ``soil``.
+        nu : float
+            Poisson's ratio.
+
+        Returns
+        -------
+        BodyOperator
+            The condensed operator (unit E).
+
+        Raises
+        ------
+        ConfigError
+            If ``which`` is neither, or the plate has no thickness.
+        """
         if which not in ("plate", "soil"):
             raise ConfigError("body", which, "plate | soil")
         if which == "plate" and geom.plate_thickness <= 0:
@@ -529,6 +679,28 @@ class SceneLCP:
     or None: ``dW/dE_soil`` (no plate: ``-W / E``; a frictionless or bonded plate:
     ``-W (dH/dE) W``, ``dH/dE = E_p^2 Y^T S Y`` of the Schur complement ``H``; None for the
     unilateral interface), for the law's derivative in E (:mod:`ssw.walls.fem`).
+
+    Parameters
+    ----------
+    W : numpy.ndarray
+        Compliance (m/N), (m, m).
+    q0 : numpy.ndarray
+        Gaps at zero indentation (m), (m,).
+    q1 : numpy.ndarray
+        Gap change per unit indentation, (m,).
+    n_sphere : int
+        Number of sphere candidates (the first constraints).
+    r : numpy.ndarray
+        Radii of the sphere candidates (m).
+    weight : numpy.ndarray
+        Their surface weights (m^2).
+    tie : numpy.ndarray or None
+        Force the plate pulls on the soil's axis node per unit constraint force (N), (m,); None
+        unless unilateral.
+    dofs : int
+        Unknowns of the dense system.
+    dW_dE : numpy.ndarray or None
+        ``dW/dE_soil`` (m/N/Pa), (m, m), or None.
     """
 
     W: np.ndarray
@@ -549,7 +721,36 @@ def coupled_stiffness(
     """The condensed plate and soil assembled on their retained dofs: ``K`` (Pa m-scaled),
     the plate's dofs ``p_map`` (candidates, then interface) and the soil's ``s_map``
     (interface) in it, and ``off`` the interface nodes whose plate and soil dofs are two
-    (``unilateral``: every node off the axis; else none, the interface is shared)."""
+    (``unilateral``: every node off the axis; else none, the interface is shared).
+
+    Parameters
+    ----------
+    plate_S : numpy.ndarray
+        Plate's condensed stiffness (unit E).
+    soil_S : numpy.ndarray
+        Soil's condensed stiffness (unit E).
+    plate_E : float
+        Plate's Young's modulus (Pa).
+    soil_E : float
+        Soil's Young's modulus (Pa).
+    layout : Layout
+        The retained dofs.
+    nc : int
+        Number of sphere candidates.
+    unilateral : bool
+        Whether the interface is unilateral.
+
+    Returns
+    -------
+    K : numpy.ndarray
+        Coupled stiffness.
+    p_map : numpy.ndarray
+        Plate dofs in ``K``.
+    s_map : numpy.ndarray
+        Soil dofs in ``K``.
+    off : numpy.ndarray
+        Interface nodes with two dofs.
+    """
     ni = layout.iface_r.size
     p_map = np.arange(nc + ni)
     s_map = nc + np.arange(ni)
@@ -702,7 +903,13 @@ _DEFAULT: OperatorStore | None = None
 
 
 def default_store() -> OperatorStore:
-    """The process-wide :class:`OperatorStore` (disk cache from ``$SSW_CACHE_DIR``)."""
+    """The process-wide :class:`OperatorStore` (disk cache from ``$SSW_CACHE_DIR``).
+
+    Returns
+    -------
+    OperatorStore
+        The store.
+    """
     global _DEFAULT
     if _DEFAULT is None or _DEFAULT.directory != cache_dir():
         _DEFAULT = OperatorStore()

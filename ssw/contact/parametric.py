@@ -76,6 +76,21 @@ class Path:
     ``lam0, lam1`` (k, m) N and N/m: ``lam = lam0 + delta lam1`` (0 off the active set);
     ``gap0, gap1`` (k, m) m and -: ``g = gap0 + delta gap1`` (0 on the active set);
     ``active`` (k, m) bool.
+
+    Parameters
+    ----------
+    breaks : numpy.ndarray
+        Piece breakpoints (m), (k + 1,).
+    lam0 : numpy.ndarray
+        Force intercepts (N), (k, m).
+    lam1 : numpy.ndarray
+        Force slopes (N/m), (k, m).
+    gap0 : numpy.ndarray
+        Gap intercepts (m), (k, m).
+    gap1 : numpy.ndarray
+        Gap slopes, (k, m).
+    active : numpy.ndarray
+        Active sets, (k, m) bool.
     """
 
     breaks: np.ndarray
@@ -92,18 +107,51 @@ class Path:
 
     def piece_of(self, delta: np.ndarray) -> np.ndarray:
         """Index of the piece holding each ``delta`` (m); a breakpoint belongs to the piece
-        that starts there."""
+        that starts there.
+
+        Parameters
+        ----------
+        delta : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Piece indices, (n,).
+        """
         j = np.searchsorted(self.breaks, np.asarray(delta, float), side="right") - 1
         return np.clip(j, 0, self.pieces - 1)
 
     def forces(self, delta: np.ndarray) -> np.ndarray:
-        """(n, m) constraint forces ``lam`` (N) at the indentations ``delta`` (n,)."""
+        """(n, m) constraint forces ``lam`` (N) at the indentations ``delta`` (n,).
+
+        Parameters
+        ----------
+        delta : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Constraint forces (N), (n, m).
+        """
         d = np.asarray(delta, float)
         j = self.piece_of(d)
         return self.lam0[j] + d[:, None] * self.lam1[j]
 
     def gaps(self, delta: np.ndarray) -> np.ndarray:
-        """(n, m) gaps ``g`` (m) at the indentations ``delta`` (n,)."""
+        """(n, m) gaps ``g`` (m) at the indentations ``delta`` (n,).
+
+        Parameters
+        ----------
+        delta : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Gaps (m), (n, m).
+        """
         d = np.asarray(delta, float)
         j = self.piece_of(d)
         return self.gap0[j] + d[:, None] * self.gap1[j]
@@ -114,6 +162,22 @@ def prefix_path(W: np.ndarray, q0: np.ndarray, q1: np.ndarray,
     """The path if its active sets are the prefixes of the constraints' order (module
     docstring), else None. ``delta_end`` (m, may be inf): the path ends there or where the
     last constraint enters the contact, whichever comes first.
+
+    Parameters
+    ----------
+    W : numpy.ndarray
+        Constraint compliance matrix (m/N), (m, m), symmetric positive definite.
+    q0 : numpy.ndarray
+        Gaps at zero indentation (m), (m,).
+    q1 : numpy.ndarray
+        Gap change per unit indentation, (m,).
+    delta_end : float
+        Last indentation (m), may be inf.
+
+    Returns
+    -------
+    Path or None
+        The piecewise-linear path, or None.
     """
     W, q0, q1 = np.asarray(W, float), np.asarray(q0, float), np.asarray(q1, float)
     m = q0.size
@@ -164,7 +228,26 @@ def prefix_path(W: np.ndarray, q0: np.ndarray, q1: np.ndarray,
 def trace(W: np.ndarray, q0: np.ndarray, q1: np.ndarray, delta_end: float
           ) -> tuple[Path, dict[str, int]]:
     """The path on ``[0, delta_end]``: :func:`prefix_path` when it holds, else
-    :class:`Tracer`. Also returns ``{"pieces", "prefix"}`` (1 if the fast path served)."""
+    :class:`Tracer`. Also returns ``{"pieces", "prefix"}`` (1 if the fast path served).
+
+    Parameters
+    ----------
+    W : numpy.ndarray
+        Constraint compliance matrix (m/N), (m, m), symmetric positive definite.
+    q0 : numpy.ndarray
+        Gaps at zero indentation (m), (m,).
+    q1 : numpy.ndarray
+        Gap change per unit indentation, (m,).
+    delta_end : float
+        Last indentation (m).
+
+    Returns
+    -------
+    path : Path
+        The piecewise-linear path.
+    stats : dict
+        ``pieces`` and ``prefix``.
+    """
     p = prefix_path(W, q0, q1, delta_end)
     if p is not None and p.breaks[-1] >= delta_end:
         return p, {"pieces": p.pieces, "prefix": 1}

@@ -97,12 +97,24 @@ def _under_mpi() -> bool:
 
 
 def comm_size() -> int:
-    """Number of MPI ranks of PETSC_COMM_WORLD (1 outside an MPI launcher)."""
+    """Number of MPI ranks of PETSC_COMM_WORLD (1 outside an MPI launcher).
+
+    Returns
+    -------
+    int
+        Number of ranks.
+    """
     return _petsc().COMM_WORLD.getSize() if _under_mpi() else 1
 
 
 def comm_rank() -> int:
-    """Rank of this process in PETSC_COMM_WORLD (0 outside an MPI launcher)."""
+    """Rank of this process in PETSC_COMM_WORLD (0 outside an MPI launcher).
+
+    Returns
+    -------
+    int
+        This process's rank.
+    """
     return _petsc().COMM_WORLD.getRank() if _under_mpi() else 0
 
 

@@ -94,7 +94,23 @@ def _allowed(kind: str, lo: float, closed: bool, hi: float | None) -> str:
 def settings_of(contact_cfg: dict[str, Any]) -> dict[str, Any]:
     """The contact settings with defaults filled in and checked against the schema's
     ranges (:data:`RANGES`; ConfigError naming the field otherwise). Other keys pass
-    through."""
+    through.
+
+    Parameters
+    ----------
+    contact_cfg : dict
+        The contact settings (SI).
+
+    Returns
+    -------
+    dict
+        The filled settings.
+
+    Raises
+    ------
+    ConfigError
+        If a setting is unknown in kind or out of its range.
+    """
     cfg = {**DEFAULTS, **contact_cfg}
     if cfg["interface"] not in INTERFACES:
         raise ConfigError("contact.interface", cfg["interface"], " | ".join(INTERFACES))
@@ -133,7 +149,32 @@ def condense(
     """Condensed constraints of the monolithic engine: sphere candidates are the top nodes
     with r <= r_cand (those with r <= r_start condensed at once), plus, for the unilateral
     interface, the interface pairs off the axis. Also returns the top nodes beyond the
-    candidates with r < R/2 (checked for penetration at the end)."""
+    candidates with r < R/2 (checked for penetration at the end).
+
+    Parameters
+    ----------
+    sysm : System
+        The assembled system.
+    solver : LUSolver
+        Its factorization.
+    mesh : Mesh
+        The mesh (m).
+    radius : float
+        Sphere radius (m).
+    r_cand : float
+        Radius of the candidate zone (m).
+    interface : str
+        The plate-soil interface.
+    r_start : float
+        Radius within which candidates are condensed at once (m).
+
+    Returns
+    -------
+    cond : Condensed
+        The condensed constraints.
+    beyond : numpy.ndarray
+        Top nodes beyond the candidates with ``r < R/2``.
+    """
     tol = geometric_tolerance(sysm.nodes, sysm.tri)
     top_body = 1 if mesh.plate_radius > 0 else 0
     top_elems = np.flatnonzero(sysm.body == top_body)
@@ -169,6 +210,12 @@ class MeshCache(OperatorStore):
     Scenes that differ only in materials (a set's soils under one plate) share the mesh
     and the nested-dissection order: gmsh and the ordering are deterministic, so reusing
     them gives the same numbers as building them again.
+
+    Parameters
+    ----------
+    directory : str or pathlib.Path or None
+        The disk cache folder; ``"env"``: :func:`ssw.contact.operators.cache_dir`; None: memory
+        only.
     """
 
     def __init__(self, directory: Any = "env") -> None:
@@ -180,6 +227,22 @@ class MeshCache(OperatorStore):
 
     def mesh_for(self, plate_thickness: float, plate_radius: float,
                  settings: MeshSettings) -> Mesh:
+        """The mesh of a plate and settings, rebuilt only when they change.
+
+        Parameters
+        ----------
+        plate_thickness : float
+            Plate thickness (m).
+        plate_radius : float
+            Plate radius (m).
+        settings : MeshSettings
+            The mesh settings (m).
+
+        Returns
+        -------
+        Mesh
+            The mesh.
+        """
         key = (float(plate_thickness), float(plate_radius), settings)
         if key != self.key or self.mesh is None:
             self.mesh = build_mesh(plate_thickness, plate_radius, settings)
@@ -187,7 +250,22 @@ class MeshCache(OperatorStore):
         return self.mesh
 
     def order_nodes(self, rows: np.ndarray, cols: np.ndarray, n: int) -> np.ndarray:
-        """:func:`ssw.contact.petsc_solver.nd_order`, remembered for the last graph."""
+        """:func:`ssw.contact.petsc_solver.nd_order`, remembered for the last graph.
+
+        Parameters
+        ----------
+        rows : numpy.ndarray
+            Graph row indices.
+        cols : numpy.ndarray
+            Graph column indices.
+        n : int
+            Number of nodes.
+
+        Returns
+        -------
+        numpy.ndarray
+            The node permutation, (n,).
+        """
         import hashlib
 
         graph = (n, hashlib.sha1(rows.tobytes() + cols.tobytes()).digest())
@@ -330,6 +408,24 @@ def edge_radii(r: np.ndarray, gap: np.ndarray, active: np.ndarray) -> np.ndarray
 
     ``r`` (ms,) sorted; ``gap``, ``active`` (n, ms): per state, the gaps (m) and the active
     sphere candidates. Returns (n,) m.
+
+    Parameters
+    ----------
+    r : numpy.ndarray
+        Radii of the sphere candidates (m), sorted, (ms,).
+    gap : numpy.ndarray
+        Gaps (m), (n, ms).
+    active : numpy.ndarray
+        Active candidates (bool), (n, ms).
+
+    Returns
+    -------
+    numpy.ndarray
+        Contact radii (m), (n,).
+
+    References
+    ----------
+    Johnson, K. L. (1985). *Contact Mechanics*, Cambridge University Press, eq. (3.42).
     """
     n, ms = active.shape
     any_act = active.any(axis=1)
@@ -429,6 +525,20 @@ def indentation_steps(delta_max: float, steps: int, delta_reach: float | None = 
     increments to 0.1 mm and 1000 more beyond, two densities, made the fitted K jump where
     the chain's reach crosses 0.1 mm), and every multiple of ``h`` (the thesis's reference
     indentation 1 um among them) is a sample, not an interpolation.
+
+    Parameters
+    ----------
+    delta_max : float
+        Indentation of the uniform part (m), > 0.
+    steps : int
+        Number of increments to ``delta_max``, >= 1.
+    delta_reach : float or None
+        Indentation to continue to (m); None: stop at ``delta_max``.
+
+    Returns
+    -------
+    numpy.ndarray
+        Indentations (m).
     """
     h = float(delta_max) / int(steps)
     d = h * np.arange(1, int(steps) + 1)
@@ -464,7 +574,20 @@ def _check_zone(cond: Condensed, sysm: System, outside: np.ndarray, lam: np.ndar
 def strain_energy(state: dict[str, Any], lam: np.ndarray) -> float:
     """Strain energy (J) of the state under contact forces ``lam`` (N): ``x^T K x / 2`` with
     the monolithic engine's stiffness, ``lam^T W lam / 2`` with the substructured one's
-    condensed compliance (Clapeyron)."""
+    condensed compliance (Clapeyron).
+
+    Parameters
+    ----------
+    state : dict
+        The engine's state.
+    lam : numpy.ndarray
+        Contact forces (N).
+
+    Returns
+    -------
+    float
+        Strain energy (J).
+    """
     if "cond" in state:
         x = state["cond"].X @ lam
         return 0.5 * float(x @ state["solver"].matvec(x))
@@ -474,7 +597,25 @@ def strain_energy(state: dict[str, Any], lam: np.ndarray) -> float:
 
 def scene_plate(scene: Any, materials: dict[str, Any]) -> tuple[float, float] | None:
     """The ``(E Pa, nu)`` of a scene's plate from the material library (None: no plate);
-    ConfigError naming ``plate_material`` when the library has no such material."""
+    ConfigError naming ``plate_material`` when the library has no such material.
+
+    Parameters
+    ----------
+    scene : Scene
+        The study scene.
+    materials : dict
+        The materials library (SI).
+
+    Returns
+    -------
+    tuple of float or None
+        ``(E, nu)`` (Pa, -), or None.
+
+    Raises
+    ------
+    ConfigError
+        If the library has no such material.
+    """
     if scene.plate_thickness <= 0:
         return None
     if scene.plate_material not in materials:
@@ -505,6 +646,11 @@ def solve_scene(
         A mesh and operator cache shared by the scenes of a batch (None: the process's).
     engine : str
         ``substructured`` (default) or ``monolithic`` (the module docstring).
+
+    Returns
+    -------
+    ForceCurve
+        The curve (N, m), with the scene's inputs.
     """
     if scene.sample is not None:  # a finite block: the FEM's soil domain is the block
         contact_cfg = scene.sample.contact_settings(contact_cfg)

@@ -77,7 +77,17 @@ FIELDS_KEPT = 4
 @dataclass(frozen=True)
 class BodyPeak:
     """Peak von Mises stress of one body at each state. ``peak`` (n,) Pa; ``r``, ``z``
-    (n,) m where it occurs (z from the plate-soil interface, up)."""
+    (n,) m where it occurs (z from the plate-soil interface, up).
+
+    Parameters
+    ----------
+    peak : numpy.ndarray
+        Peak von Mises stress (Pa), (n,).
+    r : numpy.ndarray
+        Radius where it occurs (m), (n,).
+    z : numpy.ndarray
+        Height where it occurs, from the plate-soil interface, up (m), (n,).
+    """
 
     peak: np.ndarray
     r: np.ndarray
@@ -89,7 +99,21 @@ class ContactStress:
     """Stresses of contact states: ``delta`` (n,) m (rigid-sphere indentation), ``force``
     (n,) N on the sphere, ``plate`` (None without one) and ``soil`` peaks. ``fields``
     (when asked): per body, ``(r, z, von_mises)`` at every evaluation point, arrays
-    (n_points,) m, m and (n_points, n) Pa."""
+    (n_points,) m, m and (n_points, n) Pa.
+
+    Parameters
+    ----------
+    delta : numpy.ndarray
+        Rigid-sphere indentations (m), (n,).
+    force : numpy.ndarray
+        Forces on the sphere (N), (n,).
+    plate : BodyPeak or None
+        The plate's peaks, or None.
+    soil : BodyPeak
+        The soil's peaks.
+    fields : dict or None
+        Per body, ``(r, z, von_mises)`` (m, m, Pa) at every point, or None.
+    """
 
     delta: np.ndarray
     force: np.ndarray
@@ -148,7 +172,18 @@ class BodyField:
 
     def displacements(self, u_B: np.ndarray) -> np.ndarray:
         """Nodal ``(u_r, u_z)`` (n_nodes, 2, n_states) m of the body for retained
-        displacements ``u_B`` (n_B, n_states) m."""
+        displacements ``u_B`` (n_B, n_states) m.
+
+        Parameters
+        ----------
+        u_B : numpy.ndarray
+            Retained displacements (m), (n_B, n_states).
+
+        Returns
+        -------
+        numpy.ndarray
+            Nodal displacements (m), (n_nodes, 2, n_states).
+        """
         u_B = np.asarray(u_B, float).reshape(self.ndof - self.n_int, -1)
         x = np.empty((self.ndof, u_B.shape[1]))
         x[self.n_int:] = u_B
@@ -162,7 +197,20 @@ class BodyField:
     def von_mises(self, u_B: np.ndarray, E: np.ndarray) -> np.ndarray:
         """von Mises stress (n_points, n_states) Pa at ``points`` for retained
         displacements ``u_B`` (n_B, n_states) m and the body's modulus ``E`` (n_states,) Pa
-        of each state."""
+        of each state.
+
+        Parameters
+        ----------
+        u_B : numpy.ndarray
+            Retained displacements (m), (n_B, n_states).
+        E : numpy.ndarray
+            Body's Young's modulus (Pa), (n_states,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Von Mises stress (Pa), (n_points, n_states).
+        """
         u = self.displacements(u_B)
         ue = np.concatenate([u[self.tri, 0], u[self.tri, 1]], axis=1)  # (ne, 12, n)
         # (ne, 3, 4, n): one batched product of the (12 x 12) operators (numpy's matmul
@@ -213,7 +261,29 @@ _FIELDS: OrderedDict[tuple[str, str, float], BodyField] = OrderedDict()
 
 def body_field(store: OperatorStore, geom: Geometry, which: str, nu: float) -> BodyField:
     """The :class:`BodyField` of the ``plate`` or the ``soil`` of ``geom`` at ``nu``
-    (built from the geometry's mesh on first use, then kept: :data:`FIELDS_KEPT`)."""
+    (built from the geometry's mesh on first use, then kept: :data:`FIELDS_KEPT`).
+
+    Parameters
+    ----------
+    store : OperatorStore
+        The operator store.
+    geom : Geometry
+        The scene's geometry (m).
+    which : str
+        ``plate`` or ``soil``.
+    nu : float
+        Poisson's ratio.
+
+    Returns
+    -------
+    BodyField
+        The field.
+
+    Raises
+    ------
+    ConfigError
+        If the geometry has an elastic subgrade.
+    """
     key = (geom.key(), which, float(nu))
     if key in _FIELDS:
         _FIELDS.move_to_end(key)
@@ -235,7 +305,22 @@ def body_field(store: OperatorStore, geom: Geometry, which: str, nu: float) -> B
 def retained_dofs(model: Any, which: str) -> tuple[np.ndarray, np.ndarray]:
     """The retained (node, component) of a body, in its condensed operator's order
     (``ssw.contact.operators._condense``): the plate's candidates then its interface
-    dofs; the soil's interface dofs, or its candidates without a plate."""
+    dofs; the soil's interface dofs, or its candidates without a plate.
+
+    Parameters
+    ----------
+    model : Any
+        The condensed geometry's model.
+    which : str
+        ``plate`` or ``soil``.
+
+    Returns
+    -------
+    nodes : numpy.ndarray
+        Node indices.
+    comps : numpy.ndarray
+        Components (0: r, 1: z).
+    """
     if which == "plate":
         return (np.concatenate([model.cand, model.iface_nodes[:, 1]]),
                 np.concatenate([np.ones(len(model.cand), int), model.iface_comp]))
@@ -253,7 +338,32 @@ def retained_displacements(
     ``G`` assembled as :func:`ssw.contact.operators.scene_lcp` does (a sphere candidate's
     force pushes its ``u_z`` down; a pair of the unilateral interface pulls its two nodes
     together). ``lam`` (m,) gives (n_dofs,) displacements; (k, m), states of one scene,
-    gives (n_dofs, k) from one factorization."""
+    gives (n_dofs, k) from one factorization.
+
+    Parameters
+    ----------
+    layout : Layout
+        The retained dofs.
+    plate : BodyOperator or None
+        The plate's operator, or None.
+    soil : BodyOperator
+        The soil's operator.
+    soil_E : float
+        Soil's Young's modulus (Pa).
+    plate_E : float or None
+        Plate's Young's modulus (Pa).
+    interface : str
+        The plate-soil interface.
+    lam : numpy.ndarray
+        Constraint forces (N), (m,) or (k, m).
+
+    Returns
+    -------
+    u_plate : numpy.ndarray or None
+        Plate's retained displacements (m).
+    u_soil : numpy.ndarray
+        Soil's retained displacements (m).
+    """
     nc = layout.r.size
     lam = np.asarray(lam, float)
     one = lam.ndim == 1
@@ -301,6 +411,20 @@ def equivalent_radius(radius: float, top: tuple[float, float], bead: tuple[float
     soil it keeps the local contact pressure of the elastic bead (the rigid sphere of the
     bead's own radius overstates it by ``(E_top*/E*)^(2/3)``: 1.6 for a steel plate under a
     steel bead).
+
+    Parameters
+    ----------
+    radius : float
+        Bead radius (m).
+    top : tuple of float
+        The top body's ``(E, nu)`` (Pa, -).
+    bead : tuple of float
+        The bead's ``(E, nu)`` (Pa, -).
+
+    Returns
+    -------
+    float
+        Equivalent rigid radius (m).
     """
     e_top = top[0] / (1.0 - top[1] ** 2)
     e_bead = bead[0] / (1.0 - bead[1] ** 2)
@@ -407,6 +531,11 @@ def contact_stresses(
         (n,) N, the rigid sphere's force at each ``delta`` when the caller knows it (the
         chain's fem wall at its peak indentation): with ``bead``, the rigid sphere's path is
         then not traced again.
+
+    Returns
+    -------
+    ContactStress
+        The peaks (Pa, m) of the plate and the soil at each state.
     """
     from ssw.contact.parametric import trace
     from ssw.contact.scene import settings_of

@@ -47,7 +47,29 @@ from ssw.errors import SolverError
 class Condensation:
     """A body's condensed stiffness. ``S`` (nb, nb) m (N/m per Pa of the body's E) on the
     retained dofs in the order given; ``dofs`` the body's matrix size; ``backward_error``
-    of the factorization; ``pivoted``: the pivoted fallback was used; ``wall_*`` s."""
+    of the factorization; ``pivoted``: the pivoted fallback was used; ``wall_*`` s.
+
+    Parameters
+    ----------
+    S : numpy.ndarray
+        Condensed stiffness (m, N/m per Pa of E), (nb, nb).
+    dofs : int
+        The body's matrix size.
+    nnz_factor : int
+        Nonzeros of the factors.
+    backward_error : float
+        Backward error of the factorization.
+    pivoted : bool
+        Whether the pivoted fallback was used.
+    wall_assemble : float
+        Assembly time (s).
+    wall_factor : float
+        Factorization time (s).
+    body : BodyMatrix or None
+        The body's matrix, or None.
+    factor : Any
+        The factorization, or None.
+    """
 
     S: np.ndarray
     dofs: int
@@ -108,6 +130,30 @@ def body_dofs(
     elimination order (nodes of the body only). Internal dofs follow ``order``, a node's
     u_r, u_z, p in turn, except the pressures of nodes without a free displacement, which
     come after every other internal dof.
+
+    Parameters
+    ----------
+    tri : numpy.ndarray
+        Quadratic triangles (node indices, gmsh order), (ne, 6).
+    free : numpy.ndarray
+        Free displacement components, (n, 2) bool.
+    b_nodes : numpy.ndarray
+        Nodes of the retained dofs.
+    b_comps : numpy.ndarray
+        Components of the retained dofs.
+    order : numpy.ndarray
+        Node elimination order.
+
+    Returns
+    -------
+    udof : numpy.ndarray
+        Displacement dofs, (n, 2).
+    pdof : numpy.ndarray
+        Pressure dofs, (n,).
+    ndof : int
+        Number of dofs.
+    n_internal : int
+        Number of internal dofs.
     """
     n = free.shape[0]
     vertex = np.zeros(n, dtype=bool)
@@ -153,6 +199,18 @@ def schur_complement(K: Any, n_int: int) -> tuple[np.ndarray, float, int, bool]:
     pivot-free LU in the given order when its backward error is at most
     :data:`ssw.contact.lu.BACKWARD_ERROR_TOL` (module docstring), else from a pivoted LU of
     ``K_II`` and one solve per column of ``K_IB``.
+
+    Parameters
+    ----------
+    K : scipy.sparse matrix
+        The square stiffness.
+    n_int : int
+        Number of internal dofs (they come first).
+
+    Returns
+    -------
+    tuple
+        ``(S, backward_error, nnz, pivoted)``.
     """
     return schur_factor(K, n_int)[:4]
 
@@ -261,7 +319,25 @@ class LeadingBlock:
 class BodyMatrix:
     """A body's u-p stiffness at unit E, interior dofs first (``K[:n_int, :n_int]`` is
     ``K_II``), divided by ``scale`` (nondimensional); ``udof`` (n_local, 2) its displacement
-    dofs (-1: fixed), ``nodes``/``tri`` the body's own (local) mesh."""
+    dofs (-1: fixed), ``nodes``/``tri`` the body's own (local) mesh.
+
+    Parameters
+    ----------
+    K : scipy.sparse matrix
+        The u-p stiffness at unit E over ``scale``, interior dofs first.
+    n_int : int
+        Number of interior dofs.
+    ndof : int
+        Number of dofs.
+    scale : float
+        Its scale (N/m per Pa).
+    udof : numpy.ndarray
+        Displacement dofs, (n_local, 2); -1: fixed.
+    nodes : numpy.ndarray
+        The body's node coordinates (m).
+    tri : numpy.ndarray
+        The body's triangles (local indices).
+    """
 
     K: Any
     n_int: int
@@ -278,7 +354,32 @@ def body_matrix(
 ) -> BodyMatrix:
     """The u-p stiffness (unit E) of the body meshed by ``tri`` with the retained dofs
     ``(b_nodes, b_comps)`` last (arguments as :func:`condense_body`); ``E`` and ``nu`` may
-    vary by element (a lift on a subgrade: E relative to the lift's)."""
+    vary by element (a lift on a subgrade: E relative to the lift's).
+
+    Parameters
+    ----------
+    nodes : numpy.ndarray
+        Node coordinates (r, z) (m), (n, 2).
+    tri : numpy.ndarray
+        Quadratic triangles (node indices, gmsh order), (ne, 6).
+    nu : array_like
+        Poisson's ratio, scalar or per element.
+    free : numpy.ndarray
+        Free displacement components, (n, 2) bool.
+    b_nodes : numpy.ndarray
+        Nodes of the retained dofs.
+    b_comps : numpy.ndarray
+        Components of the retained dofs.
+    order_nodes : callable
+        ``order_nodes(rows, cols, n)``: a fill-reducing permutation.
+    E : array_like
+        Young's modulus relative to the body's, scalar or per element.
+
+    Returns
+    -------
+    BodyMatrix
+        The u-p stiffness and its dof numbering.
+    """
     import scipy.sparse as sp
 
     from ssw.contact.assembly import node_graph
@@ -329,6 +430,11 @@ def condense_body(
         ``(rows, cols, n) -> permutation`` (nested dissection).
     E : float or numpy.ndarray
         The body's Young's modulus, Pa (1: the unit-E operator).
+
+    Returns
+    -------
+    Condensation
+        The condensed stiffness and how it was made.
     """
     t0 = time.perf_counter()
     bm = body_matrix(nodes, tri, nu, free, b_nodes, b_comps, order_nodes, E)

@@ -36,7 +36,11 @@ CURVE_REACH = 1.5
 class DynamicTof:
     """TOFs of a dynamic wall and of its quasi-static laws, and what it took.
 
-    Attributes
+    ``error`` is ``tof_half_space / tof_dynamic - 1``, the relative error the quasi-static
+    assumption makes in the TOF; ``error_box`` the same against the 1 m box the study's
+    curves use (static box effect included).
+
+    Parameters
     ----------
     tof_dynamic : numpy.ndarray
         (n,) s, the dynamic wall's.
@@ -51,10 +55,6 @@ class DynamicTof:
     curves : list or None
         Per scene, the static boxes' laws ``{L: (d, F)}`` (m, N; the bead's compliance
         included) when kept.
-
-    ``error`` is ``tof_half_space / tof_dynamic - 1``, the relative error the quasi-static
-    assumption makes in the TOF; ``error_box`` the same against the 1 m box the study's
-    curves use (static box effect included).
     """
 
     tof_dynamic: np.ndarray
@@ -66,10 +66,14 @@ class DynamicTof:
 
     @property
     def error(self) -> np.ndarray:
+        """Relative TOF error of the quasi-static half-space law, ``tof_half_space / tof_dynamic -
+        1``.
+        """
         return self.tof_half_space / self.tof_dynamic - 1.0
 
     @property
     def error_box(self) -> np.ndarray:
+        """Relative TOF error of the static box law, ``tof_static / tof_dynamic - 1``."""
         return self.tof_static / self.tof_dynamic - 1.0
 
 

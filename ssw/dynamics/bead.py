@@ -49,7 +49,18 @@ def _disk(r: np.ndarray, a: np.ndarray) -> np.ndarray:
 
 
 def tributary_edges(r: np.ndarray) -> np.ndarray:
-    """(m + 1,) annulus edges of candidates at radii ``r`` (sorted, ``r[0] >= 0``), m."""
+    """(m + 1,) annulus edges of candidates at radii ``r`` (sorted, ``r[0] >= 0``), m.
+
+    Parameters
+    ----------
+    r : numpy.ndarray
+        Candidate radii (m), sorted, ``r[0] >= 0``, (m,).
+
+    Returns
+    -------
+    numpy.ndarray
+        Annulus edges (m), (m + 1,), from 0.
+    """
     r = np.asarray(r, float)
     mid = 0.5 * (r[1:] + r[:-1])
     last = r[-1] + 0.5 * (r[-1] - r[-2]) if r.size > 1 else 2.0 * r[-1]
@@ -68,6 +79,11 @@ def bead_compliance(r: np.ndarray, E_b: float, nu_b: float) -> np.ndarray:
         The bead's Young's modulus, Pa.
     nu_b : float
         The bead's Poisson's ratio.
+
+    Returns
+    -------
+    numpy.ndarray
+        Symmetric compliance (m/N), (m, m).
     """
     c_b = (1.0 - nu_b**2) / E_b
     b = tributary_edges(r)

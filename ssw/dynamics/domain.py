@@ -49,7 +49,31 @@ PLATE_LAYERS = 4
 
 @dataclass(frozen=True)
 class DomainSpec:
-    """How to size the dynamic domain (module docstring). SI units."""
+    """How to size the dynamic domain (module docstring). SI units.
+
+    Parameters
+    ----------
+    window : float
+        Time the contact's response must be free of reflections (s).
+    f_max : float
+        Highest frequency the mesh resolves (Hz).
+    wave_elements : float
+        Elements per shear wavelength at ``f_max``.
+    size_contact : float
+        Element size under the contact (m).
+    growth : float
+        Element size growth rate away from the contact.
+    plate_layers : int
+        Element layers through the plate.
+    min_domain : float
+        Smallest domain radius = depth (m).
+    max_domain : float
+        Largest domain radius = depth (m).
+    domain : float or None
+        A fixed domain radius = depth (m) instead of the wave-speed rule; None: the rule.
+    size_max : float or None
+        A fixed largest element (m) instead of the wave rule; None: the rule.
+    """
 
     window: float  # s, the time the contact's response must be free of reflections
     f_max: float = F_MAX  # Hz
@@ -73,7 +97,22 @@ class DomainSpec:
 
 
 def domain_size(soil: Material, plate_radius: float, spec: DomainSpec) -> float:
-    """Radius = depth (m) of the dynamic domain (module docstring)."""
+    """Radius = depth (m) of the dynamic domain (module docstring).
+
+    Parameters
+    ----------
+    soil : Material
+        The soil (Pa, -, kg/m^3).
+    plate_radius : float
+        Plate radius (m).
+    spec : DomainSpec
+        The domain sizing.
+
+    Returns
+    -------
+    float
+        Radius = depth of the domain (m).
+    """
     if spec.domain is not None:
         return float(spec.domain)
     lo = max(spec.min_domain, MIN_PLATE_RADII * plate_radius)
@@ -82,7 +121,22 @@ def domain_size(soil: Material, plate_radius: float, spec: DomainSpec) -> float:
 
 
 def mesh_settings(soil: Material, plate_radius: float, spec: DomainSpec) -> MeshSettings:
-    """Mesh settings of :func:`ssw.contact.mesh.build_mesh` for the dynamic scene."""
+    """Mesh settings of :func:`ssw.contact.mesh.build_mesh` for the dynamic scene.
+
+    Parameters
+    ----------
+    soil : Material
+        The soil (Pa, -, kg/m^3).
+    plate_radius : float
+        Plate radius (m).
+    spec : DomainSpec
+        The domain sizing.
+
+    Returns
+    -------
+    MeshSettings
+        The mesh settings (m).
+    """
     L = domain_size(soil, plate_radius, spec)
     h_wave = soil.c_s / (spec.f_max * spec.wave_elements)
     size_max = float(min(h_wave, L / 4.0)) if spec.size_max is None else spec.size_max

@@ -57,7 +57,17 @@ WAKE = 1e-7
 @dataclass(frozen=True)
 class WallState:
     """One scene's wall state: the FEM state, whether the dynamics runs (``awake``) and
-    the bead's rest indentation ``d`` (m) while it does not."""
+    the bead's rest indentation ``d`` (m) while it does not.
+
+    Parameters
+    ----------
+    fem : State
+        The FEM state.
+    awake : bool
+        Whether the dynamics runs.
+    d : float
+        The bead's rest indentation (m) while dormant.
+    """
 
     fem: State
     awake: bool
@@ -74,6 +84,27 @@ class Scene:
     sphere's FEM at the indentation ``d / s``, ``s`` of
     :func:`ssw.chain.wall.compliance_scale`: the quasi-static walls' rule, for
     comparisons with them) or ``rigid`` (none).
+
+    Parameters
+    ----------
+    soil : Material
+        The soil (Pa, -, kg/m^3).
+    plate : Material or None
+        The plate, or None.
+    plate_thickness : float
+        Plate thickness (m); 0 without a plate.
+    plate_radius : float
+        Plate radius (m).
+    radius : float
+        Bead radius (m).
+    interface : str
+        The plate-soil interface.
+    bead_E : float or None
+        Bead's Young's modulus (Pa).
+    bead_nu : float or None
+        Bead's Poisson's ratio.
+    bead : str
+        How the bead's elasticity enters: ``compliance``, ``scale`` or ``rigid``.
     """
 
     soil: Material
@@ -104,7 +135,22 @@ class Scene:
 
 
 def top_candidates(system: DynamicSystem, mesh: Mesh, r_cand: float) -> np.ndarray:
-    """Top-surface nodes of the loaded body with ``r <= r_cand``, sorted by radius."""
+    """Top-surface nodes of the loaded body with ``r <= r_cand``, sorted by radius.
+
+    Parameters
+    ----------
+    system : DynamicSystem
+        The scene's operators.
+    mesh : Mesh
+        The scene's mesh.
+    r_cand : float
+        Radius of the candidate zone (m).
+
+    Returns
+    -------
+    numpy.ndarray
+        Node indices, sorted by radius.
+    """
     s = system.static
     tol = 1e-9 * mesh.soil_radius
     top_body = 1 if mesh.plate_radius > 0 else 0
@@ -170,6 +216,7 @@ class ContactFEM:
 
     @property
     def n_candidates(self) -> int:
+        """Number of contact candidate nodes."""
         return len(self.r)
 
     def _check_zone(self, lam: np.ndarray) -> None:
@@ -179,21 +226,54 @@ class ContactFEM:
 
     # ------------------------------------------------------------------ static
     def static_contact(self, d: float) -> np.ndarray:
-        """Contact forces (N) of the bead held at indentation ``d`` (m), at rest."""
+        """Contact forces (N) of the bead held at indentation ``d`` (m), at rest.
+
+        Parameters
+        ----------
+        d : float
+            Bead indentation (m).
+
+        Returns
+        -------
+        numpy.ndarray
+            Contact forces (N), one per candidate.
+        """
         lam, self._active, _ = solve_lcp(self.W_static, self.shape - self.d_factor * d,
                                          self._active, self.tol, self._cache_static)
         self._check_zone(lam)
         return lam
 
     def static_force(self, d: np.ndarray) -> np.ndarray:
-        """Quasi-static wall force (N) at indentations ``d`` (m), any shape."""
+        """Quasi-static wall force (N) at indentations ``d`` (m), any shape.
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), any shape.
+
+        Returns
+        -------
+        numpy.ndarray
+            Force (N), the shape of ``d``.
+        """
         d = np.asarray(d, float)
         return np.array([self.static_contact(x).sum() for x in d.ravel()]).reshape(d.shape)
 
     def static_indentation(self, F: float) -> float:
         """Indentation (m) at which the static force is ``F`` (N): the root of the monotone
         static law (:func:`ssw.roots.find_root`, the bracket grown from ``[0, 1 um]`` up
-        to the bead's radius)."""
+        to the bead's radius).
+
+        Parameters
+        ----------
+        F : float
+            Force (N).
+
+        Returns
+        -------
+        float
+            Indentation (m); 0 for ``F <= 0``.
+        """
         from ssw.roots import find_root
 
         if F <= 0:
@@ -203,17 +283,54 @@ class ContactFEM:
         return float(root.x)
 
     def rest(self, d: float) -> State:
-        """The state at rest with the bead held at ``d`` (m)."""
+        """The state at rest with the bead held at ``d`` (m).
+
+        Parameters
+        ----------
+        d : float
+            Bead indentation (m).
+
+        Returns
+        -------
+        State
+            The FEM state at rest.
+        """
         return self.static.state(self.static_contact(d))
 
     # ------------------------------------------------------------------ dynamic
     def start(self, d: float) -> WallState:
-        """The dormant state at rest with the bead at ``d`` (m)."""
+        """The dormant state at rest with the bead at ``d`` (m).
+
+        Parameters
+        ----------
+        d : float
+            Bead indentation (m).
+
+        Returns
+        -------
+        WallState
+            The dormant state.
+        """
         return WallState(self.rest(d), awake=False, d=float(d))
 
     def advance(self, ws: WallState, d: float) -> tuple[float, WallState]:
         """One step to the bead indentation ``d`` (m), waking the FEM when the bead has moved
-        by more than :data:`WAKE` x the indentation scale from its rest position."""
+        by more than :data:`WAKE` x the indentation scale from its rest position.
+
+        Parameters
+        ----------
+        ws : WallState
+            The state at the step's start.
+        d : float
+            Bead indentation at the step's end (m).
+
+        Returns
+        -------
+        F : float
+            Wall force (N).
+        state : WallState
+            The new state.
+        """
         if not ws.awake:
             if abs(d - ws.d) <= WAKE * self.d_scale:
                 return float(self.static_contact(d).sum()), ws
@@ -222,7 +339,27 @@ class ContactFEM:
         return F, WallState(st, awake=True, d=float(d))
 
     def step(self, st: State, d: float) -> tuple[float, State]:
-        """Advance one step to the bead indentation ``d`` (m): (wall force N, new state)."""
+        """Advance one step to the bead indentation ``d`` (m): (wall force N, new state).
+
+        Parameters
+        ----------
+        st : State
+            The FEM state at the step's start.
+        d : float
+            Bead indentation at the step's end (m).
+
+        Returns
+        -------
+        F : float
+            Wall force (N).
+        state : State
+            The new FEM state.
+
+        Raises
+        ------
+        SolverError
+            If the contact was built without a time step.
+        """
         if self.newmark is None:
             raise SolverError("this contact was built without a time step (static only)")
         u_free = self.newmark.free(st)
@@ -233,7 +370,18 @@ class ContactFEM:
         return float(lam.sum()), self.newmark.finish(st, u_free, lam)
 
     def energy(self, st: State) -> tuple[float, float, float]:
-        """(kinetic, strain incl. the bead's, radiated) energies (J) of a state."""
+        """(kinetic, strain incl. the bead's, radiated) energies (J) of a state.
+
+        Parameters
+        ----------
+        st : State
+            The FEM state.
+
+        Returns
+        -------
+        tuple of float
+            ``(kinetic, strain, radiated)`` (J).
+        """
         kin, strain = self.system.energy(st.u, st.v)
         return kin, strain + 0.5 * float(st.lam @ (self.W_bead @ st.lam)), st.radiated
 
@@ -247,6 +395,11 @@ class ContactFEM:
 class FEMWall:
     """A stateful wall over scenes, each a :class:`ContactFEM`
     (:class:`ssw.chain.wall.StatefulWall`). States are lists of :class:`WallState`.
+
+    Parameters
+    ----------
+    contacts : list of ContactFEM
+        One contact FEM per scene.
     """
 
     def __init__(self, contacts: list[ContactFEM]) -> None:
@@ -258,28 +411,95 @@ class FEMWall:
 
     @property
     def n(self) -> int:
+        """Number of scenes."""
         return len(self.contacts)
 
     def force(self, d: np.ndarray) -> np.ndarray:
-        """Quasi-static force (N) at ``d`` (m), one per scene."""
+        """Quasi-static force (N) at ``d`` (m), one per scene.
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Force (N), (n,).
+        """
         return np.array([c.static_force(x) for c, x in zip(self.contacts, d, strict=True)])
 
     def indentation(self, F: np.ndarray) -> np.ndarray:
-        """Static indentation (m) carrying ``F`` (N), one per scene."""
+        """Static indentation (m) carrying ``F`` (N), one per scene.
+
+        Parameters
+        ----------
+        F : numpy.ndarray
+            Forces (N), scalar or (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Indentation (m), (n,).
+        """
         F = np.broadcast_to(np.asarray(F, float), (self.n,))
         return np.array([c.static_indentation(x) for c, x in zip(self.contacts, F, strict=True)])
 
     def hertz_equivalent(self, d_ref: float) -> np.ndarray:
-        """``F(d_ref) / d_ref^1.5`` (N/m^1.5), static."""
+        """``F(d_ref) / d_ref^1.5`` (N/m^1.5), static.
+
+        Parameters
+        ----------
+        d_ref : float
+            Reference indentation (m), > 0.
+
+        Returns
+        -------
+        numpy.ndarray
+            Equivalent Hertz coefficient (N/m^1.5), (n,).
+        """
         return self.force(np.full(self.n, d_ref)) / d_ref**1.5
 
     def start(self, d0: np.ndarray) -> list[WallState]:
-        """Dormant rest states with the beads at ``d0`` (m)."""
+        """Dormant rest states with the beads at ``d0`` (m).
+
+        Parameters
+        ----------
+        d0 : numpy.ndarray
+            Initial indentations (m), (n,).
+
+        Returns
+        -------
+        list of WallState
+            One state per scene.
+        """
         return [c.start(x) for c, x in zip(self.contacts, d0, strict=True)]
 
     def advance(self, states: list[WallState], d: np.ndarray, dt: float
                 ) -> tuple[np.ndarray, list[WallState]]:
-        """Wall forces (N) at the new indentations ``d`` (m) and the new states."""
+        """Wall forces (N) at the new indentations ``d`` (m) and the new states.
+
+        Parameters
+        ----------
+        states : list of WallState
+            One state per scene.
+        d : numpy.ndarray
+            Indentations (m), (n,).
+        dt : float
+            Time step (s); must be the one the FEM was factored for.
+
+        Returns
+        -------
+        F : numpy.ndarray
+            Wall forces (N), (n,).
+        states : list of WallState
+            The new states.
+
+        Raises
+        ------
+        ConfigError
+            If ``dt`` is not the wall's step.
+        """
         if dt != self.dt:
             raise ConfigError("dt", dt, f"the step the FEM wall was factored for ({self.dt} s)")
         out = [c.advance(s, x) for c, s, x in zip(self.contacts, states, d, strict=True)]
@@ -287,17 +507,57 @@ class FEMWall:
 
     def energy(self, states: list[WallState]) -> tuple[np.ndarray, np.ndarray]:
         """Stored (kinetic + strain, J) and radiated (J) energy per scene (a dormant
-        scene's: its rest state's)."""
+        scene's: its rest state's).
+
+        Parameters
+        ----------
+        states : list of WallState
+            One state per scene.
+
+        Returns
+        -------
+        stored : numpy.ndarray
+            Kinetic plus strain energy (J), (n,).
+        radiated : numpy.ndarray
+            Energy radiated through the boundary (J), (n,).
+        """
         e = np.array([c.energy(s.fem) for c, s in zip(self.contacts, states, strict=True)])
         return e[:, 0] + e[:, 1], e[:, 2]
 
     def take(self, idx: np.ndarray) -> FEMWall:
+        """The scenes ``idx`` (may repeat).
+
+        Parameters
+        ----------
+        idx : numpy.ndarray
+            Integer indices of the scenes to keep, (k,); may repeat.
+
+        Returns
+        -------
+        FEMWall
+            The wall of the selected scenes (the same contacts).
+        """
         return FEMWall([self.contacts[i] for i in np.atleast_1d(idx)])
 
     def take_state(self, states: list[WallState], idx: np.ndarray) -> list[WallState]:
+        """The states of the scenes ``idx``.
+
+        Parameters
+        ----------
+        states : list of WallState
+            One state per scene.
+        idx : numpy.ndarray
+            Integer indices of the scenes to keep, (k,); may repeat.
+
+        Returns
+        -------
+        list of WallState
+            The selected states.
+        """
         return [states[i] for i in np.atleast_1d(idx)]
 
     def destroy(self) -> None:
+        """Free the contacts' factorizations."""
         for c in self.contacts:
             c.destroy()
 
@@ -305,7 +565,20 @@ class FEMWall:
 def plate_of(params: Any, plate_density: float | None = None) -> Material | None:
     """The chain's plate as a :class:`ssw.dynamics.system.Material` (None without a plate); the
     density comes
-    from the materials library by ``params.plate_material`` unless given."""
+    from the materials library by ``params.plate_material`` unless given.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain (its plate).
+    plate_density : float or None
+        Plate density (kg/m^3); None: the materials library's for ``params.plate_material``.
+
+    Returns
+    -------
+    Material or None
+        The plate (Pa, -, kg/m^3), or None.
+    """
     if params.plate_thickness <= 0:
         return None
     if plate_density is None:
@@ -317,7 +590,28 @@ def plate_of(params: Any, plate_density: float | None = None) -> Material | None
 
 def scenes_of(params: Any, soil_E: Any, soil_nu: Any, soil_density: Any,
               plate_density: float | None = None, bead: str = "compliance") -> list[Scene]:
-    """One :class:`Scene` per broadcast (E, nu, density) of the chain ``params``."""
+    """One :class:`Scene` per broadcast (E, nu, density) of the chain ``params``.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    soil_E : array_like
+        Soil Young's modulus (Pa).
+    soil_nu : array_like
+        Soil Poisson's ratio.
+    soil_density : array_like
+        Soil density (kg/m^3).
+    plate_density : float or None
+        Plate density (kg/m^3); None: the materials library's for ``params.plate_material``.
+    bead : str
+        How the bead's elasticity enters (:class:`Scene`).
+
+    Returns
+    -------
+    list of Scene
+        One scene per broadcast soil.
+    """
     E, nu, rho = (np.ravel(x) for x in np.broadcast_arrays(
         np.asarray(soil_E, float), np.asarray(soil_nu, float), np.asarray(soil_density, float)))
     plate = plate_of(params, plate_density)
@@ -347,6 +641,36 @@ def fem_wall(
     quasi-static run's, per scene). ``scales`` (:class:`ssw.dynamics.scales.ChainScales`;
     default: a Hertz wall run, :func:`ssw.dynamics.scales.chain_scales`) gives the step,
     the window and the candidate zone.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    soil_E : array_like
+        Soil Young's modulus (Pa).
+    soil_nu : array_like
+        Soil Poisson's ratio.
+    soil_density : array_like
+        Soil density (kg/m^3).
+    boundary : str
+        ``absorbing`` or ``fixed``.
+    spec : dict or None
+        Fields of :class:`ssw.dynamics.domain.DomainSpec` to override.
+    plate_density : float or None
+        Plate density (kg/m^3); None: the materials library's for ``params.plate_material``.
+    scales : ChainScales or None
+        Step (s), window (s) and peak indentations (m); None: from a Hertz wall run.
+    candidate_factor : float
+        Candidate zone radius in units of ``sqrt(R d_peak)``.
+    bead : str
+        How the bead's elasticity enters (:class:`Scene`).
+
+    Returns
+    -------
+    wall : FEMWall
+        The dynamic FEM wall.
+    scales : ChainScales
+        The scales it was sized with.
     """
     from ssw.chain.wall import hertz_wall
     from ssw.dynamics.scales import chain_scales
@@ -368,21 +692,97 @@ def fem_wall(
 
 class StaticFEMWall(FEMWall):
     """The same scenes' quasi-static law (density -> 0): the static LCP at every step, no
-    state (the reference of the quasi-static assumption on the same mesh)."""
+    state (the reference of the quasi-static assumption on the same mesh).
+
+    Parameters
+    ----------
+    contacts : list of ContactFEM
+        One contact FEM per scene.
+    """
 
     def start(self, d0: np.ndarray) -> np.ndarray:
+        """The state: the bead indentations ``d0`` (m).
+
+        Parameters
+        ----------
+        d0 : numpy.ndarray
+            Initial indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            A copy of ``d0`` (m).
+        """
         return np.asarray(d0, float).copy()
 
     def advance(self, states: np.ndarray, d: np.ndarray, dt: float
                 ) -> tuple[np.ndarray, np.ndarray]:
+        """The static force at the new indentations; the state is the indentation.
+
+        Parameters
+        ----------
+        states : numpy.ndarray
+            The bead indentations (m), (n,): the static wall's state.
+        d : numpy.ndarray
+            Indentations (m), (n,).
+        dt : float
+            Time step (s); unused.
+
+        Returns
+        -------
+        F : numpy.ndarray
+            Wall forces (N), (n,).
+        states : numpy.ndarray
+            The new indentations (m), (n,).
+        """
         return self.force(d), d.copy()
 
     def energy(self, states: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Strain energy of the rest states at the indentations; nothing dissipated.
+
+        Parameters
+        ----------
+        states : numpy.ndarray
+            The bead indentations (m), (n,): the static wall's state.
+
+        Returns
+        -------
+        stored : numpy.ndarray
+            Stored energy (J), (n,).
+        dissipated : numpy.ndarray
+            Zeros (J), (n,).
+        """
         e = [c.energy(c.rest(x)) for c, x in zip(self.contacts, states, strict=True)]
         return np.array([k + s for k, s, _ in e]), np.zeros(self.n)
 
     def take(self, idx: np.ndarray) -> StaticFEMWall:
+        """The scenes ``idx`` (may repeat).
+
+        Parameters
+        ----------
+        idx : numpy.ndarray
+            Integer indices of the scenes to keep, (k,); may repeat.
+
+        Returns
+        -------
+        StaticFEMWall
+            The wall of the selected scenes.
+        """
         return StaticFEMWall([self.contacts[i] for i in np.atleast_1d(idx)])
 
     def take_state(self, states: np.ndarray, idx: np.ndarray) -> np.ndarray:
+        """The state of the scenes ``idx``.
+
+        Parameters
+        ----------
+        states : numpy.ndarray
+            The bead indentations (m), (n,): the static wall's state.
+        idx : numpy.ndarray
+            Integer indices of the scenes to keep, (k,); may repeat.
+
+        Returns
+        -------
+        numpy.ndarray
+            The selected indentations (m).
+        """
         return states[idx]

@@ -55,7 +55,23 @@ class State:
     """The discrete state at one time. ``u``, ``v``, ``a`` (ndof,) m, m/s, m/s^2 (the
     pressure entries are the scaled pressures and their rates); ``lam`` (m,) N, the contact
     forces; ``radiated`` J, the work absorbed by the dashpots so far; ``work`` J, the work
-    of the contact forces on the plate/soil so far."""
+    of the contact forces on the plate/soil so far.
+
+    Parameters
+    ----------
+    u : numpy.ndarray
+        Displacements (m), (ndof,) (pressure entries: scaled pressures).
+    v : numpy.ndarray
+        Velocities (m/s), (ndof,).
+    a : numpy.ndarray
+        Accelerations (m/s^2), (ndof,).
+    lam : numpy.ndarray
+        Contact forces (N), (m,).
+    radiated : float
+        Work absorbed by the dashpots so far (J).
+    work : float
+        Work of the contact forces on the plate and soil so far (J).
+    """
 
     u: np.ndarray
     v: np.ndarray
@@ -66,7 +82,20 @@ class State:
 
 
 def dot(a: np.ndarray, b: np.ndarray) -> float:
-    """``a . b`` without threaded BLAS (module docstring)."""
+    """``a . b`` without threaded BLAS (module docstring).
+
+    Parameters
+    ----------
+    a : numpy.ndarray
+        First vector, (k,).
+    b : numpy.ndarray
+        Second vector, (k,).
+
+    Returns
+    -------
+    float
+        The dot product.
+    """
     return float(np.einsum("i,i->", a, b))
 
 
@@ -127,12 +156,38 @@ class Newmark:
         self.Av = (self.c1 * system.M + system.C).tocsr()
 
     def free(self, st: State) -> np.ndarray:
-        """Displacement at ``t + dt`` with no contact force (ndof,)."""
+        """Displacement at ``t + dt`` with no contact force (ndof,).
+
+        Parameters
+        ----------
+        st : State
+            The state at ``t``.
+
+        Returns
+        -------
+        numpy.ndarray
+            Displacements (m), (ndof,).
+        """
         rhs = self.Au @ st.u + self.Av @ st.v + self.system.M @ st.a
         return self.lu.solve(rhs)
 
     def finish(self, st: State, u_free: np.ndarray, lam: np.ndarray) -> State:
-        """The state at ``t + dt`` once the contact forces ``lam`` are known."""
+        """The state at ``t + dt`` once the contact forces ``lam`` are known.
+
+        Parameters
+        ----------
+        st : State
+            The state at ``t``.
+        u_free : numpy.ndarray
+            Contact-free displacements at ``t + dt`` (m), (ndof,).
+        lam : numpy.ndarray
+            Contact forces at ``t + dt`` (N), one per contact dof.
+
+        Returns
+        -------
+        State
+            The state at ``t + dt``, with its radiated energy and work (J).
+        """
         u = u_free + np.einsum("ij,j->i", self.X, lam)
         du = u - st.u
         a = self.c0 * du - self.c1 * st.v - st.a
@@ -149,7 +204,15 @@ class Newmark:
 
 
 class Static:
-    """The static problem ``(K + Kb) u = G^T lam`` on the same dofs (one factorization)."""
+    """The static problem ``(K + Kb) u = G^T lam`` on the same dofs (one factorization).
+
+    Parameters
+    ----------
+    system : DynamicSystem
+        The dynamic system (its stiffness).
+    load_dofs : numpy.ndarray
+        The dofs the contact forces act on.
+    """
 
     def __init__(self, system: DynamicSystem, load_dofs: np.ndarray) -> None:
         self.system = system
@@ -163,9 +226,21 @@ class Static:
         self.W = 0.5 * (w + w.T)
 
     def state(self, lam: np.ndarray) -> State:
-        """The state at rest under the contact forces ``lam``."""
+        """The state at rest under the contact forces ``lam``.
+
+        Parameters
+        ----------
+        lam : numpy.ndarray
+            Contact forces (N), one per contact dof.
+
+        Returns
+        -------
+        State
+            Displacements (m), zero velocity and acceleration.
+        """
         n = self.system.ndof
         return State(u=self.X @ lam, v=np.zeros(n), a=np.zeros(n), lam=np.asarray(lam).copy())
 
     def destroy(self) -> None:
+        """Free the factorization."""
         self.lu.destroy()

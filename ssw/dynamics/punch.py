@@ -75,6 +75,30 @@ def veletsos_verbic(a0: np.ndarray, nu: float) -> tuple[np.ndarray, np.ndarray]:
     """Normalized vertical impedance ``(k, c)`` of Veletsos & Verbic (1973) at ``a0``.
 
     Only the tabulated Poisson's ratios (:data:`VV_COEFFICIENTS`) are accepted.
+
+    Parameters
+    ----------
+    a0 : numpy.ndarray
+        Dimensionless frequency ``omega r0 / c_s``.
+    nu : float
+        Poisson's ratio (a tabulated one).
+
+    Returns
+    -------
+    k : numpy.ndarray
+        Normalized stiffness.
+    c : numpy.ndarray
+        Normalized damping.
+
+    Raises
+    ------
+    ConfigError
+        If ``nu`` is not tabulated.
+
+    References
+    ----------
+    Veletsos, A. S. and Verbic, B. (1973). Vibration of viscoelastic foundations.
+    *Earthquake Eng. Struct. Dyn.* 2, 87-102.
     """
     key = next((x for x in VV_COEFFICIENTS if abs(x - nu) < 1e-9), None)
     if key is None:
@@ -86,7 +110,25 @@ def veletsos_verbic(a0: np.ndarray, nu: float) -> tuple[np.ndarray, np.ndarray]:
 
 
 def lysmer_analog(a0: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Lysmer's analog: ``k = 1``, ``c = 0.85`` at every ``a0``."""
+    """Lysmer's analog: ``k = 1``, ``c = 0.85`` at every ``a0``.
+
+    Parameters
+    ----------
+    a0 : numpy.ndarray
+        Dimensionless frequency ``omega r0 / c_s``.
+
+    Returns
+    -------
+    k : numpy.ndarray
+        Normalized stiffness, ones.
+    c : numpy.ndarray
+        Normalized damping, 0.85.
+
+    References
+    ----------
+    Lysmer, J. and Richart, F. E. (1966). Dynamic response of footings to vertical loading.
+    *J. Soil Mech. Found. Div.* 92(SM1), 65-91.
+    """
     a0 = np.asarray(a0, float)
     return np.ones_like(a0), np.full_like(a0, LYSMER_C)
 
@@ -99,6 +141,29 @@ class PunchImpedance:
     stiffness of the discrete punch on the dynamic mesh with its truncation boundary.
     a_eff : m.
     t, delta, force : the record (s, m, N).  dofs : size of the system.  domain : m.
+
+    Parameters
+    ----------
+    a0 : numpy.ndarray
+        Dimensionless frequencies, (n,).
+    k : numpy.ndarray
+        Normalized stiffness, (n,).
+    c : numpy.ndarray
+        Normalized damping, (n,).
+    K_static : float
+        Static stiffness of the discrete punch (N/m).
+    a_eff : float
+        Effective punch radius (m).
+    t : numpy.ndarray
+        Times of the record (s).
+    delta : numpy.ndarray
+        Punch displacement of the record (m).
+    force : numpy.ndarray
+        Punch force of the record (N).
+    dofs : int
+        Size of the system.
+    domain : float
+        Domain radius = depth (m).
     """
 
     a0: np.ndarray
@@ -137,6 +202,11 @@ def punch_impedance(
     wave_elements : float
         Elements per shear wavelength at the pulse's highest frequency (the far field's
         element size).
+
+    Returns
+    -------
+    PunchImpedance
+        Normalized impedance (``k``, ``c``), static stiffness (N/m) and the record.
     """
     cs = soil.c_s
     s = PULSE_WIDTH * radius / cs
@@ -183,7 +253,20 @@ def punch_impedance(
 
 
 def static_stiffness(system, dofs: np.ndarray) -> float:
-    """Static force per unit uniform displacement of the nodes ``dofs`` (N/m)."""
+    """Static force per unit uniform displacement of the nodes ``dofs`` (N/m).
+
+    Parameters
+    ----------
+    system : DynamicSystem
+        The operators.
+    dofs : numpy.ndarray
+        The loaded dofs.
+
+    Returns
+    -------
+    float
+        Stiffness (N/m).
+    """
     static = Static(system, dofs)
     one = np.ones(len(dofs))
     K = float(one @ np.linalg.solve(static.W, one))

@@ -26,7 +26,20 @@ STATIC_SIZE_MAX = 0.1
 
 def static_box(contact: ContactFEM, L: float) -> ContactFEM:
     """The scene of ``contact`` as a static-only problem in a fixed box of radius = depth
-    ``L`` (m), with the same contact mesh settings and candidate zone."""
+    ``L`` (m), with the same contact mesh settings and candidate zone.
+
+    Parameters
+    ----------
+    contact : ContactFEM
+        The dynamic scene.
+    L : float
+        Radius = depth of the box (m).
+
+    Returns
+    -------
+    ContactFEM
+        The static-only scene.
+    """
     from dataclasses import replace
 
     spec = replace(contact.spec, domain=float(L), size_max=STATIC_SIZE_MAX)
@@ -41,7 +54,24 @@ CURVE_POINTS = 400
 def static_curve(contact: ContactFEM, d_max: float, points: int = CURVE_POINTS
                  ) -> tuple[np.ndarray, np.ndarray]:
     """The scene's quasi-static law on ``points`` equal indentations up to ``d_max``:
-    ``(d, F)`` (m, N), the bead's indentation (its compliance included) and the force."""
+    ``(d, F)`` (m, N), the bead's indentation (its compliance included) and the force.
+
+    Parameters
+    ----------
+    contact : ContactFEM
+        The scene.
+    d_max : float
+        Largest indentation (m).
+    points : int
+        Number of points.
+
+    Returns
+    -------
+    d : numpy.ndarray
+        Indentations (m), (points,).
+    F : numpy.ndarray
+        Forces (N), (points,).
+    """
     d = d_max * np.arange(1, points + 1) / points
     return d, contact.static_force(d)
 
@@ -51,7 +81,22 @@ def static_table_wall(params: Any, wall: FEMWall, d_max: np.ndarray) -> Any:
     the quasi-static twin of the FEM wall for the chain's own integrator and for the
     reduced wall. The table wall rescales indentations by
     :func:`ssw.chain.wall.compliance_scale`; the curves, which already hold the bead's
-    compliance, are handed over divided by it."""
+    compliance, are handed over divided by it.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    wall : FEMWall
+        The FEM wall.
+    d_max : numpy.ndarray
+        Largest indentation per scene (m), (n,).
+
+    Returns
+    -------
+    TableWall
+        The tabulated static laws.
+    """
     from types import SimpleNamespace
 
     from ssw.chain.wall import compliance_scale, table_wall

@@ -66,7 +66,19 @@ MIN_STEP = 1e-15
 @dataclass(frozen=True)
 class ReducedState:
     """The last two indentations (m), shape (n,), the dissipated energy (J) and the step
-    (s) they are apart."""
+    (s) they are apart.
+
+    Parameters
+    ----------
+    d1 : numpy.ndarray
+        Last indentation (m), (n,).
+    d0 : numpy.ndarray
+        The one before (m), (n,).
+    dissipated : numpy.ndarray
+        Dissipated energy (J), (n,).
+    dt : float
+        Step between them (s); 0 at rest.
+    """
 
     d1: np.ndarray
     d0: np.ndarray
@@ -82,6 +94,27 @@ class ReducedWall:
     soil's shear modulus (Pa), Poisson's ratio, density (kg/m^3).  mu_p : (n,) the
     plate's areal density (kg/m^2, 0 without a plate).  c_r, m_r, k_p : the normalized
     dashpot, soil mass and plate mass.
+
+    Parameters
+    ----------
+    qs : Wall
+        The quasi-static wall.
+    G : numpy.ndarray
+        Soil's shear modulus (Pa), (n,).
+    nu : numpy.ndarray
+        Soil's Poisson's ratio, (n,).
+    rho : numpy.ndarray
+        Soil's density (kg/m^3), (n,).
+    mu_p : numpy.ndarray
+        Plate's areal density (kg/m^2), (n,); 0 without a plate.
+    c_r : float
+        Normalized radiation dashpot.
+    m_r : float
+        Normalized participating soil mass.
+    k_p : float
+        Plate's participating mass in units of ``mu_p pi a^2``.
+    dt : float or None
+        The step the wall was built for (s), or None.
     """
 
     qs: Any
@@ -105,11 +138,25 @@ class ReducedWall:
 
     @property
     def n(self) -> int:
+        """Number of scenes."""
         return self.qs.n
 
     def tangent(self, d: np.ndarray, F: np.ndarray | None = None) -> np.ndarray:
         """Tangent stiffness ``dF_qs/dd`` (N/m) at ``d`` (m), 0 where ``d <= 0``: a forward
-        difference of relative step :data:`TANGENT_STEP` (``F = F_qs(d)`` if known)."""
+        difference of relative step :data:`TANGENT_STEP` (``F = F_qs(d)`` if known).
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+        F : numpy.ndarray or None
+            Quasi-static forces at ``d`` (N), if known.
+
+        Returns
+        -------
+        numpy.ndarray
+            Tangent stiffness (N/m), (n,).
+        """
         d = np.asarray(d, float)
         F = self.qs.force(d) if F is None else F
         h = TANGENT_STEP * np.maximum(d, MIN_STEP)
@@ -130,12 +177,51 @@ class ReducedWall:
         return f_c, f_m, f_p
 
     def radius(self, d: np.ndarray) -> np.ndarray:
-        """Equivalent footing radius ``a = (1 - nu) k_t / (4 G)`` (m)."""
+        """Equivalent footing radius ``a = (1 - nu) k_t / (4 G)`` (m).
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Footing radius (m), (n,).
+
+        References
+        ----------
+        Lysmer, J. and Richart, F. E. (1966). Dynamic response of footings to vertical loading.
+        *J. Soil Mech. Found. Div.* 92(SM1), 65-91.
+        """
         return self._scale * self.tangent(d)
 
     def coefficients(self, d: np.ndarray, k_t: np.ndarray | None = None
                      ) -> tuple[np.ndarray, np.ndarray]:
-        """Dashpot ``C`` (N s/m) and participating mass ``m`` (kg) at ``d`` (m)."""
+        """Dashpot ``C`` (N s/m) and participating mass ``m`` (kg) at ``d`` (m).
+
+        ``C = c_r 4 a^2 sqrt(rho G) / (1 - nu)``, ``m = m_r 4 rho a^3 / (1 - nu) + k_p mu_p pi a^2``
+        (module docstring).
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+        k_t : numpy.ndarray or None
+            Tangent stiffness at ``d`` (N/m), if known.
+
+        Returns
+        -------
+        C : numpy.ndarray
+            Dashpot (N s/m), (n,).
+        m : numpy.ndarray
+            Participating mass (kg), (n,).
+
+        References
+        ----------
+        Lysmer, J. and Richart, F. E. (1966). Dynamic response of footings to vertical loading.
+        *J. Soil Mech. Found. Div.* 92(SM1), 65-91.
+        """
         kt = self.tangent(d) if k_t is None else k_t
         f_c, f_m, f_p = self._factors
         k2 = kt * kt
@@ -143,34 +229,131 @@ class ReducedWall:
 
     # the stateful wall protocol (ssw.chain.wall.StatefulWall) and the Wall protocol
     def force(self, d: np.ndarray) -> np.ndarray:
-        """Quasi-static force (N)."""
+        """Quasi-static force (N).
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Force (N), (n,).
+        """
         return self.qs.force(d)
 
     def potential(self, d: np.ndarray) -> np.ndarray:
-        """Quasi-static stored energy (J)."""
+        """Quasi-static stored energy (J).
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Stored energy (J), (n,).
+        """
         return potential(self.qs, d)
 
     def dforce_dd(self, d: np.ndarray) -> np.ndarray:
-        """Quasi-static tangent stiffness (N/m), the statics' (the wall at rest)."""
+        """Quasi-static tangent stiffness (N/m), the statics' (the wall at rest).
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Tangent stiffness (N/m), (n,).
+        """
         return self.qs.dforce_dd(d)
 
     def dforce_dE(self, d: np.ndarray) -> np.ndarray:
-        """Quasi-static ``dF/dE`` (N/Pa), the statics'."""
+        """Quasi-static ``dF/dE`` (N/Pa), the statics'.
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``dF/dE`` (N/Pa), (n,).
+        """
         return self.qs.dforce_dE(d)
 
     def indentation(self, F: np.ndarray) -> np.ndarray:
+        """Quasi-static indentation (m) carrying ``F`` (N).
+
+        Parameters
+        ----------
+        F : numpy.ndarray
+            Forces (N), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Indentation (m), (n,).
+        """
         return self.qs.indentation(F)
 
     def hertz_equivalent(self, d_ref: float) -> np.ndarray:
+        """The quasi-static law's ``F(d_ref) / d_ref^1.5`` (N/m^1.5).
+
+        Parameters
+        ----------
+        d_ref : float
+            Reference indentation (m), > 0.
+
+        Returns
+        -------
+        numpy.ndarray
+            Equivalent Hertz coefficient (N/m^1.5), (n,).
+        """
         return self.qs.hertz_equivalent(d_ref)
 
     def start(self, d0: np.ndarray) -> ReducedState:
+        """The state at rest with the last beads at ``d0`` (m).
+
+        Parameters
+        ----------
+        d0 : numpy.ndarray
+            Initial indentations (m), (n,).
+
+        Returns
+        -------
+        ReducedState
+            Both past indentations ``d0``, nothing dissipated.
+        """
         d0 = np.asarray(d0, float)
         return ReducedState(d0.copy(), d0.copy(), np.zeros(d0.shape))
 
     def advance(self, st: ReducedState, d: np.ndarray, dt: float
                 ) -> tuple[np.ndarray, ReducedState]:
-        """Force (N) at the new indentation ``d`` (m) and the new state."""
+        """Force (N) at the new indentation ``d`` (m) and the new state.
+
+        Parameters
+        ----------
+        st : ReducedState
+            The state.
+        d : numpy.ndarray
+            Indentations at the step's end (m), (n,).
+        dt : float
+            Time step (s).
+
+        Returns
+        -------
+        F : numpy.ndarray
+            Force (N), (n,).
+        state : ReducedState
+            The new state.
+        """
         d = np.array(d, float)  # kept in the state: a copy, whatever the caller does to d
         F = self.qs.force(d)
         C, m = self.coefficients(d, self.tangent(d, F))
@@ -183,7 +366,22 @@ class ReducedWall:
 
     def start_tangent(self, st: ReducedState, D0: np.ndarray, dE: np.ndarray
                       ) -> tuple[np.ndarray, np.ndarray]:
-        """The derivatives (n, k) of the state at rest: both indentations move as ``D0``."""
+        """The derivatives (n, k) of the state at rest: both indentations move as ``D0``.
+
+        Parameters
+        ----------
+        st : ReducedState
+            The state.
+        D0 : numpy.ndarray
+            Derivatives of the initial indentations (m per parameter unit), (n, k).
+        dE : numpy.ndarray
+            Derivatives of the soil's modulus (Pa per parameter unit), (n, k); unused.
+
+        Returns
+        -------
+        tuple of numpy.ndarray
+            The derivatives of both past indentations, copies of ``D0``.
+        """
         return np.array(D0, float), np.array(D0, float)
 
     def advance_tangent(self, st: ReducedState, tst: tuple[np.ndarray, np.ndarray],
@@ -264,7 +462,20 @@ class ReducedWall:
 
     def energy(self, st: ReducedState) -> tuple[np.ndarray, np.ndarray]:
         """Stored (the quasi-static potential and the participating mass's kinetic energy,
-        J) and dissipated (J) energy."""
+        J) and dissipated (J) energy.
+
+        Parameters
+        ----------
+        st : ReducedState
+            The state.
+
+        Returns
+        -------
+        stored : numpy.ndarray
+            Stored energy (J), (n,).
+        dissipated : numpy.ndarray
+            Dissipated energy (J), (n,).
+        """
         kinetic = 0.0
         if st.dt > 0:
             _, m = self.coefficients(st.d1)
@@ -272,10 +483,36 @@ class ReducedWall:
         return potential(self.qs, st.d1) + kinetic, st.dissipated
 
     def take(self, idx: np.ndarray) -> ReducedWall:
+        """The scenes ``idx`` (may repeat).
+
+        Parameters
+        ----------
+        idx : numpy.ndarray
+            Integer indices of the scenes to keep, (k,); may repeat.
+
+        Returns
+        -------
+        ReducedWall
+            The wall of the selected scenes.
+        """
         return ReducedWall(self.qs.take(idx), self.G[idx], self.nu[idx], self.rho[idx],
                            self.mu_p[idx], self.c_r, self.m_r, self.k_p, self.dt)
 
     def take_state(self, st: ReducedState, idx: np.ndarray) -> ReducedState:
+        """The state of the scenes ``idx``.
+
+        Parameters
+        ----------
+        st : ReducedState
+            The state.
+        idx : numpy.ndarray
+            Integer indices of the scenes to keep, (k,); may repeat.
+
+        Returns
+        -------
+        ReducedState
+            The selected scenes' state.
+        """
         return ReducedState(st.d1[idx], st.d0[idx], st.dissipated[idx], st.dt)
 
 
@@ -284,7 +521,20 @@ POTENTIAL_POINTS = 32
 
 
 def potential(wall: Any, d: np.ndarray) -> np.ndarray:
-    """``int_0^d F`` (J) of a wall: its ``potential`` or Gauss-Legendre quadrature."""
+    """``int_0^d F`` (J) of a wall: its ``potential`` or Gauss-Legendre quadrature.
+
+    Parameters
+    ----------
+    wall : Any
+        A wall law.
+    d : numpy.ndarray
+        Indentations (m), (n,).
+
+    Returns
+    -------
+    numpy.ndarray
+        Stored energy (J), (n,).
+    """
     if hasattr(wall, "potential"):
         return wall.potential(d)
     d = np.maximum(np.asarray(d, float), 0.0)
@@ -298,7 +548,37 @@ def reduced_wall(qs: Any, soil_E: Any, soil_nu: Any, soil_density: Any, *,
                  k_p: float = K_P) -> ReducedWall:
     """The reduced wall of the quasi-static wall ``qs`` (one scene per broadcast soil E Pa,
     nu, density kg/m^3; ``qs.n`` scenes); ``plate_areal_density`` (kg/m^2) is the plate's
-    density times thickness (0: no plate; :func:`plate_areal_density`)."""
+    density times thickness (0: no plate; :func:`plate_areal_density`).
+
+    Parameters
+    ----------
+    qs : Wall
+        The quasi-static wall.
+    soil_E : array_like
+        Soil Young's modulus (Pa).
+    soil_nu : array_like
+        Soil Poisson's ratio.
+    soil_density : array_like
+        Soil density (kg/m^3).
+    plate_areal_density : array_like
+        Plate density times thickness (kg/m^2); 0: no plate.
+    c_r : float
+        Normalized radiation dashpot.
+    m_r : float
+        Normalized participating soil mass.
+    k_p : float
+        Plate's participating mass in units of ``mu_p pi a^2``.
+
+    Returns
+    -------
+    ReducedWall
+        The reduced wall.
+
+    Raises
+    ------
+    ConfigError
+        If the soils are neither one nor one per scene.
+    """
     E, nu, rho = (np.ravel(x).astype(float) for x in np.broadcast_arrays(
         np.asarray(soil_E, float), np.asarray(soil_nu, float),
         np.asarray(soil_density, float)))
@@ -312,7 +592,20 @@ def reduced_wall(qs: Any, soil_E: Any, soil_nu: Any, soil_density: Any, *,
 
 def plate_areal_density(params: Any, plate_density: float | None = None) -> float:
     """``rho_p t`` (kg/m^2) of the chain's plate (0 without one); the density comes from
-    the materials library by ``params.plate_material`` unless given."""
+    the materials library by ``params.plate_material`` unless given.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain (its plate).
+    plate_density : float or None
+        Plate density (kg/m^3); None: the materials library's for ``params.plate_material``.
+
+    Returns
+    -------
+    float
+        Areal density (kg/m^2).
+    """
     if params.plate_thickness <= 0:
         return 0.0
     if plate_density is None:

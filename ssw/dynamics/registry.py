@@ -42,7 +42,33 @@ WRAPPERS: dict[str, Callable[..., Any]] = {
 def with_dynamics(name: str, wall: Any, params: Any, soil_E: Any, soil_nu: Any,
                   soil_density: Any = None) -> Any:
     """The wall ``wall`` (one law per scene) with the dynamics ``name`` of :data:`WRAPPERS`
-    (``fem`` is :func:`ssw.dynamics.api.fem_tof`, not a wrapper)."""
+    (``fem`` is :func:`ssw.dynamics.api.fem_tof`, not a wrapper).
+
+    Parameters
+    ----------
+    name : str
+        The dynamics' registry name.
+    wall : Wall
+        The quasi-static wall.
+    params : ChainParams
+        The chain.
+    soil_E : array_like
+        Soil Young's modulus (Pa).
+    soil_nu : array_like
+        Soil Poisson's ratio.
+    soil_density : array_like or None
+        Soil density (kg/m^3).
+
+    Returns
+    -------
+    Any
+        The wrapped wall.
+
+    Raises
+    ------
+    ConfigError
+        If ``name`` is not a wrapper.
+    """
     if name not in WRAPPERS:
         allowed = " | ".join(WRAPPERS) + (" (fem: ssw.dynamics.api.fem_tof)"
                                           if name == "fem" else "")

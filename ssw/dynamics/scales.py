@@ -25,6 +25,21 @@ class ChainScales:
     margin).  window : s, from the wall's first motion until the reflected peak has left
     the wall (its reflections must stay out).  f_max : Hz, the frequency that bounds the
     wall force's spectrum.  d_peak : m, the largest indentation.  t_onset : s.
+
+    Parameters
+    ----------
+    dt : float
+        The chain's step (s).
+    t_end : numpy.ndarray
+        The run's end (s), (n,).
+    window : numpy.ndarray
+        Time from the wall's first motion until the reflected peak has left it (s), (n,).
+    f_max : numpy.ndarray
+        Frequency bounding the wall force's spectrum (Hz), (n,).
+    d_peak : numpy.ndarray
+        Largest indentation (m), (n,).
+    t_onset : numpy.ndarray
+        Time of the wall's first motion (s), (n,).
     """
 
     dt: float

@@ -35,7 +35,26 @@ THRESHOLD = 0.0025
 
 def scene_point(params: Any, E: float, nu: float, rho: float, **options: Any
                 ) -> dict[str, Any]:
-    """One scene: dynamic FEM, quasi-static boxes, reduced wall (module docstring)."""
+    """One scene: dynamic FEM, quasi-static boxes, reduced wall (module docstring).
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    E : float
+        Soil Young's modulus (Pa).
+    nu : float
+        Soil Poisson's ratio.
+    rho : float
+        Soil density (kg/m^3).
+    **options : Any
+        Options of :func:`ssw.dynamics.api.fem_tof`.
+
+    Returns
+    -------
+    dict
+        The point: soil, plate, TOFs (s), errors, dofs and timings (s).
+    """
     from ssw.dynamics.api import fem_tof
 
     t0 = time.perf_counter()
@@ -59,7 +78,28 @@ def reduced_point(params: Any, E: float, nu: float, rho: float,
                   laws: dict[float, tuple[np.ndarray, np.ndarray]] | None = None,
                   **coefficients: float) -> float:
     """The reduced wall's TOF (s) on the half-space law of one scene
-    (:func:`ssw.dynamics.api.reduced_tof`; ``laws``: the static boxes' laws if known)."""
+    (:func:`ssw.dynamics.api.reduced_tof`; ``laws``: the static boxes' laws if known).
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    E : float
+        Soil Young's modulus (Pa).
+    nu : float
+        Soil Poisson's ratio.
+    rho : float
+        Soil density (kg/m^3).
+    laws : dict or None
+        The static boxes' laws, if known.
+    **coefficients : float
+        Reduced-wall coefficients (``c_r``, ``m_r``, ``k_p``) replacing the defaults.
+
+    Returns
+    -------
+    float
+        TOF (s).
+    """
     from ssw.dynamics.api import reduced_tof
 
     r = reduced_tof(params, E, nu, rho, laws=None if laws is None else [laws], **coefficients)
@@ -69,7 +109,22 @@ def reduced_point(params: Any, E: float, nu: float, rho: float,
 def refresh_reduced(params: Any, points: list[dict[str, Any]], **coefficients: float
                     ) -> list[dict[str, Any]]:
     """The points with their reduced-wall columns recomputed (static laws rebuilt: seconds
-    per point), e.g. after a change of the reduced wall; the FEM columns are kept."""
+    per point), e.g. after a change of the reduced wall; the FEM columns are kept.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    points : list of dict
+        The study's points.
+    **coefficients : float
+        Reduced-wall coefficients (``c_r``, ``m_r``, ``k_p``) replacing the defaults.
+
+    Returns
+    -------
+    list of dict
+        The points with new ``tof_reduced`` (s) and ``reduced_error``.
+    """
     out = []
     for p in points:
         pk = params if p["plate_thickness"] > 0 else params.with_(plate_thickness=0.0)
@@ -84,7 +139,30 @@ def run_study(params: Any, out: Path, *, E: tuple[float, ...] = STUDY_E,
               density: tuple[float, ...] = STUDY_DENSITY, nu: float = STUDY_NU,
               plates: tuple[bool, ...] = (True, False), **options: Any) -> list[dict[str, Any]]:
     """Run (or resume) the grid; every point is appended to ``out`` (JSON lines) when done.
-    Returns every point of the grid."""
+    Returns every point of the grid.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    out : pathlib.Path
+        The JSON lines file.
+    E : tuple of float
+        Soil moduli (Pa).
+    density : tuple of float
+        Soil densities (kg/m^3).
+    nu : float
+        Soil Poisson's ratio.
+    plates : tuple of bool
+        With and/or without the plate.
+    **options : Any
+        Options of :func:`scene_point`.
+
+    Returns
+    -------
+    list of dict
+        Every point of the grid.
+    """
     out = Path(out)
     out.parent.mkdir(parents=True, exist_ok=True)
     done = {_key(r): r for r in read_points(out)} if out.is_file() else {}
@@ -110,13 +188,40 @@ def _key(r: dict[str, Any]) -> tuple:
 
 
 def read_points(path: Path) -> list[dict[str, Any]]:
-    """The points of a study file (JSON lines)."""
+    """The points of a study file (JSON lines).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The JSON lines file.
+
+    Returns
+    -------
+    list of dict
+        The points.
+    """
     return [json.loads(x) for x in Path(path).read_text().splitlines() if x.strip()]
 
 
 def summarize(points: list[dict[str, Any]], out_dir: Path, threshold: float = THRESHOLD
               ) -> dict[str, Any]:
-    """CSV table, figure and verdict of the study's points (written atomically)."""
+    """CSV table, figure and verdict of the study's points (written atomically).
+
+    Parameters
+    ----------
+    points : list of dict
+        The study's points.
+    out_dir : pathlib.Path
+        The output directory.
+    threshold : float
+        Largest accepted relative TOF error.
+
+    Returns
+    -------
+    dict
+        The verdict: the point count, the largest errors, the points above the threshold
+        and the outputs' paths.
+    """
     from ssw.h5io import atomic_write_text
     from ssw.plotting import pyplot, save_png
 

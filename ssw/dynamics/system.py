@@ -70,7 +70,17 @@ MASS_WEIGHTS = 0.5 * np.array([0.225] + [0.132394152788506] * 3 + [0.12593918054
 
 @dataclass(frozen=True)
 class Material:
-    """An isotropic elastic solid: E (Pa), nu (-), density (kg/m^3)."""
+    """An isotropic elastic solid: E (Pa), nu (-), density (kg/m^3).
+
+    Parameters
+    ----------
+    E : float
+        Young's modulus (Pa).
+    nu : float
+        Poisson's ratio.
+    density : float
+        Density (kg/m^3).
+    """
 
     E: float
     nu: float
@@ -111,6 +121,25 @@ class DynamicSystem:
     :class:`ssw.contact.assembly.System`); ``M``, ``C`` and ``Kb`` are scipy CSR matrices
     (kg, N s/m, N/m) on the same dofs (zero rows at pressure dofs). ``soil`` and ``plate``
     are the materials; ``boundary`` names the truncation boundary.
+
+    Parameters
+    ----------
+    static : System
+        The stiffness (COO triplets of ``K / scale``) and the dof maps.
+    M : scipy.sparse.csr_matrix
+        Mass matrix (kg).
+    C : scipy.sparse.csr_matrix
+        Dashpot matrix of the boundary (N s/m).
+    Kb : scipy.sparse.csr_matrix
+        Spring matrix of the boundary (N/m).
+    soil : Material
+        The soil.
+    plate : Material or None
+        The plate, or None.
+    boundary : str
+        The truncation boundary: ``absorbing`` or ``fixed``.
+    mesh : Mesh
+        The mesh (m).
     """
 
     static: System
@@ -124,15 +153,34 @@ class DynamicSystem:
 
     @property
     def ndof(self) -> int:
+        """Number of free degrees of freedom."""
         return self.static.ndof
 
     @property
     def scale(self) -> float:
+        """Stiffness scale of the static operators (N/m)."""
         return self.static.scale
 
     def stiffness_triplets(self, mass_factor: float = 0.0, damping_factor: float = 0.0
                            ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """COO triplets of ``(K + Kb + mass_factor M + damping_factor C) / scale``."""
+        """COO triplets of ``(K + Kb + mass_factor M + damping_factor C) / scale``.
+
+        Parameters
+        ----------
+        mass_factor : float
+            Factor of ``M`` (1/s^2).
+        damping_factor : float
+            Factor of ``C`` (1/s).
+
+        Returns
+        -------
+        rows : numpy.ndarray
+            Row indices.
+        cols : numpy.ndarray
+            Column indices.
+        vals : numpy.ndarray
+            Values (dimensionless, scaled).
+        """
         extra = (self.Kb + mass_factor * self.M + damping_factor * self.C).tocoo()
         s = self.static
         return (np.concatenate([s.rows, extra.row]), np.concatenate([s.cols, extra.col]),
@@ -148,7 +196,22 @@ class DynamicSystem:
         return (k.tocsr() + self.Kb).tocsr()
 
     def energy(self, u: np.ndarray, v: np.ndarray) -> tuple[float, float]:
-        """Kinetic ``v M v / 2`` and strain ``u (K + Kb) u / 2`` energies (J)."""
+        """Kinetic ``v M v / 2`` and strain ``u (K + Kb) u / 2`` energies (J).
+
+        Parameters
+        ----------
+        u : numpy.ndarray
+            Displacements (m), (ndof,).
+        v : numpy.ndarray
+            Velocities (m/s), (ndof,).
+
+        Returns
+        -------
+        kinetic : float
+            Kinetic energy (J).
+        strain : float
+            Strain energy (J).
+        """
         return (0.5 * float(np.einsum("i,i->", v, self.M @ v)),
                 0.5 * float(np.einsum("i,i->", u, self.K @ u)))
 
@@ -162,6 +225,18 @@ def without_mass(system: DynamicSystem, dofs: np.ndarray) -> DynamicSystem:
     the contact stress is a smooth function of time. The mass removed, that of the
     contact candidates' surface layer (elements of ``~0.1 r`` at radius ``r``), is
     ``O(h)`` of the participating mass and vanishes with mesh refinement.
+
+    Parameters
+    ----------
+    system : DynamicSystem
+        The operators.
+    dofs : numpy.ndarray
+        The contact dofs.
+
+    Returns
+    -------
+    DynamicSystem
+        The system with those rows and columns of ``M`` zeroed.
 
     References
     ----------
@@ -187,6 +262,11 @@ def mass_matrices(xy: np.ndarray, rho: np.ndarray) -> np.ndarray:
         (ne, 6, 2) node coordinates (r, z), m.
     rho : numpy.ndarray
         (ne,) density, kg/m^3.
+
+    Returns
+    -------
+    numpy.ndarray
+        Element mass matrices (kg), (ne, 6, 6).
     """
     n, _ = p2_shape(MASS_POINTS)
     det = triangle_jacobian(xy)[1]
@@ -209,6 +289,37 @@ def boundary_matrices(
     Consistent boundary matrices ``int N_a N_b k 2 pi r ds`` over the soil's faces
     ``r = L_r`` and ``z = -L_z`` (4-point Gauss along each quadratic edge), normal and
     tangential components as in the module docstring.
+
+    Parameters
+    ----------
+    nodes : numpy.ndarray
+        Node coordinates (r, z) (m), (n_nodes, 2).
+    tri : numpy.ndarray
+        Quadratic triangles, (n_el, 6).
+    body : numpy.ndarray
+        Body of each element (0: soil).
+    udof : numpy.ndarray
+        Dof number of each node's components (negative: fixed), (n_nodes, 2).
+    ndof : int
+        Number of dofs.
+    L_r : float
+        Radius of the domain (m).
+    L_z : float
+        Depth of the domain (m).
+    soil : Material
+        The soil (Pa, -, kg/m^3).
+
+    Returns
+    -------
+    C : scipy.sparse.csr_matrix
+        Dashpot matrix (N s/m).
+    Kb : scipy.sparse.csr_matrix
+        Spring matrix (N/m).
+
+    References
+    ----------
+    Lysmer, J. and Kuhlemeyer, R. L. (1969). Finite dynamic model for infinite media.
+    *J. Eng. Mech. Div.* 95(EM4), 859-877.
     """
     from scipy.sparse import coo_matrix
 
@@ -274,6 +385,11 @@ def assemble_dynamic(
         fixed bottom, as the quasi-static FEM).
     order_nodes : callable
         ``(rows, cols, n) -> permutation`` (nested dissection).
+
+    Returns
+    -------
+    DynamicSystem
+        The assembled operators.
     """
     if boundary not in BOUNDARIES:
         raise ConfigError("dynamics.boundary", boundary, " | ".join(BOUNDARIES))

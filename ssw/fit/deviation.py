@@ -40,7 +40,25 @@ THESIS_SET2: dict[float, float] = {0.2e-3: 0.37, 0.4e-3: 0.42}
 
 
 def force_at(curve: ForceCurve, delta: float) -> float:
-    """Force (N) at ``delta`` (m), log-log interpolated between neighbouring samples."""
+    """Force (N) at ``delta`` (m), log-log interpolated between neighbouring samples.
+
+    Parameters
+    ----------
+    curve : ForceCurve
+        The force-indentation curve (SI).
+    delta : float
+        Indentation (m), > 0, within the curve's range.
+
+    Returns
+    -------
+    float
+        Force (N).
+
+    Raises
+    ------
+    OutOfRangeError
+        If ``delta`` is outside the curve's range or has no positive sample below it.
+    """
     d, F = np.asarray(curve.delta), np.asarray(curve.force)
     if not d[0] <= delta <= d[-1] or delta <= 0:
         raise OutOfRangeError(
@@ -56,7 +74,25 @@ def force_at(curve: ForceCurve, delta: float) -> float:
 
 
 def deviation(curve: ForceCurve, delta_ref: float = DELTA_REF, **overrides: Any) -> dict:
-    """``{"ratio": F/F_H, "deviation": F/F_H - 1, ...scene}`` at ``delta_ref`` (m)."""
+    """``{"ratio": F/F_H, "deviation": F/F_H - 1, ...scene}`` at ``delta_ref`` (m).
+
+    ``F_H = 4/3 E/(1 - nu^2) sqrt(R) delta^(3/2)`` is the bare soil's Hertz force under a rigid
+    sphere (Johnson 1985, *Contact Mechanics*, section 4.2).
+
+    Parameters
+    ----------
+    curve : ForceCurve
+        The force-indentation curve (SI).
+    delta_ref : float
+        Reference indentation (m).
+    **overrides : Any
+        Scene quantities replacing the curve's (:func:`ssw.fit.fitting.scene_inputs`).
+
+    Returns
+    -------
+    dict
+        The scene's inputs, ``delta_ref`` (m), ``ratio`` and ``deviation``.
+    """
     sc = scene_inputs(curve, **overrides)
     E_star = hertz.effective_modulus(sc["soil_E"], sc["soil_nu"])
     F_H = float(hertz.force(delta_ref, E_star, sc["radius"]))
@@ -66,7 +102,22 @@ def deviation(curve: ForceCurve, delta_ref: float = DELTA_REF, **overrides: Any)
 
 def thesis_value(set_kind: str, plate_material: str, plate_thickness: float) -> float | None:
     """The thesis's stated deviation for a Set 1 (``materials``) or Set 2 (``thickness``)
-    scene, or None where it states none."""
+    scene, or None where it states none.
+
+    Parameters
+    ----------
+    set_kind : str
+        ``materials`` (Set 1) or ``thickness`` (Set 2).
+    plate_material : str
+        The plate's material key.
+    plate_thickness : float
+        The plate's thickness (m).
+
+    Returns
+    -------
+    float or None
+        The deviation the thesis states (dimensionless), or None.
+    """
     if set_kind == "materials" and abs(plate_thickness - 0.4e-3) < 1e-9:
         return THESIS_SET1.get(plate_material)
     if set_kind == "thickness" and plate_material in ("pla", "none"):
@@ -79,7 +130,22 @@ def thesis_value(set_kind: str, plate_material: str, plate_thickness: float) -> 
 def deviation_rows(
     curves: list[ForceCurve], set_kind: str, delta_ref: float = DELTA_REF
 ) -> list[dict[str, Any]]:
-    """One row per curve: scene, ratio, deviation and the thesis's value (or None)."""
+    """One row per curve: scene, ratio, deviation and the thesis's value (or None).
+
+    Parameters
+    ----------
+    curves : list of ForceCurve
+        The curves (SI).
+    set_kind : str
+        ``materials`` or ``thickness``.
+    delta_ref : float
+        Reference indentation (m).
+
+    Returns
+    -------
+    list of dict
+        The rows (see :func:`deviation`) with ``thesis_deviation``.
+    """
     rows = []
     for c in curves:
         r = deviation(c, delta_ref)
@@ -172,6 +238,22 @@ def thesis_statements(
     ``solve(scene, cfg_with_material_set)`` returns the scene's curve (an FEM solve);
     ``sets`` maps config set names to kinds (default ``set1_materials -> materials``,
     ``set2_thickness -> thickness``, those present in the config).
+
+    Parameters
+    ----------
+    cfg : dict
+        The validated study config.
+    solve : callable
+        ``solve(scene, cfg)`` returning the scene's :class:`ssw.curve.ForceCurve`.
+    material_sets : tuple of str
+        The material sets to compare.
+    sets : dict or None
+        Config set name -> kind; None: the default mapping.
+
+    Returns
+    -------
+    list of dict
+        Deviation rows per material set and scene.
     """
     import copy
 

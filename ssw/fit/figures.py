@@ -38,7 +38,19 @@ def _figure(nrows: int = 1) -> tuple[Any, Any]:
 
 
 def plot_curves(paths: list[str], output: str, cfg: dict[str, Any], title: str = "") -> None:
-    """Force vs indentation and the ratio to bare-soil Hertz, one line per curve."""
+    """Force vs indentation and the ratio to bare-soil Hertz, one line per curve.
+
+    Parameters
+    ----------
+    paths : list of str
+        The input files.
+    output : str
+        The PNG file to write.
+    cfg : dict
+        The validated study config.
+    title : str
+        The figure's title; empty: a default.
+    """
     fig, ax = _figure(2)
     for p in paths:
         c = read_curve(p, extras=False)
@@ -62,7 +74,19 @@ def plot_curves(paths: list[str], output: str, cfg: dict[str, Any], title: str =
 
 
 def plot_deviation(paths: list[str], output: str, cfg: dict[str, Any], title: str = "") -> None:
-    """Deviation from Hertz at ``fit.delta_ref`` per scene, with the thesis's values."""
+    """Deviation from Hertz at ``fit.delta_ref`` per scene, with the thesis's values.
+
+    Parameters
+    ----------
+    paths : list of str
+        The input files.
+    output : str
+        The PNG file to write.
+    cfg : dict
+        The validated study config.
+    title : str
+        The figure's title; empty: a default.
+    """
     curves = [read_curve(p, extras=False) for p in paths]
     kinds = {float(scene_inputs(c).get("plate_thickness") or 0.0) for c in curves}
     rows = deviation_rows(
@@ -84,7 +108,19 @@ def plot_deviation(paths: list[str], output: str, cfg: dict[str, Any], title: st
 
 
 def plot_k(paths: list[str], output: str, cfg: dict[str, Any], title: str = "") -> None:
-    """K vs soil E for each nu: nodes, interpolant and the fits' max relative residual."""
+    """K vs soil E for each nu: nodes, interpolant and the fits' max relative residual.
+
+    Parameters
+    ----------
+    paths : list of str
+        The input files; the first is the K table (HDF5).
+    output : str
+        The PNG file to write.
+    cfg : dict
+        The validated study config.
+    title : str
+        The figure's title; empty: a default.
+    """
     from ssw.fit.table import load_tables
 
     tables, _ = load_tables(paths[0])

@@ -43,7 +43,37 @@ INPUT_KEYS: dict[str, tuple[str, ...]] = {
 
 @dataclass(frozen=True)
 class FitResult:
-    """A law fitted to one curve on ``[delta_lo, delta_hi]`` (m). SI units."""
+    """A law fitted to one curve on ``[delta_lo, delta_hi]`` (m). SI units.
+
+    Parameters
+    ----------
+    law : str
+        The law's registry name.
+    params : dict
+        Fitted parameters (their units: ``Law.units``).
+    rms_rel_residual : float
+        RMS relative residual.
+    max_rel_residual : float
+        Largest relative residual.
+    nrms_residual : float
+        ``rms(F_fit - F) / max F`` on the range.
+    delta_lo : float
+        Lower end of the fit range (m).
+    delta_hi : float
+        Upper end of the fit range (m).
+    n_points : int
+        Number of curve samples fitted.
+    weighting : str
+        The residual weighting.
+    E_star : float
+        ``E_soil / (1 - nu_soil^2)`` (Pa).
+    radius : float
+        Indenter radius (m).
+    hertz_coefficient : float
+        ``4/3 E* sqrt(R)`` (N m^-1.5).
+    scene : dict
+        The curve's scene quantities (SI).
+    """
 
     law: str
     params: dict[str, float]
@@ -60,18 +90,48 @@ class FitResult:
     scene: dict[str, Any] = field(default_factory=dict)
 
     def predict(self, delta: ArrayLike) -> NDArray[np.float64]:
-        """Force (N) of the fitted law at ``delta`` (m)."""
+        """Force (N) of the fitted law at ``delta`` (m).
+
+        Parameters
+        ----------
+        delta : array_like
+            Indentations (m).
+
+        Returns
+        -------
+        numpy.ndarray
+            Force (N), the shape of ``delta``.
+        """
         law = get_law(self.law)
         return law.evaluate(self.params, np.asarray(delta, float), self.hertz_coefficient)
 
     def as_dict(self) -> dict[str, Any]:
-        """Flat dict: the law's parameters at top level (e.g. ``"K"``), then the rest."""
+        """Flat dict: the law's parameters at top level (e.g. ``"K"``), then the rest.
+
+        Returns
+        -------
+        dict
+            The flat record (SI).
+        """
         d = asdict(self)
         return {**d.pop("params"), **d}
 
 
 def scene_inputs(curve: ForceCurve, **overrides: Any) -> dict[str, Any]:
-    """Scene quantities of ``curve`` (soil_E, soil_nu, radius, plate_*), overrides first."""
+    """Scene quantities of ``curve`` (soil_E, soil_nu, radius, plate_*), overrides first.
+
+    Parameters
+    ----------
+    curve : ForceCurve
+        The force-indentation curve (SI).
+    **overrides : Any
+        Values that replace the curve's (SI); None leaves the curve's.
+
+    Returns
+    -------
+    dict
+        ``soil_E`` (Pa), ``soil_nu``, ``radius`` (m) and the plate's quantities.
+    """
     src = dict(curve.inputs)
     if isinstance(src.get("scene"), dict):
         src = {**src["scene"], **src}

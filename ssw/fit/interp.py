@@ -38,7 +38,19 @@ def _pchip() -> type:
 
 
 class GridInterpolant:
-    """``p(E, nu)`` on a grid: PCHIP in log E of ``log p`` (or ``p``), linear in nu."""
+    """``p(E, nu)`` on a grid: PCHIP in log E of ``log p`` (or ``p``), linear in nu.
+
+    Parameters
+    ----------
+    soil_E : array_like
+        Moduli of the grid (Pa), (n_E,), increasing.
+    soil_nu : array_like
+        Poisson's ratios of the grid, (n_nu,), increasing.
+    values : array_like
+        Values on the grid, (n_nu, n_E).
+    log_values : bool
+        Whether to interpolate ``log p`` (positive values).
+    """
 
     def __init__(
         self, soil_E: ArrayLike, soil_nu: ArrayLike, values: ArrayLike, *, log_values: bool
@@ -89,7 +101,20 @@ class GridInterpolant:
         """``dp/dE`` (unit of p per Pa) of the interpolant at the broadcast of ``soil_E``
         (Pa) and ``soil_nu``: the PCHIP rows' derivative in ``log E`` (continuous: PCHIP
         is C1), ``dp/dE = p g'(log E) / E`` for log values (``g = log p``), ``g' / E``
-        otherwise, mixed linearly in nu as the values are."""
+        otherwise, mixed linearly in nu as the values are.
+
+        Parameters
+        ----------
+        soil_E : array_like
+            Soil Young's modulus (Pa).
+        soil_nu : array_like
+            Soil Poisson's ratio.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``dp/dE`` (unit of p per Pa), the broadcast shape.
+        """
         E, nu = np.broadcast_arrays(np.asarray(soil_E, float), np.asarray(soil_nu, float))
         E = _snap(E, self.E, "soil_E", "Pa")
         nu = _snap(nu, self.nu, "soil_nu", "")
@@ -121,7 +146,15 @@ class GridInterpolant:
         interior E node from PCHIP through the others) and along nu (each interior nu row
         from its two neighbours); NaN where a node has no two-sided neighbours. Computed
         once per interpolant (a PCHIP per interior E node: 20 ms for 100 nodes; a fit set's
-        outputs state the error three times) and returned read-only."""
+        outputs state the error three times) and returned read-only.
+
+        Returns
+        -------
+        along_E : numpy.ndarray
+            Predictions along E, (n_nu, n_E).
+        along_nu : numpy.ndarray
+            Predictions along nu, (n_nu, n_E).
+        """
         if self._loo is None:
             self._loo = self._loo_predictions()
         return self._loo
@@ -143,7 +176,13 @@ class GridInterpolant:
 
     def loo_error(self) -> dict[str, float]:
         """Leave-one-out errors (max relative for log values, else absolute) along E and nu,
-        and their sum ``bound``, the stated interpolation error."""
+        and their sum ``bound``, the stated interpolation error.
+
+        Returns
+        -------
+        dict
+            Errors along ``E`` and ``nu`` and their sum ``bound``.
+        """
         out = {}
         for name, pred in zip(("E", "nu"), self.loo_predictions(), strict=True):
             e = pred / self.values - 1.0 if self.log_values else pred - self.values

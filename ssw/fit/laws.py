@@ -42,7 +42,23 @@ LM_TOL = float(np.finfo(float).eps)
 
 @dataclass(frozen=True)
 class Law:
-    """A fit law: names of its parameters (with units), a fitter and an evaluator."""
+    """A fit law: names of its parameters (with units), a fitter and an evaluator.
+
+    Parameters
+    ----------
+    name : str
+        The registry name.
+    params : tuple
+        Names of its parameters.
+    units : tuple
+        Their units.
+    formula : str
+        The law's formula, as text.
+    fit : callable
+        ``fit(delta, force, hertz_coefficient, weighting) -> params``.
+    evaluate : callable
+        ``evaluate(params, delta, hertz_coefficient) -> force`` (N).
+    """
 
     name: str
     params: tuple[str, ...]
@@ -65,6 +81,25 @@ def linear_lstsq(columns: list[FloatArray], force: FloatArray, weights: FloatArr
 
     Columns are scaled to unit norm before the QR-based solve, so coefficients of very
     different magnitudes (N/m next to N m^-3/2) are found to near machine precision.
+
+    Parameters
+    ----------
+    columns : list of numpy.ndarray
+        The design matrix's columns, (m,) each.
+    force : numpy.ndarray
+        Forces (N), (m,).
+    weights : numpy.ndarray
+        Weights, (m,).
+
+    Returns
+    -------
+    numpy.ndarray
+        The coefficients, one per column (N per the column's unit).
+
+    Raises
+    ------
+    SolverError
+        If a column is identically zero.
     """
     X = np.column_stack(columns) * weights[:, None]
     scale = np.linalg.norm(X, axis=0)
@@ -159,7 +194,25 @@ LAWS: dict[str, Law] = {
 
 
 def get_law(name: str, field: str = "fit.law") -> Law:
-    """The law called ``name``; ``field`` names the setting for the error message."""
+    """The law called ``name``; ``field`` names the setting for the error message.
+
+    Parameters
+    ----------
+    name : str
+        The law's registry name.
+    field : str
+        The setting's name, for the error message.
+
+    Returns
+    -------
+    Law
+        The law.
+
+    Raises
+    ------
+    ConfigError
+        If no law has that name.
+    """
     if name not in LAWS:
         raise ConfigError(field, name, f"one of {', '.join(LAWS)}")
     return LAWS[name]

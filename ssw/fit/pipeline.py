@@ -20,7 +20,18 @@ from ssw.fit.table import KTable, build_tables
 
 
 def config_laws(cfg: dict[str, Any]) -> list[str]:
-    """The laws the config fits: ``fit.compare_laws`` plus ``fit.law``, without repeats."""
+    """The laws the config fits: ``fit.compare_laws`` plus ``fit.law``, without repeats.
+
+    Parameters
+    ----------
+    cfg : dict
+        The validated study config.
+
+    Returns
+    -------
+    list of str
+        The laws' names, ``fit.law`` first.
+    """
     fc = cfg["fit"]
     return list(dict.fromkeys([fc["law"], *fc["compare_laws"]]))
 
@@ -28,7 +39,24 @@ def config_laws(cfg: dict[str, Any]) -> list[str]:
 def fit_with_config(
     curve: ForceCurve, cfg: dict[str, Any], law: str | None = None
 ) -> tuple[FitResult, FitRange]:
-    """Fit ``law`` (default ``fit.law``) on the config's range for this curve's scene."""
+    """Fit ``law`` (default ``fit.law``) on the config's range for this curve's scene.
+
+    Parameters
+    ----------
+    curve : ForceCurve
+        The force-indentation curve (SI).
+    cfg : dict
+        The validated study config.
+    law : str or None
+        The law; None: ``fit.law``.
+
+    Returns
+    -------
+    result : FitResult
+        The fit.
+    range : FitRange
+        The fit range (m).
+    """
     sc = scene_inputs(curve)
     rng = fit_range(float(sc["soil_E"]), float(sc["soil_nu"]), float(curve.delta[-1]), cfg,
                     sc.get("plate_E"), sc.get("plate_nu"))
@@ -46,6 +74,22 @@ def fit_files(
 
     The ranges of all files are computed in one batch (one chain run in mode ``chain``).
     ``curves``: the files' curves when already read.
+
+    Parameters
+    ----------
+    paths : iterable of str or pathlib.Path
+        The curve files (HDF5).
+    cfg : dict
+        The validated study config.
+    laws : list of str or None
+        The laws to fit; None: :func:`config_laws`.
+    curves : list or None
+        The files' curves when already read, in the order of ``paths``.
+
+    Returns
+    -------
+    list of dict
+        One record per file.
     """
     paths = [str(p) for p in paths]
     curves = [read_curve(p, extras=False) for p in paths] if curves is None else list(curves)
@@ -73,6 +117,25 @@ def table_from_files(
     curves: list[Any] | None = None,
 ) -> tuple[list[KTable], list[dict[str, Any]]]:
     """Fit every file (``curves``: already read) and build the tables; also return the
-    per-file records."""
+    per-file records.
+
+    Parameters
+    ----------
+    paths : iterable of str or pathlib.Path
+        The curve files (HDF5).
+    cfg : dict
+        The validated study config.
+    laws : list of str or None
+        The laws to fit; None: :func:`config_laws`.
+    curves : list or None
+        The files' curves when already read, in the order of ``paths``.
+
+    Returns
+    -------
+    tables : list of KTable
+        One table per plate.
+    records : list of dict
+        The per-file records of :func:`fit_files`.
+    """
     records = fit_files(paths, cfg, laws, curves)
     return build_tables(fr for r in records for fr in r["fits"].values()), records

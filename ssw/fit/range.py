@@ -39,7 +39,27 @@ RANGE_MODES = ("chain", "fixed", "curve")
 
 @dataclass(frozen=True)
 class ChainEstimate:
-    """The chain quantities the energy bound needs. SI units."""
+    """The chain quantities the energy bound needs. SI units.
+
+    Parameters
+    ----------
+    beads : int
+        Number of beads, the striker included.
+    bead_radius : float
+        Bead radius (m).
+    bead_density : float
+        Bead density (kg/m^3).
+    bead_E : float
+        Bead's Young's modulus (Pa).
+    bead_nu : float
+        Bead's Poisson's ratio.
+    striker_velocity : float
+        Striker speed (m/s).
+    gravity : bool
+        Whether the chain's weight loads the wall.
+    preload : float
+        Constant force on bead 1 (N).
+    """
 
     beads: int  # including the striker
     bead_radius: float  # m
@@ -57,7 +77,18 @@ class ChainEstimate:
 
     @classmethod
     def from_config(cls, cfg: dict[str, Any]) -> ChainEstimate:
-        """From a validated study config (its device and the materials library)."""
+        """From a validated study config (its device and the materials library).
+
+        Parameters
+        ----------
+        cfg : dict
+            The validated study config.
+
+        Returns
+        -------
+        ChainEstimate
+            The chain's estimate (SI).
+        """
         from ssw.config import device_of, library
 
         dev = device_of(cfg)
@@ -82,6 +113,24 @@ def energy_bound_indentation(
     The positive root of ``(2/5) A_w d^(5/2) - (M g + P) d = 1/2 m_s v^2``
     (:func:`ssw.hertz.energy_indentation`, the upper end of its final bracket: the wall
     holds the energy there); vectorized over ``soil_E`` and ``soil_nu``.
+
+    Parameters
+    ----------
+    soil_E : array_like
+        Soil Young's modulus (Pa).
+    soil_nu : array_like
+        Soil Poisson's ratio.
+    chain : ChainEstimate
+        The chain (SI).
+
+    Returns
+    -------
+    numpy.ndarray
+        Indentation bound (m), the broadcast shape.
+
+    References
+    ----------
+    Johnson, K. L. (1985). *Contact Mechanics*, ch. 11.
     """
     E_star = hertz.effective_modulus(chain.bead_E, chain.bead_nu, soil_E, soil_nu)
     A = hertz.hertz_coefficient(E_star, chain.bead_radius)
@@ -95,7 +144,24 @@ def peak_wall_indentation(
     soil_E: ArrayLike, soil_nu: ArrayLike, cfg: dict[str, Any]
 ) -> tuple[NDArray[np.float64], str]:
     """Peak wall indentation (m) of the config's chain on a Hertz wall (one batched run of
-    :mod:`ssw.chain.run`), and its source, ``"chain"``."""
+    :mod:`ssw.chain.run`), and its source, ``"chain"``.
+
+    Parameters
+    ----------
+    soil_E : array_like
+        Soil Young's modulus (Pa).
+    soil_nu : array_like
+        Soil Poisson's ratio.
+    cfg : dict
+        The validated study config.
+
+    Returns
+    -------
+    peak : numpy.ndarray
+        Peak indentations (m).
+    source : str
+        ``"chain"``.
+    """
     from ssw.chain.params import ChainParams
     from ssw.chain.run import peak_wall_indentation as chain_peak
 
@@ -105,7 +171,23 @@ def peak_wall_indentation(
 
 @dataclass(frozen=True)
 class FitRange:
-    """A fit range (m) and how it was chosen."""
+    """A fit range (m) and how it was chosen.
+
+    Parameters
+    ----------
+    lo : float
+        Lower end (m).
+    hi : float
+        Upper end (m).
+    mode : str
+        The range mode of the config.
+    source : str
+        Where the upper end comes from: ``chain``, ``config`` or ``curve``.
+    needed : float
+        The upper end before clipping to the curve (m).
+    clipped : bool
+        Whether the curve stops short of ``needed``.
+    """
 
     lo: float
     hi: float
@@ -120,7 +202,26 @@ def softer_half_space(
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """(E, nu) of the softer of soil and plate, per scene (1-D); a plate E of None or NaN
     (no plate) keeps the soil. The chain's peak indentation into a Hertz wall of that
-    material bounds the real one from above when the plate is softer than the soil."""
+    material bounds the real one from above when the plate is softer than the soil.
+
+    Parameters
+    ----------
+    soil_E : array_like
+        Soil Young's modulus (Pa).
+    soil_nu : array_like
+        Soil Poisson's ratio.
+    plate_E : Any
+        Plate Young's modulus (Pa), scalar or per scene; None or NaN: no plate.
+    plate_nu : Any
+        Plate Poisson's ratio per scene.
+
+    Returns
+    -------
+    E : numpy.ndarray
+        Young's modulus (Pa) per scene.
+    nu : numpy.ndarray
+        Poisson's ratio per scene.
+    """
     E = np.atleast_1d(np.asarray(soil_E, float)).copy()
     nu = np.atleast_1d(np.asarray(soil_nu, float)).copy()
     if plate_E is None:
@@ -146,6 +247,26 @@ def energy_reach(
     :func:`scenes_delta_max`), so with ``energy`` above the chain's (the striker's kinetic
     energy and the column's weight on the indentation) the curve covers the chain's range
     for any device of that energy: ``contact.delta_mode: energy``.
+
+    Parameters
+    ----------
+    soil_E : array_like
+        Soil Young's modulus (Pa).
+    soil_nu : array_like
+        Soil Poisson's ratio.
+    plate_E : Any
+        Plate Young's modulus (Pa) per scene; None or NaN: no plate.
+    plate_nu : Any
+        Plate Poisson's ratio per scene.
+    radius : float
+        Radius of the rigid sphere (m).
+    energy : float
+        Energy to store (J).
+
+    Returns
+    -------
+    numpy.ndarray
+        Indentation (m) per scene.
     """
     if not (np.isfinite(energy) and energy > 0):
         raise ConfigError("contact.reach_energy", energy, "an energy > 0 J")
@@ -176,6 +297,11 @@ def fit_ranges(
         than its soil replaces the soil in the Hertz wall (``softer_half_space``).
     plate_nu : array_like or None
         The plates' Poisson's ratios.
+
+    Returns
+    -------
+    list of FitRange
+        One range (m) per scene.
     """
     E, nu = softer_half_space(soil_E, soil_nu, plate_E, plate_nu)
     dmax = np.atleast_1d(np.asarray(curve_delta_max, float))
@@ -207,7 +333,28 @@ def fit_range(
     soil_E: float, soil_nu: float, curve_delta_max: float, cfg: dict[str, Any],
     plate_E: float | None = None, plate_nu: float | None = None,
 ) -> FitRange:
-    """The fit range of one scene: :func:`fit_ranges` for one scene."""
+    """The fit range of one scene: :func:`fit_ranges` for one scene.
+
+    Parameters
+    ----------
+    soil_E : float
+        Soil Young's modulus (Pa).
+    soil_nu : float
+        Soil Poisson's ratio.
+    curve_delta_max : float
+        The curve's last indentation (m).
+    cfg : dict
+        The validated study config.
+    plate_E : float or None
+        Plate Young's modulus (Pa); None: no plate.
+    plate_nu : float or None
+        Plate Poisson's ratio.
+
+    Returns
+    -------
+    FitRange
+        The fit range (m).
+    """
     return fit_ranges(soil_E, soil_nu, curve_delta_max, cfg, plate_E, plate_nu)[0]
 
 
@@ -223,6 +370,22 @@ def scene_delta_max(
     smaller; a plate softer than the soil (the thesis's printed 100 MPa PLA on a 445 MPa
     foam) makes it larger than the soil's Hertz wall, but not larger than a half-space of
     the plate's material. In fit range mode ``curve`` it is ``contact.delta_max``.
+
+    Parameters
+    ----------
+    soil_E : float
+        Soil Young's modulus (Pa).
+    soil_nu : float
+        Soil Poisson's ratio.
+    cfg : dict
+        The validated study config.
+    plate : tuple of float or None
+        The plate's ``(E, nu)`` (Pa, -); None: no plate.
+
+    Returns
+    -------
+    float
+        Indentation (m).
     """
     pE, pnu = plate if plate is not None else (None, None)
     return float(scenes_delta_max([soil_E], [soil_nu], [pE], [pnu], cfg)[0])
@@ -231,7 +394,26 @@ def scene_delta_max(
 def scenes_delta_max(
     soil_E: ArrayLike, soil_nu: ArrayLike, plate_E: Any, plate_nu: Any, cfg: dict[str, Any]
 ) -> NDArray[np.float64]:
-    """:func:`scene_delta_max` of many scenes (1-D), with one batched chain run."""
+    """:func:`scene_delta_max` of many scenes (1-D), with one batched chain run.
+
+    Parameters
+    ----------
+    soil_E : array_like
+        Soil Young's modulus (Pa).
+    soil_nu : array_like
+        Soil Poisson's ratio.
+    plate_E : Any
+        Plate Young's modulus (Pa) per scene; None or NaN: no plate.
+    plate_nu : Any
+        Plate Poisson's ratio per scene.
+    cfg : dict
+        The validated study config.
+
+    Returns
+    -------
+    numpy.ndarray
+        Indentation (m) per scene.
+    """
     E = np.atleast_1d(np.asarray(soil_E, float))
     if cfg.get("fit", {}).get("range", {}).get("mode", "chain") == "curve":
         return np.full(E.size, float(cfg["contact"]["delta_max"]))

@@ -37,13 +37,55 @@ RESIDUALS = ("rms_rel_residual", "max_rel_residual")
 
 
 def group_name(plate_material: str, plate_thickness: float) -> str:
-    """HDF5 group of a plate, e.g. ``pla-t400um`` (``noplate`` for thickness 0)."""
+    """HDF5 group of a plate, e.g. ``pla-t400um`` (``noplate`` for thickness 0).
+
+    Parameters
+    ----------
+    plate_material : str
+        The plate's material key.
+    plate_thickness : float
+        The plate's thickness (m).
+
+    Returns
+    -------
+    str
+        The group's name.
+    """
     return "noplate" if plate_thickness == 0 else f"{plate_material}-t{plate_thickness * 1e6:g}um"
 
 
 @dataclass
 class KTable:
-    """Fits of one plate over a soil grid; arrays have shape (n_nu, n_E). SI units."""
+    """Fits of one plate over a soil grid; arrays have shape (n_nu, n_E). SI units.
+
+    Parameters
+    ----------
+    plate_material : str
+        The plate's material key.
+    plate_thickness : float
+        Plate thickness (m).
+    radius : float
+        Indenter radius of the fits (m).
+    soil_E : numpy.ndarray
+        Soil moduli (Pa), increasing.
+    soil_nu : numpy.ndarray
+        Soil Poisson's ratios, increasing.
+    params : dict
+        law -> parameter -> values, (n_nu, n_E).
+    residuals : dict
+        law -> ``rms``/``max`` -> relative residuals, (n_nu, n_E).
+    delta_lo : numpy.ndarray
+        Lower end of each scene's fit range (m).
+    delta_hi : numpy.ndarray
+        Upper end of each scene's fit range (m).
+    weighting : str
+        The fits' residual weighting.
+
+    Other Parameters
+    ----------------
+    _interp : dict
+        Interpolants by quantity, built on first use (a cache).
+    """
 
     plate_material: str
     plate_thickness: float  # m
@@ -82,7 +124,22 @@ class KTable:
         plate_material: str | None = None,
         plate_thickness: float | None = None,
     ) -> KTable:
-        """The table of one plate (m) from an HDF5 file (the only one when it holds one)."""
+        """The table of one plate (m) from an HDF5 file (the only one when it holds one).
+
+        Parameters
+        ----------
+        path : str or pathlib.Path
+            The HDF5 file.
+        plate_material : str or None
+            The plate's material key; None: any.
+        plate_thickness : float or None
+            The plate's thickness (m); None: any.
+
+        Returns
+        -------
+        KTable
+            The matching table.
+        """
         tables, _ = load_tables(path)
         pick = [
             tb
@@ -100,6 +157,7 @@ class KTable:
 
     @property
     def name(self) -> str:
+        """The table's HDF5 group name (:func:`group_name`)."""
         return group_name(self.plate_material, self.plate_thickness)
 
     @property
@@ -121,13 +179,41 @@ class KTable:
         return self._interp[key]
 
     def K(self, soil_E: ArrayLike, soil_nu: ArrayLike) -> NDArray[np.float64]:
-        """Interpolated K (-) at soil modulus ``soil_E`` (Pa) and Poisson's ratio ``soil_nu``."""
+        """Interpolated K (-) at soil modulus ``soil_E`` (Pa) and Poisson's ratio ``soil_nu``.
+
+        Parameters
+        ----------
+        soil_E : array_like
+            Soil Young's modulus (Pa).
+        soil_nu : array_like
+            Soil Poisson's ratio.
+
+        Returns
+        -------
+        numpy.ndarray
+            K (dimensionless), the broadcast shape.
+        """
         return self._need("K", "k_hertz")(soil_E, soil_nu)
 
     def power(
         self, soil_E: ArrayLike, soil_nu: ArrayLike
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Interpolated ``(C, n)`` of ``F = C delta^n`` (C in N m^-n); exact at grid nodes."""
+        """Interpolated ``(C, n)`` of ``F = C delta^n`` (C in N m^-n); exact at grid nodes.
+
+        Parameters
+        ----------
+        soil_E : array_like
+            Soil Young's modulus (Pa).
+        soil_nu : array_like
+            Soil Poisson's ratio.
+
+        Returns
+        -------
+        C : numpy.ndarray
+            Coefficient (N m^-n).
+        n : numpy.ndarray
+            Exponent (dimensionless).
+        """
         Kp = self._need("Kp", "power")(soil_E, soil_nu)
         n = self._need("n", "power")(soil_E, soil_nu)
         E, nu = np.broadcast_arrays(np.asarray(soil_E, float), np.asarray(soil_nu, float))
@@ -135,7 +221,20 @@ class KTable:
         return Kp * self._hertz_A(E, nu) * d**1.5 / d**n, n
 
     def dK_dE(self, soil_E: ArrayLike, soil_nu: ArrayLike) -> NDArray[np.float64]:
-        """``dK/dE`` (1/Pa) of the interpolated K at fixed ``soil_nu``."""
+        """``dK/dE`` (1/Pa) of the interpolated K at fixed ``soil_nu``.
+
+        Parameters
+        ----------
+        soil_E : array_like
+            Soil Young's modulus (Pa).
+        soil_nu : array_like
+            Soil Poisson's ratio.
+
+        Returns
+        -------
+        numpy.ndarray
+            ``dK/dE`` (1/Pa), the broadcast shape.
+        """
         return self._need("K", "k_hertz").derivative_E(soil_E, soil_nu)
 
     def dpower_dE(
@@ -143,7 +242,22 @@ class KTable:
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """``(dC/dE, dn/dE)`` of :meth:`power` at fixed ``soil_nu`` (N m^-n / Pa, 1/Pa):
         ``C = Kp A_H d^(1.5 - n)`` with ``A_H`` proportional to E, so
-        ``dC/dE = C (Kp'/Kp + 1/E - ln(d) n')``."""
+        ``dC/dE = C (Kp'/Kp + 1/E - ln(d) n')``.
+
+        Parameters
+        ----------
+        soil_E : array_like
+            Soil Young's modulus (Pa).
+        soil_nu : array_like
+            Soil Poisson's ratio.
+
+        Returns
+        -------
+        dC_dE : numpy.ndarray
+            ``dC/dE`` (N m^-n / Pa).
+        dn_dE : numpy.ndarray
+            ``dn/dE`` (1/Pa).
+        """
         C, _ = self.power(soil_E, soil_nu)
         Kp = self._need("Kp", "power")(soil_E, soil_nu)
         dKp = self._interp["Kp"].derivative_E(soil_E, soil_nu)
@@ -152,7 +266,13 @@ class KTable:
         return C * (dKp / Kp + 1.0 / E - np.log(self.power_ref) * dn), dn
 
     def interp_error(self) -> dict[str, float]:
-        """Stated maximum interpolation errors (relative), leave-one-out estimates."""
+        """Stated maximum interpolation errors (relative), leave-one-out estimates.
+
+        Returns
+        -------
+        dict
+            Relative error per interpolated quantity.
+        """
         out: dict[str, float] = {}
         if "K" in self._interp:
             e = self._interp["K"].loo_error()
@@ -174,7 +294,13 @@ class KTable:
         return out
 
     def rows(self) -> list[dict[str, Any]]:
-        """One dict per scene: plate, soil, every law's parameters and residuals."""
+        """One dict per scene: plate, soil, every law's parameters and residuals.
+
+        Returns
+        -------
+        list of dict
+            One row per scene (SI).
+        """
         out = []
         for j, nu in enumerate(self.soil_nu):
             for i, E in enumerate(self.soil_E):
@@ -205,6 +331,22 @@ def build_tables(fits: Iterable[FitResult]) -> list[KTable]:
 
     Every (E, nu) of a plate's grid must have a fit of every law that appears for that
     plate; all fits of one plate must share the indenter radius and the weighting.
+
+    Parameters
+    ----------
+    fits : iterable of FitResult
+        The fits.
+
+    Returns
+    -------
+    list of KTable
+        One table per plate.
+
+    Raises
+    ------
+    SswError
+        If two fits of one law share a grid point, or a plate's grid is incomplete or
+        mixed.
     """
     groups: dict[tuple[str, float], dict[tuple[float, float, str], FitResult]] = {}
     for fr in fits:
@@ -258,7 +400,19 @@ def _table(mat: str, t: float, cells: dict[tuple[float, float, str], FitResult])
 def write_tables(
     tables: list[KTable], h5_path: str | Path, csv_path: str | Path | None, inputs: dict
 ) -> None:
-    """Write the tables to HDF5 (one group per plate) and, if given, CSV (one row per scene)."""
+    """Write the tables to HDF5 (one group per plate) and, if given, CSV (one row per scene).
+
+    Parameters
+    ----------
+    tables : list of KTable
+        The tables.
+    h5_path : str or pathlib.Path
+        The HDF5 file, written atomically.
+    csv_path : str or pathlib.Path or None
+        The CSV file, or None.
+    inputs : dict
+        The provenance inputs to record.
+    """
     with atomic_h5(h5_path, kind=KIND, inputs=inputs) as f:
         for tb in tables:
             g = f.create_group(tb.name)
@@ -286,7 +440,25 @@ def write_tables(
 
 
 def load_tables(path: str | Path) -> tuple[list[KTable], dict[str, Any]]:
-    """All tables of an HDF5 file written by :func:`write_tables`, and its inputs."""
+    """All tables of an HDF5 file written by :func:`write_tables`, and its inputs.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The HDF5 file.
+
+    Returns
+    -------
+    tables : list of KTable
+        The tables.
+    inputs : dict
+        The file's recorded inputs.
+
+    Raises
+    ------
+    SswError
+        If there is no file at ``path``.
+    """
     import h5py
 
     p = Path(path)

@@ -169,7 +169,7 @@ def tof(
 class TofDerivatives:
     """A TOF with its derivatives (:func:`tof_derivatives`). SI units.
 
-    Attributes
+    Parameters
     ----------
     tof : numpy.ndarray
         s, the broadcast shape of the inputs.
@@ -189,6 +189,8 @@ class TofDerivatives:
         it).
     dt : float
         s, the fixed step of every run.
+    units : dict
+        Parameter name -> its SI unit (the dissipation coefficient's is its law's).
     """
 
     tof: np.ndarray
@@ -203,7 +205,18 @@ class TofDerivatives:
 
     def as_dict(self, index: int = 0) -> dict[str, Any]:
         """Scene ``index``'s values for a JSON record: ``tof``, ``dtof_d<name>``,
-        ``derivative_method`` and ``derivative_units`` (s per unit)."""
+        ``derivative_method`` and ``derivative_units`` (s per unit).
+
+        Parameters
+        ----------
+        index : int
+            The scene.
+
+        Returns
+        -------
+        dict
+            The record (s and s per parameter unit).
+        """
         out: dict[str, Any] = {"tof": float(np.ravel(self.tof)[index])}
         for name, d in self.dtof.items():
             out[f"dtof_d{name}"] = float(np.ravel(d)[index])
@@ -475,7 +488,7 @@ def sensor_signal(
 class SensorDerivatives:
     """The sensor signal at given times and its forward sensitivities. SI units.
 
-    Attributes
+    Parameters
     ----------
     t : numpy.ndarray
         (m,) s from the striker's first contact.

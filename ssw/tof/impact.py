@@ -65,6 +65,20 @@ def tof_impact(curves: list[ForceCurve], cfg: dict[str, Any],
 
     ``records``: the curves' fits when already made (:func:`ssw.fit.pipeline.fit_files`,
     with the ``k_hertz`` and ``power`` laws on the default ranges), else they are fitted.
+
+    Parameters
+    ----------
+    curves : list of ForceCurve
+        Force-indentation curves of the contact FEM (SI).
+    cfg : dict
+        The validated config (device, fit settings).
+    records : list of dict or None
+        The curves' fits, or None to fit them here.
+
+    Returns
+    -------
+    list of dict
+        One record per curve: TOFs (s), relative errors, ``K`` (N/m^1.5), ``C`` and ``n``.
     """
     from ssw.chain.params import ChainParams
     from ssw.chain.run import run_peaks

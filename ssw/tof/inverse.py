@@ -42,7 +42,23 @@ REFINE_STEPS = 2
 
 @dataclass(frozen=True)
 class Inversion:
-    """E (Pa) and its interval for each TOF (s); arrays of the TOF's shape."""
+    """E (Pa) and its interval for each TOF (s); arrays of the TOF's shape.
+
+    Parameters
+    ----------
+    E : numpy.ndarray
+        Young's modulus (Pa).
+    E_low : numpy.ndarray
+        Lower end of its interval (Pa), from TOF + std.
+    E_high : numpy.ndarray
+        Upper end of its interval (Pa), from TOF - std.
+    clipped : numpy.ndarray
+        Whether an interval end hit the range's end.
+    tof_range : tuple
+        TOF at the largest and at the smallest modulus (s).
+    E_range : tuple
+        Modulus range of the forward model (Pa).
+    """
 
     E: np.ndarray
     E_low: np.ndarray  # from TOF + std
@@ -59,6 +75,17 @@ class ForwardGrid:
 
     ``E`` (m,) Pa, increasing; ``T`` (G, m) s; ``nu`` (G,); ``vary``: the per-scene chain
     values (:data:`ssw.chain.params.VARYING` name -> (G,) array) of each group.
+
+    Parameters
+    ----------
+    E : numpy.ndarray
+        Moduli (Pa), (m,), increasing.
+    T : numpy.ndarray
+        TOFs (s), (G, m).
+    nu : numpy.ndarray
+        Poisson's ratio of each group, (G,).
+    vary : dict
+        Per-scene chain values of each group, name -> (G,) array.
     """
 
     E: np.ndarray
@@ -189,6 +216,19 @@ class BatchInversion:
 
     ``E`` is NaN where ``reason`` (a text per target, "" when inverted) says why not;
     ``tof_lo``/``tof_hi`` (s) the forward model's TOF range of each target's group.
+
+    Parameters
+    ----------
+    E : numpy.ndarray
+        Young's modulus (Pa), (k,); NaN where not inverted.
+    tof_lo : numpy.ndarray
+        Smallest TOF of each target's group (s), (k,).
+    tof_hi : numpy.ndarray
+        Largest TOF of each target's group (s), (k,).
+    reason : tuple
+        Why a target was not inverted, per target; empty when it was.
+    E_range : tuple
+        Modulus range of the forward model (Pa).
     """
 
     E: np.ndarray

@@ -30,7 +30,25 @@ UNITS = {"soil_E": "Pa", "soil_nu": "1", "tof": "s", "t_incident": "s", "f_incid
 
 @dataclass(frozen=True)
 class Sweep:
-    """Sweep points, flat arrays of one length. SI units."""
+    """Sweep points, flat arrays of one length. SI units.
+
+    Parameters
+    ----------
+    soil_E : numpy.ndarray
+        Soil Young's modulus (Pa).
+    soil_nu : numpy.ndarray
+        Soil Poisson's ratio.
+    tof : numpy.ndarray
+        TOF (s).
+    t_incident : numpy.ndarray
+        Incident peak time at the sensor (s).
+    f_incident : numpy.ndarray
+        Incident peak above the static force (N).
+    f_reflected : numpy.ndarray
+        Reflected peak above the static force (N).
+    validity : Validity or None
+        The checks of each point (:mod:`ssw.validity`), or None.
+    """
 
     soil_E: np.ndarray  # Pa
     soil_nu: np.ndarray  # -
@@ -41,13 +59,37 @@ class Sweep:
     validity: Validity | None = None  # the checks of each point (ssw.validity)
 
     def sorted(self) -> Sweep:
-        """Points ordered by (nu, E)."""
+        """Points ordered by (nu, E).
+
+        Returns
+        -------
+        Sweep
+            The sweep reordered.
+        """
         order = np.lexsort((self.soil_E, self.soil_nu))
         return Sweep(*(getattr(self, k)[order] for k in FIELDS),
                      validity=None if self.validity is None else self.validity.take(order))
 
     def curve(self, soil_nu: float) -> tuple[np.ndarray, np.ndarray]:
-        """``(E, TOF)`` at one Poisson's ratio, E increasing."""
+        """``(E, TOF)`` at one Poisson's ratio, E increasing.
+
+        Parameters
+        ----------
+        soil_nu : float
+            Poisson's ratio of the soil (one of the sweep's).
+
+        Returns
+        -------
+        E : numpy.ndarray
+            Soil moduli (Pa), increasing.
+        tof : numpy.ndarray
+            TOFs (s).
+
+        Raises
+        ------
+        ConfigError
+            If the sweep has no point at ``soil_nu``.
+        """
         sel = np.isclose(self.soil_nu, soil_nu, rtol=0, atol=1e-9)
         if not np.any(sel):
             raise ConfigError("soil_nu", soil_nu, f"one of the sweep's {np.unique(self.soil_nu)}")
@@ -56,13 +98,48 @@ class Sweep:
 
 
 def grid_points(soil_E: Any, soil_nu: Any) -> tuple[np.ndarray, np.ndarray]:
-    """The flat (nu-major) product of the axes."""
+    """The flat (nu-major) product of the axes.
+
+    Parameters
+    ----------
+    soil_E : array_like
+        Soil moduli (Pa).
+    soil_nu : array_like
+        Soil Poisson's ratios.
+
+    Returns
+    -------
+    E : numpy.ndarray
+        Moduli (Pa) of every point.
+    nu : numpy.ndarray
+        Poisson's ratios of every point.
+    """
     nu, E = np.meshgrid(np.asarray(soil_nu, float), np.asarray(soil_E, float), indexing="ij")
     return E.ravel(), nu.ravel()
 
 
 def chunk_slice(n_points: int, chunk: int, chunks: int) -> np.ndarray:
-    """Indices of chunk ``chunk`` (0-based) of ``chunks``: interleaved."""
+    """Indices of chunk ``chunk`` (0-based) of ``chunks``: interleaved.
+
+    Parameters
+    ----------
+    n_points : int
+        Number of points.
+    chunk : int
+        The chunk, 0-based.
+    chunks : int
+        Number of chunks, >= 1.
+
+    Returns
+    -------
+    numpy.ndarray
+        Point indices ``chunk, chunk + chunks, ...``.
+
+    Raises
+    ------
+    ConfigError
+        If ``chunks < 1`` or ``chunk`` is outside ``[0, chunks)``.
+    """
     if not (chunks >= 1 and 0 <= chunk < chunks):
         raise ConfigError("chunk", f"{chunk} of {chunks}", "0 <= chunk < chunks, chunks >= 1")
     return np.arange(chunk, n_points, chunks)
@@ -87,6 +164,32 @@ def run_sweep(
     finish. With ``strengths`` (:class:`ssw.validity.Strengths`) every point also gets its
     checks (:func:`ssw.validity.assess` of the same run; ``stresses`` its mode: ``bound``
     by default, the contact FEM's stresses only with ``fem``).
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    soil_E : numpy.ndarray
+        Soil moduli (Pa), one per point.
+    soil_nu : numpy.ndarray
+        Soil Poisson's ratios, one per point.
+    wall : str
+        The wall law's registry name.
+    comm : Any
+        An MPI communicator, or None for one process.
+    on_progress : callable or None
+        Called with the count of this rank's finished points.
+    strengths : Strengths or None
+        The sample's strengths for the validity checks, or None.
+    stresses : str
+        The checks' stress mode: ``bound`` or ``fem``.
+    **wall_options : Any
+        Options of the wall law.
+
+    Returns
+    -------
+    Sweep
+        TOFs (s), incident times (s) and peak forces (N) of every point.
     """
     from ssw.validity import assess, fem_options
     from ssw.walls import build_wall
@@ -122,7 +225,17 @@ def _part(value: Any, idx: np.ndarray, n: int) -> Any:
 
 
 def write_sweep(path: str | Path, sweep: Sweep, inputs: dict[str, Any]) -> None:
-    """HDF5 (kind ``tof_sweep``) with one dataset per field."""
+    """HDF5 (kind ``tof_sweep``) with one dataset per field.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The HDF5 file, written atomically.
+    sweep : Sweep
+        The TOF sweep (SI).
+    inputs : dict
+        The provenance inputs to record.
+    """
     with atomic_h5(path, kind=KIND, inputs=inputs) as f:
         for k in FIELDS:
             write_dataset(f, k, getattr(sweep, k), UNITS[k])
@@ -158,7 +271,25 @@ def _read_validity(f: Any) -> Validity | None:
 
 
 def read_sweep(path: str | Path) -> tuple[Sweep, dict[str, Any]]:
-    """A sweep written by :func:`write_sweep` and its inputs."""
+    """A sweep written by :func:`write_sweep` and its inputs.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The HDF5 file.
+
+    Returns
+    -------
+    sweep : Sweep
+        The sweep (SI).
+    inputs : dict
+        Its recorded inputs.
+
+    Raises
+    ------
+    SswError
+        If there is no file at ``path``.
+    """
     import h5py
 
     p = Path(path)
@@ -172,7 +303,22 @@ def read_sweep(path: str | Path) -> tuple[Sweep, dict[str, Any]]:
 def model_digest(params: ChainParams, wall: str, wall_options: dict[str, Any]) -> str:
     """Digest (``ssw.provenance.digest``) of the chain model a sweep is made of: every
     ChainParams field, the wall law and its plain options (a sweep records it; a command
-    that reads a sweep in place of its own model compares)."""
+    that reads a sweep in place of its own model compares).
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    wall : str
+        The wall law's registry name.
+    wall_options : dict
+        Options of the wall law.
+
+    Returns
+    -------
+    str
+        The digest.
+    """
     from dataclasses import asdict
 
     from ssw.provenance import digest
@@ -184,7 +330,25 @@ def model_digest(params: ChainParams, wall: str, wall_options: dict[str, Any]) -
 
 def sweep_model(inputs: dict[str, Any], path: str | Path) -> str:
     """The model digest a sweep file records (a merged sweep: its parts', which must
-    agree); SswError when it records none."""
+    agree); SswError when it records none.
+
+    Parameters
+    ----------
+    inputs : dict
+        The sweep file's inputs.
+    path : str or pathlib.Path
+        The sweep file (for the message).
+
+    Returns
+    -------
+    str
+        The model digest.
+
+    Raises
+    ------
+    SswError
+        If the sweep records no single model digest.
+    """
     if "model_sha256" in inputs:
         return str(inputs["model_sha256"])
     parts = {p.get("model_sha256") for p in inputs.get("part_inputs", [])}
@@ -197,7 +361,26 @@ def sweep_model(inputs: dict[str, Any], path: str | Path) -> str:
 def require_same_model(sweep_inputs: dict[str, Any], path: str | Path, params: ChainParams,
                        wall: str, wall_options: dict[str, Any]) -> None:
     """ProvenanceError unless a sweep was made of the command's own chain model (the same
-    device, calibration, numerics and wall law), naming both sides."""
+    device, calibration, numerics and wall law), naming both sides.
+
+    Parameters
+    ----------
+    sweep_inputs : dict
+        The sweep file's inputs.
+    path : str or pathlib.Path
+        The sweep file (for the message).
+    params : ChainParams
+        The command's chain.
+    wall : str
+        The command's wall law.
+    wall_options : dict
+        The command's wall options.
+
+    Raises
+    ------
+    ProvenanceError
+        If the digests differ.
+    """
     from ssw.provenance import require_match
 
     require_match("the chain model (device, calibration, numerics, wall law)",
@@ -206,7 +389,23 @@ def require_same_model(sweep_inputs: dict[str, Any], path: str | Path, params: C
 
 
 def merge_sweeps(sweeps: list[Sweep]) -> Sweep:
-    """One sweep of all points, ordered by (nu, E); duplicates are an error."""
+    """One sweep of all points, ordered by (nu, E); duplicates are an error.
+
+    Parameters
+    ----------
+    sweeps : list of Sweep
+        The chunks.
+
+    Returns
+    -------
+    Sweep
+        The merged sweep.
+
+    Raises
+    ------
+    SswError
+        If a point appears twice.
+    """
     checks = ([s.validity for s in sweeps] if all(s.validity is not None for s in sweeps)
               else None)
     cat = Sweep(*(np.concatenate([getattr(s, k) for s in sweeps]) for k in FIELDS),
@@ -220,7 +419,15 @@ def merge_sweeps(sweeps: list[Sweep]) -> Sweep:
 def write_csv(path: str | Path, sweep: Sweep) -> None:
     """CSV with a header naming the units; with the sweep's checks, one column per check
     (its value, dimensionless; ``_upper_bound`` after the name of an upper bound) and
-    ``checks_failed`` (the failing checks' names, ``;``-joined) after the TOF columns."""
+    ``checks_failed`` (the failing checks' names, ``;``-joined) after the TOF columns.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The CSV file, written atomically.
+    sweep : Sweep
+        The TOF sweep (SI).
+    """
     import io
 
     from ssw.h5io import write_csv_text
@@ -251,7 +458,17 @@ def _with_checks(text: str, v: Validity) -> str:
 
 
 def plot_fig8(path: str | Path, sweep: Sweep, title: str = "") -> None:
-    """TOF (ms) vs soil E (MPa), one line per nu (thesis Fig 8 style), PNG."""
+    """TOF (ms) vs soil E (MPa), one line per nu (thesis Fig 8 style), PNG.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The PNG file.
+    sweep : Sweep
+        The TOF sweep (SI).
+    title : str
+        The plot's title; empty: a default.
+    """
     plt = pyplot()
 
     fig, ax = plt.subplots(figsize=(6, 4.2))

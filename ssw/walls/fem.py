@@ -73,6 +73,25 @@ class PiecewiseLinearWall:
     ends. ``force_error``: relative 1-sigma force error of each scene's law, (n,) (None:
     unknown). ``da_dE``, ``db_dE`` (n, K + 1), N/Pa and N/m/Pa, or None: the pieces'
     coefficients' derivatives with respect to the soil's modulus (:func:`fem_wall`).
+
+    Parameters
+    ----------
+    d : numpy.ndarray
+        Breakpoints (m), (n, K + 1), increasing from 0.
+    a : numpy.ndarray
+        Intercepts of the pieces (N), (n, K + 1).
+    b : numpy.ndarray
+        Slopes of the pieces (N/m), (n, K + 1).
+    U : numpy.ndarray
+        Potential at the breakpoints (J), (n, K + 1).
+    d_exact : numpy.ndarray
+        Where the exact law ends (m), (n,).
+    force_error : numpy.ndarray or None
+        Relative 1-sigma force error per scene, (n,); None: unknown.
+    da_dE : numpy.ndarray or None
+        ``da/dE`` (N/Pa), (n, K + 1), or None.
+    db_dE : numpy.ndarray or None
+        ``db/dE`` (N/m/Pa), (n, K + 1), or None.
     """
 
     d: np.ndarray
@@ -102,6 +121,7 @@ class PiecewiseLinearWall:
 
     @property
     def n(self) -> int:
+        """Number of scenes."""
         return self.d.shape[0]
 
     @property
@@ -130,18 +150,56 @@ class PiecewiseLinearWall:
         return self._law
 
     def force(self, d: np.ndarray) -> np.ndarray:
-        """Wall force (N) at indentation ``d`` (m), shape (n,); 0 for ``d <= 0``."""
+        """Wall force (N) at indentation ``d`` (m), shape (n,); 0 for ``d <= 0``.
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Force (N), (n,).
+        """
         return piecewise(self._law, d)[0]
 
     def dforce_dd(self, d: np.ndarray) -> np.ndarray:
         """Tangent stiffness (N/m): the slope ``b`` of the piece holding ``d`` (m); 0 for
-        ``d <= 0``."""
+        ``d <= 0``.
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Tangent stiffness (N/m), (n,).
+        """
         return piecewise(self._law, d, tangent=True)[1]
 
     def dforce_dE(self, d: np.ndarray) -> np.ndarray:
         """``dF/dE`` (N/Pa) at fixed indentation ``d`` (m): ``da/dE + db/dE d`` of the piece
         holding ``d`` (the law is continuous at the breakpoints, which move with E, so
-        their motion adds nothing); ConfigError without the pieces' derivatives."""
+        their motion adds nothing); ConfigError without the pieces' derivatives.
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            ``dF/dE`` (N/Pa), (n,).
+
+        Raises
+        ------
+        ConfigError
+            If the wall was built without the pieces' E-derivatives.
+        """
         self._check_dE()
         return piecewise(self._law, d, with_E=True)[2]
 
@@ -155,27 +213,79 @@ class PiecewiseLinearWall:
         """``(F, dF/dd, dF/dE)`` at indentations ``d`` (m) from one search of the pieces:
         :meth:`force`, :meth:`dforce_dd` and, with ``with_E``, :meth:`dforce_dE` (else
         None) (:func:`ssw.chain.wall.force_and_tangent`); ConfigError for ``with_E``
-        without the pieces' derivatives."""
+        without the pieces' derivatives.
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+        with_E : bool
+            Whether ``dF/dE`` is wanted.
+
+        Returns
+        -------
+        tuple
+            ``(F, dF/dd, dF/dE)``: N, N/m and N/Pa, (n,) each; ``dF/dE`` None without
+            ``with_E``.
+
+        Raises
+        ------
+        ConfigError
+            If the wall was built without the pieces' E-derivatives.
+        """
         if with_E:
             self._check_dE()
         return piecewise(self._law, d, tangent=True, with_E=with_E)[:3]
 
     def potential(self, d: np.ndarray) -> np.ndarray:
-        """Stored energy ``int_0^d F`` (J)."""
+        """Stored energy ``int_0^d F`` (J).
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Stored energy (J), (n,).
+        """
         dp = np.maximum(np.asarray(d, float), 0.0)
         j = np.arange(self.n) * self.d.shape[1] + piecewise(self._law, dp, piece=True)[3]
         dj, aj, bj = self.d.ravel()[j], self.a.ravel()[j], self.b.ravel()[j]
         return self.U.ravel()[j] + (dp - dj) * (aj + 0.5 * bj * (dp + dj))
 
     def indentation(self, F: np.ndarray) -> np.ndarray:
-        """Indentation (m) carrying the force ``F >= 0`` (N): the inverse of :meth:`force`."""
+        """Indentation (m) carrying the force ``F >= 0`` (N): the inverse of :meth:`force`.
+
+        Parameters
+        ----------
+        F : numpy.ndarray
+            Forces (N), scalar or (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Indentation (m), (n,).
+        """
         Fp = np.maximum(np.broadcast_to(np.asarray(F, float), (self.n,)), 0.0)
         j = self._piece(np.minimum(Fp / self._fend, 1.0), self._fkeys)
         aj, bj = self.a.ravel()[j], self.b.ravel()[j]
         return np.where(Fp > 0, (Fp - aj) / bj, 0.0)
 
     def take(self, idx: np.ndarray) -> PiecewiseLinearWall:
-        """The scenes ``idx`` (may repeat)."""
+        """The scenes ``idx`` (may repeat).
+
+        Parameters
+        ----------
+        idx : numpy.ndarray
+            Integer indices of the scenes to keep, (k,); may repeat.
+
+        Returns
+        -------
+        PiecewiseLinearWall
+            The law of the selected scenes.
+        """
         def sel(x: np.ndarray | None) -> np.ndarray | None:
             return None if x is None else np.asarray(x)[idx]
 
@@ -184,14 +294,38 @@ class PiecewiseLinearWall:
                                    sel(self.db_dE))
 
     def hertz_equivalent(self, d_ref: float) -> np.ndarray:
-        """``F(d_ref) / d_ref^1.5`` (N/m^1.5), for the time-step choice."""
+        """``F(d_ref) / d_ref^1.5`` (N/m^1.5), for the time-step choice.
+
+        Parameters
+        ----------
+        d_ref : float
+            Reference indentation (m), > 0.
+
+        Returns
+        -------
+        numpy.ndarray
+            Equivalent Hertz coefficient (N/m^1.5), (n,).
+        """
         return self.force(np.full(self.n, d_ref)) / d_ref**1.5
 
 
 def chain_energy(params: ChainParams) -> tuple[float, float]:
     """``(W0, Wg)``: the striker's kinetic energy ``1/2 m_s v^2`` (J) and the static load
     ``M g + P`` (N) on the wall's indentation (``M`` the chain's mass with gravity on, ``P``
-    the preload)."""
+    the preload).
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+
+    Returns
+    -------
+    W0 : float
+        Striker's kinetic energy (J), at the largest striker speed.
+    Wg : float
+        Static load on the wall (N), at the largest preload.
+    """
     m = params.masses
     W0 = 0.5 * float(m[0]) * float(np.max(params.striker_velocity)) ** 2
     Wg = (float(np.sum(m)) * params.g if params.gravity else 0.0) + float(
@@ -207,6 +341,24 @@ def energy_bound(d: np.ndarray, F: np.ndarray, W: float, Wg: float) -> tuple[flo
     ``U - Wg x`` is convex (the force is non-decreasing), so the first breakpoint past the
     level brackets the root; on that piece ``U`` is an exact quadratic, solved in closed form
     (the cancellation-free root).
+
+    Parameters
+    ----------
+    d : numpy.ndarray
+        Breakpoint indentations (m), increasing, from 0.
+    F : numpy.ndarray
+        Forces at the breakpoints (N), non-decreasing.
+    W : float
+        Energy brought (J).
+    Wg : float
+        Constant load (N).
+
+    Returns
+    -------
+    x : float
+        The indentation (m), inf if the range holds none.
+    U : numpy.ndarray
+        Potential at the breakpoints (J).
     """
     U = np.concatenate([[0.0], np.cumsum(0.5 * (F[1:] + F[:-1]) * np.diff(d))])
     g = U - Wg * d - W
@@ -384,7 +536,21 @@ class RigidLaw:
     the whole prefix path (every candidate of the zone), ``F = f0 + f1 delta`` on
     ``[breaks[j], breaks[j + 1]]`` (m, N, N/m), and ``df0``, ``df1`` their derivatives with
     respect to the soil's modulus (N/Pa, N/m/Pa; None: not computed). What a chain adds is
-    its own: the bead's compliance and the range its energy needs (``_chain_row``)."""
+    its own: the bead's compliance and the range its energy needs (``_chain_row``).
+
+    Parameters
+    ----------
+    breaks : numpy.ndarray
+        Piece breakpoints (m).
+    f0 : numpy.ndarray
+        Intercepts (N).
+    f1 : numpy.ndarray
+        Slopes (N/m).
+    df0 : numpy.ndarray or None
+        ``df0/dE`` (N/Pa), or None.
+    df1 : numpy.ndarray or None
+        ``df1/dE`` (N/m/Pa), or None.
+    """
 
     breaks: np.ndarray
     f0: np.ndarray
@@ -491,7 +657,18 @@ def _chain_dE(df0: np.ndarray, df1: np.ndarray, f1: np.ndarray, s: float, ds: fl
 def concatenate(walls: list[PiecewiseLinearWall]) -> PiecewiseLinearWall:
     """The scenes of several walls as one (each row padded with its last value, as
     :func:`fem_wall` pads its scenes; the derivatives kept only if every wall has them):
-    the walls of several plates or chains' ranges advanced in one batched run."""
+    the walls of several plates or chains' ranges advanced in one batched run.
+
+    Parameters
+    ----------
+    walls : list of PiecewiseLinearWall
+        The walls.
+
+    Returns
+    -------
+    PiecewiseLinearWall
+        One wall of all their scenes, in order.
+    """
     width = max(w.d.shape[1] for w in walls)
 
     def stack(name: str) -> np.ndarray:
@@ -539,7 +716,30 @@ def peak_stresses(params: ChainParams, soil_E: Any, soil_nu: float, d_wall: Any,
     :func:`ssw.chain.wall.compliance_scale`) and the device's plate (its material,
     thickness, diameter and interface, as :func:`fem_wall` has them) with the elastic bead
     (:func:`ssw.contact.stress.contact_stresses`; ``force``, N, the wall's force there when
-    known). Returns its ``ContactStress``."""
+    known). Returns its ``ContactStress``.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    soil_E : array_like
+        Soil Young's moduli (Pa).
+    soil_nu : float
+        Soil Poisson's ratio.
+    d_wall : array_like
+        Peak wall indentations (m), one per modulus.
+    contact : dict or None
+        The contact FEM settings; None: the defaults.
+    operators : Any
+        A store of the FEM's operators to reuse, or None.
+    force : array_like or None
+        The wall's forces at ``d_wall`` (N), when known.
+
+    Returns
+    -------
+    ContactStress
+        The contact's elastic stresses (Pa).
+    """
     from ssw.chain.wall import compliance_scale
     from ssw.contact.stress import contact_stresses
 

@@ -35,7 +35,33 @@ class Hits:
     plate-sample interface on the axis; without a plate the permanent set) and
     ``plate_thinning`` m (the rest: the plate's permanent thinning there). ``static_set`` (n,) m and
     ``static_dissipated`` (n,) J: what placing the chain did. ``wall``: the sample after
-    the last hit."""
+    the last hit.
+
+    Parameters
+    ----------
+    tof : numpy.ndarray
+        TOF (s), (hits, n).
+    peak_force : numpy.ndarray
+        Peak wall force (N), (hits, n).
+    peak_indentation : numpy.ndarray
+        Peak indentation (m), (hits, n).
+    permanent_set : numpy.ndarray
+        Permanent set after the hit (m), (hits, n).
+    set_increment : numpy.ndarray
+        Permanent set added by the hit (m), (hits, n).
+    dissipated : numpy.ndarray
+        Energy dissipated in the hit (J), (hits, n).
+    interface_set : numpy.ndarray
+        Permanent depth of the plate-sample interface on the axis (m), (hits, n).
+    plate_thinning : numpy.ndarray
+        The plate's permanent thinning there (m), (hits, n).
+    static_set : numpy.ndarray
+        Permanent set of placing the chain (m), (n,).
+    static_dissipated : numpy.ndarray
+        Energy dissipated placing the chain (J), (n,).
+    wall : PlasticWall
+        The sample after the last hit.
+    """
 
     tof: np.ndarray
     peak_force: np.ndarray
@@ -50,7 +76,13 @@ class Hits:
     wall: Any
 
     def rows(self) -> list[dict[str, Any]]:
-        """One mapping per hit (first scene)."""
+        """One mapping per hit (first scene).
+
+        Returns
+        -------
+        list of dict
+            ``hit`` and each per-hit quantity of the first scene (SI).
+        """
         keys = ("tof", "peak_force", "peak_indentation", "permanent_set", "set_increment",
                 "dissipated", "interface_set", "plate_thinning")
         return [{"hit": i + 1, **{k: float(getattr(self, k)[i, 0]) for k in keys}}
@@ -58,13 +90,46 @@ class Hits:
 
 
 def dissipated(wall: Any, d_max: np.ndarray) -> np.ndarray:
-    """(n,) J: the energy the sample lost since virgin, at the history ``d_max`` (m)."""
+    """(n,) J: the energy the sample lost since virgin, at the history ``d_max`` (m).
+
+    Parameters
+    ----------
+    wall : PlasticWall
+        The sample.
+    d_max : numpy.ndarray
+        Largest indentations of the history (m), (n,).
+
+    Returns
+    -------
+    numpy.ndarray
+        Dissipated energy (J), (n,).
+    """
     return wall.energies(np.zeros(wall.n), d_max)[1]
 
 
 def run_hits(params: ChainParams, wall: Any, hits: int) -> Hits:
     """``hits`` consecutive hits of the chain ``params`` on the virgin sample ``wall`` (a
-    :class:`ssw.walls.plastic.PlasticWall`)."""
+    :class:`ssw.walls.plastic.PlasticWall`).
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    wall : PlasticWall
+        The virgin sample.
+    hits : int
+        Number of hits, >= 1.
+
+    Returns
+    -------
+    Hits
+        Each hit's TOF (s), peaks, permanent sets (m) and dissipated energies (J).
+
+    Raises
+    ------
+    ConfigError
+        If ``hits`` is not an integer >= 1.
+    """
     from ssw.chain.run import run_peaks
     from ssw.chain.statics import static_contact_forces
 

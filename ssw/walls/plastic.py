@@ -84,7 +84,21 @@ ENERGY_MARGIN = 3.0
 class Settings:
     """FEM settings of the tables: ``levels`` unloading curves, ``increments`` per path
     (loading: ``2 x``), mesh: element ``a / fine`` under the sphere, ``growth``, domain
-    ``domain x a`` (``a`` the contact radius at the reach)."""
+    ``domain x a`` (``a`` the contact radius at the reach).
+
+    Parameters
+    ----------
+    levels : int
+        Number of unloading curves.
+    increments : int
+        Increments per path (loading: twice).
+    fine : float
+        Element size under the sphere is ``a / fine``.
+    growth : float
+        Element size growth rate.
+    domain : float
+        Domain size in units of ``a`` (the contact radius at the reach).
+    """
 
     levels: int = 10
     increments: int = 12
@@ -99,7 +113,31 @@ class Tables:
     work ``W``; levels ``d_m`` (level 0 = ``d_e``), ``d_res``, shapes ``f`` and their
     cumulative integrals ``S`` on ``xi = k / SHAPE_CELLS``; ``elastic``: never yielded;
     ``d_res_interface`` the plate-sample interface's residual depth on the axis per level
-    (``d_res`` less the plate's permanent thinning; without a plate ``d_res``)."""
+    (``d_res`` less the plate's permanent thinning; without a plate ``d_res``).
+
+    Parameters
+    ----------
+    h : float
+        Virgin table step (m).
+    F : numpy.ndarray
+        Virgin force on ``d = h k`` (N).
+    W : numpy.ndarray
+        Its cumulative work (J).
+    d_m : numpy.ndarray
+        Level indentations (m); level 0 is ``d_e``.
+    d_res : numpy.ndarray
+        Residual indentations per level (m).
+    f : numpy.ndarray
+        Unloading shapes on ``xi = k / SHAPE_CELLS``.
+    S : numpy.ndarray
+        Their cumulative integrals.
+    elastic : bool
+        Whether the sample never yielded.
+    stats : dict
+        Solver statistics.
+    d_res_interface : numpy.ndarray or None
+        The plate-sample interface's residual depth per level (m); None: ``d_res``.
+    """
 
     h: float
     F: np.ndarray
@@ -138,7 +176,31 @@ def tables(E: float, nu: float, model: Any, radius: float, d_top: float,
 
     ``model``: the sample's (None: elastic). ``plate``: None (the sphere on the sample), or
     ``(E Pa, nu, thickness m, radius m, interface, model)`` of a plate between them (its
-    model None: elastic; :func:`ssw.contact.plastic.contact_mesh` meshes it)."""
+    model None: elastic; :func:`ssw.contact.plastic.contact_mesh` meshes it).
+
+    Parameters
+    ----------
+    E : float
+        Sample's Young's modulus (Pa).
+    nu : float
+        Sample's Poisson's ratio.
+    model : Any
+        The sample's constitutive model; None: elastic.
+    radius : float
+        Radius of the rigid sphere (m).
+    d_top : float
+        Deepest indentation of the tables (m).
+    settings : Settings
+        The contact FEM's settings.
+    plate : tuple or None
+        The plate ``(E, nu, thickness, radius, interface, model)`` (Pa, -, m, m); None:
+        none.
+
+    Returns
+    -------
+    Tables
+        The scene's loading and unloading tables (SI).
+    """
     import time
 
     from ssw.contact.plastic import contact_mesh, plate_contact_radius, solve_path
@@ -205,7 +267,15 @@ def tables(E: float, nu: float, model: Any, radius: float, d_top: float,
 
 @dataclass(frozen=True)
 class PlasticState:
-    """Per scene: the indentation ``d`` and the largest one reached ``d_max`` (m)."""
+    """Per scene: the indentation ``d`` and the largest one reached ``d_max`` (m).
+
+    Parameters
+    ----------
+    d : numpy.ndarray
+        Indentations (m), (n,).
+    d_max : numpy.ndarray
+        Largest indentations reached (m), (n,).
+    """
 
     d: np.ndarray
     d_max: np.ndarray
@@ -222,6 +292,27 @@ class PlasticWall:
     level (None: ``d_res``). A :class:`ssw.chain.wall.Wall` (the law at the carried
     history) and a stateful wall (``start``, ``advance``, ``take_state``, ``energy``;
     docs/CONTRACTS.md).
+
+    Parameters
+    ----------
+    h : numpy.ndarray
+        Virgin table step (m), (n,).
+    F : numpy.ndarray
+        Virgin force (N), (n, VIRGIN_CELLS + 1).
+    W : numpy.ndarray
+        Virgin cumulative work (J), (n, VIRGIN_CELLS + 1).
+    d_m : numpy.ndarray
+        Level indentations (m), (n, L).
+    d_res : numpy.ndarray
+        Residual indentations per level (m), (n, L).
+    f : numpy.ndarray
+        Unloading shapes, (n, L, SHAPE_CELLS + 1).
+    S : numpy.ndarray
+        Their cumulative integrals, (n, L, SHAPE_CELLS + 1).
+    d_max0 : numpy.ndarray
+        The history the wall starts with (m), (n,).
+    d_res_interface : numpy.ndarray or None
+        The plate-sample interface's residual depth per level (m), (n, L); None: ``d_res``.
     """
 
     h: np.ndarray
@@ -236,6 +327,7 @@ class PlasticWall:
 
     @property
     def n(self) -> int:
+        """Number of scenes."""
         return self.h.shape[0]
 
     @property
@@ -303,7 +395,20 @@ class PlasticWall:
 
     # --- the law at a state
     def force_at(self, d: np.ndarray, d_max: np.ndarray) -> np.ndarray:
-        """Force (N) at indentation ``d`` for the largest indentation ``d_max`` (m)."""
+        """Force (N) at indentation ``d`` for the largest indentation ``d_max`` (m).
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+        d_max : numpy.ndarray
+            Largest indentations of the history (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Force (N), (n,).
+        """
         d = np.maximum(np.asarray(d, float), 0.0)
         d_max = np.maximum(np.asarray(d_max, float), d)
         FL, _ = self._virgin(d)
@@ -315,7 +420,22 @@ class PlasticWall:
         return np.where(elastic, FL, below)
 
     def energies(self, d: np.ndarray, d_max: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-        """Stored and dissipated energy (J) at ``d`` for the history ``d_max`` (m)."""
+        """Stored and dissipated energy (J) at ``d`` for the history ``d_max`` (m).
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+        d_max : numpy.ndarray
+            Largest indentations of the history (m), (n,).
+
+        Returns
+        -------
+        stored : numpy.ndarray
+            Stored energy (J), (n,).
+        dissipated : numpy.ndarray
+            Dissipated energy (J), (n,).
+        """
         d = np.maximum(np.asarray(d, float), 0.0)
         d_max = np.maximum(np.asarray(d_max, float), d)
         _, WL = self._virgin(d)
@@ -330,30 +450,86 @@ class PlasticWall:
         return np.where(elastic, WL, stored), np.where(elastic, 0.0, WLm - full)
 
     def residual_indentation(self, d_max: np.ndarray | None = None) -> np.ndarray:
-        """(n,) m: the permanent set after unloading from ``d_max`` (default the history)."""
+        """(n,) m: the permanent set after unloading from ``d_max`` (default the history).
+
+        Parameters
+        ----------
+        d_max : numpy.ndarray or None
+            Largest indentations (m), (n,); None: the wall's history.
+
+        Returns
+        -------
+        numpy.ndarray
+            Permanent set (m), (n,).
+        """
         dm = self.d_max0 if d_max is None else np.asarray(d_max, float)
         return np.where(dm <= self.d_m[:, 0], 0.0, self._level(dm)[0])
 
     def interface_residual_indentation(self, d_max: np.ndarray | None = None) -> np.ndarray:
         """(n,) m: the plate-sample interface's permanent depth on the axis after unloading
         from ``d_max`` (default the history): :meth:`residual_indentation` less the plate's
-        permanent thinning (without a plate, the residual indentation)."""
+        permanent thinning (without a plate, the residual indentation).
+
+        Parameters
+        ----------
+        d_max : numpy.ndarray or None
+            Largest indentations (m), (n,); None: the wall's history.
+
+        Returns
+        -------
+        numpy.ndarray
+            Permanent interface depth (m), (n,).
+        """
         if self.d_res_interface is None:
             return self.residual_indentation(d_max)
         dm = self.d_max0 if d_max is None else np.asarray(d_max, float)
         return np.where(dm <= self.d_m[:, 0], 0.0, self._level(dm, self.d_res_interface)[0])
 
     def with_history(self, d_max: np.ndarray) -> PlasticWall:
-        """The same sample after it reached ``d_max`` (m) (the larger of it and the past)."""
+        """The same sample after it reached ``d_max`` (m) (the larger of it and the past).
+
+        Parameters
+        ----------
+        d_max : numpy.ndarray
+            Largest indentations reached (m), (n,).
+
+        Returns
+        -------
+        PlasticWall
+            The wall with the new history.
+        """
         return replace(self, d_max0=np.maximum(self.d_max0, np.asarray(d_max, float)))
 
     # --- the Wall protocol (at the carried history)
     def force(self, d: np.ndarray) -> np.ndarray:
+        """Force (N) at indentation ``d`` (m) on the wall's history ``d_max0``.
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Force (N), (n,).
+        """
         return self.force_at(d, self.d_max0)
 
     def potential(self, d: np.ndarray) -> np.ndarray:
         """Work of the wall force from the unloaded sample to ``d`` on the current history
-        (J): the stored energy plus what a new yield would dissipate."""
+        (J): the stored energy plus what a new yield would dissipate.
+
+        Parameters
+        ----------
+        d : numpy.ndarray
+            Indentations (m), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Work (J), (n,).
+        """
         s, diss = self.energies(d, self.d_max0)
         return s + diss - self._lost0
 
@@ -364,43 +540,154 @@ class PlasticWall:
 
     def indentation(self, F: np.ndarray) -> np.ndarray:
         """Indentation (m) carrying ``F`` (N) on the current history (the root of the
-        monotone law, :func:`ssw.chain.wall.force_indentation`)."""
+        monotone law, :func:`ssw.chain.wall.force_indentation`).
+
+        Parameters
+        ----------
+        F : numpy.ndarray
+            Forces (N), (n,).
+
+        Returns
+        -------
+        numpy.ndarray
+            Indentation (m), (n,).
+        """
         return force_indentation(self.force, F, np.maximum(self.exact_reach, self.d_max0))
 
     def take(self, idx: np.ndarray) -> PlasticWall:
+        """The scenes ``idx`` (may repeat).
+
+        Parameters
+        ----------
+        idx : numpy.ndarray
+            Integer indices of the scenes to keep, (k,); may repeat.
+
+        Returns
+        -------
+        PlasticWall
+            The wall of the selected scenes.
+        """
         return PlasticWall(self.h[idx], self.F[idx], self.W[idx], self.d_m[idx],
                            self.d_res[idx], self.f[idx], self.S[idx], self.d_max0[idx],
                            None if self.d_res_interface is None else self.d_res_interface[idx])
 
     def hertz_equivalent(self, d_ref: float) -> np.ndarray:
-        """``F_L(d) / d^1.5`` (N/m^1.5) at ``max(d_ref, one table cell)``."""
+        """``F_L(d) / d^1.5`` (N/m^1.5) at ``max(d_ref, one table cell)``.
+
+        Parameters
+        ----------
+        d_ref : float
+            Reference indentation (m), > 0.
+
+        Returns
+        -------
+        numpy.ndarray
+            Equivalent Hertz coefficient (N/m^1.5), (n,).
+        """
         d = np.maximum(np.full(self.n, d_ref), self.h)
         return self._virgin(d)[0] / d**1.5
 
     # --- stateful wall
     def start(self, d0: np.ndarray) -> PlasticState:
+        """The state with the last beads at ``d0`` (m), on the wall's history.
+
+        Parameters
+        ----------
+        d0 : numpy.ndarray
+            Initial indentations (m), (n,).
+
+        Returns
+        -------
+        PlasticState
+            The state.
+        """
         d0 = np.array(d0, float)
         return PlasticState(d0, np.maximum(self.d_max0, d0))
 
     def advance(self, st: PlasticState, d: np.ndarray, dt: float
                 ) -> tuple[np.ndarray, PlasticState]:
-        """Force (N) at the new indentation ``d`` (m) and the new state."""
+        """Force (N) at the new indentation ``d`` (m) and the new state.
+
+        Parameters
+        ----------
+        st : PlasticState
+            The state (indentations and history, m).
+        d : numpy.ndarray
+            Indentations at the step's end (m), (n,).
+        dt : float
+            Time step (s); unused (the law is rate-independent).
+
+        Returns
+        -------
+        F : numpy.ndarray
+            Force (N), (n,).
+        state : PlasticState
+            The new state.
+        """
         d = np.array(d, float)
         d_max = np.maximum(st.d_max, d)
         return self.force_at(d, d_max), PlasticState(d, d_max)
 
     def take_state(self, st: PlasticState, idx: np.ndarray) -> PlasticState:
+        """The state of the scenes ``idx``.
+
+        Parameters
+        ----------
+        st : PlasticState
+            The state (indentations and history, m).
+        idx : numpy.ndarray
+            Integer indices of the scenes to keep, (k,); may repeat.
+
+        Returns
+        -------
+        PlasticState
+            The selected scenes' state.
+        """
         return PlasticState(st.d[idx], st.d_max[idx])
 
     def energy(self, st: PlasticState) -> tuple[np.ndarray, np.ndarray]:
-        """Stored and dissipated (since the unloaded virgin sample) energy, J."""
+        """Stored and dissipated (since the unloaded virgin sample) energy, J.
+
+        Parameters
+        ----------
+        st : PlasticState
+            The state (indentations and history, m).
+
+        Returns
+        -------
+        stored : numpy.ndarray
+            Stored energy (J), (n,).
+        dissipated : numpy.ndarray
+            Dissipated energy (J), (n,).
+        """
         return self.energies(st.d, st.d_max)
 
 
 def reach(params: ChainParams, E: float, nu: float, margin: float = ENERGY_MARGIN) -> float:
     """A first ``d_top`` (m): where a Hertz wall stores ``margin`` hits' energy, doubled
     (a plastic sample is softer). :func:`plastic_wall` extends it when the virgin curve
-    holds less."""
+    holds less.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The chain.
+    E : float
+        Sample's Young's modulus (Pa).
+    nu : float
+        Sample's Poisson's ratio.
+    margin : float
+        Number of hits' energy to hold.
+
+    Returns
+    -------
+    float
+        Indentation (m).
+
+    References
+    ----------
+    Johnson, K. L. (1985). *Contact Mechanics*, ch. 11.
+    """
     from ssw.hertz import energy_indentation
 
     A = float(params.wall_coefficient(np.array([E]), np.array([nu]))[0])

@@ -83,7 +83,7 @@ def family_of(scene: Scene) -> str:
 
     Parameters
     ----------
-    scene : ssw.contact.scenes.Scene
+    scene : ssw.config.Scene
         The contact scene.
 
     Returns

@@ -87,7 +87,22 @@ def lsb_volts() -> float:
 
 
 def input_delay(rate: float) -> float:
-    """NI 9234 input delay ``38.4 / f_s + 4.5 us``, s, at the sample rate ``rate`` (S/s)."""
+    """NI 9234 input delay ``38.4 / f_s + 4.5 us``, s, at the sample rate ``rate`` (S/s).
+
+    Parameters
+    ----------
+    rate : float
+        The sample rate, S/s.
+
+    Returns
+    -------
+    float
+        The delay, s.
+
+    References
+    ----------
+    NI 9234 specifications, input delay (REFERENCE.md [U]).
+    """
     return DELAY_SAMPLES / rate + DELAY_FIXED
 
 
@@ -167,7 +182,20 @@ class Acquisition:
     @classmethod
     def of(cls, settings: Any, **changes: Any) -> Acquisition:
         """The model of a :class:`ssw.daq.settings.DaqSettings` (rate, sensitivity,
-        coupling), with ``changes``."""
+        coupling), with ``changes``.
+
+        Parameters
+        ----------
+        settings : ssw.daq.settings.DaqSettings
+            The acquisition settings.
+        **changes
+            Fields of :class:`Acquisition` to replace (None values are ignored).
+
+        Returns
+        -------
+        Acquisition
+            The model.
+        """
         values = {"sample_rate": float(settings.sample_rate),
                   "sensitivity": float(settings.sensitivity), "coupling": settings.coupling}
         values.update({k: v for k, v in changes.items() if v is not None})
@@ -370,7 +398,20 @@ def acquire(acq: Acquisition, force: Force, t_first: np.ndarray, n_samples: int,
 
 def tabulated(t: np.ndarray, f: np.ndarray) -> Force:
     """A force given on samples ``(t, f)`` (s, N; increasing ``t``) as a function of time:
-    linear between the samples, 0 before the first, the last value after it."""
+    linear between the samples, 0 before the first, the last value after it.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        The sample times, s, increasing.
+    f : numpy.ndarray
+        The forces at ``t``, N.
+
+    Returns
+    -------
+    callable
+        ``force(s)``: the force, N, at the times ``s`` (s), any shape.
+    """
     t = np.asarray(t, float)
     f = np.asarray(f, float)
 

@@ -33,7 +33,23 @@ def allowed_rates() -> list[float]:
 
 
 def rate_divisor(rate: float) -> int:
-    """The divisor ``n`` with ``rate = 51200 / n``; :class:`.ConfigError` if none matches."""
+    """The divisor ``n`` with ``rate = 51200 / n``; :class:`.ConfigError` if none matches.
+
+    Parameters
+    ----------
+    rate : float
+        The sample rate, S/s.
+
+    Returns
+    -------
+    int
+        The NI 9234 divisor, 1 to 31.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When no divisor gives ``rate`` within ``RATE_RTOL``.
+    """
     n = round(NI9234_BASE_RATE / rate) if rate > 0 else 0
     if 1 <= n <= NI9234_MAX_DIVISOR and abs(NI9234_BASE_RATE / n - rate) <= RATE_RTOL * rate:
         return n
@@ -215,7 +231,27 @@ def settings_from_config(cfg: dict[str, Any], device: Any = None,
     """Build :class:`DaqSettings` from a loaded config's ``daq:`` section (the acquisition:
     module, channel, rate, trigger, hits) and the device's DAQ sensor (model, sensitivity
     V/N, range N: ``device`` or the config's, :func:`ssw.config.device_of`), plus
-    overrides."""
+    overrides.
+
+    Parameters
+    ----------
+    cfg : dict
+        The loaded study config.
+    device : ssw.device.Device or None
+        The device (None: the config's).
+    **overrides
+        Settings that replace the config's (None values are ignored).
+
+    Returns
+    -------
+    DaqSettings
+        The settings (SI units).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When a key is not a setting, or a value is invalid (:class:`DaqSettings`).
+    """
     from ssw.config import device_of
 
     dev = device if device is not None else device_of(cfg)

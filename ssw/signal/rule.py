@@ -103,7 +103,18 @@ class Selection:
 
 def local_maxima(s: np.ndarray) -> np.ndarray:
     """(n_t, n) bool: interior samples above their left neighbour and not below their right
-    one; ``s`` (n_t, n)."""
+    one; ``s`` (n_t, n).
+
+    Parameters
+    ----------
+    s : numpy.ndarray
+        The signals, (n_t, n), time along axis 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        The mask, (n_t, n); first and last samples False.
+    """
     out = np.zeros(s.shape, dtype=bool)
     out[1:-1] = (s[1:-1] > s[:-2]) & (s[1:-1] >= s[2:])
     return out

@@ -244,7 +244,18 @@ class SurveyRow:
 
 
 def point_target(point: dict[str, Any]) -> float | None:
-    """``target_E``, or ``required_ratio x reference_E``, or None (Pa)."""
+    """``target_E``, or ``required_ratio x reference_E``, or None (Pa).
+
+    Parameters
+    ----------
+    point : dict
+        The survey point (``target_E``, ``reference_E``, ``required_ratio``; Pa).
+
+    Returns
+    -------
+    float or None
+        The target modulus, Pa; None when the point has no target.
+    """
     if point.get("target_E") is not None:
         return float(point["target_E"])
     if point.get("reference_E") is not None:
@@ -289,7 +300,28 @@ def verdict_reason(E_low: float, E_high: float, target: float | None, complete: 
                    failed: tuple[str, ...] | list[str], missing: str = "") -> str:
     """Why :func:`verdict` is ``inconclusive`` ("" otherwise): the failing checks, the
     missing budget terms, or the interval straddling the target (same parameters, Pa;
-    ``missing`` the missing terms in words)."""
+    ``missing`` the missing terms in words).
+
+    Parameters
+    ----------
+    E_low : float
+        The interval's low end, Pa.
+    E_high : float
+        Its high end, Pa.
+    target : float or None
+        The point's target, Pa (None: no target).
+    complete : bool
+        Whether the interval has every term of its budget.
+    failed : sequence of str
+        The measurement's failing checks.
+    missing : str
+        The missing budget terms, in words.
+
+    Returns
+    -------
+    str
+        The reasons, joined by `` | ``; empty unless the verdict is ``inconclusive``.
+    """
     if verdict(E_low, E_high, target, complete, failed) != "inconclusive":
         return ""
     why = []
@@ -387,7 +419,18 @@ def survey_table(points: list[dict[str, Any]], results: list[dict[str, Any]],
 
 def point_checks_failed(result: dict[str, Any]) -> list[str]:
     """The failing checks of a point's ``ssw measure --json`` result (its ``validity``
-    entries, :func:`ssw.validity.describe`); none for a result without checks."""
+    entries, :func:`ssw.validity.describe`); none for a result without checks.
+
+    Parameters
+    ----------
+    result : dict
+        The point's ``ssw measure --json`` result.
+
+    Returns
+    -------
+    list of str
+        One description per failing check.
+    """
     from ssw.validity import describe
 
     return [describe(e) for e in result.get("validity") or [] if not e.get("holds", True)]
@@ -401,7 +444,19 @@ UNITS = {"E": "Pa", "E_low": "Pa", "E_high": "Pa", "E_u_pct": "%", "target_E": "
 
 def write_survey(csv_path: str | Path, h5_path: str | Path, rows: list[SurveyRow],
                  inputs: dict[str, Any]) -> None:
-    """The survey table as CSV (``name [unit]`` headers) and HDF5 (one dataset per column)."""
+    """The survey table as CSV (``name [unit]`` headers) and HDF5 (one dataset per column).
+
+    Parameters
+    ----------
+    csv_path : str or pathlib.Path
+        The CSV file.
+    h5_path : str or pathlib.Path
+        The HDF5 file.
+    rows : list of SurveyRow
+        The points' results.
+    inputs : dict
+        What the table was made from, stored as the HDF5 file's inputs.
+    """
     dicts = [asdict(r) for r in rows]
     named = [{(f"{k} [{UNITS[k]}]" if k in UNITS else k): ("" if v is None else v)
               for k, v in d.items()} for d in dicts]
@@ -421,7 +476,22 @@ def write_survey(csv_path: str | Path, h5_path: str | Path, rows: list[SurveyRow
 
 def synthetic_title(title: str, rows: list[SurveyRow], default: str) -> str:
     """A figure's title: ``title`` (else ``default``), with "(SYNTHETIC data)" added when a
-    point's recordings are synthetic and the title does not say so already."""
+    point's recordings are synthetic and the title does not say so already.
+
+    Parameters
+    ----------
+    title : str
+        The title asked for (empty: ``default``).
+    rows : list of SurveyRow
+        The points' results.
+    default : str
+        The title without one asked for.
+
+    Returns
+    -------
+    str
+        The title.
+    """
     text = title or default
     if any(r.synthetic for r in rows) and "synthetic" not in text.lower():
         text += " (SYNTHETIC data)"
@@ -727,7 +797,23 @@ def write_geojson(path: str | Path, rows: list[SurveyRow], frame: Frame | None =
 
 
 def read_results(paths: list[str | Path]) -> list[dict[str, Any]]:
-    """The ``ssw measure --json`` results of the points."""
+    """The ``ssw measure --json`` results of the points.
+
+    Parameters
+    ----------
+    paths : list of str or pathlib.Path
+        The result files, one per point.
+
+    Returns
+    -------
+    list of dict
+        The results, in the order of ``paths``.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When a file cannot be read or is not JSON.
+    """
     out = []
     for p in paths:
         try:

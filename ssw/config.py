@@ -26,7 +26,13 @@ DEFAULT_CONFIG = REPO_ROOT / "config" / "config.yaml"
 
 
 def load_schema() -> dict[str, Any]:
-    """The config JSON schema as a dict."""
+    """The config JSON schema as a dict.
+
+    Returns
+    -------
+    dict
+        The schema read from ``ssw/data/config.schema.yaml``.
+    """
     return safe_load(SCHEMA_PATH.read_text())
 
 

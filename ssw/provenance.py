@@ -262,7 +262,13 @@ def source_hash(modules: Iterable[str], packages: bool = True) -> str:
 
 def changed_since_loaded() -> str | None:
     """The first module of ssw (its path) whose file differs on disk from what this process
-    loaded (modified, replaced or removed since), or None."""
+    loaded (modified, replaced or removed since), or None.
+
+    Returns
+    -------
+    str or None
+        The module file's path.
+    """
     for path, (_, stat) in sorted(LOADED.items()):
         try:
             st = Path(path).stat()
@@ -281,6 +287,13 @@ def git_state() -> tuple[str | None, bool | None]:
     ``dirty``: the code that ran is not the commit's: ssw has uncommitted changes, or a
     module this process loaded changed on disk since (:func:`changed_since_loaded`). A warm
     process (``ssw.warmstart``) calls it once its imports are done; its forks inherit it.
+
+    Returns
+    -------
+    commit : str or None
+        The commit's hash.
+    dirty : bool or None
+        Whether the code that ran differs from the commit.
     """
     root = PACKAGE_DIR.parent
     if not (root / ".git").exists():
@@ -298,7 +311,13 @@ def git_state() -> tuple[str | None, bool | None]:
 
 
 def current_command() -> str:
-    """The running command line, as a shell would read it (``ssw`` for the entry point)."""
+    """The running command line, as a shell would read it (``ssw`` for the entry point).
+
+    Returns
+    -------
+    str
+        The command line, shell-quoted.
+    """
     argv = list(sys.argv)
     if argv and (argv[0].endswith(("/ssw", "__main__.py")) or argv[0] == "-m"):
         argv[0] = "ssw"
@@ -327,7 +346,13 @@ def set_context(modules: Sequence[str] | None = None, inputs_sha256: str | None 
 
 
 def all_modules() -> tuple[str, ...]:
-    """Every module of the package (the default closure: the whole source)."""
+    """Every module of the package (the default closure: the whole source).
+
+    Returns
+    -------
+    tuple of str
+        Dotted module names, sorted.
+    """
     return tuple(sorted(".".join(("ssw", *p.relative_to(PACKAGE_DIR).with_suffix("").parts))
                         .removesuffix(".__init__") for p in PACKAGE_DIR.rglob("*.py")))
 

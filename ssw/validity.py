@@ -227,7 +227,13 @@ class Check:
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON entry ``{"check", "value", "limit", "holds", "unit", "assumption",
-        "source", ...}`` (``value`` None when not a number)."""
+        "source", ...}`` (``value`` None when not a number).
+
+        Returns
+        -------
+        dict
+            The entry (``value`` and ``limit`` in ``unit``).
+        """
         rule = RULES[self.check]
         out: dict[str, Any] = {
             "check": self.check,
@@ -340,14 +346,26 @@ class Validity:
 
     def columns(self) -> dict[str, np.ndarray]:
         """Table columns: each check's values (named by the check) and ``checks_failed``
-        (the failing checks' names per scene, ``;``-joined, empty when all hold)."""
+        (the failing checks' names per scene, ``;``-joined, empty when all hold).
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            Column name -> values, one per scene.
+        """
         names = [k for k in RULES if k in self.values]
         cols = {k: np.asarray(self.values[k], float) for k in names}
         bad = [";".join(k for k in names if not self.holds(k)[i]) for i in range(self.n)]
         return {**cols, "checks_failed": np.array(bad, dtype=object)}
 
     def worst(self) -> Validity:
-        """One scene: each check's largest value over the scenes (NaN if any is NaN)."""
+        """One scene: each check's largest value over the scenes (NaN if any is NaN).
+
+        Returns
+        -------
+        Validity
+            The worst case, one scene.
+        """
         vals = {k: np.array([np.max(v) if v.size else np.nan]) for k, v in self.values.items()}
         return Validity(vals, dict(self.assumed), dict(self.bound), dict(self.notes),
                         dict(self.skipped))
@@ -410,7 +428,14 @@ class Validity:
 
     def meta(self) -> dict[str, Any]:
         """What the values rest on, for a file's attributes: assumptions, bounds, notes,
-        skipped checks, and each check's limit and source."""
+        skipped checks, and each check's limit and source.
+
+        Returns
+        -------
+        dict
+            ``assumed``, ``bound``, ``notes``, ``skipped`` and ``rules`` (check -> ``limit``,
+            ``unit``, ``quantity``, ``source``).
+        """
         return {"assumed": self.assumed, "bound": self.bound, "notes": self.notes,
                 "skipped": self.skipped,
                 "rules": {k: {"limit": RULES[k].limit, "unit": RULES[k].unit,

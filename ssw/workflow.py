@@ -625,7 +625,13 @@ class Study:
     def device_families(self) -> dict[str, str]:
         """The device design's jobs when ``design.device.study`` is on: ``{name: D:MAT}``
         (``name`` = bead diameter in um and plate material, a wildcard value; ``D:MAT`` the
-        ``--family`` flag), one per bead diameter and plate material; else none."""
+        ``--family`` flag), one per bead diameter and plate material; else none.
+
+        Returns
+        -------
+        dict of str to str
+            Job name -> its ``--family`` flag.
+        """
         dev = self.cfg.get("design", {}).get("device") or {}
         if not dev.get("study"):
             return {}

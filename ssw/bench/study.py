@@ -186,7 +186,13 @@ def stage_times(records: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
 
 
 def machine() -> dict[str, Any]:
-    """The machine the benchmark ran on."""
+    """The machine the benchmark ran on.
+
+    Returns
+    -------
+    dict
+        ``host``, ``cpu``, ``logical_cpus``, ``memory_bytes``, ``os`` and ``python``.
+    """
     model = ""
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
@@ -242,7 +248,13 @@ def _incremented_config(config: Path, set_name: str, thickness: float, out: Path
 
 
 def load_average() -> list[float] | None:
-    """The machine's 1, 5 and 15 minute load averages (``/proc/loadavg``), or None."""
+    """The machine's 1, 5 and 15 minute load averages (``/proc/loadavg``), or None.
+
+    Returns
+    -------
+    list of float or None
+        The load averages; None where ``/proc/loadavg`` cannot be read.
+    """
     try:
         return [float(x) for x in Path("/proc/loadavg").read_text().split()[:3]]
     except (OSError, ValueError):

@@ -82,7 +82,13 @@ NOISE_V = 50e-6
 
 
 def lsb_volts() -> float:
-    """Quantization step of the NI 9234: 10 V / 2^24, V."""
+    """Quantization step of the NI 9234: 10 V / 2^24, V.
+
+    Returns
+    -------
+    float
+        The step, V.
+    """
     return 2 * NI9234_RANGE_V / 2**NI9234_BITS
 
 

@@ -353,6 +353,11 @@ def read_recording(path: str | Path, *, clipped: str = "raise",
         The device's largest unclipped force, N, checked as well as the session's own
         stored one (the smaller applies).
 
+    Returns
+    -------
+    Recording
+        The session's hits (force in N) and metadata.
+
     Raises
     ------
     RecordingError

@@ -28,7 +28,13 @@ TRIGGER_MODES = ("auto", "hardware", "software")
 
 
 def allowed_rates() -> list[float]:
-    """The NI 9234's sample rates with the internal timebase, S/s, fastest first."""
+    """The NI 9234's sample rates with the internal timebase, S/s, fastest first.
+
+    Returns
+    -------
+    list of float
+        ``51200 / n`` for n = 1 .. 31, S/s.
+    """
     return [NI9234_BASE_RATE / n for n in range(1, NI9234_MAX_DIVISOR + 1)]
 
 
@@ -136,7 +142,13 @@ class DaqSettings:
         return 1.0 / self.sample_rate
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain dict (for metadata and ``--json``)."""
+        """Plain dict (for metadata and ``--json``).
+
+        Returns
+        -------
+        dict
+            Field name -> value (SI units; ``simulation`` as a dict).
+        """
         return asdict(self)
 
 

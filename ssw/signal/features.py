@@ -107,7 +107,13 @@ class Features:
     times: dict[str, float]
 
     def as_dict(self) -> dict[str, float]:
-        """Name -> value."""
+        """Name -> value.
+
+        Returns
+        -------
+        dict of str to float
+            Feature name -> value, in ``NAMES``' order.
+        """
         return {n: float(v) for n, v in zip(NAMES, self.values, strict=True)}
 
 

@@ -71,6 +71,16 @@ def lowpass(force: np.ndarray, rate: float, cutoff: float | None, order: int = 4
         ``None`` returns the record unchanged.
     order : int
         Butterworth order of each pass.
+
+    Returns
+    -------
+    numpy.ndarray
+        The filtered record, N (float64).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``cutoff`` is not in (0, rate / 2) Hz.
     """
     if cutoff is None:
         return np.asarray(force, dtype=np.float64)

@@ -87,7 +87,7 @@ VANISH_GRACE_S = 60.0
 class NodeLimits:
     """The largest node of a cluster, each field the maximum over its nodes.
 
-    Attributes
+    Parameters
     ----------
     cpus : int
         CPUs of the node with the most.
@@ -251,7 +251,7 @@ def check_jobs_fit(jobs: Iterable[tuple[str, int, Mapping[str, Any]]],
 class SlurmConfig:
     """What the controller says about how long it keeps jobs (``scontrol show config``).
 
-    Attributes
+    Parameters
     ----------
     accounting_storage : str
         ``AccountingStorageType`` (:data:`NO_ACCOUNTING`: no ``sacct`` history).

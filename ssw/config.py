@@ -370,7 +370,7 @@ class Scene:
     objects with a ``key``: a short file-name-safe text that tells them apart (it enters
     the scene id).
 
-    Attributes
+    Parameters
     ----------
     plate_material : str
         The plate's material key; ``"none"`` when ``plate_thickness`` is 0.

@@ -35,7 +35,7 @@ ON_PENDING = "stop"
 class PendingLimit:
     """How long a job may pend, and what its run does then.
 
-    Attributes
+    Parameters
     ----------
     limit_s : float
         s, the time after which the job is reported.

@@ -60,7 +60,7 @@ _E2 = WGS84_F * (2.0 - WGS84_F)  # first eccentricity squared
 class Frame:
     """The plane of a survey's x/y coordinates (config ``survey.frame``).
 
-    Attributes
+    Parameters
     ----------
     name : str
         What x/y are measured from (a site grid, a peg line), named in the GeoJSON and on

@@ -97,7 +97,7 @@ STRESS_MODES = ("fem", "bound", "none")
 class Rule:
     """One check of the registry (module docstring).
 
-    Attributes
+    Parameters
     ----------
     name : str
         The check's name (``check`` of its entries).
@@ -196,7 +196,7 @@ FINITE_SAMPLE = register(Rule(
 class Check:
     """One entry of a result's ``validity`` list (module docstring).
 
-    Attributes
+    Parameters
     ----------
     check : str
         The rule's name.
@@ -250,7 +250,7 @@ class Check:
 class Validity:
     """The checks of ``n`` scenes: per check one value per scene (module docstring).
 
-    Attributes
+    Parameters
     ----------
     values : dict
         Check name -> (n,) values (NaN: not evaluable at that scene).
@@ -652,7 +652,7 @@ def first_yield_index(force: Any, E: Any, nu: Any, radius: float, strength: Any)
 class Strengths:
     """The uniaxial strengths the yield checks compare stresses with. Pa; None: unknown.
 
-    Attributes
+    Parameters
     ----------
     sample : float, numpy.ndarray or None
         The sample's (one per scene, or one for all; None: ``ratio E``, an assumption

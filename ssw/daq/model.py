@@ -151,7 +151,7 @@ def antialias_fir(oversample: int = OVERSAMPLE) -> np.ndarray:
 class Acquisition:
     """One force channel of an NI 9234 as the measurement model sees it. SI units.
 
-    Attributes
+    Parameters
     ----------
     sample_rate : float
         S/s (``51200 / n``).
@@ -274,7 +274,7 @@ def frequency_response(acq: Acquisition, f: np.ndarray) -> np.ndarray:
 class FineGrid:
     """The fine input grid that produces samples at ``t_first + k / f_s`` (per column).
 
-    Attributes
+    Parameters
     ----------
     s : numpy.ndarray
         (M, n) s, the input times (chain clock) of each column (hit).

@@ -228,7 +228,7 @@ class RecordedHit:
 class Recording:
     """A session: metadata (SI units), sample rate (S/s) and its hits.
 
-    Attributes
+    Parameters
     ----------
     path : str
         The file read.

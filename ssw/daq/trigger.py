@@ -27,7 +27,7 @@ from ssw.errors import ConfigError, DaqError
 class TriggerRule:
     """Level (N), slope, pretrigger and record length (samples) of the trigger.
 
-    Attributes
+    Parameters
     ----------
     level : float
         The trigger level, N.

@@ -89,7 +89,7 @@ def upsample(y: np.ndarray, factor: int = UPSAMPLE) -> np.ndarray:
 class Features:
     """The features of one signal (module docstring). SI units.
 
-    Attributes
+    Parameters
     ----------
     values : numpy.ndarray
         (7,) in :data:`NAMES` order; NaN where a pulse is missing.

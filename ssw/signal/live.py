@@ -31,7 +31,7 @@ Estimate = Callable[[float, float], dict[str, float]]
 class HitReport:
     """What one hit adds: its TOF (s, or None and the reason) and the running statistics.
 
-    Attributes
+    Parameters
     ----------
     index : int
         The hit's index, from 0.

@@ -53,7 +53,7 @@ import numpy as np
 class PeakRule:
     """The rule's thresholds (dimensionless; module docstring).
 
-    Attributes
+    Parameters
     ----------
     incident_fraction : float
         Share of the signal's maximum a local maximum must reach to be the incident peak.

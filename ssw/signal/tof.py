@@ -318,7 +318,7 @@ def hit_peaks(force: np.ndarray, rate: float, n_pre: int, opts: TofOptions) -> P
 class TofResult:
     """TOF of a session: per-hit values (s; NaN if rejected), verdicts and statistics.
 
-    Attributes
+    Parameters
     ----------
     tof : numpy.ndarray
         Per-hit TOF, s (NaN: no pair of peaks, or clipped).

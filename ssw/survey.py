@@ -214,7 +214,61 @@ def wgs84_to_local(latitude: Any, longitude: Any, lat0: float, lon0: float
 
 @dataclass(frozen=True)
 class SurveyRow:
-    """One test point's result (SI; ratio dimensionless)."""
+    """One test point's result (SI; ratio dimensionless).
+
+    Parameters
+    ----------
+    id : str
+        The point's id.
+    E : float
+        The point's Young's modulus, Pa.
+    E_low : float
+        The interval's low end, Pa.
+    E_high : float
+        The interval's high end, Pa.
+    E_u_pct : float
+        The relative uncertainty of ``E``, %.
+    target_E : float or None
+        The point's target, Pa.
+    reference_E : float or None
+        The point's reference modulus, Pa.
+    ratio : float or None
+        ``E / reference_E``.
+    verdict : str
+        The verdict (:func:`verdict`).
+    missing_terms : str
+        The budget terms the interval lacks (empty when complete).
+    tof_mean : float
+        The mean TOF, s.
+    tof_sem : float
+        Its standard error, s (NaN: unknown).
+    n_accepted : int
+        Hits accepted.
+    n_hits : int
+        Hits recorded.
+    nu : float
+        The soil's Poisson's ratio used.
+    nu_lo : float or None
+        The low end of its range.
+    nu_hi : float or None
+        The high end of its range.
+    x : float or None
+        The point's x, m.
+    y : float or None
+        The point's y, m.
+    latitude : float or None
+        WGS84 latitude, degrees.
+    longitude : float or None
+        WGS84 longitude, degrees.
+    layer : str or None
+        The soil layer tested.
+    synthetic : bool
+        Whether the recordings are synthetic.
+    checks_failed : str
+        The measurement's failing checks, ``; ``-joined.
+    reason : str
+        Why the verdict is inconclusive, when it is.
+    """
 
     id: str
     E: float

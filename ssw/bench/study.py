@@ -272,7 +272,21 @@ def _children_cpu() -> float:
 @dataclass(frozen=True)
 class RunTime:
     """One Snakemake run: its wall time (s), the CPU time (s) of Snakemake and every job
-    it ran, the load averages before and after, and, if it failed, the tail of its log."""
+    it ran, the load averages before and after, and, if it failed, the tail of its log.
+
+    Parameters
+    ----------
+    wall_s : float
+        The wall time, s.
+    cpu_s : float
+        The CPU time of Snakemake and its jobs, s.
+    load_before : list of float or None
+        The 1, 5 and 15 minute load averages before.
+    load_after : list of float or None
+        The load averages after.
+    error : str or None
+        The tail of the log when the run failed (None: it did not).
+    """
 
     wall_s: float
     cpu_s: float

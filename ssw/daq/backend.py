@@ -25,14 +25,19 @@ from ssw.errors import ConfigError
 class Hit:
     """One finite record around one hit.
 
-    Attributes
+    Parameters
     ----------
-    force : (record_samples,) sensor force, N, as the module delivers it (scaled).
-    trigger_index : index of the first sample at or after the reference trigger
-        (equals the pretrigger sample count).
-    timestamp_utc : ISO-8601 time the record was read.
-    overloaded : the hardware reported an overload/overrange on the channel during the hit.
-    extra : backend-specific metadata (e.g. the simulated wave's true TOF), SI units.
+    force : numpy.ndarray
+        (record_samples,) sensor force, N, as the module delivers it (scaled).
+    trigger_index : int
+        Index of the first sample at or after the reference trigger (equals the
+        pretrigger sample count).
+    timestamp_utc : str
+        ISO-8601 time the record was read.
+    overloaded : bool
+        The hardware reported an overload/overrange on the channel during the hit.
+    extra : dict
+        Backend-specific metadata (e.g. the simulated wave's true TOF), SI units.
     """
 
     force: np.ndarray
@@ -43,7 +48,15 @@ class Hit:
 
 
 class Backend(Protocol):
-    """What an acquisition backend provides."""
+    """What an acquisition backend provides.
+
+    Other Parameters
+    ----------------
+    *args
+        None: a protocol is not instantiated.
+    **kwargs
+        None: a protocol is not instantiated.
+    """
 
     name: str
 

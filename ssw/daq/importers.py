@@ -39,7 +39,17 @@ def _read_h5(path: str | Path, clipped: str = "raise", full_scale: float | None 
 
 @dataclass(frozen=True)
 class Format:
-    """A recording format: its name, reader and (optional) writer."""
+    """A recording format: its name, reader and (optional) writer.
+
+    Parameters
+    ----------
+    name : str
+        The format's name (``CSV``, ``TDMS``, ...).
+    read : callable
+        ``read(path, **options)`` returns a :class:`~ssw.daq.recording.Recording`.
+    write : callable or None
+        ``write(path, recording, **options)`` returns the path written (None: not writable).
+    """
 
     name: str
     read: Callable[..., Recording]

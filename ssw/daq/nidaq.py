@@ -322,7 +322,15 @@ def software_hits(task: Any, settings: DaqSettings, n_hits: int) -> Iterator[Hit
 
 
 class NidaqBackend:
-    """The ``nidaqmx`` backend. ``task_factory``/``device_factory`` exist for tests."""
+    """The ``nidaqmx`` backend. ``task_factory``/``device_factory`` exist for tests.
+
+    Parameters
+    ----------
+    task_factory : callable or None
+        ``task_factory()`` returns a new task (None: ``nidaqmx.Task``).
+    device_factory : callable or None
+        ``device_factory(name)`` returns the device (None: ``nidaqmx.system.Device``).
+    """
 
     name = "nidaqmx"
 

@@ -208,6 +208,23 @@ class RecordedHit:
     ``index`` counts the file's hits from 0; ``label`` is the hit's name as the file gives
     it (a CSV column's header, a TDMS channel's name, an HDF5 dataset's name), which every
     message about the hit uses (:attr:`name`: the label, else ``hit k`` counted from 1).
+
+    Parameters
+    ----------
+    index : int
+        The hit's index in the file, from 0.
+    force : numpy.ndarray
+        The hit's force, N.
+    trigger_index : int
+        The index of the trigger sample (the pretrigger sample count).
+    clipped : bool
+        Whether the hit was flagged clipped when recorded.
+    timestamp_utc : str
+        ISO-8601 time the hit was recorded (empty: unknown).
+    extra : dict
+        The hit's metadata (SI units).
+    label : str
+        The hit's name as the file gives it (empty: ``hit k``).
     """
 
     index: int

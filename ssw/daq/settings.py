@@ -71,15 +71,19 @@ def rate_divisor(rate: float) -> int:
 class SimulationSettings:
     """Imperfections the simulated backend adds (``daq.simulation``), SI units.
 
-    Attributes
+    Parameters
     ----------
-    noise_rms : additive white noise at the sensor, N (rms).
-    trigger_jitter : standard deviation of the random delay between the wave and the
-        sample clock beyond the uniform sample phase, s.
-    source : waveform source: ``chain`` (``ssw.tof.api.sensor_signal``) or ``analytic``
-        (two sech^2 pulses with a known TOF, for tests without the chain).
-    striker_velocity_cov : relative standard deviation of the striker speed from hit to
-        hit (chain source only; 0 = every hit identical). A physical scatter: the TOF goes
+    noise_rms : float
+        Additive white noise at the sensor, N (rms).
+    trigger_jitter : float
+        Standard deviation of the random delay between the wave and the sample clock
+        beyond the uniform sample phase, s.
+    source : str
+        Waveform source: ``chain`` (``ssw.tof.api.sensor_signal``) or ``analytic`` (two
+        sech^2 pulses with a known TOF, for tests without the chain).
+    striker_velocity_cov : float
+        Relative standard deviation of the striker speed from hit to hit (chain source
+        only; 0 = every hit identical). A physical scatter: the TOF goes
         as ``F_m^(-1/6)`` and ``F_m`` as ``v^(6/5)``, so TOF ~ ``v^(-1/5)`` and a 5 %
         speed scatter gives ~1 % TOF scatter.
     """
@@ -99,6 +103,41 @@ class DaqSettings:
     reference trigger in the module), ``software`` (continuous acquisition, the same rule
     over a ring buffer: :mod:`ssw.daq.trigger`) or ``auto`` (hardware where the module can
     source it, else software).
+
+    Parameters
+    ----------
+    device : str
+        The NI-DAQmx name of the module.
+    channel : str
+        The module's channel (``ai0`` .. ``ai3``).
+    sensor_model : str
+        The force sensor's model.
+    sensitivity : float
+        The sensor's sensitivity, V/N.
+    excitation_current : float
+        The IEPE excitation current, A.
+    coupling : str
+        ``AC`` or ``DC``.
+    sample_rate : float
+        The sample rate, S/s (``51200 / n``).
+    max_force : float
+        The sensor's range, N.
+    trigger_level : float
+        The trigger level, N.
+    trigger_slope : str
+        ``rising`` or ``falling``.
+    pretrigger_samples : int
+        Samples kept before the trigger.
+    record_samples : int
+        Samples per record.
+    hits : int
+        Hits per session.
+    timeout : float
+        How long to wait for a trigger, s.
+    trigger_mode : str
+        ``hardware``, ``software`` or ``auto``.
+    simulation : SimulationSettings
+        What the simulated backend adds.
     """
 
     device: str = "cDAQ1Mod1"

@@ -181,6 +181,13 @@ class RingTrigger:
     hold-off as :func:`trigger_starts` on the whole stream: a crossing in one chunk whose
     record ends in a later chunk is emitted when that chunk arrives. ``samples_seen`` is
     the stream's length so far.
+
+    Parameters
+    ----------
+    rule : TriggerRule
+        The trigger rule.
+    capacity : int or None
+        The ring buffer's size, samples, at least 2 x ``record_samples`` (None: 4 x).
     """
 
     def __init__(self, rule: TriggerRule, capacity: int | None = None) -> None:

@@ -196,7 +196,19 @@ def refine_peaks(Y: np.ndarray, k: np.ndarray, upsample: int = UPSAMPLE
 
 @dataclass(frozen=True)
 class PeakPair:
-    """Incident and reflected peaks: times (s from the first sample) and heights (N)."""
+    """Incident and reflected peaks: times (s from the first sample) and heights (N).
+
+    Parameters
+    ----------
+    t_incident : float
+        The incident peak's time, s from the first sample.
+    t_reflected : float
+        The reflected peak's time, s from the first sample.
+    f_incident : float
+        The incident peak's height, N.
+    f_reflected : float
+        The reflected peak's height, N.
+    """
 
     t_incident: float
     t_reflected: float

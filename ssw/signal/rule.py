@@ -84,6 +84,25 @@ class Selection:
     pulse, or the later start given); ``w_max`` (n,) the window's maximum; ``straddle``
     (n,) bool, the window opens on the falling flank of a significant pulse that peaked
     before the later start (:func:`assemble`; always False without one).
+
+    Parameters
+    ----------
+    k_incident : numpy.ndarray
+        The incident peak's sample, (n,) int.
+    k_gap : numpy.ndarray
+        The reflected window's first sample, (n,) int.
+    k_reflected : numpy.ndarray
+        The reflected peak's sample, (n,) int.
+    w_max : numpy.ndarray
+        The reflected window's maximum, (n,).
+    has_incident : numpy.ndarray
+        Whether an incident peak was found, (n,) bool.
+    has_gap : numpy.ndarray
+        Whether the incident pulse ended, (n,) bool.
+    has_reflected : numpy.ndarray
+        Whether a reflected peak was found, (n,) bool.
+    straddle : numpy.ndarray
+        Whether the window opens on a falling flank, (n,) bool.
     """
 
     k_incident: np.ndarray

@@ -191,12 +191,21 @@ MIN_HITS_FOR_SCATTER = 3
 class ChainPath:
     """The chain between the sensor and the wall, for the bound of :func:`shortest_round_trip`.
 
-    Attributes
+    Parameters
     ----------
-    beads_below : beads between the sensor and the wall.
-    bead_radius : m.  bead_E : Pa.  bead_nu : -.  bead_density : kg/m^3.
-    static_force : N, the largest static contact force on the path (the chain's weight on
-        the wall plus any preload); an AC-coupled IEPE sensor records from zero.
+    beads_below : int
+        Beads between the sensor and the wall.
+    bead_radius : float
+        The beads' radius, m.
+    bead_E : float
+        The beads' Young's modulus, Pa.
+    bead_nu : float
+        The beads' Poisson's ratio.
+    bead_density : float
+        The beads' density, kg/m^3.
+    static_force : float
+        The largest static contact force on the path, N (the chain's weight on the wall
+        plus any preload); an AC-coupled IEPE sensor records from zero.
     """
 
     beads_below: int
@@ -255,6 +264,21 @@ class TofOptions:
     parabola on the samples). The physical bound of the reflected peak: ``min_tof`` (s),
     fixed, or ``chain`` (:class:`ChainPath`), evaluated per hit at its largest force; the
     larger applies. Neither: no bound (a record of unknown origin).
+
+    Parameters
+    ----------
+    lowpass : float or None
+        The low-pass cutoff, Hz (None: off).
+    rule : ssw.signal.rule.PeakRule
+        The peak rule.
+    min_hits : int
+        Hits that must be accepted.
+    upsample : int
+        The interpolation factor (1: the parabola on the samples).
+    min_tof : float or None
+        A fixed bound on the TOF, s.
+    chain : ChainPath or None
+        The chain path whose round trip bounds the TOF.
     """
 
     lowpass: float | None = None

@@ -265,7 +265,7 @@ class SurveyRow:
     synthetic : bool
         Whether the recordings are synthetic.
     checks_failed : str
-        The measurement's failing checks, ``; ``-joined.
+        The measurement's failing checks, joined by ``"; "``.
     reason : str
         Why the verdict is inconclusive, when it is.
     """
@@ -374,7 +374,7 @@ def verdict_reason(E_low: float, E_high: float, target: float | None, complete: 
     Returns
     -------
     str
-        The reasons, joined by `` | ``; empty unless the verdict is ``inconclusive``.
+        The reasons, joined by ``" | "``; empty unless the verdict is ``inconclusive``.
     """
     if verdict(E_low, E_high, target, complete, failed) != "inconclusive":
         return ""

@@ -44,7 +44,7 @@ class CacheWarning(UserWarning):
 class CacheFormat:
     """What a reader needs of a cache file.
 
-    Attributes
+    Parameters
     ----------
     kind : str
         What the file holds (e.g. ``contact.body``); a file of another kind is rebuilt.

@@ -87,7 +87,7 @@ VANISH_GRACE_S = 60.0
 class NodeLimits:
     """The largest node of a cluster, each field the maximum over its nodes.
 
-    Attributes
+    Parameters
     ----------
     cpus : int
         CPUs of the node with the most.
@@ -251,7 +251,7 @@ def check_jobs_fit(jobs: Iterable[tuple[str, int, Mapping[str, Any]]],
 class SlurmConfig:
     """What the controller says about how long it keeps jobs (``scontrol show config``).
 
-    Attributes
+    Parameters
     ----------
     accounting_storage : str
         ``AccountingStorageType`` (:data:`NO_ACCOUNTING`: no ``sacct`` history).
@@ -501,12 +501,19 @@ class LostJobsWatch:
       the plugin's longest pause between queries, so its queries no longer report them (it
       drops the jobs of a status query that failed on every attempt).
 
-    Attributes
+    Parameters
     ----------
     vanish_s : float
         Patience of the vanished case, s.
     stall_s : float
         Patience of the unseen case, s.
+
+    Other Parameters
+    ----------------
+    _absent_since : float or None
+        Internal state: when Slurm first listed no job of the run, s (None: not now).
+    _ended_since : float or None
+        Internal state: when every listed job had first ended, s (None: not now).
     """
 
     vanish_s: float
@@ -581,7 +588,17 @@ def _env_seconds(environ: Mapping[str, str], name: str, default: float) -> float
 
 
 class SlurmTiming(NamedTuple):
-    """A Slurm run's timing, s (:func:`slurm_timing`)."""
+    """A Slurm run's timing, s (:func:`slurm_timing`).
+
+    Parameters
+    ----------
+    vanish_s : float
+        How long Slurm may list no job of the run before its jobs count as lost, s.
+    poll_s : float
+        The lost-jobs watch's pause between two looks, s.
+    status_pause_s : float
+        The longest pause between two of the executor plugin's status queries, s.
+    """
 
     #: How long Slurm may list no job of the run before its jobs count as lost.
     vanish_s: float

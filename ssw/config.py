@@ -26,7 +26,13 @@ DEFAULT_CONFIG = REPO_ROOT / "config" / "config.yaml"
 
 
 def load_schema() -> dict[str, Any]:
-    """The config JSON schema as a dict."""
+    """The config JSON schema as a dict.
+
+    Returns
+    -------
+    dict
+        The schema read from ``ssw/data/config.schema.yaml``.
+    """
     return safe_load(SCHEMA_PATH.read_text())
 
 
@@ -52,7 +58,18 @@ MOVED_KEYS = {
 
 def check_moved_keys(cfg: dict[str, Any]) -> None:
     """ConfigError for a setting of how to run (:data:`MOVED_KEYS`) found in a study
-    config, naming where it went (a study's config says what to compute, not how)."""
+    config, naming where it went (a study's config says what to compute, not how).
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config, as read.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When a key of :data:`MOVED_KEYS` is set.
+    """
     for path, where in MOVED_KEYS.items():
         node: Any = cfg
         for k in path:
@@ -68,6 +85,21 @@ def validate_config(cfg: dict[str, Any]) -> dict[str, Any]:
 
     Returns ``cfg``. Raises :class:`.ConfigError` on the first problem (the deepest error of
     the schema, so that the message names the offending field).
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config, as read (changed in place).
+
+    Returns
+    -------
+    dict
+        ``cfg``, validated, its defaults filled.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        On the first problem found.
     """
     from ssw.schema import first_file_error, message_of, path_of
 
@@ -88,6 +120,23 @@ def load_config(path: str | Path | None = None, overrides: dict[str, Any] | None
     Without ``path``: ``config/config.yaml`` of the working folder when there is one (the
     repository), else the schema's defaults alone (a config is optional where it is not
     essential: every default comes with the package).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path or None
+        The YAML file, or None.
+    overrides : dict or None
+        Top-level keys that replace the file's.
+
+    Returns
+    -------
+    dict
+        The validated config, its defaults filled.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When the file is missing, is not a YAML mapping, or the config is invalid.
     """
     if path is None:
         local = Path("config") / "config.yaml"
@@ -108,7 +157,18 @@ def load_config(path: str | Path | None = None, overrides: dict[str, Any] | None
 
 def device_of(cfg: dict[str, Any]) -> Any:
     """The config's device (:class:`ssw.device.Device`): a path (relative to the working
-    folder, else to the repository) or the name of a shipped device."""
+    folder, else to the repository) or the name of a shipped device.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config (its ``device``, default ``thesis``).
+
+    Returns
+    -------
+    ssw.device.Device
+        The device.
+    """
     from ssw.device import load_device
 
     spec = cfg.get("device", "thesis")
@@ -119,7 +179,18 @@ def device_of(cfg: dict[str, Any]) -> Any:
 
 
 def dump_config(cfg: dict[str, Any]) -> str:
-    """YAML text of a validated config, keys in their order; re-loadable by load_config."""
+    """YAML text of a validated config, keys in their order; re-loadable by load_config.
+
+    Parameters
+    ----------
+    cfg : dict
+        The validated config.
+
+    Returns
+    -------
+    str
+        The YAML text, after a comment line.
+    """
     header = "# Resolved ssw study config (validated, defaults filled). SI units.\n"
     return header + yaml.safe_dump(_plain(cfg), sort_keys=False, default_flow_style=None)
 
@@ -136,7 +207,25 @@ def _plain(obj: Any) -> Any:
 
 
 def expand_grid(spec: dict[str, Any], field: str) -> np.ndarray:
-    """Values of a grid axis: ``{values: [...]}`` or ``{start, stop, step}`` (stop included)."""
+    """Values of a grid axis: ``{values: [...]}`` or ``{start, stop, step}`` (stop included).
+
+    Parameters
+    ----------
+    spec : dict
+        The axis: ``values``, or ``start``, ``stop`` and ``step`` (in the axis's unit).
+    field : str
+        The axis's config path, named in an error.
+
+    Returns
+    -------
+    numpy.ndarray
+        The values, float.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``stop - start`` is not a non-negative whole multiple of ``step``.
+    """
     if "values" in spec:
         return np.asarray(spec["values"], dtype=float)
     start, stop, step = (float(spec[k]) for k in ("start", "stop", "step"))
@@ -149,7 +238,18 @@ def expand_grid(spec: dict[str, Any], field: str) -> np.ndarray:
 
 
 def library(cfg: dict[str, Any]) -> dict[str, Material]:
-    """The materials of the config's library and set."""
+    """The materials of the config's library and set.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config (``material_set``, ``materials_file``).
+
+    Returns
+    -------
+    dict of str to ssw.materials.Material
+        Material key -> material (SI units).
+    """
     return material_set(cfg.get("material_set", "realistic"), _materials_path(cfg))
 
 
@@ -166,7 +266,19 @@ def _materials_path(cfg: dict[str, Any]) -> Path:
 
 
 def check_config(cfg: dict[str, Any]) -> None:
-    """Checks the schema cannot express. Raises :class:`.ConfigError` naming the field."""
+    """Checks the schema cannot express. Raises :class:`.ConfigError` naming the field.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config, schema-valid, its defaults filled.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        On the first problem: an unknown material, a thickness < 0 m, a modulus <= 0 Pa, a
+        Poisson's ratio outside (-1, 0.5], settings that contradict each other.
+    """
     mats = library(cfg)
     known = ", ".join(sorted(mats))
 
@@ -257,6 +369,23 @@ class Scene:
     linear elastic) and ``plate_model`` (the plate's; None: elastic) are frozen, hashable
     objects with a ``key``: a short file-name-safe text that tells them apart (it enters
     the scene id).
+
+    Parameters
+    ----------
+    plate_material : str
+        The plate's material key; ``"none"`` when ``plate_thickness`` is 0.
+    plate_thickness : float
+        The plate's thickness, m (0: no plate).
+    soil_E : float
+        The soil's Young's modulus, Pa.
+    soil_nu : float
+        The soil's Poisson's ratio, dimensionless.
+    sample : object or None
+        The soil's geometry (None: half-space).
+    soil_model : object or None
+        The soil's constitutive model (None: linear elastic).
+    plate_model : object or None
+        The plate's constitutive model (None: elastic).
     """
 
     plate_material: str  # material key; "none" when plate_thickness == 0
@@ -288,7 +417,26 @@ class Scene:
 
 
 def scenes(cfg: dict[str, Any], set_name: str) -> list[Scene]:
-    """Scenes of set ``set_name``: the product of its axes, no-plate scenes deduplicated."""
+    """Scenes of set ``set_name``: the product of its axes, no-plate scenes deduplicated.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+    set_name : str
+        The set's name (a key of ``sets``).
+
+    Returns
+    -------
+    list of Scene
+        The scenes, plate material outer, then thickness, E and Poisson's ratio.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When the set is unknown, its sample, soil or plate model is invalid, or two scenes
+        share an id.
+    """
     if set_name not in cfg["sets"]:
         raise ConfigError("set", set_name, f"one of the sets: {', '.join(cfg['sets'])}")
     s = cfg["sets"][set_name]
@@ -337,7 +485,23 @@ def _plate_model(cfg: dict[str, Any], set_name: str, material: str) -> Any:
 def all_scenes(cfg: dict[str, Any]) -> dict[str, Scene]:
     """Every scene of every set, by scene id (a scene shared by two sets appears once).
 
-    Raises ConfigError if two different scenes had one id (ids are lossless: a guard)."""
+    Raises ConfigError if two different scenes had one id (ids are lossless: a guard).
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+
+    Returns
+    -------
+    dict of str to Scene
+        Scene id -> scene.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When two different scenes share an id.
+    """
     out: dict[str, Scene] = {}
     for name in cfg["sets"]:
         for sc in scenes(cfg, name):
@@ -351,7 +515,20 @@ def all_scenes(cfg: dict[str, Any]) -> dict[str, Scene]:
 
 # ---------------------------------------------------------------------- survey points
 def check_points(points: list[dict[str, Any]], field: str = "survey.points") -> None:
-    """Ids unique and file-name safe, one kind of target, coordinates in pairs."""
+    """Ids unique and file-name safe, one kind of target, coordinates in pairs.
+
+    Parameters
+    ----------
+    points : list of dict
+        The survey points (schema-valid).
+    field : str
+        Their config path, named in an error.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        On the first point that breaks a rule.
+    """
     import re
 
     seen = set()
@@ -376,7 +553,18 @@ def check_points(points: list[dict[str, Any]], field: str = "survey.points") -> 
 
 
 def nu_text(nu: Any) -> str:
-    """The ``--soil-nu`` argument of a point's Poisson's ratio (``NU`` or ``LO:HI``)."""
+    """The ``--soil-nu`` argument of a point's Poisson's ratio (``NU`` or ``LO:HI``).
+
+    Parameters
+    ----------
+    nu : float or list of float
+        The Poisson's ratio, or its range ``[lo, hi]``; dimensionless.
+
+    Returns
+    -------
+    str
+        ``NU`` or ``LO:HI`` (``%g``).
+    """
     if isinstance(nu, list | tuple):
         return f"{float(nu[0]):g}:{float(nu[1]):g}"
     return f"{float(nu):g}"

@@ -9,6 +9,15 @@ class ConfigError(SswError, ValueError):
     """A configuration or command-line value is not allowed.
 
     The message names the field, the value and what is allowed.
+
+    Parameters
+    ----------
+    field : str
+        The field (config path or flag).
+    value : object
+        The value given.
+    allowed : str
+        What is allowed, and the way on.
     """
 
     def __init__(self, field: str, value: object, allowed: str) -> None:

@@ -46,7 +46,25 @@ def _json_default(obj: Any) -> Any:
 
 
 def to_json(obj: Any, **kw: Any) -> str:
-    """JSON text of ``obj``; numpy arrays and scalars and paths are converted."""
+    """JSON text of ``obj``; numpy arrays and scalars and paths are converted.
+
+    Parameters
+    ----------
+    obj : object
+        The value (dicts, lists, numbers, text, numpy arrays and scalars, paths).
+    **kw
+        Passed to :func:`json.dumps` (e.g. ``sort_keys``, ``indent``).
+
+    Returns
+    -------
+    str
+        The JSON text.
+
+    Raises
+    ------
+    TypeError
+        When a value is of none of these types.
+    """
     return json.dumps(obj, default=_json_default, **kw)
 
 
@@ -64,6 +82,18 @@ def atomic_path(path: str | os.PathLike[str], *, durable: bool = False) -> Itera
     On an exception the temporary file is removed and ``path`` is left untouched. With
     ``durable`` the temporary file is fsync'd before the rename and the folder after it, so
     the new content survives a crash or a power loss once this returns.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The destination file (its folder is created).
+    durable : bool
+        Whether to fsync the file and its folder.
+
+    Yields
+    ------
+    pathlib.Path
+        The temporary file to write (mode as the umask allows, not 0600).
     """
     dest = Path(path)
     dest.parent.mkdir(parents=True, exist_ok=True)
@@ -85,7 +115,13 @@ def atomic_path(path: str | os.PathLike[str], *, durable: bool = False) -> Itera
 
 def fsync_path(path: str | os.PathLike[str]) -> None:
     """fsync a file or a folder (a folder: so that a rename in it is on disk); a no-op
-    where the platform cannot."""
+    where the platform cannot.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The file or folder.
+    """
     try:
         fd = os.open(path, os.O_RDONLY)
     except OSError:
@@ -115,13 +151,32 @@ def cache_root() -> Path | None:
 
 
 def atomic_write_text(path: str | os.PathLike[str], text: str) -> None:
-    """Write ``text`` to ``path`` atomically."""
+    """Write ``text`` to ``path`` atomically.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The destination file.
+    text : str
+        The content.
+    """
     with atomic_path(path) as tmp:
         tmp.write_text(text)
 
 
 def read_datasets(path: str | os.PathLike[str]) -> dict[str, Any]:
-    """Every dataset of an HDF5 file, by its path in the file (attributes not included)."""
+    """Every dataset of an HDF5 file, by its path in the file (attributes not included).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The HDF5 file.
+
+    Returns
+    -------
+    dict
+        Dataset path (e.g. ``"group/name"``) -> its value (array or scalar).
+    """
     import h5py
 
     out: dict[str, Any] = {}
@@ -135,7 +190,17 @@ def write_rows_csv(rows: list[dict[str, Any]], path: str | os.PathLike[str],
                    inputs: Any = None) -> None:
     """Rows (dicts) to a CSV file, atomically; columns in order of first appearance. The
     first line is the provenance comment (:func:`ssw.provenance.csv_comment`) of a table
-    made from ``inputs`` (default: the rows themselves)."""
+    made from ``inputs`` (default: the rows themselves).
+
+    Parameters
+    ----------
+    rows : list of dict
+        The table's rows; a key missing from a row leaves its cell empty.
+    path : str or os.PathLike
+        The CSV file.
+    inputs : object, optional
+        What the table was made from (JSON-able), for its provenance.
+    """
     import csv
     import io
 
@@ -152,7 +217,17 @@ def write_rows_csv(rows: list[dict[str, Any]], path: str | os.PathLike[str],
 
 def write_json(path: str | os.PathLike[str], result: Mapping[str, Any], inputs: Any) -> None:
     """A JSON result to ``path`` atomically, with its ``provenance``
-    (:func:`ssw.provenance.record` of ``inputs``)."""
+    (:func:`ssw.provenance.record` of ``inputs``).
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The JSON file.
+    result : Mapping
+        The result (JSON-able via :func:`to_json`).
+    inputs : object
+        What the result was made from, for its provenance.
+    """
     from ssw.provenance import record
 
     atomic_write_text(path, to_json({**result, "provenance": record(inputs)}) + "\n")
@@ -160,7 +235,17 @@ def write_json(path: str | os.PathLike[str], result: Mapping[str, Any], inputs: 
 
 def write_csv_text(path: str | os.PathLike[str], text: str, inputs: Any) -> None:
     """A CSV table's ``text`` to ``path`` atomically, after its provenance comment line
-    (:func:`ssw.provenance.csv_comment`) for a table made from ``inputs``."""
+    (:func:`ssw.provenance.csv_comment`) for a table made from ``inputs``.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The CSV file.
+    text : str
+        The table's text (header and rows).
+    inputs : object
+        What the table was made from, for its provenance.
+    """
     from ssw.provenance import csv_comment, record
 
     atomic_write_text(path, csv_comment(record(inputs)) + text)
@@ -168,7 +253,18 @@ def write_csv_text(path: str | os.PathLike[str], text: str, inputs: Any) -> None
 
 def read_rows_csv(path: str | os.PathLike[str]) -> list[dict[str, str]]:
     """Rows of a CSV table (:func:`write_rows_csv`) as dicts of text; comment lines
-    (``#`` first) skipped."""
+    (``#`` first) skipped.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The CSV file.
+
+    Returns
+    -------
+    list of dict of str to str
+        One dict per row, column name -> cell text.
+    """
     import csv
 
     with open(path, newline="") as fh:
@@ -176,7 +272,19 @@ def read_rows_csv(path: str | os.PathLike[str]) -> list[dict[str, str]]:
 
 
 def csv_provenance(path: str | os.PathLike[str]) -> dict[str, Any] | None:
-    """The provenance of a CSV table written by ssw (its first line), or None."""
+    """The provenance of a CSV table written by ssw (its first line), or None.
+
+    Parameters
+    ----------
+    path : str or os.PathLike
+        The CSV file.
+
+    Returns
+    -------
+    dict or None
+        The provenance (:func:`ssw.provenance.parse_csv_comment`); None when the first line is
+        not ssw's provenance comment.
+    """
     from ssw.provenance import parse_csv_comment
 
     with open(path) as fh:
@@ -184,7 +292,19 @@ def csv_provenance(path: str | os.PathLike[str]) -> dict[str, Any] | None:
 
 
 def provenance_of(f: Any) -> dict[str, Any]:
-    """The provenance attributes of an open ssw HDF5 file (missing ones are None)."""
+    """The provenance attributes of an open ssw HDF5 file (missing ones are None).
+
+    Parameters
+    ----------
+    f : h5py.File
+        The open file.
+
+    Returns
+    -------
+    dict
+        ``ssw_version``, ``commit``, ``dirty``, ``source_sha256``, ``inputs_sha256`` and
+        ``command``.
+    """
     a = f.attrs
     commit = a.get("ssw_commit")
     return {"ssw_version": a.get("ssw_version"), "commit": commit or None,
@@ -245,6 +365,11 @@ def atomic_h5(
         Value of the ``ssw_kind`` root attribute.
     inputs : Mapping
         Every input that produced the file (SI units); stored as ``inputs_json``.
+
+    Yields
+    ------
+    h5py.File
+        The temporary file, open for writing, its provenance attributes set.
     """
     import h5py
 
@@ -266,14 +391,51 @@ def atomic_h5(
 def write_dataset(
     group: Any, name: str, data: Any, units: str, description: str = "", **kw: Any
 ) -> Any:
-    """Create dataset ``name`` in ``group`` with a ``units`` attribute (SI; ``"1"``: none)."""
+    """Create dataset ``name`` in ``group`` with a ``units`` attribute (SI; ``"1"``: none).
+
+    Parameters
+    ----------
+    group : h5py.Group or h5py.File
+        The group, open for writing.
+    name : str
+        The dataset's name.
+    data : array_like
+        The values, in ``units``.
+    units : str
+        The SI unit of the values (``"1"``: dimensionless).
+    description : str
+        Stored as the ``description`` attribute when not empty.
+    **kw
+        Passed to :meth:`h5py.Group.create_dataset` (e.g. ``compression``).
+
+    Returns
+    -------
+    h5py.Dataset
+        The new dataset.
+    """
     ds = group.create_dataset(name, data=np.asarray(data), **kw)
     new_attrs(ds, {"units": units, **({"description": description} if description else {})})
     return ds
 
 
 def read_inputs(f: Any) -> dict[str, Any]:
-    """The ``inputs_json`` root attribute of an open ssw HDF5 file, as a dict."""
+    """The ``inputs_json`` root attribute of an open ssw HDF5 file, as a dict.
+
+    Parameters
+    ----------
+    f : h5py.File
+        The open file.
+
+    Returns
+    -------
+    dict
+        The inputs that produced the file.
+
+    Raises
+    ------
+    ssw.errors.SswError
+        When the file has no ``inputs_json`` attribute.
+    """
     raw = f.attrs.get("inputs_json")
     if raw is None:
         raise SswError(f"{getattr(f, 'filename', f)} is not an ssw file (no inputs_json)")
@@ -281,7 +443,20 @@ def read_inputs(f: Any) -> dict[str, Any]:
 
 
 def check_kind(f: Any, kind: str) -> None:
-    """Raise :class:`~ssw.errors.SswError` unless the open file's ``ssw_kind`` is ``kind``."""
+    """Raise :class:`~ssw.errors.SswError` unless the open file's ``ssw_kind`` is ``kind``.
+
+    Parameters
+    ----------
+    f : h5py.File
+        The open file.
+    kind : str
+        The expected ``ssw_kind``.
+
+    Raises
+    ------
+    ssw.errors.SswError
+        When the file's ``ssw_kind`` differs.
+    """
     got = f.attrs.get("ssw_kind")
     if got != kind:
         raise SswError(f"{getattr(f, 'filename', f)}: ssw_kind is {got!r}, expected {kind!r}")

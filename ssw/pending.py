@@ -35,7 +35,7 @@ ON_PENDING = "stop"
 class PendingLimit:
     """How long a job may pend, and what its run does then.
 
-    Attributes
+    Parameters
     ----------
     limit_s : float
         s, the time after which the job is reported.
@@ -97,6 +97,13 @@ class PendingWatch:
     A job counts as pending from the first look that sees it ``PENDING``; a look that sees
     it in any other state forgets it. Past its limit a job whose action is ``stop`` stops
     the run; one whose action is ``wait`` is reported, and again after each further limit.
+
+    Other Parameters
+    ----------------
+    _since : dict of str to float
+        Internal state: job id -> when it was first seen pending, s.
+    _reported : dict of str to float
+        Internal state: job id -> when it was last reported, s.
     """
 
     _since: dict[str, float] = field(default_factory=dict, repr=False)

@@ -35,14 +35,31 @@ _override: bool | None = None
 
 
 def set_enabled(on: bool | None) -> None:
-    """Turn bars on or off for the whole process (``None``: back to automatic)."""
+    """Turn bars on or off for the whole process (``None``: back to automatic).
+
+    Parameters
+    ----------
+    on : bool or None
+        True: draw bars; False: none; None: automatic.
+    """
     global _override
     _override = on
 
 
 def is_enabled(enabled: bool | None = None) -> bool:
     """Whether a bar is drawn: ``enabled`` if given, else the process-wide setting, else
-    ``SSW_PROGRESS``, else whether stderr is a terminal."""
+    ``SSW_PROGRESS``, else whether stderr is a terminal.
+
+    Parameters
+    ----------
+    enabled : bool or None
+        The caller's choice (None: no choice).
+
+    Returns
+    -------
+    bool
+        Whether to draw.
+    """
     if enabled is not None:
         return bool(enabled)
     if _override is not None:
@@ -69,6 +86,24 @@ def progress(iterable: Iterable[T], *, total: int | None = None, desc: str | Non
     """Yield the items of ``iterable``, drawing a bar on stderr when enabled.
 
     ``total`` defaults to ``len(iterable)`` when it has one.
+
+    Parameters
+    ----------
+    iterable : iterable
+        The items.
+    total : int or None
+        The number of items (None: ``len(iterable)`` when it has one).
+    desc : str or None
+        The bar's label.
+    unit : str
+        The unit shown after the count.
+    enabled : bool or None
+        Draw the bar (None: :func:`is_enabled`).
+
+    Yields
+    ------
+    object
+        The items of ``iterable``, in order.
     """
     if total is None and hasattr(iterable, "__len__"):
         total = len(iterable)  # type: ignore[arg-type]
@@ -83,7 +118,24 @@ def progress(iterable: Iterable[T], *, total: int | None = None, desc: str | Non
 def progress_bar(total: int | None = None, *, desc: str | None = None, unit: str = "it",
                  enabled: bool | None = None) -> Iterator[Callable[..., None]]:
     """A bar driven by a callback: ``update(n=1, **info)`` advances it by ``n`` and shows
-    ``info`` (short key=value pairs) beside it. A no-op callback when disabled."""
+    ``info`` (short key=value pairs) beside it. A no-op callback when disabled.
+
+    Parameters
+    ----------
+    total : int or None
+        The count at completion (None: unknown).
+    desc : str or None
+        The bar's label.
+    unit : str
+        The unit shown after the count.
+    enabled : bool or None
+        Draw the bar (None: :func:`is_enabled`).
+
+    Yields
+    ------
+    callable
+        ``update(n=1, **info)``.
+    """
     if not is_enabled(enabled):
         yield lambda n=1, **info: None
         return

@@ -73,17 +73,50 @@ def _canonical(obj: Any) -> Any:
 
 
 def canonical_json(obj: Any) -> str:
-    """Canonical JSON text of ``obj`` (sorted keys, no spaces): equal values, equal text."""
+    """Canonical JSON text of ``obj`` (sorted keys, no spaces): equal values, equal text.
+
+    Parameters
+    ----------
+    obj : object
+        A JSON-able value (numpy arrays and scalars, paths and tuples are converted).
+
+    Returns
+    -------
+    str
+        The canonical JSON text.
+    """
     return json.dumps(_canonical(obj), sort_keys=True, separators=(",", ":"))
 
 
 def digest(obj: Any) -> str:
-    """SHA-256 (first :data:`DIGEST_HEX` hex digits) of :func:`canonical_json` of ``obj``."""
+    """SHA-256 (first :data:`DIGEST_HEX` hex digits) of :func:`canonical_json` of ``obj``.
+
+    Parameters
+    ----------
+    obj : object
+        A JSON-able value.
+
+    Returns
+    -------
+    str
+        The hex digest.
+    """
     return hashlib.sha256(canonical_json(obj).encode()).hexdigest()[:DIGEST_HEX]
 
 
 def file_digest(path: str | Path) -> str:
-    """SHA-256 (first :data:`DIGEST_HEX` hex digits) of a file's bytes."""
+    """SHA-256 (first :data:`DIGEST_HEX` hex digits) of a file's bytes.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+
+    Returns
+    -------
+    str
+        The hex digest.
+    """
     h = hashlib.sha256()
     with open(path, "rb") as fh:
         for block in iter(lambda: fh.read(1 << 20), b""):
@@ -152,7 +185,20 @@ def _package_of(path: Path) -> str:
 def module_closure(modules: Iterable[str], packages: bool = True) -> list[Path]:
     """Source files of ``modules`` and of every ``ssw`` module they import, transitively;
     with ``packages``, the parent packages' ``__init__`` too (what runs when they are
-    imported; without: only what the modules' code uses). Sorted."""
+    imported; without: only what the modules' code uses). Sorted.
+
+    Parameters
+    ----------
+    modules : iterable of str
+        Dotted module names.
+    packages : bool
+        Whether to include the parent packages' ``__init__`` files.
+
+    Returns
+    -------
+    list of pathlib.Path
+        The source files, sorted.
+    """
     seen: set[Path] = set()
     todo = list(modules)
     while todo:
@@ -216,7 +262,13 @@ def source_hash(modules: Iterable[str], packages: bool = True) -> str:
 
 def changed_since_loaded() -> str | None:
     """The first module of ssw (its path) whose file differs on disk from what this process
-    loaded (modified, replaced or removed since), or None."""
+    loaded (modified, replaced or removed since), or None.
+
+    Returns
+    -------
+    str or None
+        The module file's path.
+    """
     for path, (_, stat) in sorted(LOADED.items()):
         try:
             st = Path(path).stat()
@@ -235,6 +287,13 @@ def git_state() -> tuple[str | None, bool | None]:
     ``dirty``: the code that ran is not the commit's: ssw has uncommitted changes, or a
     module this process loaded changed on disk since (:func:`changed_since_loaded`). A warm
     process (``ssw.warmstart``) calls it once its imports are done; its forks inherit it.
+
+    Returns
+    -------
+    commit : str or None
+        The commit's hash.
+    dirty : bool or None
+        Whether the code that ran differs from the commit.
     """
     root = PACKAGE_DIR.parent
     if not (root / ".git").exists():
@@ -252,7 +311,13 @@ def git_state() -> tuple[str | None, bool | None]:
 
 
 def current_command() -> str:
-    """The running command line, as a shell would read it (``ssw`` for the entry point)."""
+    """The running command line, as a shell would read it (``ssw`` for the entry point).
+
+    Returns
+    -------
+    str
+        The command line, shell-quoted.
+    """
     argv = list(sys.argv)
     if argv and (argv[0].endswith(("/ssw", "__main__.py")) or argv[0] == "-m"):
         argv[0] = "ssw"
@@ -267,13 +332,27 @@ _CONTEXT: dict[str, Any] = {"modules": None, "inputs_sha256": None}
 
 def set_context(modules: Sequence[str] | None = None, inputs_sha256: str | None = None) -> None:
     """Declare the running command's modules and, for a workflow job, the digest of the
-    study inputs it was scheduled with (recorded in every result it writes)."""
+    study inputs it was scheduled with (recorded in every result it writes).
+
+    Parameters
+    ----------
+    modules : sequence of str or None
+        The command's modules (None: the whole package).
+    inputs_sha256 : str or None
+        The workflow's digest of the job's study inputs (None: not a workflow job).
+    """
     _CONTEXT["modules"] = tuple(modules) if modules else None
     _CONTEXT["inputs_sha256"] = inputs_sha256
 
 
 def all_modules() -> tuple[str, ...]:
-    """Every module of the package (the default closure: the whole source)."""
+    """Every module of the package (the default closure: the whole source).
+
+    Returns
+    -------
+    tuple of str
+        Dotted module names, sorted.
+    """
     return tuple(sorted(".".join(("ssw", *p.relative_to(PACKAGE_DIR).with_suffix("").parts))
                         .removesuffix(".__init__") for p in PACKAGE_DIR.rglob("*.py")))
 
@@ -285,6 +364,21 @@ def record(inputs: Any, modules: Sequence[str] | None = None, command: str | Non
     ``modules`` default to the running command's (:func:`set_context`), else the whole
     package; ``inputs_sha256`` is the workflow's digest of the job's study inputs when the
     command runs as a workflow job, else the digest of ``inputs``.
+
+    Parameters
+    ----------
+    inputs : object
+        What the result was made from (JSON-able).
+    modules : sequence of str or None
+        The modules whose source hash is recorded.
+    command : str or None
+        The command line (None: the running one).
+
+    Returns
+    -------
+    dict
+        ``ssw_version``, ``commit``, ``dirty``, ``source_sha256``, ``inputs_sha256`` and
+        ``command``.
     """
     commit, dirty = git_state()
     mods = modules or _CONTEXT["modules"] or all_modules()
@@ -300,14 +394,37 @@ def record(inputs: Any, modules: Sequence[str] | None = None, command: str | Non
 
 def csv_comment(prov: Mapping[str, Any]) -> str:
     """The first line of a CSV table: ``# ssw <version> commit <c> source <s> inputs <i>
-    command: <cmd>`` (readers skip lines starting with ``#``)."""
+    command: <cmd>`` (readers skip lines starting with ``#``).
+
+    Parameters
+    ----------
+    prov : Mapping
+        A provenance (:func:`record`).
+
+    Returns
+    -------
+    str
+        The comment line, with its newline.
+    """
     return (f"# ssw {prov['ssw_version']} commit {prov.get('commit') or 'none'}"
             f"{'+dirty' if prov.get('dirty') else ''} source {prov['source_sha256']} "
             f"inputs {prov['inputs_sha256']} command: {prov.get('command', '')}\n")
 
 
 def parse_csv_comment(line: str) -> dict[str, Any] | None:
-    """The provenance of a CSV table's first line (:func:`csv_comment`), or None."""
+    """The provenance of a CSV table's first line (:func:`csv_comment`), or None.
+
+    Parameters
+    ----------
+    line : str
+        The table's first line.
+
+    Returns
+    -------
+    dict or None
+        ``ssw_version``, ``commit``, ``dirty``, ``source_sha256``, ``inputs_sha256`` and
+        ``command`` (those present); None when the line is not ssw's comment.
+    """
     if not line.startswith("# ssw "):
         return None
     head, _, command = line.rstrip("\n").partition(" command: ")
@@ -328,6 +445,20 @@ def require_match(what: str, left: tuple[str, Any], right: tuple[str, Any]) -> N
 
     ``left`` and ``right`` are ``(name, value)`` pairs, e.g. ``("calibration c.json",
     "3fa9...")`` and ``("device my.yaml", "77c0...")``; the message names both sides.
+
+    Parameters
+    ----------
+    what : str
+        The quantity compared, e.g. ``"device digest"``.
+    left : tuple of (str, object)
+        The first side's name and value.
+    right : tuple of (str, object)
+        The second side's name and value.
+
+    Raises
+    ------
+    ProvenanceError
+        When the two values differ.
     """
     if left[1] != right[1]:
         raise ProvenanceError(

@@ -38,7 +38,23 @@ h2{font-size:16px;border-bottom:1px solid #888}"""
 
 
 def load_captions(path: str | Path | None) -> dict[str, str]:
-    """Notes from a YAML mapping of file-name globs to text ({} without a file)."""
+    """Notes from a YAML mapping of file-name globs to text ({} without a file).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path or None
+        The YAML file (None or missing: no captions).
+
+    Returns
+    -------
+    dict of str to str
+        Glob -> caption, in the file's order.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When the file is not a YAML mapping.
+    """
     if path is None or not Path(path).is_file():
         return {}
     data = safe_load(Path(path).read_text()) or {}
@@ -48,7 +64,20 @@ def load_captions(path: str | Path | None) -> dict[str, str]:
 
 
 def caption_of(name: str, captions: dict[str, str]) -> str:
-    """The first caption whose glob matches ``name`` ('' if none)."""
+    """The first caption whose glob matches ``name`` ('' if none).
+
+    Parameters
+    ----------
+    name : str
+        The table's file name.
+    captions : dict of str to str
+        Glob -> caption (:func:`load_captions`).
+
+    Returns
+    -------
+    str
+        The caption.
+    """
     for pattern, text in captions.items():
         if fnmatch.fnmatch(name, pattern):
             return text
@@ -64,7 +93,18 @@ def _cell(cell: str) -> str:
 
 
 def check_of(header: str) -> str | None:
-    """The check (:data:`ssw.validity.RULES`) a column's header names, or None."""
+    """The check (:data:`ssw.validity.RULES`) a column's header names, or None.
+
+    Parameters
+    ----------
+    header : str
+        The column's header, e.g. ``check_contact_radius_ratio [1]``.
+
+    Returns
+    -------
+    str or None
+        The check's name, a key of :data:`ssw.validity.RULES`.
+    """
     from ssw.validity import RULES
 
     name = header.split("[")[0].strip()
@@ -85,7 +125,18 @@ def _check_cell(cell: str, check: str) -> str:
 
 
 def checks_note(headers: list[str]) -> str:
-    """What the check columns among ``headers`` test: limit and source ('' if none)."""
+    """What the check columns among ``headers`` test: limit and source ('' if none).
+
+    Parameters
+    ----------
+    headers : list of str
+        The table's column headers.
+
+    Returns
+    -------
+    str
+        An HTML note listing each check's limit, quantity, assumption and source.
+    """
     from ssw.validity import RULES
 
     names = list(dict.fromkeys(c for c in map(check_of, headers) if c))
@@ -101,7 +152,20 @@ def checks_note(headers: list[str]) -> str:
 
 def csv_table(path: Path, max_rows: int = MAX_ROWS) -> str:
     """An HTML table of a CSV file (lines starting with '#' skipped; first ``max_rows`` rows;
-    check columns drawn as failing above their limit, and explained under the table)."""
+    check columns drawn as failing above their limit, and explained under the table).
+
+    Parameters
+    ----------
+    path : pathlib.Path
+        The CSV file.
+    max_rows : int
+        The most rows shown.
+
+    Returns
+    -------
+    str
+        The HTML table and its notes.
+    """
     with Path(path).open(newline="") as fh:
         rows = list(csv.reader(line for line in fh if not line.startswith("#")))
     if not rows:
@@ -123,7 +187,22 @@ def csv_table(path: Path, max_rows: int = MAX_ROWS) -> str:
 
 
 def tables_page(tables: list[str | Path], *, title: str, captions: dict[str, str]) -> str:
-    """One HTML page holding every table of ``tables`` (CSV paths), each with its note."""
+    """One HTML page holding every table of ``tables`` (CSV paths), each with its note.
+
+    Parameters
+    ----------
+    tables : list of str or pathlib.Path
+        The CSV files.
+    title : str
+        The page's title.
+    captions : dict of str to str
+        Glob -> caption (:func:`load_captions`).
+
+    Returns
+    -------
+    str
+        The HTML page.
+    """
     parts = [f"<!DOCTYPE html><html><head><meta charset='utf-8'><title>{html.escape(title)}"
              f"</title><style>{STYLE}</style></head><body>",
              f"<p class='note'>{html.escape(title)}; ssw {__version__}. SI units unless a "
@@ -140,7 +219,29 @@ def tables_page(tables: list[str | Path], *, title: str, captions: dict[str, str
 
 def write_tables(tables: list[str | Path], output: str | Path, *, title: str,
                  captions_file: str | Path | None = None) -> dict[str, Any]:
-    """Write :func:`tables_page` atomically; return what it holds."""
+    """Write :func:`tables_page` atomically; return what it holds.
+
+    Parameters
+    ----------
+    tables : list of str or pathlib.Path
+        The CSV files.
+    output : str or pathlib.Path
+        The HTML file to write.
+    title : str
+        The page's title.
+    captions_file : str or pathlib.Path or None
+        The YAML captions file (:func:`load_captions`).
+
+    Returns
+    -------
+    dict
+        ``output`` (path), ``tables`` (paths) and ``bytes`` (the page's length, characters).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When a table file is missing, or the captions file is not a YAML mapping.
+    """
     missing = [str(t) for t in tables if not Path(t).is_file()]
     if missing:
         raise ConfigError("tables", missing, "existing CSV files")

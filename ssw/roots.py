@@ -72,6 +72,17 @@ class Root:
     and ``hi`` the final bracket, ``f(lo) <= 0 <= f(hi)``: ``hi`` is the smallest abscissa
     known to reach the level, ``lo`` the largest known below it. ``calls``: evaluations of
     ``f`` (each on every element), including the bracket's growth.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        The roots.
+    lo : numpy.ndarray
+        The brackets' lower ends.
+    hi : numpy.ndarray
+        The brackets' upper ends.
+    calls : int
+        Evaluations of ``f``.
     """
 
     x: np.ndarray
@@ -292,6 +303,19 @@ class NewtonRoot:
     ``x`` (n,) the roots (SI unit of the unknown); ``state`` the caller's state of each
     element at its root (a list); ``lo`` and ``hi`` (n,) the final brackets; ``calls``
     the evaluations of the function (each on the elements still going).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        The roots.
+    state : list
+        The caller's state of each element at its root.
+    lo : numpy.ndarray
+        The brackets' lower ends.
+    hi : numpy.ndarray
+        The brackets' upper ends.
+    calls : int
+        Evaluations of the function.
     """
 
     x: np.ndarray

@@ -104,7 +104,18 @@ def validator(schema: dict[str, Any]) -> Any:
 
 
 def path_of(error: Any) -> str:
-    """The dotted path of a validation error's instance (``(top level)`` for the root)."""
+    """The dotted path of a validation error's instance (``(top level)`` for the root).
+
+    Parameters
+    ----------
+    error : jsonschema.ValidationError
+        The validation error.
+
+    Returns
+    -------
+    str
+        The path, e.g. ``sets.set1.soil_E``.
+    """
     parts = [str(p) for p in error.absolute_path]
     return ".".join(parts) if parts else "(top level)"
 

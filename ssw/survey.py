@@ -60,7 +60,7 @@ _E2 = WGS84_F * (2.0 - WGS84_F)  # first eccentricity squared
 class Frame:
     """The plane of a survey's x/y coordinates (config ``survey.frame``).
 
-    Attributes
+    Parameters
     ----------
     name : str
         What x/y are measured from (a site grid, a peg line), named in the GeoJSON and on
@@ -214,7 +214,61 @@ def wgs84_to_local(latitude: Any, longitude: Any, lat0: float, lon0: float
 
 @dataclass(frozen=True)
 class SurveyRow:
-    """One test point's result (SI; ratio dimensionless)."""
+    """One test point's result (SI; ratio dimensionless).
+
+    Parameters
+    ----------
+    id : str
+        The point's id.
+    E : float
+        The point's Young's modulus, Pa.
+    E_low : float
+        The interval's low end, Pa.
+    E_high : float
+        The interval's high end, Pa.
+    E_u_pct : float
+        The relative uncertainty of ``E``, %.
+    target_E : float or None
+        The point's target, Pa.
+    reference_E : float or None
+        The point's reference modulus, Pa.
+    ratio : float or None
+        ``E / reference_E``.
+    verdict : str
+        The verdict (:func:`verdict`).
+    missing_terms : str
+        The budget terms the interval lacks (empty when complete).
+    tof_mean : float
+        The mean TOF, s.
+    tof_sem : float
+        Its standard error, s (NaN: unknown).
+    n_accepted : int
+        Hits accepted.
+    n_hits : int
+        Hits recorded.
+    nu : float
+        The soil's Poisson's ratio used.
+    nu_lo : float or None
+        The low end of its range.
+    nu_hi : float or None
+        The high end of its range.
+    x : float or None
+        The point's x, m.
+    y : float or None
+        The point's y, m.
+    latitude : float or None
+        WGS84 latitude, degrees.
+    longitude : float or None
+        WGS84 longitude, degrees.
+    layer : str or None
+        The soil layer tested.
+    synthetic : bool
+        Whether the recordings are synthetic.
+    checks_failed : str
+        The measurement's failing checks, joined by ``"; "``.
+    reason : str
+        Why the verdict is inconclusive, when it is.
+    """
 
     id: str
     E: float
@@ -244,7 +298,18 @@ class SurveyRow:
 
 
 def point_target(point: dict[str, Any]) -> float | None:
-    """``target_E``, or ``required_ratio x reference_E``, or None (Pa)."""
+    """``target_E``, or ``required_ratio x reference_E``, or None (Pa).
+
+    Parameters
+    ----------
+    point : dict
+        The survey point (``target_E``, ``reference_E``, ``required_ratio``; Pa).
+
+    Returns
+    -------
+    float or None
+        The target modulus, Pa; None when the point has no target.
+    """
     if point.get("target_E") is not None:
         return float(point["target_E"])
     if point.get("reference_E") is not None:
@@ -289,7 +354,28 @@ def verdict_reason(E_low: float, E_high: float, target: float | None, complete: 
                    failed: tuple[str, ...] | list[str], missing: str = "") -> str:
     """Why :func:`verdict` is ``inconclusive`` ("" otherwise): the failing checks, the
     missing budget terms, or the interval straddling the target (same parameters, Pa;
-    ``missing`` the missing terms in words)."""
+    ``missing`` the missing terms in words).
+
+    Parameters
+    ----------
+    E_low : float
+        The interval's low end, Pa.
+    E_high : float
+        Its high end, Pa.
+    target : float or None
+        The point's target, Pa (None: no target).
+    complete : bool
+        Whether the interval has every term of its budget.
+    failed : sequence of str
+        The measurement's failing checks.
+    missing : str
+        The missing budget terms, in words.
+
+    Returns
+    -------
+    str
+        The reasons, joined by ``" | "``; empty unless the verdict is ``inconclusive``.
+    """
     if verdict(E_low, E_high, target, complete, failed) != "inconclusive":
         return ""
     why = []
@@ -387,7 +473,18 @@ def survey_table(points: list[dict[str, Any]], results: list[dict[str, Any]],
 
 def point_checks_failed(result: dict[str, Any]) -> list[str]:
     """The failing checks of a point's ``ssw measure --json`` result (its ``validity``
-    entries, :func:`ssw.validity.describe`); none for a result without checks."""
+    entries, :func:`ssw.validity.describe`); none for a result without checks.
+
+    Parameters
+    ----------
+    result : dict
+        The point's ``ssw measure --json`` result.
+
+    Returns
+    -------
+    list of str
+        One description per failing check.
+    """
     from ssw.validity import describe
 
     return [describe(e) for e in result.get("validity") or [] if not e.get("holds", True)]
@@ -401,7 +498,19 @@ UNITS = {"E": "Pa", "E_low": "Pa", "E_high": "Pa", "E_u_pct": "%", "target_E": "
 
 def write_survey(csv_path: str | Path, h5_path: str | Path, rows: list[SurveyRow],
                  inputs: dict[str, Any]) -> None:
-    """The survey table as CSV (``name [unit]`` headers) and HDF5 (one dataset per column)."""
+    """The survey table as CSV (``name [unit]`` headers) and HDF5 (one dataset per column).
+
+    Parameters
+    ----------
+    csv_path : str or pathlib.Path
+        The CSV file.
+    h5_path : str or pathlib.Path
+        The HDF5 file.
+    rows : list of SurveyRow
+        The points' results.
+    inputs : dict
+        What the table was made from, stored as the HDF5 file's inputs.
+    """
     dicts = [asdict(r) for r in rows]
     named = [{(f"{k} [{UNITS[k]}]" if k in UNITS else k): ("" if v is None else v)
               for k, v in d.items()} for d in dicts]
@@ -421,7 +530,22 @@ def write_survey(csv_path: str | Path, h5_path: str | Path, rows: list[SurveyRow
 
 def synthetic_title(title: str, rows: list[SurveyRow], default: str) -> str:
     """A figure's title: ``title`` (else ``default``), with "(SYNTHETIC data)" added when a
-    point's recordings are synthetic and the title does not say so already."""
+    point's recordings are synthetic and the title does not say so already.
+
+    Parameters
+    ----------
+    title : str
+        The title asked for (empty: ``default``).
+    rows : list of SurveyRow
+        The points' results.
+    default : str
+        The title without one asked for.
+
+    Returns
+    -------
+    str
+        The title.
+    """
     text = title or default
     if any(r.synthetic for r in rows) and "synthetic" not in text.lower():
         text += " (SYNTHETIC data)"
@@ -727,7 +851,23 @@ def write_geojson(path: str | Path, rows: list[SurveyRow], frame: Frame | None =
 
 
 def read_results(paths: list[str | Path]) -> list[dict[str, Any]]:
-    """The ``ssw measure --json`` results of the points."""
+    """The ``ssw measure --json`` results of the points.
+
+    Parameters
+    ----------
+    paths : list of str or pathlib.Path
+        The result files, one per point.
+
+    Returns
+    -------
+    list of dict
+        The results, in the order of ``paths``.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When a file cannot be read or is not JSON.
+    """
     out = []
     for p in paths:
         try:

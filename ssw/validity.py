@@ -97,7 +97,7 @@ STRESS_MODES = ("fem", "bound", "none")
 class Rule:
     """One check of the registry (module docstring).
 
-    Attributes
+    Parameters
     ----------
     name : str
         The check's name (``check`` of its entries).
@@ -126,7 +126,23 @@ RULES: dict[str, Rule] = {}
 
 
 def register(rule: Rule) -> Rule:
-    """Add ``rule`` to :data:`RULES` (its name must be new) and return it."""
+    """Add ``rule`` to :data:`RULES` (its name must be new) and return it.
+
+    Parameters
+    ----------
+    rule : Rule
+        The check's rule.
+
+    Returns
+    -------
+    Rule
+        ``rule``.
+
+    Raises
+    ------
+    ValueError
+        When a rule of that name is registered already.
+    """
     if rule.name in RULES:
         raise ValueError(f"check {rule.name!r} is registered already")
     RULES[rule.name] = rule
@@ -180,7 +196,7 @@ FINITE_SAMPLE = register(Rule(
 class Check:
     """One entry of a result's ``validity`` list (module docstring).
 
-    Attributes
+    Parameters
     ----------
     check : str
         The rule's name.
@@ -211,7 +227,13 @@ class Check:
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON entry ``{"check", "value", "limit", "holds", "unit", "assumption",
-        "source", ...}`` (``value`` None when not a number)."""
+        "source", ...}`` (``value`` None when not a number).
+
+        Returns
+        -------
+        dict
+            The entry (``value`` and ``limit`` in ``unit``).
+        """
         rule = RULES[self.check]
         out: dict[str, Any] = {
             "check": self.check,
@@ -228,7 +250,7 @@ class Check:
 class Validity:
     """The checks of ``n`` scenes: per check one value per scene (module docstring).
 
-    Attributes
+    Parameters
     ----------
     values : dict
         Check name -> (n,) values (NaN: not evaluable at that scene).
@@ -254,13 +276,35 @@ class Validity:
         return next((v.size for v in self.values.values()), 0)
 
     def holds(self, name: str) -> np.ndarray:
-        """(n,) bool: the check ``name`` holds (a NaN value does not)."""
+        """(n,) bool: the check ``name`` holds (a NaN value does not).
+
+        Parameters
+        ----------
+        name : str
+            The check's name (a key of :data:`RULES`).
+
+        Returns
+        -------
+        numpy.ndarray
+            Per scene: value <= limit.
+        """
         v = self.values[name]
         with np.errstate(invalid="ignore"):
             return np.asarray(v <= RULES[name].limit, bool)
 
     def checks(self, i: int = 0) -> list[Check]:
-        """Scene ``i``'s entries, in the registry's order."""
+        """Scene ``i``'s entries, in the registry's order.
+
+        Parameters
+        ----------
+        i : int
+            The scene's index.
+
+        Returns
+        -------
+        list of Check
+            One per evaluated check.
+        """
         out = []
         for name in (k for k in RULES if k in self.values):
             v = float(self.values[name][i])
@@ -270,36 +314,92 @@ class Validity:
         return out
 
     def entries(self, i: int = 0) -> list[dict[str, Any]]:
-        """Scene ``i``'s entries as JSON dicts (:meth:`Check.to_dict`)."""
+        """Scene ``i``'s entries as JSON dicts (:meth:`Check.to_dict`).
+
+        Parameters
+        ----------
+        i : int
+            The scene's index.
+
+        Returns
+        -------
+        list of dict
+            One per evaluated check.
+        """
         return [c.to_dict() for c in self.checks(i)]
 
     def failed(self, i: int = 0) -> list[str]:
         """Scene ``i``'s failing checks, each as ``name value > limit`` with what it
-        assumed (empty: every evaluated check holds)."""
+        assumed (empty: every evaluated check holds).
+
+        Parameters
+        ----------
+        i : int
+            The scene's index.
+
+        Returns
+        -------
+        list of str
+            :func:`describe` of each failing check.
+        """
         return [describe(c) for c in self.checks(i) if not c.holds]
 
     def columns(self) -> dict[str, np.ndarray]:
         """Table columns: each check's values (named by the check) and ``checks_failed``
-        (the failing checks' names per scene, ``;``-joined, empty when all hold)."""
+        (the failing checks' names per scene, ``;``-joined, empty when all hold).
+
+        Returns
+        -------
+        dict of str to numpy.ndarray
+            Column name -> values, one per scene.
+        """
         names = [k for k in RULES if k in self.values]
         cols = {k: np.asarray(self.values[k], float) for k in names}
         bad = [";".join(k for k in names if not self.holds(k)[i]) for i in range(self.n)]
         return {**cols, "checks_failed": np.array(bad, dtype=object)}
 
     def worst(self) -> Validity:
-        """One scene: each check's largest value over the scenes (NaN if any is NaN)."""
+        """One scene: each check's largest value over the scenes (NaN if any is NaN).
+
+        Returns
+        -------
+        Validity
+            The worst case, one scene.
+        """
         vals = {k: np.array([np.max(v) if v.size else np.nan]) for k, v in self.values.items()}
         return Validity(vals, dict(self.assumed), dict(self.bound), dict(self.notes),
                         dict(self.skipped))
 
     def take(self, idx: Any) -> Validity:
-        """The scenes ``idx`` (an index or a slice)."""
+        """The scenes ``idx`` (an index or a slice).
+
+        Parameters
+        ----------
+        idx : int or slice or array_like
+            The scenes to keep.
+
+        Returns
+        -------
+        Validity
+            The checks of those scenes (at least one-dimensional).
+        """
         vals = {k: np.atleast_1d(np.asarray(v)[idx]) for k, v in self.values.items()}
         return Validity(vals, dict(self.assumed), dict(self.bound), dict(self.notes),
                         dict(self.skipped))
 
     def merged(self, other: Validity) -> Validity:
-        """These checks and ``other``'s (same scenes; ``other``'s win a name in both)."""
+        """These checks and ``other``'s (same scenes; ``other``'s win a name in both).
+
+        Parameters
+        ----------
+        other : Validity
+            Further checks of the same scenes.
+
+        Returns
+        -------
+        Validity
+            Both sets of checks; a check evaluated by either is no longer listed as skipped.
+        """
         return Validity({**self.values, **other.values}, {**self.assumed, **other.assumed},
                         {**self.bound, **other.bound}, {**self.notes, **other.notes},
                         {k: v for k, v in {**self.skipped, **other.skipped}.items()
@@ -308,7 +408,18 @@ class Validity:
     @classmethod
     def concat(cls, parts: list[Validity]) -> Validity:
         """The scenes of ``parts`` one after another (the checks every part has; the first
-        part's assumptions and notes)."""
+        part's assumptions and notes).
+
+        Parameters
+        ----------
+        parts : list of Validity
+            The parts, at least one.
+
+        Returns
+        -------
+        Validity
+            The scenes of every part.
+        """
         names = [k for k in parts[0].values if all(k in p.values for p in parts)]
         first = parts[0]
         return cls({k: np.concatenate([p.values[k] for p in parts]) for k in names},
@@ -317,7 +428,14 @@ class Validity:
 
     def meta(self) -> dict[str, Any]:
         """What the values rest on, for a file's attributes: assumptions, bounds, notes,
-        skipped checks, and each check's limit and source."""
+        skipped checks, and each check's limit and source.
+
+        Returns
+        -------
+        dict
+            ``assumed``, ``bound``, ``notes``, ``skipped`` and ``rules`` (check -> ``limit``,
+            ``unit``, ``quantity``, ``source``).
+        """
         return {"assumed": self.assumed, "bound": self.bound, "notes": self.notes,
                 "skipped": self.skipped,
                 "rules": {k: {"limit": RULES[k].limit, "unit": RULES[k].unit,
@@ -326,13 +444,35 @@ class Validity:
 
     def to_dict(self, i: int = 0) -> dict[str, Any]:
         """Scene ``i`` for a JSON result: ``validity`` (entries), ``checks_failed`` (list)
-        and ``checks_skipped`` (name -> why)."""
+        and ``checks_skipped`` (name -> why).
+
+        Parameters
+        ----------
+        i : int
+            The scene's index.
+
+        Returns
+        -------
+        dict
+            ``validity``, ``checks_failed`` and ``checks_skipped``.
+        """
         return {"validity": self.entries(i), "checks_failed": self.failed(i),
                 "checks_skipped": dict(self.skipped)}
 
 
 def describe(c: Check | dict[str, Any]) -> str:
-    """``name value > limit (assumed ...)`` of a failing entry (a Check or its dict)."""
+    """``name value > limit (assumed ...)`` of a failing entry (a Check or its dict).
+
+    Parameters
+    ----------
+    c : Check or dict
+        The entry.
+
+    Returns
+    -------
+    str
+        E.g. ``contact_radius_ratio 0.31 > 0.2 (assumed ...)`` (``<=`` when it holds).
+    """
     d = c.to_dict() if isinstance(c, Check) else c
     v = "nan" if d["value"] is None else f"{d['value']:.3g}"
     rel = "<=" if d["holds"] else ">"
@@ -347,7 +487,20 @@ def describe(c: Check | dict[str, Any]) -> str:
 def human_lines(entries: list[dict[str, Any]], skipped: dict[str, str] | None = None
                 ) -> list[str]:
     """Lines for a command's human output: one per entry (``holds`` or ``FAILS`` with the
-    assumption it tests) and one per skipped check."""
+    assumption it tests) and one per skipped check.
+
+    Parameters
+    ----------
+    entries : list of dict
+        The entries (:meth:`Validity.entries`).
+    skipped : dict of str to str or None
+        Check name -> why it was not evaluated.
+
+    Returns
+    -------
+    list of str
+        The lines.
+    """
     lines = []
     for d in entries:
         state = "holds" if d["holds"] else "FAILS"
@@ -359,21 +512,64 @@ def human_lines(entries: list[dict[str, Any]], skipped: dict[str, str] | None = 
 # ---------------------------------------------------------------------------- the checks
 def contact_radius_ratio(d: Any, radius: float) -> np.ndarray:
     """``a / R = sqrt(d / R)`` (Hertz, ``a^2 = R d``) of peak indentations ``d`` (m) under a
-    bead of ``radius`` (m); 0 where ``d <= 0``."""
+    bead of ``radius`` (m); 0 where ``d <= 0``.
+
+    Parameters
+    ----------
+    d : array_like
+        Peak indentations, m.
+    radius : float
+        The bead's radius ``R``, m.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``a / R``, dimensionless.
+
+    References
+    ----------
+    Johnson, K. L. (1985). *Contact Mechanics*, ch. 4 (Hertz: ``a^2 = R d``).
+    """
     from ssw.hertz import contact_radius
 
     return contact_radius(np.asarray(d, float), radius) / float(radius)
 
 
 def plate_deflection_ratio(d: Any, thickness: float) -> np.ndarray:
-    """``d / t``: peak indentations ``d`` (m) over the plate's ``thickness`` (m, > 0)."""
+    """``d / t``: peak indentations ``d`` (m) over the plate's ``thickness`` (m, > 0).
+
+    Parameters
+    ----------
+    d : array_like
+        Peak indentations, m.
+    thickness : float
+        The plate's thickness, m (> 0).
+
+    Returns
+    -------
+    numpy.ndarray
+        ``d / t``, dimensionless.
+    """
     return np.asarray(d, float) / float(thickness)
 
 
 def reach_ratio(wall: Any, d: Any) -> np.ndarray | None:
     """The peak indentations ``d`` (m) over the wall's exact reach (m,
     :func:`ssw.chain.wall.beyond_exact_reach`: above 1 the force was an extension), or None
-    for a law defined at any depth."""
+    for a law defined at any depth.
+
+    Parameters
+    ----------
+    wall : object
+        The wall law (its ``exact_reach``, m, if any).
+    d : array_like
+        Peak indentations, m.
+
+    Returns
+    -------
+    numpy.ndarray or None
+        ``d / reach``, dimensionless; None when the wall has no ``exact_reach``.
+    """
     reach = getattr(wall, "exact_reach", None)
     if reach is None:
         return None
@@ -385,7 +581,21 @@ def pulse_overlap(run: Any, pk: Any) -> np.ndarray:
     (above its static value, at the run's steps) over the peak rule's gap share of the
     smaller peak (:data:`ssw.signal.rule.RULE`): > 1, the pulses merge. Infinite where the
     reflected peak is not on the run's record (a scene run again for longer keeps its first
-    record) or not found."""
+    record) or not found.
+
+    Parameters
+    ----------
+    run : object
+        The chain's run: ``t`` (n_t,) s and ``sensor`` (n_t, n) N.
+    pk : object
+        Its peaks: ``t_incident``, ``t_reflected``, ``tof`` (s), ``f_incident`` and
+        ``f_reflected`` (N), (n,) each.
+
+    Returns
+    -------
+    numpy.ndarray
+        The overlap ratio, dimensionless.
+    """
     from ssw.signal.rule import RULE
 
     s = run.sensor - run.sensor[0]
@@ -405,7 +615,31 @@ def first_yield_index(force: Any, E: Any, nu: Any, radius: float, strength: Any)
     :func:`ssw.constitutive.yield_index.hertz_peak_pressure`); ``k`` = 1.61 at nu 0.3
     (sec. 6.1, :func:`ssw.constitutive.yield_index.first_yield_ratio`). Two identical beads
     of radius R and modulus E have the same ``p0`` (``R* = R/2``, ``E* = E / (2 (1 -
-    nu^2))``)."""
+    nu^2))``).
+
+    Parameters
+    ----------
+    force : array_like
+        Contact forces ``F``, N.
+    E : array_like
+        The half-space's Young's modulus, Pa.
+    nu : array_like
+        Its Poisson's ratio.
+    radius : float
+        The sphere's radius ``R``, m.
+    strength : array_like
+        The uniaxial strength ``Y``, Pa.
+
+    Returns
+    -------
+    numpy.ndarray
+        The index, dimensionless (> 1: yield has begun).
+
+    References
+    ----------
+    Johnson, K. L. (1985). *Contact Mechanics*. Cambridge University Press, eq. (4.23) and
+    sec. 6.1.
+    """
     from ssw.constitutive.yield_index import first_yield_ratio, hertz_peak_pressure
 
     p0 = hertz_peak_pressure(np.asarray(force, float), E, nu, radius)
@@ -418,7 +652,7 @@ def first_yield_index(force: Any, E: Any, nu: Any, radius: float, strength: Any)
 class Strengths:
     """The uniaxial strengths the yield checks compare stresses with. Pa; None: unknown.
 
-    Attributes
+    Parameters
     ----------
     sample : float, numpy.ndarray or None
         The sample's (one per scene, or one for all; None: ``ratio E``, an assumption
@@ -442,7 +676,20 @@ class Strengths:
 
     def sample_at(self, E: Any) -> tuple[np.ndarray, str | None]:
         """The sample's strength (Pa) at moduli ``E`` (Pa), and the assumption it rests on
-        (None when it is stated)."""
+        (None when it is stated).
+
+        Parameters
+        ----------
+        E : array_like
+            The samples' Young's moduli, Pa.
+
+        Returns
+        -------
+        Y : numpy.ndarray
+            The strengths, Pa.
+        assumed : str or None
+            The assumption, when ``ratio E`` stands for a strength not given.
+        """
         E = np.asarray(E, float)
         what = (f"Y_sample = {self.ratio:g} E, ssw design's stated assumption (no strength "
                 "given: --sample-strength or --sample-material states one)")
@@ -504,7 +751,36 @@ def stress_indices(params: Any, E: np.ndarray, nu: np.ndarray, d: np.ndarray,
     ``d`` (m) and forces ``force`` (N): :func:`ssw.walls.fem.peak_stresses` (one call per
     Poisson's ratio), over :meth:`Strengths.sample_at` and the plate's yield stress; and
     the reasons of scenes the FEM could not evaluate. NaN where ``d`` is not a positive
-    number or the FEM failed; the plate's None without a plate or its strength."""
+    number or the FEM failed; the plate's None without a plate or its strength.
+
+    Parameters
+    ----------
+    params : ssw.chain.params.ChainParams
+        The chain (its plate's thickness).
+    E : numpy.ndarray
+        The samples' Young's moduli, Pa, (n,).
+    nu : numpy.ndarray
+        Their Poisson's ratios, (n,).
+    d : numpy.ndarray
+        Peak wall indentations, m, (n,).
+    force : numpy.ndarray
+        Peak wall forces, N, (n,).
+    strengths : Strengths
+        The strengths.
+    contact : dict or None
+        The contact FEM's settings.
+    operators : object or None
+        Prepared contact operators.
+
+    Returns
+    -------
+    soil : numpy.ndarray
+        The sample's yield index, (n,).
+    plate : numpy.ndarray or None
+        The plate's yield index, (n,).
+    errors : list of str
+        Why the FEM failed, per Poisson's ratio it failed at.
+    """
     from ssw.errors import SswError
     from ssw.walls.fem import peak_stresses
 
@@ -626,21 +902,58 @@ def assess(params: Any, E: Any, nu: Any, run: Any, pk: Any, wall: Any, *,
 
 def fem_options(wall: str, wall_options: dict[str, Any]) -> dict[str, Any]:
     """``contact`` and ``operators`` of a wall's options for the contact FEM's stresses
-    (the fem wall's own; another law's: the study's contact settings, if given)."""
+    (the fem wall's own; another law's: the study's contact settings, if given).
+
+    Parameters
+    ----------
+    wall : str
+        The wall law's name (not read).
+    wall_options : dict
+        The wall's options.
+
+    Returns
+    -------
+    dict
+        Its ``contact`` and ``operators`` entries.
+    """
     return {k: v for k, v in wall_options.items() if k in ("contact", "operators")}
 
 
 def finite_sample(departure: Any, assumed: str) -> Validity:
     """The ``finite_sample`` check of relative errors ``departure`` (n,) of a half-space
     reading (:func:`ssw.lift.half_space_departure`, :func:`ssw.lift.lift_errors`), resting
-    on the stated geometry ``assumed``."""
+    on the stated geometry ``assumed``.
+
+    Parameters
+    ----------
+    departure : array_like
+        Relative errors of the half-space reading, (n,).
+    assumed : str
+        The stated sample geometry.
+
+    Returns
+    -------
+    Validity
+        The check, value ``|departure|``.
+    """
     return Validity({"finite_sample": np.abs(np.atleast_1d(np.asarray(departure, float)))},
                     assumed={"finite_sample": assumed})
 
 
 def from_entries(entries: list[dict[str, Any]]) -> Validity:
     """A one-scene :class:`Validity` from a result's ``validity`` list (a JSON result read
-    back: a survey's points)."""
+    back: a survey's points).
+
+    Parameters
+    ----------
+    entries : list of dict
+        The result's ``validity`` list (checks not registered are skipped).
+
+    Returns
+    -------
+    Validity
+        One scene.
+    """
     vals, assumed, bound, notes = {}, {}, {}, {}
     for d in entries:
         name = d["check"]

@@ -79,7 +79,18 @@ CHAIN_KEYS = ("damping", "steps_per_contact", "t_max", "gravity", "wall_law",
 
 def family_of(scene: Scene) -> str:
     """The plate family of a scene: ``<plate>-t<thickness>um`` (the scene id's start), or
-    ``noplate``; the scenes of a family share their mesh and their plate's operators."""
+    ``noplate``; the scenes of a family share their mesh and their plate's operators.
+
+    Parameters
+    ----------
+    scene : ssw.config.Scene
+        The contact scene.
+
+    Returns
+    -------
+    str
+        The family name.
+    """
     if scene.plate_thickness <= 0:
         return "noplate"
     return scene.scene_id.split("-E", 1)[0]
@@ -87,7 +98,18 @@ def family_of(scene: Scene) -> str:
 
 def families(cfg: dict[str, Any]) -> dict[str, list[str]]:
     """Plate family -> its scene ids (sorted by Poisson's ratio, then E), every scene of
-    every set once. One contact job computes one family."""
+    every set once. One contact job computes one family.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+
+    Returns
+    -------
+    dict of str to list of str
+        Family name -> its scene ids.
+    """
     out: dict[str, list[Scene]] = {}
     for sc in all_scenes(cfg).values():
         out.setdefault(family_of(sc), []).append(sc)
@@ -97,30 +119,96 @@ def families(cfg: dict[str, Any]) -> dict[str, list[str]]:
 
 
 def contact_file(scene_id: str, results: str = RESULTS) -> str:
-    """The curve file of a scene: ``<results>/contact/<family>/<scene_id>.h5``."""
+    """The curve file of a scene: ``<results>/contact/<family>/<scene_id>.h5``.
+
+    Parameters
+    ----------
+    scene_id : str
+        The scene's id.
+    results : str
+        The results folder.
+
+    Returns
+    -------
+    str
+        The path of the scene's curve file.
+    """
     return scene_file(f"{results}/contact", scene_id)
 
 
 def scene_file(contact_dir: str, scene_id: str) -> str:
-    """The curve file of a scene in a contact folder: ``<dir>/<family>/<scene_id>.h5``."""
+    """The curve file of a scene in a contact folder: ``<dir>/<family>/<scene_id>.h5``.
+
+    Parameters
+    ----------
+    contact_dir : str
+        The contact folder.
+    scene_id : str
+        The scene's id.
+
+    Returns
+    -------
+    str
+        The path of the scene's curve file.
+    """
     family = "noplate" if scene_id.startswith("noplate") else scene_id.split("-E", 1)[0]
     return f"{contact_dir}/{family}/{scene_id}.h5"
 
 
 def k_table_file(cfg: dict[str, Any], results: str = RESULTS) -> str:
-    """The K table of the config's ``fit.set`` (the chain's ``fit`` wall)."""
+    """The K table of the config's ``fit.set`` (the chain's ``fit`` wall).
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+    results : str
+        The results folder.
+
+    Returns
+    -------
+    str
+        ``<results>/fit/sets/<set>/k_table.h5``.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``fit.set`` is not set.
+    """
     if cfg["fit"].get("set") is None:
         raise ConfigError("fit.set", None, "a set whose K table feeds the fit wall")
     return f"{results}/fit/sets/{cfg['fit']['set']}/k_table.h5"
 
 
 def one_soil_sets(cfg: dict[str, Any]) -> list[str]:
-    """Sets with one soil (the thesis's Sets 1 and 2: deviation from Hertz per plate)."""
+    """Sets with one soil (the thesis's Sets 1 and 2: deviation from Hertz per plate).
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+
+    Returns
+    -------
+    list of str
+        The names of the sets with one soil.
+    """
     return [s for s in cfg["sets"] if _n_soils(cfg, s) == 1]
 
 
 def grid_sets(cfg: dict[str, Any]) -> list[str]:
-    """Sets with several soils (the thesis's Set 3: K(E, nu) tables)."""
+    """Sets with several soils (the thesis's Set 3: K(E, nu) tables).
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+
+    Returns
+    -------
+    list of str
+        The names of the sets with more than one soil.
+    """
     return [s for s in cfg["sets"] if _n_soils(cfg, s) > 1]
 
 
@@ -131,17 +219,52 @@ def _n_soils(cfg: dict[str, Any], set_name: str) -> int:
 
 
 def wall_law(cfg: dict[str, Any]) -> str:
-    """The chain's last-contact law (``chain.wall_law``)."""
+    """The chain's last-contact law (``chain.wall_law``).
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+
+    Returns
+    -------
+    str
+        The law's name (default ``fem``).
+    """
     return str(cfg["chain"].get("wall_law", "fem"))
 
 
 def uses_calibration(cfg: dict[str, Any]) -> bool:
-    """Whether the sweep, the validation and the survey use the calibrated device."""
+    """Whether the sweep, the validation and the survey use the calibrated device.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+
+    Returns
+    -------
+    bool
+        ``calibration.use`` (default true).
+    """
     return bool(cfg.get("calibration", {}).get("use", True))
 
 
 def recordings(cfg: dict[str, Any], root: str) -> list[str]:
-    """The validation samples' recordings (paths from ``root``, the repository)."""
+    """The validation samples' recordings (paths from ``root``, the repository).
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+    root : str
+        The repository's folder.
+
+    Returns
+    -------
+    list of str
+        One path per validation sample that names recordings.
+    """
     import os
 
     return [os.path.join(root, s["recordings"]) for s in
@@ -150,7 +273,20 @@ def recordings(cfg: dict[str, Any], root: str) -> list[str]:
 
 def wall_inputs(cfg: dict[str, Any], results: str = RESULTS) -> dict[str, Any]:
     """The files the wall law reads: the K table (``fit``) or the sweep points' curves
-    (``table``); none for ``fem`` and ``hertz`` (the ``fem`` wall builds its own law)."""
+    (``table``); none for ``fem`` and ``hertz`` (the ``fem`` wall builds its own law).
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+    results : str
+        The results folder.
+
+    Returns
+    -------
+    dict
+        ``{"k_table": path}``, ``{"curves": [path, ...]}`` or ``{}``.
+    """
     law = wall_law(cfg)
     if law == "fit":
         return {"k_table": k_table_file(cfg, results)}
@@ -160,7 +296,20 @@ def wall_inputs(cfg: dict[str, Any], results: str = RESULTS) -> dict[str, Any]:
 
 
 def calibrated_inputs(cfg: dict[str, Any], results: str = RESULTS) -> dict[str, Any]:
-    """The wall law's inputs plus, with ``calibration.use``, the calibration file."""
+    """The wall law's inputs plus, with ``calibration.use``, the calibration file.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+    results : str
+        The results folder.
+
+    Returns
+    -------
+    dict
+        :func:`wall_inputs` plus ``"calibration"``: the calibration file's path.
+    """
     inputs = wall_inputs(cfg, results)
     if uses_calibration(cfg):
         inputs["calibration"] = f"{results}/{CALIBRATION}"
@@ -217,6 +366,21 @@ def sweep_scene_ids(cfg: dict[str, Any]) -> list[str]:
     """Contact scene ids of the sweep points (the ``table`` wall reads their curves).
 
     Raises ConfigError when a sweep point is in no contact set.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+
+    Returns
+    -------
+    list of str
+        One scene id per sweep point (Poisson's ratio outer, E inner).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When a sweep point is in no contact set.
     """
     ch = cfg["chain"]
     dev = device_of(cfg)
@@ -239,6 +403,16 @@ class Study:
 
     The device and the materials library are read once; every method is a pure function
     of the config.
+
+    Parameters
+    ----------
+    cfg : dict
+        The validated study config.
+
+    Attributes
+    ----------
+    cfg : dict
+        The study config.
     """
 
     def __init__(self, cfg: dict[str, Any]) -> None:
@@ -266,7 +440,23 @@ class Study:
         return all_scenes(self.cfg)
 
     def material_values(self, keys: Any) -> dict[str, Any]:
-        """``{key: every field of the material}`` for the material keys given."""
+        """``{key: every field of the material}`` for the material keys given.
+
+        Parameters
+        ----------
+        keys : iterable of str
+            Material keys (``none`` is skipped).
+
+        Returns
+        -------
+        dict
+            Material key -> its fields (:func:`dataclasses.asdict`; SI units).
+
+        Raises
+        ------
+        ssw.errors.ConfigError
+            When a key is not in the materials library.
+        """
         out = {}
         for k in sorted(set(keys)):
             if k == "none":
@@ -303,7 +493,27 @@ class Study:
     # ------------------------------------------------------------------ step inputs
     def inputs(self, step: str, key: str | None = None) -> dict[str, Any]:
         """The slice of the study the job ``step`` (``key``: its wildcard) reads, with the
-        ssw version and the hash of its code (module docstring)."""
+        ssw version and the hash of its code (module docstring).
+
+        Parameters
+        ----------
+        step : str
+            The job's step, a key of ``STEP_MODULES``.
+        key : str or None
+            The job's wildcard (e.g. a contact family), or None.
+
+        Returns
+        -------
+        dict
+            ``step``, ``key``, ``ssw_version``, ``code`` (the hash of the step's modules) and
+            ``config`` (the slice of the config the step reads).
+
+        Raises
+        ------
+        ssw.errors.ConfigError
+            When ``step`` is unknown, or ``key`` names no contact family, set, survey point or
+        design soil range of the study.
+        """
         from ssw import __version__
         from ssw.provenance import source_hash
 
@@ -415,7 +625,13 @@ class Study:
     def device_families(self) -> dict[str, str]:
         """The device design's jobs when ``design.device.study`` is on: ``{name: D:MAT}``
         (``name`` = bead diameter in um and plate material, a wildcard value; ``D:MAT`` the
-        ``--family`` flag), one per bead diameter and plate material; else none."""
+        ``--family`` flag), one per bead diameter and plate material; else none.
+
+        Returns
+        -------
+        dict of str to str
+            Job name -> its ``--family`` flag.
+        """
         dev = self.cfg.get("design", {}).get("device") or {}
         if not dev.get("study"):
             return {}
@@ -429,14 +645,40 @@ class Study:
         return {"study": self.cfg.get("study")}
 
     def param(self, step: str, key: str | None = None) -> str:
-        """:meth:`inputs` as canonical JSON: the value a rule's params hold."""
+        """:meth:`inputs` as canonical JSON: the value a rule's params hold.
+
+        Parameters
+        ----------
+        step : str
+            The job's step.
+        key : str or None
+            The job's wildcard, or None.
+
+        Returns
+        -------
+        str
+            The canonical JSON text.
+        """
         from ssw.provenance import canonical_json
 
         return canonical_json(self.inputs(step, key))
 
     def digest(self, step: str, key: str | None = None) -> str:
         """The digest of :meth:`inputs` (passed to the job's command as
-        ``--inputs-sha256``)."""
+        ``--inputs-sha256``).
+
+        Parameters
+        ----------
+        step : str
+            The job's step.
+        key : str or None
+            The job's wildcard, or None.
+
+        Returns
+        -------
+        str
+            The SHA-256 hex digest (:func:`ssw.provenance.digest`).
+        """
         from ssw.provenance import digest
 
         return digest(self.inputs(step, key))
@@ -480,7 +722,18 @@ def scatter_part(item: str) -> str:
 
 
 def alternatives(names: Any) -> str:
-    """A wildcard regex matching exactly ``names`` (none: a regex that matches nothing)."""
+    """A wildcard regex matching exactly ``names`` (none: a regex that matches nothing).
+
+    Parameters
+    ----------
+    names : iterable of str
+        The values the wildcard may take.
+
+    Returns
+    -------
+    str
+        The escaped names joined by ``|``, or ``(?!)``.
+    """
     import re
 
     names = list(names)
@@ -488,14 +741,42 @@ def alternatives(names: Any) -> str:
 
 
 def set_families(cfg: dict[str, Any], set_name: str, results: str = RESULTS) -> list[str]:
-    """The contact family folders that hold the scenes of a set."""
+    """The contact family folders that hold the scenes of a set.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+    set_name : str
+        The set's name (a key of ``sets``).
+    results : str
+        The results folder.
+
+    Returns
+    -------
+    list of str
+        The folders ``<results>/contact/<family>``, sorted.
+    """
     return sorted({f"{results}/contact/{family_of(s)}" for s in scenes(cfg, set_name)})
 
 
 def write_study_config(cfg: dict[str, Any], path: str = STUDY_CONFIG) -> bool:
     """Write the resolved study config (``ssw.config.dump_config``) for the jobs, only when
     its text changed (a run that changes nothing rewrites nothing). Returns whether it
-    wrote."""
+    wrote.
+
+    Parameters
+    ----------
+    cfg : dict
+        The resolved study config.
+    path : str
+        The file to write.
+
+    Returns
+    -------
+    bool
+        True when the file was written.
+    """
     from pathlib import Path
 
     from ssw.config import dump_config
@@ -529,13 +810,39 @@ RESOURCES: dict[str, tuple[float, float, float, float]] = {
 
 
 def mem_mb(step: str, size: int) -> int:
-    """MB of memory a job of ``step`` of ``size`` asks for (:data:`RESOURCES`)."""
+    """MB of memory a job of ``step`` of ``size`` asks for (:data:`RESOURCES`).
+
+    Parameters
+    ----------
+    step : str
+        The job's step (a key of :data:`RESOURCES`).
+    size : int
+        The job's size (a family's scene count; 0 for other steps).
+
+    Returns
+    -------
+    int
+        Memory, MB.
+    """
     base, per, _, _ = RESOURCES[step]
     return round(base + per * size)
 
 
 def runtime_min(step: str, size: int) -> int:
-    """Minutes of wall time a job of ``step`` of ``size`` asks for (:data:`RESOURCES`)."""
+    """Minutes of wall time a job of ``step`` of ``size`` asks for (:data:`RESOURCES`).
+
+    Parameters
+    ----------
+    step : str
+        The job's step (a key of :data:`RESOURCES`).
+    size : int
+        The job's size (a family's scene count; 0 for other steps).
+
+    Returns
+    -------
+    int
+        Wall time, min (rounded up).
+    """
     _, _, base, per = RESOURCES[step]
     return int(-(-(base + per * size) // 1))
 
@@ -606,14 +913,36 @@ def end_of_run() -> int:
 
 
 def submits_to_slurm(workflow: Any) -> bool:
-    """Whether a Snakemake run submits its jobs to Slurm (the ``slurm`` executor)."""
+    """Whether a Snakemake run submits its jobs to Slurm (the ``slurm`` executor).
+
+    Parameters
+    ----------
+    workflow : snakemake.workflow.Workflow
+        The running workflow.
+
+    Returns
+    -------
+    bool
+        True when its executor plugin is ``slurm``.
+    """
     plugin = getattr(workflow, "executor_plugin", None)
     return plugin is not None and getattr(plugin, "name", "") == "slurm"
 
 
 def check_cluster_fit(workflow: Any) -> None:
     """ConfigError naming every job of the run that asks for more than the largest node
-    has (:func:`ssw.cluster.check_jobs_fit`), before anything is submitted."""
+    has (:func:`ssw.cluster.check_jobs_fit`), before anything is submitted.
+
+    Parameters
+    ----------
+    workflow : snakemake.workflow.Workflow
+        The running workflow (its DAG's jobs to run, local jobs left out).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When a job asks for more cores, memory or time than any node has.
+    """
     from ssw.cluster import check_jobs_fit
 
     jobs = [(j.rule.name, int(j.threads), dict(j.resources.items()))
@@ -865,7 +1194,22 @@ def report_categories(cfg: dict[str, Any]) -> dict[str, str]:
 
 def report_tables(targets: list[Any], categories: dict[str, str], results: str = RESULTS
                   ) -> dict[str, list[str]]:
-    """Stage -> its CSV tables among ``targets`` (a stage is a results sub-folder)."""
+    """Stage -> its CSV tables among ``targets`` (a stage is a results sub-folder).
+
+    Parameters
+    ----------
+    targets : list
+        The report job's input files.
+    categories : dict of str to str
+        Stage -> its report category (only the keys are read).
+    results : str
+        The results folder.
+
+    Returns
+    -------
+    dict of str to list of str
+        Stage -> its CSV tables, in ``targets``' order, each once; stages with none left out.
+    """
     out: dict[str, list[str]] = {}
     for stage in categories:
         tables = list(dict.fromkeys(str(t) for t in targets
@@ -900,7 +1244,18 @@ def report_page_args(output: Any, tables: dict[str, list[str]], categories: dict
 
 
 def survey_points(cfg: dict[str, Any]) -> list[str]:
-    """The ids of the config's survey points."""
+    """The ids of the config's survey points.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+
+    Returns
+    -------
+    list of str
+        The ``survey.points`` ids, in the config's order.
+    """
     return [p["id"] for p in cfg.get("survey", {}).get("points", [])]
 
 
@@ -912,20 +1267,69 @@ def _point(cfg: dict[str, Any], point: str) -> dict[str, Any]:
 
 
 def point_recordings(cfg: dict[str, Any], point: str, root: str) -> list[str]:
-    """A survey point's recordings (paths from ``root``, the repository)."""
+    """A survey point's recordings (paths from ``root``, the repository).
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+    point : str
+        The survey point's id.
+    root : str
+        The repository's folder.
+
+    Returns
+    -------
+    list of str
+        The recording paths.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``point`` is not a survey point of the config.
+    """
     import os
 
     return [os.path.join(root, r) for r in _point(cfg, point)["recordings"]]
 
 
 def survey_nu(cfg: dict[str, Any], point: str) -> str:
-    """The point's ``--soil-nu`` argument (``NU`` or ``LO:HI``)."""
+    """The point's ``--soil-nu`` argument (``NU`` or ``LO:HI``).
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+    point : str
+        The survey point's id.
+
+    Returns
+    -------
+    str
+        The point's soil Poisson's ratio (:func:`ssw.config.nu_text`).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``point`` is not a survey point of the config.
+    """
     from ssw.config import nu_text
 
     return nu_text(_point(cfg, point)["soil_nu"])
 
 
 def survey_has_coordinates(cfg: dict[str, Any]) -> bool:
-    """Whether any survey point has plan or geographic coordinates (a map is drawn)."""
+    """Whether any survey point has plan or geographic coordinates (a map is drawn).
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+
+    Returns
+    -------
+    bool
+        True when a point has ``x`` or ``latitude``.
+    """
     return any(p.get("x") is not None or p.get("latitude") is not None
                for p in cfg.get("survey", {}).get("points", []))

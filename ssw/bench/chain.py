@@ -62,6 +62,13 @@ ENERGY_SCENE, ENERGY_T_END = (100.0e6, 0.3), 3.0e-3
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
+    """Add the ``ssw bench chain`` command and its options.
+
+    Parameters
+    ----------
+    kinds : argparse._SubParsersAction
+        The ``ssw bench`` subcommands.
+    """
     p = kinds.add_parser("chain", help="work-precision of the chain integrator vs DOP853")
     p.add_argument("--config", default="config/config.yaml", help="study config (YAML)")
     p.add_argument("--output-dir", default="results/bench", help="folder of the outputs")
@@ -79,7 +86,22 @@ def register(kinds: argparse._SubParsersAction) -> None:
 
 def time_at_error(rows: list[dict[str, Any]], method: str, target: float) -> float:
     """Time per point (s) at which ``method`` reaches ``target`` (log-log interpolation on
-    its Pareto front); NaN when no setting reaches it, the cheapest time when all do."""
+    its Pareto front); NaN when no setting reaches it, the cheapest time when all do.
+
+    Parameters
+    ----------
+    rows : list of dict
+        The measurements: ``method``, ``time_per_point`` (s) and ``error`` (relative).
+    method : str
+        The method whose rows are used.
+    target : float
+        The target error, relative.
+
+    Returns
+    -------
+    float
+        The time per point, s.
+    """
     pts = sorted((r["time_per_point"], r["error"]) for r in rows if r["method"] == method)
     front: list[tuple[float, float]] = []
     for t, e in pts:  # keep settings that are more accurate than every cheaper one
@@ -97,7 +119,20 @@ def time_at_error(rows: list[dict[str, Any]], method: str, target: float) -> flo
 
 
 def energy_error(params: Any, spc: int) -> float:
-    """``max |E(t) - E(0)| / |E(0)|`` of the energy scene at ``spc`` steps per contact."""
+    """``max |E(t) - E(0)| / |E(0)|`` of the energy scene at ``spc`` steps per contact.
+
+    Parameters
+    ----------
+    params : ssw.chain.params.ChainParams
+        The chain.
+    spc : int
+        Steps per contact time.
+
+    Returns
+    -------
+    float
+        The relative energy error, dimensionless.
+    """
     from ssw.tof.api import run_chain
 
     run = run_chain(params.with_(steps_per_contact=spc), *ENERGY_SCENE, "hertz",
@@ -107,6 +142,19 @@ def energy_error(params: Any, spc: int) -> float:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
+    """Run ``ssw bench chain`` (module docstring) and write its outputs under ``--output-dir``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's options (:func:`register`).
+
+    Returns
+    -------
+    dict
+        The measurements (times in s, errors relative, SI units otherwise) and the files
+        written.
+    """
     from pathlib import Path
 
     from ssw.chain.baseline import hertz_wall, solve_dop853
@@ -259,6 +307,18 @@ def _write(out: Any, result: dict[str, Any]) -> None:
 
 
 def human(result: dict[str, Any]) -> str:
+    """The result of :func:`run` as text for the terminal.
+
+    Parameters
+    ----------
+    result : dict
+        The result of :func:`run`.
+
+    Returns
+    -------
+    str
+        One line per measurement.
+    """
     ref = result["reference"]
     lines = [
         f"reference: {ref['method']} rtol {ref['rtol']:g} on {result['reference_points']} of "

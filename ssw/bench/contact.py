@@ -47,6 +47,13 @@ LAPLACE_N = 256
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
+    """Add the ``ssw bench contact`` command and its options.
+
+    Parameters
+    ----------
+    kinds : argparse._SubParsersAction
+        The ``ssw bench`` subcommands.
+    """
     p = kinds.add_parser("contact", help="work-precision and cost of the contact FEM")
     p.add_argument("--levels", type=float, nargs="+", default=list(LEVELS),
                    help="mesh_growth values (element size / distance from the contact)")
@@ -76,7 +83,18 @@ def register(kinds: argparse._SubParsersAction) -> None:
 
 
 def reference_lu(repeat: int) -> dict[str, Any]:
-    """Seconds of one SuperLU factorization of the 256 x 256 five-point Laplacian."""
+    """Seconds of one SuperLU factorization of the 256 x 256 five-point Laplacian.
+
+    Parameters
+    ----------
+    repeat : int
+        Timings; the fastest is kept.
+
+    Returns
+    -------
+    dict
+        ``dofs``, ``wall`` (s) and ``solver``.
+    """
     import scipy.sparse as sp
     from scipy.sparse.linalg import splu
 
@@ -119,7 +137,27 @@ def _errors(curve: Any, E: float, nu: float, radius: float, lo: float = 1e-6
 
 def level(g: float, nu: float, contact: dict[str, Any], radius: float, repeat: int = 1
           ) -> dict[str, Any]:
-    """One mesh level (module docstring)."""
+    """One mesh level (module docstring).
+
+    Parameters
+    ----------
+    g : float
+        The mesh growth (element size over distance from the contact).
+    nu : float
+        The soil's Poisson's ratio.
+    contact : dict
+        The contact settings.
+    radius : float
+        The indenter's radius, m.
+    repeat : int
+        Timings; the fastest is kept.
+
+    Returns
+    -------
+    dict
+        The mesh's size, its force errors (relative), and its cold and warm wall times and
+        stage times, s.
+    """
     from ssw.contact.operators import OperatorStore
 
     E = 50e6
@@ -140,7 +178,27 @@ def level(g: float, nu: float, contact: dict[str, Any], radius: float, repeat: i
 
 def goals(cfg: dict[str, Any], radius: float, repeat: int, lu: float, engines: bool
           ) -> list[dict[str, Any]]:
-    """The benchmark's curves (module docstring), cold and warm, relative to the reference LU."""
+    """The benchmark's curves (module docstring), cold and warm, relative to the reference LU.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+    radius : float
+        The indenter's radius, m.
+    repeat : int
+        Timings; the fastest is kept.
+    lu : float
+        The reference LU's wall time, s.
+    engines : bool
+        Also time the monolithic engine.
+
+    Returns
+    -------
+    list of dict
+        One row per curve: cold and warm wall times (s, and over ``lu``), stage times (s),
+        errors (relative).
+    """
     from ssw.config import library
     from ssw.contact.operators import OperatorStore
 
@@ -176,7 +234,20 @@ def goals(cfg: dict[str, Any], radius: float, repeat: int, lu: float, engines: b
 
 
 def wall_study(cfg: dict[str, Any], repeat: int) -> dict[str, Any]:
-    """The fem wall on the Set 3 sweep: cost and TOF of its representations."""
+    """The fem wall on the Set 3 sweep: cost and TOF of its representations.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+    repeat : int
+        Timings; the fastest is kept.
+
+    Returns
+    -------
+    dict
+        Wall times (s) and TOF differences of the representations.
+    """
     from ssw.chain.params import ChainParams
     from ssw.chain.wall import TableWall, _resample
     from ssw.contact.operators import OperatorStore
@@ -233,6 +304,19 @@ def wall_study(cfg: dict[str, Any], repeat: int) -> dict[str, Any]:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
+    """Run ``ssw bench contact`` (module docstring) and write its outputs under ``--output-dir``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's options (:func:`register`).
+
+    Returns
+    -------
+    dict
+        The measurements (times in s, errors relative, SI units otherwise) and the files
+        written.
+    """
     from ssw.config import load_config
 
     if getattr(args, "plastic", False):
@@ -291,7 +375,26 @@ def domain_study(
     sizes: tuple[float, ...] = (0.1, 0.3, 1.0, 3.0, 10.0),
 ) -> list[dict[str, Any]]:
     """Boundary effect: F(delta_max) vs domain size L (radius = depth) at the config's mesh,
-    relative to the largest L. Writes ``contact_domain.csv``."""
+    relative to the largest L. Writes ``contact_domain.csv``.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+    nu : float
+        The soil's Poisson's ratio.
+    radius : float
+        The indenter's radius, m.
+    out_dir : pathlib.Path
+        The output folder.
+    sizes : tuple of float
+        The domain sizes ``L``, m.
+
+    Returns
+    -------
+    list of dict
+        Per size: ``size`` (m), ``force`` (N), ``dofs`` and ``effect`` (relative).
+    """
     out = []
     for L in sizes:
         c = {**cfg["contact"], "steps": 10, "soil_radius": L, "soil_depth": L,
@@ -314,7 +417,29 @@ def sample_study(
     0.4 mm PLA plate) on the half-space box and on 130 x 180 mm foam blocks (ssw.sample):
     cold (mesh, operators, path: a fresh store) and warm (operators in memory) seconds,
     best of ``repeat``; the dofs; the force at 0.1 mm relative to the half-space's. Writes
-    ``contact_sample.csv``."""
+    ``contact_sample.csv``.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+    radius : float
+        The indenter's radius, m.
+    steps : int
+        Increments per curve.
+    repeat : int
+        Timings; the fastest is kept.
+    out_dir : pathlib.Path
+        The output folder.
+    blocks : tuple of (float, str)
+        The blocks: height (m) and base contact (``bonded`` or ``sliding``).
+
+    Returns
+    -------
+    list of dict
+        Per plate and sample: ``plate_thickness`` (m), ``sample``, ``dofs``, ``cold`` and
+        ``warm`` (s), ``force_rel``.
+    """
     import gc
 
     from ssw.bench import best_time
@@ -356,7 +481,27 @@ def interface_study(
     plates: tuple[tuple[str, float], ...] = (("pla", 0.4e-3), ("pla", 0.1e-3), ("a36", 0.4e-3)),
 ) -> list[dict[str, Any]]:
     """Force at delta = 1e-6, 1e-5, 1e-4 m for each interface law, plates on 50 MPa soil,
-    relative to the frictionless interface (the thesis's). Writes ``contact_interfaces.csv``."""
+    relative to the frictionless interface (the thesis's). Writes ``contact_interfaces.csv``.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+    nu : float
+        The soil's Poisson's ratio.
+    radius : float
+        The indenter's radius, m.
+    out_dir : pathlib.Path
+        The output folder.
+    plates : tuple of (str, float)
+        The plates: material key and thickness, m.
+
+    Returns
+    -------
+    list of dict
+        Per plate and interface: the forces ``F_<delta>`` (N) and ``rel_<delta>``, their
+        relative differences from the frictionless ones.
+    """
     from ssw.config import library
     from ssw.contact.operators import OperatorStore
 
@@ -405,6 +550,18 @@ def _plot(rows: list[dict[str, Any]], path: Path) -> None:
 
 
 def human(res: dict[str, Any]) -> str:
+    """The result of :func:`run` as text for the terminal.
+
+    Parameters
+    ----------
+    res : dict
+        The result of :func:`run`.
+
+    Returns
+    -------
+    str
+        One line per measurement.
+    """
     if res.get("plastic"):
         from ssw.bench.plastic import human as plastic_human
 

@@ -37,6 +37,13 @@ A0 = (0.25, 0.5, 0.75, 1.0, 1.25, 1.5)
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
+    """Add the ``ssw bench dynamic`` command and its options.
+
+    Parameters
+    ----------
+    kinds : argparse._SubParsersAction
+        The ``ssw bench`` subcommands.
+    """
     p = kinds.add_parser("dynamic", help="dynamic wall: punch impedance, static limit, cost")
     p.add_argument("--parts", nargs="+", choices=PARTS, default=list(PARTS),
                    help="which measurements to run")
@@ -46,7 +53,20 @@ def register(kinds: argparse._SubParsersAction) -> None:
 
 
 def punch_part(out: Path) -> dict[str, Any]:
-    """The punch impedance against the published values."""
+    """The punch impedance against the published values.
+
+    Parameters
+    ----------
+    out : pathlib.Path
+        The output folder.
+
+    Returns
+    -------
+    dict
+        ``a0``, the FEM's and the published ``k`` and ``c``, their largest relative
+        differences, the static stiffness ratio, the mesh's size, ``wall`` (s) and
+        ``outputs``.
+    """
     from ssw.dynamics.punch import lysmer_analog, punch_impedance, veletsos_verbic
     from ssw.dynamics.system import Material
     from ssw.plotting import pyplot, save_png
@@ -88,7 +108,14 @@ def punch_part(out: Path) -> dict[str, Any]:
 
 
 def static_limit_part() -> dict[str, Any]:
-    """Density 1e-6 in the quasi-static FEM's box and mesh vs the study's pipeline."""
+    """Density 1e-6 in the quasi-static FEM's box and mesh vs the study's pipeline.
+
+    Returns
+    -------
+    dict
+        The soil (Pa), the two TOFs (s), their ``relative_difference``, the two meshes' dofs
+        and the dynamic run's ``wall`` time (s).
+    """
     from ssw.chain.dense import dense_peaks
     from ssw.chain.integrate import simulate as chain_simulate
     from ssw.chain.params import ChainParams
@@ -122,7 +149,14 @@ def static_limit_part() -> dict[str, Any]:
 
 
 def point_part() -> dict[str, Any]:
-    """One FEM-wall TOF point: 10 MPa, 2200 kg/m^3, 0.4 mm PLA."""
+    """One FEM-wall TOF point: 10 MPa, 2200 kg/m^3, 0.4 mm PLA.
+
+    Returns
+    -------
+    dict
+        The scene, its TOFs (s), errors (relative), ``wall`` (s), energy balance and the
+        FEM's statistics.
+    """
     from ssw.chain.params import ChainParams
     from ssw.dynamics.api import fem_tof
 
@@ -138,7 +172,18 @@ def point_part() -> dict[str, Any]:
 
 
 def sweep_cost_part(repeat: int) -> dict[str, Any]:
-    """300-point sweep: quasi-static vs reduced wall, same integrator; the chain stage's."""
+    """300-point sweep: quasi-static vs reduced wall, same integrator; the chain stage's.
+
+    Parameters
+    ----------
+    repeat : int
+        Timings; the fastest is kept.
+
+    Returns
+    -------
+    dict
+        ``points``, ``t_end`` (s), the wall times (s) and their ``ratio``.
+    """
     from ssw.chain.integrate import simulate as chain_simulate
     from ssw.chain.integrate import time_step
     from ssw.chain.params import ChainParams
@@ -162,6 +207,19 @@ def sweep_cost_part(repeat: int) -> dict[str, Any]:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
+    """Run ``ssw bench dynamic`` (module docstring) and write its outputs under ``--output-dir``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's options (:func:`register`).
+
+    Returns
+    -------
+    dict
+        The measurements (times in s, errors relative, SI units otherwise) and the files
+        written.
+    """
     out = Path(args.output_dir)
     out.mkdir(parents=True, exist_ok=True)
     res: dict[str, Any] = {}
@@ -179,6 +237,18 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def human(res: dict[str, Any]) -> str:
+    """The result of :func:`run` as text for the terminal.
+
+    Parameters
+    ----------
+    res : dict
+        The result of :func:`run`.
+
+    Returns
+    -------
+    str
+        One line per measurement.
+    """
     lines = []
     if "punch" in res:
         r = res["punch"]

@@ -55,6 +55,13 @@ DELTA_MIN = 1e-6
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
+    """Add the ``ssw bench layered`` command and its options.
+
+    Parameters
+    ----------
+    kinds : argparse._SubParsersAction
+        The ``ssw bench`` subcommands.
+    """
     p = kinds.add_parser("layered", help="layered oracle: convergence, FEM agreement, speed")
     p.add_argument("--parts", nargs="+", choices=["convergence", "compare", "speed"],
                    default=["convergence", "compare", "speed"], help="parts to run")
@@ -87,7 +94,26 @@ def _max_rel(a: np.ndarray, b: np.ndarray, delta: np.ndarray) -> float:
 
 def fem_curve(contact: dict[str, Any], soil: tuple[float, float],
               plate: tuple[float, float] | None, thickness: float, radius: float) -> Any:
-    """The FEM's curve (``ssw.contact.solve_curve``), its solver released."""
+    """The FEM's curve (``ssw.contact.solve_curve``), its solver released.
+
+    Parameters
+    ----------
+    contact : dict
+        The contact settings.
+    soil : tuple of float
+        The soil's Young's modulus (Pa) and Poisson's ratio.
+    plate : tuple of float or None
+        The plate's Young's modulus (Pa) and Poisson's ratio (None: no plate).
+    thickness : float
+        The plate's thickness, m.
+    radius : float
+        The indenter's radius, m.
+
+    Returns
+    -------
+    ssw.curve.ForceCurve
+        The force-indentation curve (N, m).
+    """
     from ssw.contact import solve_curve
 
     curve, state = solve_curve(soil, plate, thickness, radius, contact)
@@ -100,7 +126,25 @@ def fem_curve(contact: dict[str, Any], soil: tuple[float, float],
 def fem_halfspace_error(contact: dict[str, Any], radius: float) -> float:
     """The FEM's discretization error at its mesh: max relative force error of a no-plate
     curve (50 MPa, nu 0.3, the contact settings given, on a 3 m domain so that the
-    boundary's effect, ~2e-4, stays out) against Sneddon's exact sphere."""
+    boundary's effect, ~2e-4, stays out) against Sneddon's exact sphere.
+
+    Parameters
+    ----------
+    contact : dict
+        The contact settings.
+    radius : float
+        The indenter's radius, m.
+
+    Returns
+    -------
+    float
+        The error, relative.
+
+    References
+    ----------
+    Sneddon, I. N. (1965). The relation between load and penetration in the axisymmetric
+    Boussinesq problem for a punch of arbitrary profile. Int. J. Eng. Sci. 3, 47-57.
+    """
     E = 50e6
     big = {**contact, "soil_radius": 3.0, "soil_depth": 3.0, "mesh_size_max": 0.3}
     curve = fem_curve(big, (E, SOIL_NU), None, 0.0, radius)
@@ -109,7 +153,23 @@ def fem_halfspace_error(contact: dict[str, Any], radius: float) -> float:
 
 
 def convergence_halfspace(ratios: list[float], radius: float, steps: int) -> list[dict]:
-    """No plate: the oracle's force error vs Sneddon and Hertz per ring ratio."""
+    """No plate: the oracle's force error vs Sneddon and Hertz per ring ratio.
+
+    Parameters
+    ----------
+    ratios : list of float
+        Ring width over radius.
+    radius : float
+        The indenter's radius, m.
+    steps : int
+        Increments of the curve.
+
+    Returns
+    -------
+    list of dict
+        Per ratio: ``rings``, the force and contact-radius errors (relative), the stated
+        error and ``wall`` (s).
+    """
     from ssw.contact.layered import LayeredSettings, increments, solve_stack
     from ssw.contact.layered_kernel import plate_on_soil
 
@@ -137,7 +197,22 @@ def convergence_halfspace(ratios: list[float], radius: float, steps: int) -> lis
 
 
 def convergence_plates(mats: dict, radius: float, steps: int) -> list[dict]:
-    """Plates: self-convergence in the ring ratio and the quadrature's error, per scene."""
+    """Plates: self-convergence in the ring ratio and the quadrature's error, per scene.
+
+    Parameters
+    ----------
+    mats : dict
+        The materials library.
+    radius : float
+        The indenter's radius, m.
+    steps : int
+        Increments of the curves.
+
+    Returns
+    -------
+    list of dict
+        Per scene: the changes between ring ratios and the quadrature's error (relative).
+    """
     from ssw.contact.layered import LayeredSettings, increments, solve_stack
     from ssw.contact.layered_kernel import plate_on_soil
     from ssw.contact.layered_rings import Quadrature
@@ -166,7 +241,28 @@ def convergence_plates(mats: dict, radius: float, steps: int) -> list[dict]:
 
 def compare(cfg: dict[str, Any], mats: dict, radius: float, steps: int, wide: float,
             scenes: list[tuple[str, float, str]] | None = None) -> dict[str, Any]:
-    """FEM vs oracle per scene, with the finite-size effects separated (module docstring)."""
+    """FEM vs oracle per scene, with the finite-size effects separated (module docstring).
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+    mats : dict
+        The materials library.
+    radius : float
+        The indenter's radius, m.
+    steps : int
+        Increments of the FEM curves.
+    wide : float
+        The wide plate's diameter, m.
+    scenes : list of tuple or None
+        ``(plate key, soil E in Pa, interface)`` (None: every plate, soil and interface).
+
+    Returns
+    -------
+    dict
+        The error budget (relative), the rows per scene and the residual finite size.
+    """
     from ssw.contact.layered import LayeredSettings, solve_curve
 
     contact = {**cfg["contact"], "steps": steps, "delta_max": 1e-4}
@@ -205,7 +301,24 @@ def residual(contact: dict[str, Any], mats: dict, radius: float,
              wide: float) -> list[dict[str, Any]]:
     """What is left of the finite geometry with the wide plate: the FEM's force with the
     plate twice as wide, and with the soil's radius (the side rollers) doubled, relative to
-    the wide plate on the study's soil; steel on 10 MPa (the longest bending length)."""
+    the wide plate on the study's soil; steel on 10 MPa (the longest bending length).
+
+    Parameters
+    ----------
+    contact : dict
+        The contact settings.
+    mats : dict
+        The materials library.
+    radius : float
+        The indenter's radius, m.
+    wide : float
+        The wide plate's diameter, m.
+
+    Returns
+    -------
+    list of dict
+        Per interface: the signed ranges ``plate_x2`` and ``soil_radius_x2`` (relative).
+    """
     plate, soil = (mats["a36"].E, mats["a36"].nu), (10e6, SOIL_NU)
     rows = []
     for iface in INTERFACES:
@@ -245,7 +358,28 @@ def _fresh_store() -> Any:
 def fem_timed(contact: dict[str, Any], soil: tuple[float, float],
               plate: tuple[float, float] | None, thickness: float, radius: float,
               store: Any) -> float:
-    """Wall time (s) of one FEM curve with the operator store ``store`` (None: default)."""
+    """Wall time (s) of one FEM curve with the operator store ``store`` (None: default).
+
+    Parameters
+    ----------
+    contact : dict
+        The contact settings.
+    soil : tuple of float
+        The soil's Young's modulus (Pa) and Poisson's ratio.
+    plate : tuple of float or None
+        The plate's Young's modulus (Pa) and Poisson's ratio (None: no plate).
+    thickness : float
+        The plate's thickness, m.
+    radius : float
+        The indenter's radius, m.
+    store : object or None
+        The operator store.
+
+    Returns
+    -------
+    float
+        The wall time, s.
+    """
     from ssw.contact import solve_curve
 
     t0 = time.perf_counter()
@@ -262,7 +396,26 @@ def speed(cfg: dict[str, Any], mats: dict, radius: float, steps: int,
     """Wall time (s) of a curve, fastest of ``repeat``: the FEM (default engine, the study's
     geometry) cold (its operators built: a geometry or Poisson's ratio no cache holds) and
     warm (operators in memory: one more soil modulus of a study), the oracle (infinite plate
-    on a half-space; nothing to reuse between soils) at the default and at ring ratio 1/20."""
+    on a half-space; nothing to reuse between soils) at the default and at ring ratio 1/20.
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config.
+    mats : dict
+        The materials library.
+    radius : float
+        The indenter's radius, m.
+    steps : int
+        Increments per curve.
+    repeat : int
+        Timings; the fastest is kept.
+
+    Returns
+    -------
+    list of dict
+        Per plate: the wall times (s) and the speed-ups.
+    """
     from ssw.contact.layered import LayeredSettings, solve_curve
 
     contact = {**cfg["contact"], "steps": steps, "delta_max": 1e-4}
@@ -307,6 +460,19 @@ def _csv(rows: list[dict]) -> str:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
+    """Run ``ssw bench layered`` (module docstring) and write its outputs under ``--output-dir``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's options (:func:`register`).
+
+    Returns
+    -------
+    dict
+        The measurements (times in s, errors relative, SI units otherwise) and the files
+        written.
+    """
     from ssw.config import library, load_config
 
     cfg = load_config(args.config)
@@ -361,6 +527,18 @@ def _plot(rows: list[dict], plates: list[dict], path: Path) -> None:
 
 
 def human(res: dict[str, Any]) -> str:
+    """The result of :func:`run` as text for the terminal.
+
+    Parameters
+    ----------
+    res : dict
+        The result of :func:`run`.
+
+    Returns
+    -------
+    str
+        One line per measurement.
+    """
     lines = []
     for r in res.get("halfspace", []):
         lines.append(f"no plate, ring ratio {r['ring_ratio']:.4g} ({r['rings']} rings): force "

@@ -39,6 +39,13 @@ FOAMS = (np.array([38e6, 123e6, 445e6]), np.array([0.34, 0.33, 0.30]))
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
+    """Add the ``ssw bench smooth`` command and its options.
+
+    Parameters
+    ----------
+    kinds : argparse._SubParsersAction
+        The ``ssw bench`` subcommands.
+    """
     p = kinds.add_parser("smooth", help="TOF noise in E, derivatives vs central "
                          "differences, the sensitivities' cost")
     p.add_argument("--config", default="config/config.yaml", help="study config (YAML)")
@@ -54,7 +61,24 @@ def register(kinds: argparse._SubParsersAction) -> None:
 
 
 def noise_part(params: Any, walls: list[str], moduli: int, degree: int) -> dict[str, Any]:
-    """rms and worst relative residual of the TOF from a polynomial in E, per wall."""
+    """rms and worst relative residual of the TOF from a polynomial in E, per wall.
+
+    Parameters
+    ----------
+    params : ssw.chain.params.ChainParams
+        The chain.
+    walls : list of str
+        The wall laws.
+    moduli : int
+        Moduli from 95 to 105 MPa.
+    degree : int
+        The polynomial's degree.
+
+    Returns
+    -------
+    dict
+        Wall -> ``rms`` and ``worst`` (relative), ``tof_100MPa`` (s).
+    """
     from ssw.tof import api
 
     E = np.linspace(E_LO, E_HI, moduli)
@@ -69,7 +93,21 @@ def noise_part(params: Any, walls: list[str], moduli: int, degree: int) -> dict[
 
 
 def derivatives_part(params: Any, walls: list[str]) -> dict[str, Any]:
-    """Forward derivatives against central differences at the same step, per wall."""
+    """Forward derivatives against central differences at the same step, per wall.
+
+    Parameters
+    ----------
+    params : ssw.chain.params.ChainParams
+        The chain.
+    walls : list of str
+        The wall laws.
+
+    Returns
+    -------
+    dict
+        Wall -> parameter -> ``method``, ``worst_relative_difference``, ``forward`` and
+        ``central`` (s per unit of the parameter).
+    """
     from ssw.tof import api
 
     E, nu = FOAMS
@@ -87,7 +125,20 @@ def derivatives_part(params: Any, walls: list[str]) -> dict[str, Any]:
 
 
 def cost_part(params: Any, repeat: int) -> dict[str, Any]:
-    """CPU time of the 300-point Hertz sweep with 0, 1 and 6 parameters' sensitivities."""
+    """CPU time of the 300-point Hertz sweep with 0, 1 and 6 parameters' sensitivities.
+
+    Parameters
+    ----------
+    params : ssw.chain.params.ChainParams
+        The chain.
+    repeat : int
+        Timings; the fastest is kept.
+
+    Returns
+    -------
+    dict
+        ``points`` and ``rows``: per case, ``parameters``, ``cpu`` (s) and ``factor``.
+    """
     from ssw.chain.sensitivity import PARAMETERS
     from ssw.tof import api
 
@@ -108,6 +159,19 @@ def cost_part(params: Any, repeat: int) -> dict[str, Any]:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
+    """Run ``ssw bench smooth`` (module docstring) and write its outputs under ``--output-dir``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's options (:func:`register`).
+
+    Returns
+    -------
+    dict
+        The measurements (times in s, errors relative, SI units otherwise) and the files
+        written.
+    """
     from ssw.chain.params import ChainParams
     from ssw.config import load_config
 
@@ -127,6 +191,18 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def human(res: dict[str, Any]) -> str:
+    """The result of :func:`run` as text for the terminal.
+
+    Parameters
+    ----------
+    res : dict
+        The result of :func:`run`.
+
+    Returns
+    -------
+    str
+        One line per measurement.
+    """
     lines = []
     for wall, r in res.get("noise", {}).items():
         lines.append(f"noise {wall:6s}: rms {r['rms']:.2e}, worst {r['worst']:.2e} "

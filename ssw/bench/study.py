@@ -62,6 +62,13 @@ USAGE = "usage"
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
+    """Add the ``ssw bench study`` command and its options.
+
+    Parameters
+    ----------
+    kinds : argparse._SubParsersAction
+        The ``ssw bench`` subcommands.
+    """
     p = kinds.add_parser(
         "study", help="wall time of the whole study per stage (snakemake, 2 cores)",
         description="Run the whole study with Snakemake into a fresh working directory and "
@@ -144,7 +151,20 @@ def _number(text: str | None) -> float | None:
 
 def stage_times(records: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
     """Per-stage job count, summed wall and CPU times of its jobs, peak memory and
-    costliest job."""
+    costliest job.
+
+    Parameters
+    ----------
+    records : list of dict
+        The jobs' records (:func:`job_records`: ``stage``, ``job``, ``s``, ``cpu_s``,
+        ``max_rss_mb``).
+
+    Returns
+    -------
+    dict
+        Stage -> ``jobs``, ``busy_s`` (s), ``cpu_s`` (s; None when a job's is unknown),
+        ``max_rss_mb`` (MB), ``costliest`` and the per-job times; busiest stage first.
+    """
     by_stage: dict[str, list[dict[str, Any]]] = defaultdict(list)
     for r in records:
         by_stage[r["stage"]].append(r)
@@ -166,7 +186,13 @@ def stage_times(records: list[dict[str, Any]]) -> dict[str, dict[str, Any]]:
 
 
 def machine() -> dict[str, Any]:
-    """The machine the benchmark ran on."""
+    """The machine the benchmark ran on.
+
+    Returns
+    -------
+    dict
+        ``host``, ``cpu``, ``logical_cpus``, ``memory_bytes``, ``os`` and ``python``.
+    """
     model = ""
     try:
         for line in Path("/proc/cpuinfo").read_text().splitlines():
@@ -222,7 +248,13 @@ def _incremented_config(config: Path, set_name: str, thickness: float, out: Path
 
 
 def load_average() -> list[float] | None:
-    """The machine's 1, 5 and 15 minute load averages (``/proc/loadavg``), or None."""
+    """The machine's 1, 5 and 15 minute load averages (``/proc/loadavg``), or None.
+
+    Returns
+    -------
+    list of float or None
+        The load averages; None where ``/proc/loadavg`` cannot be read.
+    """
     try:
         return [float(x) for x in Path("/proc/loadavg").read_text().split()[:3]]
     except (OSError, ValueError):
@@ -240,7 +272,21 @@ def _children_cpu() -> float:
 @dataclass(frozen=True)
 class RunTime:
     """One Snakemake run: its wall time (s), the CPU time (s) of Snakemake and every job
-    it ran, the load averages before and after, and, if it failed, the tail of its log."""
+    it ran, the load averages before and after, and, if it failed, the tail of its log.
+
+    Parameters
+    ----------
+    wall_s : float
+        The wall time, s.
+    cpu_s : float
+        The CPU time of Snakemake and its jobs, s.
+    load_before : list of float or None
+        The 1, 5 and 15 minute load averages before.
+    load_after : list of float or None
+        The load averages after.
+    error : str or None
+        The tail of the log when the run failed (None: it did not).
+    """
 
     wall_s: float
     cpu_s: float
@@ -279,7 +325,20 @@ def usage_records(workdir: Path, since: float = 0.0) -> dict[str, dict[str, floa
     log ``results/logs/<stage>/<job>.log``; a process without a log: its command): ``cpu_s``,
     ``wall_s`` and ``startup_s`` (s before the command's own code ran), summed over the
     job's processes, and ``max_rss_mb``, the largest peak memory of one of them (MB); only
-    records written after ``since`` (Unix s)."""
+    records written after ``since`` (Unix s).
+
+    Parameters
+    ----------
+    workdir : pathlib.Path
+        The run's working folder.
+    since : float
+        The earliest record time kept, Unix s.
+
+    Returns
+    -------
+    dict
+        Job key -> ``cpu_s``, ``wall_s``, ``startup_s`` (s) and ``max_rss_mb`` (MB).
+    """
     import json
 
     out: dict[str, dict[str, float]] = {}
@@ -322,6 +381,27 @@ def _prepare_workdir(args: argparse.Namespace) -> tuple[Path, bool]:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
+    """Run ``ssw bench study`` (module docstring) and write its outputs under ``--output-dir``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's options (:func:`register`).
+
+    Returns
+    -------
+    dict
+        The run's status, wall and CPU times (s), load, per-stage times
+        (:func:`stage_times`), the rerun's (``increment``), the command and the machine.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When the config or the Snakefile is missing, ``--cores`` < 1, ``--increment`` is
+        invalid or ``--workdir`` is not empty.
+    ssw.errors.SswError
+        When the dry run fails.
+    """
     config = Path(args.config).resolve()
     if not config.is_file():
         raise ConfigError("--config", args.config, "an existing study config file")
@@ -393,7 +473,18 @@ def _load(x: list[float] | None) -> str:
 
 
 def markdown(result: dict[str, Any]) -> str:
-    """The report as a Markdown table."""
+    """The report as a Markdown table.
+
+    Parameters
+    ----------
+    result : dict
+        The result of :func:`run`.
+
+    Returns
+    -------
+    str
+        The Markdown text.
+    """
     m = result["machine"]
     lines = [
         "# Whole-study benchmark (`ssw bench study`)", "",
@@ -433,7 +524,18 @@ def markdown(result: dict[str, Any]) -> str:
 
 
 def human(result: dict[str, Any]) -> str:
-    """Short summary for the terminal."""
+    """Short summary for the terminal.
+
+    Parameters
+    ----------
+    result : dict
+        The result of :func:`run`.
+
+    Returns
+    -------
+    str
+        One line for the run, one per stage, and the rerun's.
+    """
     rows = [f"study: {result['wall_s']:.1f} s wall on {result['cores']} cores, "
             f"{result['jobs']} jobs, {result['busy_s']:.1f} s of jobs, CPU "
             f"{_f(result.get('cpu_s'))} s ({_f(result.get('jobs_cpu_s'))} s in jobs), load "

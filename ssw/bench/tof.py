@@ -39,6 +39,13 @@ UPSAMPLE = (1, 16)
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
+    """Add the ``ssw bench tof`` command and its options.
+
+    Parameters
+    ----------
+    kinds : argparse._SubParsersAction
+        The ``ssw bench`` subcommands.
+    """
     p = kinds.add_parser("tof", help="TOF error of simulated recordings vs NI 9234 rate")
     p.add_argument("--divisors", type=int, nargs="+", default=list(DIVISORS),
                    help="rate divisors n (rate = 51200/n S/s)")
@@ -54,6 +61,19 @@ def register(kinds: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
+    """Run ``ssw bench tof`` (module docstring) and write its outputs under ``--output-dir``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's options (:func:`register`).
+
+    Returns
+    -------
+    dict
+        ``rows``: per source, interpolation, rate and sample, the TOF errors (s, and in
+        sample periods) and the times per hit (s); ``outputs``: the files written.
+    """
     from ssw.chain.params import ChainParams
     from ssw.config import load_config
     from ssw.daq.settings import NI9234_BASE_RATE, settings_from_config

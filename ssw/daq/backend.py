@@ -25,14 +25,19 @@ from ssw.errors import ConfigError
 class Hit:
     """One finite record around one hit.
 
-    Attributes
+    Parameters
     ----------
-    force : (record_samples,) sensor force, N, as the module delivers it (scaled).
-    trigger_index : index of the first sample at or after the reference trigger
-        (equals the pretrigger sample count).
-    timestamp_utc : ISO-8601 time the record was read.
-    overloaded : the hardware reported an overload/overrange on the channel during the hit.
-    extra : backend-specific metadata (e.g. the simulated wave's true TOF), SI units.
+    force : numpy.ndarray
+        (record_samples,) sensor force, N, as the module delivers it (scaled).
+    trigger_index : int
+        Index of the first sample at or after the reference trigger (equals the
+        pretrigger sample count).
+    timestamp_utc : str
+        ISO-8601 time the record was read.
+    overloaded : bool
+        The hardware reported an overload/overrange on the channel during the hit.
+    extra : dict
+        Backend-specific metadata (e.g. the simulated wave's true TOF), SI units.
     """
 
     force: np.ndarray
@@ -43,7 +48,15 @@ class Hit:
 
 
 class Backend(Protocol):
-    """What an acquisition backend provides."""
+    """What an acquisition backend provides.
+
+    Other Parameters
+    ----------------
+    *args
+        None: a protocol is not instantiated.
+    **kwargs
+        None: a protocol is not instantiated.
+    """
 
     name: str
 
@@ -51,19 +64,58 @@ class Backend(Protocol):
         """Metadata about the hardware (or simulation) that records go with."""
 
     def hits(self, settings: DaqSettings, n_hits: int) -> Iterator[Hit]:
-        """Yield ``n_hits`` records, one per hit, in order."""
+        """Yield ``n_hits`` records, one per hit, in order.
+
+        Parameters
+        ----------
+        settings : ssw.daq.settings.DaqSettings
+            The acquisition settings.
+        n_hits : int
+            How many hits to record.
+
+        Yields
+        ------
+        Hit
+            One record per hit (force in N).
+        """
 
 
 BACKENDS: dict[str, Callable[..., Backend]] = {}
 
 
 def register_backend(name: str, factory: Callable[..., Backend]) -> None:
-    """Make ``factory(**options)`` available as backend ``name``."""
+    """Make ``factory(**options)`` available as backend ``name``.
+
+    Parameters
+    ----------
+    name : str
+        The backend's name.
+    factory : callable
+        ``factory(**options)`` returns the backend.
+    """
     BACKENDS[name] = factory
 
 
 def get_backend(name: str, **options: Any) -> Backend:
-    """An instance of backend ``name`` (``nidaqmx`` or ``simulated``)."""
+    """An instance of backend ``name`` (``nidaqmx`` or ``simulated``).
+
+    Parameters
+    ----------
+    name : str
+        The backend's name.
+    **options
+        Passed to its factory.
+
+    Returns
+    -------
+    Backend
+        The backend.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When no backend has that name.
+    """
     _load_builtin()
     if name not in BACKENDS:
         raise ConfigError("backend", name, f"one of {sorted(BACKENDS)}")
@@ -99,6 +151,41 @@ def run_session(
     touched unless ``overwrite``: the session goes to the next free name
     (:func:`ssw.daq.recording.free_path`); with ``overwrite`` it is replaced when the first
     new hit is on disk, not before. Returns the file written.
+
+    Parameters
+    ----------
+    backend : Backend
+        The acquisition backend.
+    settings : ssw.daq.settings.DaqSettings
+        The acquisition settings (stored with the session).
+    path : str or pathlib.Path
+        The session's HDF5 file.
+    sample_id : str
+        The sample's id.
+    plate : str
+        The plate on the sample (free text).
+    operator : str
+        Who recorded it.
+    n_hits : int or None
+        How many hits (None: ``settings.hits``).
+    synthetic : bool
+        Whether the data are simulated.
+    notes : str
+        Free text stored with the session.
+    overwrite : bool
+        Replace an existing file at ``path``.
+    on_hit : callable or None
+        ``on_hit(i, hit)`` after hit ``i`` (from 0) is on disk.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``n_hits`` < 1.
     """
     from ssw.daq.recording import RecordingWriter, free_path
 

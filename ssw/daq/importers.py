@@ -39,7 +39,17 @@ def _read_h5(path: str | Path, clipped: str = "raise", full_scale: float | None 
 
 @dataclass(frozen=True)
 class Format:
-    """A recording format: its name, reader and (optional) writer."""
+    """A recording format: its name, reader and (optional) writer.
+
+    Parameters
+    ----------
+    name : str
+        The format's name (``CSV``, ``TDMS``, ...).
+    read : callable
+        ``read(path, **options)`` returns a :class:`~ssw.daq.recording.Recording`.
+    write : callable or None
+        ``write(path, recording, **options)`` returns the path written (None: not writable).
+    """
 
     name: str
     read: Callable[..., Recording]
@@ -51,7 +61,15 @@ FORMATS: dict[str, Format] = {}
 
 
 def register_format(suffixes: tuple[str, ...], fmt: Format) -> None:
-    """Make ``fmt`` the format of files ending in each of ``suffixes`` (with the dot)."""
+    """Make ``fmt`` the format of files ending in each of ``suffixes`` (with the dot).
+
+    Parameters
+    ----------
+    suffixes : tuple of str
+        The file suffixes, with the dot (matched case-insensitively).
+    fmt : Format
+        The reader and writer.
+    """
     for s in suffixes:
         FORMATS[s.lower()] = fmt
 
@@ -83,6 +101,27 @@ def read_any(path: str | Path, *, clipped: str = "raise", **options: Any) -> Rec
     against it, whatever the format, an ssw session's own stored range included: the
     smaller applies), and for TDMS ``group``, ``split``, ``trigger``. ``clipped``:
     ``raise``, ``drop`` or ``keep`` clipped hits.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The recording file.
+    clipped : str
+        ``raise``, ``drop`` or ``keep``.
+    **options
+        The options above.
+
+    Returns
+    -------
+    ssw.daq.recording.Recording
+        The hits, force in N.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``clipped`` is not a policy.
+    ssw.errors.RecordingError
+        When the file is missing, its suffix unknown or its content unreadable.
     """
     if clipped not in CLIP_POLICIES:
         raise ConfigError("clipped", clipped, f"one of {CLIP_POLICIES}")
@@ -92,7 +131,27 @@ def read_any(path: str | Path, *, clipped: str = "raise", **options: Any) -> Rec
 
 
 def write_any(path: str | Path, recording: Recording, **options: Any) -> Path:
-    """Write ``recording`` in the format of ``path``'s suffix (CSV, TDMS, MAT)."""
+    """Write ``recording`` in the format of ``path``'s suffix (CSV, TDMS, MAT).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file to write; its suffix picks the format.
+    recording : ssw.daq.recording.Recording
+        The recording.
+    **options
+        Passed to the format's writer.
+
+    Returns
+    -------
+    pathlib.Path
+        The file written.
+
+    Raises
+    ------
+    ssw.errors.RecordingError
+        When the format cannot be written, or the suffix is unknown.
+    """
     fmt = _format(path)
     if fmt.write is None:
         raise RecordingError(f"{path}: ssw does not write {fmt.name} files this way "

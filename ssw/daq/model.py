@@ -82,12 +82,33 @@ NOISE_V = 50e-6
 
 
 def lsb_volts() -> float:
-    """Quantization step of the NI 9234: 10 V / 2^24, V."""
+    """Quantization step of the NI 9234: 10 V / 2^24, V.
+
+    Returns
+    -------
+    float
+        The step, V.
+    """
     return 2 * NI9234_RANGE_V / 2**NI9234_BITS
 
 
 def input_delay(rate: float) -> float:
-    """NI 9234 input delay ``38.4 / f_s + 4.5 us``, s, at the sample rate ``rate`` (S/s)."""
+    """NI 9234 input delay ``38.4 / f_s + 4.5 us``, s, at the sample rate ``rate`` (S/s).
+
+    Parameters
+    ----------
+    rate : float
+        The sample rate, S/s.
+
+    Returns
+    -------
+    float
+        The delay, s.
+
+    References
+    ----------
+    NI 9234 specifications, input delay (REFERENCE.md [U]).
+    """
     return DELAY_SAMPLES / rate + DELAY_FIXED
 
 
@@ -130,7 +151,7 @@ def antialias_fir(oversample: int = OVERSAMPLE) -> np.ndarray:
 class Acquisition:
     """One force channel of an NI 9234 as the measurement model sees it. SI units.
 
-    Attributes
+    Parameters
     ----------
     sample_rate : float
         S/s (``51200 / n``).
@@ -167,7 +188,20 @@ class Acquisition:
     @classmethod
     def of(cls, settings: Any, **changes: Any) -> Acquisition:
         """The model of a :class:`ssw.daq.settings.DaqSettings` (rate, sensitivity,
-        coupling), with ``changes``."""
+        coupling), with ``changes``.
+
+        Parameters
+        ----------
+        settings : ssw.daq.settings.DaqSettings
+            The acquisition settings.
+        **changes
+            Fields of :class:`Acquisition` to replace (None values are ignored).
+
+        Returns
+        -------
+        Acquisition
+            The model.
+        """
         values = {"sample_rate": float(settings.sample_rate),
                   "sensitivity": float(settings.sensitivity), "coupling": settings.coupling}
         values.update({k: v for k, v in changes.items() if v is not None})
@@ -240,7 +274,7 @@ def frequency_response(acq: Acquisition, f: np.ndarray) -> np.ndarray:
 class FineGrid:
     """The fine input grid that produces samples at ``t_first + k / f_s`` (per column).
 
-    Attributes
+    Parameters
     ----------
     s : numpy.ndarray
         (M, n) s, the input times (chain clock) of each column (hit).
@@ -370,7 +404,20 @@ def acquire(acq: Acquisition, force: Force, t_first: np.ndarray, n_samples: int,
 
 def tabulated(t: np.ndarray, f: np.ndarray) -> Force:
     """A force given on samples ``(t, f)`` (s, N; increasing ``t``) as a function of time:
-    linear between the samples, 0 before the first, the last value after it."""
+    linear between the samples, 0 before the first, the last value after it.
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        The sample times, s, increasing.
+    f : numpy.ndarray
+        The forces at ``t``, N.
+
+    Returns
+    -------
+    callable
+        ``force(s)``: the force, N, at the times ``s`` (s), any shape.
+    """
     t = np.asarray(t, float)
     f = np.asarray(f, float)
 

@@ -95,6 +95,23 @@ def check_device(device: Any, settings: DaqSettings) -> dict[str, Any]:
     takes hardware where the module supports it. Raises :class:`.DaqError` if it is not an
     NI 9234, or if ``hardware`` is asked of a module that cannot source an analog reference
     trigger.
+
+    Parameters
+    ----------
+    device : nidaqmx.system.Device
+        The module.
+    settings : ssw.daq.settings.DaqSettings
+        The acquisition settings (``device``, ``trigger_mode``).
+
+    Returns
+    -------
+    dict
+        ``product_type``, ``serial_num``, ``analog_reference_trigger`` (bool) and ``trigger``.
+
+    Raises
+    ------
+    ssw.errors.DaqError
+        When the module is not an NI 9234, or cannot give the hardware trigger asked for.
     """
     nidaqmx = _nidaqmx()
     product = str(device.product_type)
@@ -123,6 +140,20 @@ def configure_task(task: Any, settings: DaqSettings, trigger: str = "hardware") 
     ``"software"``: continuous timing with a ``BUFFER_SECONDS`` buffer and no trigger
     (records are cut by :class:`ssw.daq.trigger.RingTrigger`). ``task`` is an
     ``nidaqmx.Task`` (or an autospec'd fake).
+
+    Parameters
+    ----------
+    task : nidaqmx.Task
+        The task to configure.
+    settings : ssw.daq.settings.DaqSettings
+        The acquisition settings.
+    trigger : str
+        ``hardware`` or ``software``.
+
+    Returns
+    -------
+    object
+        The channel added (``nidaqmx`` AI channel).
     """
     c = _nidaqmx().constants
     chan = _add_channel(task, settings)
@@ -148,12 +179,34 @@ def configure_task(task: Any, settings: DaqSettings, trigger: str = "hardware") 
 
 
 def buffer_samples(settings: DaqSettings) -> int:
-    """NI-DAQmx buffer of a continuous task: ``BUFFER_SECONDS`` and at least 4 records."""
+    """NI-DAQmx buffer of a continuous task: ``BUFFER_SECONDS`` and at least 4 records.
+
+    Parameters
+    ----------
+    settings : ssw.daq.settings.DaqSettings
+        The acquisition settings.
+
+    Returns
+    -------
+    int
+        The buffer's size, samples.
+    """
     return max(int(BUFFER_SECONDS * settings.sample_rate), 4 * settings.record_samples)
 
 
 def chunk_samples(settings: DaqSettings) -> int:
-    """Samples per read of a continuous task: ``CHUNK_SECONDS`` of data, at least 1."""
+    """Samples per read of a continuous task: ``CHUNK_SECONDS`` of data, at least 1.
+
+    Parameters
+    ----------
+    settings : ssw.daq.settings.DaqSettings
+        The acquisition settings.
+
+    Returns
+    -------
+    int
+        Samples per read.
+    """
     return max(int(CHUNK_SECONDS * settings.sample_rate), 1)
 
 
@@ -176,7 +229,25 @@ def _add_channel(task: Any, settings: DaqSettings) -> Any:
 
 
 def read_hit(task: Any, settings: DaqSettings) -> Hit:
-    """Start the task, wait for one triggered record, read it, stop. Returns the :class:`.Hit`."""
+    """Start the task, wait for one triggered record, read it, stop. Returns the :class:`.Hit`.
+
+    Parameters
+    ----------
+    task : nidaqmx.Task
+        A task configured for the hardware trigger.
+    settings : ssw.daq.settings.DaqSettings
+        The acquisition settings.
+
+    Returns
+    -------
+    ssw.daq.backend.Hit
+        The record (force in N).
+
+    Raises
+    ------
+    ssw.errors.DaqError
+        When the read returns another number of samples than ``record_samples``.
+    """
     task.start()
     try:
         data = task.read(number_of_samples_per_channel=settings.record_samples,
@@ -201,6 +272,25 @@ def software_hits(task: Any, settings: DaqSettings, n_hits: int) -> Iterator[Hit
     each record it completes. A hit is marked overloaded if the driver reported an
     overload during any read since the previous hit. Raises :class:`.DaqError` if no hit
     arrives within ``settings.timeout`` s of stream.
+
+    Parameters
+    ----------
+    task : nidaqmx.Task
+        A started continuous task.
+    settings : ssw.daq.settings.DaqSettings
+        The acquisition settings.
+    n_hits : int
+        How many hits.
+
+    Yields
+    ------
+    ssw.daq.backend.Hit
+        One record per hit (force in N).
+
+    Raises
+    ------
+    ssw.errors.DaqError
+        When a read returns no sample, or no trigger comes within ``settings.timeout`` s.
     """
     rule = TriggerRule.of(settings)
     ring = RingTrigger(rule, capacity=4 * settings.record_samples + chunk_samples(settings))
@@ -232,7 +322,15 @@ def software_hits(task: Any, settings: DaqSettings, n_hits: int) -> Iterator[Hit
 
 
 class NidaqBackend:
-    """The ``nidaqmx`` backend. ``task_factory``/``device_factory`` exist for tests."""
+    """The ``nidaqmx`` backend. ``task_factory``/``device_factory`` exist for tests.
+
+    Parameters
+    ----------
+    task_factory : callable or None
+        ``task_factory()`` returns a new task (None: ``nidaqmx.Task``).
+    device_factory : callable or None
+        ``device_factory(name)`` returns the device (None: ``nidaqmx.system.Device``).
+    """
 
     name = "nidaqmx"
 
@@ -251,10 +349,35 @@ class NidaqBackend:
         return _nidaqmx().system.Device(settings.device)
 
     def describe(self) -> dict[str, Any]:
+        """The hardware the records go with: the driver, and the module's description
+        (:func:`check_device`; filled when the task is opened).
+
+        Returns
+        -------
+        dict
+            ``driver``, then ``product_type``, ``serial_num``, ``analog_reference_trigger`` and
+            ``trigger`` once a task was opened.
+        """
         return {"driver": "NI-DAQmx", **self._description}
 
     def open(self, settings: DaqSettings) -> Any:
-        """Check the device and return a configured task (caller closes it)."""
+        """Check the device and return a configured task (caller closes it).
+
+        Parameters
+        ----------
+        settings : ssw.daq.settings.DaqSettings
+            The acquisition settings.
+
+        Returns
+        -------
+        nidaqmx.Task
+            The task, configured and committed.
+
+        Raises
+        ------
+        ssw.errors.DaqError
+            When the device is refused or a driver call fails.
+        """
         nidaqmx = _nidaqmx()
         self._description = _driver_call(
             f"querying device {settings.device!r}",
@@ -275,6 +398,26 @@ class NidaqBackend:
         return task
 
     def hits(self, settings: DaqSettings, n_hits: int) -> Iterator[Hit]:
+        """Record ``n_hits`` hits on the NI 9234: one triggered record per hit (hardware trigger),
+        or records cut from a continuous stream (software trigger); the task is closed after.
+
+        Parameters
+        ----------
+        settings : ssw.daq.settings.DaqSettings
+            The acquisition settings.
+        n_hits : int
+            How many hits.
+
+        Yields
+        ------
+        ssw.daq.backend.Hit
+            One record per hit (force in N).
+
+        Raises
+        ------
+        ssw.errors.DaqError
+            When the device is refused, a driver call fails or no trigger comes in time.
+        """
         task = self.open(settings)
         try:
             if self._description["trigger"] == "software":

@@ -47,13 +47,37 @@ CLIP_POLICIES = ("raise", "drop", "keep")
 
 
 def is_clipped(force: np.ndarray, full_scale: float) -> bool:
-    """True if any sample reaches ``CLIP_FRACTION`` of the full-scale force ``full_scale``."""
+    """True if any sample reaches ``CLIP_FRACTION`` of the full-scale force ``full_scale``.
+
+    Parameters
+    ----------
+    force : numpy.ndarray
+        The hit's force, N.
+    full_scale : float
+        The full-scale force, N.
+
+    Returns
+    -------
+    bool
+        Whether ``max |force| >= CLIP_FRACTION * full_scale``.
+    """
     return bool(np.any(np.abs(force) >= CLIP_FRACTION * full_scale))
 
 
 def free_path(path: str | Path) -> Path:
     """``path`` if no file is there, else the first free ``<stem>-<k><suffix>`` (k = 2, 3,
-    ...): a new session never replaces an existing recording unless asked to."""
+    ...): a new session never replaces an existing recording unless asked to.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The wished-for file.
+
+    Returns
+    -------
+    pathlib.Path
+        A path where no file is.
+    """
     p = Path(path)
     if not p.exists():
         return p
@@ -109,7 +133,13 @@ class RecordingWriter:
 
     def set_meta(self, meta: dict[str, Any]) -> None:
         """Store ``meta`` as root attributes (non-scalars as JSON); on disk with the next
-        write (at once when hits are already there)."""
+        write (at once when hits are already there).
+
+        Parameters
+        ----------
+        meta : dict
+            Attribute name -> value (SI units).
+        """
         for key, val in meta.items():
             ok = isinstance(val, bool | int | float | str)
             self._attrs[key] = val if ok else to_json(val)
@@ -117,7 +147,13 @@ class RecordingWriter:
             self._write()
 
     def append(self, hit: Hit) -> None:
-        """Add one hit as ``hits/hit_NNNN`` and put the session on disk (atomically)."""
+        """Add one hit as ``hits/hit_NNNN`` and put the session on disk (atomically).
+
+        Parameters
+        ----------
+        hit : ssw.daq.backend.Hit
+            The hit (force in N); flagged clipped when overloaded or at the full-scale force.
+        """
         force = np.asarray(hit.force, dtype=np.float64)
         attrs = {
             "units": FORCE_UNITS, "trigger_index": int(hit.trigger_index),
@@ -172,6 +208,23 @@ class RecordedHit:
     ``index`` counts the file's hits from 0; ``label`` is the hit's name as the file gives
     it (a CSV column's header, a TDMS channel's name, an HDF5 dataset's name), which every
     message about the hit uses (:attr:`name`: the label, else ``hit k`` counted from 1).
+
+    Parameters
+    ----------
+    index : int
+        The hit's index in the file, from 0.
+    force : numpy.ndarray
+        The hit's force, N.
+    trigger_index : int
+        The index of the trigger sample (the pretrigger sample count).
+    clipped : bool
+        Whether the hit was flagged clipped when recorded.
+    timestamp_utc : str
+        ISO-8601 time the hit was recorded (empty: unknown).
+    extra : dict
+        The hit's metadata (SI units).
+    label : str
+        The hit's name as the file gives it (empty: ``hit k``).
     """
 
     index: int
@@ -190,7 +243,21 @@ class RecordedHit:
 
 @dataclass(frozen=True)
 class Recording:
-    """A session: metadata (SI units), sample rate (S/s) and its hits."""
+    """A session: metadata (SI units), sample rate (S/s) and its hits.
+
+    Parameters
+    ----------
+    path : str
+        The file read.
+    meta : dict
+        The session's metadata (SI units).
+    sample_rate : float
+        The sample rate, S/s.
+    hits : tuple of RecordedHit
+        The hits kept.
+    dropped : tuple of str
+        Why each dropped hit was dropped.
+    """
 
     path: str
     meta: dict[str, Any]
@@ -200,6 +267,7 @@ class Recording:
 
     @property
     def sample_id(self) -> str:
+        """The sample's id (``meta["sample_id"]``; empty when unset)."""
         return str(self.meta.get("sample_id", ""))
 
 
@@ -221,6 +289,34 @@ def check_hits(
     dropped with its reason, whatever ``clipped`` says, and the other hits kept, as a dead
     hit is rejected by the TOF picking (:func:`ssw.signal.tof.session_tof`); every message
     names a hit as the file labels it (:attr:`RecordedHit.name`).
+
+    Parameters
+    ----------
+    path : str
+        The file, named in errors.
+    hits : list of RecordedHit
+        The hits read (force in N).
+    record_samples : int or None
+        The length every hit must have, samples (None: any length).
+    full_scale : float or None
+        The largest unclipped force, N (None: only the hits' stored ``clipped`` flags).
+    clipped : str
+        What to do with clipped hits: ``raise``, ``drop`` or ``keep``.
+
+    Returns
+    -------
+    kept : list of RecordedHit
+        The hits kept.
+    dropped : list of str
+        One reason per hit dropped.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``clipped`` is not a policy.
+    ssw.errors.RecordingError
+        When there are no hits, a hit is truncated or shorter than 8 samples, a clipped hit
+        meets ``clipped="raise"``, or every hit is dropped.
     """
     if clipped not in CLIP_POLICIES:
         raise ConfigError("clipped", clipped, f"one of {CLIP_POLICIES}")
@@ -273,6 +369,11 @@ def read_recording(path: str | Path, *, clipped: str = "raise",
     full_scale : float or None
         The device's largest unclipped force, N, checked as well as the session's own
         stored one (the smaller applies).
+
+    Returns
+    -------
+    Recording
+        The session's hits (force in N) and metadata.
 
     Raises
     ------

@@ -28,12 +28,34 @@ TRIGGER_MODES = ("auto", "hardware", "software")
 
 
 def allowed_rates() -> list[float]:
-    """The NI 9234's sample rates with the internal timebase, S/s, fastest first."""
+    """The NI 9234's sample rates with the internal timebase, S/s, fastest first.
+
+    Returns
+    -------
+    list of float
+        ``51200 / n`` for n = 1 .. 31, S/s.
+    """
     return [NI9234_BASE_RATE / n for n in range(1, NI9234_MAX_DIVISOR + 1)]
 
 
 def rate_divisor(rate: float) -> int:
-    """The divisor ``n`` with ``rate = 51200 / n``; :class:`.ConfigError` if none matches."""
+    """The divisor ``n`` with ``rate = 51200 / n``; :class:`.ConfigError` if none matches.
+
+    Parameters
+    ----------
+    rate : float
+        The sample rate, S/s.
+
+    Returns
+    -------
+    int
+        The NI 9234 divisor, 1 to 31.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When no divisor gives ``rate`` within ``RATE_RTOL``.
+    """
     n = round(NI9234_BASE_RATE / rate) if rate > 0 else 0
     if 1 <= n <= NI9234_MAX_DIVISOR and abs(NI9234_BASE_RATE / n - rate) <= RATE_RTOL * rate:
         return n
@@ -49,15 +71,19 @@ def rate_divisor(rate: float) -> int:
 class SimulationSettings:
     """Imperfections the simulated backend adds (``daq.simulation``), SI units.
 
-    Attributes
+    Parameters
     ----------
-    noise_rms : additive white noise at the sensor, N (rms).
-    trigger_jitter : standard deviation of the random delay between the wave and the
-        sample clock beyond the uniform sample phase, s.
-    source : waveform source: ``chain`` (``ssw.tof.api.sensor_signal``) or ``analytic``
-        (two sech^2 pulses with a known TOF, for tests without the chain).
-    striker_velocity_cov : relative standard deviation of the striker speed from hit to
-        hit (chain source only; 0 = every hit identical). A physical scatter: the TOF goes
+    noise_rms : float
+        Additive white noise at the sensor, N (rms).
+    trigger_jitter : float
+        Standard deviation of the random delay between the wave and the sample clock
+        beyond the uniform sample phase, s.
+    source : str
+        Waveform source: ``chain`` (``ssw.tof.api.sensor_signal``) or ``analytic`` (two
+        sech^2 pulses with a known TOF, for tests without the chain).
+    striker_velocity_cov : float
+        Relative standard deviation of the striker speed from hit to hit (chain source
+        only; 0 = every hit identical). A physical scatter: the TOF goes
         as ``F_m^(-1/6)`` and ``F_m`` as ``v^(6/5)``, so TOF ~ ``v^(-1/5)`` and a 5 %
         speed scatter gives ~1 % TOF scatter.
     """
@@ -77,6 +103,41 @@ class DaqSettings:
     reference trigger in the module), ``software`` (continuous acquisition, the same rule
     over a ring buffer: :mod:`ssw.daq.trigger`) or ``auto`` (hardware where the module can
     source it, else software).
+
+    Parameters
+    ----------
+    device : str
+        The NI-DAQmx name of the module.
+    channel : str
+        The module's channel (``ai0`` .. ``ai3``).
+    sensor_model : str
+        The force sensor's model.
+    sensitivity : float
+        The sensor's sensitivity, V/N.
+    excitation_current : float
+        The IEPE excitation current, A.
+    coupling : str
+        ``AC`` or ``DC``.
+    sample_rate : float
+        The sample rate, S/s (``51200 / n``).
+    max_force : float
+        The sensor's range, N.
+    trigger_level : float
+        The trigger level, N.
+    trigger_slope : str
+        ``rising`` or ``falling``.
+    pretrigger_samples : int
+        Samples kept before the trigger.
+    record_samples : int
+        Samples per record.
+    hits : int
+        Hits per session.
+    timeout : float
+        How long to wait for a trigger, s.
+    trigger_mode : str
+        ``hardware``, ``software`` or ``auto``.
+    simulation : SimulationSettings
+        What the simulated backend adds.
     """
 
     device: str = "cDAQ1Mod1"
@@ -120,7 +181,13 @@ class DaqSettings:
         return 1.0 / self.sample_rate
 
     def to_dict(self) -> dict[str, Any]:
-        """Plain dict (for metadata and ``--json``)."""
+        """Plain dict (for metadata and ``--json``).
+
+        Returns
+        -------
+        dict
+            Field name -> value (SI units; ``simulation`` as a dict).
+        """
         return asdict(self)
 
 
@@ -215,7 +282,27 @@ def settings_from_config(cfg: dict[str, Any], device: Any = None,
     """Build :class:`DaqSettings` from a loaded config's ``daq:`` section (the acquisition:
     module, channel, rate, trigger, hits) and the device's DAQ sensor (model, sensitivity
     V/N, range N: ``device`` or the config's, :func:`ssw.config.device_of`), plus
-    overrides."""
+    overrides.
+
+    Parameters
+    ----------
+    cfg : dict
+        The loaded study config.
+    device : ssw.device.Device or None
+        The device (None: the config's).
+    **overrides
+        Settings that replace the config's (None values are ignored).
+
+    Returns
+    -------
+    DaqSettings
+        The settings (SI units).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When a key is not a setting, or a value is invalid (:class:`DaqSettings`).
+    """
     from ssw.config import device_of
 
     dev = device if device is not None else device_of(cfg)

@@ -57,7 +57,18 @@ MARGIN = 64  # extra samples before/after the wave on the simulated grid
 
 
 def sech2(x: np.ndarray) -> np.ndarray:
-    """``sech(x)^2 = 4 e^(-2|x|) / (1 + e^(-2|x|))^2``, without overflow for large ``|x|``."""
+    """``sech(x)^2 = 4 e^(-2|x|) / (1 + e^(-2|x|))^2``, without overflow for large ``|x|``.
+
+    Parameters
+    ----------
+    x : array_like
+        The argument, dimensionless.
+
+    Returns
+    -------
+    numpy.ndarray
+        ``sech(x)^2``, float64, the shape of ``x``.
+    """
     e = np.exp(-2.0 * np.abs(np.asarray(x, dtype=np.float64)))
     return 4.0 * e / (1.0 + e) ** 2
 
@@ -72,6 +83,32 @@ def analytic_waveform(
     A stand-in for the chain's sensor force with an exactly known peak-to-peak TOF
     (s): each pulse is symmetric, so a linear-phase filter delays both peaks by its group
     delay. ``w_r`` (s) defaults to ``w``; forces in N, times in s. Returns ``(t, F)``.
+
+    Parameters
+    ----------
+    tof : float
+        The time between the two peaks, s.
+    t_incident : float
+        The incident peak's time, s.
+    width : float
+        The incident pulse's width ``w``, s.
+    f_incident : float
+        The incident peak force ``f_i``, N.
+    f_reflected : float
+        The reflected peak force ``f_r``, N.
+    duration : float
+        The waveform's length, s.
+    dt : float
+        The time step, s.
+    width_reflected : float or None
+        The reflected pulse's width ``w_r``, s (None: ``width``).
+
+    Returns
+    -------
+    t : numpy.ndarray
+        The times, s, from 0 in steps of ``dt``.
+    F : numpy.ndarray
+        The force, N.
     """
     t = np.arange(0.0, duration, dt)
     f = f_incident * sech2((t - t_incident) / width)
@@ -143,6 +180,15 @@ class SimulatedBackend:
         self.soil_E, self.soil_nu, self.wall = soil_E, soil_nu, wall
 
     def describe(self) -> dict[str, Any]:
+        """The simulation the records go with: the model, its source and, for the chain source,
+        the soil, the wall law and the chain's parameters.
+
+        Returns
+        -------
+        dict
+            ``model``, ``oversample``, ``source``; ``soil_E`` (Pa), ``soil_nu``, ``wall`` and
+            ``chain_params`` for the chain source; ``true_tof`` (s) when known.
+        """
         d: dict[str, Any] = {"model": "simulated NI 9234 (ssw.daq.simulated)",
                              "oversample": OVERSAMPLE}
         if self.soil_E is not None:
@@ -196,7 +242,20 @@ class SimulatedBackend:
 
     def hits(self, settings: DaqSettings, n_hits: int) -> Iterator[Hit]:
         """Records of ``n_hits`` hits; with ``striker_velocity_cov > 0`` (chain source) each
-        hit's striker speed is drawn from a normal law about the chain's own."""
+        hit's striker speed is drawn from a normal law about the chain's own.
+
+        Parameters
+        ----------
+        settings : ssw.daq.settings.DaqSettings
+            The acquisition settings (``simulation``: noise, jitter, striker speed spread).
+        n_hits : int
+            How many hits.
+
+        Yields
+        ------
+        ssw.daq.backend.Hit
+            One record per hit (force in N), seeded by ``seed``.
+        """
         rng = np.random.default_rng(self.seed)
         cov = settings.simulation.striker_velocity_cov
         for _ in range(n_hits):
@@ -217,7 +276,29 @@ def sample_hit(wave: tuple[Any, float], settings: DaqSettings, rng: np.random.Ge
     times s from the hit's start, 0 before it; ``t_end`` s, its last modelled time): samples
     at a random clock phase and jitter through the measurement model
     (:func:`ssw.daq.model.acquire`), noise, quantization and clipping
-    (:func:`ssw.daq.model.digitize`), then the trigger's window."""
+    (:func:`ssw.daq.model.digitize`), then the trigger's window.
+
+    Parameters
+    ----------
+    wave : tuple of (callable, float)
+        ``(force, t_end)``: the force function, N, and its last modelled time, s.
+    settings : ssw.daq.settings.DaqSettings
+        The acquisition settings.
+    rng : numpy.random.Generator
+        The random generator (phase, jitter, noise).
+    extra : dict
+        Metadata added to the hit's (SI units).
+
+    Returns
+    -------
+    ssw.daq.backend.Hit
+        The record, force in N; ``overloaded`` when a sample hit the rails.
+
+    Raises
+    ------
+    ssw.errors.DaqError
+        When the force never crosses the trigger level with room for a record.
+    """
     force, t_end = wave
     fs = settings.sample_rate
     sim = settings.simulation
@@ -248,6 +329,23 @@ def trigger_index(y: np.ndarray, settings: DaqSettings) -> int:
     software trigger). Raises :class:`~ssw.errors.DaqError` (as the hardware times out) if no
     crossing
     leaves room for a whole record.
+
+    Parameters
+    ----------
+    y : numpy.ndarray
+        The sampled force, N.
+    settings : ssw.daq.settings.DaqSettings
+        The trigger's settings.
+
+    Returns
+    -------
+    int
+        The trigger sample's index.
+
+    Raises
+    ------
+    ssw.errors.DaqError
+        When no crossing leaves room for a record.
     """
     from ssw.daq.trigger import TriggerRule
     from ssw.daq.trigger import trigger_index as first_trigger

@@ -25,7 +25,19 @@ from ssw.errors import ConfigError, DaqError
 
 @dataclass(frozen=True)
 class TriggerRule:
-    """Level (N), slope, pretrigger and record length (samples) of the trigger."""
+    """Level (N), slope, pretrigger and record length (samples) of the trigger.
+
+    Parameters
+    ----------
+    level : float
+        The trigger level, N.
+    slope : str
+        ``rising`` or ``falling``.
+    pretrigger_samples : int
+        Samples kept before the trigger sample.
+    record_samples : int
+        Samples per record.
+    """
 
     level: float
     slope: str = "rising"
@@ -41,13 +53,39 @@ class TriggerRule:
 
     @classmethod
     def of(cls, settings: object) -> TriggerRule:
-        """The rule of a :class:`ssw.daq.settings.DaqSettings`."""
+        """The rule of a :class:`ssw.daq.settings.DaqSettings`.
+
+        Parameters
+        ----------
+        settings : ssw.daq.settings.DaqSettings
+            The acquisition settings.
+
+        Returns
+        -------
+        TriggerRule
+            Its level, slope, pretrigger and record length.
+        """
         return cls(settings.trigger_level, settings.trigger_slope,  # type: ignore[attr-defined]
                    settings.pretrigger_samples, settings.record_samples)  # type: ignore[attr-defined]
 
 
 def crossings(y: np.ndarray, level: float, slope: str) -> np.ndarray:
-    """Indices ``k >= 1`` where ``y`` crosses ``level`` (module rule), ascending."""
+    """Indices ``k >= 1`` where ``y`` crosses ``level`` (module rule), ascending.
+
+    Parameters
+    ----------
+    y : numpy.ndarray
+        The signal, N.
+    level : float
+        The trigger level, N.
+    slope : str
+        ``rising`` (``y[k-1] < level <= y[k]``) or ``falling`` (``y[k-1] > level >= y[k]``).
+
+    Returns
+    -------
+    numpy.ndarray
+        The indices ``k``, int.
+    """
     y = np.asarray(y, dtype=np.float64)
     if slope == "rising":
         hit = (y[:-1] < level) & (y[1:] >= level)
@@ -57,7 +95,23 @@ def crossings(y: np.ndarray, level: float, slope: str) -> np.ndarray:
 
 
 def trigger_starts(y: np.ndarray, rule: TriggerRule, *, start: int = 0) -> list[int]:
-    """Start indices of every record the rule cuts from ``y`` (from sample ``start`` on)."""
+    """Start indices of every record the rule cuts from ``y`` (from sample ``start`` on).
+
+    Parameters
+    ----------
+    y : numpy.ndarray
+        The signal, N.
+    rule : TriggerRule
+        The trigger rule.
+    start : int
+        The first sample a record may start at.
+
+    Returns
+    -------
+    list of int
+        The records' first samples, ascending; a record's crossing comes at least
+        ``pretrigger_samples`` after the end of the previous record.
+    """
     post = rule.record_samples - rule.pretrigger_samples
     ks = crossings(y, rule.level, rule.slope)
     ks = ks[(ks >= rule.pretrigger_samples) & (ks + post <= y.size)]
@@ -72,7 +126,25 @@ def trigger_starts(y: np.ndarray, rule: TriggerRule, *, start: int = 0) -> list[
 
 def trigger_index(y: np.ndarray, rule: TriggerRule) -> int:
     """First trigger sample of ``y``; :class:`~ssw.errors.DaqError` if none leaves room for a
-    record."""
+    record.
+
+    Parameters
+    ----------
+    y : numpy.ndarray
+        The signal, N.
+    rule : TriggerRule
+        The trigger rule.
+
+    Returns
+    -------
+    int
+        The index of the first trigger sample.
+
+    Raises
+    ------
+    ssw.errors.DaqError
+        When no crossing leaves room for a record.
+    """
     starts = trigger_starts(y, rule)
     if not starts:
         raise DaqError(
@@ -83,7 +155,20 @@ def trigger_index(y: np.ndarray, rule: TriggerRule) -> int:
 
 
 def split_records(y: np.ndarray, rule: TriggerRule) -> list[np.ndarray]:
-    """Every record (copies, ``record_samples`` each) the rule cuts from a long channel."""
+    """Every record (copies, ``record_samples`` each) the rule cuts from a long channel.
+
+    Parameters
+    ----------
+    y : numpy.ndarray
+        The long channel, N.
+    rule : TriggerRule
+        The trigger rule.
+
+    Returns
+    -------
+    list of numpy.ndarray
+        The records, in order.
+    """
     y = np.asarray(y, dtype=np.float64)
     return [y[s : s + rule.record_samples].copy() for s in trigger_starts(y, rule)]
 
@@ -96,6 +181,13 @@ class RingTrigger:
     hold-off as :func:`trigger_starts` on the whole stream: a crossing in one chunk whose
     record ends in a later chunk is emitted when that chunk arrives. ``samples_seen`` is
     the stream's length so far.
+
+    Parameters
+    ----------
+    rule : TriggerRule
+        The trigger rule.
+    capacity : int or None
+        The ring buffer's size, samples, at least 2 x ``record_samples`` (None: 4 x).
     """
 
     def __init__(self, rule: TriggerRule, capacity: int | None = None) -> None:
@@ -115,7 +207,18 @@ class RingTrigger:
         return self._buf[: self._n], self.samples_seen - self._n
 
     def feed(self, chunk: np.ndarray) -> list[np.ndarray]:
-        """Append ``chunk`` (N) and return the records it completes."""
+        """Append ``chunk`` (N) and return the records it completes.
+
+        Parameters
+        ----------
+        chunk : numpy.ndarray
+            The stream's next samples, N.
+
+        Returns
+        -------
+        list of numpy.ndarray
+            The records completed, ``record_samples`` each, in order.
+        """
         x = np.asarray(chunk, dtype=np.float64).ravel()
         out: list[np.ndarray] = []
         while x.size:

@@ -89,7 +89,7 @@ def upsample(y: np.ndarray, factor: int = UPSAMPLE) -> np.ndarray:
 class Features:
     """The features of one signal (module docstring). SI units.
 
-    Attributes
+    Parameters
     ----------
     values : numpy.ndarray
         (7,) in :data:`NAMES` order; NaN where a pulse is missing.
@@ -107,7 +107,13 @@ class Features:
     times: dict[str, float]
 
     def as_dict(self) -> dict[str, float]:
-        """Name -> value."""
+        """Name -> value.
+
+        Returns
+        -------
+        dict of str to float
+            Feature name -> value, in ``NAMES``' order.
+        """
         return {n: float(v) for n, v in zip(NAMES, self.values, strict=True)}
 
 

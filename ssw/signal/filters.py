@@ -20,13 +20,39 @@ MAD_TO_SIGMA = 1.4826  # sigma = 1.4826 MAD for Gaussian noise
 
 
 def baseline(force: np.ndarray, n_pre: int) -> float:
-    """Median of the first ``n_pre`` samples (the pretrigger part), N."""
+    """Median of the first ``n_pre`` samples (the pretrigger part), N.
+
+    Parameters
+    ----------
+    force : numpy.ndarray
+        The record, N.
+    n_pre : int
+        Pretrigger samples (at least 1 is used).
+
+    Returns
+    -------
+    float
+        The baseline, N.
+    """
     n = max(int(n_pre), 1)
     return float(np.median(force[:n]))
 
 
 def noise_sigma(force: np.ndarray, n_pre: int) -> float:
-    """Robust noise level of the pretrigger samples, ``1.4826 MAD``, N."""
+    """Robust noise level of the pretrigger samples, ``1.4826 MAD``, N.
+
+    Parameters
+    ----------
+    force : numpy.ndarray
+        The record, N.
+    n_pre : int
+        Pretrigger samples (at least 2 are used).
+
+    Returns
+    -------
+    float
+        The noise's standard deviation estimate, N.
+    """
     pre = force[: max(int(n_pre), 2)]
     return float(MAD_TO_SIGMA * np.median(np.abs(pre - np.median(pre))))
 
@@ -45,6 +71,16 @@ def lowpass(force: np.ndarray, rate: float, cutoff: float | None, order: int = 4
         ``None`` returns the record unchanged.
     order : int
         Butterworth order of each pass.
+
+    Returns
+    -------
+    numpy.ndarray
+        The filtered record, N (float64).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``cutoff`` is not in (0, rate / 2) Hz.
     """
     if cutoff is None:
         return np.asarray(force, dtype=np.float64)

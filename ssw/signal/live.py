@@ -29,7 +29,29 @@ Estimate = Callable[[float, float], dict[str, float]]
 
 @dataclass(frozen=True)
 class HitReport:
-    """What one hit adds: its TOF (s, or None and the reason) and the running statistics."""
+    """What one hit adds: its TOF (s, or None and the reason) and the running statistics.
+
+    Parameters
+    ----------
+    index : int
+        The hit's index, from 0.
+    tof : float or None
+        Its TOF, s (None: rejected).
+    reason : str or None
+        Why it was rejected (None: accepted).
+    n_hits : int
+        Hits so far.
+    n_accepted : int
+        Hits accepted so far (outliers judged on every hit so far).
+    tof_mean : float or None
+        Mean TOF of the accepted hits, s (None: none accepted).
+    tof_sem : float or None
+        Standard error of that mean, s (0 for one hit).
+    estimate : dict or None
+        The estimate from the running mean (``E``, ``E_low``, ``E_high``, Pa).
+    estimate_error : str or None
+        Why the estimate failed.
+    """
 
     index: int
     tof: float | None
@@ -42,6 +64,13 @@ class HitReport:
     estimate_error: str | None = None
 
     def to_dict(self) -> dict[str, Any]:
+        """The report as a dict, one key per field.
+
+        Returns
+        -------
+        dict
+            Field name -> value (SI units).
+        """
         return {k: getattr(self, k) for k in self.__dataclass_fields__}
 
 
@@ -73,7 +102,20 @@ class LiveTof:
         return self.add(hit.force, overloaded=bool(getattr(hit, "overloaded", False)))
 
     def add(self, force: np.ndarray, *, overloaded: bool = False) -> HitReport:
-        """Process one record (N); return its report."""
+        """Process one record (N); return its report.
+
+        Parameters
+        ----------
+        force : numpy.ndarray
+            The record, N.
+        overloaded : bool
+            Whether the hardware reported an overrange (the hit is rejected).
+
+        Returns
+        -------
+        HitReport
+            The hit's TOF or reason, and the running statistics.
+        """
         i = len(self.tofs)
         tof, reason = np.nan, None
         if overloaded:

@@ -111,6 +111,27 @@ def refine_peak(y: np.ndarray, k: int, upsample: int = UPSAMPLE) -> tuple[float,
     (``scipy.signal.resample_poly``, ``padtype='line'``), the largest upsampled value within
     one original sample of ``k`` is taken and refined by the parabola on the fine grid
     (:func:`refine_peaks` on one record).
+
+    Parameters
+    ----------
+    y : numpy.ndarray
+        The record (any unit).
+    k : int
+        The sample at or next to the peak.
+    upsample : int
+        The upsampling factor, >= 1.
+
+    Returns
+    -------
+    position : float
+        The peak's position, samples of ``y``.
+    height : float
+        The peak's height, in the unit of ``y``.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``upsample`` < 1.
     """
     pos, h = refine_peaks(np.asarray(y)[None, :], np.array([k]), upsample)
     return float(pos[0]), float(h[0])
@@ -120,7 +141,29 @@ def refine_peaks(Y: np.ndarray, k: np.ndarray, upsample: int = UPSAMPLE
                  ) -> tuple[np.ndarray, np.ndarray]:
     """:func:`refine_peak` of many records at once: the peak of row ``i`` of ``Y`` (m, n_t)
     at or next to sample ``k[i]``; positions (m,) in samples and heights (m,). Rows whose
-    windows have one length share one interpolation call (row by row the same numbers)."""
+    windows have one length share one interpolation call (row by row the same numbers).
+
+    Parameters
+    ----------
+    Y : numpy.ndarray
+        The records, (m, n_t).
+    k : numpy.ndarray
+        The sample at or next to each row's peak, (m,).
+    upsample : int
+        The upsampling factor, >= 1.
+
+    Returns
+    -------
+    position : numpy.ndarray
+        The peaks' positions, samples, (m,).
+    height : numpy.ndarray
+        The peaks' heights, in the unit of ``Y``, (m,).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``upsample`` < 1.
+    """
     if upsample < 1:
         raise ConfigError("upsample", upsample, "an integer >= 1 (1: parabola on the samples)")
     Y = np.asarray(Y)
@@ -153,7 +196,19 @@ def refine_peaks(Y: np.ndarray, k: np.ndarray, upsample: int = UPSAMPLE
 
 @dataclass(frozen=True)
 class PeakPair:
-    """Incident and reflected peaks: times (s from the first sample) and heights (N)."""
+    """Incident and reflected peaks: times (s from the first sample) and heights (N).
+
+    Parameters
+    ----------
+    t_incident : float
+        The incident peak's time, s from the first sample.
+    t_reflected : float
+        The reflected peak's time, s from the first sample.
+    f_incident : float
+        The incident peak's height, N.
+    f_reflected : float
+        The reflected peak's height, N.
+    """
 
     t_incident: float
     t_reflected: float
@@ -266,6 +321,23 @@ def check_tof(tof: float, min_tof: float) -> float:
     Raises :class:`PeakError` naming both numbers otherwise: a wave cannot come back from
     the wall sooner, so such a TOF is a wrong peak (a ripple, a split incident pulse), a
     wrong device description, or a damaged record.
+
+    Parameters
+    ----------
+    tof : float
+        The TOF, s.
+    min_tof : float
+        The shortest physical round trip, s.
+
+    Returns
+    -------
+    float
+        ``tof``.
+
+    Raises
+    ------
+    PeakError
+        When ``tof < min_tof`` (or is NaN).
     """
     if not tof >= min_tof:
         raise PeakError(

@@ -53,7 +53,7 @@ import numpy as np
 class PeakRule:
     """The rule's thresholds (dimensionless; module docstring).
 
-    Attributes
+    Parameters
     ----------
     incident_fraction : float
         Share of the signal's maximum a local maximum must reach to be the incident peak.
@@ -84,6 +84,25 @@ class Selection:
     pulse, or the later start given); ``w_max`` (n,) the window's maximum; ``straddle``
     (n,) bool, the window opens on the falling flank of a significant pulse that peaked
     before the later start (:func:`assemble`; always False without one).
+
+    Parameters
+    ----------
+    k_incident : numpy.ndarray
+        The incident peak's sample, (n,) int.
+    k_gap : numpy.ndarray
+        The reflected window's first sample, (n,) int.
+    k_reflected : numpy.ndarray
+        The reflected peak's sample, (n,) int.
+    w_max : numpy.ndarray
+        The reflected window's maximum, (n,).
+    has_incident : numpy.ndarray
+        Whether an incident peak was found, (n,) bool.
+    has_gap : numpy.ndarray
+        Whether the incident pulse ended, (n,) bool.
+    has_reflected : numpy.ndarray
+        Whether a reflected peak was found, (n,) bool.
+    straddle : numpy.ndarray
+        Whether the window opens on a falling flank, (n,) bool.
     """
 
     k_incident: np.ndarray
@@ -103,7 +122,18 @@ class Selection:
 
 def local_maxima(s: np.ndarray) -> np.ndarray:
     """(n_t, n) bool: interior samples above their left neighbour and not below their right
-    one; ``s`` (n_t, n)."""
+    one; ``s`` (n_t, n).
+
+    Parameters
+    ----------
+    s : numpy.ndarray
+        The signals, (n_t, n), time along axis 0.
+
+    Returns
+    -------
+    numpy.ndarray
+        The mask, (n_t, n); first and last samples False.
+    """
     out = np.zeros(s.shape, dtype=bool)
     out[1:-1] = (s[1:-1] > s[:-2]) & (s[1:-1] >= s[2:])
     return out

@@ -70,6 +70,31 @@ def solitary_wave_speed(force: float, bead_radius: float, bead_E: float, bead_nu
     runs faster by a share that is the same at every amplitude, under 2 %
     (tests/test_chain_physics.py).
 
+    Parameters
+    ----------
+    force : float
+        The wave's largest dynamic contact force, N (> 0).
+    bead_radius : float
+        The beads' radius ``R``, m.
+    bead_E : float
+        The beads' Young's modulus ``E``, Pa.
+    bead_nu : float
+        The beads' Poisson's ratio ``nu``, in (-1, 0.5].
+    bead_density : float
+        The beads' density ``rho``, kg/m^3.
+    static_force : float
+        The static contact force ``F_0``, N (>= 0).
+
+    Returns
+    -------
+    float
+        The wave speed ``V_s``, m/s.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When a value is out of its range.
+
     References
     ----------
     Daraio, C., Nesterenko, V. F., Herbold, E. B. and Jin, S. (2006). Tunability of solitary
@@ -110,6 +135,41 @@ def shortest_round_trip(beads_below: int, bead_radius: float, bead_E: float, bea
     ``amplification = 1`` is the bound at the recorded force itself; it is not a bound on a
     stiff wall: there the peak-to-peak TOF of ssw.chain falls to 0.85-0.93 of it, because
     the waves overlapping at the wall run faster (:data:`WALL_AMPLIFICATION`).
+
+    Parameters
+    ----------
+    beads_below : int
+        Beads between the sensor and the wall, ``n``.
+    bead_radius : float
+        The beads' radius ``R``, m.
+    bead_E : float
+        The beads' Young's modulus, Pa.
+    bead_nu : float
+        The beads' Poisson's ratio.
+    bead_density : float
+        The beads' density, kg/m^3.
+    force : float
+        The record's largest force, N.
+    static_force : float
+        The static contact force, N.
+    amplification : float
+        The wall's force amplification, >= 1.
+
+    Returns
+    -------
+    float
+        ``t_min``, s.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``beads_below`` is not a whole number >= 0, ``amplification`` < 1, or a value of
+        :func:`solitary_wave_speed` is out of its range.
+
+    References
+    ----------
+    Daraio, C., Nesterenko, V. F., Herbold, E. B. and Jin, S. (2006). Phys. Rev. E 73,
+    026610, eqs. (2)-(3) (the wave speed).
     """
     n = int(beads_below)
     if n != beads_below or n < 0:
@@ -131,12 +191,21 @@ MIN_HITS_FOR_SCATTER = 3
 class ChainPath:
     """The chain between the sensor and the wall, for the bound of :func:`shortest_round_trip`.
 
-    Attributes
+    Parameters
     ----------
-    beads_below : beads between the sensor and the wall.
-    bead_radius : m.  bead_E : Pa.  bead_nu : -.  bead_density : kg/m^3.
-    static_force : N, the largest static contact force on the path (the chain's weight on
-        the wall plus any preload); an AC-coupled IEPE sensor records from zero.
+    beads_below : int
+        Beads between the sensor and the wall.
+    bead_radius : float
+        The beads' radius, m.
+    bead_E : float
+        The beads' Young's modulus, Pa.
+    bead_nu : float
+        The beads' Poisson's ratio.
+    bead_density : float
+        The beads' density, kg/m^3.
+    static_force : float
+        The largest static contact force on the path, N (the chain's weight on the wall
+        plus any preload); an AC-coupled IEPE sensor records from zero.
     """
 
     beads_below: int
@@ -147,13 +216,36 @@ class ChainPath:
     static_force: float = 0.0
 
     def min_tof(self, force: float) -> float:
-        """Shortest round trip (s) when the record's largest force is ``force`` (N)."""
+        """Shortest round trip (s) when the record's largest force is ``force`` (N).
+
+        Parameters
+        ----------
+        force : float
+            The record's largest force, N.
+
+        Returns
+        -------
+        float
+            :func:`shortest_round_trip` along this path, with its default amplification.
+        """
         return shortest_round_trip(self.beads_below, self.bead_radius, self.bead_E,
                                    self.bead_nu, self.bead_density, force, self.static_force)
 
     @classmethod
     def from_params(cls, params: Any) -> ChainPath:
-        """From a :class:`ssw.chain.params.ChainParams` (its gravity load and preload)."""
+        """From a :class:`ssw.chain.params.ChainParams` (its gravity load and preload).
+
+        Parameters
+        ----------
+        params : ssw.chain.params.ChainParams
+            The chain's parameters.
+
+        Returns
+        -------
+        ChainPath
+            The path from the sensor bead to the wall; static force: the beads' weight (with
+            gravity) plus the preload, N.
+        """
         weight = float(np.sum(params.masses)) * params.g if params.gravity else 0.0
         return cls(beads_below=params.n_beads - 1 - params.sensor_index,
                    bead_radius=params.bead_radius, bead_E=params.bead_E,
@@ -172,6 +264,21 @@ class TofOptions:
     parabola on the samples). The physical bound of the reflected peak: ``min_tof`` (s),
     fixed, or ``chain`` (:class:`ChainPath`), evaluated per hit at its largest force; the
     larger applies. Neither: no bound (a record of unknown origin).
+
+    Parameters
+    ----------
+    lowpass : float or None
+        The low-pass cutoff, Hz (None: off).
+    rule : ssw.signal.rule.PeakRule
+        The peak rule.
+    min_hits : int
+        Hits that must be accepted.
+    upsample : int
+        The interpolation factor (1: the parabola on the samples).
+    min_tof : float or None
+        A fixed bound on the TOF, s.
+    chain : ChainPath or None
+        The chain path whose round trip bounds the TOF.
     """
 
     lowpass: float | None = None
@@ -182,7 +289,18 @@ class TofOptions:
     chain: ChainPath | None = None
 
     def bound(self, force_max: float) -> float | None:
-        """The shortest physical TOF (s) of a record whose largest force is ``force_max``."""
+        """The shortest physical TOF (s) of a record whose largest force is ``force_max``.
+
+        Parameters
+        ----------
+        force_max : float
+            The record's largest force, N.
+
+        Returns
+        -------
+        float or None
+            The larger of ``min_tof`` and the chain's bound, s; None when neither is set.
+        """
         b = [self.min_tof] if self.min_tof is not None else []
         if self.chain is not None and force_max > 0:
             b.append(self.chain.min_tof(force_max))
@@ -190,7 +308,29 @@ class TofOptions:
 
 
 def hit_peaks(force: np.ndarray, rate: float, n_pre: int, opts: TofOptions) -> PeakPair:
-    """Peaks of one record (force in N, ``n_pre`` pretrigger samples). Raises PeakError."""
+    """Peaks of one record (force in N, ``n_pre`` pretrigger samples). Raises PeakError.
+
+    Parameters
+    ----------
+    force : numpy.ndarray
+        The record, N.
+    rate : float
+        The sample rate, S/s.
+    n_pre : int
+        Pretrigger samples (baseline and noise).
+    opts : TofOptions
+        The low-pass cutoff, peak rule, interpolation and bound.
+
+    Returns
+    -------
+    ssw.signal.peaks.PeakPair
+        The incident and reflected peaks and their TOF (s).
+
+    Raises
+    ------
+    ssw.signal.peaks.PeakError
+        When the rule finds no valid pair of peaks.
+    """
     y = np.asarray(force, dtype=np.float64) - baseline(force, n_pre)
     sigma = noise_sigma(y, n_pre)
     y = lowpass(y, rate, opts.lowpass)
@@ -200,7 +340,25 @@ def hit_peaks(force: np.ndarray, rate: float, n_pre: int, opts: TofOptions) -> P
 
 @dataclass(frozen=True)
 class TofResult:
-    """TOF of a session: per-hit values (s; NaN if rejected), verdicts and statistics."""
+    """TOF of a session: per-hit values (s; NaN if rejected), verdicts and statistics.
+
+    Parameters
+    ----------
+    tof : numpy.ndarray
+        Per-hit TOF, s (NaN: no pair of peaks, or clipped).
+    accepted : numpy.ndarray
+        Per-hit verdict, bool (finite and not an outlier).
+    reasons : tuple of str
+        One reason per rejected hit, naming the hit.
+    f_incident : numpy.ndarray
+        Per-hit incident peak force, N (NaN: no peaks).
+    f_reflected : numpy.ndarray
+        Per-hit reflected peak force, N (NaN: no peaks).
+    sample_rate : float
+        The sample rate, S/s.
+    labels : tuple of str
+        Each hit's name, as its file labels it (empty: ``hit k``).
+    """
 
     tof: np.ndarray
     accepted: np.ndarray
@@ -212,6 +370,7 @@ class TofResult:
 
     @property
     def n_accepted(self) -> int:
+        """The number of accepted hits."""
         return int(self.accepted.sum())
 
     @property
@@ -231,6 +390,15 @@ class TofResult:
         return 100.0 * self.std / self.mean
 
     def to_dict(self) -> dict:
+        """The result as a JSON-able dict.
+
+        Returns
+        -------
+        dict
+            ``tof_mean``, ``tof_std`` (s), ``tof_cov_pct`` (%), ``n_hits``, ``n_accepted``,
+            ``tof_per_hit`` (s, None when rejected), ``accepted``, ``rejections``, ``hits``,
+            ``f_incident``, ``f_reflected`` (N) and ``sample_rate`` (S/s).
+        """
         return {
             "tof_mean": self.mean, "tof_std": self.std, "tof_cov_pct": self.cov_pct,
             "n_hits": int(self.tof.size), "n_accepted": self.n_accepted,
@@ -243,7 +411,20 @@ class TofResult:
 
 
 def outliers(tof: np.ndarray, rate: float) -> np.ndarray:
-    """Mask of finite TOFs farther than ``OUTLIER_K`` robust sigmas from their median."""
+    """Mask of finite TOFs farther than ``OUTLIER_K`` robust sigmas from their median.
+
+    Parameters
+    ----------
+    tof : numpy.ndarray
+        Per-hit TOF, s (NaN: none).
+    rate : float
+        The sample rate, S/s (the robust sigma is at least ``OUTLIER_FLOOR_SAMPLES / rate``).
+
+    Returns
+    -------
+    numpy.ndarray
+        The mask, bool; all False with fewer than 3 finite TOFs.
+    """
     ok = np.isfinite(tof)
     out = np.zeros(tof.shape, dtype=bool)
     if ok.sum() < 3:
@@ -278,6 +459,18 @@ def session_tof(
     labels : list of str or None
         Each hit's name as its file labels it (a CSV column's header, a channel's name),
         used in every reason; default ``hit k`` counted from 1.
+
+    Returns
+    -------
+    TofResult
+        Per-hit TOFs, verdicts and statistics.
+
+    Raises
+    ------
+    ssw.errors.RecordingError
+        When there are no records, or fewer than ``opts.min_hits`` are accepted.
+    ssw.errors.ConfigError
+        When ``labels`` does not name every hit once.
     """
     opts = opts or TofOptions()
     n = len(forces)
@@ -318,7 +511,25 @@ def session_tof(
 
 
 def recording_tof(recording, opts: TofOptions | None = None) -> TofResult:
-    """:func:`session_tof` of a :class:`ssw.daq.recording.Recording`."""
+    """:func:`session_tof` of a :class:`ssw.daq.recording.Recording`.
+
+    Parameters
+    ----------
+    recording : ssw.daq.recording.Recording
+        The recording (force in N).
+    opts : TofOptions or None
+        The options (default ``TofOptions()``).
+
+    Returns
+    -------
+    TofResult
+        Per-hit TOFs, verdicts and statistics.
+
+    Raises
+    ------
+    ssw.errors.RecordingError
+        When fewer than ``opts.min_hits`` hits are accepted.
+    """
     hits = recording.hits
     return session_tof(
         [h.force for h in hits], recording.sample_rate,

@@ -49,7 +49,18 @@ _BRACKETS = re.compile(r"^\s*(?P<name>.*?)\s*[\[\(]\s*(?P<unit>[^\]\)]*?)\s*[\]\
 
 
 def unit_of(text: str | None) -> str | None:
-    """The canonical unit (a key of :data:`UNITS`) spelled ``text``, or None if unknown."""
+    """The canonical unit (a key of :data:`UNITS`) spelled ``text``, or None if unknown.
+
+    Parameters
+    ----------
+    text : str or None
+        The unit as written (case and spelling variants accepted).
+
+    Returns
+    -------
+    str or None
+        The canonical unit.
+    """
     if text is None:
         return None
     t = text.strip()
@@ -57,14 +68,36 @@ def unit_of(text: str | None) -> str | None:
 
 
 def expected_units(quantity: str | None = None) -> str:
-    """The accepted units of a quantity (or of all), for error messages."""
+    """The accepted units of a quantity (or of all), for error messages.
+
+    Parameters
+    ----------
+    quantity : str or None
+        ``force``, ``voltage`` or ``time`` (None: all three).
+
+    Returns
+    -------
+    str
+        ``"<quantity>: <unit>, ..."``, quantities separated by ``;``.
+    """
     q = [quantity] if quantity else ["force", "voltage", "time"]
     return "; ".join(f"{k}: {', '.join(u for u, (kind, _) in UNITS.items() if kind == k)}"
                      for k in q)
 
 
 def parse_column(header: str) -> tuple[str, str | None]:
-    """``(name, unit text or None)`` of a column header (brackets, parentheses, suffix)."""
+    """``(name, unit text or None)`` of a column header (brackets, parentheses, suffix).
+
+    Parameters
+    ----------
+    header : str
+        The column's header, e.g. ``force [N]``, ``force (N)`` or ``force_N``.
+
+    Returns
+    -------
+    tuple of (str, str or None)
+        The column's name and its unit as written (None: no unit found).
+    """
     m = _BRACKETS.match(header)
     if m:
         return m.group("name").strip(), m.group("unit").strip()
@@ -77,7 +110,18 @@ def parse_column(header: str) -> tuple[str, str | None]:
 
 
 def quantity_of(unit: str | None) -> str | None:
-    """``force``, ``voltage`` or ``time`` for a canonical unit."""
+    """``force``, ``voltage`` or ``time`` for a canonical unit.
+
+    Parameters
+    ----------
+    unit : str or None
+        A canonical unit (:func:`unit_of`).
+
+    Returns
+    -------
+    str or None
+        The unit's quantity; None for an unknown unit.
+    """
     return UNITS[unit][0] if unit in UNITS else None
 
 
@@ -87,6 +131,28 @@ def to_newtons(data: np.ndarray, unit: str | None, sensitivity: float | None,
 
     Volts are divided by ``sensitivity`` (V/N). Raises :class:`~ssw.errors.RecordingError` naming
     ``where``, the unit and what was expected.
+
+    Parameters
+    ----------
+    data : numpy.ndarray
+        The values, in ``unit``.
+    unit : str or None
+        Their unit as written (a force or a voltage).
+    sensitivity : float or None
+        The sensor sensitivity, V/N (needed for a voltage).
+    where : str
+        The source (file and column), named in an error.
+
+    Returns
+    -------
+    numpy.ndarray
+        The force, N (float64).
+
+    Raises
+    ------
+    ssw.errors.RecordingError
+        When the unit is missing, unknown or a time, or a voltage comes without a positive
+        sensitivity.
     """
     u = unit_of(unit)
     if u is None:
@@ -107,7 +173,25 @@ def to_newtons(data: np.ndarray, unit: str | None, sensitivity: float | None,
 
 
 def time_factor(unit: str | None, where: str) -> float:
-    """Seconds per ``unit`` of a time axis (``None``: s)."""
+    """Seconds per ``unit`` of a time axis (``None``: s).
+
+    Parameters
+    ----------
+    unit : str or None
+        The time axis's unit as written (None: s).
+    where : str
+        The source, named in an error.
+
+    Returns
+    -------
+    float
+        Seconds per unit.
+
+    Raises
+    ------
+    ssw.errors.RecordingError
+        When the unit is not a unit of time.
+    """
     if unit is None:
         return 1.0
     u = unit_of(unit)
@@ -117,7 +201,25 @@ def time_factor(unit: str | None, where: str) -> float:
 
 
 def rate_from_time(t: np.ndarray, where: str) -> float:
-    """Sample rate (S/s) of a uniform, increasing time axis ``t`` (s)."""
+    """Sample rate (S/s) of a uniform, increasing time axis ``t`` (s).
+
+    Parameters
+    ----------
+    t : numpy.ndarray
+        The time axis, s.
+    where : str
+        The source, named in an error.
+
+    Returns
+    -------
+    float
+        The sample rate, S/s: ``(n - 1) / (t[-1] - t[0])``.
+
+    Raises
+    ------
+    ssw.errors.RecordingError
+        When the steps are not all positive and equal within 1e-6 of their mean.
+    """
     dt = np.diff(t)
     if dt.size == 0 or np.any(dt <= 0) or np.ptp(dt) > 1e-6 * np.mean(dt):
         raise RecordingError(f"{where}: the time axis is not uniformly increasing "
@@ -127,7 +229,20 @@ def rate_from_time(t: np.ndarray, where: str) -> float:
 
 def pretrigger(t: np.ndarray | None, n: int) -> int:
     """Pretrigger samples: the first sample at ``t >= 0`` when the axis starts before 0
-    (0 at the trigger), else ``PRE_FRACTION`` of the record; at least 2."""
+    (0 at the trigger), else ``PRE_FRACTION`` of the record; at least 2.
+
+    Parameters
+    ----------
+    t : numpy.ndarray or None
+        The time axis, s, 0 at the trigger (None: no axis).
+    n : int
+        The record's length, samples.
+
+    Returns
+    -------
+    int
+        The pretrigger sample count.
+    """
     if t is not None and t[0] < 0 <= t[-1]:
         return max(int(np.searchsorted(t, 0.0)), 2)
     return max(int(PRE_FRACTION * n), 2)
@@ -138,7 +253,39 @@ def make_recording(path: str, data: np.ndarray | list[np.ndarray], rate: float, 
                    labels: list[str] | None = None) -> Recording:
     """A :class:`~ssw.daq.recording.Recording` of hits (columns of ``data``, N) after the
     readers' checks; ``labels`` name the hits as the file does (a column's header, a
-    channel's name; default ``hit k`` from 1)."""
+    channel's name; default ``hit k`` from 1).
+
+    Parameters
+    ----------
+    path : str
+        The source file, named in errors and stored as ``imported_from``.
+    data : numpy.ndarray or list of numpy.ndarray
+        The hits' forces, N: a (n_samples, n_hits) array, or one array per hit (lengths may
+        differ).
+    rate : float
+        The sample rate, S/s.
+    n_pre : int
+        The pretrigger sample count (the trigger index of every hit).
+    meta : dict
+        The format's metadata (SI units), added to the recording's.
+    clipped : str
+        What to do with clipped hits: ``raise``, ``drop`` or ``keep``.
+    full_scale : float or None
+        The largest unclipped force, N (None: no range check).
+    labels : list of str or None
+        The hits' names (None: ``hit k``).
+
+    Returns
+    -------
+    ssw.daq.recording.Recording
+        The checked recording (:func:`ssw.daq.recording.check_hits`).
+
+    Raises
+    ------
+    ssw.errors.RecordingError
+        When the data are empty, the rate is not positive, the labels do not match the hits,
+        or a check of :func:`ssw.daq.recording.check_hits` fails.
+    """
     cols = [np.asarray(c, dtype=np.float64) for c in
             (data if isinstance(data, list) else np.atleast_2d(np.asarray(data).T))]
     if not cols or cols[0].size == 0:
@@ -161,7 +308,25 @@ def make_recording(path: str, data: np.ndarray | list[np.ndarray], rate: float, 
 
 
 def hit_matrix(rec: Recording) -> tuple[np.ndarray, int]:
-    """``(force (n_samples, n_hits) N, pretrigger samples)`` of a recording for writers."""
+    """``(force (n_samples, n_hits) N, pretrigger samples)`` of a recording for writers.
+
+    Parameters
+    ----------
+    rec : ssw.daq.recording.Recording
+        The recording.
+
+    Returns
+    -------
+    force : numpy.ndarray
+        The hits' forces, (n_samples, n_hits), N.
+    n_pre : int
+        The pretrigger sample count.
+
+    Raises
+    ------
+    ssw.errors.RecordingError
+        When there are no hits, or they differ in length or trigger index.
+    """
     if not rec.hits:
         raise RecordingError(f"{rec.path}: no hits to write")
     n_pre = {h.trigger_index for h in rec.hits}

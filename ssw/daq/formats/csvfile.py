@@ -82,7 +82,36 @@ def _table(path: str, header: list[str], delim: str, lines: list[str]) -> np.nda
 def read(path: str | Path, *, units: str | None = None, sensitivity: float | None = None,
          sample_rate: float | None = None, clipped: str = "raise",
          full_scale: float | None = None, **_: object) -> Recording:
-    """Read a CSV recording (module doc). ``units``: unit of hit columns without one."""
+    """Read a CSV recording (module doc). ``units``: unit of hit columns without one.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+    units : str or None
+        The unit of data that carry none (``N``, ``V``, ``lbf``, ...); must agree with a
+        stored one.
+    sensitivity : float or None
+        The sensor sensitivity, V/N (data in volts are divided by it).
+    sample_rate : float or None
+        The sample rate, S/s, when the file stores no time axis or rate.
+    clipped : str
+        What to do with clipped hits: ``raise``, ``drop`` or ``keep``.
+    full_scale : float or None
+        The recording device's largest unclipped force, N (None: no range check).
+    **_
+        Ignored (the options of other formats).
+
+    Returns
+    -------
+    ssw.daq.recording.Recording
+        The hits, force in N.
+
+    Raises
+    ------
+    ssw.errors.RecordingError
+        When the file cannot be read, a unit is missing or unknown, or no rate is known.
+    """
     p = str(path)
     header, delim, lines = _rows(p)
     data = _table(p, header, delim, lines)
@@ -127,7 +156,27 @@ def read(path: str | Path, *, units: str | None = None, sensitivity: float | Non
 
 
 def write(path: str | Path, rec: Recording, **_: object) -> Path:
-    """Write ``rec`` as CSV (module doc), atomically; returns the path."""
+    """Write ``rec`` as CSV (module doc), atomically; returns the path.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file to write.
+    rec : ssw.daq.recording.Recording
+        The recording; its hits of one length and one trigger index.
+    **_
+        Ignored (the options of other formats).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    ssw.errors.RecordingError
+        When the recording has no hits, or its hits differ in length or trigger index.
+    """
     force, n_pre = hit_matrix(rec)
     t = (np.arange(force.shape[0]) - n_pre) / rec.sample_rate
     names = ["time_s"] + [f"hit_{h.index:04d}_N" for h in rec.hits]

@@ -29,7 +29,36 @@ from ssw.h5io import atomic_path
 def read(path: str | Path, *, units: str | None = None, sensitivity: float | None = None,
          sample_rate: float | None = None, clipped: str = "raise",
          full_scale: float | None = None, **_: object) -> Recording:
-    """Read a ``.mat`` recording (module doc)."""
+    """Read a ``.mat`` recording (module doc).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+    units : str or None
+        The unit of data that carry none (``N``, ``V``, ``lbf``, ...); must agree with a
+        stored one.
+    sensitivity : float or None
+        The sensor sensitivity, V/N (data in volts are divided by it).
+    sample_rate : float or None
+        The sample rate, S/s, when the file stores no time axis or rate.
+    clipped : str
+        What to do with clipped hits: ``raise``, ``drop`` or ``keep``.
+    full_scale : float or None
+        The recording device's largest unclipped force, N (None: no range check).
+    **_
+        Ignored (the options of other formats).
+
+    Returns
+    -------
+    ssw.daq.recording.Recording
+        The hits, force in N.
+
+    Raises
+    ------
+    ssw.errors.RecordingError
+        When the file cannot be read, a unit is missing or unknown, or no rate is known.
+    """
     from scipy import io
 
     p = str(path)
@@ -77,7 +106,27 @@ def read(path: str | Path, *, units: str | None = None, sensitivity: float | Non
 
 
 def write(path: str | Path, rec: Recording, **_: object) -> Path:
-    """Write ``rec`` as ``.mat`` (``force`` N, ``t`` s, ``fs`` S/s), atomically."""
+    """Write ``rec`` as ``.mat`` (``force`` N, ``t`` s, ``fs`` S/s), atomically.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file to write.
+    rec : ssw.daq.recording.Recording
+        The recording; its hits of one length and one trigger index.
+    **_
+        Ignored (the options of other formats).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    ssw.errors.RecordingError
+        When the recording has no hits, or its hits differ in length or trigger index.
+    """
     from scipy import io
 
     force, n_pre = hit_matrix(rec)

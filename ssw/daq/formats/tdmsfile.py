@@ -81,7 +81,46 @@ def read(path: str | Path, *, units: str | None = None, sensitivity: float | Non
          sample_rate: float | None = None, clipped: str = "raise",
          full_scale: float | None = None, group: str | None = None, split: bool | None = None,
          trigger: TriggerRule | None = None, **_: object) -> Recording:
-    """Read a TDMS recording (module doc)."""
+    """Read a TDMS recording (module doc).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file.
+    units : str or None
+        The unit of data that carry none (``N``, ``V``, ``lbf``, ...); must agree with a
+        stored one.
+    sensitivity : float or None
+        The sensor sensitivity, V/N (data in volts are divided by it).
+    sample_rate : float or None
+        The sample rate, S/s, when the file stores no time axis or rate.
+    clipped : str
+        What to do with clipped hits: ``raise``, ``drop`` or ``keep``.
+    full_scale : float or None
+        The recording device's largest unclipped force, N (None: no range check).
+    group : str or None
+        Read only this group (None: every group).
+    split : bool or None
+        Whether the one data channel is a long stream to cut into hits (None: when it is
+        longer than one record).
+    trigger : ssw.daq.trigger.TriggerRule or None
+        The rule that cuts a long channel (None: the file's ``ssw_trigger_*`` properties, else
+        the ``daq:`` defaults).
+    **_
+        Ignored (the options of other formats).
+
+    Returns
+    -------
+    ssw.daq.recording.Recording
+        The hits, force in N.
+
+    Raises
+    ------
+    ssw.errors.RecordingError
+        When the file cannot be read, a unit is missing or unknown, or no rate is known.
+    ssw.errors.ConfigError
+        When ``split`` is asked of a file with several data channels.
+    """
     nptdms = _nptdms()
     p = str(path)
     try:
@@ -176,7 +215,27 @@ def _channel(nptdms: Any, name: str, data: np.ndarray, rate: float, offset: floa
 
 
 def write(path: str | Path, rec: Recording, **_: object) -> Path:
-    """Write ``rec`` as TDMS, one channel per hit (force in N, NI waveform properties)."""
+    """Write ``rec`` as TDMS, one channel per hit (force in N, NI waveform properties).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file to write.
+    rec : ssw.daq.recording.Recording
+        The recording; its hits of one length and one trigger index.
+    **_
+        Ignored (the options of other formats).
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+
+    Raises
+    ------
+    ssw.errors.RecordingError
+        When the recording has no hits, or its hits differ in length or trigger index.
+    """
     nptdms = _nptdms()
     force, n_pre = hit_matrix(rec)
     offset = -n_pre / rec.sample_rate
@@ -189,7 +248,28 @@ def write(path: str | Path, rec: Recording, **_: object) -> Path:
 def write_stream(path: str | Path, force: np.ndarray, rate: float, rule: TriggerRule, *,
                  unit: str = "N", name: str = "force") -> Path:
     """Write one long channel (``force`` in ``unit``, ``rate`` S/s) with ``rule`` stored as
-    the file's ``ssw_trigger_*`` properties (how :func:`read` splits it)."""
+    the file's ``ssw_trigger_*`` properties (how :func:`read` splits it).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The file to write.
+    force : numpy.ndarray
+        The signal, in ``unit``.
+    rate : float
+        The sample rate, S/s.
+    rule : ssw.daq.trigger.TriggerRule
+        The trigger rule stored with it.
+    unit : str
+        The signal's unit (stored as ``unit_string``).
+    name : str
+        The channel's name.
+
+    Returns
+    -------
+    pathlib.Path
+        ``path``.
+    """
     nptdms = _nptdms()
     props = {"ssw_trigger_level": float(rule.level), "ssw_trigger_slope": rule.slope,
              "ssw_pretrigger_samples": int(rule.pretrigger_samples),

@@ -46,10 +46,10 @@ from typing import Any
 
 import numpy as np
 import scipy.sparse as sp
-from scipy.sparse.linalg import splu
 
 from ssw.constitutive.base import Update
 from ssw.constitutive.tensors import ONE, P_DEV, SQRT2, bulk_shear, elastic_tangent
+from ssw.contact import lu as sparse_lu
 from ssw.contact.assembly import (
     element_sizes,
     fixed_free,
@@ -674,12 +674,8 @@ def _factor(A: Any) -> Any:
     """SuperLU of a symmetric quasi-definite Newton matrix (the u-p blocks: SPD displacement
     block, negative definite pressure block; Vanderbei 1995): a minimum-degree ordering of
     ``A + A^T`` with diagonal pivots, the symmetric structure's fill; partial pivoting (the
-    COLAMD ordering) when a diagonal pivot fails."""
-    try:
-        return splu(A, permc_spec="MMD_AT_PLUS_A", diag_pivot_thresh=0.0,
-                    options={"SymmetricMode": True})
-    except RuntimeError:
-        return splu(A, permc_spec="COLAMD")
+    COLAMD ordering) when a diagonal pivot fails (:mod:`ssw.contact.lu`)."""
+    return sparse_lu.diagonal_lu(A, "MMD_AT_PLUS_A") or sparse_lu.pivoted_lu(A)
 
 
 def _symmetric_order(lu: Any) -> np.ndarray | None:
@@ -704,11 +700,8 @@ class _OrderedLU:
     def factor(cls, A: Any, order: np.ndarray) -> _OrderedLU | None:
         """The factorization of ``A`` (CSC, already permuted to ``order``) with diagonal
         pivots in its own order; None when a diagonal pivot fails."""
-        try:
-            return cls(splu(A, permc_spec="NATURAL", diag_pivot_thresh=0.0,
-                            options={"SymmetricMode": True}), order)
-        except RuntimeError:
-            return None
+        factors = sparse_lu.diagonal_lu(A)
+        return None if factors is None else cls(factors, order)
 
     def solve(self, rhs: np.ndarray, trans: str = "N") -> np.ndarray:
         """The solution of the unpermuted system (``trans`` as SuperLU's)."""

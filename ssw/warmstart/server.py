@@ -310,7 +310,6 @@ def serve(path: str, parent: int) -> None:
     listener.bind(f"{path}.new")
     listener.listen(128)
     listener.setblocking(False)
-    os.replace(f"{path}.new", path)  # the path appears when it accepts
     srv = _Server(listener, path, parent)
 
     def stop(signum: int, frame: object) -> None:
@@ -322,6 +321,9 @@ def serve(path: str, parent: int) -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
     srv.selector.register(listener, selectors.EVENT_READ, "accept")
     srv.selector.register(srv.wake_r, selectors.EVENT_READ, "wake")
+    # the path appears when it accepts and a SIGTERM stops it cleanly (whoever sees the
+    # path may stop it at once)
+    os.replace(f"{path}.new", path)
     print(f"ssw warm start: pid {os.getpid()}, {len(sys.modules)} modules loaded, "
           f"{len(srv.code.files)} files watched; listening at {path}", flush=True)
     while not (srv.stopping and not srv.forks and not srv.unrun):

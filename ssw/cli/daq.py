@@ -83,6 +83,24 @@ def format_hit(r: Any) -> str:
 
 
 def run_acquire(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw acquire``: one sample session (N hits) recorded with an NI 9234, or simulated.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw acquire --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The recording written and its TOF (mean, std, COV, per hit; s).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When the analytic source has no ``--tof``, or the soil is neither a
+        library material nor given by ``--soil-E`` and ``--soil-nu``.
+    """
     from ssw.cli._device import chain_context
     from ssw.config import library
     from ssw.daq.backend import get_backend, run_session
@@ -162,6 +180,18 @@ def run_acquire(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def run_tof_recording(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw tof-recording``: the TOF (mean, std, COV, per hit) of a recording.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw tof-recording --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The file, its metadata, the TOF result (s) and the hits dropped.
+    """
     from ssw.cli._device import chain_context
     from ssw.daq.importers import read_any
     from ssw.signal.tof import recording_tof
@@ -193,6 +223,13 @@ def _human_tof(r: dict[str, Any]) -> str:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``ssw acquire``, ``ssw tof-recording`` subcommands to the command line.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``ssw`` parser.
+    """
     p = sub.add_parser(
         "acquire", help="record one sample session (N hits) with an NI 9234, or simulate it",
         description="One finite reference-triggered record per hit, written to one HDF5 "

@@ -229,6 +229,21 @@ def _record_usage(argv: Sequence[str], started: float) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """The ``ssw`` command: parse ``argv``, run the command, print its result.
+
+    Library errors (:class:`ssw.errors.SswError`) are one line on stderr; with ``$SSW_USAGE_DIR``
+    set, the process's CPU and wall time are written there.
+
+    Parameters
+    ----------
+    argv : sequence of str or None
+        The arguments after ``ssw`` (None: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        The exit status: 0 on success, 2 on a library error, 130 when interrupted.
+    """
     started = _process_wall()
     argv = list(sys.argv[1:] if argv is None else argv)
     try:

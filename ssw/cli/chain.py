@@ -30,7 +30,22 @@ def context_strengths(ctx: Any, sample: Any = None, source: str = "") -> Any:
     """The strengths of the yield checks (:func:`ssw.validity.strengths_of`) of a resolved
     chain context: its device's beads and plate in its materials (the calibration's, else
     the config's library), the sample's ``sample`` (Pa, one or one per scene) from
-    ``source`` when known."""
+    ``source`` when known.
+
+    Parameters
+    ----------
+    ctx : ssw.cli._device.ChainContext
+        The resolved chain context.
+    sample : float or numpy.ndarray or None
+        Pa, the sample's strength (one, or one per scene); None: not known.
+    source : str
+        Where the sample's strength comes from.
+
+    Returns
+    -------
+    ssw.validity.Strengths
+        The strengths of the beads, the plate and the sample (Pa).
+    """
     from ssw.config import library
     from ssw.validity import strengths_of
 
@@ -40,7 +55,18 @@ def context_strengths(ctx: Any, sample: Any = None, source: str = "") -> Any:
 
 
 def sample_statement(sample: Any) -> str:
-    """The stated sample geometry a ``finite_sample`` check rests on, in words."""
+    """The stated sample geometry a ``finite_sample`` check rests on, in words.
+
+    Parameters
+    ----------
+    sample : ssw.sample.Sample
+        The tested block (lengths in m).
+
+    Returns
+    -------
+    str
+        Its thickness and radius (mm), base and side.
+    """
     d = sample.to_dict()
     parts = [f"thickness {d['thickness'] * 1e3:g} mm"]
     if d.get("radius") is not None:
@@ -52,7 +78,24 @@ def sample_statement(sample: Any) -> str:
 def finite_sample_validity(ctx: Any, E: Any, nu: Any, tof: Any) -> Any:
     """The ``finite_sample`` check of TOFs ``tof`` (s) on the context's stated sample at
     ``E`` (Pa), ``nu`` (:func:`ssw.lift.half_space_departure`), or None without a
-    stated sample."""
+    stated sample.
+
+    Parameters
+    ----------
+    ctx : ssw.cli._device.ChainContext
+        The resolved chain context (its sample and wall options).
+    E : float or numpy.ndarray
+        Pa, the soil moduli.
+    nu : float or numpy.ndarray
+        The soils' Poisson's ratios (-).
+    tof : float or numpy.ndarray
+        s, the TOFs on the sample.
+
+    Returns
+    -------
+    ssw.validity.Validity or None
+        The check, or None without a stated sample.
+    """
     from ssw.lift import half_space_departure
     from ssw.validity import finite_sample
 
@@ -63,7 +106,15 @@ def finite_sample_validity(ctx: Any, E: Any, nu: Any, tof: Any) -> Any:
 
 
 def add_stress_checks_option(p: argparse.ArgumentParser, default: str) -> None:
-    """``--stress-checks`` (:data:`ssw.validity.STRESS_MODES`)."""
+    """``--stress-checks`` (:data:`ssw.validity.STRESS_MODES`).
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser (the options are added to it).
+    default : str
+        The mode when the flag is not given.
+    """
     from ssw.validity import STRESS_MODES
 
     p.add_argument("--stress-checks", choices=STRESS_MODES, default=default,

@@ -273,6 +273,22 @@ def scene_reach(scenes: list[Any], cfg: dict[str, Any], contact: dict[str, Any],
     at its last contact on that scene (:func:`ssw.fit.range.scenes_delta_max`, one batched
     chain run). The thesis's 0.1 mm stops short of the 0.2-0.6 mm a 20-bead chain presses
     into soils below ~700 MPa, and the chain's TOF would rest on an extrapolated curve.
+
+    Parameters
+    ----------
+    scenes : list of ssw.config.Scene
+        The scenes (soil E, Pa; nu; plate material and thickness, m).
+    cfg : dict of str to Any
+        The study config (the indenter's radius, m; the chain for ``chain``).
+    contact : dict of str to Any
+        The ``contact:`` settings (``delta_max``, m; ``delta_mode``; ``reach_energy``, J).
+    mats : dict
+        The materials library (key to Material: the plates' E, Pa, and nu).
+
+    Returns
+    -------
+    list of float
+        m, each scene's final indentation.
     """
     d0 = float(contact.get("delta_max", 1.0e-4))
     mode = contact.get("delta_mode", "fixed")

@@ -512,7 +512,19 @@ def _load_results(paths: list[str]) -> list[dict[str, Any]]:
 
 
 def human(res: dict[str, Any]) -> str:
-    """The ranking as a short table and the recommendation with its reasons."""
+    """The ranking as a short table and the recommendation with its reasons.
+
+    Parameters
+    ----------
+    res : dict of str to Any
+        The result of :func:`run` (a plate design or, ``ssw_kind`` ``design_device``, a
+        device design: :func:`ssw.design.device_output.human`).
+
+    Returns
+    -------
+    str
+        The text for the terminal (thickness in mm, the rest in SI units).
+    """
     if res.get("ssw_kind") == "design_device":
         from ssw.design.device_output import human as device_human
 

@@ -169,7 +169,26 @@ def _sample_range(args: argparse.Namespace, ctx: Any) -> list[dict[str, Any]] | 
 
 def sample_strength(args: argparse.Namespace, ctx: Any) -> float | None:
     """The sample's uniaxial strength (Pa): ``--sample-strength``, else that of the library
-    material ``--sample-material`` (:func:`ssw.measure.uniaxial_strength`), else None."""
+    material ``--sample-material`` (:func:`ssw.measure.uniaxial_strength`), else None.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (``--sample-strength``, ``--sample-material``).
+    ctx : ssw.cli._device.ChainContext
+        The resolved chain context (its config's materials library).
+
+    Returns
+    -------
+    float or None
+        Pa, the strength, or None.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When both flags are given, the material is not in the library, or its entry
+        states no strength.
+    """
     from ssw.errors import ConfigError
     from ssw.measure import uniaxial_strength
 

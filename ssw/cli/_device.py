@@ -106,8 +106,8 @@ class ChainContext:
     params: Any
     wall: str
     wall_options: dict[str, Any]
-    #: the tested sample (ssw.sample.Sample; None: a half-space) and the wall options
-    #: without it (what a calibration records: its sample belongs to its references)
+    # the tested sample (ssw.sample.Sample; None: a half-space) and the wall options
+    # without it (what a calibration records: its sample belongs to its references)
     sample: Any = None
     device_wall_options: dict[str, Any] | None = None
 

@@ -30,7 +30,13 @@ from ssw.h5io import to_json
 
 
 def add_json_flag(parser: argparse.ArgumentParser) -> None:
-    """Add the ``--json`` flag every subcommand has."""
+    """Add the ``--json`` flag every subcommand has.
+
+    Parameters
+    ----------
+    parser : argparse.ArgumentParser
+        The subcommand's parser.
+    """
     parser.add_argument(
         "--json",
         action="store_true",
@@ -39,7 +45,13 @@ def add_json_flag(parser: argparse.ArgumentParser) -> None:
 
 
 def command_modules() -> list[str]:
-    """Names of the modules of ``ssw.cli`` that define subcommands, sorted."""
+    """Names of the modules of ``ssw.cli`` that define subcommands, sorted.
+
+    Returns
+    -------
+    list of str
+        Dotted module names (those not starting with an underscore).
+    """
     import ssw.cli as pkg
 
     names = (m.name for m in pkgutil.iter_modules(pkg.__path__))
@@ -52,7 +64,13 @@ _ADD_PARSER_RE = re.compile(r"\.add_parser\(\s*[\"']([\w-]+)[\"']")
 
 def command_index() -> dict[str, str]:
     """Command name -> the module that registers it, found by reading the modules' text
-    (importing every module would import everything they use: ~0.5 s per command run)."""
+    (importing every module would import everything they use: ~0.5 s per command run).
+
+    Returns
+    -------
+    dict of str to str
+        Command name to the dotted name of its module.
+    """
     import ssw.cli as pkg
 
     out: dict[str, str] = {}
@@ -135,7 +153,18 @@ class _GroupedParser(argparse.ArgumentParser):
 
 def build_parser(argv: Sequence[str] | None = None) -> argparse.ArgumentParser:
     """The ``ssw`` parser: every command, or, when ``argv`` names one, only the module that
-    defines it (``ssw --help`` and an unknown command still see them all)."""
+    defines it (``ssw --help`` and an unknown command still see them all).
+
+    Parameters
+    ----------
+    argv : sequence of str or None
+        The arguments after ``ssw``; None: every command.
+
+    Returns
+    -------
+    argparse.ArgumentParser
+        The parser.
+    """
     parser = _GroupedParser(
         prog="ssw",
         description="Solitary strain wave (SSW) device: the soil's Young's modulus from the "
@@ -229,6 +258,21 @@ def _record_usage(argv: Sequence[str], started: float) -> None:
 
 
 def main(argv: Sequence[str] | None = None) -> int:
+    """The ``ssw`` command: parse ``argv``, run the command, print its result.
+
+    Library errors (:class:`ssw.errors.SswError`) are one line on stderr; with ``$SSW_USAGE_DIR``
+    set, the process's CPU and wall time are written there.
+
+    Parameters
+    ----------
+    argv : sequence of str or None
+        The arguments after ``ssw`` (None: ``sys.argv[1:]``).
+
+    Returns
+    -------
+    int
+        The exit status: 0 on success, 2 on a library error, 130 when interrupted.
+    """
     started = _process_wall()
     argv = list(sys.argv[1:] if argv is None else argv)
     try:

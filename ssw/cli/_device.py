@@ -50,7 +50,15 @@ WALL_CHOICES = ("rigid", "hertz", "fit", "table", "fem")
 
 def add_device_options(p: argparse.ArgumentParser,
                        walls: tuple[str, ...] = WALL_CHOICES) -> None:
-    """Config, device, calibration, device-field and wall options."""
+    """Config, device, calibration, device-field and wall options.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser (the options are added to it).
+    walls : tuple of str
+        The wall laws ``--law`` accepts.
+    """
     from ssw.cli._sample import add_sample_options
 
     add_sample_options(p)
@@ -69,7 +77,28 @@ def add_device_options(p: argparse.ArgumentParser,
 
 @dataclass(frozen=True)
 class ChainContext:
-    """What a chain command runs: config, device, calibration, ChainParams, wall law."""
+    """What a chain command runs: config, device, calibration, ChainParams, wall law.
+
+    Parameters
+    ----------
+    cfg : dict of str to Any
+        The study config.
+    device : ssw.device.Device
+        The device (the calibration's when there is one).
+    calibration : ssw.calibration.Calibration or None
+        The calibration applied, or None.
+    params : ssw.chain.params.ChainParams
+        The chain (SI units).
+    wall : str
+        The last contact's law (``rigid``, ``hertz``, ``fit``, ``table`` or ``fem``; empty
+        for a numerics-only context).
+    wall_options : dict of str to Any
+        The wall law's options (with the tested sample's contact settings).
+    sample : ssw.sample.Sample or None
+        The tested sample; None: a half-space.
+    device_wall_options : dict of str to Any or None
+        The wall options without the sample (what a calibration records).
+    """
 
     cfg: dict[str, Any]
     device: Any
@@ -77,13 +106,20 @@ class ChainContext:
     params: Any
     wall: str
     wall_options: dict[str, Any]
-    #: the tested sample (ssw.sample.Sample; None: a half-space) and the wall options
-    #: without it (what a calibration records: its sample belongs to its references)
+    # the tested sample (ssw.sample.Sample; None: a half-space) and the wall options
+    # without it (what a calibration records: its sample belongs to its references)
     sample: Any = None
     device_wall_options: dict[str, Any] | None = None
 
     def inputs(self) -> dict[str, Any]:
-        """Provenance for --json and output files."""
+        """Provenance for --json and output files.
+
+        Returns
+        -------
+        dict of str to Any
+            The device's name, source and values (SI units), the calibration file, the
+            wall and its options (objects named by their type, the curve left out).
+        """
         return {
             "device_name": self.device.name, "device_source": self.device.source,
             "device_values": self.device.physics_dict(),
@@ -96,7 +132,21 @@ class ChainContext:
 
 
 def resolve_calibration(spec: str | None, cfg: dict[str, Any]) -> Any:
-    """The calibration of ``--calibration`` (see the module docstring) or None."""
+    """The calibration of ``--calibration`` (see the module docstring) or None.
+
+    Parameters
+    ----------
+    spec : str or None
+        ``--calibration``: a file, ``auto`` (or None) or ``none``.
+    cfg : dict of str to Any
+        The study config (its ``calibration.use``).
+
+    Returns
+    -------
+    ssw.calibration.Calibration or None
+        The calibration loaded, or None (``none``; ``auto`` without the study's file or
+        with ``calibration.use`` false).
+    """
     from ssw.calibration import load_calibration
 
     if spec is None or spec == "auto":
@@ -185,7 +235,34 @@ def check_bead_material(key: str, over: dict[str, Any], materials: dict[str, Any
 
 def chain_context(args: argparse.Namespace, E: Any = 1.0e8, nu: Any = 0.3,
                   numerics_only: bool = False) -> ChainContext:
-    """Resolve config, calibration, device, params and wall (module docstring)."""
+    """Resolve config, calibration, device, params and wall (module docstring).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (the options of :func:`add_device_options`).
+    E : float or numpy.ndarray
+        Pa, the soil moduli the ``table`` wall needs curves of.
+    nu : float or numpy.ndarray
+        The soils' Poisson's ratios (-), likewise.
+    numerics_only : bool
+        Resolve config, calibration, device and params only (no wall, no sample).
+
+    Returns
+    -------
+    ChainContext
+        What the command runs.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        On contradicting flags (``--drop-height`` with ``--striker-velocity``, a flag
+        against the calibration, ``--bead-material`` against bead values), a thickness
+        range where one thickness is needed, a sample without the fem wall, or wall
+        dynamics without the soil's density.
+    ssw.provenance.ProvenanceError
+        When the calibration was made for another device.
+    """
     from ssw.chain.params import chain_params, numerics_of
     from ssw.cli._sample import sample_of, thickness_range
     from ssw.config import device_of, library, load_config
@@ -286,7 +363,29 @@ def contact_for_bead(cfg: dict[str, Any], bead_radius: float) -> dict[str, Any]:
 
 def wall_law(args: argparse.Namespace, cfg: dict[str, Any], cal: Any, params: Any,
              E: Any, nu: Any) -> tuple[str, dict[str, Any]]:
-    """The last-contact law and its options (module docstring, step 5)."""
+    """The last-contact law and its options (module docstring, step 5).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (``--law``, ``--K``, ``--k-table``, ``--curve``,
+        ``--contact-dir``).
+    cfg : dict of str to Any
+        The study config.
+    cal : ssw.calibration.Calibration or None
+        The calibration, whose law and options win.
+    params : ssw.chain.params.ChainParams
+        The chain (its bead radius, m, and plate).
+    E : float or numpy.ndarray
+        Pa, the soil moduli whose curves the ``table`` law reads.
+    nu : float or numpy.ndarray
+        The soils' Poisson's ratios (-), likewise.
+
+    Returns
+    -------
+    tuple of (str, dict of str to Any)
+        The law's name and its options.
+    """
     given = getattr(args, "wall", None)
     if cal is not None:  # its law and options (a contradicting flag is refused before)
         law = cal.wall["law"]

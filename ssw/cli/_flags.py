@@ -46,7 +46,7 @@ GROUPS = {DEVICE: "device fields (override the device's)", MODEL: "numerics and 
 class Flag:
     """One command-line flag of the chain commands.
 
-    Attributes
+    Parameters
     ----------
     option : str
         The flag (``--bead-E``).
@@ -88,7 +88,18 @@ class Flag:
         return "wall" if self.option == "--law" else self.option[2:].replace("-", "_")
 
     def value(self, args: argparse.Namespace) -> Any:
-        """The field's value the flag gives in ``args``, or None when it is not given."""
+        """The field's value the flag gives in ``args``, or None when it is not given.
+
+        Parameters
+        ----------
+        args : argparse.Namespace
+            The parsed command line.
+
+        Returns
+        -------
+        Any
+            The field's value (SI units), or None.
+        """
         v = getattr(args, self.dest, None)
         if self.const is not None:
             return self.const if v else None
@@ -168,7 +179,15 @@ BY_OPTION = {f.option: f for f in FLAGS}
 
 
 def add_flags(p: argparse.ArgumentParser, walls: tuple[str, ...]) -> None:
-    """Every flag of :data:`FLAGS` in its group (``--law`` choosing among ``walls``)."""
+    """Every flag of :data:`FLAGS` in its group (``--law`` choosing among ``walls``).
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser (the flags are added to it).
+    walls : tuple of str
+        The wall laws ``--law`` accepts.
+    """
     groups = {t: p.add_argument_group(title) for t, title in GROUPS.items()}
     for f in FLAGS:
         g = groups[f.target if f.field != "fit_law" else WALL]
@@ -182,7 +201,20 @@ def add_flags(p: argparse.ArgumentParser, walls: tuple[str, ...]) -> None:
 
 
 def given(args: argparse.Namespace, target: str | None = None) -> dict[Flag, Any]:
-    """The flags given in ``args`` (of ``target`` only, if given) and their field values."""
+    """The flags given in ``args`` (of ``target`` only, if given) and their field values.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    target : str or None
+        ``device``, ``model`` or ``wall``; None: every flag.
+
+    Returns
+    -------
+    dict of Flag to Any
+        Each flag given and its field's value (SI units).
+    """
     out = {}
     for f in FLAGS:
         v = f.value(args)
@@ -192,12 +224,38 @@ def given(args: argparse.Namespace, target: str | None = None) -> dict[Flag, Any
 
 
 def fields_of(args: argparse.Namespace, target: str) -> dict[str, Any]:
-    """``{field: value}`` of the ``target``'s flags given in ``args``."""
+    """``{field: value}`` of the ``target``'s flags given in ``args``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+    target : str
+        ``device``, ``model`` or ``wall``.
+
+    Returns
+    -------
+    dict of str to Any
+        Field name to value (SI units).
+    """
     return {f.field: v for f, v in given(args, target).items()}
 
 
 def same(a: Any, b: Any) -> bool:
-    """Two values of a flag agree (floats within :data:`SAME_REL`)."""
+    """Two values of a flag agree (floats within :data:`SAME_REL`).
+
+    Parameters
+    ----------
+    a : Any
+        One value.
+    b : Any
+        The other.
+
+    Returns
+    -------
+    bool
+        Whether they agree: numbers within the relative :data:`SAME_REL`, others equal.
+    """
     if isinstance(a, bool) or isinstance(b, bool) or a is None or b is None:
         return a == b
     if isinstance(a, int | float | np.floating) and isinstance(b, int | float | np.floating):
@@ -208,7 +266,21 @@ def same(a: Any, b: Any) -> bool:
 def calibrated_value(flag: Flag, cal: Any) -> Any:
     """What the calibration ``cal`` was made with for ``flag``'s field (the calibrated
     device's field, its ChainParams' field, its wall law or a wall option; the striker
-    speed for ``--drop-height``)."""
+    speed for ``--drop-height``).
+
+    Parameters
+    ----------
+    flag : Flag
+        The flag.
+    cal : ssw.calibration.Calibration
+        The calibration.
+
+    Returns
+    -------
+    Any
+        The calibrated value (SI units; m/s for ``--drop-height``), or None for a wall
+        option it does not state.
+    """
     if flag.target == DEVICE:
         return getattr(cal.device, "striker_velocity" if flag.field == "drop_height"
                        else flag.field)

@@ -11,7 +11,13 @@ from ssw.sample import BASES, LATERALS, Sample, equivalent_radius
 
 def add_sample_options(p: argparse.ArgumentParser) -> None:
     """``--sample-thickness``, ``--sample-radius`` or ``--sample-box``, ``--sample-base``,
-    ``--sample-lateral`` (default: none of them, the half-space)."""
+    ``--sample-lateral`` (default: none of them, the half-space).
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser (the options are added to it).
+    """
     g = p.add_argument_group("sample (default: a half-space)")
     g.add_argument("--sample-thickness", metavar="H|LO:HI",
                    help="a finite sample block of this thickness, m; a range LO:HI (ssw "
@@ -32,7 +38,23 @@ def add_sample_options(p: argparse.ArgumentParser) -> None:
 
 
 def thickness_range(args: argparse.Namespace) -> tuple[float, float] | None:
-    """``(lo, hi)`` m of ``--sample-thickness LO:HI``; None for one thickness or none."""
+    """``(lo, hi)`` m of ``--sample-thickness LO:HI``; None for one thickness or none.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line.
+
+    Returns
+    -------
+    tuple of (float, float) or None
+        ``(lo, hi)``, m, or None.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When the range is not two numbers with ``0 < LO < HI``.
+    """
     text = getattr(args, "sample_thickness", None)
     if text is None or ":" not in str(text):
         return None
@@ -47,7 +69,26 @@ def thickness_range(args: argparse.Namespace) -> tuple[float, float] | None:
 
 def sample_of(args: argparse.Namespace, thickness: float | None = None) -> Sample | None:
     """The :class:`~ssw.sample.Sample` of the flags, or None (the half-space) when none is given; a
-    thickness range gives its middle (or ``thickness``, m)."""
+    thickness range gives its middle (or ``thickness``, m).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (the options of :func:`add_sample_options`).
+    thickness : float or None
+        m, the block's thickness instead of the flag's (None: the flag's).
+
+    Returns
+    -------
+    ssw.sample.Sample or None
+        The block (lengths in m), or None for the half-space.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        On a malformed thickness or box, sample flags without a thickness, a radius and a
+        box (or neither), a radius with an elastic base, or base values without one.
+    """
     text = getattr(args, "sample_thickness", None)
     rng = thickness_range(args)
     if thickness is None and text is not None:

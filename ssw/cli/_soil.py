@@ -15,7 +15,13 @@ PLASTIC_MODELS = ("von-mises", "drucker-prager", "crushable-foam", "tresca")
 
 def add_soil_model_options(p: Any) -> None:
     """The flags of a plastic sample's model (``ssw contact``, ``ssw tof --hits``), on a
-    parser or an argument group: read by :func:`soil_model_of`."""
+    parser or an argument group: read by :func:`soil_model_of`.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser or argparse._ArgumentGroup
+        The command's parser or one of its argument groups (the options are added to it).
+    """
     p.add_argument("--soil-model", choices=PLASTIC_MODELS,
                    help="constitutive model of the sample beyond elasticity (the "
                    "elasto-plastic contact, ssw.contact.plastic; through the plate if any)")
@@ -38,7 +44,25 @@ def add_soil_model_options(p: Any) -> None:
 def soil_material_of(args: argparse.Namespace, cfg: dict[str, Any]) -> Any:
     """The library material of ``--soil-material`` (None without it); fills
     ``args.soil_E``/``soil_nu`` from it when they are not given. ConfigError naming the
-    flag for a key the library lacks."""
+    flag for a key the library lacks.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (``--soil-material``, ``--soil-E``, ``--soil-nu``).
+    cfg : dict of str to Any
+        The study config (its materials library).
+
+    Returns
+    -------
+    ssw.materials.Material or None
+        The material, or None without the flag.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When the library has no such material.
+    """
     if args.soil_material is None:
         return None
     from ssw.config import library
@@ -56,7 +80,27 @@ def soil_material_of(args: argparse.Namespace, cfg: dict[str, Any]) -> Any:
 def soil_model_of(args: argparse.Namespace, cfg: dict[str, Any]) -> Any:
     """The :mod:`ssw.constitutive` model of the flags; fills ``args.soil_E``/``soil_nu``
     from ``--soil-material`` when they are not given. ConfigError naming the flag that is
-    missing or wrong."""
+    missing or wrong.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (the options of :func:`add_soil_model_options`).
+    cfg : dict of str to Any
+        The study config (its materials library).
+
+    Returns
+    -------
+    Any
+        The plastic model (:func:`ssw.constitutive.model_from`, or the material's
+        strengths through :func:`ssw.constitutive.model_of_strength`; stresses in Pa).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``--soil-model``, the soil's E or nu, or a strength the model needs is
+        missing, or the model is no plastic one.
+    """
     from ssw.constitutive import model_from, model_of_strength
 
     if args.soil_model is None:
@@ -96,7 +140,13 @@ PLATE_MODELS = ("von-mises",)
 
 def add_plate_model_options(p: Any) -> None:
     """The flags of a yielding plate (``ssw contact``, ``ssw tof --hits``), on a parser or
-    an argument group: read by :func:`plate_model_of`."""
+    an argument group: read by :func:`plate_model_of`.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser or argparse._ArgumentGroup
+        The command's parser or one of its argument groups (the options are added to it).
+    """
     p.add_argument("--plate-model", choices=PLATE_MODELS,
                    help="constitutive model of the plate beyond elasticity (default: elastic); "
                    "its yield stress and hardening are the plate material's in the library "

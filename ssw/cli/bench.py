@@ -10,6 +10,16 @@ import pkgutil
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``ssw bench`` subcommand to the command line.
+
+    Each kind of :mod:`ssw.bench` adds its own parser under ``ssw bench``; every one gets the
+    ``--json`` flag.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``ssw`` parser.
+    """
     import ssw.bench as pkg
     from ssw.cli import add_json_flag
 

@@ -75,6 +75,27 @@ def _ranges(items: list[str] | None) -> dict[str, tuple[float, float]]:
 
 
 def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw calibrate``: device parameters identified from measured TOFs on references (the bounded
+    Levenberg-Marquardt of :mod:`ssw.calibration`).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw calibrate --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The identified parameters with their standard deviations, covariance, residuals,
+        leave-one-out and alternatives, the calibration file (``output``) and the cost (s);
+        SI units.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        On flags that do not go together or a malformed ``--reference`` or
+        ``--reference-recording``.
+    """
     from ssw.calibration import calibrate, parse_reference, write_calibration
     from ssw.calibration.references import from_config, recording_reference
     from ssw.chain.params import numerics_of
@@ -281,6 +302,13 @@ def _human(r: dict[str, Any]) -> str:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``ssw calibrate`` subcommand to the command line.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``ssw`` parser.
+    """
     p = sub.add_parser(
         "calibrate", help="identify device parameters from measured TOFs on references",
         description="Least-squares identification of device parameters (a batched global "

@@ -30,7 +30,22 @@ def context_strengths(ctx: Any, sample: Any = None, source: str = "") -> Any:
     """The strengths of the yield checks (:func:`ssw.validity.strengths_of`) of a resolved
     chain context: its device's beads and plate in its materials (the calibration's, else
     the config's library), the sample's ``sample`` (Pa, one or one per scene) from
-    ``source`` when known."""
+    ``source`` when known.
+
+    Parameters
+    ----------
+    ctx : ssw.cli._device.ChainContext
+        The resolved chain context.
+    sample : float or numpy.ndarray or None
+        Pa, the sample's strength (one, or one per scene); None: not known.
+    source : str
+        Where the sample's strength comes from.
+
+    Returns
+    -------
+    ssw.validity.Strengths
+        The strengths of the beads, the plate and the sample (Pa).
+    """
     from ssw.config import library
     from ssw.validity import strengths_of
 
@@ -40,7 +55,18 @@ def context_strengths(ctx: Any, sample: Any = None, source: str = "") -> Any:
 
 
 def sample_statement(sample: Any) -> str:
-    """The stated sample geometry a ``finite_sample`` check rests on, in words."""
+    """The stated sample geometry a ``finite_sample`` check rests on, in words.
+
+    Parameters
+    ----------
+    sample : ssw.sample.Sample
+        The tested block (lengths in m).
+
+    Returns
+    -------
+    str
+        Its thickness and radius (mm), base and side.
+    """
     d = sample.to_dict()
     parts = [f"thickness {d['thickness'] * 1e3:g} mm"]
     if d.get("radius") is not None:
@@ -52,7 +78,24 @@ def sample_statement(sample: Any) -> str:
 def finite_sample_validity(ctx: Any, E: Any, nu: Any, tof: Any) -> Any:
     """The ``finite_sample`` check of TOFs ``tof`` (s) on the context's stated sample at
     ``E`` (Pa), ``nu`` (:func:`ssw.lift.half_space_departure`), or None without a
-    stated sample."""
+    stated sample.
+
+    Parameters
+    ----------
+    ctx : ssw.cli._device.ChainContext
+        The resolved chain context (its sample and wall options).
+    E : float or numpy.ndarray
+        Pa, the soil moduli.
+    nu : float or numpy.ndarray
+        The soils' Poisson's ratios (-).
+    tof : float or numpy.ndarray
+        s, the TOFs on the sample.
+
+    Returns
+    -------
+    ssw.validity.Validity or None
+        The check, or None without a stated sample.
+    """
     from ssw.lift import half_space_departure
     from ssw.validity import finite_sample
 
@@ -63,7 +106,15 @@ def finite_sample_validity(ctx: Any, E: Any, nu: Any, tof: Any) -> Any:
 
 
 def add_stress_checks_option(p: argparse.ArgumentParser, default: str) -> None:
-    """``--stress-checks`` (:data:`ssw.validity.STRESS_MODES`)."""
+    """``--stress-checks`` (:data:`ssw.validity.STRESS_MODES`).
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser (the options are added to it).
+    default : str
+        The mode when the flag is not given.
+    """
     from ssw.validity import STRESS_MODES
 
     p.add_argument("--stress-checks", choices=STRESS_MODES, default=default,
@@ -75,6 +126,24 @@ def add_stress_checks_option(p: argparse.ArgumentParser, default: str) -> None:
 
 # ---------------------------------------------------------------------------- ssw chain
 def run_chain(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw chain``: one chain run to ``--t-end``, every contact force written to HDF5.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw chain --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The output file, its sizes, the time step (s), the wall, the peak wall force (N)
+        and indentation (m).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``--t-end`` is not a duration > 0 s.
+    """
     from ssw.h5io import atomic_h5, write_dataset
     from ssw.tof.api import run_chain as simulate_one
 
@@ -115,6 +184,25 @@ DERIVATIVES = ("auto", "forward", "central", "none")
 
 
 def run_tof(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw tof``: the TOF at the sensor for one soil (with its sensitivities when asked).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw tof --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The TOF and the peaks' times (s) and forces (N), the time step (s), the
+        sensitivities and validity checks, with the device's inputs (SI units).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When only one of ``--soil-E`` and ``--soil-nu`` is given, or on a
+        ``--derivatives`` method the wall cannot give.
+    """
     from ssw.chain.sensitivity import PARAMETERS
     from ssw.chain.sensitivity import units as sensitivity_units
     from ssw.tof.api import peaks, tof_derivatives
@@ -315,6 +403,21 @@ def _sweep_points(args: argparse.Namespace, cfg: dict[str, Any]) -> tuple[np.nda
 
 
 def run_tof_sweep(args: argparse.Namespace) -> dict[str, Any] | None:
+    """``ssw tof-sweep``: the TOF over a grid of soil E (Pa) and nu, batched, one chunk of it
+    written.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw tof-sweep --help``).
+
+    Returns
+    -------
+    dict of str to Any or None
+        The soils (E in Pa, nu), their TOFs (s), the points, the wall time (s), the MPI
+        ranks and the validity checks; None on an MPI rank other than 0 (rank 0 writes
+        and reports).
+    """
     import time
     from dataclasses import replace
 
@@ -384,6 +487,18 @@ def _part(text: str) -> tuple[int, int]:
 
 
 def run_tof_merge(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw tof-merge``: the sweep's chunks merged into one file, its CSV and figure.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw tof-merge --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The output file and the number of points.
+    """
     from ssw.provenance import require_match
     from ssw.tof.sweep import (
         merge_sweeps,
@@ -413,6 +528,24 @@ def run_tof_merge(args: argparse.Namespace) -> dict[str, Any]:
 
 # ---------------------------------------------------------------------------- ssw invert
 def run_invert(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw invert``: the soil's E (Pa) from a TOF (s) and an assumed Poisson's ratio.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw invert --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        ``E`` (Pa) with its interval (``E_low``, ``E_high``, Pa), the contributions to it (%)
+        and the validity checks, with the inputs.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        On ``--law table`` or several Poisson's ratios with ``--table``.
+    """
     from ssw.measure import parse_nu
 
     E_range = (args.soil_E_min, args.soil_E_max)
@@ -467,6 +600,14 @@ def _inverse_validity(args: argparse.Namespace, ctx: Any, E: float, nu: float) -
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``ssw chain``, ``ssw tof``, ``ssw tof-sweep``, ``ssw tof-merge``, ``ssw invert``
+    subcommands to the command line.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``ssw`` parser.
+    """
     p = sub.add_parser("chain", help="simulate the bead chain; write every contact force",
                        description="One chain run to --t-end; HDF5 datasets time (s) and "
                        "contact_force (N, n_time x n_contacts, last column the wall).")

@@ -10,6 +10,13 @@ from ssw.config import expand_grid, load_config, scenes
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``ssw check-config`` subcommand to the command line.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``ssw`` parser.
+    """
     p = sub.add_parser(
         "check-config",
         help="validate a study config (schema + semantic checks) and count its jobs",
@@ -22,6 +29,19 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw check-config``: a study config validated (schema and semantic checks) and its jobs
+    counted.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw check-config --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        ``valid``, the study, the scenes of each set and the chain sweep's points.
+    """
     cfg = load_config(args.config)
     per_set = {name: len(scenes(cfg, name)) for name in cfg["sets"]}
     sweep = cfg["chain"]["sweep"]

@@ -27,6 +27,13 @@ from ssw.errors import ConfigError
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``ssw contact``, ``ssw contact-plot`` subcommands to the command line.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``ssw`` parser.
+    """
     p = sub.add_parser(
         "contact",
         help="force-indentation curve of the rigid sphere on a plate on a soil (FEM)",
@@ -128,6 +135,26 @@ def _scene(args: argparse.Namespace, cfg: dict[str, Any], mats: dict) -> Any:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any] | None:
+    """``ssw contact``: the force-indentation curve of the rigid sphere on a plate on a soil (FEM),
+    one scene or a batch of them.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw contact --help``).
+
+    Returns
+    -------
+    dict of str to Any or None
+        The curve (indentation, m; force, N; contact radius, m), its file and statistics,
+        or the batch's curves and files; None on an MPI rank other than 0.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``--family`` names no plate family of the config, or comes with
+        ``--scene``.
+    """
     from ssw.config import library, load_config
     from ssw.contact.petsc_solver import comm_rank
     from ssw.curve import write_curve
@@ -246,6 +273,22 @@ def scene_reach(scenes: list[Any], cfg: dict[str, Any], contact: dict[str, Any],
     at its last contact on that scene (:func:`ssw.fit.range.scenes_delta_max`, one batched
     chain run). The thesis's 0.1 mm stops short of the 0.2-0.6 mm a 20-bead chain presses
     into soils below ~700 MPa, and the chain's TOF would rest on an extrapolated curve.
+
+    Parameters
+    ----------
+    scenes : list of ssw.config.Scene
+        The scenes (soil E, Pa; nu; plate material and thickness, m).
+    cfg : dict of str to Any
+        The study config (the indenter's radius, m; the chain for ``chain``).
+    contact : dict of str to Any
+        The ``contact:`` settings (``delta_max``, m; ``delta_mode``; ``reach_energy``, J).
+    mats : dict
+        The materials library (key to Material: the plates' E, Pa, and nu).
+
+    Returns
+    -------
+    list of float
+        m, each scene's final indentation.
     """
     d0 = float(contact.get("delta_max", 1.0e-4))
     mode = contact.get("delta_mode", "fixed")
@@ -381,6 +424,19 @@ def _human(res: dict[str, Any]) -> str:
 
 
 def run_plot(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw contact-plot``: force against indentation of contact curves beside Hertz's (thesis Figs
+    5, 6).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw contact-plot --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The figure's path (``output``) and the number of curves.
+    """
     from ssw.contact.figures import plot_curves
     from ssw.curve import read_curve
 

@@ -13,7 +13,13 @@ from ssw.errors import ConfigError, SswError
 
 
 def add_recording_options(p: argparse.ArgumentParser) -> None:
-    """Flags of every command that reads recordings (.h5, .csv, .tdms, .mat)."""
+    """Flags of every command that reads recordings (.h5, .csv, .tdms, .mat).
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser (the options are added to it).
+    """
     p.add_argument("--units", help="unit of data columns/channels whose file gives none: "
                    "N, kN, lbf (force) or V, mV (sensor voltage, with --sensitivity)")
     p.add_argument("--sensitivity", type=float, help="data in volts: sensor sensitivity, V/N")
@@ -24,7 +30,19 @@ def add_recording_options(p: argparse.ArgumentParser) -> None:
 
 
 def read_options(args: argparse.Namespace) -> dict[str, Any]:
-    """Keyword options of :func:`ssw.daq.importers.read_any` from those flags."""
+    """Keyword options of :func:`ssw.daq.importers.read_any` from those flags.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (the options of :func:`add_recording_options`).
+
+    Returns
+    -------
+    dict of str to Any
+        ``clipped`` and those of ``units``, ``sensitivity`` (V/N) and ``sample_rate`` (S/s)
+        given.
+    """
     opts: dict[str, Any] = {"clipped": args.clipped}
     for key in ("units", "sensitivity", "sample_rate"):
         if getattr(args, key, None) is not None:
@@ -33,7 +51,13 @@ def read_options(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def add_tof_options(p: argparse.ArgumentParser) -> None:
-    """Flags of the TOF picking (:class:`ssw.signal.tof.TofOptions`)."""
+    """Flags of the TOF picking (:class:`ssw.signal.tof.TofOptions`).
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The command's parser (the options are added to it).
+    """
     from ssw.signal.peaks import UPSAMPLE
 
     p.add_argument("--lowpass", type=float, help="zero-phase low-pass cutoff, Hz (default none)")
@@ -52,7 +76,20 @@ def add_tof_options(p: argparse.ArgumentParser) -> None:
 
 def tof_options(args: argparse.Namespace, params: Any = None) -> Any:
     """:class:`ssw.signal.tof.TofOptions` from the flags; ``params`` (ChainParams) gives the
-    physical bound (:class:`ssw.signal.tof.ChainPath`) unless ``--no-bound``."""
+    physical bound (:class:`ssw.signal.tof.ChainPath`) unless ``--no-bound``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (the options of :func:`add_tof_options`).
+    params : ssw.chain.params.ChainParams or None
+        The chain whose shortest round trip bounds the TOF; None: no chain bound.
+
+    Returns
+    -------
+    ssw.signal.tof.TofOptions
+        The options (cutoff in Hz, shortest TOF in s).
+    """
     from ssw.signal.tof import ChainPath, TofOptions
 
     bound = not getattr(args, "no_bound", False)
@@ -65,7 +102,19 @@ def tof_options(args: argparse.Namespace, params: Any = None) -> Any:
 
 
 def format_hit(r: Any) -> str:
-    """One line per hit (a :class:`ssw.signal.live.HitReport`) for the person at the bench."""
+    """One line per hit (a :class:`ssw.signal.live.HitReport`) for the person at the bench.
+
+    Parameters
+    ----------
+    r : ssw.signal.live.HitReport
+        The hit's report.
+
+    Returns
+    -------
+    str
+        The hit's TOF (ms) or why it was rejected, the running mean (ms) and SEM (us), and
+        the running E estimate (MPa) when there is one.
+    """
     head = f"hit {r.index + 1}: " + (f"TOF {r.tof * 1e3:.4f} ms" if r.tof is not None
                                      else f"rejected ({r.reason})")
     if r.tof_mean is None:
@@ -83,6 +132,24 @@ def format_hit(r: Any) -> str:
 
 
 def run_acquire(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw acquire``: one sample session (N hits) recorded with an NI 9234, or simulated.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw acquire --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The recording written and its TOF (mean, std, COV, per hit; s).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When the analytic source has no ``--tof``, or the soil is neither a
+        library material nor given by ``--soil-E`` and ``--soil-nu``.
+    """
     from ssw.cli._device import chain_context
     from ssw.config import library
     from ssw.daq.backend import get_backend, run_session
@@ -162,6 +229,18 @@ def run_acquire(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def run_tof_recording(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw tof-recording``: the TOF (mean, std, COV, per hit) of a recording.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw tof-recording --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The file, its metadata, the TOF result (s) and the hits dropped.
+    """
     from ssw.cli._device import chain_context
     from ssw.daq.importers import read_any
     from ssw.signal.tof import recording_tof
@@ -193,6 +272,13 @@ def _human_tof(r: dict[str, Any]) -> str:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``ssw acquire``, ``ssw tof-recording`` subcommands to the command line.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``ssw`` parser.
+    """
     p = sub.add_parser(
         "acquire", help="record one sample session (N hits) with an NI 9234, or simulate it",
         description="One finite reference-triggered record per hit, written to one HDF5 "

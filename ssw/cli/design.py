@@ -32,6 +32,13 @@ THESIS_TOF_SCATTER_SOURCE = ("the thesis's 1.53e-5 s over three consecutive hits
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``ssw design`` subcommand to the command line.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``ssw`` parser.
+    """
     from ssw.cli._device import add_device_options
     from ssw.design.spec import MATERIALS, THICKNESS
 
@@ -191,6 +198,25 @@ def _spec(args: argparse.Namespace, ctx: Any) -> Any:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw design``: plates (material x thickness) or, with ``--space device``, whole devices
+    designed for a soil range.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw design --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The design's JSON (:meth:`ssw.design.run.DesignResult.to_dict` or
+        :meth:`ssw.design.device_search.DeviceDesignResult.to_dict`).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        On flags that belong to the other design space.
+    """
     if args.space == "device":
         return _run_device(args)
     from ssw.cli._device import chain_context
@@ -486,7 +512,19 @@ def _load_results(paths: list[str]) -> list[dict[str, Any]]:
 
 
 def human(res: dict[str, Any]) -> str:
-    """The ranking as a short table and the recommendation with its reasons."""
+    """The ranking as a short table and the recommendation with its reasons.
+
+    Parameters
+    ----------
+    res : dict of str to Any
+        The result of :func:`run` (a plate design or, ``ssw_kind`` ``design_device``, a
+        device design: :func:`ssw.design.device_output.human`).
+
+    Returns
+    -------
+    str
+        The text for the terminal (thickness in mm, the rest in SI units).
+    """
     if res.get("ssw_kind") == "design_device":
         from ssw.design.device_output import human as device_human
 

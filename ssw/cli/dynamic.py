@@ -49,6 +49,13 @@ def _spec(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``ssw dynamic-tof``, ``ssw dynamic-study`` subcommands to the command line.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``ssw`` parser.
+    """
     p = sub.add_parser("dynamic-tof", help="TOF with a dynamic (inertial) wall vs quasi-static",
                        description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     p.add_argument("--soil-E", type=float, required=True, help="soil Young's modulus, Pa")
@@ -76,6 +83,24 @@ def register(sub: argparse._SubParsersAction) -> None:
 
 
 def run_tof(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw dynamic-tof``: the TOF with a dynamic (inertial) wall against the quasi-static ones.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw dynamic-tof --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        ``tof_dynamic``, ``tof_static_box``, ``tof_half_space`` (s), the relative
+        errors ``error`` and ``error_box`` (-), ``wall_dynamics`` and the run's statistics.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When the soil's E or density is missing.
+    """
     from ssw.dynamics.api import fem_tof, reduced_tof
 
     if not args.soil_E > 0 or not args.soil_density > 0:
@@ -96,12 +121,42 @@ def run_tof(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def human_tof(res: dict[str, Any]) -> str:
+    """The short summary of ``ssw dynamic-tof`` on the terminal: the dynamic TOF beside the
+    quasi-static ones.
+
+    Parameters
+    ----------
+    res : dict of str to Any
+        The command's result (SI units).
+
+    Returns
+    -------
+    str
+        The summary (times in ms, errors in %).
+    """
     return (f"TOF {res['wall_dynamics']} {1e3 * res['tof_dynamic']:.5f} ms; quasi-static: "
             f"half-space {1e3 * res['tof_half_space']:.5f} ms ({100 * res['error']:+.3f} %), "
             f"1 m box {1e3 * res['tof_static_box']:.5f} ms ({100 * res['error_box']:+.3f} %)")
 
 
 def run_study(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw dynamic-study``: the TOF error of the quasi-static wall over soils.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw dynamic-study --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The study's summary (:func:`ssw.dynamics.study.summarize`).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``--output-dir`` holds no ``points.jsonl``.
+    """
     from ssw.dynamics import study
 
     params = _params(args)
@@ -126,6 +181,19 @@ def run_study(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def human_study(res: dict[str, Any]) -> str:
+    """The short summary of ``ssw dynamic-study`` on the terminal: the largest errors and the
+    outputs.
+
+    Parameters
+    ----------
+    res : dict of str to Any
+        The command's result (SI units).
+
+    Returns
+    -------
+    str
+        The summary (times in ms, errors in %).
+    """
     w = res["worst"]
     lines = [f"{res['points']} points; largest |TOF error| of the quasi-static wall "
              f"{100 * res['max_abs_error']:.3f} %"

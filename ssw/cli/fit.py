@@ -34,6 +34,15 @@ def _config_arg(p: argparse.ArgumentParser) -> None:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``ssw fit``, ``ssw fit-table``, ``ssw fit-deviation``, ``ssw fit-tof-impact``, ``ssw
+    fit-calibrate-soil``, ``ssw fit-thesis-statements``, ``ssw fit-range``, ``ssw fit-set``,
+    ``ssw fit-plot`` subcommands to the command line.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``ssw`` parser.
+    """
     p = sub.add_parser(
         "fit",
         help="fit a modified-Hertz law to one contact curve",
@@ -195,6 +204,19 @@ def _human_fit(r: dict[str, Any]) -> str:
 
 
 def run_fit(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw fit``: a modified-Hertz law fitted to one contact curve.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw fit --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The fit (the ``as_dict`` of :func:`ssw.fit.pipeline.fit_with_config`'s result, SI
+        units), its indentation ``range`` and the law's ``formula``.
+    """
     from ssw.curve import read_curve
     from ssw.fit.pipeline import fit_with_config
 
@@ -207,6 +229,19 @@ def run_fit(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def run_table(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw fit-table``: contact curves fitted and aggregated into K(E, nu) tables (HDF5 and CSV).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw fit-table --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The output files and, per table, its grid sizes, interpolation error and largest
+        relative residual of each law.
+    """
     from ssw.fit.pipeline import config_laws, table_from_files
     from ssw.fit.table import write_tables
 
@@ -238,6 +273,19 @@ def run_table(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def run_deviation(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw fit-deviation``: each curve's deviation from Hertz at the reference indentation, next
+    to the thesis's values.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw fit-deviation --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        ``rows``: one per curve (written as CSV with ``--output``).
+    """
     from ssw.curve import read_curve
     from ssw.fit.deviation import deviation_rows
 
@@ -255,6 +303,18 @@ def run_deviation(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def run_plot(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw fit-plot``: a figure of the fits (thesis Figs 5-7 analogues).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw fit-plot --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The figure's path (``output``).
+    """
     from ssw.fit import figures
 
     cfg = load_config(args.config)
@@ -263,6 +323,20 @@ def run_plot(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def run_tof_impact(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw fit-tof-impact``: the TOF with the FEM curve itself against the K and power fits (what
+    the fit error costs).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw fit-tof-impact --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        ``rows`` (one per curve; CSV with ``--output``) and ``max_abs``, the largest
+        absolute TOF and E errors of each fit (relative, -).
+    """
     from ssw.curve import read_curve
     from ssw.tof.impact import tof_impact
 
@@ -279,6 +353,19 @@ def run_tof_impact(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw fit-calibrate-soil``: the soil E (Pa) at which a plate's deviation from Hertz equals a
+    target (FEM solves).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw fit-calibrate-soil --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        ``soil_E`` (Pa), the ``material_set`` and every solve's soil E (Pa) and deviation.
+    """
     from ssw.config import Scene, library
     from ssw.contact import solve_scene
     from ssw.fit.deviation import calibrate_soil_E, deviation
@@ -301,6 +388,19 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def run_statements(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw fit-thesis-statements``: the thesis's Set 1/2 deviations from Hertz, ours (both
+    material sets) and theirs.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw fit-thesis-statements --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        ``rows``: one per statement (CSV with ``--output``).
+    """
     from ssw.config import library
     from ssw.contact import solve_scene
     from ssw.fit.deviation import thesis_statements
@@ -317,6 +417,18 @@ def run_statements(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def run_range(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw fit-range``: the indentation range a scene's default fit needs.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw fit-range --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        ``delta_lo`` and ``delta_hi`` (m) and the range ``mode``.
+    """
     from ssw.fit.range import scene_delta_max
 
     cfg = load_config(args.config)
@@ -330,7 +442,24 @@ def run_range(args: argparse.Namespace) -> dict[str, Any]:
 
 def run_set(args: argparse.Namespace) -> dict[str, Any]:
     """Every fit output of one set (the module docstring), one process: the config loaded
-    once, every curve read once."""
+    once, every curve read once.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line of ``ssw fit-set`` (its flags: ``ssw fit-set --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The ``set`` and the ``outputs`` written (paths).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When the set is not in the config, or a curve stops short of the fit range the
+        chain needs.
+    """
     from pathlib import Path
 
     from ssw.config import expand_grid
@@ -420,7 +549,27 @@ def run_set(args: argparse.Namespace) -> dict[str, Any]:
 
 def set_curve_files(cfg: dict[str, Any], set_name: str, paths: list[str]) -> list[str]:
     """The curve files of a set: files as given; a folder contributes the set's scenes it
-    holds (``<folder>/<scene_id>.h5``). ConfigError if a scene of the set has no file."""
+    holds (``<folder>/<scene_id>.h5``). ConfigError if a scene of the set has no file.
+
+    Parameters
+    ----------
+    cfg : dict of str to Any
+        The study config.
+    set_name : str
+        The set's name in the config.
+    paths : list of str
+        Curve files and folders of curve files.
+
+    Returns
+    -------
+    list of str
+        The curve files: those given, then the folders' files of the set's other scenes.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When a folder is given and a scene of the set has no file in any of them.
+    """
     from pathlib import Path
 
     from ssw.config import scenes

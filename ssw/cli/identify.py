@@ -25,6 +25,26 @@ from ssw.cli._device import add_device_options, chain_context
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw identify``: what the TOF, the waveform's features and the whole waveform identify of
+    the device and the soil on a sample (:func:`ssw.calibration.information.identifiability`).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw identify --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The soil (E in Pa, nu), the device's inputs and the identifiability result
+        (SI units).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``--hits`` is below 1, or no hit's TOF scatter is stated (flag or
+        device file).
+    """
     from ssw.calibration.information import identifiability
     from ssw.daq.settings import settings_from_config
     from ssw.errors import ConfigError
@@ -105,6 +125,13 @@ def _human(r: dict[str, Any]) -> str:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``ssw identify`` subcommand to the command line.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``ssw`` parser.
+    """
     p = sub.add_parser(
         "identify", help="what TOF, features and the whole waveform identify on a sample",
         description="Singular values, marginal uncertainties and correlations of E, nu, the "

@@ -17,6 +17,25 @@ from ssw.cli._device import add_device_options, chain_context
 
 
 def parse_floats(text: str, field: str) -> list[float]:
+    """Comma-separated numbers.
+
+    Parameters
+    ----------
+    text : str
+        The numbers, comma-separated (empty items skipped).
+    field : str
+        The flag named in the error.
+
+    Returns
+    -------
+    list of float
+        The numbers.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When an item is no number.
+    """
     from ssw.errors import ConfigError
 
     try:
@@ -26,6 +45,25 @@ def parse_floats(text: str, field: str) -> list[float]:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw lift-study``: the error of a half-space reading of a lift on a subgrade, over subgrade
+    ratios and lift thicknesses (:func:`ssw.lift.lift_errors`).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw lift-study --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The device's inputs and the study (TOFs, s; relative errors, -); the CSV and
+        figure written when asked.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``--ratios`` or ``--thicknesses`` holds an item that is no number.
+    """
     from ssw.h5io import write_csv_text
     from ssw.lift import lift_errors, plot_lift
 
@@ -60,6 +98,13 @@ def _human(r: dict[str, Any]) -> str:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``ssw lift-study`` subcommand to the command line.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``ssw`` parser.
+    """
     p = sub.add_parser(
         "lift-study", help="error of a half-space reading of a lift on a subgrade",
         description="The device's chain on a lift of E1 over a subgrade of ratio x E1 (the "

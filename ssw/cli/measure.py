@@ -19,6 +19,20 @@ from ssw.cli.daq import add_recording_options, add_tof_options
 
 
 def run_measure(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw measure``: the recordings of one test point read into the soil's E with its 95 %
+    interval (:func:`ssw.measure.measure`).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw measure --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The device's inputs and the measurement (E and its 95 % interval, Pa; the
+        contributions, %; the TOF's mean and scatter, s) with its validity checks.
+    """
     from ssw.cli.daq import read_options, tof_options
     from ssw.daq.importers import read_any
     from ssw.measure import measure, parse_nu
@@ -155,7 +169,26 @@ def _sample_range(args: argparse.Namespace, ctx: Any) -> list[dict[str, Any]] | 
 
 def sample_strength(args: argparse.Namespace, ctx: Any) -> float | None:
     """The sample's uniaxial strength (Pa): ``--sample-strength``, else that of the library
-    material ``--sample-material`` (:func:`ssw.measure.uniaxial_strength`), else None."""
+    material ``--sample-material`` (:func:`ssw.measure.uniaxial_strength`), else None.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (``--sample-strength``, ``--sample-material``).
+    ctx : ssw.cli._device.ChainContext
+        The resolved chain context (its config's materials library).
+
+    Returns
+    -------
+    float or None
+        Pa, the strength, or None.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When both flags are given, the material is not in the library, or its entry
+        states no strength.
+    """
     from ssw.errors import ConfigError
     from ssw.measure import uniaxial_strength
 
@@ -229,6 +262,13 @@ def _human(r: dict[str, Any]) -> str:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``ssw measure`` subcommand to the command line.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``ssw`` parser.
+    """
     p = sub.add_parser(
         "measure", help="recordings of one test point -> E with its 95 %% interval",
         description="Per-hit TOF (rejection rule per session), pooled mean and standard "

@@ -14,6 +14,25 @@ from ssw.cli import add_json_flag
 
 
 def run_report(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw report``: CSV tables rendered as one HTML page, or several pages with ``--page``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw report --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        What :func:`ssw.report.write_tables` returns, or ``pages``: that of each page by
+        its output.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When tables and ``--output`` are missing (and no ``--page``), mixed with
+        ``--page``, or a ``--page`` lacks its output, title or CSV.
+    """
     from ssw.errors import ConfigError
     from ssw.report import write_tables
 
@@ -34,6 +53,13 @@ def run_report(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``ssw report`` subcommand to the command line.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``ssw`` parser.
+    """
     p = sub.add_parser("report", help="CSV tables as one HTML page (for the Snakemake report)",
                        description="Renders CSV tables (6 significant digits, long tables "
                        "cut) with their notes into one HTML page.")

@@ -19,6 +19,26 @@ from ssw.errors import ConfigError
 
 
 def run_table(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw survey-table``: a survey's points: their table, verdicts against the targets and
+    figures.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw survey-table --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The ``points`` (one row each), the files written and the count of each of the
+        ``verdicts`` (pass, fail, inconclusive, no target).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When the survey has no points, a point has no result file, or a map is asked
+        of points without coordinates.
+    """
     from ssw.config import load_config
     from ssw.survey import (
         plot_map,
@@ -79,6 +99,13 @@ def _human(r: dict[str, Any]) -> str:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``ssw survey-table`` subcommand to the command line.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``ssw`` parser.
+    """
     p = sub.add_parser(
         "survey-table", help="a survey's points: table, verdicts against targets, figures",
         description="Gather the `ssw measure --json` results of the config's survey.points "

@@ -15,6 +15,26 @@ CURVE_POINTS = 40  # E points of each model curve in Fig 10
 
 
 def run_validate(args: argparse.Namespace) -> dict[str, Any]:
+    """``ssw validate``: simulated against measured TOFs and the inverted E of the thesis's samples
+    (Tables 2, 3).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The parsed command line (its flags: ``ssw validate --help``).
+
+    Returns
+    -------
+    dict of str to Any
+        The device's inputs, each sample's row (``samples``) and the inverse's ``E_range``
+        (Pa); with ``--outdir``, the ``outputs`` written (CSV, HDF5, the thesis's tables
+        and Figs 9, 10).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        On ``--law table`` (the inverse needs a law at any E).
+    """
     from ssw.signal.tof import ChainPath, TofOptions
     from ssw.tof import api
     from ssw.validation.table import inverse_range, validate_samples
@@ -94,6 +114,13 @@ def _human(r: dict[str, Any]) -> str:
 
 
 def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``ssw validate`` subcommand to the command line.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``ssw`` parser.
+    """
     p = sub.add_parser(
         "validate", help="simulated vs measured TOF and inverted E (thesis Tables 2, 3)",
         description="For each config validation sample: TOF simulated at the manufacturer's "

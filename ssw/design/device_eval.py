@@ -67,7 +67,20 @@ SOFT = ("soil_yield_index",)
 
 def scaled_contact(contact: dict[str, Any], factor: float) -> dict[str, Any]:
     """The ``contact:`` settings with every length times ``factor`` (the mesh of a bead
-    ``factor`` times the base device's)."""
+    ``factor`` times the base device's).
+
+    Parameters
+    ----------
+    contact : dict of str to Any
+        The ``contact:`` settings (lengths in m).
+    factor : float
+        The scale of every length (-): the bead radius over the base device's.
+
+    Returns
+    -------
+    dict of str to Any
+        The settings, the :data:`CONTACT_LENGTHS` (m) scaled, the others as given.
+    """
     return {k: (float(v) * factor if k in CONTACT_LENGTHS and v is not None else v)
             for k, v in contact.items()}
 
@@ -80,6 +93,76 @@ class DeviceCandidate:
     ``source``: how it was chosen (``reference``: the base device; ``scan``; ``search``);
     ``step``: ``own`` (its own time step: the TOF of ``ssw tof``) or ``shared`` (the
     shortest of its chain's batch).
+
+    Parameters
+    ----------
+    point : ssw.design.space.DevicePoint
+        The device.
+    soil_E : numpy.ndarray
+        (n,) Pa, the soil moduli.
+    tof_E : numpy.ndarray
+        (n,) s, the dense TOF.
+    dtof_dE_E : numpy.ndarray
+        (n,) s/Pa, its exact forward sensitivity ``dTOF/dE``.
+    sensitivity_E : numpy.ndarray
+        (n,) ``S = |E dTOF/dE| / TOF`` (-).
+    u_tof_E : numpy.ndarray
+        (n,) s, the mean TOF's standard uncertainty of one measurement:
+        ``u^2 = scatter^2 / hits + (noise^2 + spread^2) / hits + bias^2``.
+    resolution_E : numpy.ndarray
+        (n,) the relative resolution ``dE/E = u_TOF / (TOF S)`` (-; inf: no TOF).
+    noise_E : numpy.ndarray
+        (n,) s, one hit's TOF standard deviation from the DAQ's white noise.
+    bias_E : numpy.ndarray
+        (n,) s, the sampled TOF's mean error over the clock phases.
+    spread_E : numpy.ndarray
+        (n,) s, its standard deviation over the phases.
+    samples_per_pulse_E : numpy.ndarray
+        (n,) the narrower pulse's width at half height, in samples.
+    overlap_E : numpy.ndarray
+        (n,) the valley between the pulses over the peak rule's gap share of the smaller
+        (-; > 1: the pulses merge).
+    detection_E : numpy.ndarray
+        (n,) the peak rule's noise floor over the reflected peak (-).
+    round_trip_E : numpy.ndarray
+        (n,) the shortest physical round trip sensor -> wall -> sensor over the TOF (-).
+    sensor_peak_E : numpy.ndarray
+        (n,) N, the sensor's largest reading.
+    wall_force_E : numpy.ndarray
+        (n,) N, the wall's force at the peak indentation.
+    plate_von_mises_E : numpy.ndarray
+        (n,) Pa, the plate's peak von Mises stress.
+    soil_von_mises_E : numpy.ndarray
+        (n,) Pa, the soil's peak von Mises stress (elastic field).
+    plate_yield_E : numpy.ndarray
+        (n,) the plate's peak von Mises stress over its yield stress (-).
+    soil_yield_E : numpy.ndarray
+        (n,) the soil's peak von Mises stress over its yield stress (-).
+    bead_force : float
+        N, the largest bead contact force of the device's batched run.
+    bead_yield_index : float
+        Hertz peak pressure of two beads at ``bead_force`` over their first-yield pressure
+        ``k(nu) Y`` (-; Johnson 1985, sec. 6.1).
+    range_index : float
+        The sensor's largest reading over the full scale (-).
+    mass : float
+        kg, beads, sensor, striker and plate.
+    length : float
+        m, bead column, drop height and plate thickness.
+    plate_mass_ratio : float
+        The plate's mass over a bead's (-).
+    source : str
+        How it was chosen: ``reference``, ``scan`` or ``search``.
+    step : str
+        ``own`` or ``shared`` time step.
+    wall_time : float
+        s, its share of the evaluation's wall time.
+    limits : dict of str to float
+        Each index's limit (:attr:`ssw.design.device_spec.DeviceSpec.limits`; 1 if absent).
+    checks_E : dict of str to numpy.ndarray
+        (n,) each validity check's ratio over the soils.
+    checks_assumed : dict of str to str
+        The assumption behind a check, by check name.
     """
 
     point: DevicePoint
@@ -116,7 +199,13 @@ class DeviceCandidate:
     checks_assumed: dict[str, str] = field(default_factory=dict, compare=False)
 
     def validity(self) -> Any:
-        """The checks over the soils (:class:`ssw.validity.Validity`, one scene per E)."""
+        """The checks over the soils (:class:`ssw.validity.Validity`, one scene per E).
+
+        Returns
+        -------
+        ssw.validity.Validity
+            The checks ``checks_E`` and their assumptions ``checks_assumed``.
+        """
         from ssw.validity import Validity
 
         return Validity(dict(self.checks_E), dict(self.checks_assumed))
@@ -138,22 +227,27 @@ class DeviceCandidate:
 
     @property
     def overlap_index(self) -> float:
+        """The worst pulse overlap over the soils (-; inf: not evaluable)."""
         return self._worst(self.overlap_E)
 
     @property
     def detection_index(self) -> float:
+        """The worst noise floor over the reflected peak over the soils (-; inf: none)."""
         return self._worst(self.detection_E)
 
     @property
     def round_trip_index(self) -> float:
+        """The worst shortest round trip over the TOF over the soils (-; inf: none)."""
         return self._worst(self.round_trip_E)
 
     @property
     def plate_yield_index(self) -> float:
+        """The plate's largest peak von Mises stress over its yield stress (-)."""
         return self._worst(self.plate_yield_E)
 
     @property
     def soil_yield_index(self) -> float:
+        """The soil's largest peak von Mises stress over its yield stress (-)."""
         return self._worst(self.soil_yield_E)
 
     @property
@@ -178,14 +272,28 @@ class DeviceCandidate:
 
     @property
     def feasible(self) -> bool:
+        """Every hard and soft limit met."""
         return self.hard_feasible and self.violations["soil_yield_index"] == 0.0
 
     @property
     def key(self) -> tuple[Any, ...]:
+        """The device's key (:attr:`ssw.design.space.DevicePoint.key`)."""
         return self.point.key
 
     def to_dict(self, arrays: bool = True) -> dict[str, Any]:
-        """The JSON record (``arrays``: with the per-soil arrays)."""
+        """The JSON record (``arrays``: with the per-soil arrays).
+
+        Parameters
+        ----------
+        arrays : bool
+            Whether the per-soil arrays (:data:`ARRAYS`) and checks are included.
+
+        Returns
+        -------
+        dict of str to Any
+            The point's variables, source, step, resolution, sensitivity, indices,
+            feasibility, violations and (when checked) the worst validity (SI units).
+        """
         d: dict[str, Any] = {
             **self.point.to_dict(), "source": self.source, "step": self.step,
             "resolution": self.resolution, "sensitivity": self.sensitivity,
@@ -204,7 +312,20 @@ class DeviceCandidate:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any], limits: dict[str, float]) -> DeviceCandidate:
-        """A candidate from its JSON record (:meth:`to_dict` with arrays)."""
+        """A candidate from its JSON record (:meth:`to_dict` with arrays).
+
+        Parameters
+        ----------
+        d : dict of str to Any
+            The record, with the per-soil arrays (SI units).
+        limits : dict of str to float
+            Each index's limit.
+
+        Returns
+        -------
+        DeviceCandidate
+            The candidate.
+        """
         arr = {k: np.asarray(d[k], float) for k in ARRAYS}
         scalars = {k: float(d[k]) for k in ("bead_force", "bead_yield_index", "range_index",
                                             "mass", "length", "plate_mass_ratio")}

@@ -26,7 +26,18 @@ _KEY = ("bead_material", "bead_diameter", "beads", "sensor_index", "sensor_mass_
 def table_text(result: dict[str, Any]) -> str:
     """The candidates of a device design as CSV (ranked; the recommended and the base
     device flagged; then each check's worst value over the soils, ``check_<name>``, and
-    ``checks_failed``: :mod:`ssw.validity`)."""
+    ``checks_failed``: :mod:`ssw.validity`).
+
+    Parameters
+    ----------
+    result : dict of str to Any
+        The JSON of an ``ssw design --space device`` result.
+
+    Returns
+    -------
+    str
+        The CSV text (SI units), one line per candidate after the header.
+    """
     def key(c: dict[str, Any]) -> tuple[Any, ...]:
         return tuple(c[k] for k in _KEY)
 
@@ -58,7 +69,17 @@ def table_text(result: dict[str, Any]) -> str:
 
 
 def write_table(path: str | Path, result: dict[str, Any], inputs: Any) -> None:
-    """:func:`table_text` to ``path`` atomically, with its provenance line."""
+    """:func:`table_text` to ``path`` atomically, with its provenance line.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The CSV file.
+    result : dict of str to Any
+        The JSON of an ``ssw design --space device`` result.
+    inputs : Any
+        What the provenance line records (:func:`ssw.h5io.write_csv_text`).
+    """
     from ssw.h5io import write_csv_text
 
     write_csv_text(path, table_text(result), inputs)
@@ -68,7 +89,15 @@ def plot(path: str | Path, result: dict[str, Any]) -> None:
     """Left: worst-case resolution against the soil yield index; right: against the mass.
     Devices with dE/E >= 1 (their TOF hardly moves with E) are left out. Filled: every hard
     limit met; hollow: one broken; the Pareto fronts joined; the
-    recommended ringed; the base device a star. Written atomically (PNG)."""
+    recommended ringed; the base device a star. Written atomically (PNG).
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The PNG file.
+    result : dict of str to Any
+        The JSON of an ``ssw design --space device`` result.
+    """
     from ssw.plotting import pyplot, save_png
 
     plt = pyplot()
@@ -137,7 +166,18 @@ def _plot_prediction(ax: Any, pred: dict[str, Any]) -> None:
 
 
 def human(res: dict[str, Any]) -> str:
-    """The recommended device beside the base device, and the reasons."""
+    """The recommended device beside the base device, and the reasons.
+
+    Parameters
+    ----------
+    res : dict of str to Any
+        The JSON of an ``ssw design --space device`` result.
+
+    Returns
+    -------
+    str
+        The text for the terminal (SI units unless a row names its own).
+    """
     rec, ref = res["recommended"], res.get("reference")
     rows = [("resolution", "dE/E"), ("sensitivity", "min |dlnTOF/dlnE|"),
             ("soil_yield_index", "soil yield"), ("plate_yield_index", "plate yield"),

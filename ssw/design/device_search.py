@@ -47,7 +47,19 @@ HARD_WEIGHT = 10.0
 def merit(c: DeviceCandidate) -> float:
     """A scalar to minimize: ``ln(dE/E)`` plus ``HARD_WEIGHT`` times the hard limits'
     relative excess and the soft limit's excess (0 for a feasible device). Infinite for a
-    device with no TOF somewhere in the soil range."""
+    device with no TOF somewhere in the soil range.
+
+    Parameters
+    ----------
+    c : ssw.design.device_eval.DeviceCandidate
+        The device evaluated.
+
+    Returns
+    -------
+    float
+        ``ln(dE/E) + HARD_WEIGHT sum(v_hard) + v_soil`` (-), ``v`` the relative excesses
+        over the limits; inf without a TOF.
+    """
     if not np.isfinite(c.resolution):
         return float("inf")
     v = c.violations
@@ -66,7 +78,23 @@ def _order(c: DeviceCandidate) -> tuple[int, float, float]:
 
 def dominates(a: DeviceCandidate, b: DeviceCandidate, objectives: tuple[str, ...]) -> bool:
     """``a`` is no worse than ``b`` in every objective (smaller is better) and better in
-    one."""
+    one.
+
+    Parameters
+    ----------
+    a : ssw.design.device_eval.DeviceCandidate
+        The first device.
+    b : ssw.design.device_eval.DeviceCandidate
+        The second device.
+    objectives : tuple of str
+        Attribute names of the candidates (e.g. ``resolution``, ``mass``), each smaller
+        better.
+
+    Returns
+    -------
+    bool
+        Whether ``a`` dominates ``b``.
+    """
     va = [float(getattr(a, k)) for k in objectives]
     vb = [float(getattr(b, k)) for k in objectives]
     return all(x <= y for x, y in zip(va, vb, strict=True)) and any(
@@ -74,7 +102,20 @@ def dominates(a: DeviceCandidate, b: DeviceCandidate, objectives: tuple[str, ...
 
 
 def pareto(cands: list[DeviceCandidate], objectives: tuple[str, ...]) -> list[DeviceCandidate]:
-    """The non-dominated hard-feasible candidates, by the first objective."""
+    """The non-dominated hard-feasible candidates, by the first objective.
+
+    Parameters
+    ----------
+    cands : list of ssw.design.device_eval.DeviceCandidate
+        The candidates.
+    objectives : tuple of str
+        Attribute names of the candidates, each smaller better.
+
+    Returns
+    -------
+    list of ssw.design.device_eval.DeviceCandidate
+        The front, sorted by the objectives in order.
+    """
     pool = [c for c in cands if c.hard_feasible]
     front = [c for c in pool if not any(dominates(o, c, objectives) for o in pool)]
     return sorted(front, key=lambda c: tuple(getattr(c, k) for k in objectives))
@@ -82,7 +123,19 @@ def pareto(cands: list[DeviceCandidate], objectives: tuple[str, ...]) -> list[De
 
 @dataclass(frozen=True)
 class Ranking:
-    """Every candidate ranked (best first), the recommended one and the fronts."""
+    """Every candidate ranked (best first), the recommended one and the fronts.
+
+    Parameters
+    ----------
+    candidates : list of ssw.design.device_eval.DeviceCandidate
+        Every candidate, best first.
+    recommended : ssw.design.device_eval.DeviceCandidate
+        The first of them.
+    front_soil : list of ssw.design.device_eval.DeviceCandidate
+        The Pareto front of resolution and soil yield index.
+    front_mass : list of ssw.design.device_eval.DeviceCandidate
+        The Pareto front of resolution and mass.
+    """
 
     candidates: list[DeviceCandidate]
     recommended: DeviceCandidate
@@ -91,7 +144,24 @@ class Ranking:
 
 
 def rank(cands: list[DeviceCandidate]) -> Ranking:
-    """The ranking (module docstring); ValueError on no candidate."""
+    """The ranking (module docstring); ValueError on no candidate.
+
+    Parameters
+    ----------
+    cands : list of ssw.design.device_eval.DeviceCandidate
+        The candidates.
+
+    Returns
+    -------
+    Ranking
+        Feasible devices by resolution, then hard-feasible ones by soil excess, then the
+        rest by :func:`merit`; and the two Pareto fronts.
+
+    Raises
+    ------
+    ValueError
+        When there is no candidate.
+    """
     if not cands:
         raise ValueError("no candidate to rank")
     ordered = sorted(cands, key=_order)
@@ -146,7 +216,22 @@ def _refine(args: tuple[_Task, DeviceCandidate]) -> tuple[list[DeviceCandidate],
 
 
 def map_jobs(fn: Any, tasks: list[Any], jobs: int) -> list[Any]:
-    """``[fn(t) for t in tasks]``, in ``jobs`` processes when more than one."""
+    """``[fn(t) for t in tasks]``, in ``jobs`` processes when more than one.
+
+    Parameters
+    ----------
+    fn : callable
+        The function of one task (picklable when ``jobs > 1``).
+    tasks : list
+        Its arguments, one per call.
+    jobs : int
+        Processes (1: this process).
+
+    Returns
+    -------
+    list
+        ``fn``'s results in the order of ``tasks``.
+    """
     if jobs <= 1 or len(tasks) <= 1:
         return [fn(t) for t in tasks]
     with ProcessPoolExecutor(max_workers=min(jobs, len(tasks))) as ex:
@@ -155,7 +240,29 @@ def map_jobs(fn: Any, tasks: list[Any], jobs: int) -> list[Any]:
 
 @dataclass(frozen=True)
 class DeviceDesignResult:
-    """The device design's ranking, the base device, the searches and the cost (s)."""
+    """The device design's ranking, the base device, the searches and the cost (s).
+
+    Parameters
+    ----------
+    spec : ssw.design.device_spec.DeviceSpec
+        The design problem.
+    space : ssw.design.space.DeviceSpace
+        The devices searched.
+    ranking : Ranking
+        The candidates ranked.
+    recommended : ssw.design.device_eval.DeviceCandidate
+        The recommended device.
+    reference : ssw.design.device_eval.DeviceCandidate or None
+        The base device evaluated, or None.
+    searches : list of dict of str to Any
+        Each bounded search's record.
+    wall_time : float
+        s, the design's wall time.
+    cpu_time : float
+        s, its CPU time (user + sys, children included).
+    plastic : dict of tuple to dict of str to Any
+        The plastic check's record of a device, by its key.
+    """
 
     spec: DeviceSpec
     space: DeviceSpace
@@ -168,7 +275,14 @@ class DeviceDesignResult:
     plastic: dict[tuple[Any, ...], dict[str, Any]] = field(default_factory=dict)
 
     def reasons(self) -> list[str]:
-        """Why the recommended device (plain sentences with the numbers)."""
+        """Why the recommended device (plain sentences with the numbers).
+
+        Returns
+        -------
+        list of str
+            The reasons, one sentence each (resolution, sensitivity, TOF, indices, the base
+            device against it).
+        """
         r, ref = self.recommended, self.reference
         cands = self.ranking.candidates
         n_ok = sum(c.feasible for c in cands)
@@ -206,7 +320,15 @@ class DeviceDesignResult:
         return out
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON of ``ssw design --space device``."""
+        """The JSON of ``ssw design --space device``.
+
+        Returns
+        -------
+        dict of str to Any
+            The statement, spec, space, soil grid (Pa), recommended and base devices, the
+            Pareto fronts, every candidate, the plastic checks, the searches, counts and
+            the wall and CPU times (s).
+        """
         rk = self.ranking
         plastic = self.plastic
         return {
@@ -320,7 +442,23 @@ def run_device_design(space: DeviceSpace, spec: DeviceSpec, base: Any,
 def merge_device_results(results: list[dict[str, Any]]) -> DeviceDesignResult:
     """The candidates of several device designs of one question (the workflow's family
     jobs' JSON) ranked together. Each family's best was evaluated at its own step, so the
-    best of all is too; the costs add up. ConfigError when the questions differ."""
+    best of all is too; the costs add up. ConfigError when the questions differ.
+
+    Parameters
+    ----------
+    results : list of dict of str to Any
+        The JSON of each ``ssw design --space device`` result.
+
+    Returns
+    -------
+    DeviceDesignResult
+        Their candidates ranked together; wall and CPU times the sums of theirs (s).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When there is no result, or their questions differ.
+    """
     from ssw.design.space import space_from_dict
     from ssw.errors import ConfigError
 
@@ -501,6 +639,12 @@ def with_plastic_check(result: DeviceDesignResult, base: Any, materials: dict[st
 
 
 def cpu_time() -> float:
-    """s, this process's CPU time and its finished children's (user + sys)."""
+    """s, this process's CPU time and its finished children's (user + sys).
+
+    Returns
+    -------
+    float
+        s, ``time.process_time()`` plus the children's user and system time.
+    """
     ch = resource.getrusage(resource.RUSAGE_CHILDREN)
     return time.process_time() + ch.ru_utime + ch.ru_stime

@@ -70,12 +70,12 @@ PLASTIC_HITS = 0
 class DeviceSpec:
     """A device design problem (module docstring). SI units.
 
-    Attributes
+    Parameters
     ----------
     soil_E : tuple of float
         (lo, hi) Pa, the soils the device must measure.
     soil_nu : float
-        Their Poisson's ratio.
+        Their Poisson's ratio (-).
     moduli : int
         Soil moduli of each device's curves.
     soil_strength : float or None
@@ -173,7 +173,19 @@ class DeviceSpec:
 
     def soil_yield_stress(self, E: np.ndarray) -> np.ndarray:
         """The soil's yield stress (Pa) at moduli ``E``
-        (:func:`ssw.design.spec.soil_yield_stress`)."""
+        (:func:`ssw.design.spec.soil_yield_stress`).
+
+        Parameters
+        ----------
+        E : numpy.ndarray
+            Soil moduli, Pa.
+
+        Returns
+        -------
+        numpy.ndarray
+            Yield stress, Pa, shaped as ``E``: ``soil_strength`` when stated, else
+            ``soil_strength_ratio E``.
+        """
         return soil_yield_stress(E, self.soil_strength, self.soil_strength_ratio)
 
     @property
@@ -187,7 +199,14 @@ class DeviceSpec:
 
     def statement(self) -> dict[str, Any]:
         """The objective and the constraints, stated (the JSON's ``objective`` and
-        ``constraints``)."""
+        ``constraints``).
+
+        Returns
+        -------
+        dict of str to Any
+            ``objective``, ``constraints``, ``plastic_check``, ``ranking`` and
+            ``resolution``, each in words with this spec's values.
+        """
         strength = (f"{self.soil_strength:.4g} Pa" if self.soil_strength is not None else
                     f"{self.soil_strength_ratio:g} E (assumed)")
         return {
@@ -235,12 +254,29 @@ class DeviceSpec:
         }
 
     def to_dict(self) -> dict[str, Any]:
-        """Every field (JSON) and the soil grid."""
+        """Every field (JSON) and the soil grid.
+
+        Returns
+        -------
+        dict of str to Any
+            Every field (SI units) and ``soil_E_grid`` (Pa, :attr:`grid`).
+        """
         return {**asdict(self), "soil_E_grid": self.grid.tolist()}
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> DeviceSpec:
-        """A spec from :meth:`to_dict`."""
+        """A spec from :meth:`to_dict`.
+
+        Parameters
+        ----------
+        d : dict of str to Any
+            The fields (SI units); ``soil_E_grid`` is ignored.
+
+        Returns
+        -------
+        DeviceSpec
+            The spec.
+        """
         kw = {k: v for k, v in d.items() if k != "soil_E_grid"}
         kw["soil_E"] = tuple(kw["soil_E"])
         return cls(**kw)

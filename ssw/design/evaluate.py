@@ -57,6 +57,53 @@ class Candidate:
     over ``soil_E``.
 
     ``source``: how it was chosen (``reference``: the device's own plate; ``scan``; ``search``).
+
+    Parameters
+    ----------
+    material : str
+        The plate's material key.
+    thickness : float
+        m, the plate's thickness.
+    plate_diameter : float
+        m, the plate's diameter.
+    striker_velocity : float
+        m/s, the striker's speed.
+    soil_E : numpy.ndarray
+        (n,) Pa, the soil moduli.
+    tof_E : numpy.ndarray
+        (n,) s, the TOF.
+    sensitivity_E : numpy.ndarray
+        (n,) ``S = |E dTOF/dE / TOF|`` (-).
+    resolution_E : numpy.ndarray
+        (n,) ``dE/E = u_TOF / (TOF S)`` (-).
+    peak_force_E : numpy.ndarray
+        (n,) N, the wall's force at the largest indentation.
+    peak_indentation_E : numpy.ndarray
+        (n,) m, the chain's largest wall indentation.
+    plate_von_mises_E : numpy.ndarray
+        (n,) Pa, the plate's peak von Mises stress.
+    soil_von_mises_E : numpy.ndarray
+        (n,) Pa, the soil's peak von Mises stress.
+    plate_yield_E : numpy.ndarray
+        (n,) the plate's peak von Mises stress over its yield stress (-).
+    soil_yield_E : numpy.ndarray
+        (n,) the soil's peak von Mises stress over its yield stress (-).
+    plate_yield_stress : float
+        Pa, the plate material's yield stress.
+    mass : float
+        kg, the plate's mass ``rho pi D^2 t / 4``.
+    mass_ratio : float
+        The plate's mass over a bead's (-).
+    source : str
+        How it was chosen: ``reference``, ``scan`` or ``search``.
+    wall_time : float
+        s, its share of the evaluation's wall time.
+    limits : dict of str to float
+        ``soil_yield_limit`` and ``max_mass_ratio`` (-; 1 if absent).
+    checks_E : dict of str to numpy.ndarray
+        (n,) each validity check's ratio over the soils.
+    checks_assumed : dict of str to str
+        The assumption behind a check, by check name.
     """
 
     material: str
@@ -83,7 +130,13 @@ class Candidate:
     checks_assumed: dict[str, str] = field(default_factory=dict, compare=False)
 
     def validity(self) -> Any:
-        """The checks over the soils (:class:`ssw.validity.Validity`, one scene per E)."""
+        """The checks over the soils (:class:`ssw.validity.Validity`, one scene per E).
+
+        Returns
+        -------
+        ssw.validity.Validity
+            The checks ``checks_E`` and their assumptions ``checks_assumed``.
+        """
         from ssw.validity import Validity
 
         return Validity(dict(self.checks_E), dict(self.checks_assumed))
@@ -101,10 +154,12 @@ class Candidate:
 
     @property
     def plate_yield_index(self) -> float:
+        """The plate's largest peak von Mises stress over its yield stress (-)."""
         return float(np.max(self.plate_yield_E))
 
     @property
     def soil_yield_index(self) -> float:
+        """The soil's largest peak von Mises stress over its yield stress (-)."""
         return float(np.max(self.soil_yield_E))
 
     @property
@@ -125,6 +180,7 @@ class Candidate:
 
     @property
     def feasible(self) -> bool:
+        """Every limit met (plate elastic, soil yield index, mass ratio)."""
         return all(v == 0.0 for v in self.violations.values())
 
     @property
@@ -135,10 +191,18 @@ class Candidate:
 
     @property
     def key(self) -> tuple[str, float, float, float]:
+        """Material, thickness (m), plate diameter (m) and striker speed (m/s)."""
         return (self.material, self.thickness, self.plate_diameter, self.striker_velocity)
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON record (the fields of ``ssw design --json``'s ``candidates``)."""
+        """The JSON record (the fields of ``ssw design --json``'s ``candidates``).
+
+        Returns
+        -------
+        dict of str to Any
+            The fields, indices, feasibility, violations, per-soil arrays and checks (SI
+            units).
+        """
         return {
             "material": self.material, "thickness": self.thickness,
             "plate_diameter": self.plate_diameter, "striker_velocity": self.striker_velocity,
@@ -176,7 +240,20 @@ class Candidate:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any], limits: dict[str, float]) -> Candidate:
-        """A candidate from its JSON record (:meth:`to_dict`)."""
+        """A candidate from its JSON record (:meth:`to_dict`).
+
+        Parameters
+        ----------
+        d : dict of str to Any
+            The record (SI units).
+        limits : dict of str to float
+            ``soil_yield_limit`` and ``max_mass_ratio`` (-).
+
+        Returns
+        -------
+        Candidate
+            The candidate.
+        """
         arr = {k: np.asarray(d[k], float) for k in (
             "soil_E", "tof_E", "sensitivity_E", "resolution_E", "peak_force_E",
             "peak_indentation_E", "plate_von_mises_E", "soil_von_mises_E", "plate_yield_E",
@@ -193,14 +270,44 @@ class Candidate:
 
 
 def quantize(thickness: float) -> float:
-    """The thickness rounded to :data:`ssw.design.spec.THICKNESS_QUANTUM` (m)."""
+    """The thickness rounded to :data:`ssw.design.spec.THICKNESS_QUANTUM` (m).
+
+    Parameters
+    ----------
+    thickness : float
+        m.
+
+    Returns
+    -------
+    float
+        m, the nearest multiple of the quantum.
+    """
     return float(np.round(thickness / THICKNESS_QUANTUM) * THICKNESS_QUANTUM)
 
 
 def candidate_params(params: ChainParams, material: Material, thickness: float,
                      plate_diameter: float, striker_velocity: float) -> ChainParams:
     """The device's chain ``params`` with a candidate's plate (``material``, ``thickness``
-    m, ``plate_diameter`` m) and striker speed (m/s)."""
+    m, ``plate_diameter`` m) and striker speed (m/s).
+
+    Parameters
+    ----------
+    params : ssw.chain.params.ChainParams
+        The device's chain.
+    material : ssw.materials.Material
+        The plate's material (E, Pa; nu, -).
+    thickness : float
+        m, the plate's thickness.
+    plate_diameter : float
+        m, the plate's diameter.
+    striker_velocity : float
+        m/s, the striker's speed.
+
+    Returns
+    -------
+    ssw.chain.params.ChainParams
+        The chain with that plate and striker speed.
+    """
     return params.with_(plate_material=material.key, plate_thickness=float(thickness),
                         plate_E=material.E, plate_nu=material.nu,
                         plate_diameter=float(plate_diameter),
@@ -208,7 +315,23 @@ def candidate_params(params: ChainParams, material: Material, thickness: float,
 
 
 def plate_yield_stress(material: Material) -> float:
-    """The plate material's yield stress (Pa); ConfigError when the library has none."""
+    """The plate material's yield stress (Pa); ConfigError when the library has none.
+
+    Parameters
+    ----------
+    material : ssw.materials.Material
+        The plate's material.
+
+    Returns
+    -------
+    float
+        Pa, its yield stress.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When the library states no yield stress for it.
+    """
     y = material.strength.yield_stress
     if y is None:
         raise ConfigError(f"materials.{material.key}.strength.yield_stress", None,

@@ -48,7 +48,32 @@ def hits_check(spec: DesignSpec, params: ChainParams, materials: dict[str, Mater
     Returns the plate, the soil (``soil_E``, ``soil_nu``, ``yield_stress``), per hit
     (``tof`` s, ``peak_force`` N, ``permanent_set`` m, ``dissipated`` J), the TOF's
     ``drift`` (s, hit to hit), its standard deviation over the hits (``tof_std``, s) and
-    over the hits after the first (``tof_std_seated``), and the elastic index it checks."""
+    over the hits after the first (``tof_std_seated``), and the elastic index it checks.
+
+    Parameters
+    ----------
+    spec : ssw.design.spec.DesignSpec
+        The design (the soil's Poisson's ratio and yield stress, Pa).
+    params : ssw.chain.params.ChainParams
+        The device's chain.
+    materials : dict of str to ssw.materials.Material
+        The materials library.
+    candidate : ssw.design.evaluate.Candidate or dict of str to Any
+        The plate (or its JSON record); the soil of its largest soil yield index is struck.
+    hits : int
+        Consecutive hits, at least 2.
+
+    Returns
+    -------
+    dict of str to Any
+        The plate, the soil, the hits' records, the TOF drift (s) and standard deviations
+        (s), the elastic soil yield index and the static set (m).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``hits`` is no integer >= 2.
+    """
     from ssw.errors import ConfigError
 
     c = candidate.to_dict() if isinstance(candidate, Candidate) else candidate

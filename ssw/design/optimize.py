@@ -68,7 +68,19 @@ BOUND_SHARE = 0.9
 
 
 def merit(c: Candidate) -> float:
-    """The ranking number of a candidate (module docstring); smaller is better."""
+    """The ranking number of a candidate (module docstring); smaller is better.
+
+    Parameters
+    ----------
+    c : ssw.design.evaluate.Candidate
+        The candidate.
+
+    Returns
+    -------
+    float
+        ``-S + HARD_WEIGHT (v_plate + v_mass) + SOFT_WEIGHT v_soil`` (-): ``S`` the
+        worst-case sensitivity, ``v`` the relative violations of the limits.
+    """
     v = c.violations
     return (-c.sensitivity + HARD_WEIGHT * (v["plate_yield_index"] + v["mass_ratio"])
             + SOFT_WEIGHT * v["soil_yield_index"])
@@ -77,7 +89,25 @@ def merit(c: Candidate) -> float:
 @dataclass(frozen=True)
 class Search:
     """The thickness search of one material (plate diameter, striker speed): its best
-    candidate, every thickness it evaluated (in order) and scipy's report."""
+    candidate, every thickness it evaluated (in order) and scipy's report.
+
+    Parameters
+    ----------
+    material : str
+        The plate material (library key).
+    plate_diameter : float
+        m, the plate's diameter.
+    striker_velocity : float
+        m/s, the striker's speed.
+    best : ssw.design.evaluate.Candidate
+        The candidate of smallest merit.
+    evaluated : tuple of float
+        m, every thickness evaluated, in order.
+    nfev : int
+        The number of thicknesses evaluated.
+    message : str
+        How the refinement ended.
+    """
 
     material: str
     plate_diameter: float
@@ -88,6 +118,14 @@ class Search:
     message: str
 
     def to_dict(self) -> dict[str, Any]:
+        """The JSON record of the search.
+
+        Returns
+        -------
+        dict of str to Any
+            Material, plate diameter (m), striker speed (m/s), best thickness (m) and
+            merit, the thicknesses evaluated (m), ``nfev`` and ``message``.
+        """
         return {"material": self.material, "plate_diameter": self.plate_diameter,
                 "striker_velocity": self.striker_velocity,
                 "best_thickness": self.best.thickness, "best_merit": merit(self.best),
@@ -190,7 +228,18 @@ def _refine(x: np.ndarray, f: np.ndarray, k: int) -> tuple[np.ndarray, np.ndarra
 def pareto_front(cands: Iterable[Candidate]) -> list[Candidate]:
     """The candidates meeting the hard limits that no other such candidate dominates
     (larger sensitivity and smaller soil yield index, one of them strictly), sorted by
-    soil yield index."""
+    soil yield index.
+
+    Parameters
+    ----------
+    cands : iterable of ssw.design.evaluate.Candidate
+        The candidates.
+
+    Returns
+    -------
+    list of ssw.design.evaluate.Candidate
+        The front, by soil yield index then decreasing sensitivity.
+    """
     pool = [c for c in cands if c.plate_feasible]
     S = np.array([c.sensitivity for c in pool])
     Y = np.array([c.soil_yield_index for c in pool])
@@ -204,7 +253,19 @@ def pareto_front(cands: Iterable[Candidate]) -> list[Candidate]:
 
 @dataclass(frozen=True)
 class Ranking:
-    """Every candidate (by merit), the recommended one and why, and the Pareto front."""
+    """Every candidate (by merit), the recommended one and why, and the Pareto front.
+
+    Parameters
+    ----------
+    candidates : list of ssw.design.evaluate.Candidate
+        One per plate, by merit.
+    recommended : ssw.design.evaluate.Candidate
+        The first of them.
+    reasons : list of str
+        Why it won, in words (:func:`reasons`).
+    pareto : list of ssw.design.evaluate.Candidate
+        The Pareto front (:func:`pareto_front`).
+    """
 
     candidates: list[Candidate]
     recommended: Candidate
@@ -213,7 +274,25 @@ class Ranking:
 
 
 def rank(cands: Iterable[Candidate], spec: DesignSpec) -> Ranking:
-    """Rank candidates by merit; the first is recommended, with the reasons it won."""
+    """Rank candidates by merit; the first is recommended, with the reasons it won.
+
+    Parameters
+    ----------
+    cands : iterable of ssw.design.evaluate.Candidate
+        The candidates (one kept per plate, the ``reference`` label preferred).
+    spec : ssw.design.spec.DesignSpec
+        The design problem (its limits, for the reasons).
+
+    Returns
+    -------
+    Ranking
+        The candidates by merit, the recommended one, its reasons and the Pareto front.
+
+    Raises
+    ------
+    ValueError
+        When there is no candidate.
+    """
     unique: dict[tuple[str, float, float, float], Candidate] = {}
     for c in cands:  # one per plate (the same plate from two jobs: keep the reference label)
         old = unique.get(c.key)
@@ -227,7 +306,22 @@ def rank(cands: Iterable[Candidate], spec: DesignSpec) -> Ranking:
 
 
 def reasons(best: Candidate, pool: list[Candidate], spec: DesignSpec) -> list[str]:
-    """Why ``best`` won, in words with its numbers."""
+    """Why ``best`` won, in words with its numbers.
+
+    Parameters
+    ----------
+    best : ssw.design.evaluate.Candidate
+        The recommended candidate.
+    pool : list of ssw.design.evaluate.Candidate
+        Every candidate ranked.
+    spec : ssw.design.spec.DesignSpec
+        The design problem (limits, thickness range, TOF uncertainty).
+
+    Returns
+    -------
+    list of str
+        The reasons, one sentence each.
+    """
     feas = [c for c in pool if c.feasible]
     hard = [c for c in pool if c.plate_feasible]
     out = []

@@ -15,7 +15,18 @@ COLUMNS = ("material", "thickness", "plate_diameter", "striker_velocity", "sourc
 
 
 def check_columns(candidates: list[dict[str, Any]]) -> list[str]:
-    """The checks (:data:`ssw.validity.RULES` order) any candidate's record carries."""
+    """The checks (:data:`ssw.validity.RULES` order) any candidate's record carries.
+
+    Parameters
+    ----------
+    candidates : list of dict of str to Any
+        The candidates' JSON records.
+
+    Returns
+    -------
+    list of str
+        The check names.
+    """
     from ssw.validity import RULES
 
     have = {e["check"] for c in candidates for e in c.get("validity", [])}
@@ -26,7 +37,18 @@ def table_text(result: dict[str, Any]) -> str:
     """The candidates of an ``ssw design`` result as CSV (best merit first; the recommended
     one flagged). After ``recommended``, each check's worst value over the soils
     (``check_<name>``, dimensionless; :mod:`ssw.validity`) and ``checks_failed`` (their
-    names, ``;``-joined)."""
+    names, ``;``-joined).
+
+    Parameters
+    ----------
+    result : dict of str to Any
+        The JSON of an ``ssw design`` result.
+
+    Returns
+    -------
+    str
+        The CSV text (SI units), one line per candidate after the header.
+    """
     rec = result["recommended"]
     key = (rec["material"], rec["thickness"], rec["plate_diameter"], rec["striker_velocity"])
     checks = check_columns(result["candidates"])
@@ -47,7 +69,17 @@ def table_text(result: dict[str, Any]) -> str:
 
 
 def write_table(path: str | Path, result: dict[str, Any], inputs: Any) -> None:
-    """:func:`table_text` to ``path`` atomically, with its provenance line."""
+    """:func:`table_text` to ``path`` atomically, with its provenance line.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The CSV file.
+    result : dict of str to Any
+        The JSON of an ``ssw design`` result.
+    inputs : Any
+        What the provenance line records (:func:`ssw.h5io.write_csv_text`).
+    """
     from ssw.h5io import write_csv_text
 
     write_csv_text(path, table_text(result), inputs)
@@ -57,7 +89,15 @@ def plot(path: str | Path, result: dict[str, Any]) -> None:
     """Left: every candidate's worst-case sensitivity against its soil yield index (filled:
     the plate stays elastic and light; the Pareto front joined; the recommended ringed;
     the device's own plate a star). Right: the sensitivity curves over the soil range of
-    the recommended plate, the device's, and each material's best."""
+    the recommended plate, the device's, and each material's best.
+
+    Parameters
+    ----------
+    path : str or pathlib.Path
+        The PNG file.
+    result : dict of str to Any
+        The JSON of an ``ssw design`` result.
+    """
     from ssw.plotting import pyplot, save_png
 
     plt = pyplot()

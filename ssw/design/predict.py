@@ -48,7 +48,7 @@ LEVELS = ("tof", "features")
 class LevelPrediction:
     """One level's predicted uncertainty of ``ln E`` over the soils. Arrays (k,).
 
-    Attributes
+    Parameters
     ----------
     noise_hit : numpy.ndarray
         Standard deviation of ``ln E`` from one hit's noise.

@@ -25,7 +25,19 @@ from ssw.materials import Material
 
 @dataclass(frozen=True)
 class DesignResult:
-    """The design's ranking, its searches and what it cost (s)."""
+    """The design's ranking, its searches and what it cost (s).
+
+    Parameters
+    ----------
+    spec : ssw.design.spec.DesignSpec
+        The design problem.
+    ranking : ssw.design.optimize.Ranking
+        The candidates ranked.
+    searches : list of dict of str to Any
+        Each thickness search's record (:meth:`ssw.design.optimize.Search.to_dict`).
+    wall_time : float
+        s, the design's wall time.
+    """
 
     spec: DesignSpec
     ranking: Ranking
@@ -33,7 +45,15 @@ class DesignResult:
     wall_time: float
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON of ``ssw design`` (module docstring of :mod:`ssw.cli.design`)."""
+        """The JSON of ``ssw design`` (module docstring of :mod:`ssw.cli.design`).
+
+        Returns
+        -------
+        dict of str to Any
+            The statement, spec, soil grid (Pa), recommended candidate and its reasons,
+            every candidate with its merit, the Pareto front, the device's own plate, the
+            searches, the evaluation count and the wall time (s).
+        """
         r = self.ranking
         rec = r.recommended.to_dict()
         return {
@@ -92,6 +112,16 @@ def run_design(spec: DesignSpec, params: ChainParams, materials: dict[str, Mater
         The contact operators of this process (default: the process's).
     bead_material : str or None
         The beads' material key (the device's): the candidates' bead check.
+
+    Returns
+    -------
+    DesignResult
+        The ranking of every candidate evaluated, the searches and the wall time (s).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When a design material is not in the library.
     """
     t0 = time.perf_counter()
     for key in spec.materials:
@@ -129,7 +159,23 @@ def run_design(spec: DesignSpec, params: ChainParams, materials: dict[str, Mater
 def merge_results(results: list[dict[str, Any]]) -> DesignResult:
     """Rank together the candidates of several ``ssw design`` results (JSON dicts) of the
     same design question (soils, limits, device): ConfigError naming the field that
-    differs otherwise."""
+    differs otherwise.
+
+    Parameters
+    ----------
+    results : list of dict of str to Any
+        The JSON of each ``ssw design`` result.
+
+    Returns
+    -------
+    DesignResult
+        Their candidates ranked together; wall time the sum of theirs (s).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When there is no result, or a spec field differs between them.
+    """
     if not results:
         raise ConfigError("design results", [], "at least one result of ssw design")
     base = results[0]["spec"]

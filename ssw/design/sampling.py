@@ -54,7 +54,7 @@ class SampledTof:
     """A device's TOF as a DAQ reads it, per scene. SI units; arrays (n,), NaN where the
     scene has no two peaks.
 
-    Attributes
+    Parameters
     ----------
     bias : numpy.ndarray
         s, the mean over the sample-clock phases of the sampled TOF minus the dense TOF.
@@ -114,7 +114,22 @@ def picker_gain(s: np.ndarray, c: np.ndarray, pos: np.ndarray) -> np.ndarray:
     """``||d pos / d s_k||_2`` (samples per unit of the signal) of the peak picker
     (:func:`ssw.signal.peaks.refine_peaks`) at each row of the samples ``s`` (m, n_s), its
     peak next to ``c`` at ``pos``: central differences of every sample of the picker's
-    window, a step of 1e-4 of the peak's height."""
+    window, a step of 1e-4 of the peak's height.
+
+    Parameters
+    ----------
+    s : numpy.ndarray
+        (m, n_s) the sampled signals, one per row (the sensor's force, N).
+    c : numpy.ndarray
+        (m,) int, the index of each row's peak sample.
+    pos : numpy.ndarray
+        (m,) the picker's peak position of each row, in samples.
+
+    Returns
+    -------
+    numpy.ndarray
+        (m,) the gain, samples per unit of the signal (per N).
+    """
     from ssw.signal.peaks import HALF_WINDOW, UPSAMPLE, refine_peaks
 
     m, n_s = s.shape

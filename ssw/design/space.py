@@ -60,14 +60,36 @@ CONTINUOUS = ("sensor_mass_ratio", "striker_mass_ratio", "drop_height", "plate_t
 @dataclass(frozen=True)
 class Interval:
     """A continuous variable's range ``[lo, hi]`` (its SI unit or a ratio) and the number of
-    points of its scan."""
+    points of its scan.
+
+    Parameters
+    ----------
+    lo : float
+        Lower bound, in the variable's SI unit (m for lengths) or a ratio.
+    hi : float
+        Upper bound, same unit as ``lo``.
+    scan : int
+        Points of the coarse scan (centres of equal cells of the log range).
+    """
 
     lo: float
     hi: float
     scan: int = 1
 
     def check(self, name: str) -> None:
-        """ConfigError naming ``design.device.<name>`` for a bad range."""
+        """ConfigError naming ``design.device.<name>`` for a bad range.
+
+        Parameters
+        ----------
+        name : str
+            The variable's key under ``design.device`` (named in the error).
+
+        Raises
+        ------
+        ssw.errors.ConfigError
+            When the bounds are not finite with ``0 < lo <= hi``, or ``scan`` is no integer
+            >= 1.
+        """
         if not (np.isfinite(self.lo) and np.isfinite(self.hi) and 0 < self.lo <= self.hi):
             raise ConfigError(f"design.device.{name}.range", [self.lo, self.hi],
                               "[LO, HI] with 0 < LO <= HI")
@@ -75,12 +97,30 @@ class Interval:
             raise ConfigError(f"design.device.{name}.scan", self.scan, "an integer >= 1")
 
     def scan_values(self) -> np.ndarray:
-        """The scan: the centres of ``scan`` equal cells of ``[ln lo, ln hi]``."""
+        """The scan: the centres of ``scan`` equal cells of ``[ln lo, ln hi]``.
+
+        Returns
+        -------
+        numpy.ndarray
+            (scan,) the scan points, in the variable's unit:
+            ``exp(ln lo + (ln hi - ln lo) (k + 1/2) / scan)``, ``k = 0 .. scan - 1``.
+        """
         a, b = np.log(self.lo), np.log(self.hi)
         return np.exp(a + (b - a) * (np.arange(self.scan) + 0.5) / self.scan)
 
     def contains(self, x: float) -> bool:
-        """Whether ``x`` lies in the range (relative tolerance 1e-9)."""
+        """Whether ``x`` lies in the range (relative tolerance 1e-9).
+
+        Parameters
+        ----------
+        x : float
+            The value, in the variable's unit.
+
+        Returns
+        -------
+        bool
+            True when ``lo (1 - 1e-9) <= x <= hi (1 + 1e-9)``.
+        """
         return self.lo * (1 - 1e-9) <= x <= self.hi * (1 + 1e-9)
 
 
@@ -88,12 +128,12 @@ class Interval:
 class DevicePoint:
     """One device of the space. SI units; masses as multiples of one bead's.
 
-    Attributes
+    Parameters
     ----------
     bead_material : str
         Key of the materials library.
     bead_diameter : float
-        m.
+        The beads' diameter, m.
     beads : int
         Beads including the striker (bead 0).
     sensor_index : int
@@ -107,9 +147,9 @@ class DevicePoint:
     plate_material : str
         Key of the materials library.
     plate_thickness : float
-        m.
+        The plate's thickness, m.
     plate_diameter : float
-        m.
+        The plate's diameter, m.
     """
 
     bead_material: str
@@ -125,7 +165,7 @@ class DevicePoint:
 
     @property
     def bead_radius(self) -> float:
-        """m."""
+        """The beads' radius, m."""
         return 0.5 * self.bead_diameter
 
     @property
@@ -146,19 +186,54 @@ class DevicePoint:
                 self.plate_diameter)
 
     def continuous(self) -> np.ndarray:
-        """(4,) the continuous variables in the order of :data:`CONTINUOUS`."""
+        """The continuous variables in the order of :data:`CONTINUOUS`.
+
+        Returns
+        -------
+        numpy.ndarray
+            (4,) sensor and striker mass ratios (-), drop height (m), plate thickness (m).
+        """
         return np.array([getattr(self, k) for k in CONTINUOUS])
 
     def with_continuous(self, x: np.ndarray) -> DevicePoint:
         """The point with the continuous variables ``x`` (order of :data:`CONTINUOUS`),
-        quantized."""
+        quantized.
+
+        Parameters
+        ----------
+        x : numpy.ndarray
+            (4,) sensor and striker mass ratios (-), drop height (m), plate thickness (m).
+
+        Returns
+        -------
+        DevicePoint
+            This point with those values, rounded by :func:`quantize`.
+        """
         return quantize(replace(self, **{k: float(v) for k, v in zip(CONTINUOUS, x,
                                                                     strict=True)}))
 
     def params(self, base: Any, materials: dict[str, Any]) -> Any:
         """The :class:`ssw.chain.params.ChainParams` of this device: ``base``'s numerics
         (time steps, gravity, damping, interface) with this device's beads, sensor, striker
-        and plate, the materials' values."""
+        and plate, the materials' values.
+
+        Parameters
+        ----------
+        base : ssw.chain.params.ChainParams
+            The base chain whose numerics are kept.
+        materials : dict of str to Material
+            The materials library (key to density, kg/m^3, E, Pa, nu, -).
+
+        Returns
+        -------
+        ssw.chain.params.ChainParams
+            The chain of this device (masses, kg, from ``4/3 pi R^3 rho`` of a bead).
+
+        Raises
+        ------
+        ssw.errors.ConfigError
+            When the bead or plate material is not in ``materials``.
+        """
         bead = _material(materials, self.bead_material, "design.device.bead_materials")
         plate = _material(materials, self.plate_material, "design.device.plate_materials")
         R = self.bead_radius
@@ -174,7 +249,27 @@ class DevicePoint:
 
     def device(self, base: Any, materials: dict[str, Any], name: str = "designed") -> Any:
         """The :class:`ssw.device.Device` of this point (``base``'s DAQ sensor, interface,
-        preload and reading)."""
+        preload and reading).
+
+        Parameters
+        ----------
+        base : ssw.device.Device
+            The base device whose sensor, interface, preload and reading are kept.
+        materials : dict of str to Material
+            The materials library (the bead material's density, kg/m^3, sets the masses).
+        name : str
+            The new device's name.
+
+        Returns
+        -------
+        ssw.device.Device
+            The device of this point.
+
+        Raises
+        ------
+        ssw.errors.ConfigError
+            When the bead material is not in ``materials``.
+        """
         bead = _material(materials, self.bead_material, "design.device.bead_materials")
         m_bead = 4.0 / 3.0 * np.pi * self.bead_radius**3 * bead.density
         return base.with_(
@@ -188,19 +283,43 @@ class DevicePoint:
             plate_diameter=float(self.plate_diameter), source="")
 
     def label(self) -> str:
-        """A short description (mm, g-free ratios)."""
+        """A short description (mm, g-free ratios).
+
+        Returns
+        -------
+        str
+            Beads, diameter (mm) and material, sensor index and mass ratio, striker mass
+            ratio and drop height (mm), plate material and thickness (mm).
+        """
         return (f"{self.beads} x {self.bead_diameter * 1e3:.4g} mm {self.bead_material}, "
                 f"sensor {self.sensor_index} (x{self.sensor_mass_ratio:.3g}), striker "
                 f"x{self.striker_mass_ratio:.3g} from {self.drop_height * 1e3:.3g} mm, "
                 f"{self.plate_material} {self.plate_thickness * 1e3:.3g} mm")
 
     def to_dict(self) -> dict[str, Any]:
-        """Every variable (JSON)."""
+        """Every variable (JSON).
+
+        Returns
+        -------
+        dict of str to Any
+            Field name to value (SI units).
+        """
         return asdict(self)
 
     @classmethod
     def from_dict(cls, d: dict[str, Any]) -> DevicePoint:
-        """A point from :meth:`to_dict`."""
+        """A point from :meth:`to_dict`.
+
+        Parameters
+        ----------
+        d : dict of str to Any
+            Field name to value (SI units); unknown keys are ignored.
+
+        Returns
+        -------
+        DevicePoint
+            The point.
+        """
         names = {f.name for f in fields(cls)}
         return cls(**{k: (int(v) if k in ("beads", "sensor_index") else
                           str(v) if k in ("bead_material", "plate_material") else float(v))
@@ -223,7 +342,19 @@ def _round(x: float, quantum: float) -> float:
 
 def quantize(p: DevicePoint) -> DevicePoint:
     """The point with its continuous variables rounded (:data:`RATIO_QUANTUM` relative; the
-    plate's thickness to :data:`ssw.design.spec.THICKNESS_QUANTUM`)."""
+    plate's thickness to :data:`ssw.design.spec.THICKNESS_QUANTUM`).
+
+    Parameters
+    ----------
+    p : DevicePoint
+        The point.
+
+    Returns
+    -------
+    DevicePoint
+        The point with its mass ratios and drop height rounded to a relative 1e-6 and its
+        plate thickness to a multiple of the thickness quantum (m).
+    """
     t = float(np.round(p.plate_thickness / THICKNESS_QUANTUM) * THICKNESS_QUANTUM)
     return replace(p, sensor_mass_ratio=_round(p.sensor_mass_ratio, RATIO_QUANTUM),
                    striker_mass_ratio=_round(p.striker_mass_ratio, RATIO_QUANTUM),
@@ -232,7 +363,20 @@ def quantize(p: DevicePoint) -> DevicePoint:
 
 def sensor_index(position: float, beads: int) -> int:
     """The sensor's index for a position (share of the chain from the striker):
-    ``floor(position beads + 1/2)``, kept within ``1 .. beads - 2``."""
+    ``floor(position beads + 1/2)``, kept within ``1 .. beads - 2``.
+
+    Parameters
+    ----------
+    position : float
+        The sensor's share of the chain from the striker, in (0, 1).
+    beads : int
+        Beads including the striker.
+
+    Returns
+    -------
+    int
+        The sensor bead's 0-based index.
+    """
     return int(np.clip(np.floor(position * beads + 0.5), 1, beads - 2))
 
 
@@ -240,12 +384,12 @@ def sensor_index(position: float, beads: int) -> int:
 class DeviceSpace:
     """The devices a design searches (module docstring). Lengths in m.
 
-    Attributes
+    Parameters
     ----------
     bead_materials : tuple of str
         Materials of the beads (library keys).
     bead_diameters : tuple of float
-        m.
+        Bead diameters, m.
     beads : tuple of int
         Bead counts, striker included.
     sensor_positions : tuple of float
@@ -257,9 +401,9 @@ class DeviceSpace:
     striker_mass_ratio : Interval
         The striker's mass over a bead's.
     drop_height : Interval
-        m.
+        The striker's drop height, m.
     plate_thickness : Interval
-        m.
+        The plate's thickness, m.
     plate_diameter_ratio : float
         The plate's diameter over the bead diameter.
     """
@@ -300,12 +444,29 @@ class DeviceSpace:
 
     # ------------------------------------------------------------------ structure
     def families(self) -> list[tuple[float, str]]:
-        """(bead diameter, plate material) pairs: the workflow's jobs."""
+        """(bead diameter, plate material) pairs: the workflow's jobs.
+
+        Returns
+        -------
+        list of tuple of (float, str)
+            Bead diameter (m) and plate material key of each family.
+        """
         return list(itertools.product(self.bead_diameters, self.plate_materials))
 
     def chains(self, diameter: float) -> list[tuple[str, float, int, int]]:
         """The chains of one bead diameter, in a fixed order (the same sensor index from
-        two positions counts once)."""
+        two positions counts once).
+
+        Parameters
+        ----------
+        diameter : float
+            The bead diameter, m.
+
+        Returns
+        -------
+        list of tuple of (str, float, int, int)
+            Bead material, diameter (m), bead count and sensor index of each chain.
+        """
         out = []
         for mat, n, pos in itertools.product(self.bead_materials, self.beads,
                                              self.sensor_positions):
@@ -316,7 +477,20 @@ class DeviceSpace:
 
     def scan(self, chain: tuple[str, float, int, int], plate_material: str
              ) -> list[DevicePoint]:
-        """The scan points of one chain on one plate material."""
+        """The scan points of one chain on one plate material.
+
+        Parameters
+        ----------
+        chain : tuple of (str, float, int, int)
+            Bead material, diameter (m), bead count and sensor index.
+        plate_material : str
+            The plate's material key.
+
+        Returns
+        -------
+        list of DevicePoint
+            The product of the continuous variables' scans, quantized.
+        """
         mat, diameter, n, idx = chain
         grids = [getattr(self, k).scan_values() for k in CONTINUOUS]
         return [quantize(DevicePoint(mat, diameter, n, idx, float(sm), float(st), float(h),
@@ -327,7 +501,29 @@ class DeviceSpace:
     def family_points(self, diameter: float, plate_material: str, part: int = 0,
                       parts: int = 1) -> list[DevicePoint]:
         """The scan points of a family's chains ``part``, ``part + parts``, ... (a part of
-        the workflow's scatter; every chain whole in one part)."""
+        the workflow's scatter; every chain whole in one part).
+
+        Parameters
+        ----------
+        diameter : float
+            The family's bead diameter, m.
+        plate_material : str
+            The family's plate material key.
+        part : int
+            This part's index, ``0 <= part < parts``.
+        parts : int
+            The number of parts the family's chains are split into.
+
+        Returns
+        -------
+        list of DevicePoint
+            The scan points of this part's chains.
+
+        Raises
+        ------
+        ssw.errors.ConfigError
+            On a bad ``part``/``parts`` or more parts than the family has chains.
+        """
         if not (isinstance(parts, int) and parts >= 1 and 0 <= part < parts):
             raise ConfigError("--part", f"{part}/{parts}", "I/N with 0 <= I < N")
         every = self.chains(diameter)
@@ -345,12 +541,24 @@ class DeviceSpace:
             self.plate_materials)
 
     def bounds(self) -> list[tuple[float, float]]:
-        """The continuous variables' log bounds, in the order of :data:`CONTINUOUS`."""
+        """The continuous variables' log bounds, in the order of :data:`CONTINUOUS`.
+
+        Returns
+        -------
+        list of tuple of (float, float)
+            ``(ln lo, ln hi)`` of each variable (ln of its SI value or ratio).
+        """
         return [(float(np.log(getattr(self, k).lo)), float(np.log(getattr(self, k).hi)))
                 for k in CONTINUOUS]
 
     def to_dict(self) -> dict[str, Any]:
-        """Every field (JSON), the ranges as ``{range: [lo, hi], scan: n}``."""
+        """Every field (JSON), the ranges as ``{range: [lo, hi], scan: n}``.
+
+        Returns
+        -------
+        dict of str to Any
+            Field name to value (SI units), plus ``size`` (scan points of the space).
+        """
         d: dict[str, Any] = {k: list(getattr(self, k)) for k in (
             "bead_materials", "bead_diameters", "beads", "sensor_positions",
             "plate_materials")}
@@ -365,7 +573,25 @@ class DeviceSpace:
 def space_from_dict(d: dict[str, Any], base_ratio: float) -> DeviceSpace:
     """The :class:`DeviceSpace` of a config's ``design.device`` section (schema-filled or
     partial: missing keys take the defaults), ``base_ratio`` the base device's plate
-    diameter over its bead diameter (when the section states none)."""
+    diameter over its bead diameter (when the section states none).
+
+    Parameters
+    ----------
+    d : dict of str to Any
+        The ``design.device`` section (lengths in m).
+    base_ratio : float
+        The base device's plate diameter over its bead diameter (-).
+
+    Returns
+    -------
+    DeviceSpace
+        The space.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When a value is out of its allowed range (:class:`DeviceSpace` checks).
+    """
     kw: dict[str, Any] = {}
     for k, conv in (("bead_materials", str), ("bead_diameters", float), ("beads", int),
                     ("sensor_positions", float), ("plate_materials", str)):
@@ -383,7 +609,22 @@ def space_from_dict(d: dict[str, Any], base_ratio: float) -> DeviceSpace:
 
 def point_of(params: Any, bead_material: str, plate_material: str) -> DevicePoint:
     """The :class:`DevicePoint` of a chain (``ChainParams``: a base device), its bead and
-    plate material keys given (the params hold their values)."""
+    plate material keys given (the params hold their values).
+
+    Parameters
+    ----------
+    params : ssw.chain.params.ChainParams
+        The chain (SI units).
+    bead_material : str
+        The beads' material key.
+    plate_material : str
+        The plate's material key.
+
+    Returns
+    -------
+    DevicePoint
+        The point, masses as ratios to a bead's, drop height ``v^2 / (2 g)`` in m.
+    """
     m = params.masses
     mb = params.bead_mass
     return DevicePoint(

@@ -74,25 +74,48 @@ HITS = 3
 class DesignSpec:
     """A plate design problem (module docstring). SI units.
 
-    Attributes
+    Parameters
     ----------
-    soil_E : (lo, hi) Pa, the soils the device must measure.
-    soil_nu : their Poisson's ratio.
-    materials : plate material keys (the materials library).
-    thickness : (lo, hi) m, the thickness range searched per material.
-    plate_diameters : m, plate diameters tried (discrete); empty: the device's.
-    striker_velocities : m/s, striker speeds tried (discrete); empty: the device's.
-    moduli : soil moduli of the sensitivity curve (log-spaced, ends included).
-    log_step : half-step in ln E of the central difference of ln TOF.
-    soil_strength : Pa, the soil's yield stress, or None: ``soil_strength_ratio * E``.
-    soil_strength_ratio : yield stress over modulus of the soil (when no soil_strength).
-    soil_yield_limit : the largest soil yield index allowed (1: first yield).
-    max_mass_ratio : the largest plate mass over a bead's mass.
-    hits : TOF hits averaged per measurement (resolution).
-    tof_scatter : s, one hit's TOF standard deviation; tof_scatter_source: where from.
-    tof_sampling : s, the TOF's sampling uncertainty at the DAQ's rate; sample_rate: S/s.
-    scan_points : thicknesses scanned per material before the bounded search.
-    thickness_tol : the bounded search's tolerance in ln(thickness).
+    soil_E : tuple of (float, float)
+        ``(lo, hi)`` Pa, the soils the device must measure.
+    soil_nu : float
+        Their Poisson's ratio (-).
+    materials : tuple of str
+        Plate material keys (the materials library).
+    thickness : tuple of (float, float)
+        ``(lo, hi)`` m, the thickness range searched per material.
+    plate_diameters : tuple of float
+        m, plate diameters tried (discrete); empty: the device's.
+    striker_velocities : tuple of float
+        m/s, striker speeds tried (discrete); empty: the device's.
+    moduli : int
+        Soil moduli of the sensitivity curve (log-spaced, ends included).
+    log_step : float
+        Half-step in ln E of the central difference of ln TOF (-).
+    soil_strength : float or None
+        Pa, the soil's yield stress, or None: ``soil_strength_ratio * E``.
+    soil_strength_ratio : float
+        Yield stress over modulus of the soil (-, when no ``soil_strength``).
+    soil_yield_limit : float
+        The largest soil yield index allowed (-, 1: first yield).
+    max_mass_ratio : float
+        The largest plate mass over a bead's mass (-).
+    hits : int
+        TOF hits averaged per measurement (resolution).
+    tof_scatter : float
+        s, one hit's TOF standard deviation.
+    tof_scatter_source : str
+        Where ``tof_scatter`` comes from.
+    tof_sampling : float
+        s, the TOF's sampling uncertainty at the DAQ's rate.
+    sample_rate : float or None
+        S/s, the DAQ's sample rate (None: not stated).
+    scan_points : int
+        Thicknesses scanned per material before the bounded search.
+    thickness_tol : float
+        The bounded search's tolerance in ln(thickness) (-).
+    extra : dict of str to Any
+        Further values carried along (not compared, not written by :meth:`to_dict`).
     """
 
     soil_E: tuple[float, float]
@@ -153,7 +176,19 @@ class DesignSpec:
         return np.geomspace(self.soil_E[0], self.soil_E[1], self.moduli)
 
     def soil_yield_stress(self, E: np.ndarray) -> np.ndarray:
-        """The soil's yield stress (Pa) at moduli ``E`` (module docstring)."""
+        """The soil's yield stress (Pa) at moduli ``E`` (module docstring).
+
+        Parameters
+        ----------
+        E : numpy.ndarray
+            Soil moduli, Pa.
+
+        Returns
+        -------
+        numpy.ndarray
+            Yield stress, Pa, shaped as ``E``: ``soil_strength`` when stated, else
+            ``soil_strength_ratio E``.
+        """
         return soil_yield_stress(E, self.soil_strength, self.soil_strength_ratio)
 
     @property
@@ -164,7 +199,14 @@ class DesignSpec:
 
     def statement(self) -> dict[str, Any]:
         """The objective and the constraints, stated (the JSON's ``objective`` and
-        ``constraints``)."""
+        ``constraints``).
+
+        Returns
+        -------
+        dict of str to Any
+            ``objective``, ``constraints``, ``ranking`` and ``resolution``, each in words
+            with this spec's values.
+        """
         strength = (f"{self.soil_strength:.4g} Pa" if self.soil_strength is not None else
                     f"{self.soil_strength_ratio:g} E (assumed; the ranking does not depend "
                     "on it)")
@@ -192,7 +234,13 @@ class DesignSpec:
         }
 
     def to_dict(self) -> dict[str, Any]:
-        """Every field (JSON)."""
+        """Every field (JSON).
+
+        Returns
+        -------
+        dict of str to Any
+            Every field but ``extra`` (SI units) and ``soil_E_grid`` (Pa, :attr:`grid`).
+        """
         d = asdict(self)
         d.pop("extra")
         return {**d, "soil_E_grid": self.grid.tolist()}
@@ -200,7 +248,20 @@ class DesignSpec:
 
 def check_soil(soil_E: tuple[float, float], soil_nu: float) -> None:
     """ConfigError naming ``--soil-E`` or ``--soil-nu`` for a bad soil range (Pa) or
-    Poisson's ratio."""
+    Poisson's ratio.
+
+    Parameters
+    ----------
+    soil_E : tuple of (float, float)
+        ``(lo, hi)`` soil moduli, Pa.
+    soil_nu : float
+        The soil's Poisson's ratio (-).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When not ``0 < lo < hi`` (finite), or ``soil_nu`` is outside (-1, 0.5].
+    """
     lo, hi = soil_E
     if not (np.isfinite(lo) and np.isfinite(hi) and 0 < lo < hi):
         raise ConfigError("--soil-E", f"{lo}:{hi}", "LO:HI moduli with 0 < LO < HI (Pa)")
@@ -210,7 +271,22 @@ def check_soil(soil_E: tuple[float, float], soil_nu: float) -> None:
 
 def soil_yield_stress(E: np.ndarray, strength: float | None, ratio: float) -> np.ndarray:
     """The soil's yield stress (Pa) at moduli ``E`` (Pa): ``strength`` when stated, else
-    ``ratio E`` (module docstring)."""
+    ``ratio E`` (module docstring).
+
+    Parameters
+    ----------
+    E : numpy.ndarray
+        Soil moduli, Pa.
+    strength : float or None
+        The soil's stated yield stress, Pa, or None.
+    ratio : float
+        Yield stress over modulus (-), used when ``strength`` is None.
+
+    Returns
+    -------
+    numpy.ndarray
+        Yield stress, Pa, shaped as ``E``.
+    """
     E = np.asarray(E, float)
     if strength is not None:
         return np.full(E.shape, float(strength))
@@ -218,7 +294,25 @@ def soil_yield_stress(E: np.ndarray, strength: float | None, ratio: float) -> np
 
 
 def parse_range(text: str, field_name: str) -> tuple[float, float]:
-    """``LO:HI`` -> (lo, hi) floats; ConfigError naming ``field_name`` otherwise."""
+    """``LO:HI`` -> (lo, hi) floats; ConfigError naming ``field_name`` otherwise.
+
+    Parameters
+    ----------
+    text : str
+        The range as ``LO:HI`` (SI units).
+    field_name : str
+        The flag or key named in the error.
+
+    Returns
+    -------
+    tuple of (float, float)
+        ``(lo, hi)``, in the unit of ``text``.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``text`` is not two numbers separated by a colon.
+    """
     try:
         lo, hi = (float(x) for x in str(text).split(":"))
     except ValueError as exc:
@@ -227,7 +321,25 @@ def parse_range(text: str, field_name: str) -> tuple[float, float]:
 
 
 def parse_list(text: str | None, field_name: str) -> tuple[float, ...]:
-    """``A,B,...`` -> floats (empty for None or '')."""
+    """``A,B,...`` -> floats (empty for None or '').
+
+    Parameters
+    ----------
+    text : str or None
+        Comma-separated numbers (SI units), or None.
+    field_name : str
+        The flag or key named in the error.
+
+    Returns
+    -------
+    tuple of float
+        The numbers, in the unit of ``text``.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When an item is no number.
+    """
     if not text:
         return ()
     try:
@@ -238,7 +350,27 @@ def parse_list(text: str | None, field_name: str) -> tuple[float, ...]:
 
 def spec_from_config(design: dict[str, Any], soil: str, **fields: Any) -> DesignSpec:
     """The :class:`DesignSpec` of soil range ``soil`` of a config's ``design:`` section
-    (schema-filled), with ``fields`` (the device's and the DAQ's values) added."""
+    (schema-filled), with ``fields`` (the device's and the DAQ's values) added.
+
+    Parameters
+    ----------
+    design : dict of str to Any
+        The config's ``design:`` section (SI units).
+    soil : str
+        The key of a soil range under ``design.soils``.
+    **fields : Any
+        Further :class:`DesignSpec` fields; they override the section's.
+
+    Returns
+    -------
+    DesignSpec
+        The design problem.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        When ``soil`` is no soil range of the section, or a value is out of range.
+    """
     soils = design.get("soils", {})
     if soil not in soils:
         raise ConfigError("design soil range", soil, f"one of {', '.join(soils) or '(none)'}")

@@ -38,7 +38,7 @@ LOCKED_FIXTURES = ("ci_study",)
 #: ``fixture:NAME`` or a module's path) and modules (a path: its tests that are in no group).
 #: From ``pytest -n 2 --durations=0`` (2 cores, 2026-11-26): a module's or group's seconds.
 EARLY = (
-    "slurm",  # a CI study on Slurm, the lost-jobs and Ctrl-C tests' waits
+    "slurm",  # the lost-jobs, pending and Ctrl-C tests' waits
     "tests/test_workflow.py",  # the CI study (ci_study) and the tests that read it
     "tests/test_docs.py",  # the documentation site, from nothing in a fresh clone
     "fixture:made", "tests/test_commands.py",  # the README's and the docs' commands

@@ -118,6 +118,7 @@ def misfit_tofs():
     return {soil: chain_tof(*soil, MISFIT_V, **MISFIT) for soil in [*FOAMS, *MISFIT_UNSEEN]}
 
 
+@pytest.mark.long
 def test_a_device_the_model_does_not_describe_calibrates_with_the_preload_on_its_bound(
         misfit_tofs, device):
     """The default free parameters (striker speed and preload) on three foams of a device

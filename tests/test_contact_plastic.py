@@ -313,6 +313,7 @@ def _tresca_punch(kind: str, h_edge: float, h_face: float, nu: float = 0.3) -> n
     return c.force / (np.pi * a * a * k)
 
 
+@pytest.mark.long
 def test_flat_punch_tresca_limit_load():
     """Rigid flat punch on a Tresca half-space: the mean pressure levels off within 3 % of
     Eason & Shield's limits, 5.69 k (smooth) and 6.05 k (rough; the Haar-Karman solutions

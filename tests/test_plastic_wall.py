@@ -56,6 +56,7 @@ def _balance(w, steps: int) -> tuple[float, float]:
     return float(np.max(np.abs(e - e[0])) / ke), float(lost[0])
 
 
+@pytest.mark.long
 def test_energy_balance_per_hit():
     """Striker kinetic energy + gravity work = chain kinetic + stored + wall stored + wall
     dissipated over a hit, to 2e-6 of the striker's energy at 1000 steps per contact

@@ -399,6 +399,7 @@ def _assert_jobs_ask_for_what_they_use(log: str, config: Path) -> None:
     assert not any(k.startswith(("sweep_figure", "report_tables", "all")) for k in calls)
 
 
+@pytest.mark.long
 def test_ci_study_slurm_equals_local(tmp_path: Path, slurm_cluster: str,
                                     request: pytest.FixtureRequest) -> None:
     """The whole CI study (config/ci.yaml: contact -> fits -> the fem wall -> calibration ->

@@ -127,6 +127,7 @@ def _copy_tree(dest: Path) -> None:
             shutil.copy2(src, dest / name)
 
 
+@pytest.mark.long
 def test_a_clone_under_a_folder_with_a_space_and_an_accent_gives_the_same_tables(ci_study,
                                                                                   tmp_path):
     """`make study CONFIG=config/ci.yaml` (the README's command on the CI study) in a clone
@@ -325,6 +326,7 @@ def test_study_tables_carry_their_checks(ci_study):
     assert all({"value", "limit", "holds", "source"} <= set(e) for e in point["validity"])
 
 
+@pytest.mark.long
 def test_study_report_renders_in_a_headless_browser(ci_study):
     """`snakemake --report`: every figure of the study, with the survey's, loads in
     chromium, each category opens, no screenshot is blank (tests/test_report_browser.py)."""

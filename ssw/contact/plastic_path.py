@@ -120,6 +120,43 @@ class PlasticCurve:
     ``branch`` 0 loading, 1 unloading; ``dissipated`` the cumulative plastic work (J);
     ``plastic_volume`` (m^3), ``plastic_depth`` and ``plastic_radius`` (m) the extent of the
     points that have yielded so far; ``iterations`` Newton's per increment.
+
+    Parameters
+    ----------
+    delta : numpy.ndarray
+        m, the indentation at each increment.
+    force : numpy.ndarray
+        N, the contact force.
+    branch : numpy.ndarray
+        0 loading, 1 unloading.
+    contact_radius : numpy.ndarray
+        m, the contact's radius.
+    dissipated : numpy.ndarray
+        J, the cumulative plastic work.
+    plastic_volume : numpy.ndarray
+        m^3, volume of the points that have yielded so far.
+    plastic_depth : numpy.ndarray
+        m, depth of the yielded zone.
+    plastic_radius : numpy.ndarray
+        m, radius of the yielded zone.
+    iterations : numpy.ndarray
+        Newton iterations per increment.
+    yield_ratio : numpy.ndarray
+        -, the largest yield ratio of the sample's (and plate's) points.
+    first_yield_force : float or None
+        N, the force at first yield (None: nothing yields).
+    first_yield_delta : float or None
+        m, the indentation at first yield.
+    residual_indentation : float or None
+        m, the permanent indentation on the axis after unloading (None: not unloaded).
+    stored_energy : float
+        J, the elastic energy stored at the end of the path.
+    stats : dict
+        Solver counts and timings (s).
+    interface_residual : float or None
+        m, the plate-sample interface's residual depth on the axis (the residual
+        indentation less the plate's permanent thinning there; without a plate the
+        residual indentation).
     """
 
     delta: np.ndarray

@@ -60,7 +60,7 @@ class LawScore:
     """One dissipation law's fit of the references' records and its criteria (module
     docstring).
 
-    Attributes
+    Parameters
     ----------
     law : str
         The law's name (:data:`ssw.chain.dissipation.LAWS`).
@@ -105,7 +105,13 @@ class LawScore:
     unexplained: int
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready (SI; the coefficient in ``unit``)."""
+        """JSON-ready (SI; the coefficient in ``unit``).
+
+        Returns
+        -------
+        dict
+            Field name -> value.
+        """
         return asdict(self)
 
 

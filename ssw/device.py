@@ -305,7 +305,7 @@ def device_from_dict(data: dict[str, Any], source: str = "") -> Device:
     data : dict
         The device in the nested layout of ``ssw/data/device.schema.yaml`` (SI units).
     source : str
-        Where it was read from, for error messages and :attr:`Device.source`.
+        Where it was read from, for error messages and ``Device.source``.
 
     Returns
     -------

@@ -67,8 +67,8 @@ def sampling_uncertainty(rate: float) -> float:
     Returns
     -------
     float
-        s, one standard uncertainty: :data:`SAMPLING_FRACTION_FULL_RATE` (at the NI 9234's
-        full rate) or :data:`SAMPLING_FRACTION` sample periods, ``frac / rate``.
+        s, one standard uncertainty: ``SAMPLING_FRACTION_FULL_RATE`` (at the NI 9234's
+        full rate) or ``SAMPLING_FRACTION`` sample periods, ``frac / rate``.
     """
     frac = SAMPLING_FRACTION_FULL_RATE if rate >= 0.99 * FULL_RATE else SAMPLING_FRACTION
     return frac / rate

@@ -87,7 +87,7 @@ class Calibration:
     at_bound : dict of str to str
         Parameters a scan bound holds, with the bound.
     device_sha256 : str
-        :func:`device_digest` of the nominal device and its materials.
+        ``device_digest`` of the nominal device and its materials.
     path : str
         The file it was read from ("" when made in memory).
     covariance_parameters : tuple of str
@@ -189,7 +189,7 @@ class Calibration:
         return tuple(n for n in self.free if parameter(n).kind == "continuous")
 
     def to_dict(self) -> dict[str, Any]:
-        """The file's JSON layout (``ssw_kind``, :data:`SCHEMA_VERSION`, every field; SI).
+        """The file's JSON layout (``ssw_kind``, ``SCHEMA_VERSION``, every field; SI).
 
         Returns
         -------

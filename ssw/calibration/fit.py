@@ -273,8 +273,8 @@ def scan_grid(model: TofModel, ranges: dict[str, tuple[float, float]],
     ranges : dict of str to tuple of float
         ``(lo, hi)`` per free parameter, SI.
     points : int or None
-        Points per continuous axis (None: :data:`SCAN_POINTS_1D` for one, else within
-        :data:`SCAN_BUDGET`); integer axes take every integer in range.
+        Points per continuous axis (None: ``SCAN_POINTS_1D`` for one, else within
+        ``SCAN_BUDGET``); integer axes take every integer in range.
 
     Returns
     -------

@@ -566,7 +566,7 @@ class Setup:
         Returns
         -------
         float
-            s, the step kept in :attr:`dt`.
+            s, the step kept in ``dt``.
         """
         from ssw.chain.integrate import time_step
         from ssw.chain.params import Batch

@@ -144,8 +144,8 @@ class Mesh:
     soil_depth: float
     base: str = "bonded"
     lateral: str = "mould"
-    #: (ne,) bool, the soil elements of the subgrade (below the lift); None: no subgrade;
-    #: its E relative to the lift's and its Poisson's ratio
+    # (ne,) bool, the soil elements of the subgrade (below the lift); None: no subgrade;
+    # its E relative to the lift's and its Poisson's ratio
     subgrade: np.ndarray | None = None
     subgrade_ratio: float = 1.0
     subgrade_nu: float = 0.0

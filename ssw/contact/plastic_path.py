@@ -174,8 +174,8 @@ class PlasticCurve:
     residual_indentation: float | None
     stored_energy: float
     stats: dict[str, Any] = field(default_factory=dict)
-    #: the plate-sample interface's residual depth on the axis (m; the residual indentation
-    #: less the plate's permanent thinning there; without a plate the residual indentation)
+    # the plate-sample interface's residual depth on the axis (m; the residual indentation
+    # less the plate's permanent thinning there; without a plate the residual indentation)
     interface_residual: float | None = None
 
     @property

@@ -269,7 +269,7 @@ def load_calibration(path: str | Path) -> Calibration:
     The file is checked against its JSON Schema (``ssw/data/calibration.schema.yaml``,
     through :func:`ssw.schema.first_file_error`), NaN and infinities are refused anywhere,
     and the covariance must be square over its parameters, symmetric and positive definite
-    (:func:`check_covariance`); each refusal names the field.
+    (``check_covariance``); each refusal names the field.
 
     Parameters
     ----------

@@ -46,7 +46,7 @@ Model error. Where the references' chi^2 with their stated TOF uncertainties exc
 :func:`degrees_of_freedom`), the model does not describe the device to the references'
 precision: the fit is repeated with a relative TOF model error ``tau`` in the weights,
 ``std_i^2 + tau^2 T_i^2``, ``tau`` the upper confidence bound its residuals call for,
-re-estimated until it settles (:func:`_with_model_error`; :mod:`ssw.calibration.model_error`
+re-estimated until it settles (``_with_model_error``; :mod:`ssw.calibration.model_error`
 states the estimator and why). The covariance and the leave-one-out fits then use those
 weights; ``Fit.chi2`` stays the references' chi^2 with their stated uncertainties and
 ``Fit.model_error`` states the term. A calibration is refused only for its input (TOFs the

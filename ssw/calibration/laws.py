@@ -50,8 +50,8 @@ from ssw.errors import ConfigError
 #: A criterion's difference below which two laws are not told apart (Burnham & Anderson
 #: 2002, sec. 2.6).
 INDISTINCT = 2.0
-#: The kinds of observation that are priors, not records (:func:`ssw.calibration.waveform.
-#: observe`): they enter the likelihood, not the observations' count ``n``.
+#: The kinds of observation that are priors, not records (``ssw.calibration.waveform.observe``):
+#: they enter the likelihood, not the observations' count ``n``.
 PRIORS = ("trigger", "delay")
 
 

@@ -28,7 +28,7 @@ One estimator answers "how large is the model's error?" at every level:
   quantile, :func:`rejects`: a calibration the references do not reject is left as it
   was, to the digit), and fitted with the parameters: the weights ``sigma_i^2 + tau^2
   T_i^2``, ``tau`` re-estimated from the new residuals until it settles
-  (:data:`PASSES`, :data:`RTOL`). Every interval made through the calibration carries it
+  (:data:`PASSES`, ``RTOL``). Every interval made through the calibration carries it
   (:func:`ssw.modulus.estimate_moduli`): its covariance, from those weights, and the
   sample's own model error ``tau / |d ln TOF / d ln E|`` (the term
   :data:`ssw.modulus.MODEL_TERM`);
@@ -176,7 +176,7 @@ class ModelError:
     passes : int
         Fits made with the term.
     settled : bool
-        ``tau`` changed by at most :data:`RTOL` of itself at the last pass.
+        ``tau`` changed by at most ``RTOL`` of itself at the last pass.
     """
 
     tau: float

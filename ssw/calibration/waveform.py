@@ -1193,7 +1193,7 @@ def model_floor(setup: Setup, f: Fit) -> dict[str, float]:
     """The model-error floor the references' residuals call for: per observation kind (each
     feature; the samples of a waveform) the relative standard deviation ``phi`` that, added
     in quadrature to the noise's, brings that kind's chi^2 at the fit ``f`` down to the
-    lower :data:`FLOOR_CONFIDENCE` quantile of a chi^2 of its share of the degrees of
+    lower ``FLOOR_CONFIDENCE`` quantile of a chi^2 of its share of the degrees of
     freedom: the upper confidence bound of ``phi`` (the Birge ratio of each kind, Birge
     1932, made 1 at the bound rather than at the point estimate: a kind with a handful of
     observations per reference gives a floor that samples outside the references' range

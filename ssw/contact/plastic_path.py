@@ -237,7 +237,7 @@ def solve_path(
     near : float or None
         Radius (m) of the near zone about the contact point outside which the mesh is
         condensed (the elastic far field, ``_Model._condense``); -1 (default):
-        :func:`near_radius` of the path, doubled while the plastic zone or the contact
+        ``near_radius`` of the path, doubled while the plastic zone or the contact
         reaches its edge; None: no condensation.
     elastic_mesh : Mesh or None
         A mesh for the path's elastic part (module docstring, "Two meshes"): the loading

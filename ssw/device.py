@@ -51,25 +51,62 @@ DISSIPATION_LAWS = ("dashpot", "kuwabara_kono", "hunt_crossley")
 class Device:
     """One SSW instrument. SI units; the YAML layout is nested (:meth:`to_dict`).
 
-    Attributes
+    Parameters
     ----------
-    name, description : identification.
-    beads : beads including the striker (bead 0) and the bead on the plate (>= 3).
-    bead_material : material key (materials library); bead_radius : m.
-    preload : N, constant downward force on bead 1 (top of the resting column).
-    sensor_index : 0-based index of the sensor particle from the striker.
-    sensor_mass : kg or None (a bead's).  sensor_reads : ``mean`` | ``upper`` | ``lower``.
-    striker_mass : kg or None (a bead's).  striker_velocity : m/s at first contact.
-    plate_material : material key or ``none``; plate_thickness : m (0: no plate);
-    plate_diameter : m; plate_interface : ``frictionless`` | ``bonded`` | ``unilateral``.
-    sensor_model : text; sensitivity : V/N; sensor_range : N.
-    dissipation_law : the contacts' dissipation law (:data:`DISSIPATION_LAWS`: ``dashpot``
-    ``c d'``, ``kuwabara_kono`` ``c sqrt(d) d'``, ``hunt_crossley`` ``c F_el(d) d'``);
-    dissipation : its coefficient ``c`` >= 0 in the law's unit (N s/m, N s/m^1.5, s/m; 0:
-    conservative).
-    tof_scatter : s, the stated standard deviation of one hit's TOF on a uniform sample
-    (None: not stated); tof_scatter_source : where it comes from.
-    source : where the device was read from (not part of its physics).
+    name : str
+        The device's name (identification only).
+    beads : int
+        Beads including the striker (bead 0) and the bead on the plate (>= 3).
+    bead_material : str
+        Material key of the beads (materials library).
+    bead_radius : float
+        m, radius of every bead.
+    preload : float
+        N, constant downward force on bead 1 (top of the resting column), >= 0.
+    sensor_index : int
+        0-based index of the sensor particle from the striker, 1 .. ``beads - 2``.
+    sensor_mass : float or None
+        kg, mass of the sensor particle; ``None``: a bead's mass.
+    sensor_reads : str
+        Which force the sensor reads: ``mean`` | ``upper`` | ``lower``.
+    striker_mass : float or None
+        kg, mass of the striker; ``None``: a bead's mass.
+    striker_velocity : float
+        m/s, the striker's speed at first contact.
+    plate_material : str
+        Material key of the plate under the last bead, or ``none``.
+    plate_thickness : float
+        m, thickness of the plate (0: no plate).
+    plate_diameter : float
+        m, diameter of the plate.
+    plate_interface : str
+        How the plate meets the sample: ``frictionless`` | ``bonded`` | ``unilateral``.
+    sensor_model : str
+        The DAQ force sensor's model (text).
+    sensitivity : float
+        V/N, the force sensor's sensitivity.
+    sensor_range : float
+        N, the force sensor's measuring range.
+    dissipation_law : str
+        The contacts' dissipation law (:data:`DISSIPATION_LAWS`): ``dashpot`` ``c d'``,
+        ``kuwabara_kono`` ``c sqrt(d) d'``, ``hunt_crossley`` ``c F_el(d) d'``.
+    dissipation : float
+        Its coefficient ``c`` >= 0 in the law's unit (N s/m, N s/m^1.5, s/m; 0:
+        conservative).
+    tof_scatter : float or None
+        s, the stated standard deviation of one hit's TOF on a uniform sample (None: not
+        stated).
+    tof_scatter_source : str
+        Where ``tof_scatter`` comes from.
+    description : str
+        Free text describing the device.
+    source : str
+        Where the device was read from (not part of its physics).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        A field out of its allowed range, naming its place in the YAML layout.
     """
 
     name: str
@@ -142,6 +179,7 @@ class Device:
 
     @property
     def has_plate(self) -> bool:
+        """Whether the device has a plate under the last bead (thickness > 0 m)."""
         return self.plate_thickness > 0
 
     @property
@@ -157,6 +195,22 @@ class Device:
         Changing ``beads`` without ``sensor_index`` keeps the beads below the sensor (the
         sensor stays at the same height above the plate: what a longer or shorter column
         above it means physically).
+
+        Parameters
+        ----------
+        **changes : Any
+            New values by field name (SI units); ``drop_height`` (m) sets
+            ``striker_velocity = sqrt(2 g h)``.
+
+        Returns
+        -------
+        Device
+            The changed copy (validated again).
+
+        Raises
+        ------
+        ssw.errors.ConfigError
+            An unknown field, a drop height with a velocity, or a value out of range.
         """
         ch = dict(changes)
         if "drop_height" in ch:
@@ -179,7 +233,14 @@ class Device:
 
     # ------------------------------------------------------------------ I/O
     def to_dict(self) -> dict[str, Any]:
-        """The nested YAML/JSON layout of the schema (SI units)."""
+        """The nested YAML/JSON layout of the schema (SI units).
+
+        Returns
+        -------
+        dict
+            The device by schema section (``chain``, ``sensor``, ``striker``, ``plate``,
+            ``daq_sensor``, ``dissipation``, ``repeatability``), SI units.
+        """
         return {
             "name": self.name,
             "description": self.description,
@@ -202,7 +263,13 @@ class Device:
         scatter: a measured property of the device, not part of its model). A device
         without dissipation (coefficient 0, whatever the law's name) leaves the dissipation
         out: its physics, and the digest a calibration records of it, are those of a
-        device file that states none."""
+        device file that states none.
+
+        Returns
+        -------
+        dict
+            Field name -> value (SI units) of the physical fields.
+        """
         d = asdict(self)
         for k in ("name", "description", "source", "tof_scatter", "tof_scatter_source"):
             d.pop(k)
@@ -233,9 +300,22 @@ def _yaml_field(name: str) -> str:
 def device_from_dict(data: dict[str, Any], source: str = "") -> Device:
     """A device from its nested layout: schema-validated, defaults filled.
 
-    Raises :class:`~ssw.errors.ConfigError` naming the field (``device.<path>``), the value and
-    what is
-    allowed.
+    Parameters
+    ----------
+    data : dict
+        The device in the nested layout of ``ssw/data/device.schema.yaml`` (SI units).
+    source : str
+        Where it was read from, for error messages and ``Device.source``.
+
+    Returns
+    -------
+    Device
+        The validated device.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        Naming the field (``device.<path>``), the value and what is allowed.
     """
     from ssw.schema import first_file_error, path_of
 
@@ -276,12 +356,34 @@ def device_from_dict(data: dict[str, Any], source: str = "") -> Device:
 
 
 def available_devices() -> list[str]:
-    """Names of the devices shipped with ssw."""
+    """Names of the devices shipped with ssw.
+
+    Returns
+    -------
+    list of str
+        The shipped devices' names, sorted.
+    """
     return sorted(p.stem for p in DEVICES_DIR.glob("*.yaml"))
 
 
 def device_path(spec: str | Path) -> Path:
-    """The YAML file of ``spec``: an existing path, or the name of a shipped device."""
+    """The YAML file of ``spec``: an existing path, or the name of a shipped device.
+
+    Parameters
+    ----------
+    spec : str or Path
+        A path to a device YAML file, or the name of a shipped device.
+
+    Returns
+    -------
+    Path
+        The device's YAML file.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        Neither a file nor a shipped device (``--device``), listing the shipped ones.
+    """
     p = Path(spec)
     if p.is_file():
         return p
@@ -294,7 +396,24 @@ def device_path(spec: str | Path) -> Path:
 
 
 def load_device(spec: str | Path | dict[str, Any] | Device | None = None) -> Device:
-    """A device from a path, a shipped device's name, a mapping, or the default (thesis)."""
+    """A device from a path, a shipped device's name, a mapping, or the default (thesis).
+
+    Parameters
+    ----------
+    spec : str, Path, dict, Device or None
+        A device file, a shipped device's name, a nested mapping, a device (returned as
+        is), or None for :data:`DEFAULT_DEVICE`.
+
+    Returns
+    -------
+    Device
+        The validated device.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        An unknown device, an unreadable file, or an invalid field.
+    """
     if isinstance(spec, Device):
         return spec
     if isinstance(spec, dict):
@@ -308,7 +427,17 @@ def load_device(spec: str | Path | dict[str, Any] | Device | None = None) -> Dev
 
 
 def write_device(path: str | Path, device: Device, header: str = "") -> None:
-    """Write a device YAML file atomically (re-loadable by :func:`load_device`)."""
+    """Write a device YAML file atomically (re-loadable by :func:`load_device`).
+
+    Parameters
+    ----------
+    path : str or Path
+        The YAML file to write.
+    device : Device
+        The device to write (its :meth:`Device.to_dict` layout).
+    header : str
+        Text put before the YAML (e.g. comment lines); none by default.
+    """
     from ssw.h5io import atomic_write_text
 
     text = (header + "\n" if header else "") + yaml.safe_dump(
@@ -324,6 +453,25 @@ class Parameter:
     ``kind`` is ``continuous`` (refined by least squares) or ``integer`` (scanned);
     ``lower``/``upper`` bound the global scan (SI); ``log`` scans and steps it in log
     space; ``scale`` (SI) makes Jacobian columns comparable when a value may be 0.
+
+    Parameters
+    ----------
+    name : str
+        The device field's name.
+    unit : str
+        Its SI unit (``1``: dimensionless).
+    kind : str
+        ``continuous`` or ``integer``.
+    lower : float
+        Lower end of the global scan, in ``unit``.
+    upper : float
+        Upper end of the global scan, in ``unit``.
+    log : bool
+        Scan and step in log space.
+    scale : float
+        Typical size in ``unit``, scaling its Jacobian column.
+    description : str
+        What the parameter is (text).
     """
 
     name: str
@@ -352,14 +500,49 @@ PARAMETERS: dict[str, Parameter] = {p.name: p for p in (
 
 
 def parameter(name: str) -> Parameter:
-    """The calibratable parameter ``name`` (ConfigError listing them otherwise)."""
+    """The calibratable parameter ``name`` (ConfigError listing them otherwise).
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`PARAMETERS`.
+
+    Returns
+    -------
+    Parameter
+        Its description.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        ``name`` is not calibratable (``--free``).
+    """
     if name not in PARAMETERS:
         raise ConfigError("--free", name, f"one of {', '.join(PARAMETERS)}")
     return PARAMETERS[name]
 
 
 def parameter_value(device: Device, name: str) -> float:
-    """The device's value of a calibratable parameter (a None mass is a bead's mass)."""
+    """The device's value of a calibratable parameter (a None mass is a bead's mass).
+
+    Parameters
+    ----------
+    device : Device
+        The device.
+    name : str
+        A key of :data:`PARAMETERS`.
+
+    Returns
+    -------
+    float
+        The value in the parameter's SI unit; a None mass is ``4/3 pi R^3 rho`` of a bead
+        (kg).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        ``name`` is not calibratable.
+    """
     parameter(name)
     v = getattr(device, name)
     if v is None:  # a mass given as "a bead's"

@@ -57,14 +57,72 @@ FULL_RATE = 51200.0
 
 
 def sampling_uncertainty(rate: float) -> float:
-    """TOF uncertainty (s) of the peak picking at sample rate ``rate`` (S/s)."""
+    """TOF uncertainty (s) of the peak picking at sample rate ``rate`` (S/s).
+
+    Parameters
+    ----------
+    rate : float
+        S/s, the record's sample rate.
+
+    Returns
+    -------
+    float
+        s, one standard uncertainty: ``SAMPLING_FRACTION_FULL_RATE`` (at the NI 9234's
+        full rate) or ``SAMPLING_FRACTION`` sample periods, ``frac / rate``.
+    """
     frac = SAMPLING_FRACTION_FULL_RATE if rate >= 0.99 * FULL_RATE else SAMPLING_FRACTION
     return frac / rate
 
 
 @dataclass(frozen=True)
 class Measurement:
-    """The modulus of one test point and how it was obtained. SI units."""
+    """The modulus of one test point and how it was obtained. SI units.
+
+    Parameters
+    ----------
+    E : float
+        Pa, the Young's modulus of the test point.
+    E_low : float
+        Pa, lower end of the 95 % interval, ``E exp(-1.96 u)``.
+    E_high : float
+        Pa, upper end of the 95 % interval, ``E exp(+1.96 u)``.
+    u : float
+        -, standard uncertainty of ln E: the quadrature sum of ``contributions``.
+    contributions : dict of str to float
+        -, standard uncertainty of ln E per source.
+    notes : tuple of str
+        Remarks on the measurement (text).
+    tof_mean : float
+        s, mean TOF of the accepted hits.
+    tof_sem : float
+        s, its standard error (NaN: not estimable).
+    tof_std : float
+        s, sample standard deviation of the accepted hits' TOF (NaN: too few hits).
+    n_hits : int
+        Hits found in the recordings.
+    n_accepted : int
+        Hits the rejection rule accepted.
+    tof_per_hit : list of float or None
+        s, each hit's TOF (None: none picked).
+    accepted : list of bool
+        Whether each hit was accepted.
+    rejections : list of str
+        Why hits were rejected or dropped, by file.
+    files : list of str
+        The recordings' paths.
+    sample_rate : float
+        S/s, the lowest sample rate of the recordings.
+    nu : float
+        -, the Poisson's ratio of the inversion.
+    nu_range : tuple of float or None
+        -, the stated Poisson's ratio range, or None.
+    synthetic : bool
+        Whether any recording is synthetic.
+    missing : dict of str to str
+        Budget terms left out of the interval, each with the reason.
+    extra : dict
+        Further entries of :meth:`to_dict` (sensitivity, checks, yield index).
+    """
 
     E: float
     E_low: float
@@ -94,6 +152,13 @@ class Measurement:
         return not self.missing
 
     def to_dict(self) -> dict[str, Any]:
+        """The measurement as a JSON-ready mapping (SI units; percentages marked ``_pct``).
+
+        Returns
+        -------
+        dict
+            E, its interval and budget (in %), the TOF statistics, the hits and ``extra``.
+        """
         return {
             "E": self.E, "E_low": self.E_low, "E_high": self.E_high, "coverage": 0.95,
             "E_u_pct": 100.0 * self.u,
@@ -115,7 +180,23 @@ def uniaxial_strength(strength: Any) -> float | None:
     """The uniaxial strength (Pa) a sample's von Mises stress is compared with, from a
     :class:`ssw.materials.Strength`: the yield stress, else the compressive strength (foams:
     the crushing plateau), else the unconfined compressive strength of Mohr-Coulomb
-    ``q_u = 2 c cos(phi) / (1 - sin(phi))``; None when none is known."""
+    ``q_u = 2 c cos(phi) / (1 - sin(phi))``; None when none is known.
+
+    Parameters
+    ----------
+    strength : ssw.materials.Strength or None
+        The sample material's strengths (Pa; friction angle in degrees).
+
+    Returns
+    -------
+    float or None
+        Pa, the uniaxial strength, or None.
+
+    Notes
+    -----
+    ``q_u = 2 c cos(phi) / (1 - sin(phi)) = 2 c tan(45 deg + phi / 2)`` is the uniaxial
+    compressive strength of the Mohr-Coulomb criterion (its unconfined compression circle).
+    """
     if strength is None:
         return None
     if strength.yield_stress is not None:
@@ -133,7 +214,32 @@ def yield_check(E: float, nu: float, params: Any, wall_options: dict[str, Any] |
     """How close a hit on a sample of modulus ``E`` (Pa), ``nu`` came to yielding it (module
     docstring): ``{"sample_peak_von_mises": Pa, "sample_strength": Pa, "yield_index": -,
     "sample_yielded": bool, "peak_wall_force": N}``, from the device's chain ``params`` on
-    its exact FEM wall (``wall_options``: its ``contact`` settings and operators)."""
+    its exact FEM wall (``wall_options``: its ``contact`` settings and operators).
+
+    Parameters
+    ----------
+    E : float
+        Pa, the sample's Young's modulus.
+    nu : float
+        -, its Poisson's ratio.
+    params : ssw.chain.params.ChainParams
+        The device's chain.
+    wall_options : dict or None
+        The wall builder's options (only ``contact`` and ``operators`` are used).
+    strength : float
+        Pa, the sample's uniaxial strength (:func:`uniaxial_strength`).
+
+    Returns
+    -------
+    dict
+        ``sample_peak_von_mises`` (Pa), ``sample_strength`` (Pa), ``yield_index`` (-, their
+        ratio), ``sample_yielded`` (bool), ``peak_wall_force`` (N).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        ``strength`` is not a finite value > 0 Pa.
+    """
     from ssw.errors import ConfigError
     from ssw.tof.api import peaks
     from ssw.walls.fem import peak_stresses
@@ -151,7 +257,27 @@ def yield_check(E: float, nu: float, params: Any, wall_options: dict[str, Any] |
 
 def pooled_tof(recordings: list[Any], tof_options: Any = None) -> dict[str, Any]:
     """Per-hit TOFs of every recording (the rejection rule applied per session), pooled:
-    the accepted hits' mean, sample std and standard error of the mean (s)."""
+    the accepted hits' mean, sample std and standard error of the mean (s).
+
+    Parameters
+    ----------
+    recordings : list of ssw.daq.recording.Recording
+        The sessions of one test point.
+    tof_options : ssw.signal.tof.TofOptions or None
+        Options of the TOF picking and the rejection rule (None: the defaults).
+
+    Returns
+    -------
+    dict
+        ``tof_mean``, ``tof_std`` (NaN below :data:`ssw.signal.tof.MIN_HITS_FOR_SCATTER`
+        hits), ``tof_sem`` (s); ``n_accepted``, ``n_hits``, ``tof_per_hit``, ``accepted``,
+        ``rejections``, ``sample_rate`` (S/s, the lowest) and ``n_dropped``.
+
+    Raises
+    ------
+    ssw.errors.RecordingError
+        No hit was accepted.
+    """
     from ssw.signal.tof import recording_tof
 
     per_hit: list[float | None] = []
@@ -220,6 +346,16 @@ def measure(
         the entry.
     stresses : str
         The checks' stress mode (:data:`ssw.validity.STRESS_MODES`).
+
+    Returns
+    -------
+    Measurement
+        E with its 95 % interval ``E exp(+-1.96 u)`` and the budget.
+
+    Raises
+    ------
+    ssw.errors.RecordingError
+        No recording, or no accepted hit.
     """
     from ssw.modulus import estimate_moduli
 
@@ -313,7 +449,23 @@ def _checks(est: Any, params: Any, wall: str, wall_options: dict[str, Any] | Non
 
 
 def parse_nu(text: str | float) -> float | tuple[float, float]:
-    """``NU`` or ``LO:HI`` (a Poisson's ratio range) from the command line."""
+    """``NU`` or ``LO:HI`` (a Poisson's ratio range) from the command line.
+
+    Parameters
+    ----------
+    text : str or float
+        ``NU`` or ``LO:HI``, with ``-1 < LO <= HI <= 0.5``.
+
+    Returns
+    -------
+    float or tuple of float
+        The Poisson's ratio, or the range ``(lo, hi)``.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        Not a ratio or range in bounds (``--soil-nu``).
+    """
     from ssw.errors import ConfigError
 
     s = str(text).strip()

@@ -65,6 +65,35 @@ class ModulusEstimate:
 
     ``contributions``: standard uncertainty of ln E per source (about the relative
     standard uncertainty of E); ``u``: their quadrature sum.
+
+    Parameters
+    ----------
+    E : float
+        Pa, the sample's Young's modulus (the TOF inversion's).
+    E_low : float
+        Pa, lower end of the 95 % interval, ``E exp(-1.96 u)``.
+    E_high : float
+        Pa, upper end of the 95 % interval, ``E exp(+1.96 u)``.
+    u : float
+        -, standard uncertainty of ln E: the quadrature sum of ``contributions``.
+    contributions : dict of str to float
+        -, standard uncertainty of ln E per source.
+    tof : float
+        s, the measured mean TOF inverted.
+    tof_sem : float
+        s, its standard error (NaN: not known).
+    nu : float
+        -, the Poisson's ratio of the inversion (a range's middle).
+    nu_range : tuple of float or None
+        -, the stated Poisson's ratio range ``(lo, hi)``, or None.
+    dlnTOF_dlnE : float
+        -, the TOF's sensitivity to E at the estimate, ``d ln TOF / d ln E``.
+    notes : tuple of str
+        Remarks on the estimate (text).
+    missing : dict of str to str
+        Budget terms left out of the interval, each with the reason.
+    extrapolated : bool
+        Whether the wall law was used beyond its exact reach.
     """
 
     E: float
@@ -82,6 +111,13 @@ class ModulusEstimate:
     extrapolated: bool = False
 
     def to_dict(self) -> dict[str, Any]:
+        """The estimate as a JSON-ready mapping (SI units, ``coverage`` 0.95).
+
+        Returns
+        -------
+        dict
+            The fields (``missing`` as ``missing_terms``), lists for tuples.
+        """
         d = asdict(self)
         d["nu_range"] = None if self.nu_range is None else list(self.nu_range)
         d["notes"] = list(self.notes)
@@ -134,6 +170,11 @@ def estimate_moduli(
         A forward grid of the same device over ``E_range``
         (:func:`ssw.tof.inverse.forward_grid`; the live estimate keeps one): used when it
         holds every inversion's Poisson's ratio, else one is computed.
+
+    Returns
+    -------
+    list of ModulusEstimate
+        One estimate per sample, in the order of ``tof``.
     """
     from ssw.chain.wall import beyond_exact_reach
     from ssw.tof import api

@@ -14,7 +14,13 @@ from ssw.h5io import atomic_path
 
 
 def pyplot() -> Any:
-    """``matplotlib.pyplot`` on the Agg backend (imported lazily: matplotlib is slow to load)."""
+    """``matplotlib.pyplot`` on the Agg backend (imported lazily: matplotlib is slow to load).
+
+    Returns
+    -------
+    module
+        ``matplotlib.pyplot``.
+    """
     import matplotlib
 
     matplotlib.use("Agg")
@@ -24,7 +30,19 @@ def pyplot() -> Any:
 
 
 def save_png(fig: Any, path: str | Path, *, dpi: int = 130, **savefig_kw: Any) -> None:
-    """Write ``fig`` to ``path`` as PNG atomically, then close it."""
+    """Write ``fig`` to ``path`` as PNG atomically, then close it.
+
+    Parameters
+    ----------
+    fig : matplotlib.figure.Figure
+        The figure (closed afterwards, also on error).
+    path : str or Path
+        The PNG file.
+    dpi : int
+        Dots per inch.
+    **savefig_kw : Any
+        Further arguments of ``Figure.savefig``.
+    """
     import matplotlib.pyplot as plt
 
     try:

@@ -45,6 +45,13 @@ RANGES = (("soft", 10e6, 100e6, 0.3), ("stiff", 100e6, 1000e6, 0.3))
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
+    """Add the ``ssw bench design`` command and its options.
+
+    Parameters
+    ----------
+    kinds : argparse._SubParsersAction
+        The ``ssw bench`` subcommands.
+    """
     from ssw.design.spec import MATERIALS, MODULI
 
     p = kinds.add_parser("design", help="wall time of a whole plate design (ssw design)")
@@ -103,7 +110,19 @@ def _device_family(args: tuple[Any, ...]) -> int:
 
 
 def run_device(args: argparse.Namespace) -> dict[str, Any]:
-    """``--space device``: candidates per second against the number of candidates."""
+    """``--space device``: candidates per second against the number of candidates.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's options (:func:`register`).
+
+    Returns
+    -------
+    dict
+        Per size: candidates, families, wall and CPU time (s), candidates per s; and the
+        files written (``design_device_bench.csv``, ``.json``).
+    """
     from ssw.chain.params import chain_params, numerics_of
     from ssw.config import device_of, library, load_config
     from ssw.design.device_search import cpu_time, map_jobs
@@ -137,6 +156,20 @@ def run_device(args: argparse.Namespace) -> dict[str, Any]:
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
+    """Run ``ssw bench design`` (module docstring) and write its outputs under
+    ``--output-dir`` (``--space device``: :func:`run_device`).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's options (:func:`register`).
+
+    Returns
+    -------
+    dict
+        Per soil range and cache state: candidates, wall time (s), s per candidate and
+        the recommended plate; and the files written (``design_bench.csv``, ``.json``).
+    """
     if args.space == "device":
         return run_device(args)
     from ssw.chain.params import chain_params, numerics_of
@@ -216,6 +249,18 @@ def _write_rows(out: Path, stem: str, command: str, config: str,
 
 
 def human(result: dict[str, Any]) -> str:
+    """The result of :func:`run` as text for the terminal.
+
+    Parameters
+    ----------
+    result : dict
+        The result of :func:`run`.
+
+    Returns
+    -------
+    str
+        One line per measurement.
+    """
     if result["command"].endswith("--space device"):
         lines = [f"{'cands':>6s} {'fams':>4s} {'wall s':>8s} {'CPU s':>8s} {'cand/s':>7s} "
                  f"{'CPU s/cand':>10s}  load"]

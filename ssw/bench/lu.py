@@ -75,6 +75,13 @@ VARIANTS = (("petsc natural", "petsc", "natural"), ("petsc nd", "petsc", "nd"),
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
+    """Add the ``ssw bench lu`` command and its options.
+
+    Parameters
+    ----------
+    kinds : argparse._SubParsersAction
+        The ``ssw bench`` subcommands.
+    """
     p = kinds.add_parser("lu", help="every sparse factorization ssw makes, by every package")
     p.add_argument("--matrices", nargs="+", default=["monolithic", "dynamic", "schur", "plastic"],
                    choices=["monolithic", "dynamic", "schur", "plastic"],
@@ -397,6 +404,20 @@ def monolithic_curves(cfg: dict[str, Any], repeat: int, solvers: tuple[str, ...]
 
 
 def run(args: argparse.Namespace) -> dict[str, Any]:
+    """Run ``ssw bench lu`` (module docstring) and write ``lu_bench.csv`` and
+    ``lu_bench.json`` under ``--output-dir``.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's options (:func:`register`).
+
+    Returns
+    -------
+    dict
+        ``rows`` (per matrix and method: size, wall and CPU times in s, backward error),
+        ``curves``, ``solvers``, ``petsc_version`` and the files written.
+    """
     from ssw.config import load_config
     from ssw.contact.petsc_solver import _petsc, available_solvers
 
@@ -433,7 +454,18 @@ def _fmt(v: Any, spec: str) -> str:
 
 
 def human(res: dict[str, Any]) -> str:
-    """The table as Markdown (times: wall s, CPU s in parentheses)."""
+    """The table as Markdown (times: wall s, CPU s in parentheses).
+
+    Parameters
+    ----------
+    res : dict
+        The result of :func:`run`.
+
+    Returns
+    -------
+    str
+        The PETSc version line and one table row per measurement.
+    """
     def t(r: dict[str, Any], key: str, spec: str) -> str:
         w, c = r[f"{key}_wall"], r[f"{key}_cpu"]
         return "" if w is None else f"{w:{spec}} ({c:{spec}})"

@@ -47,6 +47,13 @@ from ssw.h5io import write_json
 
 
 def register(kinds: argparse._SubParsersAction) -> None:
+    """Add the ``ssw bench plastic`` command and its options.
+
+    Parameters
+    ----------
+    kinds : argparse._SubParsersAction
+        The ``ssw bench`` subcommands.
+    """
     p = kinds.add_parser("plastic", help="cost of an elasto-plastic loading-unloading curve "
                          "(= contact --plastic)")
     add_arguments(p)
@@ -56,6 +63,14 @@ def register(kinds: argparse._SubParsersAction) -> None:
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:
+    """Add the plastic curve's options (``--plastic``, ``--plastic-E`` Pa, ``--plastic-Y``
+    Pa, ``--plastic-delta-max`` m, the timed mesh's, ...) to a parser.
+
+    Parameters
+    ----------
+    p : argparse.ArgumentParser
+        The parser of ``ssw bench plastic`` or ``ssw bench contact``.
+    """
     p.add_argument("--plastic", action="store_true",
                    help="time an elasto-plastic loading-unloading curve instead")
     p.add_argument("--plastic-steps", type=int, default=250,
@@ -84,6 +99,20 @@ REFERENCE_MESH = (32.0, 0.1, 60.0)
 
 
 def run_plastic(args: argparse.Namespace) -> dict[str, Any]:
+    """Time the plastic curve (module docstring) and write ``plastic_bench.json`` and
+    ``plastic_curve.png`` under ``--output-dir`` (``--plastic-study``: :func:`run_study`).
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's options (:func:`add_arguments`).
+
+    Returns
+    -------
+    dict
+        The timings (wall and CPU s), the errors against the reference mesh, Johnson's
+        first yield and Hertz (relative; forces N), and the files written.
+    """
     if getattr(args, "plastic_study", False):
         return run_study(args)
     from ssw.config import load_config
@@ -240,7 +269,19 @@ def elastic_error(curve: Any, E: float, nu: float, radius: float, johnson: float
 def run_study(args: argparse.Namespace) -> dict[str, Any]:
     """``--plastic-study``: the config's plastic curve timed on the path's mesh and on the
     elastic engine's mesh, each against the config's mesh refined (growth and element at
-    the contact halved, the elastic engine's mesh kind; the increments the same). SI."""
+    the contact halved, the elastic engine's mesh kind; the increments the same). SI.
+
+    Parameters
+    ----------
+    args : argparse.Namespace
+        The command's options (:func:`add_arguments`).
+
+    Returns
+    -------
+    dict
+        Per mesh (``path``, ``study``, ``reference``): its size, timings (s) and errors;
+        written to ``plastic_study.json`` under ``--output-dir``.
+    """
     from ssw.config import load_config
     from ssw.constitutive import VonMises
     from ssw.contact.plastic import johnson_first_yield, solve_plastic_scene, summary
@@ -316,6 +357,18 @@ def _plot(curve: Any, ref: Any, E: float, nu: float, radius: float, Fy: float,
 
 
 def human(res: dict[str, Any]) -> str:
+    """The result of :func:`run_plastic` as text for the terminal.
+
+    Parameters
+    ----------
+    res : dict
+        The result of :func:`run_plastic`.
+
+    Returns
+    -------
+    str
+        One line per measurement.
+    """
     def g(x: Any) -> str:
         return "none" if x is None else f"{x:.4g}"
 

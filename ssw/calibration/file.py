@@ -47,7 +47,56 @@ SCHEMA_PATH = Path(__file__).resolve().parent.parent / "data" / "calibration.sch
 
 @dataclass(frozen=True)
 class Calibration:
-    """A calibrated device and how it was obtained. SI units."""
+    """A calibrated device and how it was obtained. SI units.
+
+    Parameters
+    ----------
+    device : ssw.device.Device
+        The calibrated device (the identified values in place).
+    device_nominal : ssw.device.Device
+        The device the calibration started from.
+    free : tuple of str
+        The identified parameters (:data:`ssw.device.PARAMETERS`).
+    parameters : dict
+        Identified value per free parameter, in its SI unit.
+    parameter_std : dict of str to float or None
+        Standard error per parameter of ``covariance_parameters`` (None: no covariance).
+    covariance : list of list of float or None
+        Covariance of ``covariance_parameters`` (SI units squared), or None.
+    singular_values : list of float
+        Singular values of the fit's scaled Jacobian.
+    unidentified : list of str
+        Directions the references do not identify (text).
+    references : list of dict
+        Per reference: ``id``, ``E`` (Pa), ``nu``, ``tof``, ``tof_std``, ``tof_model``,
+        ``residual`` (s), ``residual_pct`` (%), ``source``.
+    loo : list of dict
+        The leave-one-out predictions, one per reference.
+    alternatives : list of dict of str to float
+        Other solutions within chi^2 + 1 of the best.
+    wall : dict
+        The wall law (``law``) and its options.
+    numerics : dict
+        The chain numerics the calibration was made with.
+    material_set : str
+        The materials library's set.
+    materials_file : str or None
+        A materials file replacing the set, or None.
+    provenance : dict
+        Where the calibration comes from (inputs, versions, time).
+    at_bound : dict of str to str
+        Parameters a scan bound holds, with the bound.
+    device_sha256 : str
+        ``device_digest`` of the nominal device and its materials.
+    path : str
+        The file it was read from ("" when made in memory).
+    covariance_parameters : tuple of str
+        The parameters the covariance is over (continuous, not at a bound).
+    model_error : dict or None
+        The TOF model-error term (:class:`ssw.calibration.model_error.ModelError`), or None.
+    warnings : list of str
+        The fit's findings (:func:`ssw.calibration.fit.fit_warnings`).
+    """
 
     device: Device
     device_nominal: Device
@@ -78,33 +127,75 @@ class Calibration:
         return [r["residual"] for r in self.references]
 
     def materials(self) -> dict[str, Any]:
-        """The materials library the calibration used."""
+        """The materials library the calibration used.
+
+        Returns
+        -------
+        dict
+            Material key -> :class:`ssw.materials.Material` (SI units).
+        """
         from ssw.config import library
 
         return library({"material_set": self.material_set, "materials_file": self.materials_file})
 
     def chain_params(self, **numerics: Any) -> Any:
         """ChainParams of the calibrated device with the calibration's numerics (``numerics``
-        override them)."""
+        override them).
+
+        Parameters
+        ----------
+        **numerics : Any
+            Numerics of :func:`ssw.chain.params.chain_params` replacing the calibration's.
+
+        Returns
+        -------
+        ssw.chain.params.ChainParams
+            The calibrated device's chain.
+        """
         return chain_params(self.device, self.materials(), **{**self.numerics, **numerics})
 
     def covariance_array(self) -> np.ndarray | None:
-        """The covariance (SI) of ``covariance_parameters``, or None."""
+        """The covariance (SI) of ``covariance_parameters``, or None.
+
+        Returns
+        -------
+        numpy.ndarray or None
+            (p, p) covariance, SI units squared.
+        """
         return None if self.covariance is None else np.asarray(self.covariance, float)
 
     def model_term(self) -> Any:
         """The TOF model's error term (:class:`ssw.calibration.model_error.ModelError`), or
-        None where the references do not reject the model."""
+        None where the references do not reject the model.
+
+        Returns
+        -------
+        ssw.calibration.model_error.ModelError or None
+            The term.
+        """
         from ssw.calibration.model_error import ModelError
 
         return ModelError.from_dict(self.model_error)
 
     def continuous(self) -> tuple[str, ...]:
         """The continuous free parameters, in order (the covariance is over those of them
-        no bound holds: ``covariance_parameters``)."""
+        no bound holds: ``covariance_parameters``).
+
+        Returns
+        -------
+        tuple of str
+            Their names.
+        """
         return tuple(n for n in self.free if parameter(n).kind == "continuous")
 
     def to_dict(self) -> dict[str, Any]:
+        """The file's JSON layout (``ssw_kind``, ``SCHEMA_VERSION``, every field; SI).
+
+        Returns
+        -------
+        dict
+            The calibration file's content.
+        """
         return {
             "ssw_kind": KIND, "schema_version": SCHEMA_VERSION,
             "device": self.device.to_dict(), "device_nominal": self.device_nominal.to_dict(),
@@ -147,7 +238,20 @@ def write_calibration(path: str | Path, cal: Calibration) -> None:
 
 def non_finite(obj: Any, where: str = "") -> str | None:
     """The dotted path of the first number in a JSON document that is NaN or infinite
-    (JSON Schema's bounds let them through), or None."""
+    (JSON Schema's bounds let them through), or None.
+
+    Parameters
+    ----------
+    obj : Any
+        A JSON document (dicts, lists, numbers, strings).
+    where : str
+        The dotted path of ``obj`` in the document ("" at the top).
+
+    Returns
+    -------
+    str or None
+        The path of the first NaN or infinite number, or None.
+    """
     if isinstance(obj, float) and not np.isfinite(obj):
         return where or "(top level)"
     items = (obj.items() if isinstance(obj, dict) else enumerate(obj)
@@ -165,7 +269,7 @@ def load_calibration(path: str | Path) -> Calibration:
     The file is checked against its JSON Schema (``ssw/data/calibration.schema.yaml``,
     through :func:`ssw.schema.first_file_error`), NaN and infinities are refused anywhere,
     and the covariance must be square over its parameters, symmetric and positive definite
-    (:func:`check_covariance`); each refusal names the field.
+    (``check_covariance``); each refusal names the field.
 
     Parameters
     ----------
@@ -224,7 +328,20 @@ def load_calibration(path: str | Path) -> Calibration:
 
 def check_covariance(cal: Calibration, source: str) -> None:
     """ConfigError unless the covariance (if any) is square over its parameters (the
-    continuous free ones no bound holds), finite, symmetric and positive definite."""
+    continuous free ones no bound holds), finite, symmetric and positive definite.
+
+    Parameters
+    ----------
+    cal : Calibration
+        The calibration.
+    source : str
+        Where it was read from, naming the field in errors.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        The covariance's parameters, shape, symmetry or definiteness is wrong.
+    """
     field_ = f"{source}: covariance"
     names = cal.covariance_parameters
     cont = cal.continuous()
@@ -248,7 +365,20 @@ def check_covariance(cal: Calibration, source: str) -> None:
 def device_digest(device: Device, materials: dict[str, Any]) -> str:
     """What a calibration was made for: the digest of the device's physics and of the
     values of its materials (``ssw.provenance.digest``); the calibrated parameters are
-    part of it at their nominal values."""
+    part of it at their nominal values.
+
+    Parameters
+    ----------
+    device : ssw.device.Device
+        The (nominal) device.
+    materials : dict
+        The materials library (its bead and plate materials enter).
+
+    Returns
+    -------
+    str
+        The SHA-256 digest (hex).
+    """
     from dataclasses import asdict
 
     from ssw.provenance import digest

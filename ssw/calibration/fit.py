@@ -46,7 +46,7 @@ Model error. Where the references' chi^2 with their stated TOF uncertainties exc
 :func:`degrees_of_freedom`), the model does not describe the device to the references'
 precision: the fit is repeated with a relative TOF model error ``tau`` in the weights,
 ``std_i^2 + tau^2 T_i^2``, ``tau`` the upper confidence bound its residuals call for,
-re-estimated until it settles (:func:`_with_model_error`; :mod:`ssw.calibration.model_error`
+re-estimated until it settles (``_with_model_error``; :mod:`ssw.calibration.model_error`
 states the estimator and why). The covariance and the leave-one-out fits then use those
 weights; ``Fit.chi2`` stays the references' chi^2 with their stated uncertainties and
 ``Fit.model_error`` states the term. A calibration is refused only for its input (TOFs the
@@ -119,7 +119,27 @@ def scan_ranges(free: tuple[str, ...], overrides: dict[str, tuple[float, float]]
                 device: Any = None) -> dict[str, tuple[float, float]]:
     """The scan range of each free parameter (defaults of :data:`ssw.device.PARAMETERS`;
     the bead count starts where the device's beads below the sensor still leave a sensor
-    with a bead above it)."""
+    with a bead above it).
+
+    Parameters
+    ----------
+    free : tuple of str
+        The free parameters' names.
+    overrides : dict of str to tuple of float or None
+        ``(lo, hi)`` per parameter replacing its default range, in its SI unit.
+    device : ssw.device.Device or None
+        The nominal device (the bead count's lower end).
+
+    Returns
+    -------
+    dict of str to tuple of float
+        ``(lo, hi)`` per free parameter, SI.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        A range that is not ``LO < HI`` (``LO > 0`` when log-scanned; preload >= 0).
+    """
     out = {}
     for n in free:
         p = parameter(n)
@@ -137,7 +157,23 @@ def scan_ranges(free: tuple[str, ...], overrides: dict[str, tuple[float, float]]
 # --------------------------------------------------------------------- results
 @dataclass(frozen=True)
 class Solution:
-    """One local least-squares solution of one problem (a subset of the references)."""
+    """One local least-squares solution of one problem (a subset of the references).
+
+    Parameters
+    ----------
+    refs : tuple of int
+        Indices of the references of the problem.
+    theta : numpy.ndarray
+        The parameters (SI), in ``model.free`` order.
+    chi2 : float
+        -, the weighted sum of squared residuals.
+    tof_model : numpy.ndarray
+        s, the model's TOF at the subset's references.
+    converged : bool
+        Whether the local least squares converged.
+    iterations : int
+        Its iterations.
+    """
 
     refs: tuple[int, ...]
     theta: np.ndarray  # SI, model.free order
@@ -154,6 +190,52 @@ class Fit:
     ``covariance``, ``std``, ``singular_values`` and ``singular_vectors`` are over
     ``covariance_names``: the continuous free parameters not held on a bound
     (``at_bound``: name -> ``lower`` | ``upper``), conditional on the held ones.
+
+    Parameters
+    ----------
+    names : tuple of str
+        The free parameters, in order.
+    theta : numpy.ndarray
+        (p,) the identified values, SI.
+    chi2 : float
+        -, the weighted sum of squared residuals at ``theta``.
+    tof_model : numpy.ndarray
+        (n,) s, the model's TOF at each reference.
+    residuals : numpy.ndarray
+        (n,) s, model minus measured TOF.
+    weights_known : bool
+        Whether the references state their TOF uncertainty (else
+        :data:`DEFAULT_REL_STD`, the covariance rescaled by ``chi2 / (n - q)``).
+    covariance : numpy.ndarray or None
+        (q, q) SI, over ``covariance_names``; None if not estimable.
+    std : numpy.ndarray or None
+        (q,) SI, the standard errors.
+    singular_values : numpy.ndarray
+        (q,) of the weighted Jacobian in scaled coordinates.
+    singular_vectors : numpy.ndarray
+        (q, q), columns: the right singular vectors.
+    jacobian : numpy.ndarray
+        (n, p) ``d TOF / d theta`` of every continuous parameter, s per SI unit.
+    unidentified : tuple of str
+        Directions the data cannot pin (texts).
+    alternatives : tuple of dict of str to float
+        Other solutions within chi^2 + 1.
+    converged : bool
+        Whether the least squares converged.
+    scan_points : int
+        Points per axis of the global scan.
+    evaluations : int
+        Parameter sets the model evaluated (a cost counter).
+    runs : int
+        Batched chain runs.
+    covariance_names : tuple of str
+        The continuous free parameters no bound holds.
+    at_bound : dict of str to str
+        Held parameter -> ``lower`` | ``upper``.
+    tof_range : numpy.ndarray or None
+        (n, 2) s, the TOFs the scanned device can give on each reference.
+    model_error : ssw.calibration.model_error.ModelError or None
+        The TOF model-error term where the references reject the model.
     """
 
     names: tuple[str, ...]
@@ -182,7 +264,23 @@ class Fit:
 # --------------------------------------------------------------------- scan
 def scan_grid(model: TofModel, ranges: dict[str, tuple[float, float]],
               points: int | None = None) -> tuple[np.ndarray, list[np.ndarray]]:
-    """The scan's parameter sets (m, p) in ``model.free`` order, and each axis's values."""
+    """The scan's parameter sets (m, p) in ``model.free`` order, and each axis's values.
+
+    Parameters
+    ----------
+    model : TofModel
+        The TOF model (its continuous and integer free parameters).
+    ranges : dict of str to tuple of float
+        ``(lo, hi)`` per free parameter, SI.
+    points : int or None
+        Points per continuous axis (None: ``SCAN_POINTS_1D`` for one, else within
+        ``SCAN_BUDGET``); integer axes take every integer in range.
+
+    Returns
+    -------
+    tuple
+        The (m, p) grid (SI) and the list of each axis's values.
+    """
     cont, ints = model.continuous, model.integers
     n = points or (SCAN_POINTS_1D if len(cont) == 1 else
                    max(6, int(np.floor(SCAN_BUDGET ** (1.0 / max(len(cont), 1))))))
@@ -353,7 +451,21 @@ class Local:
     ``sv`` (q,) and ``V`` (q, q) the singular values and right singular vectors of their
     weighted Jacobian (scaled coordinates), ``sv`` padded with zeros when the data are
     fewer than ``q``; ``floor`` the singular value below which a direction is not
-    identified."""
+    identified.
+
+    Parameters
+    ----------
+    held : numpy.ndarray
+        (p,) -1 / +1 held on the lower / upper bound, 0 free.
+    free : numpy.ndarray
+        Indices of the free parameters.
+    sv : numpy.ndarray
+        (q,) singular values of their weighted Jacobian (scaled coordinates).
+    V : numpy.ndarray
+        (q, q) right singular vectors (columns).
+    floor : float
+        The singular value below which a direction is not identified.
+    """
 
     held: np.ndarray
     free: np.ndarray
@@ -417,6 +529,23 @@ class SubsetFit:
     ``theta``: its values (SI); ``chi2``; ``singular_values`` of the subset's weighted
     Jacobian at ``theta`` (scaled coordinates) over the parameters no bound holds there
     (``at_bound``); ``identified``: every one >= the floor (:data:`IDENTIFIED_MIN`).
+
+    Parameters
+    ----------
+    refs : tuple of int
+        Indices of the subset's references.
+    theta : numpy.ndarray
+        (p,) its values, SI.
+    chi2 : float
+        -, its weighted sum of squared residuals.
+    identified : bool
+        Every free direction's singular value >= the floor.
+    singular_values : numpy.ndarray
+        Of the subset's weighted Jacobian at ``theta`` (scaled coordinates).
+    iterations : int
+        Iterations of the refinement.
+    at_bound : dict of str to str
+        Held parameter -> ``lower`` | ``upper``.
     """
 
     refs: tuple[int, ...]
@@ -716,7 +845,27 @@ def check_producible(refs: list[Reference], tof: np.ndarray,
     """The TOF range (s, (n, 2)) the scanned device gives on each reference; CalibrationError
     naming every reference whose measured TOF lies outside it (by more than
     :data:`PRODUCIBLE_MARGIN`): no parameter within the ranges can fit it (a TOF in ms typed
-    as s, a wrong sample, a device unlike the one described)."""
+    as s, a wrong sample, a device unlike the one described).
+
+    Parameters
+    ----------
+    refs : list of Reference
+        The references.
+    tof : numpy.ndarray
+        (m, n) s, the scan's TOF per parameter set and reference (NaN: none).
+    ranges : dict of str to tuple of float
+        The scan ranges (SI), named in the error.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n, 2) s, the lowest and highest TOF on each reference.
+
+    Raises
+    ------
+    ssw.errors.CalibrationError
+        A reference's TOF outside what the device can produce.
+    """
     from ssw.errors import CalibrationError
 
     ok = np.isfinite(tof)
@@ -801,11 +950,35 @@ def fit_warnings(fit: Fit) -> list[str]:
 
 
 def leave_one_out_sets(n: int) -> list[tuple[int, ...]]:
-    """Every subset of ``range(n)`` without one element (none for n < 2)."""
+    """Every subset of ``range(n)`` without one element (none for n < 2).
+
+    Parameters
+    ----------
+    n : int
+        The number of references.
+
+    Returns
+    -------
+    list of tuple of int
+        The ``n`` subsets, the one without ``i`` at ``i``.
+    """
     return [tuple(j for j in range(n) if j != i) for i in range(n)] if n >= 2 else []
 
 
 def theta_dict(names: tuple[str, ...], theta: np.ndarray) -> dict[str, Any]:
-    """Named values, integers as ints."""
+    """Named values, integers as ints.
+
+    Parameters
+    ----------
+    names : tuple of str
+        Parameter names (:data:`ssw.device.PARAMETERS`).
+    theta : numpy.ndarray
+        Their values, SI.
+
+    Returns
+    -------
+    dict
+        Name -> value (int for an integer parameter, else float).
+    """
     return {n: (round(float(v)) if parameter(n).kind == "integer" else float(v))
             for n, v in zip(names, theta, strict=True)}

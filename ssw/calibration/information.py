@@ -63,7 +63,7 @@ BLIND_SHARE = 1e-3
 class Information:
     """The information a set of observations carries on parameters of interest.
 
-    Attributes
+    Parameters
     ----------
     names : tuple of str
         The parameters of interest.
@@ -94,7 +94,14 @@ class Information:
                      if s <= IDENTIFIED_U)
 
     def as_dict(self) -> dict[str, Any]:
-        """JSON-ready: singular values, standard uncertainties, correlations, identified."""
+        """JSON-ready: singular values, standard uncertainties, correlations, identified.
+
+        Returns
+        -------
+        dict
+            ``parameters``, ``singular_values``, ``std_scaled`` (None: not estimable),
+            ``correlation``, ``identified``, ``observations``.
+        """
         def num(v: float) -> float | None:
             return float(v) if np.isfinite(v) else None
 
@@ -211,7 +218,7 @@ class Identifiability:
     """What TOF, features and the whole waveform identify on one sample (module
     docstring). SI units.
 
-    Attributes
+    Parameters
     ----------
     levels : dict
         Level -> :class:`Information` over :data:`INTEREST`, every parameter free.
@@ -239,7 +246,13 @@ class Identifiability:
 
     def as_dict(self) -> dict[str, Any]:
         """JSON-ready (the criterion stated; ``std``: :func:`natural` units; ``labels``:
-        each parameter's name in words, the contact dissipation's with its law)."""
+        each parameter's name in words, the contact dissipation's with its law).
+
+        Returns
+        -------
+        dict
+            Per level the information's mapping, with the values, noise and labels.
+        """
         from ssw.calibration.waveform import parameter
         from ssw.chain.dissipation import law_of
 

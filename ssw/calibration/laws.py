@@ -50,8 +50,8 @@ from ssw.errors import ConfigError
 #: A criterion's difference below which two laws are not told apart (Burnham & Anderson
 #: 2002, sec. 2.6).
 INDISTINCT = 2.0
-#: The kinds of observation that are priors, not records (:func:`ssw.calibration.waveform.
-#: observe`): they enter the likelihood, not the observations' count ``n``.
+#: The kinds of observation that are priors, not records (``ssw.calibration.waveform.observe``):
+#: they enter the likelihood, not the observations' count ``n``.
 PRIORS = ("trigger", "delay")
 
 
@@ -60,7 +60,7 @@ class LawScore:
     """One dissipation law's fit of the references' records and its criteria (module
     docstring).
 
-    Attributes
+    Parameters
     ----------
     law : str
         The law's name (:data:`ssw.chain.dissipation.LAWS`).
@@ -105,7 +105,13 @@ class LawScore:
     unexplained: int
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready (SI; the coefficient in ``unit``)."""
+        """JSON-ready (SI; the coefficient in ``unit``).
+
+        Returns
+        -------
+        dict
+            Field name -> value.
+        """
         return asdict(self)
 
 

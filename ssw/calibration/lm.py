@@ -67,7 +67,7 @@ Evaluate = Callable[[dict[int, np.ndarray]], dict[int, tuple[np.ndarray, np.ndar
 class Problem:
     """One least-squares problem as Levenberg-Marquardt advances it.
 
-    Attributes
+    Parameters
     ----------
     x : numpy.ndarray
         Scaled coordinates (p,) of the continuous parameters.
@@ -110,7 +110,19 @@ class Problem:
 
 def tolerance(pr: Problem) -> float:
     """The chi^2 a step must gain to count (:data:`LM_FTOL`, scaled by the misfit per
-    degree of freedom when it exceeds 1)."""
+    degree of freedom when it exceeds 1).
+
+    Parameters
+    ----------
+    pr : Problem
+        The problem (its cost, residuals and searched directions).
+
+    Returns
+    -------
+    float
+        -, ``LM_FTOL max(1, cost / dof)`` with ``dof = n - q`` (at least 1); ``LM_FTOL``
+        at a non-finite cost.
+    """
     dof = max(pr.r.size - pr.basis.shape[1], 1)
     return LM_FTOL * max(1.0, pr.cost / dof) if np.isfinite(pr.cost) else LM_FTOL
 

@@ -30,7 +30,28 @@ from ssw.errors import ConfigError
 @dataclass(frozen=True)
 class Reference:
     """A reference sample: known E (Pa) and nu, the TOF measured on it (s) and the TOF's
-    standard uncertainty (s; the standard error of its mean), or None if not known."""
+    standard uncertainty (s; the standard error of its mean), or None if not known.
+
+    Parameters
+    ----------
+    E : float
+        Pa, the sample's known Young's modulus (> 0).
+    nu : float
+        -, its Poisson's ratio, in (-1, 0.5].
+    tof : float
+        s, the TOF measured on it (> 0).
+    tof_std : float or None
+        s, the TOF's standard uncertainty (standard error of its mean); None: not known.
+    id : str
+        The reference's name.
+    source : str
+        Where the TOF comes from (``given``, a recording, the published table).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        A value out of its range, naming the reference and the field.
+    """
 
     E: float
     nu: float
@@ -52,7 +73,25 @@ class Reference:
 
 
 def parse_reference(text: str, index: int = 0) -> Reference:
-    """``E,nu,TOF[,TOF_STD]`` (SI: Pa, -, s, s) from the command line."""
+    """``E,nu,TOF[,TOF_STD]`` (SI: Pa, -, s, s) from the command line.
+
+    Parameters
+    ----------
+    text : str
+        ``E,nu,TOF`` or ``E,nu,TOF,TOF_STD``.
+    index : int
+        The reference's position among the ``--reference`` options (its id ``ref<index>``).
+
+    Returns
+    -------
+    Reference
+        The reference.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        Not three or four numbers (``--reference``), or a value out of range.
+    """
     parts = [p.strip() for p in str(text).split(",")]
     if len(parts) not in (3, 4):
         raise ConfigError(f"--reference[{index}]", text, "E,nu,TOF or E,nu,TOF,TOF_STD (SI)")
@@ -133,16 +172,34 @@ class TofModel:
 
     @property
     def n_refs(self) -> int:
+        """The number of references."""
         return int(self.refs_E.size)
 
     def params_for(self, values: dict[str, float]) -> ChainParams:
-        """ChainParams of the device with ``values`` of the free parameters (one set)."""
+        """ChainParams of the device with ``values`` of the free parameters (one set).
+
+        Parameters
+        ----------
+        values : dict of str to float
+            Free parameter -> value, SI (integers rounded); the others nominal.
+
+        Returns
+        -------
+        ssw.chain.params.ChainParams
+            The device's chain with those values and the model's numerics.
+        """
         return chain_params(self.device.with_(**_cast(values)), self.materials, **self.numerics)
 
     def walls(self) -> Any:
         """The references' walls, built once: no free parameter changes a wall law, but a
         law computed to a finite depth (``fem``: to the energy the chain can bring) is built
-        for the most energetic set the scan may try (:meth:`fix_time_step`'s extremes)."""
+        for the most energetic set the scan may try (:meth:`fix_time_step`'s extremes).
+
+        Returns
+        -------
+        object
+            The walls of :func:`ssw.walls.build_wall` for the references.
+        """
         if self._walls is None:
             from ssw.walls import build_wall
 
@@ -157,7 +214,18 @@ class TofModel:
 
     def fix_time_step(self, ranges: dict[str, tuple[float, float]]) -> float:
         """Fix the time step of every run: the integrator's step for the fastest and
-        lightest striker of ``ranges`` (SI) on the stiffest reference wall."""
+        lightest striker of ``ranges`` (SI) on the stiffest reference wall.
+
+        Parameters
+        ----------
+        ranges : dict of str to tuple of float
+            ``(lo, hi)`` per free parameter, SI.
+
+        Returns
+        -------
+        float
+            s, the time step kept for every later run.
+        """
         vals = {}
         for n in self.continuous:
             lo, hi = ranges[n]
@@ -183,7 +251,22 @@ class TofModel:
         """Fix the time step for the refinement around the parameter sets ``theta`` (rows,
         ``free`` order): the step of ``margin`` times their fastest striker (capped at the
         scan's range), instead of the scan's fastest. One step for every later run, so the
-        least squares compare TOFs of one discretization (module docstring)."""
+        least squares compare TOFs of one discretization (module docstring).
+
+        Parameters
+        ----------
+        theta : numpy.ndarray
+            (m, len(free)) parameter sets, SI.
+        ranges : dict of str to tuple of float
+            ``(lo, hi)`` per free parameter, SI (caps the striker speed).
+        margin : float
+            -, factor on the fastest striker speed of ``theta``.
+
+        Returns
+        -------
+        float
+            s, the time step kept for every later run.
+        """
         th = np.atleast_2d(np.asarray(theta, float))
         vals = {}
         if "striker_velocity" in self.continuous:
@@ -205,7 +288,13 @@ class TofModel:
     def forward(self) -> bool:
         """Whether the references' walls carry the forward sensitivities of every
         continuous free parameter (:func:`ssw.tof.api.forward_ok`): then
-        :meth:`derivatives` is exact, else a calibration takes central differences."""
+        :meth:`derivatives` is exact, else a calibration takes central differences.
+
+        Returns
+        -------
+        bool
+            True when every continuous free parameter has forward sensitivities.
+        """
         from ssw.tof.api import forward_ok
 
         return bool(self.continuous) and all(

@@ -28,7 +28,7 @@ One estimator answers "how large is the model's error?" at every level:
   quantile, :func:`rejects`: a calibration the references do not reject is left as it
   was, to the digit), and fitted with the parameters: the weights ``sigma_i^2 + tau^2
   T_i^2``, ``tau`` re-estimated from the new residuals until it settles
-  (:data:`PASSES`, :data:`RTOL`). Every interval made through the calibration carries it
+  (:data:`PASSES`, ``RTOL``). Every interval made through the calibration carries it
   (:func:`ssw.modulus.estimate_moduli`): its covariance, from those weights, and the
   sample's own model error ``tau / |d ln TOF / d ln E|`` (the term
   :data:`ssw.modulus.MODEL_TERM`);
@@ -116,7 +116,20 @@ def floor_bound(r: np.ndarray, sigma: np.ndarray, scale: np.ndarray, dof: float,
 
 def chi2_cdf(chi2: float, dof: int) -> float:
     """``P(X <= chi2)`` for ``X`` chi^2-distributed with ``dof`` degrees of freedom (NaN for
-    ``dof < 1``)."""
+    ``dof < 1``).
+
+    Parameters
+    ----------
+    chi2 : float
+        -, the chi^2 value.
+    dof : int
+        Its degrees of freedom.
+
+    Returns
+    -------
+    float
+        -, the chi^2 distribution's CDF at ``chi2``.
+    """
     from scipy.special import chdtr  # scipy.stats is a 0.4 s import for this one number
 
     return float(chdtr(dof, chi2)) if dof >= 1 else float("nan")
@@ -124,7 +137,20 @@ def chi2_cdf(chi2: float, dof: int) -> float:
 
 def rejects(chi2: float, dof: int) -> bool:
     """Whether a chi^2 with ``dof`` degrees of freedom rejects the model at
-    ``1 - REJECT_QUANTILE`` (False without a degree of freedom)."""
+    ``1 - REJECT_QUANTILE`` (False without a degree of freedom).
+
+    Parameters
+    ----------
+    chi2 : float
+        -, the references' chi^2.
+    dof : int
+        Its degrees of freedom.
+
+    Returns
+    -------
+    bool
+        True when ``P(X <= chi2) > REJECT_QUANTILE``.
+    """
     return bool(dof >= 1 and chi2_cdf(chi2, dof) > REJECT_QUANTILE)
 
 
@@ -132,7 +158,7 @@ def rejects(chi2: float, dof: int) -> bool:
 class ModelError:
     """A TOF calibration's model-error term (module docstring). SI units.
 
-    Attributes
+    Parameters
     ----------
     tau : float
         The TOF model's relative standard error (1), the :data:`FLOOR_CONFIDENCE` upper
@@ -150,7 +176,7 @@ class ModelError:
     passes : int
         Fits made with the term.
     settled : bool
-        ``tau`` changed by at most :data:`RTOL` of itself at the last pass.
+        ``tau`` changed by at most ``RTOL`` of itself at the last pass.
     """
 
     tau: float
@@ -162,7 +188,13 @@ class ModelError:
     settled: bool
 
     def to_dict(self) -> dict[str, Any]:
-        """JSON-ready, with the estimator named."""
+        """JSON-ready, with the estimator named.
+
+        Returns
+        -------
+        dict
+            ``level``, the fields, ``confidence``, ``reject_quantile`` and ``estimator``.
+        """
         return {"level": "tof", **asdict(self), "confidence": FLOOR_CONFIDENCE,
                 "reject_quantile": REJECT_QUANTILE,
                 "estimator": "upper confidence bound of a relative TOF error tau: weights "
@@ -170,14 +202,31 @@ class ModelError:
 
     @classmethod
     def from_dict(cls, d: dict[str, Any] | None) -> ModelError | None:
-        """The term of a calibration file's ``model_error`` (None: none)."""
+        """The term of a calibration file's ``model_error`` (None: none).
+
+        Parameters
+        ----------
+        d : dict or None
+            The file's ``model_error`` mapping (:meth:`to_dict`), or None.
+
+        Returns
+        -------
+        ModelError or None
+            The term, or None when ``d`` is empty.
+        """
         if not d:
             return None
         return cls(float(d["tau"]), float(d["chi2"]), int(d["dof"]), float(d["quantile"]),
                    float(d["chi2_with_term"]), int(d["passes"]), bool(d["settled"]))
 
     def note(self) -> str:
-        """What the term is, in a sentence (outputs, notes)."""
+        """What the term is, in a sentence (outputs, notes).
+
+        Returns
+        -------
+        str
+            The sentence, with chi^2, its degrees of freedom and ``tau``.
+        """
         return (f"MODEL ERROR: the references reject the TOF model (chi2 {self.chi2:.4g} on "
                 f"{self.dof} degree(s) of freedom, beyond its {REJECT_QUANTILE:.0%} "
                 f"quantile): calibrated with a relative TOF model error tau = "

@@ -31,7 +31,27 @@ SLOPE_STEP = 0.02
 
 def tof_slope(E: np.ndarray, nu: np.ndarray, params: Any, wall: str,
               wall_options: dict[str, Any]) -> np.ndarray:
-    """``d ln TOF / d ln E`` (central difference, one batched run) at each (E, nu)."""
+    """``d ln TOF / d ln E`` (central difference, one batched run) at each (E, nu).
+
+    Parameters
+    ----------
+    E : numpy.ndarray
+        Pa, the moduli.
+    nu : numpy.ndarray
+        -, the Poisson's ratios (same shape).
+    params : ssw.chain.params.ChainParams
+        The device's chain.
+    wall : str
+        The wall law's name.
+    wall_options : dict
+        The wall builder's options.
+
+    Returns
+    -------
+    numpy.ndarray
+        -, ``ln(TOF(E (1 + h)) / TOF(E (1 - h))) / ln((1 + h) / (1 - h))`` with
+        ``h = SLOPE_STEP``.
+    """
     from ssw.tof import api
 
     E = np.asarray(E, float)
@@ -45,7 +65,33 @@ def tof_slope(E: np.ndarray, nu: np.ndarray, params: Any, wall: str,
 def recording_reference(path: str | Path, E: float, nu: float, *, id: str = "",
                         tof_options: Any = None, **read_options: Any) -> Reference:
     """A reference from a recording of a sample of known E (Pa) and nu: the mean TOF of its
-    accepted hits, with the standard error of that mean."""
+    accepted hits, with the standard error of that mean.
+
+    Parameters
+    ----------
+    path : str or Path
+        The recording (any format :func:`ssw.daq.importers.read_any` reads).
+    E : float
+        Pa, the sample's known Young's modulus.
+    nu : float
+        -, its Poisson's ratio.
+    id : str
+        The reference's name (default the file's stem).
+    tof_options : ssw.signal.tof.TofOptions or None
+        Options of the TOF picking and rejection rule.
+    **read_options : Any
+        Options of :func:`ssw.daq.importers.read_any` (``full_scale`` N, ...).
+
+    Returns
+    -------
+    Reference
+        The mean TOF (s) and its standard error ``std / sqrt(n)`` (s).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        Fewer accepted hits than :data:`ssw.signal.tof.MIN_HITS_FOR_SCATTER`.
+    """
     from ssw.daq.importers import read_any
     from ssw.signal.tof import MIN_HITS_FOR_SCATTER, recording_tof
 
@@ -70,6 +116,36 @@ def from_config(cfg: dict[str, Any], params: Any, wall: str, wall_options: dict[
     published measured mean with ``tof_std`` or the uncertainty derived from the published
     E COV (module docstring); without either, a ConfigError (``require_std``) or no
     uncertainty (None).
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config (``validation.samples`` and the materials).
+    params : ssw.chain.params.ChainParams
+        The device's chain (the TOF slope of a derived uncertainty).
+    wall : str
+        The wall law's name.
+    wall_options : dict
+        The wall builder's options.
+    root : str or Path
+        Folder relative recording paths start from.
+    tof_options : ssw.signal.tof.TofOptions or None
+        Options of the TOF picking and rejection rule.
+    require_std : bool
+        Refuse a sample without a TOF uncertainty (else its ``tof_std`` is None).
+    full_scale : float or None
+        N, the device's largest unclipped force, the recordings are read with.
+
+    Returns
+    -------
+    list of Reference
+        One per sample, in the config's order.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        No sample, a sample without a measured TOF, or without an uncertainty when
+        ``require_std``.
     """
     from ssw.config import library
 

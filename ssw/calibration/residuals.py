@@ -42,7 +42,20 @@ Derivatives = Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]
 
 # --------------------------------------------------------------------- coordinates
 def to_x(theta: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
-    """Scaled coordinates of parameter values (last axis in ``names`` order)."""
+    """Scaled coordinates of parameter values (last axis in ``names`` order).
+
+    Parameters
+    ----------
+    theta : numpy.ndarray
+        (..., p) parameter values, SI.
+    names : tuple of str
+        The parameters (:data:`ssw.device.PARAMETERS`), the last axis's order.
+
+    Returns
+    -------
+    numpy.ndarray
+        (..., p) ``x = ln(theta)`` for a log-scanned parameter, ``theta / scale`` otherwise.
+    """
     th = np.asarray(theta, float)
     out = np.empty_like(th)
     for j, n in enumerate(names):
@@ -52,7 +65,20 @@ def to_x(theta: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
 
 
 def from_x(x: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
-    """Parameter values (SI) of scaled coordinates (last axis in ``names`` order)."""
+    """Parameter values (SI) of scaled coordinates (last axis in ``names`` order).
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        (..., p) scaled coordinates.
+    names : tuple of str
+        The parameters (:data:`ssw.device.PARAMETERS`), the last axis's order.
+
+    Returns
+    -------
+    numpy.ndarray
+        (..., p) ``theta = exp(x)`` for a log-scanned parameter, ``x scale`` otherwise, SI.
+    """
     xx = np.asarray(x, float)
     out = np.empty_like(xx)
     for j, n in enumerate(names):
@@ -63,7 +89,20 @@ def from_x(x: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
 
 def dtheta_dx(theta: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
     """``d theta / d x`` per parameter (theta for log coordinates, scale otherwise), same
-    shape as ``theta`` (last axis in ``names`` order)."""
+    shape as ``theta`` (last axis in ``names`` order).
+
+    Parameters
+    ----------
+    theta : numpy.ndarray
+        (..., p) parameter values, SI.
+    names : tuple of str
+        The parameters (:data:`ssw.device.PARAMETERS`), the last axis's order.
+
+    Returns
+    -------
+    numpy.ndarray
+        (..., p) ``d theta / d x``, SI per scaled unit.
+    """
     th = np.asarray(theta, float)
     return np.stack([th[..., j] if parameter(n).log else np.full(th.shape[:-1],
                                                                   parameter(n).scale)
@@ -72,7 +111,20 @@ def dtheta_dx(theta: np.ndarray, names: tuple[str, ...]) -> np.ndarray:
 
 def bounds_x(names: tuple[str, ...], ranges: dict[str, tuple[float, float]]
              ) -> tuple[np.ndarray, np.ndarray]:
-    """The scaled coordinates' bounds of the parameter ranges (SI)."""
+    """The scaled coordinates' bounds of the parameter ranges (SI).
+
+    Parameters
+    ----------
+    names : tuple of str
+        The parameters (:data:`ssw.device.PARAMETERS`), the last axis's order.
+    ranges : dict of str to tuple of float
+        ``(lo, hi)`` per parameter, SI.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        (p,) lower and (p,) upper bounds in scaled coordinates.
+    """
     lo = np.array([ranges[n][0] for n in names], float)
     hi = np.array([ranges[n][1] for n in names], float)
     return to_x(lo, names), to_x(hi, names)
@@ -82,7 +134,22 @@ def fd_pair(x: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> tuple[np.ndarray, 
     """The two points of a central difference of step :data:`FD_STEP` per scaled
     coordinate, ``x -+ FD_STEP``, shifted (same spacing) to stay inside ``[lo, hi]``: a
     point on a bound (a preload of 0 N) is differentiated one-sidedly instead of at an
-    inadmissible value."""
+    inadmissible value.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        Scaled coordinates.
+    lo : numpy.ndarray
+        Their lower bounds (broadcast against ``x``).
+    hi : numpy.ndarray
+        Their upper bounds.
+
+    Returns
+    -------
+    tuple of numpy.ndarray
+        The lower and upper points, ``2 FD_STEP`` apart, inside ``[lo, hi]``.
+    """
     a = np.asarray(x, float) - FD_STEP
     b = np.asarray(x, float) + FD_STEP
     below, above = a < lo, b > hi
@@ -170,7 +237,7 @@ def model_derivatives(model: Any, ranges: dict[str, tuple[float, float]]) -> Der
 class Observations:
     """Measured values a calibration fits, their standard uncertainties and references.
 
-    Attributes
+    Parameters
     ----------
     values : numpy.ndarray
         (n,) the measured values (SI; today each reference's mean TOF, s).
@@ -190,12 +257,36 @@ class Observations:
 
     @classmethod
     def tof(cls, tof: np.ndarray, std: np.ndarray) -> Observations:
-        """One mean TOF (s) per reference with its standard uncertainty (s)."""
+        """One mean TOF (s) per reference with its standard uncertainty (s).
+
+        Parameters
+        ----------
+        tof : numpy.ndarray
+            (n,) s, the references' mean TOFs.
+        std : numpy.ndarray
+            (n,) s, their standard uncertainties (> 0).
+
+        Returns
+        -------
+        Observations
+            Value ``j`` belonging to reference ``j``, of kind ``tof``.
+        """
         T = np.asarray(tof, float).ravel()
         return cls(T, np.asarray(std, float).ravel(), np.arange(T.size), ("tof",) * T.size)
 
     def columns(self, refs: tuple[int, ...] | np.ndarray) -> np.ndarray:
-        """Indices of the values that belong to the references ``refs``."""
+        """Indices of the values that belong to the references ``refs``.
+
+        Parameters
+        ----------
+        refs : tuple of int or numpy.ndarray
+            Reference indices.
+
+        Returns
+        -------
+        numpy.ndarray
+            The indices into ``values``, ascending.
+        """
         return np.flatnonzero(np.isin(self.reference, np.asarray(refs, int)))
 
     def weighted(self, values: np.ndarray, jacobian: np.ndarray, cols: np.ndarray
@@ -225,6 +316,19 @@ class Observations:
         return r, J, float(r @ r)
 
     def chi2(self, values: np.ndarray, cols: np.ndarray) -> np.ndarray:
-        """chi^2 (m,) of the model's values (m, n) on ``cols`` (inf where one is missing)."""
+        """chi^2 (m,) of the model's values (m, n) on ``cols`` (inf where one is missing).
+
+        Parameters
+        ----------
+        values : numpy.ndarray
+            (m, n) the model's values per parameter set.
+        cols : numpy.ndarray
+            The observations compared (:meth:`columns`).
+
+        Returns
+        -------
+        numpy.ndarray
+            (m,) -, ``sum(((model - measured) / std)^2)`` over ``cols``.
+        """
         r = (values[:, cols] - self.values[cols]) / self.std[cols]
         return np.where(np.all(np.isfinite(r), axis=1), np.sum(r**2, axis=1), np.inf)

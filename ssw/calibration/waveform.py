@@ -95,7 +95,21 @@ RAIL_SHARE = 0.999
 
 
 def device_globals(params: Any, gain: float = 1.0) -> dict[str, float]:
-    """The global parameters (:data:`GLOBALS`, SI) of a chain ``params`` and a DAQ gain."""
+    """The global parameters (:data:`GLOBALS`, SI) of a chain ``params`` and a DAQ gain.
+
+    Parameters
+    ----------
+    params : ssw.chain.params.ChainParams
+        The device's chain.
+    gain : float
+        -, the DAQ gain.
+
+    Returns
+    -------
+    dict of str to float
+        ``preload`` (N), ``sensor_mass``, ``striker_mass`` (kg), ``damping`` (the law's
+        unit), ``gain`` (-).
+    """
     return {"preload": float(params.preload),
             "sensor_mass": float(params.masses[params.sensor_index]),
             "striker_mass": float(params.masses[0]), "damping": float(params.damping),
@@ -105,7 +119,25 @@ def device_globals(params: Any, gain: float = 1.0) -> dict[str, float]:
 def parameter(name: str, law: str | None = None) -> Parameter:
     """The parameter ``name`` of :data:`PARAMETERS` (ConfigError listing them otherwise);
     ``damping`` under the dissipation ``law`` when given (its unit, range and scale:
-    :func:`ssw.chain.dissipation.parameter`)."""
+    :func:`ssw.chain.dissipation.parameter`).
+
+    Parameters
+    ----------
+    name : str
+        A key of :data:`PARAMETERS`.
+    law : str or None
+        The contacts' dissipation law (:data:`ssw.chain.dissipation.LAWS`) for ``damping``.
+
+    Returns
+    -------
+    ssw.device.Parameter
+        The parameter's unit, kind, range, log flag and scale.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        An unknown name.
+    """
     if name == "damping" and law is not None:
         from ssw.chain.dissipation import parameter as dissipation_parameter
 
@@ -119,7 +151,7 @@ def parameter(name: str, law: str | None = None) -> Parameter:
 class Hits:
     """The records of one sample, ready for a waveform fit. SI units.
 
-    Attributes
+    Parameters
     ----------
     id : str
         The sample's name.
@@ -239,7 +271,26 @@ class Hits:
     def from_recording(cls, rec: Any, *, E: float | None, nu: float,
                        full_scale: float | None = None, id: str = "") -> Hits:
         """The hits of a :class:`ssw.daq.recording.Recording` (every hit kept by its
-        reader)."""
+        reader).
+
+        Parameters
+        ----------
+        rec : ssw.daq.recording.Recording
+            The recording.
+        E : float or None
+            Pa, the sample's modulus if known.
+        nu : float
+            -, its Poisson's ratio.
+        full_scale : float or None
+            N, the rails (None: none).
+        id : str
+            The sample's name (default the file's stem).
+
+        Returns
+        -------
+        Hits
+            As :meth:`of`.
+        """
         from pathlib import Path
 
         forces = np.stack([h.force for h in rec.hits])
@@ -257,7 +308,7 @@ def _record_features(y: np.ndarray, rate: float, noise: float) -> Any:
 class State:
     """Values of every parameter of a waveform model (SI).
 
-    Attributes
+    Parameters
     ----------
     E : numpy.ndarray
         (n_s,) Pa, per sample.
@@ -279,14 +330,28 @@ class State:
     globals: dict[str, float]
 
     def copy(self) -> State:
-        """A deep copy."""
+        """A deep copy.
+
+        Returns
+        -------
+        State
+            The copy (its own arrays and globals).
+        """
         return State(self.E.copy(), self.striker_velocity.copy(), self.time_offset.copy(),
                      self.delay.copy(), dict(self.globals))
 
 
 @dataclass(frozen=True)
 class Column:
-    """One parameter of a fit: its name and which sample (``E``) or hit (per-hit) it is."""
+    """One parameter of a fit: its name and which sample (``E``) or hit (per-hit) it is.
+
+    Parameters
+    ----------
+    name : str
+        The parameter (``E``, a :data:`PER_HIT` or a :data:`GLOBALS` name).
+    index : int
+        The sample or hit it belongs to; -1 for a global.
+    """
 
     name: str
     index: int = -1
@@ -299,7 +364,20 @@ class Column:
 
 def columns_of(n_samples: int, n_hits: int) -> list[Column]:
     """Every parameter of a model of ``n_samples`` samples and ``n_hits`` hits: the
-    samples' E, the hits' speeds, time offsets and delays, the globals."""
+    samples' E, the hits' speeds, time offsets and delays, the globals.
+
+    Parameters
+    ----------
+    n_samples : int
+        Samples of the model.
+    n_hits : int
+        Hits of all samples.
+
+    Returns
+    -------
+    list of Column
+        The columns in that order.
+    """
     out = [Column("E", i) for i in range(n_samples)]
     for name in PER_HIT:
         out += [Column(name, h) for h in range(n_hits)]
@@ -307,14 +385,37 @@ def columns_of(n_samples: int, n_hits: int) -> list[Column]:
 
 
 def get(state: State, col: Column) -> float:
-    """The value of ``col`` in ``state``."""
+    """The value of ``col`` in ``state``.
+
+    Parameters
+    ----------
+    state : State
+        The parameter values.
+    col : Column
+        The parameter.
+
+    Returns
+    -------
+    float
+        Its value, SI.
+    """
     if col.index < 0:
         return float(state.globals[col.name])
     return float(getattr(state, col.name)[col.index])
 
 
 def put(state: State, col: Column, value: float) -> None:
-    """Set ``col`` in ``state``."""
+    """Set ``col`` in ``state``.
+
+    Parameters
+    ----------
+    state : State
+        The parameter values (changed in place).
+    col : Column
+        The parameter.
+    value : float
+        Its new value, SI.
+    """
     if col.index < 0:
         state.globals[col.name] = float(value)
     else:
@@ -325,7 +426,7 @@ def put(state: State, col: Column, value: float) -> None:
 class Observed:
     """The model's observations of the samples' records and their derivatives.
 
-    Attributes
+    Parameters
     ----------
     model : numpy.ndarray
         (n,) the model's values.
@@ -356,7 +457,7 @@ class Observed:
 class Setup:
     """The model of a set of samples' records at one level of information.
 
-    Attributes
+    Parameters
     ----------
     params : ChainParams
         The device's chain (its numerics; the globals of a :class:`State` replace its
@@ -389,6 +490,16 @@ class Setup:
         s, the chain's step for every run (fixed by :meth:`fix_step`).
     runs : int
         Chain runs so far (a cost counter).
+
+    Other Parameters
+    ----------------
+    _starts : numpy.ndarray
+        Internal: each sample's first hit (set from ``samples``; leave the default).
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        A level other than ``features`` | ``waveform``, or a TOF scatter <= 0 s.
     """
 
     params: Any
@@ -431,13 +542,32 @@ class Setup:
                               self.trigger_jitter))
 
     def hit_of(self) -> np.ndarray:
-        """(n_hits,) the sample of each hit."""
+        """(n_hits,) the sample of each hit.
+
+        Returns
+        -------
+        numpy.ndarray
+            (n_hits,) int, the index into ``samples`` of each hit.
+        """
         return np.repeat(np.arange(len(self.samples)), [s.n for s in self.samples])
 
     def fix_step(self, state: State, margin: float = 1.25) -> float:
         """Fix the chain's step for every later run: the integrator's step for ``margin``
         times the fastest striker of ``state`` and its lightest masses (one
-        discretization for a whole fit: its model is smooth in the parameters)."""
+        discretization for a whole fit: its model is smooth in the parameters).
+
+        Parameters
+        ----------
+        state : State
+            The parameter values (its fastest striker and its globals).
+        margin : float
+            -, factor on the fastest striker speed.
+
+        Returns
+        -------
+        float
+            s, the step kept in ``dt``.
+        """
         from ssw.chain.integrate import time_step
         from ssw.chain.params import Batch
         from ssw.walls import build_wall
@@ -677,7 +807,20 @@ def _recorded(setup: Setup, name: str) -> np.ndarray:
 
 def coordinate(setup: Setup, col: Column) -> tuple[bool, float]:
     """The scaled coordinate of a parameter: ``(log, scale)`` (``ln x``, or ``x / scale``;
-    a time offset in sample periods, a delay in units of the prior's width)."""
+    a time offset in sample periods, a delay in units of the prior's width).
+
+    Parameters
+    ----------
+    setup : Setup
+        The waveform model (the sample rate, the delay prior's width, the damping law).
+    col : Column
+        The parameter.
+
+    Returns
+    -------
+    tuple
+        ``(log, scale)``: bool, and the scale in the parameter's SI unit.
+    """
     if col.name == "time_offset":
         return False, 1.0 / setup.acq.sample_rate
     if col.name == "delay":
@@ -687,7 +830,22 @@ def coordinate(setup: Setup, col: Column) -> tuple[bool, float]:
 
 
 def to_x(setup: Setup, cols: list[Column], values: np.ndarray) -> np.ndarray:
-    """Scaled coordinates (:func:`coordinate`) of SI values, one per column."""
+    """Scaled coordinates (:func:`coordinate`) of SI values, one per column.
+
+    Parameters
+    ----------
+    setup : Setup
+        The waveform model (the sample rate, the delay prior's width, the damping law).
+    cols : list of Column
+        The parameters, in order.
+    values : numpy.ndarray
+        (q,) their values, SI.
+
+    Returns
+    -------
+    numpy.ndarray
+        (q,) ``ln(value)`` or ``value / scale``.
+    """
     out = np.empty(len(cols))
     for j, c in enumerate(cols):
         log, scale = coordinate(setup, c)
@@ -696,7 +854,22 @@ def to_x(setup: Setup, cols: list[Column], values: np.ndarray) -> np.ndarray:
 
 
 def from_x(setup: Setup, cols: list[Column], x: np.ndarray) -> np.ndarray:
-    """SI values of scaled coordinates, one per column."""
+    """SI values of scaled coordinates, one per column.
+
+    Parameters
+    ----------
+    setup : Setup
+        The waveform model (the sample rate, the delay prior's width, the damping law).
+    cols : list of Column
+        The parameters, in order.
+    x : numpy.ndarray
+        (q,) scaled coordinates.
+
+    Returns
+    -------
+    numpy.ndarray
+        (q,) ``exp(x)`` or ``x scale``, SI.
+    """
     out = np.empty(len(cols))
     for j, c in enumerate(cols):
         log, scale = coordinate(setup, c)
@@ -705,7 +878,22 @@ def from_x(setup: Setup, cols: list[Column], x: np.ndarray) -> np.ndarray:
 
 
 def dtheta_dx(setup: Setup, cols: list[Column], values: np.ndarray) -> np.ndarray:
-    """``d value / d x`` per column (the value for a log coordinate, else the scale)."""
+    """``d value / d x`` per column (the value for a log coordinate, else the scale).
+
+    Parameters
+    ----------
+    setup : Setup
+        The waveform model (the sample rate, the delay prior's width, the damping law).
+    cols : list of Column
+        The parameters, in order.
+    values : numpy.ndarray
+        (q,) their values, SI.
+
+    Returns
+    -------
+    numpy.ndarray
+        (q,) SI per scaled unit.
+    """
     return np.array([values[j] if coordinate(setup, c)[0] else coordinate(setup, c)[1]
                      for j, c in enumerate(cols)])
 
@@ -718,7 +906,7 @@ FLAG_QUANTILE = 0.999
 class Fit:
     """A fit of a waveform model's free parameters to the records. SI units.
 
-    Attributes
+    Parameters
     ----------
     state : State
         The parameters at the optimum.
@@ -777,7 +965,20 @@ class Fit:
 
     def std(self, col: Column, scaled: bool = True) -> float:
         """The standard error of ``col`` in its scaled coordinate (relative for a log
-        coordinate), times ``sqrt(misfit)`` when ``scaled``."""
+        coordinate), times ``sqrt(misfit)`` when ``scaled``.
+
+        Parameters
+        ----------
+        col : Column
+            A fitted parameter.
+        scaled : bool
+            Scale by ``sqrt(misfit)`` (:attr:`misfit`).
+
+        Returns
+        -------
+        float
+            The standard error in the scaled coordinate.
+        """
         j = self.free.index(col)
         s = float(np.sqrt(max(self.cov_x[j, j], 0.0)))
         return s * np.sqrt(self.misfit) if scaled else s
@@ -992,7 +1193,7 @@ def model_floor(setup: Setup, f: Fit) -> dict[str, float]:
     """The model-error floor the references' residuals call for: per observation kind (each
     feature; the samples of a waveform) the relative standard deviation ``phi`` that, added
     in quadrature to the noise's, brings that kind's chi^2 at the fit ``f`` down to the
-    lower :data:`FLOOR_CONFIDENCE` quantile of a chi^2 of its share of the degrees of
+    lower ``FLOOR_CONFIDENCE`` quantile of a chi^2 of its share of the degrees of
     freedom: the upper confidence bound of ``phi`` (the Birge ratio of each kind, Birge
     1932, made 1 at the bound rather than at the point estimate: a kind with a handful of
     observations per reference gives a floor that samples outside the references' range

@@ -41,7 +41,45 @@ GMSH_TRIANGLE6 = 9
 
 @dataclass(frozen=True)
 class MeshSettings:
-    """Domain and mesh density. Lengths in m."""
+    """Domain and mesh density. Lengths in m.
+
+    Parameters
+    ----------
+    soil_radius : float
+        m, radius of the soil sample (rollers on ``r = soil_radius``).
+    soil_depth : float
+        m, depth of the soil sample (fixed bottom).
+    size_contact : float
+        m, element size at the contact point.
+    growth : float
+        -, element size / distance from the contact point.
+    size_max : float
+        m, largest element size.
+    plate_layers : int
+        Elements through the plate thickness.
+    base : str
+        Bottom: ``bonded`` (u = 0) | ``sliding`` (u_z = 0) on a rigid base.
+    lateral : str
+        Side: ``mould`` (rollers, u_r = 0) | ``free`` (traction-free).
+    subgrade_depth : float
+        m, a lift of this thickness on a subgrade below (0: none).
+    subgrade_ratio : float
+        -, the subgrade's E over the lift's.
+    subgrade_nu : float
+        -, the subgrade's Poisson's ratio.
+    near_size : float
+        m, the element at the contact point outside a plateau (0: none).
+    near_growth : float
+        -, element size / distance within the plateau.
+    spot_size : float
+        m, element size in spots (balls about points; 0: none).
+    spot_points : tuple
+        ``((r, depth), ...)`` in m (depth below the loaded surface): the spots' centres.
+    spot_radius : float
+        m, the spots' radius (``spot_size`` within it).
+    spot_growth : float
+        -, element size / distance beyond a spot.
+    """
 
     soil_radius: float  # m, radius of the soil sample (rollers on r = soil_radius)
     soil_depth: float  # m, depth of the soil sample (fixed bottom)
@@ -68,6 +106,33 @@ class Mesh:
 
     ``nodes`` (n, 2) m; ``tri`` (ne, 6) node indices (3 vertices then the midsides of edges
     01, 12, 20); ``body`` (ne,) 0 = soil, 1 = plate; ``top`` is the z of the loaded surface.
+
+    Parameters
+    ----------
+    nodes : numpy.ndarray
+        (n, 2) m, the nodes' ``(r, z)``.
+    tri : numpy.ndarray
+        (ne, 6) node indices: 3 vertices, then the midsides of edges 01, 12, 20.
+    body : numpy.ndarray
+        (ne,) 0 = soil, 1 = plate.
+    top : float
+        m, the z of the loaded surface.
+    plate_radius : float
+        m, radius of the plate (0: none).
+    soil_radius : float
+        m, radius of the soil sample.
+    soil_depth : float
+        m, depth of the soil sample.
+    base : str
+        Bottom condition: ``bonded`` | ``sliding``.
+    lateral : str
+        Side condition: ``mould`` | ``free``.
+    subgrade : numpy.ndarray or None
+        (ne,) bool, the soil elements of the subgrade (below the lift); None: no subgrade.
+    subgrade_ratio : float
+        -, the subgrade's E over the lift's.
+    subgrade_nu : float
+        -, the subgrade's Poisson's ratio.
     """
 
     nodes: np.ndarray
@@ -79,8 +144,8 @@ class Mesh:
     soil_depth: float
     base: str = "bonded"
     lateral: str = "mould"
-    #: (ne,) bool, the soil elements of the subgrade (below the lift); None: no subgrade;
-    #: its E relative to the lift's and its Poisson's ratio
+    # (ne,) bool, the soil elements of the subgrade (below the lift); None: no subgrade;
+    # its E relative to the lift's and its Poisson's ratio
     subgrade: np.ndarray | None = None
     subgrade_ratio: float = 1.0
     subgrade_nu: float = 0.0
@@ -293,7 +358,23 @@ def _check_orientation(nodes: np.ndarray, tri: np.ndarray) -> None:
 
 
 def mesh_settings(cfg: dict[str, Any]) -> MeshSettings:
-    """Mesh settings of a (filled) contact config."""
+    """Mesh settings of a (filled) contact config.
+
+    Parameters
+    ----------
+    cfg : dict
+        The filled ``contact`` section (``soil_radius``, ``mesh_size_contact``, ... in m).
+
+    Returns
+    -------
+    MeshSettings
+        The settings, a lift's subgrade included when ``subgrade_depth`` > 0.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        A subgrade without a modulus ratio, or with one out of range.
+    """
     return MeshSettings(
         soil_radius=float(cfg["soil_radius"]),
         soil_depth=float(cfg["soil_depth"]),

@@ -95,7 +95,28 @@ def johnson_first_yield(E: float, nu: float, Y: float, radius: float) -> tuple[f
     """Hertz force (N) and indentation (m) at first yield of a von Mises half-space under a
     rigid sphere (Johnson 1985, sec. 6.1): ``p0 = k Y`` with ``k`` the peak of
     ``(sigma_r - sigma_z) / p0`` on the axis (1.61 at nu 0.3), ``a = pi p0 R / (2 E*)``,
-    ``F = 2/3 pi a^2 p0``, ``delta = a^2 / R``; ``k`` computed from the axis stresses."""
+    ``F = 2/3 pi a^2 p0``, ``delta = a^2 / R``; ``k`` computed from the axis stresses.
+
+    Parameters
+    ----------
+    E : float
+        Pa, the half-space's Young's modulus.
+    nu : float
+        -, its Poisson's ratio (``E* = E / (1 - nu^2)``, the sphere rigid).
+    Y : float
+        Pa, its yield stress in tension/compression (von Mises).
+    radius : float
+        m, the sphere's radius.
+
+    Returns
+    -------
+    tuple of float
+        The force (N) and the indentation (m) at first yield.
+
+    References
+    ----------
+    K. L. Johnson, *Contact Mechanics*, Cambridge University Press (1985), sec. 6.1.
+    """
     from ssw.constitutive.yield_index import first_yield_ratio
 
     k = first_yield_ratio(nu)
@@ -182,8 +203,22 @@ def scene_meshes(
 
     Parameters
     ----------
-    soil, model, radius, contact_cfg, plate, plate_thickness, plate_model, mesh
-        As :func:`solve_plastic_scene`'s.
+    soil : tuple of float
+        The sample's ``(E Pa, nu)``.
+    model : model of :mod:`ssw.constitutive` or None
+        The sample's law (None: elastic).
+    radius : float
+        The sphere's radius, m.
+    contact_cfg : dict
+        The config's ``contact`` section.
+    plate : tuple of float or None
+        The plate's ``(E Pa, nu)`` when ``plate_thickness > 0``.
+    plate_thickness : float
+        The plate's thickness, m (0: none).
+    plate_model : model of :mod:`ssw.constitutive` or None
+        The plate's law (None: elastic).
+    mesh : str
+        ``path`` (two meshes) | ``study`` (one), as :func:`solve_plastic_scene`'s.
     elastic_growth : float
         The elastic part's grading (:func:`elastic_mesh_settings`'s ``growth``).
 
@@ -249,7 +284,20 @@ DATASETS = {
 
 
 def summary(curve: PlasticCurve) -> dict[str, Any]:
-    """The scalars of a path (SI): first yield, permanent set, works."""
+    """The scalars of a path (SI): first yield, permanent set, works.
+
+    Parameters
+    ----------
+    curve : PlasticCurve
+        The path.
+
+    Returns
+    -------
+    dict
+        ``first_yield_force`` (N), ``first_yield_delta``, ``residual_indentation``,
+        ``interface_residual_indentation``, ``plate_thinning`` (m; None where unknown),
+        ``dissipated_work``, ``external_work``, ``stored_energy`` (J), ``force_max`` (N).
+    """
     under, total = curve.interface_residual, curve.residual_indentation
     return {"first_yield_force": curve.first_yield_force,
             "first_yield_delta": curve.first_yield_delta,
@@ -262,7 +310,17 @@ def summary(curve: PlasticCurve) -> dict[str, Any]:
 
 
 def write_plastic_curve(path: Any, curve: PlasticCurve, inputs: dict[str, Any]) -> None:
-    """Write ``curve`` (both branches) and its inputs to HDF5 ``path`` atomically."""
+    """Write ``curve`` (both branches) and its inputs to HDF5 ``path`` atomically.
+
+    Parameters
+    ----------
+    path : str or Path
+        The HDF5 file.
+    curve : PlasticCurve
+        The path (its :data:`DATASETS`, :func:`summary` and ``stats``).
+    inputs : dict
+        The inputs recorded in the file's provenance.
+    """
     from ssw.h5io import atomic_h5, write_dataset
 
     with atomic_h5(path, kind=KIND, inputs=inputs) as f:
@@ -276,7 +334,18 @@ def write_plastic_curve(path: Any, curve: PlasticCurve, inputs: dict[str, Any]) 
 
 
 def read_plastic_curve(path: Any) -> dict[str, Any]:
-    """The datasets and scalars of a plastic curve file (None for an unknown scalar)."""
+    """The datasets and scalars of a plastic curve file (None for an unknown scalar).
+
+    Parameters
+    ----------
+    path : str or Path
+        A file of :func:`write_plastic_curve`.
+
+    Returns
+    -------
+    dict
+        The :data:`DATASETS` arrays, the :func:`summary` scalars (SI) and ``inputs``.
+    """
     import h5py
 
     from ssw.h5io import check_kind, read_inputs
@@ -296,7 +365,20 @@ def read_plastic_curve(path: Any) -> dict[str, Any]:
 def loading_curve(curve: PlasticCurve, inputs: dict[str, Any]) -> Any:
     """The loading branch of a plastic path as a :class:`ssw.curve.ForceCurve` (what a
     study's contact job writes for a scene with a ``soil_model``; the unloading branch is
-    in the plastic curve file, :func:`write_plastic_curve`)."""
+    in the plastic curve file, :func:`write_plastic_curve`).
+
+    Parameters
+    ----------
+    curve : PlasticCurve
+        The path.
+    inputs : dict
+        The scene's inputs (the curve's metadata, with its :func:`summary`).
+
+    Returns
+    -------
+    ssw.curve.ForceCurve
+        Indentation (m), force (N) and contact radius (m) of the loading branch.
+    """
     from ssw.curve import ForceCurve
 
     m = curve.branch == 0
@@ -355,6 +437,23 @@ def scene_path(scene: Any, contact_cfg: dict[str, Any], indenter_radius: float,
 def scene_curve(scene: Any, contact_cfg: dict[str, Any], indenter_radius: float,
                 plate: tuple[float, float] | None) -> Any:
     """A study scene with a ``soil_model``: its loading curve (:func:`loading_curve`) of
-    :func:`scene_path`."""
+    :func:`scene_path`.
+
+    Parameters
+    ----------
+    scene : ssw.config.Scene
+        The scene.
+    contact_cfg : dict
+        The config's ``contact`` section.
+    indenter_radius : float
+        The sphere's radius, m.
+    plate : tuple of float or None
+        The scene's plate ``(E Pa, nu)``.
+
+    Returns
+    -------
+    ssw.curve.ForceCurve
+        The loading branch (:func:`loading_curve`).
+    """
     return loading_curve(*scene_path(scene, contact_cfg, indenter_radius, plate))
 

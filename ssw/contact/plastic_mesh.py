@@ -109,7 +109,7 @@ NEAR = 1.0
 
 def near_radius(mesh: Mesh, E: float, nu: float, radius: float, d_end: float,
                 punch: str | None = None, plate: tuple[float, float] | None = None) -> float:
-    """The near zone's radius (m) of a path to ``d_end`` (m): :data:`NEAR` times the larger
+    """The near zone's radius (m) of a path to ``d_end`` (m): ``NEAR`` times the larger
     of ``sqrt(2 R d_end)`` (``R`` the sphere's ``radius``; a punch: its radius) and, with a
     plate, the length over which it spreads a load on the sample, ``(2 D (1 - nu^2) /
     E)^(1/3)``, ``D = E_p t^3 / (12 (1 - nu_p^2))`` (a plate on an elastic half-space),
@@ -174,7 +174,7 @@ def path_mesh_settings(settings: Any, radius: float, d_end: float,
                        ) -> Any:
     """The mesh settings of a plastic path: the study's (domain, boundaries, growth,
     largest element, plate layers) with the element at the contact point scaled to the
-    path (:data:`PATH_RESOLVED`; at most a plate layer).
+    path (``PATH_RESOLVED``; at most a plate layer).
 
     Parameters
     ----------
@@ -270,7 +270,7 @@ def elastic_mesh_settings(settings: Any, plateau: float,
     resolves the contact radii from ``size_contact / growth`` on; so the elastic part's
     mesh, like the engine's, does not depend on the increments) up to ``plateau``, and
     refined in spots about the first-yield point and the contact's edge then
-    (:data:`SPOT_FINE`: the plastic zone starts there, and the stresses there set the
+    (``SPOT_FINE``: the plastic zone starts there, and the stresses there set the
     first yield).
 
     Parameters
@@ -284,7 +284,7 @@ def elastic_mesh_settings(settings: Any, plateau: float,
         (:func:`hertz_yield_point`); None: no spots.
     growth : float
         Element size over the distance from the contact point (default
-        :data:`ELASTIC_GROWTH`).
+        ``ELASTIC_GROWTH``).
     radius : float
         The sphere's radius ``R``, m (the contact radius at first yield ``sqrt(R
         delta_y)`` sizes the spots; needed with ``yield_point``).

@@ -120,6 +120,43 @@ class PlasticCurve:
     ``branch`` 0 loading, 1 unloading; ``dissipated`` the cumulative plastic work (J);
     ``plastic_volume`` (m^3), ``plastic_depth`` and ``plastic_radius`` (m) the extent of the
     points that have yielded so far; ``iterations`` Newton's per increment.
+
+    Parameters
+    ----------
+    delta : numpy.ndarray
+        m, the indentation at each increment.
+    force : numpy.ndarray
+        N, the contact force.
+    branch : numpy.ndarray
+        0 loading, 1 unloading.
+    contact_radius : numpy.ndarray
+        m, the contact's radius.
+    dissipated : numpy.ndarray
+        J, the cumulative plastic work.
+    plastic_volume : numpy.ndarray
+        m^3, volume of the points that have yielded so far.
+    plastic_depth : numpy.ndarray
+        m, depth of the yielded zone.
+    plastic_radius : numpy.ndarray
+        m, radius of the yielded zone.
+    iterations : numpy.ndarray
+        Newton iterations per increment.
+    yield_ratio : numpy.ndarray
+        -, the largest yield ratio of the sample's (and plate's) points.
+    first_yield_force : float or None
+        N, the force at first yield (None: nothing yields).
+    first_yield_delta : float or None
+        m, the indentation at first yield.
+    residual_indentation : float or None
+        m, the permanent indentation on the axis after unloading (None: not unloaded).
+    stored_energy : float
+        J, the elastic energy stored at the end of the path.
+    stats : dict
+        Solver counts and timings (s).
+    interface_residual : float or None
+        m, the plate-sample interface's residual depth on the axis (the residual
+        indentation less the plate's permanent thinning there; without a plate the
+        residual indentation).
     """
 
     delta: np.ndarray
@@ -137,8 +174,8 @@ class PlasticCurve:
     residual_indentation: float | None
     stored_energy: float
     stats: dict[str, Any] = field(default_factory=dict)
-    #: the plate-sample interface's residual depth on the axis (m; the residual indentation
-    #: less the plate's permanent thinning there; without a plate the residual indentation)
+    # the plate-sample interface's residual depth on the axis (m; the residual indentation
+    # less the plate's permanent thinning there; without a plate the residual indentation)
     interface_residual: float | None = None
 
     @property
@@ -200,7 +237,7 @@ def solve_path(
     near : float or None
         Radius (m) of the near zone about the contact point outside which the mesh is
         condensed (the elastic far field, ``_Model._condense``); -1 (default):
-        :func:`near_radius` of the path, doubled while the plastic zone or the contact
+        ``near_radius`` of the path, doubled while the plastic zone or the contact
         reaches its edge; None: no condensation.
     elastic_mesh : Mesh or None
         A mesh for the path's elastic part (module docstring, "Two meshes"): the loading

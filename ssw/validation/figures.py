@@ -23,6 +23,17 @@ def plot_fig10(path: str | Path, rows: list[SampleResult],
 
     ``curves`` maps nu to ``(E, TOF)`` (Pa, s) from the chain model; ``sweep_curves`` the
     same from the workflow's stored sweep (thesis Fig 8), drawn dashed.
+
+    Parameters
+    ----------
+    path : str or Path
+        The PNG file.
+    rows : list of SampleResult
+        The validation rows (their simulated, measured and published TOFs).
+    curves : dict of float to tuple of numpy.ndarray
+        nu -> ``(E, TOF)`` (Pa, s) of the chain model.
+    sweep_curves : dict of float to tuple of numpy.ndarray or None
+        nu -> ``(E, TOF)`` (Pa, s) of the stored sweep, or None.
     """
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.4))
@@ -59,7 +70,15 @@ def plot_fig10(path: str | Path, rows: list[SampleResult],
 
 def plot_fig9(path: str | Path, rows: list[SampleResult]) -> None:
     """Per-hit TOF minus the session mean (us) for every sample with a recording, with the
-    thesis's soil-sample standard deviations (no plate / PLA plate) as reference bands."""
+    thesis's soil-sample standard deviations (no plate / PLA plate) as reference bands.
+
+    Parameters
+    ----------
+    path : str or Path
+        The PNG file.
+    rows : list of SampleResult
+        The validation rows (those with per-hit TOFs are drawn).
+    """
     plt = pyplot()
     fig, ax = plt.subplots(figsize=(6.4, 4.0))
     for std, label, style in ((FIG9_STD_NO_PLATE, "thesis soil, no plate: std", ":"),

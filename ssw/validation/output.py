@@ -26,7 +26,18 @@ COLUMNS = {
 
 
 def check_names(rows: list[SampleResult]) -> list[str]:
-    """The checks (:data:`ssw.validity.RULES` order) any row carries."""
+    """The checks (:data:`ssw.validity.RULES` order) any row carries.
+
+    Parameters
+    ----------
+    rows : list of SampleResult
+        The validation rows.
+
+    Returns
+    -------
+    list of str
+        The checks' names.
+    """
     from ssw.validity import RULES
 
     have = {e["check"] for r in rows for e in r.validity}
@@ -37,7 +48,18 @@ def to_csv_text(rows: list[SampleResult]) -> str:
     """CSV text; the header names each column with its unit, ``name [unit]``. After the
     thesis's columns, each check's value (dimensionless, ``[1]``; ``_upper_bound`` after the
     name of an upper bound; empty where a row has none) and ``checks_failed`` (the failing
-    checks, ``;``-joined)."""
+    checks, ``;``-joined).
+
+    Parameters
+    ----------
+    rows : list of SampleResult
+        The validation rows.
+
+    Returns
+    -------
+    str
+        The CSV text, one line per row after the header.
+    """
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
     checks = check_names(rows)
@@ -57,7 +79,19 @@ def to_csv_text(rows: list[SampleResult]) -> str:
 
 def write_table(csv_path: str | Path, h5_path: str | Path, rows: list[SampleResult],
                 inputs: dict[str, Any]) -> None:
-    """Write the CSV and the HDF5 (one group per sample, per-hit arrays included)."""
+    """Write the CSV and the HDF5 (one group per sample, per-hit arrays included).
+
+    Parameters
+    ----------
+    csv_path : str or Path
+        The CSV file (:func:`to_csv_text`, with its provenance line).
+    h5_path : str or Path
+        The HDF5 file, written atomically.
+    rows : list of SampleResult
+        The validation rows.
+    inputs : dict
+        The inputs recorded in both files' provenance.
+    """
     write_csv_text(csv_path, to_csv_text(rows), inputs)
     with atomic_h5(h5_path, kind=KIND, inputs=inputs) as f:
         for r in rows:
@@ -83,6 +117,16 @@ def thesis_tables_text(rows: list[SampleResult]) -> tuple[str, str]:
     MPa), the leave-one-out E (ssw: calibrated without that sample), its COV (ssw / thesis,
     %), difference (ssw / leave-one-out / thesis, %). Thesis differences are recomputed
     from its printed values with the same formulas.
+
+    Parameters
+    ----------
+    rows : list of SampleResult
+        The validation rows.
+
+    Returns
+    -------
+    tuple of str
+        The CSV texts of Table 2 and Table 3.
     """
     t2 = io.StringIO()
     w = csv.writer(t2, lineterminator="\n")
@@ -114,7 +158,19 @@ def thesis_tables_text(rows: list[SampleResult]) -> tuple[str, str]:
 def write_thesis_tables(table2: str | Path, table3: str | Path, rows: list[SampleResult],
                         inputs: Any = None) -> None:
     """Write :func:`thesis_tables_text` to two CSV files (with their provenance line, for
-    tables made from ``inputs``: default the rows)."""
+    tables made from ``inputs``: default the rows).
+
+    Parameters
+    ----------
+    table2 : str or Path
+        The CSV file of Table 2.
+    table3 : str or Path
+        The CSV file of Table 3.
+    rows : list of SampleResult
+        The validation rows.
+    inputs : Any
+        The inputs recorded in the provenance line (None: the rows' mappings).
+    """
     a, b = thesis_tables_text(rows)
     inputs = [r.to_dict() for r in rows] if inputs is None else inputs
     write_csv_text(table2, a, inputs)

@@ -37,7 +37,81 @@ from ssw.errors import ConfigError
 
 @dataclass(frozen=True)
 class SampleResult:
-    """One validation row (SI units; percentages in %)."""
+    """One validation row (SI units; percentages in %).
+
+    Parameters
+    ----------
+    sample : str
+        The sample's id.
+    material : str
+        Its materials-library key.
+    E_manufacturer : float
+        Pa, the manufacturer's Young's modulus.
+    nu : float
+        -, the sample's Poisson's ratio.
+    tof_sim : float
+        s, the chain model's TOF at ``E_manufacturer`` and ``nu``.
+    tof_measured : float
+        s, the measured mean TOF (the recording's, else the published one).
+    tof_measured_std : float or None
+        s, standard deviation of the accepted hits' TOF.
+    tof_source : str
+        Where ``tof_measured`` comes from (recording or published).
+    tof_diff_pct : float
+        %, ``100 |tof_measured - tof_sim| / tof_sim``.
+    tof_diff_signed_pct : float
+        %, ``100 (tof_measured - tof_sim) / tof_sim``.
+    E_measured : float
+        Pa, E inverted from ``tof_measured``.
+    E_cov_pct : float or None
+        %, COV of the per-hit E (None without a recording).
+    E_diff_pct : float
+        %, ``100 |E_measured - E_manufacturer| / E_manufacturer``.
+    E_low : float or None
+        Pa, lower end of the 95 % interval of ``E_measured``.
+    E_high : float or None
+        Pa, upper end of the 95 % interval of ``E_measured``.
+    E_u_pct : float or None
+        %, standard uncertainty of ln E (x 100).
+    E_contributions_pct : dict of str to float
+        %, the budget's terms by source.
+    E_notes : list of str
+        Remarks on the estimate.
+    E_missing_terms : dict of str to str
+        Budget terms left out, with the reason.
+    E_loo : float or None
+        Pa, E from the calibration made without this sample.
+    E_loo_diff_pct : float or None
+        %, ``100 (E_loo - E_manufacturer) / E_manufacturer``.
+    tof_sem : float or None
+        s, standard error of ``tof_measured``.
+    n_hits : int or None
+        Hits in the recording.
+    n_accepted : int or None
+        Hits the rejection rule accepted.
+    recording : str or None
+        Path of the sample's recording.
+    synthetic : bool or None
+        Whether the recording is synthetic.
+    tof_per_hit : list of float
+        s, each hit's TOF.
+    E_per_hit : list of float
+        Pa, E inverted from each accepted hit.
+    rejections : list of str
+        Why hits were rejected.
+    tof_published : float or None
+        s, the thesis's measured mean TOF (Table 2).
+    tof_sim_published : float or None
+        s, the thesis's simulated TOF (Table 2).
+    E_published : float or None
+        Pa, the thesis's measured E (Table 3).
+    E_cov_published : float or None
+        %, the thesis's COV of measured E (Table 3).
+    validity : list of dict
+        The checks of the ``tof_sim`` run (:mod:`ssw.validity`).
+    checks_failed : list of str
+        Names of the checks that fail.
+    """
 
     sample: str
     material: str
@@ -76,16 +150,47 @@ class SampleResult:
     checks_failed: list[str] = field(default_factory=list)
 
     def to_dict(self) -> dict[str, Any]:
+        """The row as a mapping of its fields (SI units; percentages in %).
+
+        Returns
+        -------
+        dict
+            Field name -> value.
+        """
         return asdict(self)
 
 
 def pct(a: float, b: float) -> float:
-    """``100 (a - b) / b``."""
+    """``100 (a - b) / b``.
+
+    Parameters
+    ----------
+    a : float
+        The value compared.
+    b : float
+        The reference (same unit, nonzero).
+
+    Returns
+    -------
+    float
+        %, the signed relative difference.
+    """
     return 100.0 * (a - b) / b
 
 
 def cov_pct(x: np.ndarray) -> float | None:
-    """Sample COV ``100 std(x, ddof=1) / mean(x)``, None for fewer than two values."""
+    """Sample COV ``100 std(x, ddof=1) / mean(x)``, None for fewer than two values.
+
+    Parameters
+    ----------
+    x : numpy.ndarray
+        The values (any unit).
+
+    Returns
+    -------
+    float or None
+        %, the coefficient of variation.
+    """
     return float(100.0 * np.std(x, ddof=1) / np.mean(x)) if x.size > 1 else None
 
 
@@ -94,6 +199,20 @@ def inverse_range(wall: str, wall_options: dict[str, Any], params: Any) -> tuple
 
     With the ``fit`` wall and a K table, the forward model only exists over the table's
     soil moduli (the table does not extrapolate).
+
+    Parameters
+    ----------
+    wall : str
+        The wall law's name.
+    wall_options : dict
+        The wall builder's options (``k_table`` read for the ``fit`` wall).
+    params : ssw.chain.params.ChainParams
+        The device's chain (to load the K table).
+
+    Returns
+    -------
+    tuple of float
+        Pa, ``(lo, hi)`` of the inversion's search.
     """
     from ssw.tof.inverse import E_RANGE
     from ssw.walls import load_k_table
@@ -121,6 +240,39 @@ def validate_samples(
     of ``tof_sim``; its sample's yield against its library strength,
     :func:`sample_strengths`), with the stress mode ``stresses``
     (:data:`ssw.validity.STRESS_MODES`).
+
+    Parameters
+    ----------
+    cfg : dict
+        The study config (``validation.samples`` and the materials read).
+    params : ssw.chain.params.ChainParams
+        The (calibrated) device's chain.
+    wall : str
+        The last contact's wall law.
+    wall_options : dict
+        The wall builder's options.
+    root : str or Path
+        Folder relative recording paths start from.
+    tof_options : ssw.signal.tof.TofOptions or None
+        Options of the TOF picking and rejection rule.
+    calibration : ssw.calibration.Calibration or None
+        Its covariance enters the E intervals, its leave-one-out rows ``E_loo``.
+    full_scale : float or None
+        N, the device's largest unclipped force, the hits are checked against.
+    strengths : ssw.validity.Strengths or None
+        The beads' and the plate's strengths; with them each row carries its checks.
+    stresses : str
+        The checks' stress mode (:data:`ssw.validity.STRESS_MODES`).
+
+    Returns
+    -------
+    list of SampleResult
+        One row per sample, in the config's order.
+
+    Raises
+    ------
+    ssw.errors.ConfigError
+        No sample in ``validation.samples``.
     """
     from ssw.calibration.references import from_config
     from ssw.config import library
@@ -221,7 +373,22 @@ def sample_strengths(samples: list[dict[str, Any]], mats: dict[str, Any],
     """``strengths`` (:class:`ssw.validity.Strengths`: the beads' and the plate's) with each
     sample's own: its library material's uniaxial strength
     (:func:`ssw.measure.uniaxial_strength`), NaN (the stated assumption) where it has
-    none."""
+    none.
+
+    Parameters
+    ----------
+    samples : list of dict
+        The config's samples (``id``, ``material``).
+    mats : dict
+        The materials library by key.
+    strengths : ssw.validity.Strengths
+        The beads' and the plate's strengths.
+
+    Returns
+    -------
+    ssw.validity.Strengths
+        A copy with ``sample`` (Pa per sample, NaN: none stated) and its source.
+    """
     from dataclasses import replace
 
     from ssw.measure import uniaxial_strength

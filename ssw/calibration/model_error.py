@@ -97,21 +97,23 @@ def floor_bound(r: np.ndarray, sigma: np.ndarray, scale: np.ndarray, dof: float,
     Birge (1932); Paule & Mandel (1982) (module docstring).
     """
     from scipy import stats
-    from scipy.optimize import brentq
+
+    from ssw.roots import find_root
 
     rr, sig, sc = np.asarray(r, float) ** 2, np.asarray(sigma, float) ** 2, \
         np.asarray(scale, float) ** 2
     target = float(stats.chi2.ppf(1.0 - confidence, max(dof, 1e-3)))
 
-    def excess(phi: float) -> float:
-        return float(np.sum(rr / (sig + phi**2 * sc))) - target
+    def shortfall(phi: np.ndarray) -> np.ndarray:
+        """``target - sum_i r_i^2 / (sigma_i^2 + phi^2 s_i^2)``: rises with ``phi``."""
+        return target - np.sum(rr / (sig + np.asarray(phi)[..., None] ** 2 * sc), axis=-1)
 
-    if excess(0.0) <= 0.0:
+    if shortfall(np.asarray(0.0)) >= 0.0:
         return 0.0
     hi = float(np.sqrt(np.sum(rr) / max(np.sum(sc), 1e-300) * rr.size / target))
-    while excess(hi) > 0.0:
-        hi *= 2.0
-    return float(brentq(excess, 0.0, hi, xtol=1e-12 * hi, rtol=1e-6))
+    # the bracket grows from the moment estimate until it holds the root
+    root = find_root(shortfall, 0.0, hi, xatol=1e-12 * hi, xrtol=1e-6, grow=True)
+    return float(root.x)
 
 
 def chi2_cdf(chi2: float, dof: int) -> float:

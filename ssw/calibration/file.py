@@ -459,8 +459,6 @@ def calibrate(
         A reference TOF the device cannot produce
         (:func:`ssw.calibration.fit.check_producible`).
     """
-    from ssw.tof import api
-
     if not refs:
         raise ConfigError("--reference", [], "at least one reference sample")
     t0 = time.perf_counter()
@@ -477,48 +475,67 @@ def calibrate(
     merr = None if fit.model_error is None else fit.model_error.to_dict()
     values = theta_dict(model.free, fit.theta)
     cal_device = device.with_(**values)
-    params = chain_params(cal_device, materials, **numerics)
-    # canonical evaluation: one plain run of the calibrated device (what users reproduce)
-    tof_c = np.asarray(api.tof(model.refs_E, model.refs_nu, params, wall, **opts), float)
-    references = [
+    references = _reference_rows(refs, chain_params(cal_device, materials, **numerics), wall,
+                                 opts)
+    std = None if fit.std is None else dict(zip(fit.covariance_names, map(float, fit.std),
+                                                strict=True))
+    loo_rows = _loo_predictions(model, refs, subs, materials, numerics, wall, opts) if loo else []
+    prov = {**_provenance(refs, model, device, wall, numerics, fit, merr, reference_sample, t0),
+            **(provenance or {})}
+    return Calibration(
+        device=cal_device, device_nominal=device, free=model.free, parameters=values,
+        parameter_std=std, covariance=None if fit.covariance is None else fit.covariance.tolist(),
+        singular_values=fit.singular_values.tolist(), unidentified=list(fit.unidentified),
+        references=references, loo=loo_rows, alternatives=list(fit.alternatives),
+        wall={"law": wall, "options": _plain_options(
+            opts if recorded_wall_options is None else dict(recorded_wall_options))},
+        numerics=dict(numerics), material_set=material_set, materials_file=materials_file,
+        provenance=prov, at_bound=dict(fit.at_bound),
+        device_sha256=device_digest(device, materials),
+        covariance_parameters=fit.covariance_names, model_error=merr, warnings=warnings,
+    )
+
+
+def _reference_rows(refs: list[Reference], params: Any, wall: str,
+                    opts: dict[str, Any]) -> list[dict[str, Any]]:
+    """The file's rows of the references: each one's measured TOF and the calibrated
+    device's (``params``, one plain run on ``wall`` with ``opts``: what users reproduce), s,
+    and the residual (s and %)."""
+    from ssw.tof import api
+
+    tof_model = np.asarray(api.tof([r.E for r in refs], [r.nu for r in refs], params, wall,
+                                   **opts), float)
+    return [
         {"id": r.id, "E": r.E, "nu": r.nu, "tof": r.tof, "tof_std": r.tof_std,
          "source": r.source, "tof_model": float(tc), "residual": float(tc - r.tof),
          "residual_pct": float(100.0 * (tc - r.tof) / r.tof)}
-        for r, tc in zip(refs, tof_c, strict=True)
+        for r, tc in zip(refs, tof_model, strict=True)
     ]
-    std = None if fit.std is None else {n: float(s) for n, s in
-                                        zip(fit.covariance_names, fit.std, strict=True)}
-    loo_rows = _loo_predictions(model, refs, subs, materials, numerics, wall, opts) if loo \
-        else []
+
+
+def _provenance(refs: list[Reference], model: TofModel, device: Device, wall: str,
+                numerics: dict[str, Any], fit: Any, merr: dict[str, Any] | None,
+                reference_sample: Any, t0: float) -> dict[str, Any]:
+    """The calibration's provenance: its inputs' record, the fit's cost and findings and
+    how its residuals were weighted (with the model-error term where the references reject
+    the model); ``t0`` the calibration's start (``time.perf_counter``, s)."""
     from ssw.provenance import record
 
-    prov = {**record({"references": [r.__dict__ for r in refs], "free": list(model.free),
+    if not fit.weights_known:
+        weights = "1 % of each TOF, covariance scaled by chi2/(n - q), q its parameters"
+    else:
+        weights = "given TOF uncertainties" + (
+            f" and a relative TOF model error tau = {merr['tau']:.4g} (the references "
+            "reject the model)" if merr else "")
+    return {**record({"references": [r.__dict__ for r in refs], "free": list(model.free),
                       "device": device.physics_dict(), "wall": wall,
                       "numerics": dict(numerics)}),
             "created_utc": datetime.now(UTC).isoformat(),
             "wall_time_s": time.perf_counter() - t0, "scan_points": fit.scan_points,
             "parameter_sets_evaluated": model.evaluations, "batched_runs": model.runs,
-            "converged": fit.converged, "chi2": fit.chi2,
-            "weights": ("given TOF uncertainties" + (
-                f" and a relative TOF model error tau = {merr['tau']:.4g} (the references "
-                "reject the model)" if merr else "")) if fit.weights_known else
-            "1 % of each TOF, covariance scaled by chi2/(n - q), q its parameters",
+            "converged": fit.converged, "chi2": fit.chi2, "weights": weights,
             "model_error_tau": None if merr is None else merr["tau"],
-            "reference_sample": None if reference_sample is None else reference_sample.to_dict(),
-            **(provenance or {})}
-    return Calibration(
-        device=cal_device, device_nominal=device, free=model.free, parameters=values,
-        parameter_std=std,
-        covariance=None if fit.covariance is None else fit.covariance.tolist(),
-        singular_values=fit.singular_values.tolist(), unidentified=list(fit.unidentified),
-        references=references, loo=loo_rows, alternatives=list(fit.alternatives),
-        wall={"law": wall, "options": _plain_options(
-            opts if recorded_wall_options is None else dict(recorded_wall_options))},
-        numerics=dict(numerics),
-        material_set=material_set, materials_file=materials_file, provenance=prov,
-        at_bound=dict(fit.at_bound), device_sha256=device_digest(device, materials),
-        covariance_parameters=fit.covariance_names, model_error=merr, warnings=warnings,
-    )
+            "reference_sample": None if reference_sample is None else reference_sample.to_dict()}
 
 
 def _plain_options(opts: dict[str, Any]) -> dict[str, Any]:

@@ -128,7 +128,7 @@ def point_target(point: dict[str, Any]) -> float | None:
 
 def verdict(E_low: float, E_high: float, target: float | None, complete: bool = True,
             failed: tuple[str, ...] | list[str] = ()) -> str:
-    """The conformity verdict of an interval against a target (module docstring).
+    """The conformity verdict of an interval against a target (:mod:`ssw.survey`).
 
     Parameters
     ----------

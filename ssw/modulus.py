@@ -366,7 +366,8 @@ class Estimator:
     carries one, Poisson's ratio, wall law, integrator) come
     from one full :func:`estimate_moduli` at the first estimate's TOF and are kept (they
     change slowly with E); the TOF's own contribution is recomputed at every call, with the
-    grid's interpolated slope ``d ln E / d TOF``.
+    slope ``d ln E / d TOF`` of the inversion's own interpolant on the grid (the derivative
+    of :meth:`ssw.tof.inverse.ForwardGrid.interpolant`).
 
     Parameters
     ----------

@@ -140,6 +140,69 @@ def _nu_args(nu: Any, k: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return 0.5 * (lo + hi), lo, hi
 
 
+def _inverted(T: np.ndarray, nu_c: np.ndarray, nu_lo: np.ndarray, nu_hi: np.ndarray,
+              params: Any, wall: str, opts: dict[str, Any], E_range: tuple[float, float],
+              grid: Any) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """E (Pa) of each sample at its central Poisson's ratio, and ``ln E`` at a range's ends
+    (NaN without a range), in one batched inversion (:func:`ssw.tof.inverse.invert_batch`;
+    ``grid`` used when it holds every Poisson's ratio)."""
+    k = T.size
+    ranged = nu_hi > nu_lo
+    targets = np.concatenate([T, T[ranged], T[ranged]])
+    nus = np.concatenate([nu_c, nu_lo[ranged], nu_hi[ranged]])
+    if grid is not None and np.any(grid.group_of(nus, {}) < 0):
+        grid = None  # a range's end the grid was not computed for
+    inv = invert_batch(targets, nus, params, wall, E_range=E_range, grid=grid, **opts)
+    nr = int(ranged.sum())
+    lnE_lo = np.full(k, np.nan)
+    lnE_hi = np.full(k, np.nan)
+    lnE_lo[ranged] = np.log(inv.E[k:k + nr])
+    lnE_hi[ranged] = np.log(inv.E[k + nr:])
+    return inv.E[:k], lnE_lo, lnE_hi
+
+
+def _calibration_term(calibration: Any, cov: np.ndarray | None, g: np.ndarray,
+                      contrib: dict[str, float], notes: list[str],
+                      missing: dict[str, str]) -> None:
+    """The ``calibration`` term ``sqrt(g^T C g)`` of one sample (``g_j = - (d ln TOF /
+    d theta_j) / k``) into ``contrib``, or why it is missing into ``missing``; a note when
+    the calibration holds parameters on their bounds."""
+    if cov is not None:
+        if calibration.at_bound:  # held parameters: fixed, not part of the covariance
+            notes.append("the calibration holds " + ", ".join(
+                f"{n} on its {side} bound" for n, side in calibration.at_bound.items())
+                + ": its term is conditional on that")
+        var = float(g @ cov @ g)
+        if not var > 0:
+            raise ConfigError("calibration covariance", var,
+                              "a positive variance g^T C g of ln E (the covariance is not "
+                              "positive definite: recalibrate)")
+        contrib["calibration"] = float(np.sqrt(var))
+    elif calibration is not None:
+        missing["calibration"] = (
+            "the calibration has no covariance (its references do not identify every "
+            "parameter, or as many parameters as references without TOF uncertainties)")
+    else:
+        missing["calibration"] = ("uncalibrated device: the uncertainty of its "
+                                  "parameters is not known")
+
+
+def _wall_state(wall: str, params: Any, E: np.ndarray, nu: np.ndarray,
+                opts: dict[str, Any], peak: np.ndarray) -> tuple[np.ndarray, np.ndarray | None]:
+    """Each sample's own wall law (at its E, Pa, and Poisson's ratio): whether the chain's
+    peak wall indentation ``peak`` (m) lies beyond the law's exact reach, and the law's
+    stated relative force error per sample (None: it states none)."""
+    from ssw.chain.wall import beyond_exact_reach
+    from ssw.walls import build_wall
+
+    w = build_wall(wall, params, E, nu, **opts)
+    beyond = beyond_exact_reach(w, peak)
+    force_error = getattr(w, "force_error", None)
+    if force_error is not None:
+        force_error = np.broadcast_to(np.asarray(force_error, float), (E.size,))
+    return beyond, force_error
+
+
 def estimate_moduli(
     tof: Any, tof_sem: Any, nu: Any, params: Any, wall: str,
     wall_options: dict[str, Any] | None = None, *, calibration: Any = None,
@@ -176,9 +239,7 @@ def estimate_moduli(
     list of ModulusEstimate
         One estimate per sample, in the order of ``tof``.
     """
-    from ssw.chain.wall import beyond_exact_reach
     from ssw.tof import api
-    from ssw.walls import build_wall
 
     opts = dict(wall_options or {})
     T = np.atleast_1d(np.asarray(tof, float)).ravel()
@@ -188,18 +249,7 @@ def estimate_moduli(
         raise ConfigError("tof_sem", S.tolist(), "standard errors >= 0 s (NaN: unknown)")
     nu_c, nu_lo, nu_hi = _nu_args(nu, k)
     ranged = nu_hi > nu_lo
-    # E at the central nu, and at the range ends (one batched inversion)
-    targets = np.concatenate([T, T[ranged], T[ranged]])
-    nus = np.concatenate([nu_c, nu_lo[ranged], nu_hi[ranged]])
-    if grid is not None and np.any(grid.group_of(nus, {}) < 0):
-        grid = None  # a range's end the grid was not computed for
-    inv = invert_batch(targets, nus, params, wall, E_range=E_range, grid=grid, **opts)
-    E = inv.E[:k]
-    nr = int(ranged.sum())
-    lnE_lo = np.full(k, np.nan)
-    lnE_hi = np.full(k, np.nan)
-    lnE_lo[ranged] = np.log(inv.E[k:k + nr])
-    lnE_hi[ranged] = np.log(inv.E[k + nr:])
+    E, lnE_lo, lnE_hi = _inverted(T, nu_c, nu_lo, nu_hi, params, wall, opts, E_range, grid)
     # one run: slope in E, and d TOF / d theta of the calibrated continuous parameters
     # (forward sensitivities where the wall has them, central differences otherwise)
     names: tuple[str, ...] = ()
@@ -212,13 +262,9 @@ def estimate_moduli(
     slope = E * np.asarray(der.dtof["E"], float) / Tb
     # d ln TOF / d theta_j, (len(names), k)
     dln = np.array([np.asarray(der.dtof[n], float) / Tb for n in names]).reshape(-1, k)
-    w = build_wall(wall, params, E, nu_c, **opts)  # every sample's own law (its error)
-    # the sample's own peak indentation: beyond the law's exact range?
-    beyond = beyond_exact_reach(w, der.run.peak_wall_indentation)
-    force_error = getattr(w, "force_error", None)
-    if force_error is not None:
-        force_error = np.broadcast_to(np.asarray(force_error, float), (k,))
+    beyond, force_error = _wall_state(wall, params, E, nu_c, opts, der.run.peak_wall_indentation)
     tau, cal_notes = model_term(calibration)
+    integrator = INTEGRATOR_REL_ERROR_80 * (80.0 / float(params.steps_per_contact)) ** 2
     out = []
     for i in range(k):
         contrib: dict[str, float] = {}
@@ -229,25 +275,7 @@ def estimate_moduli(
             missing["tof"] = "the TOF's scatter is not known (too few hits to estimate it)"
         else:
             contrib["tof"] = float(S[i] / (T[i] * abs(kk)))
-        if cov is not None:
-            if calibration.at_bound:  # held parameters: fixed, not part of the covariance
-                notes.append("the calibration holds " + ", ".join(
-                    f"{n} on its {side} bound" for n, side in calibration.at_bound.items())
-                    + ": its term is conditional on that")
-            g = -dln[:, i] / kk
-            var = float(g @ cov @ g)
-            if not var > 0:
-                raise ConfigError("calibration covariance", var,
-                                  "a positive variance g^T C g of ln E (the covariance is not "
-                                  "positive definite: recalibrate)")
-            contrib["calibration"] = float(np.sqrt(var))
-        elif calibration is not None:
-            missing["calibration"] = (
-                "the calibration has no covariance (its references do not identify every "
-                "parameter, or as many parameters as references without TOF uncertainties)")
-        else:
-            missing["calibration"] = ("uncalibrated device: the uncertainty of its "
-                                      "parameters is not known")
+        _calibration_term(calibration, cov, -dln[:, i] / kk, contrib, notes, missing)
         if tau is not None:  # the references reject the model: its error, the sample's
             contrib[MODEL_TERM] = float(tau / abs(kk))
         if ranged[i]:
@@ -260,8 +288,7 @@ def estimate_moduli(
             contrib["wall"] = float(force_error[i])
         else:
             missing["wall"] = f"the {wall} wall states no force error"
-        steps = float(params.steps_per_contact)
-        contrib["integrator"] = float(INTEGRATOR_REL_ERROR_80 * (80.0 / steps) ** 2 / abs(kk))
+        contrib["integrator"] = float(integrator / abs(kk))
         u = float(np.sqrt(sum(v**2 for v in contrib.values())))
         out.append(ModulusEstimate(
             E=float(E[i]), E_low=float(E[i] * np.exp(-COVERAGE_Z * u)),
@@ -339,7 +366,8 @@ class Estimator:
     carries one, Poisson's ratio, wall law, integrator) come
     from one full :func:`estimate_moduli` at the first estimate's TOF and are kept (they
     change slowly with E); the TOF's own contribution is recomputed at every call, with the
-    grid's interpolated slope ``d ln E / d TOF``.
+    slope ``d ln E / d TOF`` of the inversion's own interpolant on the grid (the derivative
+    of :meth:`ssw.tof.inverse.ForwardGrid.interpolant`).
 
     Parameters
     ----------
@@ -367,8 +395,6 @@ class Estimator:
     def __init__(self, params: Any, wall: str, wall_options: dict[str, Any] | None,
                  nu: Any, *, calibration: Any = None, E_range: tuple[float, float] = E_RANGE,
                  extra: dict[str, float] | None = None) -> None:
-        from scipy.interpolate import PchipInterpolator
-
         from ssw.errors import SolverError
         from ssw.tof.inverse import forward_grid, grid_fault
 
@@ -381,7 +407,8 @@ class Estimator:
         fault = grid_fault(E, T, self.nu_c)
         if fault:
             raise SolverError(fault)
-        self._slope = PchipInterpolator(T[::-1], np.log(E[::-1])).derivative()
+        # d ln E / d TOF: the inversion's own interpolant's derivative
+        self._slope = self.grid.interpolant(0).derivative()
         self.tof_range = (float(T[-1]), float(T[0]))
         self._fixed: dict[str, float] | None = None
 

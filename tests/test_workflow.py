@@ -352,7 +352,7 @@ def test_spawned_jobs_name_the_interpreter_quoted(monkeypatch):
 
     from snakemake.executors.local import Executor
 
-    from ssw.workflow import _SPAWNING_EXECUTORS, quote_job_python
+    from ssw.workflow.run import _SPAWNING_EXECUTORS, quote_job_python
 
     for module, name in _SPAWNING_EXECUTORS:  # put back as they were after the test
         cls = getattr(sys.modules.get(module), name, None)

@@ -15,6 +15,10 @@ Checks (warnings, so that ``sphinx-build -W`` fails): a schema key without a des
 command or flag without help, a module of ``ssw`` that no ``ssw-api`` directive documents,
 and a numpydoc ``Parameters``/``Other Parameters`` entry that packs several names on one
 line (``a, b : float``; the house rule is one parameter per entry).
+
+A reference to an object of ``ssw`` by a name it is imported under (a package's re-export,
+``ssw.validity.RULES``; a bare name a module imports) resolves to where the object is
+documented (:func:`defining_target`).
 """
 
 from __future__ import annotations
@@ -422,6 +426,88 @@ def _merge(app: Sphinx, env: Any, docnames: Any, other: Any) -> None:
         env.domaindata.setdefault(key, {}).update(other.domaindata.get(key, {}))
 
 
+# ------------------------------------------------------------------ re-exported names
+
+
+def _documented_in(module: Any, name: str) -> str | None:
+    """The module (``module`` or one of its package's modules) whose source documents the
+    data ``name`` (a ``#:`` comment), or None."""
+    from sphinx.pycode import ModuleAnalyzer, PycodeError
+
+    names = [module.__name__]
+    if hasattr(module, "__path__"):
+        names += api_modules(module.__name__)[1:]
+    for m in names:
+        try:
+            docs = ModuleAnalyzer.for_module(m).find_attr_docs()
+        except PycodeError:
+            continue
+        if ("", name) in docs and getattr(importlib.import_module(m), name, None) is \
+                getattr(module, name, None):
+            return m
+    return None
+
+
+def defining_target(target: str, context: str | None = None) -> str | None:
+    """Where an object of ``ssw`` that a reference names through an import is documented:
+    its defining module's dotted name (``ssw.validity.RULES``, re-exported by its package,
+    is ``ssw.validity.checks.RULES``; a bare ``Validity`` referenced from a module that
+    imports it is ``ssw.validity.checks.Validity``), or None.
+
+    Parameters
+    ----------
+    target : str
+        The reference's target.
+    context : str or None
+        The module the reference is written in (a bare name is looked up there).
+
+    Returns
+    -------
+    str or None
+        The dotted name of the definition (an attribute's path kept), or None when the
+        target names no imported object of ``ssw``.
+    """
+    path = target if target.startswith("ssw.") or not context else f"{context}.{target}"
+    parts = path.split(".")
+    for i in range(len(parts) - 1, 0, -1):
+        try:
+            module = importlib.import_module(".".join(parts[:i]))
+        except ImportError:
+            continue
+        obj = getattr(module, parts[i], None)
+        if obj is None:
+            return None
+        home = getattr(obj, "__module__", None) if callable(obj) else None
+        if callable(obj) and home and home.startswith("ssw."):
+            where = f"{home}.{getattr(obj, '__qualname__', parts[i])}"
+        else:
+            found = _documented_in(module, parts[i])
+            if found is None:
+                return None
+            where = f"{found}.{parts[i]}"
+        return ".".join([where, *parts[i + 1:]])
+    return None
+
+
+def _resolve_reexport(app: Sphinx, env: Any, node: Any, contnode: Any) -> Any:
+    """A Python reference Sphinx could not resolve, to where its object is documented
+    (:func:`defining_target`), or None (the reference stays missing)."""
+    if node.get("refdomain") != "py" or node.get("reftype") == "mod":
+        return None
+    target = node.get("reftarget", "")
+    context = node.get("py:module")
+    if not (target.startswith("ssw.") or (context or "").startswith("ssw.")):
+        return None
+    try:
+        where = defining_target(target, context)
+    except Exception:  # an import the build cannot make: the reference stays missing
+        return None
+    if where is None or where == target:
+        return None
+    return env.get_domain("py").resolve_xref(env, node["refdoc"], app.builder,
+                                             node["reftype"], where, node, contnode)
+
+
 # ------------------------------------------------------------------ docstrings
 
 
@@ -458,6 +544,7 @@ def setup(app: Sphinx) -> dict[str, Any]:
     app.connect("env-get-outdated", _outdated)
     app.connect("env-purge-doc", _purge)
     app.connect("env-merge-info", _merge)
+    app.connect("missing-reference", _resolve_reexport)
     # numpydoc rewrites the docstring at priority 500: check it before.
     app.connect("autodoc-process-docstring", _check_one_parameter_per_entry, priority=400)
     return {"version": "1", "parallel_read_safe": True, "parallel_write_safe": True,

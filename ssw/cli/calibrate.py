@@ -74,6 +74,37 @@ def _ranges(items: list[str] | None) -> dict[str, tuple[float, float]]:
     return out
 
 
+def _references(args: argparse.Namespace, ctx: Any) -> list[Any]:
+    """The references of ``ssw calibrate``: ``--reference E,nu,TOF[,STD]`` (SI units), each
+    ``--reference-recording FILE,E,nu`` (its TOF picked from the recording) and, with
+    ``--from-config``, the config's validation samples; ConfigError when malformed or none.
+    """
+    from ssw.calibration import parse_reference
+    from ssw.calibration.references import from_config, recording_reference
+
+    refs = [parse_reference(t, i) for i, t in enumerate(args.reference or [])]
+    for j, t in enumerate(args.reference_recording or []):
+        parts = t.split(",")
+        if len(parts) != 3:
+            raise ConfigError(f"--reference-recording[{j}]", t, "FILE,E,nu")
+        try:
+            E, nu = float(parts[1]), float(parts[2])
+        except ValueError as exc:
+            raise ConfigError(f"--reference-recording[{j}]", t, "FILE,E,nu") from exc
+        refs.append(recording_reference(parts[0], E, nu, tof_options=_tof_options(ctx.params),
+                                        full_scale=ctx.device.full_scale_force))
+    if args.from_config:
+        val = ctx.cfg.get("validation", {})
+        refs += from_config(ctx.cfg, ctx.params, ctx.wall, ctx.wall_options, root=args.root,
+                            tof_options=_tof_options(ctx.params, val.get("lowpass"),
+                                                     val.get("min_hits", 3)),
+                            full_scale=ctx.device.full_scale_force)
+    if not refs:
+        raise ConfigError("--reference", None, "references: --reference E,nu,TOF[,STD], "
+                          "--reference-recording FILE,E,nu or --from-config")
+    return refs
+
+
 def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
     """``ssw calibrate``: device parameters identified from measured TOFs on references (the bounded
     Levenberg-Marquardt of :mod:`ssw.calibration`).
@@ -96,8 +127,7 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
         On flags that do not go together or a malformed ``--reference`` or
         ``--reference-recording``.
     """
-    from ssw.calibration import calibrate, parse_reference, write_calibration
-    from ssw.calibration.references import from_config, recording_reference
+    from ssw.calibration import calibrate, write_calibration
     from ssw.chain.params import numerics_of
 
     if args.calibration not in ("auto", "none"):
@@ -110,27 +140,8 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
     ctx = chain_context(args)
     if ctx.wall == "table":
         raise ConfigError("--law", "table", "fem | hertz | fit | rigid (a law at any E)")
-    refs = [parse_reference(t, i) for i, t in enumerate(args.reference or [])]
-    for j, t in enumerate(args.reference_recording or []):
-        parts = t.split(",")
-        if len(parts) != 3:
-            raise ConfigError(f"--reference-recording[{j}]", t, "FILE,E,nu")
-        try:
-            E, nu = float(parts[1]), float(parts[2])
-        except ValueError as exc:
-            raise ConfigError(f"--reference-recording[{j}]", t, "FILE,E,nu") from exc
-        refs.append(recording_reference(parts[0], E, nu, tof_options=_tof_options(ctx.params),
-                                        full_scale=ctx.device.full_scale_force))
+    refs = _references(args, ctx)
     cal_cfg = ctx.cfg.get("calibration", {})
-    if args.from_config:
-        val = ctx.cfg.get("validation", {})
-        refs += from_config(ctx.cfg, ctx.params, ctx.wall, ctx.wall_options, root=args.root,
-                            tof_options=_tof_options(ctx.params, val.get("lowpass"),
-                                                     val.get("min_hits", 3)),
-                            full_scale=ctx.device.full_scale_force)
-    if not refs:
-        raise ConfigError("--reference", None, "references: --reference E,nu,TOF[,STD], "
-                          "--reference-recording FILE,E,nu or --from-config")
     wall, wall_options = ctx.wall, ctx.wall_options
     if args.soil_model is not None:
         wall, wall_options = "plastic", _plastic_options(args, ctx, refs)
@@ -163,6 +174,13 @@ def run_calibrate(args: argparse.Namespace) -> dict[str, Any]:
         cal = _with_information(args, ctx, cal)
     if args.output:
         write_calibration(args.output, cal)
+    return _result(args, ctx, cal)
+
+
+def _result(args: argparse.Namespace, ctx: Any, cal: Any) -> dict[str, Any]:
+    """``ssw calibrate``'s result: the command's inputs, the calibration ``cal``'s
+    parameters (SI units) with their uncertainties, residuals, leave-one-out and
+    alternatives, the file written (``output``) and the cost (wall time, s; runs)."""
     out = {
         **ctx.inputs(),
         "parameters": cal.parameters, "parameter_std": cal.parameter_std,

@@ -33,16 +33,8 @@ def _config_arg(p: argparse.ArgumentParser) -> None:
                    help="study config YAML (default: ./config/config.yaml, else ssw's defaults)")
 
 
-def register(sub: argparse._SubParsersAction) -> None:
-    """Add the ``ssw fit``, ``ssw fit-table``, ``ssw fit-deviation``, ``ssw fit-tof-impact``, ``ssw
-    fit-calibrate-soil``, ``ssw fit-thesis-statements``, ``ssw fit-range``, ``ssw fit-set``,
-    ``ssw fit-plot`` subcommands to the command line.
-
-    Parameters
-    ----------
-    sub : argparse._SubParsersAction
-        The subcommands of the ``ssw`` parser.
-    """
+def _add_fit(sub: argparse._SubParsersAction) -> None:
+    """Add ``ssw fit``: one law fitted to one contact curve."""
     p = sub.add_parser(
         "fit",
         help="fit a modified-Hertz law to one contact curve",
@@ -59,6 +51,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_json_flag(p)
     p.set_defaults(func=run_fit, human=_human_fit)
 
+
+def _add_table(sub: argparse._SubParsersAction) -> None:
+    """Add ``ssw fit-table``: every curve fitted, the K(E, nu) tables."""
     t = sub.add_parser(
         "fit-table",
         help="fit contact curves and aggregate K(E, nu) tables (HDF5 + CSV)",
@@ -72,6 +67,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_json_flag(t)
     t.set_defaults(func=run_table)
 
+
+def _add_deviation(sub: argparse._SubParsersAction) -> None:
+    """Add ``ssw fit-deviation``: deviation from Hertz next to the thesis's values."""
     d = sub.add_parser(
         "fit-deviation",
         help="deviation from Hertz at the reference indentation, next to the thesis's values",
@@ -85,6 +83,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_json_flag(d)
     d.set_defaults(func=run_deviation)
 
+
+def _add_tof_impact(sub: argparse._SubParsersAction) -> None:
+    """Add ``ssw fit-tof-impact``: the TOF error a fit's error costs."""
     i = sub.add_parser(
         "fit-tof-impact",
         help="TOF with the FEM curve itself vs the K and power fits (what fit error costs)",
@@ -97,6 +98,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_json_flag(i)
     i.set_defaults(func=run_tof_impact)
 
+
+def _add_calibrate_soil(sub: argparse._SubParsersAction) -> None:
+    """Add ``ssw fit-calibrate-soil``: the soil E at which a plate's deviation reaches a target."""
     c = sub.add_parser(
         "fit-calibrate-soil",
         help="soil E at which a plate's deviation from Hertz equals a target (FEM solves)",
@@ -114,6 +118,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_json_flag(c)
     c.set_defaults(func=run_calibrate)
 
+
+def _add_statements(sub: argparse._SubParsersAction) -> None:
+    """Add ``ssw fit-thesis-statements``: the thesis's Set 1/2 deviations, ours and theirs."""
     st = sub.add_parser(
         "fit-thesis-statements",
         help="the thesis's Set 1/2 deviations from Hertz, ours (both material sets) and theirs",
@@ -126,6 +133,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_json_flag(st)
     st.set_defaults(func=run_statements)
 
+
+def _add_range(sub: argparse._SubParsersAction) -> None:
+    """Add ``ssw fit-range``: the indentation range a scene's default fit needs."""
     g = sub.add_parser(
         "fit-range",
         help="the indentation range a scene's default fit needs (m)",
@@ -139,6 +149,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_json_flag(g)
     g.set_defaults(func=run_range)
 
+
+def _add_set(sub: argparse._SubParsersAction) -> None:
+    """Add ``ssw fit-set``: every fit output of one set (the workflow's fit job)."""
     fs = sub.add_parser(
         "fit-set", help="every fit output of one set of the config (the workflow's fit job)",
         description="Table, deviation, figures and TOF cost of one set's curves, in one "
@@ -159,6 +172,9 @@ def register(sub: argparse._SubParsersAction) -> None:
     add_json_flag(fs)
     fs.set_defaults(func=run_set)
 
+
+def _add_plot(sub: argparse._SubParsersAction) -> None:
+    """Add ``ssw fit-plot``: the fits' figures."""
     f = sub.add_parser("fit-plot", help="figures of the fits (thesis Figs 5-7 analogues)")
     f.add_argument("kind", choices=["deviation", "curves", "k"],
                    help="the figure: deviation from Hertz (Figs 5, 6), fitted curves, or "
@@ -169,6 +185,27 @@ def register(sub: argparse._SubParsersAction) -> None:
     _config_arg(f)
     add_json_flag(f)
     f.set_defaults(func=run_plot)
+
+
+def register(sub: argparse._SubParsersAction) -> None:
+    """Add the ``ssw fit``, ``ssw fit-table``, ``ssw fit-deviation``, ``ssw fit-tof-impact``, ``ssw
+    fit-calibrate-soil``, ``ssw fit-thesis-statements``, ``ssw fit-range``, ``ssw fit-set``,
+    ``ssw fit-plot`` subcommands to the command line.
+
+    Parameters
+    ----------
+    sub : argparse._SubParsersAction
+        The subcommands of the ``ssw`` parser.
+    """
+    _add_fit(sub)
+    _add_table(sub)
+    _add_deviation(sub)
+    _add_tof_impact(sub)
+    _add_calibrate_soil(sub)
+    _add_statements(sub)
+    _add_range(sub)
+    _add_set(sub)
+    _add_plot(sub)
 
 
 def _cfg_with(args: argparse.Namespace) -> dict[str, Any]:
@@ -494,18 +531,7 @@ def run_set(args: argparse.Namespace) -> dict[str, Any]:
         written.append(str(path))
 
     tables, records = table_from_files(args.curves, cfg, curves=curves)
-    short = [(p, r["range"]) for p, r in zip(args.curves, records, strict=True)
-             if r["range"]["clipped"]]
-    if short:
-        from ssw.errors import ConfigError
-
-        p, rng = short[0]
-        raise ConfigError(
-            "contact.reach_energy", cfg["contact"].get("reach_energy"),
-            f"curves that reach the fit range: {len(short)} of {len(records)} stop short of "
-            f"what the chain needs (e.g. {p}: ends at {rng['hi']:.4g} m, the chain presses "
-            f"{rng['needed']:.4g} m); raise contact.reach_energy (delta_mode energy) or "
-            "contact.delta_max (fixed)")
+    _require_fit_range(args.curves, records, cfg)
     write_tables(tables, tdir / "k_table.h5", tdir / "k_table.csv", {
         "curves": list(args.curves), "fit": cfg["fit"], "laws": config_laws(cfg),
         "ranges": [r["range"] for r in records]})
@@ -537,14 +563,38 @@ def run_set(args: argparse.Namespace) -> dict[str, Any]:
         figures.PLOTS[kind_](inputs, str(out / "figures" / name), cfg, args.set)
         written.append(str(out / "figures" / name))
     if getattr(args, "contact_figure", None):
-        from ssw.contact.figures import plot_curves
-
-        label_by = args.label_by or ("material" if kind == "materials" else "thickness")
-        title = args.title if args.title is not None else (
-            f"{args.set}: plate {'materials' if kind == 'materials' else 'thickness'}")
-        plot_curves(curves, args.contact_figure, label_by=label_by, title=title)
-        written.append(args.contact_figure)
+        written.append(_contact_figure(args, curves, kind))
     return {"set": args.set, "outputs": written}
+
+
+def _require_fit_range(paths: list[str], records: list[dict[str, Any]],
+                       cfg: dict[str, Any]) -> None:
+    """ConfigError naming the curves (of ``paths``, their fit ``records``) that stop short
+    of the indentation (m) the chain needs, and the flag that lengthens them."""
+    short = [(p, r["range"]) for p, r in zip(paths, records, strict=True)
+             if r["range"]["clipped"]]
+    if short:
+        from ssw.errors import ConfigError
+
+        p, rng = short[0]
+        raise ConfigError(
+            "contact.reach_energy", cfg["contact"].get("reach_energy"),
+            f"curves that reach the fit range: {len(short)} of {len(records)} stop short of "
+            f"what the chain needs (e.g. {p}: ends at {rng['hi']:.4g} m, the chain presses "
+            f"{rng['needed']:.4g} m); raise contact.reach_energy (delta_mode energy) or "
+            "contact.delta_max (fixed)")
+
+
+def _contact_figure(args: argparse.Namespace, curves: list[Any], kind: str) -> str:
+    """Draw ``ssw fit-set --contact-figure``: the set's curves with Hertz, labelled by what
+    the set varies (``kind``) unless ``--label-by`` says; returns the PNG's path."""
+    from ssw.contact.figures import plot_curves
+
+    label_by = args.label_by or ("material" if kind == "materials" else "thickness")
+    title = args.title if args.title is not None else (
+        f"{args.set}: plate {'materials' if kind == 'materials' else 'thickness'}")
+    plot_curves(curves, args.contact_figure, label_by=label_by, title=title)
+    return str(args.contact_figure)
 
 
 def set_curve_files(cfg: dict[str, Any], set_name: str, paths: list[str]) -> list[str]:

@@ -115,6 +115,30 @@ class ForwardGrid:
         keys = np.column_stack([nu, *(vary[n] for n in sorted(vary))]).tolist()
         return np.array([rows.get(tuple(k), -1) for k in keys], dtype=np.int64)
 
+    def interpolant(self, g: int) -> Any:
+        """``ln E`` against TOF of group ``g``: the monotone cubic the inversion reads (PCHIP,
+        Fritsch & Carlson 1980); its derivative is ``d ln E / d TOF`` (1/s), the slope of
+        the secant steps and of a TOF's term in ``ln E`` (:class:`ssw.modulus.Estimator`).
+
+        Parameters
+        ----------
+        g : int
+            The group's row; its TOFs must pass :func:`grid_fault`.
+
+        Returns
+        -------
+        scipy.interpolate.PchipInterpolator
+            ``ln E`` (E in Pa) of a TOF (s), on the group's TOFs in increasing order.
+
+        References
+        ----------
+        Fritsch, F. N. and Carlson, R. E. (1980). Monotone piecewise cubic interpolation.
+        SIAM J. Numer. Anal. 17, 238-246.
+        """
+        from scipy.interpolate import PchipInterpolator
+
+        return PchipInterpolator(self.T[g, ::-1], np.log(self.E[::-1]))
+
 
 def forward_grid(
     soil_nu: Any, params: ChainParams, wall: str, *, vary: dict[str, Any] | None = None,
@@ -295,8 +319,6 @@ def invert_batch(
     ConfigError
         A TOF <= 0, a bad ``E_range``, or a ``grid`` without a target's group.
     """
-    from scipy.interpolate import PchipInterpolator
-
     T = np.atleast_1d(np.asarray(tof, float)).ravel()
     k = T.size
     nu = np.broadcast_to(np.asarray(soil_nu, float), (k,)).ravel()
@@ -328,7 +350,7 @@ def invert_batch(
                 reason[i] = msg
             splines.append(None)
             continue
-        sp = PchipInterpolator(T_g[g, ::-1], np.log(E_g[::-1]))
+        sp = grid.interpolant(g)
         splines.append(sp)
         for i in members:
             if not lo_T[g] <= T[i] <= hi_T[g]:

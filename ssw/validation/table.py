@@ -276,10 +276,7 @@ def validate_samples(
     """
     from ssw.calibration.references import from_config
     from ssw.config import library
-    from ssw.daq.importers import read_any
     from ssw.modulus import estimate_moduli
-    from ssw.signal.tof import recording_tof
-    from ssw.tof.inverse import invert_batch
     from ssw.tof.sweep import run_sweep
 
     samples = cfg.get("validation", {}).get("samples", [])
@@ -301,22 +298,7 @@ def validate_samples(
     refs = {r.id: r for r in from_config(cfg, params, wall, wall_options, root=root,
                                          tof_options=tof_options, require_std=False,
                                          full_scale=full_scale)}
-    extras: list[dict[str, Any]] = []
-    for smp in samples:
-        extra: dict[str, Any] = {}
-        if smp.get("recordings"):
-            p = Path(smp["recordings"])
-            p = p if p.is_absolute() else Path(root) / p
-            rec = read_any(p, clipped="drop", full_scale=full_scale)
-            res = recording_tof(rec, tof_options)
-            t_hits = res.tof[res.accepted]
-            extra = dict(n_hits=int(res.tof.size), n_accepted=res.n_accepted,
-                         recording=str(smp["recordings"]),
-                         synthetic=bool(rec.meta.get("synthetic", False)),
-                         tof_per_hit=t_hits.tolist(),
-                         rejections=list(res.reasons) + list(rec.dropped),
-                         tof_measured_std=res.std)
-        extras.append(extra)
+    extras = [_recording_extra(smp, root, tof_options, full_scale) for smp in samples]
     T = np.array([refs[s["id"]].tof for s in samples])
     # an unknown TOF uncertainty is NaN: the interval then lists its tof term as missing
     S = np.array([np.nan if refs[s["id"]].tof_std is None else refs[s["id"]].tof_std
@@ -325,47 +307,86 @@ def validate_samples(
                        for i, s in enumerate(samples)], float)
     est = estimate_moduli(T, S, nu_arg, params, wall, wall_options, calibration=calibration,
                           E_range=E_range)
-    # per-hit moduli (Table 3's COV) in one batched inversion
-    hit_T = [np.asarray(x.get("tof_per_hit", []), float) for x in extras]
-    if any(h.size for h in hit_T):
-        allT = np.concatenate(hit_T)
-        allnu = np.concatenate([np.full(h.size, est[i].nu) for i, h in enumerate(hit_T)])
-        inv = invert_batch(allT, allnu, params, wall, E_range=E_range, strict=False,
-                           **wall_options)
-        k = 0
-        for i, h in enumerate(hit_T):
-            extras[i]["E_per_hit"] = inv.E[k:k + h.size].tolist()
-            k += h.size
+    _per_hit_moduli(extras, [e.nu for e in est], params, wall, E_range, wall_options)
     loo = {row["id"]: row for row in (calibration.loo if calibration is not None else [])}
-    rows = []
-    for i, smp in enumerate(samples):
-        e = est[i]
-        extra = extras[i]
-        E_hits = np.asarray(extra.get("E_per_hit", []), float)
-        E_hits = E_hits[np.isfinite(E_hits)]
-        source = "recording" if smp.get("recordings") else "published"
-        std = extra.pop("tof_measured_std", None)
-        lo = loo.get(smp["id"], {}).get("E_predicted")
-        rows.append(SampleResult(
-            sample=smp["id"], material=smp["material"], E_manufacturer=float(E_man[i]),
-            nu=e.nu, tof_sim=float(tof_sim[i]), tof_measured=float(T[i]),
-            tof_measured_std=std, tof_source=source,
-            tof_diff_pct=abs(pct(T[i], tof_sim[i])), tof_diff_signed_pct=pct(T[i], tof_sim[i]),
-            E_measured=e.E, E_cov_pct=cov_pct(E_hits) if E_hits.size else None,
-            E_diff_pct=abs(pct(e.E, E_man[i])), E_low=e.E_low, E_high=e.E_high,
-            E_u_pct=100.0 * e.u,
-            E_contributions_pct={k_: 100.0 * v for k_, v in e.contributions.items()},
-            E_notes=list(e.notes), E_missing_terms=dict(e.missing), E_loo=lo,
-            E_loo_diff_pct=None if lo is None else pct(lo, E_man[i]),
-            tof_sem=None if np.isnan(S[i]) else float(S[i]),
-            tof_published=smp.get("tof_published"),
-            tof_sim_published=smp.get("tof_sim_published"),
-            E_published=smp.get("E_published"), E_cov_published=smp.get("E_cov_published"),
-            validity=[] if checks is None else checks.entries(i),
-            checks_failed=[] if checks is None else checks.failed(i),
-            **extra,
-        ))
-    return rows
+    return [_row(smp, est[i], extras[i], float(E_man[i]), float(tof_sim[i]), float(T[i]),
+                 float(S[i]), loo.get(smp["id"], {}).get("E_predicted"),
+                 None if checks is None else (checks.entries(i), checks.failed(i)))
+            for i, smp in enumerate(samples)]
+
+
+def _recording_extra(smp: dict[str, Any], root: str | Path, tof_options: Any,
+                     full_scale: float | None) -> dict[str, Any]:
+    """A sample's columns from its recording (none without one): its hits, the accepted
+    hits' TOFs (s), the rejections and the TOF's standard deviation (s) (``tof_measured_std``,
+    taken out again by :func:`_row`)."""
+    from ssw.daq.importers import read_any
+    from ssw.signal.tof import recording_tof
+
+    if not smp.get("recordings"):
+        return {}
+    p = Path(smp["recordings"])
+    p = p if p.is_absolute() else Path(root) / p
+    rec = read_any(p, clipped="drop", full_scale=full_scale)
+    res = recording_tof(rec, tof_options)
+    t_hits = res.tof[res.accepted]
+    return dict(n_hits=int(res.tof.size), n_accepted=res.n_accepted,
+                recording=str(smp["recordings"]),
+                synthetic=bool(rec.meta.get("synthetic", False)),
+                tof_per_hit=t_hits.tolist(),
+                rejections=list(res.reasons) + list(rec.dropped),
+                tof_measured_std=res.std)
+
+
+def _per_hit_moduli(extras: list[dict[str, Any]], nus: list[float], params: Any, wall: str,
+                    E_range: tuple[float, float], wall_options: dict[str, Any]) -> None:
+    """Each recorded hit's E (Pa; Table 3's COV) into ``extras`` (``E_per_hit``), every hit
+    of every sample in one batched inversion at its sample's Poisson's ratio ``nus``."""
+    from ssw.tof.inverse import invert_batch
+
+    hit_T = [np.asarray(x.get("tof_per_hit", []), float) for x in extras]
+    if not any(h.size for h in hit_T):
+        return
+    allT = np.concatenate(hit_T)
+    allnu = np.concatenate([np.full(h.size, nus[i]) for i, h in enumerate(hit_T)])
+    inv = invert_batch(allT, allnu, params, wall, E_range=E_range, strict=False,
+                       **wall_options)
+    k = 0
+    for i, h in enumerate(hit_T):
+        extras[i]["E_per_hit"] = inv.E[k:k + h.size].tolist()
+        k += h.size
+
+
+def _row(smp: dict[str, Any], e: Any, extra: dict[str, Any], E_man: float, tof_sim: float,
+         T: float, S: float, lo: float | None,
+         checks: tuple[list[dict[str, Any]], list[str]] | None) -> SampleResult:
+    """One sample's row from its estimate ``e`` (:class:`ssw.modulus.ModulusEstimate`), its
+    recording's columns ``extra``, its manufacturer's E (Pa), simulated and measured TOF and
+    the TOF's standard error (s; NaN: unknown), its leave-one-out E (Pa) and its checks
+    (entries, failing names)."""
+    E_hits = np.asarray(extra.get("E_per_hit", []), float)
+    E_hits = E_hits[np.isfinite(E_hits)]
+    source = "recording" if smp.get("recordings") else "published"
+    std = extra.pop("tof_measured_std", None)
+    return SampleResult(
+        sample=smp["id"], material=smp["material"], E_manufacturer=E_man,
+        nu=e.nu, tof_sim=tof_sim, tof_measured=T,
+        tof_measured_std=std, tof_source=source,
+        tof_diff_pct=abs(pct(T, tof_sim)), tof_diff_signed_pct=pct(T, tof_sim),
+        E_measured=e.E, E_cov_pct=cov_pct(E_hits) if E_hits.size else None,
+        E_diff_pct=abs(pct(e.E, E_man)), E_low=e.E_low, E_high=e.E_high,
+        E_u_pct=100.0 * e.u,
+        E_contributions_pct={k_: 100.0 * v for k_, v in e.contributions.items()},
+        E_notes=list(e.notes), E_missing_terms=dict(e.missing), E_loo=lo,
+        E_loo_diff_pct=None if lo is None else pct(lo, E_man),
+        tof_sem=None if np.isnan(S) else S,
+        tof_published=smp.get("tof_published"),
+        tof_sim_published=smp.get("tof_sim_published"),
+        E_published=smp.get("E_published"), E_cov_published=smp.get("E_cov_published"),
+        validity=[] if checks is None else checks[0],
+        checks_failed=[] if checks is None else checks[1],
+        **extra,
+    )
 
 
 def sample_strengths(samples: list[dict[str, Any]], mats: dict[str, Any],

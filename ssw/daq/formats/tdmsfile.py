@@ -138,6 +138,37 @@ def read(path: str | Path, *, units: str | None = None, sensitivity: float | Non
     if not data:
         raise RecordingError(f"{p}: no data channel (groups {[g.name for g in tf.groups()]}); "
                              "a force (N) or voltage (V) channel expected")
+    forces, rates, offsets = _channel_forces(data, times, p, units, sensitivity, sample_rate)
+    if len({round(r, 6) for r in rates}) != 1:
+        raise RecordingError(f"{p}: channels sampled at different rates {sorted(set(rates))} "
+                             "S/s; one rate expected")
+    rate = rates[0]
+    if split is None:
+        rule = trigger or _default_rule(dict(tf.properties))
+        split = len(forces) == 1 and forces[0].size > rule.record_samples
+    if split:
+        if len(forces) != 1:
+            raise ConfigError("split", True, f"a file with one data channel ({p} has "
+                              f"{len(forces)})")
+        return _split_stream(p, forces[0], data[0][0], data[0][1].name,
+                             trigger or _default_rule(dict(tf.properties)), rate, clipped,
+                             full_scale)
+    n = forces[0].size
+    t = (np.arange(n) / rate + offsets[0]) if offsets[0] < 0 else None
+    if len(set(offsets)) != 1:
+        raise RecordingError(f"{p}: channels start at different wf_start_offset "
+                             f"{sorted(set(offsets))} s; one trigger position expected")
+    return make_recording(p, forces, rate, pretrigger(t, n),
+                          {"format": "tdms", "layout": "one channel per hit"}, clipped,
+                          full_scale, [ch.name for _, ch, _ in data])
+
+
+def _channel_forces(data: list, times: list, p: str, units: str | None,
+                    sensitivity: float | None, sample_rate: float | None
+                    ) -> tuple[list[np.ndarray], list[float], list[float]]:
+    """Each data channel (``(group, channel, properties)``) as force (N), its sample rate
+    (S/s) and its ``wf_start_offset`` (s); RecordingError on a unit missing or contradicted
+    by ``units`` (V divided by ``sensitivity``, V/N)."""
     forces, rates, offsets = [], [], []
     for gname, ch, props in data:
         where = f"{p}: channel {gname}/{ch.name}"
@@ -152,38 +183,25 @@ def read(path: str | Path, *, units: str | None = None, sensitivity: float | Non
                                  sensitivity, where))
         rates.append(_rate(props, gname, times, sample_rate, p, where))
         offsets.append(float(props.get("wf_start_offset", 0.0)))
-    if len({round(r, 6) for r in rates}) != 1:
-        raise RecordingError(f"{p}: channels sampled at different rates {sorted(set(rates))} "
-                             "S/s; one rate expected")
-    rate = rates[0]
-    if split is None:
-        rule = trigger or _default_rule(dict(tf.properties))
-        split = len(forces) == 1 and forces[0].size > rule.record_samples
-    if split:
-        if len(forces) != 1:
-            raise ConfigError("split", True, f"a file with one data channel ({p} has "
-                              f"{len(forces)})")
-        rule = trigger or _default_rule(dict(tf.properties))
-        hits = split_records(forces[0], rule)
-        if not hits:
-            raise RecordingError(
-                f"{p}: channel {data[0][0]}/{data[0][1].name}: no hit: the signal (peak "
-                f"{np.max(np.abs(forces[0])):.4g} N) never crosses the trigger level "
-                f"{rule.level} N ({rule.slope}) with room for a {rule.record_samples}-sample "
-                "record")
-        meta = {"format": "tdms", "layout": "one long channel, split by the trigger rule",
-                "trigger_level": rule.level, "trigger_slope": rule.slope}
-        name = data[0][1].name
-        return make_recording(p, hits, rate, rule.pretrigger_samples, meta, clipped,
-                              full_scale, [f"{name} record {k + 1}" for k in range(len(hits))])
-    n = forces[0].size
-    t = (np.arange(n) / rate + offsets[0]) if offsets[0] < 0 else None
-    if len(set(offsets)) != 1:
-        raise RecordingError(f"{p}: channels start at different wf_start_offset "
-                             f"{sorted(set(offsets))} s; one trigger position expected")
-    return make_recording(p, forces, rate, pretrigger(t, n),
-                          {"format": "tdms", "layout": "one channel per hit"}, clipped,
-                          full_scale, [ch.name for _, ch, _ in data])
+    return forces, rates, offsets
+
+
+def _split_stream(p: str, force: np.ndarray, group: str, name: str, rule: TriggerRule,
+                  rate: float, clipped: str, full_scale: float | None) -> Recording:
+    """One long channel's force (N, at ``rate`` S/s; channel ``name`` of ``group``) cut into
+    hits by the trigger ``rule``
+    (:func:`ssw.daq.trigger.split_records`); RecordingError when no hit triggers."""
+    hits = split_records(force, rule)
+    if not hits:
+        raise RecordingError(
+            f"{p}: channel {group}/{name}: no hit: the signal (peak "
+            f"{np.max(np.abs(force)):.4g} N) never crosses the trigger level "
+            f"{rule.level} N ({rule.slope}) with room for a {rule.record_samples}-sample "
+            "record")
+    meta = {"format": "tdms", "layout": "one long channel, split by the trigger rule",
+            "trigger_level": rule.level, "trigger_slope": rule.slope}
+    return make_recording(p, hits, rate, rule.pretrigger_samples, meta, clipped,
+                          full_scale, [f"{name} record {k + 1}" for k in range(len(hits))])
 
 
 def _rate(props: dict[str, Any], gname: str, times: list, sample_rate: float | None,

@@ -1,7 +1,8 @@
 """Stage II: dynamics of the bead chain and the time of flight (TOF).
 
 Modules: :mod:`~ssw.chain.params` (the chain), :mod:`~ssw.chain.dissipation` (the contacts'
-dissipation laws), :mod:`~ssw.chain.wall` (last-contact laws),
+dissipation laws), :mod:`~ssw.chain.wall` (the last contact's protocol), its laws
+:mod:`~ssw.chain.wall_power`, :mod:`~ssw.chain.wall_table` and :mod:`~ssw.chain.wall_base`,
 :mod:`~ssw.chain.statics` (gravity precompression), :mod:`~ssw.chain.integrate` (batched
 velocity Verlet), :mod:`~ssw.chain.tof` (peak picking), :mod:`~ssw.chain.run` (runs of
 prebuilt walls, a truncated record refused), :mod:`~ssw.chain.baseline` (scipy DOP853

@@ -18,7 +18,7 @@ as a calibration scan tries). Beyond it the last piece continues linearly (never
 by a chain the bound holds for: tests/test_fem_wall.py).
 
 Bead compliance. The FEM's sphere is rigid; the bead's compliance is added as for the other
-FEM-based walls (:func:`ssw.chain.wall.compliance_scale`): ``F(d) = F_R(d / s)``.
+FEM-based walls (:func:`ssw.chain.wall_base.compliance_scale`): ``F(d) = F_R(d / s)``.
 
 Representation. The exact law is kept as it is: per scene its breakpoints and the
 coefficients ``F = a + b d`` of each piece, evaluated by one binary search per call over all
@@ -713,7 +713,7 @@ def peak_stresses(params: ChainParams, soil_E: Any, soil_nu: float, d_wall: Any,
     """The contact's elastic stresses at the chain's peak wall indentations ``d_wall`` (m,
     one per soil modulus ``soil_E``, Pa; one ``soil_nu``): the indentation moved into the
     rigid sphere's coordinates of the FEM (the bead's compliance out,
-    :func:`ssw.chain.wall.compliance_scale`) and the device's plate (its material,
+    :func:`ssw.chain.wall_base.compliance_scale`) and the device's plate (its material,
     thickness, diameter and interface, as :func:`fem_wall` has them) with the elastic bead
     (:func:`ssw.contact.stress.contact_stresses`; ``force``, N, the wall's force there when
     known). Returns its ``ContactStress``.

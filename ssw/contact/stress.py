@@ -5,7 +5,7 @@ stiffness condensed onto the retained dofs (the contact candidates and the plate
 interface). A state of the contact, the exact LCP solution at an indentation ``delta`` of
 the rigid sphere (:mod:`ssw.contact.parametric`), fixes the contact forces ``lam`` and with
 them the retained displacements ``u_B``: the scene's dense system ``K u = G^T lam``
-assembled as :func:`ssw.contact.operators.scene_lcp` does. Each body's interior follows
+assembled as :func:`ssw.contact.coupling.scene_lcp` does. Each body's interior follows
 from its own equilibrium with ``u_B`` imposed (static condensation read backwards,
 Przemieniecki 1963),
 
@@ -335,7 +335,7 @@ def retained_displacements(
 ) -> tuple[np.ndarray | None, np.ndarray]:
     """Retained displacements (m) of the plate (None without one) and of the soil under
     the constraint forces ``lam`` (N) of the scene's LCP: ``K u = G^T lam`` with ``K`` and
-    ``G`` assembled as :func:`ssw.contact.operators.scene_lcp` does (a sphere candidate's
+    ``G`` assembled as :func:`ssw.contact.coupling.scene_lcp` does (a sphere candidate's
     force pushes its ``u_z`` down; a pair of the unilateral interface pulls its two nodes
     together). ``lam`` (m,) gives (n_dofs,) displacements; (k, m), states of one scene,
     gives (n_dofs, k) from one factorization.

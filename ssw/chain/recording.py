@@ -1,8 +1,8 @@
 """What a chain run keeps of its scenes, step by step (:func:`ssw.chain.integrate.simulate`).
 
 :class:`Record` holds the per-step rows of the active scenes in blocks of ``check_every``
-steps and writes them, block by block, into the run's records (n_t, *shape, n), NaN where
-a scene had stopped. :class:`Recorder` fills those rows from the compiled step
+steps and writes them, block by block, into the run's records ``(n_t, *shape, n)``, NaN
+where a scene had stopped. :class:`Recorder` fills those rows from the compiled step
 (:class:`ssw.chain.kernel.Stepper`): the sensor's reading of its two contacts
 (``ChainParams.sensor_reads``), the wall's force, the sensor's sensitivities, every
 contact force and the energy record (kinetic + elastic - the work potential of gravity and
@@ -28,7 +28,7 @@ RECORD_BYTES = 2**27
 
 class Record:
     """Per-step rows of the active scenes, kept in blocks of ``check_every`` steps and
-    written, block by block, into the records (n_t, *shape, n), NaN where a scene had
+    written, block by block, into the records ``(n_t, *shape, n)``, NaN where a scene had
     stopped.
 
     The records are allocated for the run's longest possible length (up to
@@ -113,7 +113,7 @@ class Record:
         Returns
         -------
         dict
-            Each record, (n_t, *shape, n).
+            Each record, ``(n_t, *shape, n)``.
         """
         return {k: x[:n_t] for k, x in self.out.items()}
 

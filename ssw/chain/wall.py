@@ -8,10 +8,11 @@ internal state: the soil's motion, a sample's history), with :func:`force_and_ta
 (the scenes that went deeper than a law's exact part reaches).
 
 The laws made of the chain's numbers live beside it and are importable from here:
-:mod:`ssw.chain.wall_power` (``rigid``, ``hertz`` and the fitted laws, :class:`PowerWall`),
-:mod:`ssw.chain.wall_table` (a FEM curve interpolated, :class:`TableWall`) and what they
-share, :mod:`ssw.chain.wall_base` (the scenes' arrays, the bead's compliance, a monotone
-law's inverse). The laws that need the contact FEM, the fitted tables or the soil's
+:mod:`ssw.chain.wall_power` (``rigid``, ``hertz`` and the fitted laws,
+:class:`~ssw.chain.wall_power.PowerWall`), :mod:`ssw.chain.wall_table` (a FEM curve
+interpolated, :class:`~ssw.chain.wall_table.TableWall`) and what they share,
+:mod:`ssw.chain.wall_base` (the scenes' arrays, the bead's compliance, a monotone law's
+inverse). The laws that need the contact FEM, the fitted tables or the soil's
 dynamics, and the registry of every law by name, live above the chain in :mod:`ssw.walls`.
 """
 

@@ -355,13 +355,12 @@ def invert_batch(
 
 def _interpolated(T: np.ndarray, grid: ForwardGrid, gidx: np.ndarray, strict: bool,
                   reason: list[str]) -> tuple[np.ndarray, list[Any]]:
-    """``ln E`` of each target from its group's forward grid: PCHIP in ``ln E`` against TOF
-    (:func:`invert_batch`). ``T`` (k,) the TOFs (s), ``gidx`` (k,) each target's group in
-    ``grid``; a group whose TOF(E) is not invertible (:func:`grid_fault`) or a TOF outside
-    its range raises (``strict``) or leaves NaN and its reason in ``reason`` (in place).
-    Returns ``ln E`` (k,) and each group's interpolant (None where not invertible)."""
-    from scipy.interpolate import PchipInterpolator
-
+    """``ln E`` of each target from its group's forward grid: its interpolant in ``ln E``
+    against TOF (:meth:`ForwardGrid.interpolant`, for :func:`invert_batch`). ``T`` (k,) the
+    TOFs (s), ``gidx`` (k,) each target's group in ``grid``; a group whose TOF(E) is not
+    invertible (:func:`grid_fault`) or a TOF outside its range raises (``strict``) or leaves
+    NaN and its reason in ``reason`` (in place). Returns ``ln E`` (k,) and each group's
+    interpolant (None where not invertible)."""
     E_g, T_g = grid.E, grid.T
     logE = np.full(T.size, np.nan)
     lo_T, hi_T = T_g[:, -1], T_g[:, 0]

@@ -171,16 +171,7 @@ def find_root(
 
     f_lo, f_hi = full(lo), full(hi)
     if grow:
-        for _ in range(MAX_GROWTH):
-            short = f_hi < 0
-            if not short.any():
-                break
-            step = hi - lo
-            lo, f_lo = np.where(short, hi, lo), np.where(short, f_hi, f_lo)
-            hi = np.where(short, hi + 2.0 * step, hi)
-            if np.any(hi > limit):
-                raise SolverError(f"no root up to {limit:.6g}: the function stays below 0")
-            f_hi = full(hi)
+        lo, f_lo, hi, f_hi = _grow_bracket(full, lo, f_lo, hi, f_hi, limit)
     bad = (f_lo > 0) | (f_hi < 0) | ((f_lo < 0) & ~(hi > lo))
     if bad.any():
         raise SolverError(f"the brackets [{lo[bad][:3].tolist()}, {hi[bad][:3].tolist()}] "
@@ -195,6 +186,50 @@ def find_root(
         _chandrupatla(full, idx, lo[idx], f_lo[idx], hi[idx], f_hi[idx], x, out_lo, out_hi,
                       max(float(xatol), 4.0 * float(np.finfo(float).tiny)), float(xrtol))
     return Root(x.reshape(shape), out_lo.reshape(shape), out_hi.reshape(shape), calls)
+
+
+def _grow_bracket(full: Callable[[np.ndarray], np.ndarray], lo: np.ndarray, f_lo: np.ndarray,
+                  hi: np.ndarray, f_hi: np.ndarray, limit: float
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """Move each bracket up until ``f(hi) >= 0``: ``lo`` to the old ``hi``, ``hi`` twice as
+    far from it again, at most :data:`MAX_GROWTH` times (:func:`find_root`'s ``grow``).
+
+    Parameters
+    ----------
+    full : callable
+        The function on every element (flat arrays), counted and checked finite.
+    lo : ndarray
+        Lower ends (flat).
+    f_lo : ndarray
+        ``f(lo)``.
+    hi : ndarray
+        Upper ends (flat), first guesses.
+    f_hi : ndarray
+        ``f(hi)``.
+    limit : float
+        The largest upper end allowed.
+
+    Returns
+    -------
+    tuple of ndarray
+        ``(lo, f(lo), hi, f(hi))`` of the grown brackets.
+
+    Raises
+    ------
+    SolverError
+        The growth passed ``limit``.
+    """
+    for _ in range(MAX_GROWTH):
+        short = f_hi < 0
+        if not short.any():
+            break
+        step = hi - lo
+        lo, f_lo = np.where(short, hi, lo), np.where(short, f_hi, f_lo)
+        hi = np.where(short, hi + 2.0 * step, hi)
+        if np.any(hi > limit):
+            raise SolverError(f"no root up to {limit:.6g}: the function stays below 0")
+        f_hi = full(hi)
+    return lo, f_lo, hi, f_hi
 
 
 def _chandrupatla(full: Callable[[np.ndarray], np.ndarray], pos: np.ndarray,
@@ -301,14 +336,15 @@ class NewtonRoot:
     """Roots found by :func:`newton_bracketed`, element by element.
 
     ``x`` (n,) the roots (SI unit of the unknown); ``state`` the caller's state of each
-    element at its root (a list); ``lo`` and ``hi`` (n,) the final brackets; ``calls``
-    the evaluations of the function (each on the elements still going).
+    element at its root (a list, or an array with a row per element); ``lo`` and ``hi``
+    (n,) the final brackets; ``calls`` the evaluations of the function (each on the
+    elements still going).
 
     Parameters
     ----------
     x : numpy.ndarray
         The roots.
-    state : list
+    state : list or numpy.ndarray
         The caller's state of each element at its root.
     lo : numpy.ndarray
         The brackets' lower ends.
@@ -319,16 +355,17 @@ class NewtonRoot:
     """
 
     x: np.ndarray
-    state: list
+    state: list | np.ndarray
     lo: np.ndarray
     hi: np.ndarray
     calls: int
 
 
 def newton_bracketed(
-    fun: Callable[[np.ndarray, list], tuple[np.ndarray, np.ndarray, list]],
+    fun: Callable[[np.ndarray, Any], tuple[np.ndarray, np.ndarray, Any]],
     level: np.ndarray | float, lo: np.ndarray | float, hi: np.ndarray | float,
-    state: list, *, grow: bool = False, same_piece: Callable[[Any, Any], bool] | None = None,
+    state: list | np.ndarray, *, grow: bool = False,
+    same_piece: Callable[[Any, Any], bool] | None = None,
     ftol: np.ndarray | float | None = None, max_steps: int = NEWTON_STEPS,
     x0: np.ndarray | float | None = None,
 ) -> NewtonRoot:
@@ -339,16 +376,19 @@ def newton_bracketed(
     ----------
     fun : callable
         ``fun(x, state) -> (f, slope, state)``: ``x`` (m,) the abscissae of some elements,
-        ``state`` the list of their states (the caller's warm starts, e.g. an active set);
-        returns ``f(x)`` (m,), its slope ``f'(x)`` (m,) and the states at ``x``.
+        ``state`` their states (the caller's warm starts, e.g. an active set; the elements'
+        rows of an array state); returns ``f(x)`` (m,), its slope ``f'(x)`` (m,) and the
+        states at ``x``.
     level : array_like
         (n,) or scalar, the value to reach (unit of ``f``).
     lo : array_like
         (n,) or scalar, lower ends of the brackets, ``f(lo) < level``.
     hi : array_like
         (n,) or scalar, upper ends, ``f(hi) >= level`` (with ``grow``: a first guess).
-    state : list
-        The elements' states at ``hi`` before its evaluation (warm starts), length n.
+    state : list or numpy.ndarray
+        The elements' states at ``hi`` before its evaluation (warm starts), length n: a
+        list, or an array with a row per element (kept and selected by numpy indexing,
+        no Python loop over the elements).
     grow : bool
         Double ``hi`` (warm-starting each evaluation from the last state) until
         ``f(hi) >= level``, at most :data:`MAX_GROWTH` times; ``lo`` stays.
@@ -402,28 +442,54 @@ def newton_bracketed(
                      for v in (level, lo, hi))
     n = level.size
     tol = None if ftol is None else np.broadcast_to(np.asarray(ftol, float), (n,))
-    st = list(state)
-    calls = 1
+    st = _copy(state)
     x = hi.copy() if x0 is None else np.array(np.broadcast_to(np.asarray(x0, float), (n,)))
     f, slope, st = fun(x.copy(), st)
+    calls = 1
     if grow:
-        for _ in range(MAX_GROWTH):
-            short = np.flatnonzero(f < level)
-            if short.size == 0:
-                break
-            hi[short] *= 2.0
-            f_s, s_s, st_s = fun(hi[short], [st[i] for i in short])
-            calls += 1
-            f[short], slope[short] = f_s, s_s
-            for j, i in enumerate(short):
-                st[i] = st_s[j]
-        else:
-            raise SolverError(f"no abscissa up to {hi[f < level][:3].tolist()} reaches the "
-                              f"level {level[f < level][:3].tolist()}")
+        calls += _grow_upper(fun, level, hi, f, slope, st)
         x = hi.copy()
-    out_x, out_state = x.copy(), list(st)
-    go = np.arange(n)
-    xs, fs, ss, sts = x, np.asarray(f, float), np.asarray(slope, float), st
+    out_x, out_state = x.copy(), _copy(st)
+    calls += _newton_steps(fun, level, lo, hi, tol, same_piece, max_steps,
+                           (x, np.asarray(f, float), np.asarray(slope, float), st),
+                           out_x, out_state)
+    return NewtonRoot(out_x, out_state, lo, hi, calls)
+
+
+def _grow_upper(fun: Callable[[np.ndarray, Any], tuple[np.ndarray, np.ndarray, Any]],
+                level: np.ndarray, hi: np.ndarray, f: np.ndarray, slope: np.ndarray,
+                st: list | np.ndarray) -> int:
+    """Double the upper ends that do not reach ``level`` until each does, warm-starting
+    every evaluation from the element's last state (:func:`newton_bracketed`'s ``grow``);
+    ``hi``, ``f``, ``slope`` and ``st`` are updated in place. Returns the evaluations of
+    ``fun``; raises SolverError after :data:`MAX_GROWTH` doublings."""
+    calls = 0
+    for _ in range(MAX_GROWTH):
+        short = np.flatnonzero(f < level)
+        if short.size == 0:
+            return calls
+        hi[short] *= 2.0
+        f_s, s_s, st_s = fun(hi[short], _at(st, short))
+        calls += 1
+        f[short], slope[short] = f_s, s_s
+        _put(st, short, st_s)
+    raise SolverError(f"no abscissa up to {hi[f < level][:3].tolist()} reaches the "
+                      f"level {level[f < level][:3].tolist()}")
+
+
+def _newton_steps(fun: Callable[[np.ndarray, Any], tuple[np.ndarray, np.ndarray, Any]],
+                  level: np.ndarray, lo: np.ndarray, hi: np.ndarray, tol: np.ndarray | None,
+                  same_piece: Callable[[Any, Any], bool] | None, max_steps: int,
+                  start: tuple[np.ndarray, np.ndarray, np.ndarray, Any],
+                  out_x: np.ndarray, out_state: list | np.ndarray) -> int:
+    """The safeguarded Newton steps of :func:`newton_bracketed` (its Notes) from ``start =
+    (x, f, slope, states)`` of every element: the brackets ``lo``, ``hi`` are narrowed and
+    the stopped elements' abscissae and states written into ``out_x``, ``out_state``, in
+    place. Returns the evaluations of ``fun``; raises SolverError when an element does not
+    stop in ``max_steps``."""
+    calls = 0
+    go = np.arange(level.size)
+    xs, fs, ss, sts = start
     for _ in range(max_steps):
         lv, a, b = level[go], lo[go], hi[go]
         if tol is not None:
@@ -432,9 +498,9 @@ def newton_bracketed(
                 _keep(done, go, xs, sts, out_x, out_state)
                 keep = ~done
                 go, xs, fs, ss, lv, a, b = (v[keep] for v in (go, xs, fs, ss, lv, a, b))
-                sts = [s for s, k in zip(sts, keep, strict=True) if k]
+                sts = _take(sts, keep)
                 if go.size == 0:
-                    break
+                    return calls
         a = np.where(fs < lv, xs, a)
         b = np.where(fs < lv, b, xs)
         lo[go], hi[go] = a, b
@@ -452,21 +518,45 @@ def newton_bracketed(
                 _keep(done, go, nxt, st_n, out_x, out_state)
                 keep = ~done
                 go, nxt, f_n, s_n = (v[keep] for v in (go, nxt, f_n, s_n))
-                st_n = [s for s, k in zip(st_n, keep, strict=True) if k]
+                st_n = _take(st_n, keep)
                 if go.size == 0:
-                    break
+                    return calls
         xs, fs, ss, sts = nxt, f_n, s_n, st_n
-    else:
-        if go.size:
-            raise SolverError(f"Newton's iteration did not reach the level "
-                              f"{level[go][:3].tolist()} in {max_steps} steps (brackets "
-                              f"[{lo[go][:3].tolist()}, {hi[go][:3].tolist()}])")
-    return NewtonRoot(out_x, out_state, lo, hi, calls)
+    if go.size:
+        raise SolverError(f"Newton's iteration did not reach the level "
+                          f"{level[go][:3].tolist()} in {max_steps} steps (brackets "
+                          f"[{lo[go][:3].tolist()}, {hi[go][:3].tolist()}])")
+    return calls
 
 
-def _keep(done: np.ndarray, go: np.ndarray, x: np.ndarray, states: list,
-          out_x: np.ndarray, out_state: list) -> None:
+def _copy(states: list | np.ndarray) -> list | np.ndarray:
+    """A copy of the elements' states (a list, or an array with one row per element)."""
+    return states.copy() if isinstance(states, np.ndarray) else list(states)
+
+
+def _at(states: list | np.ndarray, idx: np.ndarray) -> list | np.ndarray:
+    """The states of the elements ``idx``."""
+    return states[idx] if isinstance(states, np.ndarray) else [states[i] for i in idx]
+
+
+def _put(states: list | np.ndarray, idx: np.ndarray, values: list | np.ndarray) -> None:
+    """Write ``values`` as the states of the elements ``idx``, in place."""
+    if isinstance(states, np.ndarray):
+        states[idx] = values
+        return
+    for j, i in enumerate(idx):
+        states[i] = values[j]
+
+
+def _take(states: list | np.ndarray, keep: np.ndarray) -> list | np.ndarray:
+    """The states of the elements ``keep`` (bool) holds."""
+    if isinstance(states, np.ndarray):
+        return states[keep]
+    return [s for s, k in zip(states, keep, strict=True) if k]
+
+
+def _keep(done: np.ndarray, go: np.ndarray, x: np.ndarray, states: list | np.ndarray,
+          out_x: np.ndarray, out_state: list | np.ndarray) -> None:
     """Write the stopped elements' abscissae and states (``done`` over ``go``) in place."""
     out_x[go[done]] = x[done]
-    for j in np.flatnonzero(done):
-        out_state[go[j]] = states[j]
+    _put(out_state, go[done], _take(states, done))

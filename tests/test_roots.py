@@ -250,3 +250,25 @@ def test_newton_with_a_residual_tolerance_and_its_bisection_safeguard():
     with pytest.raises(SolverError, match="reaches the level"):
         newton_bracketed(lambda x, st: (np.zeros_like(x), np.zeros_like(x), st), 1.0, 0.0,
                          1.0, [None], grow=True, ftol=0.0)
+
+
+def test_newton_with_array_states_selects_rows_without_a_list():
+    """The states as an array (a row per element): the same roots as the list of states,
+    bit for bit, with the stopped elements' rows returned in the array. ``atan(x - c) = 0``
+    with the bracket grown from a first guess below some roots; the roots are ``c`` to
+    ``ftol`` (the equation's closed form)."""
+    from ssw.roots import newton_bracketed
+
+    c = np.array([-3.0, 0.1, 7.0, 25.0, 0.0, 12.5])
+
+    def fun(x, states):  # each element's state is its c, as a list or an array
+        u = x - np.asarray(states, float)
+        return np.arctan(u), 1.0 / (1.0 + u**2), states
+
+    as_list = newton_bracketed(fun, 0.0, -10.0, 2.0, list(c), grow=True, ftol=1e-13)
+    as_array = newton_bracketed(fun, 0.0, -10.0, 2.0, c.copy(), grow=True, ftol=1e-13)
+    assert isinstance(as_array.state, np.ndarray)
+    np.testing.assert_array_equal(as_array.x, as_list.x)
+    np.testing.assert_array_equal(as_array.state, c)
+    assert as_array.calls == as_list.calls
+    assert as_array.x == pytest.approx(c, abs=1e-12)

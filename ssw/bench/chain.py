@@ -173,19 +173,7 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     pk_def, run_def = api.peaks(E, nu, params, "hertz")
     stop = run_def.stop_time  # s, ssw's simulated time per point
 
-    # the reference: one DOP853 solve per point at 1e-12, and its check at 1e-10
-    ref, check, t_ref, share = (np.empty(sub.size) for _ in range(4))
-    for i, k in enumerate(sub):
-        w = hertz_wall(params, E[k], nu[k])
-        t_end = REFERENCE_LENGTH * stop[k]
-        t0 = time.perf_counter()
-        r = solve_dop853(params, w, t_end=t_end, rtol=REFERENCE_RTOL,
-                         sample_dt=REFERENCE_SAMPLE_DT)
-        t_ref[i] = time.perf_counter() - t0
-        c = solve_dop853(params, w, t_end=t_end, rtol=CHECK_RTOL,
-                         sample_dt=REFERENCE_SAMPLE_DT)
-        ref[i], check[i] = r.tof[0], c.tof[0]
-        share[i] = r.t_reflected[0] / t_end  # the reflected peak lies well inside the run
+    ref, check, t_ref, share = _reference(params, E[sub], nu[sub], stop[sub])
     ref_of = dict(zip(sub.tolist(), ref, strict=True))
 
     def err(idx: np.ndarray, tof: np.ndarray) -> float:
@@ -249,6 +237,31 @@ def run(args: argparse.Namespace) -> dict[str, Any]:
     _write(out, result)
     write_json(out / "chain_work_precision.json", result, result)
     return result
+
+
+
+def _reference(params: Any, E: np.ndarray, nu: np.ndarray, stop: np.ndarray
+               ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The reference TOFs: one DOP853 solve per point at :data:`REFERENCE_RTOL` over
+    :data:`REFERENCE_LENGTH` times ssw's run (``stop``, s), and its check at
+    :data:`CHECK_RTOL`. ``E`` (Pa), ``nu`` (-) the points, ``params`` the chain. Returns
+    the reference and the check TOFs (s), the reference's CPU time per point (s) and the
+    reflected peak's time as a share of the run (it lies well inside)."""
+    from ssw.chain.baseline import hertz_wall, solve_dop853
+
+    ref, check, t_ref, share = (np.empty(E.size) for _ in range(4))
+    for i in range(E.size):
+        w = hertz_wall(params, E[i], nu[i])
+        t_end = REFERENCE_LENGTH * stop[i]
+        t0 = time.perf_counter()
+        r = solve_dop853(params, w, t_end=t_end, rtol=REFERENCE_RTOL,
+                         sample_dt=REFERENCE_SAMPLE_DT)
+        t_ref[i] = time.perf_counter() - t0
+        c = solve_dop853(params, w, t_end=t_end, rtol=CHECK_RTOL,
+                         sample_dt=REFERENCE_SAMPLE_DT)
+        ref[i], check[i] = r.tof[0], c.tof[0]
+        share[i] = r.t_reflected[0] / t_end
+    return ref, check, t_ref, share
 
 
 LABELS = {

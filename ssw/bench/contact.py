@@ -249,7 +249,7 @@ def wall_study(cfg: dict[str, Any], repeat: int) -> dict[str, Any]:
         Wall times (s) and TOF differences of the representations.
     """
     from ssw.chain.params import ChainParams
-    from ssw.chain.wall import TableWall, _resample
+    from ssw.chain.wall_table import TableWall, _resample
     from ssw.contact.operators import OperatorStore
     from ssw.curve import ForceCurve
     from ssw.tof import api

@@ -47,8 +47,9 @@ number of steps, for the chain rule through :func:`time_step` (:func:`step_tange
 
 The step's arithmetic (forces, damping, accelerations, kicks, drift, sensitivities, the
 sensor's record and the peaks) and the stop rule's are one compiled kernel,
-:mod:`ssw.chain.kernel`; this module drives it and keeps what varies by wall, the records
-and the stop rule's state. When nothing is done in Python between two steps (the step
+:mod:`ssw.chain.kernel`; this module drives it (:func:`simulate`: the run's set-up, then
+its loop of blocks) and keeps what varies by wall and the stop rule's state; the records
+are :mod:`ssw.chain.recording`'s. When nothing is done in Python between two steps (the step
 evaluates the wall's law, no force or energy record), a block of ``check_every`` steps is
 one call of the kernel.
 
@@ -72,12 +73,11 @@ import numpy as np
 from ssw.chain.dissipation import law_of
 from ssw.chain.kernel import Stepper, stop_update
 from ssw.chain.params import Batch, ChainParams
+from ssw.chain.recording import Recorder
 from ssw.chain.sensitivity import STEP, Tangent, tangent_of
 from ssw.chain.statics import (
     initial_state,
     initial_tangent,
-    kinetic_energy,
-    potential_energy,
     static_contact_forces,
 )
 from ssw.chain.wall import Wall, force_and_tangent, is_stateful
@@ -95,11 +95,6 @@ TRAVEL_FACTOR, TAIL_CONTACTS = 1.5, 4.0
 NOISE_SHARE = 0.01
 #: The rule's constants, in the order of :func:`ssw.chain.kernel.stop_update`.
 _RULE = np.array([INCIDENT_END, WALL_RELEASE, TRAVEL_FACTOR, TAIL_CONTACTS])
-#: Bytes a record is first allocated for (virtual memory, touched only as the run goes; a
-#: longer run doubles it). 128 MB holds the thesis sweep's 300 scenes whole and keeps the
-#: reserved address space modest where a cluster limits virtual memory (ulimit -v, strict
-#: overcommit); 1 GB measured the same CPU on that sweep (1.0 s).
-RECORD_BYTES = 2**27
 
 
 @dataclass(frozen=True)
@@ -179,62 +174,6 @@ class Run:
                        stop_time=self.stop_time[idx], energy_wall=sel(self.energy_wall, 1),
                        dissipated=sel(self.dissipated, 1), dsensor=sel(self.dsensor, 1),
                        peak_contact_force=sel(self.peak_contact_force, 0))
-
-
-class _Record:
-    """Per-step rows of the active scenes, kept in blocks of ``check_every`` steps and
-    written, block by block, into the records (n_t, *shape, n), NaN where a scene had
-    stopped.
-
-    The records are allocated for the run's longest possible length (up to
-    :data:`RECORD_BYTES` each, then grown by doubling) and never initialised as a whole:
-    only the rows a run reaches are written, so memory the run does not use is never
-    touched. Writing each block straight into them, instead of keeping the blocks and
-    assembling them at the end, halves the memory a run touches: on this project's
-    virtual machines a process's first touch of memory costs about 2.7 ms per MB of CPU
-    (a first 70 MB array 0.19 s, the next one 0.013 s), 0.2 s of a run of 1500 scenes.
-    """
-
-    def __init__(self, shapes: dict[str, tuple[int, ...]], n: int, block: int,
-                 rows: int) -> None:
-        self.n = n
-        self.buf = {k: np.empty((block, *sh, n)) for k, sh in shapes.items()}
-        row_bytes = 8 * n * max(int(np.prod(sh, dtype=int)) for sh in shapes.values())
-        cap = max(block, min(rows, RECORD_BYTES // max(row_bytes, 1)))
-        self.out = {k: np.empty((cap, *sh, n)) for k, sh in shapes.items()}
-        self.filled = 0
-
-    def _reserve(self, rows: int) -> None:
-        """Room for ``rows`` rows (doubling the records, their filled rows copied)."""
-        cap = next(iter(self.out.values())).shape[0]
-        if rows <= cap:
-            return
-        cap = max(rows, 2 * cap)
-        for k, x in self.out.items():
-            y = np.empty((cap, *x.shape[1:]))
-            y[: self.filled] = x[: self.filled]
-            self.out[k] = y
-
-    def flush(self, j0: int, rows: int, active: np.ndarray) -> dict[str, np.ndarray]:
-        """Write rows ``0..rows-1`` of the buffers (steps ``j0..``) of the scenes ``active``
-        into the records; returns those rows of the buffers (views, valid until the next
-        block)."""
-        na = active.size
-        self._reserve(j0 + rows)
-        got = {k: b[:rows, ..., :na] for k, b in self.buf.items()}
-        for k, x in got.items():
-            dst = self.out[k][j0 : j0 + rows]
-            if na == self.n:
-                dst[...] = x
-            else:
-                dst[...] = np.nan
-                dst[..., active] = x
-        self.filled = j0 + rows
-        return got
-
-    def assemble(self, n_t: int) -> dict[str, np.ndarray]:
-        """The records, (n_t, *shape, n)."""
-        return {k: x[:n_t] for k, x in self.out.items()}
 
 
 def impact_scales(params: ChainParams | Batch) -> tuple[np.ndarray, np.ndarray]:
@@ -505,179 +444,208 @@ def simulate(
     b = params if isinstance(params, Batch) else Batch.of(params, n)
     if b.n != n:
         raise ValueError(f"batch of {b.n} scenes for a wall of {n}")
-    p = b.params
+    stateful = is_stateful(wall)
+    tg = tangent_of(derivatives)
+    dt = _checked_step(b, wall, dt, tg, stateful, initial is not None)
+    n_steps = int(np.ceil(float(t_end if t_end is not None else b.params.t_max) / dt - 1e-9))
+    rule = _stop_rule(b)
+    ch, drive = _start(b, wall, stateful, tg, dt, initial, record_energy)
+    if ch.law is None:  # else the step evaluates the wall's law itself
+        drive.write_row(ch)
+    ch.forces(has_old=False, kick=False)
+    rec = Recorder(b, ch, None if tg is None else tg.k, n_steps + 1, check_every,
+                   record_forces, record_energy, dt)
+    # blocks of check_every steps; when nothing is done in Python between the steps (the
+    # step evaluates the wall's law, no force or energy record), a block is one call of the
+    # compiled step
+    in_c = not (stateful or ch.law is None or record_forces or record_energy)
+    n_t, stop_time, peak_u, peak_f = _integrate(ch, drive, rec, rule, dt, n_steps,
+                                                check_every, stop_early, in_c, on_progress)
+    out = rec.rec.assemble(n_t)
+    return Run(
+        t=dt * np.arange(n_t), sensor=out["sensor"], wall_force=out["wall"],
+        forces=np.moveaxis(out["forces"], 1, 2) if record_forces else None,
+        energy=out.get("energy"), peak_wall_indentation=peak_u, stop_time=stop_time,
+        dt=dt, energy_wall=out.get("energy_wall") if record_energy and stateful else None,
+        dissipated=out.get("dissipated"), tangent=tg,
+        dsensor=None if tg is None else np.moveaxis(out["dsensor"], 1, 2),
+        peak_contact_force=peak_f,
+    )
+
+
+def _checked_step(b: Batch, wall: Any, dt: float | None, tg: Tangent | None, stateful: bool,
+                  given_initial: bool) -> float:
+    """The run's step (s): ``dt`` or :func:`time_step`; ConfigError for a stateful wall
+    built for another step, or sensitivities the wall or the initial state cannot give
+    (:func:`simulate`'s Raises)."""
     dt = float(dt if dt is not None else time_step(b, wall))
     wall_dt = getattr(wall, "dt", None)
     if wall_dt is not None and abs(wall_dt - dt) > 1e-15 * dt:
         raise ConfigError("dt", dt, f"the step the wall was built for ({wall_dt} s)")
-    t_end = float(t_end if t_end is not None else p.t_max)
-    n_steps = int(np.ceil(t_end / dt - 1e-9))
-    N, s = p.n_beads, p.sensor_index
-    A, damping, law = p.bead_coefficient, p.damping, law_of(p.damping_law, "chain.damping_law")
-    inv_m_all = np.ascontiguousarray((1.0 / b.masses).T)  # (N, n)
-    g_acc = p.g if p.gravity else 0.0
-    F0 = static_contact_forces(b)  # (n, N)
-    _, f_impact = impact_scales(b)
-    rule = _StopRule(n, sensor_reading(p, F0[:, s - 1], F0[:, s]), F0[:, -1].copy(),
-                     NOISE_SHARE * f_impact, b.contact_time())
-    preload_all = b.preload.copy()
-    has_preload = bool(np.any(preload_all > 0))
-    reads = p.sensor_reads
-    stateful = is_stateful(wall)
-    tg = tangent_of(derivatives)
-    if tg is not None and stateful and not hasattr(wall, "advance_tangent"):
+    if tg is None:
+        return dt
+    if stateful and not hasattr(wall, "advance_tangent"):
         raise ConfigError("derivatives", list(tg.names),
                           f"none for the {type(wall).__name__} (no exact tangent: "
                           "differentiate its TOF by central differences, ssw.tof.api)")
-    if tg is not None and initial is not None:
+    if given_initial:
         raise ConfigError("derivatives", list(tg.names), "none with a given initial state")
-    c_T = None if tg is None else tg.col(STEP)
-    if c_T is not None and stateful and not getattr(wall, "step_tangent", False):
+    if tg.col(STEP) is not None and stateful and not getattr(wall, "step_tangent", False):
         raise ConfigError("derivatives", list(tg.names),
                           f"none of the step ({STEP}) for the {type(wall).__name__} (its "
                           "advance_tangent does not differentiate the step)")
-    c_D = None if tg is None else tg.col("damping")
-    predict = damping > 0.0 or c_D is not None
-    half = 0.5 * dt
+    return dt
 
+
+def _stop_rule(b: Batch) -> _StopRule:
+    """The early-stop rule's state at the run's start: the static sensor and wall forces,
+    the noise level (:data:`NOISE_SHARE` of the two-bead impact force) and the contact
+    times of the scenes ``b``."""
+    p = b.params
+    s = p.sensor_index
+    F0 = static_contact_forces(b)  # (n, N)
+    _, f_impact = impact_scales(b)
+    return _StopRule(b.n, sensor_reading(p, F0[:, s - 1], F0[:, s]), F0[:, -1].copy(),
+                     NOISE_SHARE * f_impact, b.contact_time())
+
+
+class _WallDrive:
+    """The last contact of a run's active scenes (:func:`simulate`): its law, or a stateful
+    wall's state and force, their sensitivities, and the step's last contact row they
+    write. ``u_last`` (n,) m, the last bead's initial position."""
+
+    def __init__(self, wall: Any, stateful: bool, u_last: np.ndarray, tg: Tangent | None
+                 ) -> None:
+        self.w, self.stateful, self.tg = wall, stateful, tg
+        self.c_E = None if tg is None else tg.col("E")
+        # a wall with internal state advances it every step from the last bead's new
+        # position; its force is then f, not force(u_last)
+        self.state = wall.start(u_last.copy()) if stateful else None
+        self.f = wall.force(u_last) if stateful else None
+        self.tstate: Any = None
+        self.df: np.ndarray | None = None
+        self.dE_all = self.dE = np.zeros((wall.n, 0 if tg is None else tg.k))
+        self.step_opt: dict[str, Any] = {}
+
+    def start_tangent(self, u_last: np.ndarray, D_last: np.ndarray) -> None:
+        """The sensitivities' start: ``D_last`` (n, k) the last bead's initial position's
+        derivatives (m per unit of each parameter)."""
+        tg, wall, c_E = self.tg, self.w, self.c_E
+        assert tg is not None
+        if c_E is not None:
+            self.dE_all[:, c_E] = 1.0
+        c_T = tg.col(STEP)
+        # the step's column for a stateful wall: d dt / d column
+        self.step_opt = {} if c_T is None else {"ddt": np.eye(tg.k)[c_T]}
+        if self.stateful:
+            self.tstate = wall.start_tangent(self.state, D_last, self.dE)
+            self.df = wall.dforce_dd(u_last)[:, None] * D_last
+            if c_E is not None:
+                self.df[:, c_E] += wall.dforce_dE(u_last)
+
+    def advance(self, ch: Any, dt: float) -> None:
+        """A stateful wall's state over the step, to the last bead's new position."""
+        u_last = ch.z[0, -1].copy()
+        if self.tg is not None:
+            self.f, self.df, self.state, self.tstate = self.w.advance_tangent(
+                self.state, self.tstate, u_last, ch.ZT[0, -1], dt, self.dE, **self.step_opt)
+        else:
+            self.f, self.state = self.w.advance(self.state, u_last, dt)
+
+    def write_row(self, ch: Any) -> None:
+        """The wall's force (and its sensitivities) into the step's last contact row (not
+        called when the step evaluates the wall's law itself)."""
+        u_last = ch.z[0, -1]
+        if self.f is not None:
+            ch.f[-1] = self.f
+            if self.tg is not None:
+                ch.dF[-1] = self.df
+        elif self.tg is None:
+            ch.f[-1] = self.w.force(u_last)
+        else:
+            ch.f[-1], kd, kE = force_and_tangent(self.w, u_last, self.c_E is not None)
+            np.multiply(ch.ZT[0, -1], np.asarray(kd)[:, None], out=ch.dF[-1])
+            if self.c_E is not None:
+                ch.dF[-1, :, self.c_E] += kE
+
+    def keep(self, keep: np.ndarray, active: np.ndarray, in_c: bool) -> None:
+        """Keep the scenes ``keep`` (bool over the active scenes; ``active`` the run's
+        indices of those kept); the law itself too unless the step holds it (``in_c``)."""
+        idx = np.flatnonzero(keep)
+        if self.tg is not None:
+            self.dE = self.dE_all[active]
+            if self.stateful:
+                self.df = self.df[keep]
+                self.tstate = tuple(x[idx] for x in self.tstate)
+        if self.stateful:
+            self.state = self.w.take_state(self.state, idx)
+            self.f = self.f[keep]
+        if not in_c:  # else the step's own law rows were kept (ch.keep)
+            self.w = self.w.take(idx)
+
+
+def _start(b: Batch, wall: Any, stateful: bool, tg: Tangent | None, dt: float,
+           initial: tuple[np.ndarray, np.ndarray] | None, record_energy: bool
+           ) -> tuple[Stepper, _WallDrive]:
+    """The compiled step at the run's initial state (:mod:`ssw.chain.statics`, or
+    ``initial``) with its sensitivities, and the wall's drive; a piecewise-linear wall's law
+    goes into the step (one call per step) unless the E sensitivity needs what it lacks."""
+    p, n = b.params, b.n
+    N, s = p.n_beads, p.sensor_index
+    damping, law = p.damping, law_of(p.damping_law, "chain.damping_law")
     # internal layout (N, n_scenes): every bead's row is contiguous
     u0, v0 = initial if initial is not None else initial_state(b, wall)
     u_last = np.ascontiguousarray(u0[:, -1])
-    peak_all = np.empty(n)
-    peak_f_all = np.empty(n)
-    # a wall with internal state advances it every step from the last bead's new position;
-    # its force is then f_wall, not force(u_last)
-    wstate = wall.start(u_last.copy()) if stateful else None
-    f_wall = wall.force(u_last) if stateful else None
+    drive = _WallDrive(wall, stateful, u_last, tg)
 
-    # forward sensitivities (ssw.chain.sensitivity): U, V, Acc (N, n, k)
-    mass_rows = mass_cols = np.zeros(0, int)
-    c_E = c_P = None
+    def col(name: str) -> int:
+        """The tangent's column of ``name``; -1 where it carries none."""
+        c = None if tg is None else tg.col(name)
+        return -1 if c is None else c
+
+    mass_at: list[tuple[int, int]] = []
     if tg is not None:
-        c_E, c_P = tg.col("E"), tg.col("preload")
-        c_m0 = tg.col("striker_mass")
-        c_ms = None if p.uniform else tg.col("sensor_mass")
         # (bead, column) of the masses differentiated: the striker's, the sensor's
-        mass_at = [(i, c) for i, c in ((0, c_m0), (s, c_ms)) if c is not None]
-        mass_rows = np.array([i for i, _ in mass_at], int)
-        mass_cols = np.array([c for _, c in mass_at], int)
+        c_ms = None if p.uniform else tg.col("sensor_mass")
+        mass_at = [(i, c) for i, c in ((0, tg.col("striker_mass")), (s, c_ms))
+                   if c is not None]
         ZT = np.empty((2, N, n, tg.k))
         ZT[0], ZT[1] = initial_tangent(b, wall, u0, tg)
-        dE_all = np.zeros((n, tg.k))
-        if c_E is not None:
-            dE_all[:, c_E] = 1.0
-        dE = dE_all
-        tstate = wall.start_tangent(wstate, ZT[0, -1], dE) if stateful else None
-        # the step's column for a stateful wall: d dt / d column
-        step_opt = {} if c_T is None else {"ddt": np.eye(tg.k)[c_T]}
-        df_wall = None
-        if stateful:
-            df_wall = wall.dforce_dd(u_last)[:, None] * ZT[0, -1]
-            if c_E is not None:
-                df_wall[:, c_E] += wall.dforce_dE(u_last)
-    consts = dict(A=A, dt=dt, damping=damping, law=law.code, g=g_acc, predict=predict,
-                  damped_tangent=tg is not None and damping > 0.0,
-                  c_D=-1 if c_D is None else c_D, c_P=-1 if c_P is None else c_P,
-                  c_E=-1 if c_E is None else c_E, c_T=-1 if c_T is None else c_T,
-                  mass_at=list(zip(mass_rows.tolist(), mass_cols.tolist(), strict=True)))
-    ch = Stepper(N, n, 0 if tg is None else tg.k, consts, inv_m_all,
-                 preload_all if has_preload else None, record_energy and damping > 0.0)
+        drive.start_tangent(u_last, ZT[0, -1])
+    consts = dict(A=p.bead_coefficient, dt=dt, damping=damping, law=law.code,
+                  g=p.g if p.gravity else 0.0, predict=damping > 0.0 or col("damping") >= 0,
+                  damped_tangent=tg is not None and damping > 0.0, c_D=col("damping"),
+                  c_P=col("preload"), c_E=col("E"), c_T=col(STEP), mass_at=mass_at)
+    preload = b.preload.copy()
+    ch = Stepper(N, n, 0 if tg is None else tg.k, consts,
+                 np.ascontiguousarray((1.0 / b.masses).T),
+                 preload if bool(np.any(preload > 0)) else None,
+                 record_energy and damping > 0.0)
     ch.z[0], ch.z[1] = u0.T, v0.T
     if tg is not None:
         ch.ZT[...] = ZT
     # a piecewise-linear wall's law is evaluated by the step itself (one call per step);
     # without its E derivatives, the E sensitivity goes through force_and_tangent, which
     # says so
-    law = None if stateful else getattr(wall, "step_law", lambda: None)()
-    if law is not None and (c_E is None or law[3] is not None):
-        ch.use_law(law)
+    step_law = None if stateful else getattr(wall, "step_law", lambda: None)()
+    if step_law is not None and (drive.c_E is None or step_law[3] is not None):
+        ch.use_law(step_law)
+    return ch, drive
 
-    def wall_row(w: Any) -> None:
-        """The wall's force (and its sensitivities) into the step's last contact row (not
-        called when the step evaluates the wall's law itself)."""
-        u_last = ch.z[0, -1]
-        if f_wall is not None:
-            ch.f[-1] = f_wall
-            if tg is not None:
-                ch.dF[-1] = df_wall
-        elif tg is None:
-            ch.f[-1] = w.force(u_last)
-        else:
-            ch.f[-1], kd, kE = force_and_tangent(w, u_last, c_E is not None)
-            np.multiply(ch.ZT[0, -1], np.asarray(kd)[:, None], out=ch.dF[-1])
-            if c_E is not None:
-                ch.dF[-1, :, c_E] += kE
 
-    def read(upper: np.ndarray, lower: np.ndarray, out: np.ndarray) -> None:
-        """The sensor's reading (``sensor_reading``) of its two contacts' forces."""
-        if reads == "upper":
-            out[...] = upper
-        elif reads == "lower":
-            out[...] = lower
-        else:
-            np.add(upper, lower, out=out)
-            out *= 0.5
-
-    w = wall
-    writes_wall = ch.law is None  # else the step evaluates the wall's law itself
-    if writes_wall:
-        wall_row(w)
-    ch.forces(has_old=False, kick=False)
+def _integrate(ch: Stepper, drive: _WallDrive, rec: Recorder, rule: _StopRule, dt: float,
+               n_steps: int, check_every: int, stop_early: bool, in_c: bool,
+               on_progress: Any) -> tuple[int, np.ndarray, np.ndarray, np.ndarray]:
+    """The run's loop: blocks of ``check_every`` steps (steps ``j0 .. step``, in one call of
+    the compiled step when ``in_c``), each recorded, then the stop rule, whose stopped
+    scenes leave the arrays. Returns the rows of the run, each scene's stop time (s, NaN:
+    ran to the end), peak wall indentation (m) and peak bead-bead force (N)."""
+    n = ch.z.shape[-1]
     active = np.arange(n)
-    shapes: dict[str, tuple[int, ...]] = {"sensor": (), "wall": ()}
-    if tg is not None:
-        shapes.update(dsensor=(tg.k,))
-    if record_energy:
-        shapes.update(energy=(), energy_wall=(), dissipated=())
-        w_dash = np.zeros(n)  # the damping's work so far (J)
-        p_dash = ch.power.copy() if ch.power is not None else np.zeros(n)
-    if record_forces:
-        shapes["forces"] = (N,)
-    rec = _Record(shapes, n, check_every, n_steps + 1)
-    buf = rec.buf
-
-    # the sensor's two contacts, step by step; read once per block (flush)
-    pair = np.empty((check_every, 2, n))
-    dpair = None if tg is None else np.empty((check_every, 2, n, tg.k))
-
-    # the step's code fills the sensor's and the wall's rows and keeps the peaks: the
-    # largest wall indentation and, per contact and active scene, bead-bead force (reduced
-    # over the contacts when a scene stops)
-    ch.start_record(s, buf["wall"], pair, dpair)
-
-    def record_row(k: int, na: int, sub_w: Any) -> None:
-        """Row ``k`` of the block buffers (the active scenes' first ``na`` columns)."""
-        ch.record(k)
-        if record_forces:
-            buf["forces"][k, :, :na] = ch.f
-        if record_energy:
-            sub = b.take(active)
-            u, v = ch.z
-            e = kinetic_energy(sub, v.T) + potential_energy(sub, None if stateful else sub_w,
-                                                            u.T)
-            stored = lost = 0.0
-            if stateful:
-                stored, lost = sub_w.energy(wstate)
-            buf["energy_wall"][k, :na] = stored if stateful else np.nan
-            buf["dissipated"][k, :na] = lost + w_dash
-            buf["energy"][k, :na] = e + stored + lost + w_dash
-
-    def flush(j0: int, rows: int) -> dict[str, np.ndarray]:
-        """The block's sensor readings, then :meth:`_Record.flush`."""
-        na = active.size
-        read(pair[:rows, 0, :na], pair[:rows, 1, :na], buf["sensor"][:rows, :na])
-        if tg is not None:
-            read(dpair[:rows, 0, :na].transpose(0, 2, 1),
-                 dpair[:rows, 1, :na].transpose(0, 2, 1), buf["dsensor"][:rows, :, :na])
-        return rec.flush(j0, rows, active)
-
-    record_row(0, n, w)
-    flush(0, 1)
-    stop_time = np.full(n, np.nan)
-    # blocks of check_every steps (steps j0 .. step); when nothing is done in Python between
-    # the steps (the step evaluates the wall's law, no force or energy record), a block is
-    # one call of the compiled step
-    in_c = not (stateful or writes_wall or record_forces or record_energy)
+    peak_u, peak_f, stop_time = np.empty(n), np.empty(n), np.full(n, np.nan)
+    rec.row(0, active, ch, drive.w, drive.state, drive.stateful)
+    rec.flush(0, 1, active)
+    writes_wall = ch.law is None
     step, j0 = 0, 1
     while j0 <= n_steps:
         rows = min(check_every, n_steps - j0 + 1)
@@ -686,68 +654,35 @@ def simulate(
             ch.advance(rows)
         for k in range(0 if in_c else rows):
             ch.drift()
-            if stateful:
-                u_last = ch.z[0, -1].copy()
-                if tg is not None:
-                    f_wall, df_wall, wstate, tstate = w.advance_tangent(
-                        wstate, tstate, u_last, ch.ZT[0, -1], dt, dE, **step_opt)
-                else:
-                    f_wall, wstate = w.advance(wstate, u_last, dt)
+            if drive.stateful:
+                drive.advance(ch, dt)
             if writes_wall:
-                wall_row(w)
+                drive.write_row(ch)
             ch.forces(has_old=True, kick=True)
-            if record_energy and damping > 0.0:
-                w_dash += half * (p_dash + ch.power)
-                p_dash = ch.power.copy()
-            record_row(k, active.size, w)
-        got = flush(j0, rows)
+            rec.damping_work(ch)
+            rec.row(k, active, ch, drive.w, drive.state, drive.stateful)
+        got = rec.flush(j0, rows, active)
         times = dt * np.arange(j0, step + 1)
         j0 = step + 1
         if not stop_early:
             continue
         done = rule.update(times, got["sensor"], got["wall"])
-        if np.any(done):
-            if on_progress is not None:
-                on_progress(int(np.count_nonzero(done)))
-            stop_time[active[done]] = times[-1]
-            keep = ~done
-            rule.keep(keep)
-            peak_all[active[done]] = ch.peak_u[done]
-            peak_f_all[active[done]] = ch.peak_f[:, done].max(axis=0)
-            active = active[keep]
-            if active.size == 0:
-                break
-            idx = np.flatnonzero(keep)
-            ch.keep(keep)
-            if record_energy:
-                w_dash, p_dash = w_dash[keep], p_dash[keep]
-            if tg is not None:
-                dE = dE_all[active]
-                if stateful:
-                    df_wall = df_wall[keep]
-                    tstate = tuple(x[idx] for x in tstate)
-            if stateful:
-                wstate = w.take_state(wstate, idx)
-                f_wall = f_wall[keep]
-            if not in_c:  # else the step's own law rows were kept (ch.keep)
-                w = w.take(idx)
+        if not np.any(done):
+            continue
+        if on_progress is not None:
+            on_progress(int(np.count_nonzero(done)))
+        stop_time[active[done]] = times[-1]
+        keep = ~done
+        rule.keep(keep)
+        peak_u[active[done]] = ch.peak_u[done]
+        peak_f[active[done]] = ch.peak_f[:, done].max(axis=0)
+        active = active[keep]
+        if active.size == 0:
+            break
+        ch.keep(keep)
+        rec.keep(keep)
+        drive.keep(keep, active, in_c)
     if active.size:
-        peak_all[active] = ch.peak_u
-        peak_f_all[active] = ch.peak_f.max(axis=0)
-    n_t = step + 1
-    out = rec.assemble(n_t)
-    return Run(
-        t=dt * np.arange(n_t),
-        sensor=out["sensor"],
-        wall_force=out["wall"],
-        forces=np.moveaxis(out["forces"], 1, 2) if record_forces else None,
-        energy=out.get("energy"),
-        peak_wall_indentation=peak_all,
-        stop_time=stop_time,
-        dt=dt,
-        energy_wall=out.get("energy_wall") if record_energy and stateful else None,
-        dissipated=out.get("dissipated"),
-        tangent=tg,
-        dsensor=None if tg is None else np.moveaxis(out["dsensor"], 1, 2),
-        peak_contact_force=peak_f_all,
-    )
+        peak_u[active] = ch.peak_u
+        peak_f[active] = ch.peak_f.max(axis=0)
+    return step + 1, stop_time, peak_u, peak_f

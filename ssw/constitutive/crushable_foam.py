@@ -22,7 +22,8 @@ Return mapping (backward Euler). With ``d eps_p = x (3 s + (2 alpha^2 / 3) p ONE
 
 (the deviatoric direction is the trial's) and consistency is the scalar equation
 ``g(x) = sigma_hat(x) (1 - 2 H c x) - Y_n = 0``, ``c = 1 + (alpha/3)^2``, monotone in ``x``
-on its bracket; it is solved by a safeguarded Newton iteration vectorized over the points.
+on its bracket; it is solved by the safeguarded Newton iteration of
+:func:`ssw.roots.newton_bracketed`, vectorized over the yielding points.
 The consistent tangent is the p-q form (:func:`ssw.constitutive.tensors.pq_tangent`) with
 ``J = d(p, q)/d(p_tr, q_tr)`` by implicit differentiation of ``g(x) = 0``.
 
@@ -51,6 +52,7 @@ from ssw.constitutive.tensors import (
     trial,
 )
 from ssw.errors import ConfigError, SolverError
+from ssw.roots import newton_bracketed
 
 #: Newton iterations of the consistency equation (quadratic convergence takes < 10).
 MAX_ITER = 60
@@ -193,32 +195,32 @@ class CrushableFoam:
         hi = np.where(yl, (s_tr / Yn - 1.0) / m, 0.0)
         if H > 0:
             hi = np.minimum(hi, 1.0 / (2.0 * H * c))
-        lo = np.zeros_like(hi)
-        x = np.zeros_like(hi)
 
-        def parts(x):
+        def parts(x: np.ndarray, rows: Any = slice(None)) -> tuple[np.ndarray, ...]:
+            """The shrink factors, ``p``, ``q`` and ``sigma_hat`` of the points ``rows`` at
+            ``x``."""
             ap, aq = 1.0 / (1.0 + 2.0 * K * a2 * x), 1.0 / (1.0 + 6.0 * G * x)
-            p, q = p_tr * ap, q_tr * aq
+            p, q = p_tr[rows] * ap, q_tr[rows] * aq
             sh = np.sqrt((q * q + a2 * p * p) / c)
             return ap, aq, p, q, sh
 
-        for _ in range(MAX_ITER):
-            ap, aq, p, q, sh = parts(x)
+        def minus_g(x: np.ndarray, rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, Any]:
+            """``-g(x)`` and ``-g'(x)`` of the points ``rows``: increasing on the bracket."""
+            ap, aq, p, q, sh = parts(x, rows)
             h = 1.0 - 2.0 * H * c * x
-            g = np.where(yl, sh * h - Yn, 0.0)
-            if np.all(np.abs(g) <= RTOL * Yn):
-                break
-            lo = np.where(g > 0, x, lo)
-            hi = np.where(g < 0, x, hi)
             dsh = -(a2 * p * p * 2.0 * K * a2 * ap + q * q * 6.0 * G * aq) / (c * sh)
-            gx = dsh * h - 2.0 * H * c * sh
-            with np.errstate(invalid="ignore", divide="ignore"):
-                step = x - g / gx
-            bad = ~np.isfinite(step) | (step <= lo) | (step >= hi)
-            x = np.where(yl, np.where(bad, 0.5 * (lo + hi), step), 0.0)
-        else:
-            raise SolverError("the crushable-foam return mapping did not converge in "
-                              f"{MAX_ITER} iterations")
+            return Yn[rows] - sh * h, 2.0 * H * c * sh - dsh * h, rows
+
+        x = np.zeros_like(hi)
+        rows = np.flatnonzero(yl)
+        if rows.size:
+            try:
+                x[rows] = newton_bracketed(minus_g, 0.0, 0.0, hi[rows], rows,
+                                           ftol=RTOL * Yn[rows], max_steps=MAX_ITER,
+                                           x0=0.0).x
+            except SolverError as exc:
+                raise SolverError("the crushable-foam return mapping did not converge in "
+                                  f"{MAX_ITER} iterations ({exc})") from exc
         ap, aq, p, q, sh = parts(x)
         h = 1.0 - 2.0 * H * c * x
         # implicit differentiation of g(x; p_tr, q_tr) = sh (1 - 2 H c x) - Y_n = 0

@@ -360,39 +360,16 @@ def solve_curve(
     active = path.active[path.piece_of(deltas)][:, :ms]
     force = lam[:, :ms].sum(axis=1)
     a = edge_radii(lcp.r, gaps, active)
-    keep = np.unique(np.linspace(0, deltas.size - 1, int(cfg["pressure_profiles"]))
-                     .round().astype(int))
-    p = lam[keep, :ms] / np.where(lcp.weight > 0, lcp.weight, np.inf)
-    if lcp.r[0] == 0.0:  # the axis vertex of a P2 edge has zero weight; dp/dr = 0
-        p[:, 0] = p[:, 1]
+    keep, p = _pressure_profiles(lcp, lam, deltas.size, int(cfg["pressure_profiles"]))
     if np.any(path.active[:, ms - 1]):
         raise SolverError(
             f"the contact zone reached the last candidate node (r = {lcp.r[-1]:.4g} m): "
             "raise contact.candidate_factor")
-    tie_max = None
-    if lcp.tie is not None:
-        # affine per piece: its extremes are at the breakpoints (0 at delta = 0)
-        tie = path.forces(path.breaks[1:]) @ lcp.tie
-        tie_max = float(np.max(tie))
-        if tie_max > 1e-9 * max(float(force[-1]), 1e-300):
-            raise SolverError(
-                f"the unilateral interface's axis tie is in tension ({tie_max:.3g} N): the "
-                "plate would lift off at the axis; the model does not hold")
+    tie_max = _axis_tie_max(lcp, path, float(force[-1]))
     t_lcp = time.perf_counter()
-    st_s = soil_op.stats
-    st_p = plate_op.stats if plate_op is not None else {}
-    stats = {
-        "nodes": layout.nodes, "elements": layout.elements,
-        "dofs": int(st_s.get("dofs", 0)) + int(st_p.get("dofs", 0)),
-        "candidates": int(lcp.q0.size), "sphere_candidates": ms, "interface_dofs":
-        int(layout.iface_r.size), "scene_dofs": int(lcp.dofs), "breakpoints": path.pieces,
-        "prefix_path": how["prefix"], "ranks": 1,
-        "operators_built": built["count"], "backward_error": max(
-            float(st_s.get("backward_error", 0.0)), float(st_p.get("backward_error", 0.0))),
-        "wall_mesh": built["wall_mesh"], "wall_assemble": built["wall_assemble"],
-        "wall_factor": built["wall_factor"], "wall_condense": t_cond - t_ops,
-        "wall_lcp": t_lcp - t_cond, "wall_total": t_lcp - t_start,
-    }
+    body_stats = (soil_op.stats, plate_op.stats if plate_op is not None else {})
+    stats = _substructured_stats(layout, lcp, path, how, body_stats, built,
+                                 (t_start, t_ops, t_cond, t_lcp))
     if tie_max is not None:
         stats["tie_force_max"] = tie_max
     curve = ForceCurve(
@@ -401,6 +378,58 @@ def solve_curve(
     )
     return curve, {"lcp": lcp, "path": path, "lam": lam[-1], "store": store,
                    "geometry": geom}
+
+
+def _substructured_stats(layout: Any, lcp: Any, path: Any, how: dict[str, Any],
+                         body_stats: tuple[dict[str, Any], dict[str, Any]],
+                         built: dict[str, float], times: tuple[float, float, float, float]
+                         ) -> dict[str, Any]:
+    """A substructured curve's stats: its sizes, how its path was found (``how``), the
+    operators built (``built``) and the wall-clock times (s) of its stages from ``times =
+    (start, operators ready, scene condensed, path traced)``; ``body_stats`` the soil's and
+    the plate's operator stats (``{}`` without a plate)."""
+    st_s, st_p = body_stats
+    t_start, t_ops, t_cond, t_lcp = times
+    return {
+        "nodes": layout.nodes, "elements": layout.elements,
+        "dofs": int(st_s.get("dofs", 0)) + int(st_p.get("dofs", 0)),
+        "candidates": int(lcp.q0.size), "sphere_candidates": lcp.n_sphere, "interface_dofs":
+        int(layout.iface_r.size), "scene_dofs": int(lcp.dofs), "breakpoints": path.pieces,
+        "prefix_path": how["prefix"], "ranks": 1,
+        "operators_built": built["count"], "backward_error": max(
+            float(st_s.get("backward_error", 0.0)), float(st_p.get("backward_error", 0.0))),
+        "wall_mesh": built["wall_mesh"], "wall_assemble": built["wall_assemble"],
+        "wall_factor": built["wall_factor"], "wall_condense": t_cond - t_ops,
+        "wall_lcp": t_lcp - t_cond, "wall_total": t_lcp - t_start,
+    }
+
+
+def _pressure_profiles(lcp: Any, lam: np.ndarray, steps: int, profiles: int
+                       ) -> tuple[np.ndarray, np.ndarray]:
+    """The steps whose pressure profile a curve keeps (``profiles`` of its ``steps``,
+    evenly spread) and the candidates' pressures there (Pa): their forces ``lam`` (N) over
+    their surface weights (m^2)."""
+    ms = lcp.n_sphere
+    keep = np.unique(np.linspace(0, steps - 1, profiles).round().astype(int))
+    p = lam[keep, :ms] / np.where(lcp.weight > 0, lcp.weight, np.inf)
+    if lcp.r[0] == 0.0:  # the axis vertex of a P2 edge has zero weight; dp/dr = 0
+        p[:, 0] = p[:, 1]
+    return keep, p
+
+
+def _axis_tie_max(lcp: Any, path: Any, force_end: float) -> float | None:
+    """The largest force (N) the plate pulls on the soil's axis node along the path (an
+    unilateral interface; None for the others); SolverError when it is a tension beyond
+    round-off of the curve's last force ``force_end`` (N): the plate would lift off."""
+    if lcp.tie is None:
+        return None
+    # affine per piece: its extremes are at the breakpoints (0 at delta = 0)
+    tie_max = float(np.max(path.forces(path.breaks[1:]) @ lcp.tie))
+    if tie_max > 1e-9 * max(force_end, 1e-300):
+        raise SolverError(
+            f"the unilateral interface's axis tie is in tension ({tie_max:.3g} N): the "
+            "plate would lift off at the axis; the model does not hold")
+    return tie_max
 
 
 def edge_radii(r: np.ndarray, gap: np.ndarray, active: np.ndarray) -> np.ndarray:

@@ -5,7 +5,7 @@ stiffness condensed onto the retained dofs (the contact candidates and the plate
 interface). A state of the contact, the exact LCP solution at an indentation ``delta`` of
 the rigid sphere (:mod:`ssw.contact.parametric`), fixes the contact forces ``lam`` and with
 them the retained displacements ``u_B``: the scene's dense system ``K u = G^T lam``
-assembled as :func:`ssw.contact.operators.scene_lcp` does. Each body's interior follows
+assembled as :func:`ssw.contact.coupling.scene_lcp` does. Each body's interior follows
 from its own equilibrium with ``u_B`` imposed (static condensation read backwards,
 Przemieniecki 1963),
 
@@ -335,7 +335,7 @@ def retained_displacements(
 ) -> tuple[np.ndarray | None, np.ndarray]:
     """Retained displacements (m) of the plate (None without one) and of the soil under
     the constraint forces ``lam`` (N) of the scene's LCP: ``K u = G^T lam`` with ``K`` and
-    ``G`` assembled as :func:`ssw.contact.operators.scene_lcp` does (a sphere candidate's
+    ``G`` assembled as :func:`ssw.contact.coupling.scene_lcp` does (a sphere candidate's
     force pushes its ``u_z`` down; a pair of the unilateral interface pulls its two nodes
     together). ``lam`` (m,) gives (n_dofs,) displacements; (k, m), states of one scene,
     gives (n_dofs, k) from one factorization.
@@ -537,7 +537,6 @@ def contact_stresses(
     ContactStress
         The peaks (Pa, m) of the plate and the soil at each state.
     """
-    from ssw.contact.parametric import trace
     from ssw.contact.scene import settings_of
 
     E, d = np.broadcast_arrays(np.atleast_1d(np.asarray(soil_E, float)),
@@ -562,53 +561,71 @@ def contact_stresses(
     uP: np.ndarray | None = None
     uS: np.ndarray | None = None
     d = d.copy()
-    top = plate if has_plate else (None, soil_nu)
+    plate_E = plate[0] if has_plate else None
     # the states of one modulus share their scene: one LCP, one path, one factorization
     moduli, which = np.unique(E, return_inverse=True)
     for u, Eu in enumerate(moduli):
         ks = np.flatnonzero(which == u)
-        if known is None:
-            lcp = scene_lcp(layout, plate_op, soil_op, float(Eu),
-                            plate[0] if has_plate else None, interface, radius)
-            path, _ = trace(lcp.W, lcp.q0, lcp.q1, float(d[ks].max()))
-            lam = path.forces(d[ks])
-            f_R = lam[:, :lcp.n_sphere].sum(axis=1)
-        else:
-            f_R = known[ks]
-        if bead is not None:
-            top_E = plate[0] if has_plate else float(Eu)
-            r_eq = equivalent_radius(radius, (top_E, top[1]), bead)
-            lcp = scene_lcp(layout, plate_op, soil_op, float(Eu),
-                            plate[0] if has_plate else None, interface, r_eq)
-            d[ks], lam, active = _state_at_force(lcp, f_R, float(d[ks].max()))
-        else:
-            active = path.active
-        ms = lcp.n_sphere
+        top = plate if has_plate else (float(Eu), soil_nu)  # the body the sphere presses
+        r_eq = None if bead is None else equivalent_radius(radius, top, bead)
+        d[ks], lam, active, ms = _scene_states(
+            (layout, plate_op, soil_op), float(Eu), plate_E, interface, radius, d[ks],
+            None if known is None else known[ks], r_eq)
         if np.any(active[:, ms - 1]):
             k = int(ks[np.argmax(d[ks])])
             raise SolverError(f"the contact zone reached the last candidate (r = "
                               f"{layout.r[-1]:.4g} m) at the state {k}: soil E {E[k]:.4g} Pa, "
                               f"indentation {d[k]:.4g} m")
         force[ks] = lam[:, :ms].sum(axis=1)
-        up, us = retained_displacements(layout, plate_op, soil_op, float(Eu),
-                                        plate[0] if has_plate else None, interface, lam)
+        up, us = retained_displacements(layout, plate_op, soil_op, float(Eu), plate_E,
+                                        interface, lam)
         if uS is None:
             uS = np.empty((us.shape[0], n))
             uP = np.empty((up.shape[0], n)) if up is not None else None
         uS[:, ks] = us
         if up is not None:
             uP[:, ks] = up
-    out_fields: dict[str, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+    out_fields: dict[str, Any] | None = {} if fields else None
+    soil = _body_peak(store, geom, "soil", soil_nu, uS, E, out_fields)
+    plate_peak = (_body_peak(store, geom, "plate", plate[1], uP, np.full(n, plate[0]),
+                             out_fields) if has_plate else None)
+    return ContactStress(d, force, plate_peak, soil, out_fields)
 
-    def peaks(which: str, nu: float, u: np.ndarray, modulus: np.ndarray) -> BodyPeak:
-        fld = body_field(store, geom, which, nu)
-        vm = fld.von_mises(u, modulus)
-        j = np.argmax(vm, axis=0)
-        pts = fld.points
-        if fields:
-            out_fields[which] = (pts[:, 0], pts[:, 1], vm)
-        return BodyPeak(vm[j, np.arange(vm.shape[1])], pts[j, 0], pts[j, 1])
 
-    soil = peaks("soil", soil_nu, uS, E)
-    plate_peak = peaks("plate", plate[1], uP, np.full(n, plate[0])) if has_plate else None
-    return ContactStress(d, force, plate_peak, soil, out_fields if fields else None)
+def _scene_states(ops: tuple[Layout, BodyOperator | None, BodyOperator], soil_E: float,
+                  plate_E: float | None, interface: str, radius: float, d: np.ndarray,
+                  known: np.ndarray | None, r_eq: float | None
+                  ) -> tuple[np.ndarray, np.ndarray, np.ndarray, int]:
+    """The contact states of one scene (one soil modulus) at the rigid sphere's
+    indentations ``d`` (m): its path traced (or its forces ``known``, N); with ``r_eq`` (m,
+    :func:`equivalent_radius`) the states of that sphere carrying the rigid sphere's forces.
+    ``ops`` the geometry's layout and the plate's (or None) and soil's operators. Returns
+    the states' indentations (m), the candidates' forces ``lam`` (N), their active sets and
+    the number of sphere candidates."""
+    from ssw.contact.parametric import trace
+
+    layout, plate_op, soil_op = ops
+    if known is None:
+        lcp = scene_lcp(layout, plate_op, soil_op, soil_E, plate_E, interface, radius)
+        path, _ = trace(lcp.W, lcp.q0, lcp.q1, float(d.max()))
+        lam = path.forces(d)
+        if r_eq is None:
+            return d, lam, path.active, lcp.n_sphere
+        known = lam[:, :lcp.n_sphere].sum(axis=1)
+    lcp = scene_lcp(layout, plate_op, soil_op, soil_E, plate_E, interface, float(r_eq))
+    d, lam, active = _state_at_force(lcp, known, float(d.max()))
+    return d, lam, active, lcp.n_sphere
+
+
+def _body_peak(store: OperatorStore, geom: Geometry, which: str, nu: float, u: np.ndarray,
+               modulus: np.ndarray, out_fields: dict[str, Any] | None) -> BodyPeak:
+    """The peak von Mises stress (Pa) of the ``plate`` or the ``soil`` at each state, and
+    where (m), from its retained displacements ``u`` (m) at the states' moduli (Pa); every
+    evaluation point's stress into ``out_fields`` when given."""
+    fld = body_field(store, geom, which, nu)
+    vm = fld.von_mises(u, modulus)
+    j = np.argmax(vm, axis=0)
+    pts = fld.points
+    if out_fields is not None:
+        out_fields[which] = (pts[:, 0], pts[:, 1], vm)
+    return BodyPeak(vm[j, np.arange(vm.shape[1])], pts[j, 0], pts[j, 1])

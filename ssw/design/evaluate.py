@@ -19,7 +19,7 @@ of the design (:attr:`ssw.design.spec.DesignSpec.grid`):
    (:attr:`ssw.design.spec.DesignSpec.tof_uncertainty`);
 4. stresses at the hit's peak: the chain's largest wall indentation ``d_k`` is, in the
    rigid sphere's coordinates of the FEM, ``d_k / s_k`` (the bead's compliance,
-   :func:`ssw.chain.wall.compliance_scale`), the force the wall carries there; at that
+   :func:`ssw.chain.wall_base.compliance_scale`), the force the wall carries there; at that
    force the contact's elastic field under the bead's Hertz-equivalent rigid sphere
    (:func:`ssw.contact.stress.equivalent_radius`: the elastic steel bead's pressure, not a
    rigid one's) gives the plate's and the soil's peak von Mises stresses

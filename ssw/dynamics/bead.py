@@ -19,7 +19,7 @@ condensed FEM compliance in the contact LCP, ``g = g0 + (W_fem + W_bead) lam``: 
 deformation is a state function of the contact forces (its energy ``lam W_bead lam / 2``),
 so the energy balance of a dynamic run stays exact. For a Hertzian pressure this is Hertz's
 ``1/E* = c_w + c_b``; for a plate's pressure it is the same half-space model of the bead,
-where :func:`ssw.chain.wall.compliance_scale` rescales the indentation instead.
+where :func:`ssw.chain.wall_base.compliance_scale` rescales the indentation instead.
 
 References
 ----------

@@ -82,7 +82,7 @@ class Scene:
     bead's own elasticity (``bead_E``, ``bead_nu``) enters: ``compliance`` (its half-space
     compliance in the LCP, :mod:`ssw.dynamics.bead`; the default), ``scale`` (the rigid
     sphere's FEM at the indentation ``d / s``, ``s`` of
-    :func:`ssw.chain.wall.compliance_scale`: the quasi-static walls' rule, for
+    :func:`ssw.chain.wall_base.compliance_scale`: the quasi-static walls' rule, for
     comparisons with them) or ``rigid`` (none).
 
     Parameters

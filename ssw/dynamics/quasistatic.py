@@ -80,7 +80,7 @@ def static_table_wall(params: Any, wall: FEMWall, d_max: np.ndarray) -> Any:
     """A `ssw.chain.wall.TableWall` of the scenes' static laws up to ``d_max`` (m):
     the quasi-static twin of the FEM wall for the chain's own integrator and for the
     reduced wall. The table wall rescales indentations by
-    :func:`ssw.chain.wall.compliance_scale`; the curves, which already hold the bead's
+    :func:`ssw.chain.wall_base.compliance_scale`; the curves, which already hold the bead's
     compliance, are handed over divided by it.
 
     Parameters

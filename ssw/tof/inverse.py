@@ -337,9 +337,34 @@ def invert_batch(
                           "a forward grid computed for every target's nu and chain values")
     E_g, T_g = grid.E, grid.T
     reason = [""] * k
-    logE = np.full(k, np.nan)
     lo_T, hi_T = T_g[:, -1].copy(), T_g[:, 0].copy()
-    splines = []
+    logE, splines = _interpolated(T, grid, gidx, strict, reason)
+    ok = np.isfinite(logE)
+    lo, hi = np.log(E_g[0]), np.log(E_g[-1])
+    for _ in range(refine if ok.any() else 0):
+        sel = np.flatnonzero(ok)
+        Tm = api.tof(np.exp(logE[sel]), nu[sel], params, wall,
+                     vary={n: v[sel] for n, v in vk.items()} or None, **wall_options)
+        for j, i in enumerate(sel):
+            sp = splines[gidx[i]]
+            slope = float(sp.derivative()(np.clip(Tm[j], sp.x[0], sp.x[-1])))
+            logE[i] = float(np.clip(logE[i] + slope * (T[i] - Tm[j]), lo, hi))
+    return BatchInversion(np.exp(logE), lo_T[gidx], hi_T[gidx], tuple(reason),
+                          (float(E_g[0]), float(E_g[-1])))
+
+
+def _interpolated(T: np.ndarray, grid: ForwardGrid, gidx: np.ndarray, strict: bool,
+                  reason: list[str]) -> tuple[np.ndarray, list[Any]]:
+    """``ln E`` of each target from its group's forward grid: its interpolant in ``ln E``
+    against TOF (:meth:`ForwardGrid.interpolant`, for :func:`invert_batch`). ``T`` (k,) the
+    TOFs (s), ``gidx`` (k,) each target's group in ``grid``; a group whose TOF(E) is not
+    invertible (:func:`grid_fault`) or a TOF outside its range raises (``strict``) or leaves
+    NaN and its reason in ``reason`` (in place). Returns ``ln E`` (k,) and each group's
+    interpolant (None where not invertible)."""
+    E_g, T_g = grid.E, grid.T
+    logE = np.full(T.size, np.nan)
+    lo_T, hi_T = T_g[:, -1], T_g[:, 0]
+    splines: list[Any] = []
     for g in range(T_g.shape[0]):
         members = np.flatnonzero(gidx == g)
         msg = grid_fault(E_g, T_g[g], float(grid.nu[g]))
@@ -362,18 +387,7 @@ def invert_batch(
                 reason[i] = msg
             else:
                 logE[i] = float(sp(T[i]))
-    ok = np.isfinite(logE)
-    lo, hi = np.log(E_g[0]), np.log(E_g[-1])
-    for _ in range(refine if ok.any() else 0):
-        sel = np.flatnonzero(ok)
-        Tm = api.tof(np.exp(logE[sel]), nu[sel], params, wall,
-                     vary={n: v[sel] for n, v in vk.items()} or None, **wall_options)
-        for j, i in enumerate(sel):
-            sp = splines[gidx[i]]
-            slope = float(sp.derivative()(np.clip(Tm[j], sp.x[0], sp.x[-1])))
-            logE[i] = float(np.clip(logE[i] + slope * (T[i] - Tm[j]), lo, hi))
-    return BatchInversion(np.exp(logE), lo_T[gidx], hi_T[gidx], tuple(reason),
-                          (float(E_g[0]), float(E_g[-1])))
+    return logE, splines
 
 
 def invert(

@@ -5,9 +5,9 @@ The chain integrates against the :class:`ssw.chain.wall.Wall` protocol; this lay
 the walls. The registry :data:`WALLS` maps a name to a builder
 ``builder(params, soil_E, soil_nu, **options) -> Wall``:
 
-* ``rigid``, ``hertz``, ``table`` (:mod:`ssw.chain.wall`): laws made of the chain's numbers
-  and, for ``table``, FEM curves;
-* ``fit`` (:mod:`ssw.chain.wall`'s modified Hertz or power law), with ``k_table=`` a K table
+* ``rigid``, ``hertz`` (:mod:`ssw.chain.wall_power`), ``table`` (:mod:`ssw.chain.wall_table`):
+  laws made of the chain's numbers and, for ``table``, FEM curves;
+* ``fit`` (:mod:`ssw.chain.wall_power`'s modified Hertz or power law), with ``k_table=`` a K table
   file of the fit stage (:class:`ssw.fit.table.KTable`, read once per file version) or
   explicit ``K=`` / ``power=(C, n)`` values;
 * ``fem`` (:mod:`ssw.walls.fem`): the exact FEM law, computed on demand;
@@ -82,7 +82,7 @@ def _read_k_table(path: str, size: int, mtime_ns: int, plate_material: str,
 
 def file_fit_wall(params: ChainParams, soil_E: Any, soil_nu: Any, *, k_table: Any = None,
                   **values: Any) -> Wall:
-    """:func:`ssw.chain.wall.fit_wall` with a K table file read here.
+    """:func:`ssw.chain.wall_power.fit_wall` with a K table file read here.
 
     Parameters
     ----------
@@ -101,7 +101,7 @@ def file_fit_wall(params: ChainParams, soil_E: Any, soil_nu: Any, *, k_table: An
     Returns
     -------
     Wall
-        A :class:`ssw.chain.wall.PowerWall`.
+        A :class:`ssw.chain.wall_power.PowerWall`.
     """
     table = None if k_table is None else load_k_table(k_table, params)
     return fit_wall(params, soil_E, soil_nu, k_table=table, **values)

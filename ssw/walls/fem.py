@@ -18,7 +18,7 @@ as a calibration scan tries). Beyond it the last piece continues linearly (never
 by a chain the bound holds for: tests/test_fem_wall.py).
 
 Bead compliance. The FEM's sphere is rigid; the bead's compliance is added as for the other
-FEM-based walls (:func:`ssw.chain.wall.compliance_scale`): ``F(d) = F_R(d / s)``.
+FEM-based walls (:func:`ssw.chain.wall_base.compliance_scale`): ``F(d) = F_R(d / s)``.
 
 Representation. The exact law is kept as it is: per scene its breakpoints and the
 coefficients ``F = a + b d`` of each piece, evaluated by one binary search per call over all
@@ -414,7 +414,7 @@ def fem_wall(
     """
     from ssw.chain.wall import compliance_scale, compliance_scale_dE, scene_arrays
     from ssw.contact.operators import default_store, geometry_of, scene_lcp
-    from ssw.contact.parametric import Tracer, prefix_path
+    from ssw.contact.parametric import prefix_path
     from ssw.contact.scene import settings_of
     from ssw.hertz import effective_modulus, energy_indentation, hertz_coefficient
 
@@ -423,8 +423,7 @@ def fem_wall(
     cfg = settings_of({**(contact or {}), "interface": params.plate_interface,
                        "plate_diameter": params.plate_diameter})
     store = operators if operators is not None else default_store()
-    R = float(params.bead_radius)
-    t = float(params.plate_thickness)
+    R, t = float(params.bead_radius), float(params.plate_thickness)
     has_plate = t > 0
     plate = (float(params.plate_E), float(params.plate_nu))
     W0, Wg = chain_energy(params)
@@ -468,50 +467,71 @@ def fem_wall(
             _keep(key, law)
             row = _chain_row(law, s[i], float(ds[i]), W, Wg, with_dE)
             if row is None:
-                raise SolverError(
-                    f"the fem wall's range does not hold the chain's energy within its contact "
-                    f"zone (r <= {layout.r[-1]:.4g} m; soil E {E[i]:.4g} Pa)")
+                raise _beyond_zone(float(layout.r[-1]), float(E[i]))
             rows.append(row)
             continue
-        tracer = None if path is not None else Tracer(lcp.W, lcp.q0, lcp.q1)
-        end = float(guess[i])
-        while True:
-            if tracer is not None:
-                tracer.advance(end)
-                path = tracer.path()
-            dR = path.breaks
-            F = np.concatenate([path.lam0[:, :ms].sum(1) + dR[:-1] * path.lam1[:, :ms].sum(1),
-                                [path.lam0[-1, :ms].sum() + dR[-1] * path.lam1[-1, :ms].sum()]])
-            d = s[i] * dR
-            bound, U = energy_bound(d, F, W, Wg)
-            if np.isfinite(bound):
-                break
-            if tracer is None or end > 0.5 * R:
-                raise SolverError(
-                    f"the fem wall's range does not hold the chain's energy within its contact "
-                    f"zone (r <= {layout.r[-1]:.4g} m; soil E {E[i]:.4g} Pa)")
-            end *= 2.0
-        if np.any(path.active[:, ms - 1]):
-            raise SolverError(
-                f"the contact zone of the fem wall reached its last candidate (r = "
-                f"{layout.r[-1]:.4g} m); soil E {E[i]:.4g} Pa")
-        keep = d <= bound * (1 + 1e-12)
-        j_end = int(np.count_nonzero(keep))  # breakpoints up to the bound, plus the next
-        j_end = min(j_end + 1, d.size)
-        row = _pieces(d[:j_end], path, ms, s[i], U[:j_end])
-        deriv = None
-        if with_dE and lcp.dW_dE is not None and lcp.tie is None:
-            df0, df1 = _pieces_dE(lcp.W, lcp.dW_dE, path, ms, j_end - 1)
-            deriv = _chain_dE(df0, df1, path.lam1[:j_end - 1, :ms].sum(axis=1), s[i],
-                              float(ds[i]))
-        rows.append((*row, *(deriv if deriv is not None else (None, None))))
-    # per scene: the mesh's error and the finite domain's stiffening at its own contact
-    # radius (a soft soil's is larger)
+        rows.append(_traced_row(lcp, path, s[i], float(ds[i]), float(guess[i]), W, Wg, R,
+                                float(E[i]), with_dE))
+    return _assemble(rows, _force_error(cfg, R, reach))
+
+
+def _force_error(cfg: dict[str, Any], R: float, reach: np.ndarray) -> np.ndarray:
+    """The stated relative force error of each scene's law: the mesh's error and the finite
+    domain's stiffening at the scene's own contact radius ``sqrt(R reach)`` (m; a soft
+    soil's is larger), from the contact settings ``cfg`` (m)."""
     a_peak = np.sqrt(R * reach)
     L = min(float(cfg["soil_radius"]), float(cfg["soil_depth"]))
-    error = np.hypot(FORCE_ERROR_COEF * float(cfg["mesh_growth"]) ** 2,
-                     DOMAIN_ERROR_COEF * a_peak / L)
-    return _assemble(rows, error)
+    return np.hypot(FORCE_ERROR_COEF * float(cfg["mesh_growth"]) ** 2,
+                    DOMAIN_ERROR_COEF * a_peak / L)
+
+
+def _beyond_zone(zone: float, soil_E: float) -> SolverError:
+    """The error of a range that does not hold the chain's energy within the contact zone
+    (``zone``, m, the last candidate's radius; ``soil_E``, Pa)."""
+    return SolverError(f"the fem wall's range does not hold the chain's energy within its "
+                       f"contact zone (r <= {zone:.4g} m; soil E {soil_E:.4g} Pa)")
+
+
+def _traced_row(lcp: Any, path: Any, s: float, ds: float, end: float, W: float, Wg: float,
+                R: float, soil_E: float, with_dE: bool) -> tuple[Any, ...]:
+    """One scene's law (a row of :func:`_assemble`) from its contact path as far as the
+    chain's energy reaches: ``path`` the whole path when the problem has one in closed
+    form, else None and the path is traced from ``end`` (m, rigid coordinates; doubled
+    until the energy bound is finite, :func:`energy_bound`). ``s``, ``ds`` the bead's
+    compliance scale and its derivative in E (1/Pa); ``W``, ``Wg`` the chain's energy (J)
+    and weight (N); ``R`` the bead radius (m); ``soil_E`` (Pa) for the messages."""
+    from ssw.contact.parametric import Tracer
+
+    ms = lcp.n_sphere
+    zone = float(lcp.r[-1])
+    tracer = None if path is not None else Tracer(lcp.W, lcp.q0, lcp.q1)
+    while True:
+        if tracer is not None:
+            tracer.advance(end)
+            path = tracer.path()
+        dR = path.breaks
+        F = np.concatenate([path.lam0[:, :ms].sum(1) + dR[:-1] * path.lam1[:, :ms].sum(1),
+                            [path.lam0[-1, :ms].sum() + dR[-1] * path.lam1[-1, :ms].sum()]])
+        d = s * dR
+        bound, U = energy_bound(d, F, W, Wg)
+        if np.isfinite(bound):
+            break
+        if tracer is None or end > 0.5 * R:
+            raise _beyond_zone(zone, soil_E)
+        end *= 2.0
+    if np.any(path.active[:, ms - 1]):
+        raise SolverError(
+            f"the contact zone of the fem wall reached its last candidate (r = "
+            f"{zone:.4g} m); soil E {soil_E:.4g} Pa")
+    keep = d <= bound * (1 + 1e-12)
+    j_end = int(np.count_nonzero(keep))  # breakpoints up to the bound, plus the next
+    j_end = min(j_end + 1, d.size)
+    row = _pieces(d[:j_end], path, ms, s, U[:j_end])
+    deriv = None
+    if with_dE and lcp.dW_dE is not None and lcp.tie is None:
+        df0, df1 = _pieces_dE(lcp.W, lcp.dW_dE, path, ms, j_end - 1)
+        deriv = _chain_dE(df0, df1, path.lam1[:j_end - 1, :ms].sum(axis=1), s, ds)
+    return (*row, *(deriv if deriv is not None else (None, None)))
 
 
 def _pieces(d: np.ndarray, path: Any, ms: int, s: float, U: np.ndarray
@@ -713,7 +733,7 @@ def peak_stresses(params: ChainParams, soil_E: Any, soil_nu: float, d_wall: Any,
     """The contact's elastic stresses at the chain's peak wall indentations ``d_wall`` (m,
     one per soil modulus ``soil_E``, Pa; one ``soil_nu``): the indentation moved into the
     rigid sphere's coordinates of the FEM (the bead's compliance out,
-    :func:`ssw.chain.wall.compliance_scale`) and the device's plate (its material,
+    :func:`ssw.chain.wall_base.compliance_scale`) and the device's plate (its material,
     thickness, diameter and interface, as :func:`fem_wall` has them) with the elastic bead
     (:func:`ssw.contact.stress.contact_stresses`; ``force``, N, the wall's force there when
     known). Returns its ``ContactStress``.

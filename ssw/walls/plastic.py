@@ -42,7 +42,7 @@ integrals are exact for the piecewise linear tables, so the chain's energy balan
 to the integrator's error.
 
 Bead compliance: as for the other FEM walls, ``F(d) = F_R(d / s)`` with
-:func:`ssw.chain.wall.compliance_scale` (exact for Hertz; for the plastic branches a
+:func:`ssw.chain.wall_base.compliance_scale` (exact for Hertz; for the plastic branches a
 first-order correction, ``s - 1 < 1e-3`` on soils and foams below 200 MPa).
 
 Cost: a loading path and ``K`` loading-unloading paths on a mesh scaled to the contact
@@ -540,7 +540,7 @@ class PlasticWall:
 
     def indentation(self, F: np.ndarray) -> np.ndarray:
         """Indentation (m) carrying ``F`` (N) on the current history (the root of the
-        monotone law, :func:`ssw.chain.wall.force_indentation`).
+        monotone law, :func:`ssw.chain.wall_base.force_indentation`).
 
         Parameters
         ----------

@@ -47,7 +47,9 @@ HARD_WEIGHT = 10.0
 def merit(c: DeviceCandidate) -> float:
     """A scalar to minimize: ``ln(dE/E)`` plus ``HARD_WEIGHT`` times the hard limits'
     relative excess and the soft limit's excess (0 for a feasible device). Infinite for a
-    device with no TOF somewhere in the soil range.
+    device with no TOF somewhere in the soil range. The excesses not computed (a device
+    whose stresses were skipped, ``stresses_skipped``: it breaks another hard limit) count
+    0, so its merit is a lower bound.
 
     Parameters
     ----------
@@ -63,8 +65,9 @@ def merit(c: DeviceCandidate) -> float:
     if not np.isfinite(c.resolution):
         return float("inf")
     v = c.violations
-    hard = sum(v[k] for k in HARD)
-    return float(np.log(c.resolution) + HARD_WEIGHT * hard + v["soil_yield_index"])
+    hard = sum(v[k] for k in HARD if not np.isnan(v[k]))
+    soil = v["soil_yield_index"]
+    return float(np.log(c.resolution) + HARD_WEIGHT * hard + (0.0 if np.isnan(soil) else soil))
 
 
 def _order(c: DeviceCandidate) -> tuple[int, float, float]:
@@ -297,7 +300,7 @@ class DeviceDesignResult:
                        f"{self.spec.soil_yield_limit:g}; of the {n_hard} that meet every hard "
                        f"limit this one yields the sample least ({r.soil_yield_index:.3g})")
         else:
-            worst = max(r.violations, key=lambda k: r.violations[k])
+            worst = max(r.violations, key=lambda k: np.nan_to_num(r.violations[k], nan=-1.0))
             out.append(f"no device meets every hard limit; this one breaks them least "
                        f"(worst: {worst} {r.indices[worst]:.3g})")
         out.append(f"its sensitivity |d ln TOF / d ln E| >= {r.sensitivity:.3g}, TOF "

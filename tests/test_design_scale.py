@@ -4,11 +4,14 @@ computation gives.
 * the noise's TOF gain of the peak picker (:func:`ssw.design.sampling.picker_gain`, the
   picker's exact derivative) equals central differences of the picker itself
   (:func:`ssw.signal.peaks.refine_peaks`), sample by sample;
+* the route of the workflow and of Slurm (``--family``/``--part`` jobs, then ``--merge``)
+  recommends what one run of the same question and size does, with the same numbers.
 """
 
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 
 def test_picker_gain_is_the_pickers_derivative():
@@ -42,3 +45,71 @@ def test_picker_gain_is_the_pickers_derivative():
     assert live.sum() >= m - 3
     np.testing.assert_allclose(gain[live], fd[live], rtol=1e-6)
     assert np.all(gain[~live] == 0.0)
+
+
+#: One family of two chains (a part each), two striker masses scanned: with ``--size 10``
+#: the scan's 4 devices and a bounded search of 3 evaluations from the best device of each
+#: chain (``sized``: every chain and plate searched, as the default space at 10^4 and 10^5).
+SPLIT_SPACE = {"bead_materials": ["chrome_steel", "tungsten_carbide"],
+               "bead_diameters": [9.525e-3], "beads": [12], "sensor_positions": [0.5],
+               "plate_materials": ["pla"],
+               "striker_mass_ratio": {"range": [0.5, 1.0], "scan": 2},
+               "drop_height": {"range": [2e-3, 8e-3], "scan": 1},
+               "plate_thickness": {"range": [1e-4, 1.5e-4], "scan": 1},
+               "finalists": 1, "refine_evaluations": 2, "moduli": 2, "plate_yield_limit": 3.0}
+KEY = ("bead_material", "bead_diameter", "beads", "sensor_index", "sensor_mass_ratio",
+       "striker_mass_ratio", "drop_height", "plate_material", "plate_thickness")
+
+
+def test_a_design_split_into_parts_and_merged_is_the_single_run(tmp_path):
+    """The Slurm route (``--family D:MAT --part I/N`` jobs, then ``--merge``) against one
+    ``ssw design --space device`` run of the same question and size: the same devices
+    evaluated, the same recommended device with the same numbers, and every device
+    evaluated at the same time step with the same per-soil numbers (the parts' chains run
+    in the batches of the single run; each part's best is also evaluated at its own step,
+    so the other part's best differs in its step only)."""
+    import json
+
+    from conftest import run_device_design
+
+    from ssw.cli import main
+    from ssw.design.device_eval import ARRAYS
+    from ssw.design.space import space_from_dict
+
+    single = run_device_design(tmp_path, SPLIT_SPACE, "--size", "10", "--no-reference")
+    space = space_from_dict(single["space"], single["space"]["plate_diameter_ratio"])
+    assert space.size == 4 and single["spec"]["finalists"] == 2
+    assert len(single["searches"]) == 2  # each chain searched
+    common = ["design", "--space", "device", "--config", str(tmp_path / "config.yaml"),
+              "--calibration", "none", "--soil-E", "20e6:200e6", "--soil-nu", "0.3",
+              "--soil-yield-limit", "50", "--size", "10", "--no-reference"]
+    parts = []
+    for i in range(2):
+        parts.append(tmp_path / f"part{i}.json")
+        assert main([*common, "--family", "9.525e-3:pla", "--part", f"{i}/2", "--output",
+                     str(parts[i])]) == 0
+    chains = [{c["bead_material"] for c in json.loads(p.read_text())["candidates"]}
+              for p in parts]
+    assert chains == [{"chrome_steel"}, {"tungsten_carbide"}]  # one chain a part
+    merged_path = tmp_path / "merged.json"
+    assert main(["design", "--space", "device", "--config", str(tmp_path / "config.yaml"),
+                 "--merge", *map(str, parts), "--output", str(merged_path)]) == 0
+    merged = json.loads(merged_path.read_text())
+    assert merged["recommended"]["label"] == single["recommended"]["label"]
+    assert merged["recommended"]["step"] == single["recommended"]["step"] == "own"
+    for name in ("resolution", "sensitivity", "soil_yield_index", "plate_yield_index",
+                 "bead_yield_index", "mass"):
+        # equal up to the operators' condensation order in one process (~1e-12)
+        assert merged["recommended"][name] == pytest.approx(single["recommended"][name],
+                                                            rel=1e-9), name
+
+    def rows(res):
+        return {tuple(c[k] for k in KEY): c for c in res["candidates"]}
+
+    ra, rb = rows(single), rows(merged)
+    assert set(ra) == set(rb) and len(ra) >= 6  # the scan's 4 and the searches'
+    same = [k for k in ra if ra[k]["step"] == rb[k]["step"]]
+    assert len(same) >= len(ra) - 1
+    for k in same:
+        for name in ARRAYS:
+            np.testing.assert_allclose(rb[k][name], ra[k][name], rtol=1e-9, err_msg=name)

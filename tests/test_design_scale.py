@@ -113,3 +113,46 @@ def test_a_design_split_into_parts_and_merged_is_the_single_run(tmp_path):
     for k in same:
         for name in ARRAYS:
             np.testing.assert_allclose(rb[k][name], ra[k][name], rtol=1e-9, err_msg=name)
+
+
+def test_stresses_skipped_only_where_the_ranking_cannot_use_them():
+    """One chain's devices (the 20-200 MPa recommendation, 12 x 9.525 mm chrome steel on
+    0.548 mm PLA, dropped from 4.47 mm to 50 mm, two strikers) evaluated with the stresses
+    where needed and with all of them: the same dynamics; a device whose stresses were
+    skipped breaks a hard limit known without them in the full evaluation too, and its
+    merit is a lower bound of the full one; the stresses computed are the full run's; and
+    the ranking's feasible devices and recommendation are the same."""
+    from ssw.chain.params import chain_params, numerics_of
+    from ssw.config import device_of, library, load_config
+    from ssw.design.device_eval import BEFORE_STRESSES, evaluate
+    from ssw.design.device_search import merit, rank
+    from ssw.design.device_spec import DeviceSpec
+    from ssw.design.space import DevicePoint
+
+    cfg = load_config("config/config.yaml")
+    dev, mats = device_of(cfg), library(cfg)
+    base = chain_params(dev, mats, **numerics_of(cfg))
+    spec = DeviceSpec((20e6, 200e6), 0.3, moduli=3)
+    pts = [DevicePoint("chrome_steel", 9.525e-3, 12, 6, 0.956, st, h, "pla", 5.48e-4,
+                       2.475e-2) for st in (0.923, 3.0) for h in (4.47e-3, 1.5e-2, 5e-2)]
+    items = [(p, p.params(base, mats)) for p in pts]
+    contact = dict(cfg.get("contact", {}))
+    lazy, full = (evaluate(items, spec, mats, contact, base.bead_radius,
+                           dev.full_scale_force, all_stresses=a) for a in (False, True))
+    skipped = [c.stresses_skipped != "" for c in lazy]
+    assert any(skipped) and not all(skipped)
+    assert not any(c.stresses_skipped for c in full)
+    for a, b, s in zip(lazy, full, skipped, strict=True):
+        np.testing.assert_array_equal(a.resolution_E, b.resolution_E)
+        if s:
+            assert np.all(np.isnan(a.soil_yield_E)) and np.isnan(a.plate_yield_index)
+            assert any(b.violations[k] > 0 for k in BEFORE_STRESSES)
+            assert not b.hard_feasible
+            assert merit(a) <= merit(b)
+        else:
+            np.testing.assert_allclose(a.soil_von_mises_E, b.soil_von_mises_E, rtol=1e-9)
+            np.testing.assert_allclose(a.plate_von_mises_E, b.plate_von_mises_E, rtol=1e-9)
+            assert a.feasible == b.feasible and merit(a) == pytest.approx(merit(b), rel=1e-9)
+    ra, rb = rank(lazy), rank(full)
+    assert ra.recommended.key == rb.recommended.key
+    assert {c.key for c in lazy if c.feasible} == {c.key for c in full if c.feasible}

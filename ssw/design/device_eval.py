@@ -562,15 +562,15 @@ def _broken_before_stresses(c: DeviceCandidate) -> list[str]:
 def evaluate(items: list[tuple[DevicePoint, Any]], spec: DeviceSpec,
              materials: dict[str, Any], contact: dict[str, Any], base_radius: float,
              full_scale: float, *, store: Any = None, source: str = "scan",
-             own_step: bool = False) -> list[DeviceCandidate]:
+             own_step: bool = False, all_stresses: bool = False) -> list[DeviceCandidate]:
     """Evaluate devices over the soil grid (module docstring).
 
     The stresses (step 5, the costliest per plate) are computed only for the devices that
-    meet every hard limit known without them (:data:`BEFORE_STRESSES`): those the
-    ranking's feasible and hard-feasible classes and the Pareto fronts can hold. A device
-    that breaks one is ranked among the infeasible ones by :func:`merit
-    <ssw.design.device_search.merit>` without its yield terms (a lower bound), its plate
-    and soil stresses NaN and ``stresses_skipped`` naming the broken limits.
+    meet every hard limit known without them (:data:`BEFORE_STRESSES`), unless
+    ``all_stresses``: those the ranking's feasible and hard-feasible classes and the Pareto
+    fronts can hold. A device that breaks one is ranked among the infeasible ones by
+    :func:`merit <ssw.design.device_search.merit>` without its yield terms (a lower bound),
+    its plate and soil stresses NaN and ``stresses_skipped`` naming the broken limits.
 
     Parameters
     ----------
@@ -592,6 +592,9 @@ def evaluate(items: list[tuple[DevicePoint, Any]], spec: DeviceSpec,
         The candidates' label (``scan``, ``search``, ``reference``).
     own_step : bool
         Group the devices by striker so that each runs at its own time step.
+    all_stresses : bool
+        The stresses of every device (the base device's and the recommended one's: each
+        stated whole), not only of those that meet the hard limits known without them.
 
     Returns
     -------
@@ -614,6 +617,8 @@ def evaluate(items: list[tuple[DevicePoint, Any]], spec: DeviceSpec,
     nan = np.full(spec.moduli, np.nan)
     broken = [_broken_before_stresses(_candidate(sc, nan, nan, spec, materials, full_scale,
                                                  source, "?")) for sc in scenes]
+    if all_stresses:
+        broken = [[] for _ in scenes]
     needed = [i for i, b in enumerate(broken) if not b]
     plate_vm, soil_vm = _stresses(scenes, needed, spec, contact_of, store)
     return [_candidate(sc, plate_vm[i], soil_vm[i], spec, materials, full_scale, source,

@@ -185,8 +185,9 @@ class _Task:
 def _evaluate(task: _Task, points: list[DevicePoint], source: str,
               own_step: bool = False) -> list[DeviceCandidate]:
     items = [(p, p.params(task.base, task.materials)) for p in points]
+    # a device at its own step is the base device or the recommended one: stated whole
     return evaluate(items, task.spec, task.materials, task.contact, task.base.bead_radius,
-                    task.full_scale, source=source, own_step=own_step)
+                    task.full_scale, source=source, own_step=own_step, all_stresses=own_step)
 
 
 def _scan_family(args: tuple[_Task, float, str, int, int]) -> list[DeviceCandidate]:

@@ -235,6 +235,7 @@ def sampled_tof(run: object, peaks: object, rate: float, noise_rms: float,
     times = np.empty((2, cols.size, phases))
     gain = np.empty((2, cols.size))
     width = np.empty((2, cols.size))
+    rows, peaks_at, offsets = [], [], []  # every peak's samples at every phase: one pick
     for j, tp in enumerate((t_inc[cols], t_ref[cols])):
         y, start = _filtered(run, tp, cols, rate, taps, OVERSAMPLE, half_samples)
         mid = half_samples * OVERSAMPLE
@@ -254,11 +255,16 @@ def sampled_tof(run: object, peaks: object, rate: float, noise_rms: float,
             s = y[r[:, None], j0[:, None] + OVERSAMPLE * np.arange(n_s)[None, :]]
             c = np.rint((k - j0) / OVERSAMPLE).astype(np.int64)
             near = s[r[:, None], c[:, None] + np.arange(-1, 2)[None, :]]
-            c = np.clip(c - 1 + np.argmax(near, axis=1), 1, n_s - 2)
-            pos, _ = refine_peaks(s, c, UPSAMPLE)
-            times[j, :, p] = (start + j0 + pos * OVERSAMPLE) * h
-            if p == 0:
-                gain[j] = picker_gain(s, c, pos)
+            rows.append(s)
+            peaks_at.append(np.clip(c - 1 + np.argmax(near, axis=1), 1, n_s - 2))
+            offsets.append(start + j0)
+    # (the picker's rows are independent: one call gives each row's own numbers)
+    pos, _ = refine_peaks(np.concatenate(rows), np.concatenate(peaks_at), UPSAMPLE)
+    pos = pos.reshape(2, phases, cols.size)
+    for j in range(2):
+        times[j] = ((np.stack(offsets[j * phases:(j + 1) * phases]) + pos[j] * OVERSAMPLE)
+                    * h).T
+        gain[j] = picker_gain(rows[j * phases], peaks_at[j * phases], pos[j, 0])
     err = (times[1] - times[0]) - (t_ref[cols] - t_inc[cols])[:, None]
     bias, spread, noise, samples = nan.copy(), nan.copy(), nan.copy(), nan.copy()
     bias[cols] = err.mean(axis=1)

@@ -62,14 +62,16 @@ KEY = ("bead_material", "bead_diameter", "beads", "sensor_index", "sensor_mass_r
 
 
 def test_a_design_split_into_parts_and_merged_is_the_single_run(tmp_path):
-    """The Slurm route (``--family D:MAT --part I/N`` jobs, then ``--merge``) against one
-    ``ssw design --space device`` run of the same question and size: the same devices
+    """The Slurm route (``--family D:MAT --part I/N`` jobs sized by the config's
+    ``design.device.size``, then ``--merge``) against one ``ssw design --space device``
+    run of the same question and ``--size``: the same devices
     evaluated, the same recommended device with the same numbers, and every device
     evaluated at the same time step with the same per-soil numbers (the parts' chains run
     in the batches of the single run; each part's best is also evaluated at its own step,
     so the other part's best differs in its step only)."""
     import json
 
+    import yaml
     from conftest import run_device_design
 
     from ssw.cli import main
@@ -80,9 +82,13 @@ def test_a_design_split_into_parts_and_merged_is_the_single_run(tmp_path):
     space = space_from_dict(single["space"], single["space"]["plate_diameter_ratio"])
     assert space.size == 4 and single["spec"]["finalists"] == 2
     assert len(single["searches"]) == 2  # each chain searched
-    common = ["design", "--space", "device", "--config", str(tmp_path / "config.yaml"),
+    # the parts as the workflow runs them: the size from the config's design.device.size
+    cfg = yaml.safe_load((tmp_path / "config.yaml").read_text())
+    cfg["design"]["device"]["size"] = 10
+    (tmp_path / "sized.yaml").write_text(yaml.safe_dump(cfg))
+    common = ["design", "--space", "device", "--config", str(tmp_path / "sized.yaml"),
               "--calibration", "none", "--soil-E", "20e6:200e6", "--soil-nu", "0.3",
-              "--soil-yield-limit", "50", "--size", "10", "--no-reference"]
+              "--soil-yield-limit", "50", "--no-reference"]
     parts = []
     for i in range(2):
         parts.append(tmp_path / f"part{i}.json")

@@ -130,7 +130,8 @@ def _add_device_options(g: argparse._ArgumentGroup) -> None:
     g.add_argument("--size", type=int, metavar="N",
                    help="with --space device: about N evaluations (the scan grown to at "
                    "most 3/4 of N, the rest in bounded searches from the best devices: "
-                   "ssw.design.device_search.sized; default: the config's space)")
+                   "ssw.design.device_search.sized; default: the config's design.device."
+                   "size, else its space as stated)")
     g.add_argument("--part", metavar="I/N",
                    help="with --space device and --family: only the family's chains I, I+N, "
                    "... (the workflow's scatter; no plastic check, the merge strikes)")
@@ -358,10 +359,11 @@ def _run_device(args: argparse.Namespace) -> dict[str, Any]:
                       tof_scatter_source=plate_spec.tof_scatter_source,
                       sample_rate=plate_spec.sample_rate, **kw)
     mats = ctx.calibration.materials() if ctx.calibration is not None else library(cfg)
-    if args.size is not None:
+    size = args.size if args.size is not None else section.get("size")
+    if size is not None:
         from ssw.design.device_search import sized
 
-        space, spec = sized(space, spec, args.size)
+        space, spec = sized(space, spec, size)
     ref = None if args.no_reference else point_of(p, dev.bead_material, dev.plate_material)
     families = _families(args.family)
     # the config's contact lengths are its device's bead's: scaled to the base device's

@@ -162,3 +162,35 @@ def test_stresses_skipped_only_where_the_ranking_cannot_use_them():
     ra, rb = rank(lazy), rank(full)
     assert ra.recommended.key == rb.recommended.key
     assert {c.key for c in lazy if c.feasible} == {c.key for c in full if c.feasible}
+
+
+def test_bench_times_the_sized_design_and_reports_its_recommendation(tmp_path):
+    """``ssw bench design --space device --sizes N`` runs ``ssw design --space device
+    --size N`` (:func:`ssw.bench.design.device_argv`): its row states that run's
+    evaluations and recommended device, its CSV reads back (the device's label quoted)."""
+    import csv
+    import json
+    from pathlib import Path
+
+    import yaml
+
+    from ssw.bench.design import device_argv
+    from ssw.cli import main
+
+    root = Path(__file__).resolve().parents[1]
+    cfg = yaml.safe_load((root / "config" / "config.yaml").read_text())
+    cfg["design"]["device"] = {**SPLIT_SPACE, "bead_materials": ["chrome_steel"]}
+    config = tmp_path / "config.yaml"
+    config.write_text(yaml.safe_dump(cfg))
+    assert main(["bench", "design", "--space", "device", "--sizes", "6", "--jobs", "1",
+                 "--config", str(config), "--output-dir", str(tmp_path / "bench")]) == 0
+    direct = tmp_path / "direct.json"
+    assert main([*device_argv(str(config), 6, 1), "--output", str(direct)]) == 0
+    want = json.loads(direct.read_text())
+    with open(tmp_path / "bench" / "design_device_bench.csv") as fh:
+        (row,) = csv.DictReader(line for line in fh if not line.startswith("#"))
+    assert row["recommended"] == want["recommended"]["label"] and "," in row["recommended"]
+    assert int(row["candidates"]) == want["evaluations"]
+    assert float(row["resolution"]) == pytest.approx(want["recommended"]["resolution"],
+                                                     rel=1e-9)
+    assert float(row["cpu_time"]) > 0 and float(row["wall_time"]) > 0

@@ -31,6 +31,8 @@ the stresses; cached operators save the condensation only (0.3 s).
 from __future__ import annotations
 
 import argparse
+import csv
+import io
 import os
 import tempfile
 import time
@@ -237,8 +239,11 @@ def _write_rows(out: Path, stem: str, command: str, config: str,
               "cpu_count": os.cpu_count(),
               "outputs": [str(out / f"{stem}.{x}") for x in ("csv", "json")]}
     keys = list(rows[0])
-    write_csv_text(out / f"{stem}.csv", "\n".join(
-        [",".join(keys)] + [",".join(str(r[k]) for k in keys) for r in rows]) + "\n", result)
+    text = io.StringIO()  # a field with a comma (a device's label) quoted
+    writer = csv.writer(text, lineterminator="\n")
+    writer.writerow(keys)
+    writer.writerows([[str(r[k]) for k in keys] for r in rows])
+    write_csv_text(out / f"{stem}.csv", text.getvalue(), result)
     write_json(out / f"{stem}.json", result, result)
     return result
 

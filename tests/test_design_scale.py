@@ -78,7 +78,7 @@ def test_a_design_split_into_parts_and_merged_is_the_single_run(tmp_path):
     from ssw.design.device_eval import ARRAYS
     from ssw.design.space import space_from_dict
 
-    single = run_device_design(tmp_path, SPLIT_SPACE, "--size", "10", "--no-reference")
+    single = run_device_design(tmp_path, SPLIT_SPACE, "--size", "10")
     space = space_from_dict(single["space"], single["space"]["plate_diameter_ratio"])
     assert space.size == 4 and single["spec"]["finalists"] == 2
     assert len(single["searches"]) == 2  # each chain searched
@@ -88,19 +88,23 @@ def test_a_design_split_into_parts_and_merged_is_the_single_run(tmp_path):
     (tmp_path / "sized.yaml").write_text(yaml.safe_dump(cfg))
     common = ["design", "--space", "device", "--config", str(tmp_path / "sized.yaml"),
               "--calibration", "none", "--soil-E", "20e6:200e6", "--soil-nu", "0.3",
-              "--soil-yield-limit", "50", "--no-reference"]
+              "--soil-yield-limit", "50"]
     parts = []
     for i in range(2):
         parts.append(tmp_path / f"part{i}.json")
         assert main([*common, "--family", "9.525e-3:pla", "--part", f"{i}/2", "--output",
                      str(parts[i])]) == 0
-    chains = [{c["bead_material"] for c in json.loads(p.read_text())["candidates"]}
-              for p in parts]
+    chains = [{c["bead_material"] for c in json.loads(p.read_text())["candidates"]
+               if c["source"] == "scan"} for p in parts]
     assert chains == [{"chrome_steel"}, {"tungsten_carbide"}]  # one chain a part
     merged_path = tmp_path / "merged.json"
     assert main(["design", "--space", "device", "--config", str(tmp_path / "config.yaml"),
                  "--merge", *map(str, parts), "--output", str(merged_path)]) == 0
     merged = json.loads(merged_path.read_text())
+    # each chain searched once, by the part that scans it (the base device by neither)
+    starts = sorted(x["start"]["bead_material"] for x in merged["searches"])
+    assert starts == sorted(x["start"]["bead_material"] for x in single["searches"])
+    assert starts == ["chrome_steel", "tungsten_carbide"]
     assert merged["recommended"]["label"] == single["recommended"]["label"]
     assert merged["recommended"]["step"] == single["recommended"]["step"] == "own"
     for name in ("resolution", "sensitivity", "soil_yield_index", "plate_yield_index",
@@ -113,7 +117,9 @@ def test_a_design_split_into_parts_and_merged_is_the_single_run(tmp_path):
         return {tuple(c[k] for k in KEY): c for c in res["candidates"]}
 
     ra, rb = rows(single), rows(merged)
-    assert set(ra) == set(rb) and len(ra) >= 6  # the scan's 4 and the searches'
+    assert set(ra) == set(rb) and len(ra) >= 7  # the scan's 4, the searches', the base
+    # the base device (a chain outside the space) evaluated, searched from by no part
+    assert single["reference"] is not None and merged["reference"] is not None
     same = [k for k in ra if ra[k]["step"] == rb[k]["step"]]
     assert len(same) >= len(ra) - 1
     for k in same:

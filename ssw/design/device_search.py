@@ -7,10 +7,12 @@ rank, and place the thesis device.
    family (bead diameter x plate material; one process each with ``jobs > 1``) at the scan
    points of its continuous variables, evaluated over the soil grid
    (:func:`ssw.design.device_eval.evaluate`, the devices of one chain in one batched run);
-2. the bounded search: the ``finalists`` best devices (each of its own chain and plate)
-   move their continuous variables (sensor and striker mass ratios, drop height, plate
-   thickness, in their logarithm) inside the space's ranges by ``scipy.optimize.minimize``
-   (Powell, bounded; :func:`merit` as the objective, ``refine_evaluations`` evaluations);
+2. the bounded search: the ``finalists`` best devices (each of its own chain and plate,
+   among the chains and plates the run scans: the base device competes for its own pair's
+   start only when its chain is scanned) move their continuous variables (sensor and
+   striker mass ratios, drop height, plate thickness, in their logarithm) inside the
+   space's ranges by ``scipy.optimize.minimize`` (Powell, bounded; :func:`merit` as the
+   objective, ``refine_evaluations`` evaluations);
 3. the ranking (:func:`rank`): the feasible device of finest worst-case resolution; when
    none is feasible, the hard-feasible device of finest resolution whose soil yield is
    least in excess, else the smallest weighted violation; the Pareto fronts of the
@@ -426,7 +428,13 @@ def run_device_design(space: DeviceSpace, spec: DeviceSpec, base: Any,
     if reference is not None:
         ref = _evaluate(task, [reference], "reference", own_step=True)[0]
         seen[ref.key] = ref
-    finalists = best_of_pairs(sorted(seen.values(), key=_order), spec.finalists)
+    # the searches start from the chains and plates this run scans (the base device competes
+    # for its own pair's start there): a part of a family (--part) searches its own pairs,
+    # never another part's, so the parts together search what one run does
+    mine = {(c.point.chain, c.point.plate_material) for c in scanned}
+    finalists = best_of_pairs(sorted((c for c in seen.values()
+                                      if (c.point.chain, c.point.plate_material) in mine),
+                                     key=_order), spec.finalists)
     searches = []
     if spec.refine_evaluations > 0 and finalists:
         for found, info in map_jobs(_refine, [(task, c) for c in finalists], jobs):

@@ -135,7 +135,7 @@ def picker_gain(s: np.ndarray, c: np.ndarray, pos: np.ndarray) -> np.ndarray:
 
     The picker is linear up to its parabola: the window ``w`` of samples
     ``c - HALF_WINDOW .. c + HALF_WINDOW`` is upsampled ``U`` times, ``f = w A``
-    (:func:`_interpolation_matrix`), and the vertex of the parabola through the fine values
+    (``_interpolation_matrix``), and the vertex of the parabola through the fine values
     ``f_{j-1}, f_j, f_{j+1}`` at its largest one ``j`` gives ``pos = lo + (j + p) / U`` with
     ``p = (f_{j-1} - f_{j+1}) / (2 D)``, ``D = f_{j-1} - 2 f_j + f_{j+1} < 0``. So, exactly
     (the limit of a central difference of the picker; ``j`` recovered from ``pos``, as

@@ -13,12 +13,13 @@ Reports the wall time of each, the candidates evaluated, the seconds per candida
 recommended plate. Writes ``design_bench.csv`` and ``design_bench.json`` under the output
 folder.
 
-``--space device --sizes 100,1000,10000`` times the device design's evaluation instead
-(:mod:`ssw.design.device_search`): for each size, that many devices drawn evenly from the
-default device space (its scans refined until it holds them), evaluated over the thesis's
-20-200 MPa soils (6 moduli) in ``--jobs`` processes (one family each), with wall and CPU
-time (this process and its children) and candidates per second. Writes
-``design_device_bench.csv`` and ``.json``.
+``--space device --sizes 100,1000,10000`` times the whole device design instead
+(:mod:`ssw.design.device_search`): for each size N, ``ssw design --space device --size N``
+on the 20-200 MPa soils at nu 0.3 with ``--jobs`` processes and ``--config``'s device space
+(:func:`device_argv`; the scan grown to about 3/4 of N, the rest in bounded searches from
+the best devices), with wall and CPU time (this process and its workers), candidates per
+second, CPU per candidate and the recommended device. Writes ``design_device_bench.csv``
+and ``.json``.
 
 Measured (2 cores, 43 candidates a range): 38-45 s a range with the operators cached on a
 quiet machine (``ssw design --soil-range soft|stiff --jobs 2``), 43-66 s cold or warm with
@@ -30,13 +31,13 @@ the stresses; cached operators save the condensation only (0.3 s).
 from __future__ import annotations
 
 import argparse
+import csv
+import io
 import os
 import tempfile
 import time
 from pathlib import Path
 from typing import Any
-
-import numpy as np
 
 from ssw.h5io import write_csv_text, write_json
 
@@ -82,35 +83,36 @@ def _design(spec: Any, params: Any, mats: Any, contact: Any, jobs: int) -> tuple
     return time.perf_counter() - t0, res
 
 
-def _device_points(n: int, ratio: float) -> tuple[Any, list[Any]]:
-    """``n`` devices drawn evenly from the default device space, its scans refined (one
-    more point per continuous variable in turn) until it holds ``n``."""
-    from dataclasses import replace
-
-    from ssw.design.space import CONTINUOUS, DeviceSpace
-
-    space = DeviceSpace(plate_diameter_ratio=ratio)
-    k = 0
-    while space.size < n:
-        name = CONTINUOUS[k % len(CONTINUOUS)]
-        iv = getattr(space, name)
-        space = replace(space, **{name: replace(iv, scan=iv.scan + 1)})
-        k += 1
-    pts = [p for d, m in space.families() for p in space.family_points(d, m)]
-    idx = sorted({int(i) for i in (np.arange(n) * (len(pts) / n))})
-    return space, [pts[i] for i in idx]
+#: The device design timed by ``--space device``: ``ssw design`` on these soils (Pa, -).
+DEVICE_SOILS = ("20e6:200e6", "0.3")
 
 
-def _device_family(args: tuple[Any, ...]) -> int:
-    from ssw.design.device_eval import evaluate
+def device_argv(config: str, size: int, jobs: int) -> list[str]:
+    """The ``ssw design`` command line timed by ``--space device`` for one size.
 
-    points, spec, params, mats, contact, full_scale = args
-    items = [(p, p.params(params, mats)) for p in points]
-    return len(evaluate(items, spec, mats, contact, params.bead_radius, full_scale))
+    Parameters
+    ----------
+    config : str
+        The study config (its ``design.device`` space; default space without one).
+    size : int
+        ``--size``: about this many evaluations.
+    jobs : int
+        ``--jobs``: processes.
+
+    Returns
+    -------
+    list of str
+        ``design --space device --config CONFIG --calibration none --soil-E 20e6:200e6
+        --soil-nu 0.3 --size SIZE --jobs JOBS`` (the arguments after ``ssw``).
+    """
+    return ["design", "--space", "device", "--config", config, "--calibration", "none",
+            "--soil-E", DEVICE_SOILS[0], "--soil-nu", DEVICE_SOILS[1], "--size", str(size),
+            "--jobs", str(jobs)]
 
 
 def run_device(args: argparse.Namespace) -> dict[str, Any]:
-    """``--space device``: candidates per second against the number of candidates.
+    """``--space device``: the whole device design (``ssw design --space device --size N``,
+    :func:`device_argv`) at each size, timed in this process.
 
     Parameters
     ----------
@@ -120,35 +122,30 @@ def run_device(args: argparse.Namespace) -> dict[str, Any]:
     Returns
     -------
     dict
-        Per size: candidates, families, wall and CPU time (s), candidates per s; and the
-        files written (``design_device_bench.csv``, ``.json``).
+        Per size: candidates evaluated (scan, search), searches, wall and CPU time (s, this
+        process and its workers), candidates per s, CPU s per candidate, the recommended
+        device, its worst-case resolution dE/E (-) and the feasible devices; and the files
+        written (``design_device_bench.csv``, ``.json``).
     """
-    from ssw.chain.params import chain_params, numerics_of
-    from ssw.config import device_of, library, load_config
-    from ssw.design.device_search import cpu_time, map_jobs
-    from ssw.design.device_spec import DeviceSpec
+    from ssw.cli import build_parser
+    from ssw.design.device_search import cpu_time
     from ssw.design.spec import parse_list
 
-    cfg = load_config(args.config)
-    mats = library(cfg)
-    device = device_of(cfg)
-    params = chain_params(device, mats, **numerics_of(cfg))
-    contact = dict(cfg.get("contact", {}))
-    spec = DeviceSpec((20e6, 200e6), 0.3)
     rows = []
     for n in (int(x) for x in parse_list(args.sizes, "--sizes")):
-        space, pts = _device_points(n, params.plate_diameter / (2.0 * params.bead_radius))
-        fams: dict[tuple[float, str], list[Any]] = {}
-        for p in pts:
-            fams.setdefault((p.bead_diameter, p.plate_material), []).append(p)
+        argv = device_argv(args.config, n, args.jobs)
+        ns = build_parser(argv).parse_args(argv)
         t0, c0 = time.perf_counter(), cpu_time()
-        done = sum(map_jobs(_device_family, [(v, spec, params, mats, contact,
-                                          device.full_scale_force) for v in fams.values()],
-                        args.jobs))
+        res = ns.func(ns)
         wall, cpu = time.perf_counter() - t0, cpu_time() - c0
-        rows.append({"candidates": done, "families": len(fams), "space_size": space.size,
-                     "jobs": args.jobs, "wall_time": wall, "cpu_time": cpu,
-                     "candidates_per_s": done / wall, "cpu_per_candidate": cpu / done,
+        done = int(res["evaluations"])
+        rec = res["recommended"]
+        rows.append({"size": n, "candidates": done,
+                     "scanned": sum(c["source"] == "scan" for c in res["candidates"]),
+                     "searches": len(res["searches"]), "jobs": args.jobs,
+                     "wall_time": wall, "cpu_time": cpu, "candidates_per_s": done / wall,
+                     "cpu_per_candidate": cpu / done, "recommended": rec["label"],
+                     "resolution": rec["resolution"], "feasible": res["feasible"],
                      "loadavg": " ".join(Path("/proc/loadavg").read_text().split()[:3])
                      if Path("/proc/loadavg").exists() else ""})
     return _write_rows(Path(args.output_dir), "design_device_bench",
@@ -242,8 +239,11 @@ def _write_rows(out: Path, stem: str, command: str, config: str,
               "cpu_count": os.cpu_count(),
               "outputs": [str(out / f"{stem}.{x}") for x in ("csv", "json")]}
     keys = list(rows[0])
-    write_csv_text(out / f"{stem}.csv", "\n".join(
-        [",".join(keys)] + [",".join(str(r[k]) for k in keys) for r in rows]) + "\n", result)
+    text = io.StringIO()  # a field with a comma (a device's label) quoted
+    writer = csv.writer(text, lineterminator="\n")
+    writer.writerow(keys)
+    writer.writerows([[str(r[k]) for k in keys] for r in rows])
+    write_csv_text(out / f"{stem}.csv", text.getvalue(), result)
     write_json(out / f"{stem}.json", result, result)
     return result
 
@@ -262,12 +262,13 @@ def human(result: dict[str, Any]) -> str:
         One line per measurement.
     """
     if result["command"].endswith("--space device"):
-        lines = [f"{'cands':>6s} {'fams':>4s} {'wall s':>8s} {'CPU s':>8s} {'cand/s':>7s} "
-                 f"{'CPU s/cand':>10s}  load"]
+        lines = [f"{'size':>6s} {'cands':>6s} {'wall s':>8s} {'CPU s':>8s} {'cand/s':>7s} "
+                 f"{'CPU s/cand':>10s} {'dE/E':>7s}  recommended  (load)"]
         for r in result["rows"]:
-            lines.append(f"{r['candidates']:6d} {r['families']:4d} {r['wall_time']:8.1f} "
+            lines.append(f"{r['size']:6d} {r['candidates']:6d} {r['wall_time']:8.1f} "
                          f"{r['cpu_time']:8.1f} {r['candidates_per_s']:7.2f} "
-                         f"{r['cpu_per_candidate']:10.3f}  {r['loadavg']}")
+                         f"{r['cpu_per_candidate']:10.4f} {r['resolution']:7.4f}  "
+                         f"{r['recommended']}  ({r['loadavg']})")
         return "\n".join(lines)
     lines = [f"{'range':6s} {'cache':5s} {'cands':>5s} {'wall s':>7s} {'s/cand':>7s}  recommended"]
     for r in result["rows"]:

@@ -101,10 +101,37 @@ def register(sub: argparse._SubParsersAction) -> None:
                    "yielding as von Mises (the plate's dent; default design.device."
                    "plastic_hits, 0: off; with --merge on the merged ranking, the base device "
                    "of --config/--calibration)")
+    _add_device_options(g)
+    o = p.add_argument_group("outputs")
+    o.add_argument("--output", help="the result JSON (with its provenance)")
+    o.add_argument("--csv", help="the candidates' table (CSV)")
+    o.add_argument("--plot", help="the Pareto front and sensitivity curves (PNG)")
+    o.add_argument("--output-device", metavar="FILE",
+                   help="the recommended device as a device YAML that every command takes "
+                   "(--device FILE): the base device with the design's beads, sensor, "
+                   "striker and plate (ssw.design.device_file)")
+    o.add_argument("--output-device-rank", type=int, default=1, metavar="K",
+                   help="with --output-device: the candidate of rank K instead (default 1: "
+                   "the recommended)")
+    add_device_options(p, walls=("fem",))
+    add_json_flag(p)
+    p.set_defaults(func=run, human=human)
+
+
+def _add_device_options(g: argparse._ArgumentGroup) -> None:
+    """The options of ``ssw design --space device`` alone: its budget (``--size``), the
+    workflow's scatter and merge, the predicted measurement and the virtual prototype.
+
+    Parameters
+    ----------
+    g : argparse._ArgumentGroup
+        The command's group of the question.
+    """
     g.add_argument("--size", type=int, metavar="N",
                    help="with --space device: about N evaluations (the scan grown to at "
                    "most 3/4 of N, the rest in bounded searches from the best devices: "
-                   "ssw.design.device_search.sized; default: the config's space)")
+                   "ssw.design.device_search.sized; default: the config's design.device."
+                   "size, else its space as stated)")
     g.add_argument("--part", metavar="I/N",
                    help="with --space device and --family: only the family's chains I, I+N, "
                    "... (the workflow's scatter; no plastic check, the merge strikes)")
@@ -134,20 +161,6 @@ def register(sub: argparse._SubParsersAction) -> None:
     g.add_argument("--striker-cov", type=float, default=0.01,
                    help="with --prototype: the striker speed's relative scatter from hit to "
                    "hit (default 0.01)")
-    o = p.add_argument_group("outputs")
-    o.add_argument("--output", help="the result JSON (with its provenance)")
-    o.add_argument("--csv", help="the candidates' table (CSV)")
-    o.add_argument("--plot", help="the Pareto front and sensitivity curves (PNG)")
-    o.add_argument("--output-device", metavar="FILE",
-                   help="the recommended device as a device YAML that every command takes "
-                   "(--device FILE): the base device with the design's beads, sensor, "
-                   "striker and plate (ssw.design.device_file)")
-    o.add_argument("--output-device-rank", type=int, default=1, metavar="K",
-                   help="with --output-device: the candidate of rank K instead (default 1: "
-                   "the recommended)")
-    add_device_options(p, walls=("fem",))
-    add_json_flag(p)
-    p.set_defaults(func=run, human=human)
 
 
 def _spec(args: argparse.Namespace, ctx: Any) -> Any:
@@ -346,10 +359,11 @@ def _run_device(args: argparse.Namespace) -> dict[str, Any]:
                       tof_scatter_source=plate_spec.tof_scatter_source,
                       sample_rate=plate_spec.sample_rate, **kw)
     mats = ctx.calibration.materials() if ctx.calibration is not None else library(cfg)
-    if args.size is not None:
+    size = args.size if args.size is not None else section.get("size")
+    if size is not None:
         from ssw.design.device_search import sized
 
-        space, spec = sized(space, spec, args.size)
+        space, spec = sized(space, spec, size)
     ref = None if args.no_reference else point_of(p, dev.bead_material, dev.plate_material)
     families = _families(args.family)
     # the config's contact lengths are its device's bead's: scaled to the base device's

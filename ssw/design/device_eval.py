@@ -163,6 +163,10 @@ class DeviceCandidate:
         (n,) each validity check's ratio over the soils.
     checks_assumed : dict of str to str
         The assumption behind a check, by check name.
+    stresses_skipped : str
+        Empty when the plate's and soil's stresses were computed; else why not (the hard
+        limits known without them that the device breaks, :func:`evaluate`): its stress
+        arrays NaN, its yield indices and their violations NaN (not computed).
     """
 
     point: DevicePoint
@@ -197,6 +201,7 @@ class DeviceCandidate:
     limits: dict[str, float] = field(default_factory=dict, compare=False)
     checks_E: dict[str, np.ndarray] = field(default_factory=dict, compare=False)
     checks_assumed: dict[str, str] = field(default_factory=dict, compare=False)
+    stresses_skipped: str = ""
 
     def validity(self) -> Any:
         """The checks over the soils (:class:`ssw.validity.Validity`, one scene per E).
@@ -208,7 +213,10 @@ class DeviceCandidate:
         """
         from ssw.validity import Validity
 
-        return Validity(dict(self.checks_E), dict(self.checks_assumed))
+        skipped = {} if not self.stresses_skipped else {
+            k: f"stresses not computed: the device {self.stresses_skipped}"
+            for k in ("sample_yield", "plate_yield")}
+        return Validity(dict(self.checks_E), dict(self.checks_assumed), skipped=skipped)
 
     # ------------------------------------------------------------------ indices
     @property
@@ -242,13 +250,15 @@ class DeviceCandidate:
 
     @property
     def plate_yield_index(self) -> float:
-        """The plate's largest peak von Mises stress over its yield stress (-)."""
-        return self._worst(self.plate_yield_E)
+        """The plate's largest peak von Mises stress over its yield stress (-; NaN: not
+        computed, ``stresses_skipped``)."""
+        return float("nan") if self.stresses_skipped else self._worst(self.plate_yield_E)
 
     @property
     def soil_yield_index(self) -> float:
-        """The soil's largest peak von Mises stress over its yield stress (-)."""
-        return self._worst(self.soil_yield_E)
+        """The soil's largest peak von Mises stress over its yield stress (-; NaN: not
+        computed, ``stresses_skipped``)."""
+        return float("nan") if self.stresses_skipped else self._worst(self.soil_yield_E)
 
     @property
     def indices(self) -> dict[str, float]:
@@ -257,11 +267,13 @@ class DeviceCandidate:
 
     @property
     def violations(self) -> dict[str, float]:
-        """Relative excess of each index over its limit (0: met; inf: not evaluable)."""
+        """Relative excess of each index over its limit (0: met; inf: not evaluable; NaN:
+        not computed, ``stresses_skipped``)."""
         out = {}
         for k, v in self.indices.items():
             lim = self.limits.get(k, 1.0)
-            out[k] = max(0.0, v / lim - 1.0) if np.isfinite(v) else float("inf")
+            out[k] = (max(0.0, v / lim - 1.0) if np.isfinite(v)
+                      else float("nan") if np.isnan(v) else float("inf"))
         return out
 
     @property
@@ -299,7 +311,8 @@ class DeviceCandidate:
             "resolution": self.resolution, "sensitivity": self.sensitivity,
             **self.indices, "bead_force": self.bead_force,
             "feasible": self.feasible, "hard_feasible": self.hard_feasible,
-            "violations": self.violations, "wall_time": self.wall_time}
+            "violations": self.violations, "wall_time": self.wall_time,
+            "stresses_skipped": self.stresses_skipped}
         if arrays:
             d.update({k: getattr(self, k).tolist() for k in ARRAYS})
         if self.checks_E:  # the worst over the soils, and (with arrays) every soil's
@@ -334,7 +347,8 @@ class DeviceCandidate:
                    limits=dict(limits),
                    checks_E={k: np.asarray(v, float) for k, v in
                              d.get("checks_E", {}).items()},
-                   checks_assumed=dict(d.get("checks_assumed", {})))
+                   checks_assumed=dict(d.get("checks_assumed", {})),
+                   stresses_skipped=str(d.get("stresses_skipped", "")))
 
 
 def _bead_strength(material: Any) -> float:
@@ -448,11 +462,115 @@ def _dynamics(members: list[tuple[DevicePoint, Any]], spec: DeviceSpec, contact:
     return out
 
 
+#: Hard limits known before the stresses: a device that breaks one of them is not built
+#: whatever its stresses, so its stresses are not computed (:func:`evaluate`).
+BEFORE_STRESSES = tuple(k for k in HARD if k != "plate_yield_index")
+
+
+def _stress_groups(scenes: list[_Scenes], needed: list[int]) -> list[list[int]]:
+    """The scenes ``needed`` grouped by bead and plate (one stress call each)."""
+    plates: dict[tuple[Any, ...], list[int]] = {}
+    for i in needed:
+        p = scenes[i].params
+        plates.setdefault((p.bead_radius, p.bead_E, p.bead_nu, p.plate_E, p.plate_nu,
+                           p.plate_thickness, p.plate_diameter, p.plate_interface), []).append(i)
+    return [[i for i in idx if np.all(np.isfinite(scenes[i].d_peak))]
+            for idx in plates.values()]
+
+
+def _stresses(scenes: list[_Scenes], needed: list[int], spec: DeviceSpec, contact_of: Any,
+              store: Any) -> tuple[list[np.ndarray], list[np.ndarray]]:
+    """Pa, the plate's and the soil's peak von Mises stress (n_E,) of each scene (NaN where
+    not ``needed`` or without a peak): the states of one bead on one plate in one call
+    (:func:`ssw.walls.fem.peak_stresses`, one state per modulus)."""
+    from ssw.walls.fem import peak_stresses
+
+    plate_vm = [np.full(spec.moduli, np.nan) for _ in scenes]
+    soil_vm = [np.full(spec.moduli, np.nan) for _ in scenes]
+    for ok in _stress_groups(scenes, needed):
+        if not ok:
+            continue
+        p = scenes[ok[0]].params
+        t0 = time.perf_counter()
+        st = peak_stresses(p, np.concatenate([scenes[i].E for i in ok]), spec.soil_nu,
+                           np.concatenate([scenes[i].d_peak for i in ok]),
+                           contact=contact_of(p), operators=store,
+                           force=np.concatenate([scenes[i].wall_force for i in ok]))
+        share = (time.perf_counter() - t0) / len(ok)
+        for j, i in enumerate(ok):
+            sl = slice(j * spec.moduli, (j + 1) * spec.moduli)
+            soil_vm[i] = st.soil.peak[sl]
+            plate_vm[i] = st.plate.peak[sl] if st.plate is not None else np.zeros(spec.moduli)
+            scenes[i].wall_time += share
+    return plate_vm, soil_vm
+
+
+def _candidate(sc: _Scenes, plate_vm: np.ndarray, soil_vm: np.ndarray, spec: DeviceSpec,
+               materials: dict[str, Any], full_scale: float, source: str,
+               skipped: str = "") -> DeviceCandidate:
+    """The candidate of one device's dynamics and stresses (module docstring, 3-6)."""
+    from ssw.constitutive.yield_index import first_yield_ratio, hertz_peak_pressure
+    from ssw.design.evaluate import plate_yield_stress
+
+    point, p = sc.point, sc.params
+    plate_mat = materials[point.plate_material]
+    Y_plate = plate_yield_stress(plate_mat)
+    p0 = float(hertz_peak_pressure(np.array([sc.bead_force]), p.bead_E, p.bead_nu,
+                                   p.bead_radius)[0])
+    bead_index = p0 / (first_yield_ratio(p.bead_nu)
+                       * _bead_strength(materials[point.bead_material]))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        sens = np.abs(sc.E * sc.dtof) / sc.tof
+        u = np.sqrt(spec.tof_scatter**2 / spec.hits
+                    + (sc.sampled.noise**2 + sc.sampled.spread**2) / spec.hits
+                    + sc.sampled.bias**2)
+        res = u / (sc.tof * sens)
+    plate_mass = plate_mat.density * np.pi * 0.25 * p.plate_diameter**2 * p.plate_thickness
+    checks = {**sc.checks, "pulse_separation": sc.overlap,
+              "bead_yield": np.full(sc.E.size, float(bead_index))}
+    if not skipped:
+        checks.update(sample_yield=soil_vm / spec.soil_yield_stress(sc.E),
+                      plate_yield=plate_vm / Y_plate)
+    return DeviceCandidate(
+        point=point, soil_E=sc.E, tof_E=sc.tof, dtof_dE_E=sc.dtof, sensitivity_E=sens,
+        u_tof_E=u, resolution_E=np.where(np.isfinite(res), res, np.inf),
+        noise_E=sc.sampled.noise, bias_E=sc.sampled.bias, spread_E=sc.sampled.spread,
+        samples_per_pulse_E=sc.sampled.samples_per_pulse, overlap_E=sc.overlap,
+        detection_E=sc.detection, round_trip_E=sc.round_trip, sensor_peak_E=sc.sensor_peak,
+        wall_force_E=sc.wall_force, plate_von_mises_E=plate_vm, soil_von_mises_E=soil_vm,
+        plate_yield_E=plate_vm / Y_plate, soil_yield_E=soil_vm / spec.soil_yield_stress(sc.E),
+        bead_force=sc.bead_force, bead_yield_index=float(bead_index),
+        range_index=float(np.nanmax(sc.sensor_peak) / full_scale),
+        mass=float(np.sum(p.masses) + plate_mass),
+        length=float(p.n_beads * 2.0 * p.bead_radius + point.drop_height + p.plate_thickness),
+        plate_mass_ratio=float(plate_mass / p.bead_mass), source=source, step=sc.step,
+        wall_time=sc.wall_time, limits=spec.limits, checks_E=checks,
+        checks_assumed={} if spec.soil_strength is not None else {
+            "sample_yield": f"Y_soil = {spec.soil_strength_ratio:g} E (ssw design's "
+                            "stated assumption: --soil-strength states one)"},
+        stresses_skipped=skipped)
+
+
+def _broken_before_stresses(c: DeviceCandidate) -> list[str]:
+    """The limits of :data:`BEFORE_STRESSES` a candidate breaks (or all: no TOF)."""
+    if not np.isfinite(c.resolution):
+        return ["resolution (no TOF on some soil)"]
+    v = c.violations
+    return [k for k in BEFORE_STRESSES if not v[k] == 0.0]
+
+
 def evaluate(items: list[tuple[DevicePoint, Any]], spec: DeviceSpec,
              materials: dict[str, Any], contact: dict[str, Any], base_radius: float,
              full_scale: float, *, store: Any = None, source: str = "scan",
-             own_step: bool = False) -> list[DeviceCandidate]:
+             own_step: bool = False, all_stresses: bool = False) -> list[DeviceCandidate]:
     """Evaluate devices over the soil grid (module docstring).
+
+    The stresses (step 5, the costliest per plate) are computed only for the devices that
+    meet every hard limit known without them (:data:`BEFORE_STRESSES`), unless
+    ``all_stresses``: those the ranking's feasible and hard-feasible classes and the Pareto
+    fronts can hold. A device that breaks one is ranked among the infeasible ones by
+    :func:`merit <ssw.design.device_search.merit>` without its yield terms (a lower bound),
+    its plate and soil stresses NaN and ``stresses_skipped`` naming the broken limits.
 
     Parameters
     ----------
@@ -474,16 +592,15 @@ def evaluate(items: list[tuple[DevicePoint, Any]], spec: DeviceSpec,
         The candidates' label (``scan``, ``search``, ``reference``).
     own_step : bool
         Group the devices by striker so that each runs at its own time step.
+    all_stresses : bool
+        The stresses of every device (the base device's and the recommended one's: each
+        stated whole), not only of those that meet the hard limits known without them.
 
     Returns
     -------
     list of DeviceCandidate
         In the order of ``items``.
     """
-    from ssw.constitutive.yield_index import first_yield_ratio, hertz_peak_pressure
-    from ssw.design.evaluate import plate_yield_stress
-    from ssw.walls.fem import peak_stresses
-
     def contact_of(p: Any) -> dict[str, Any]:
         return scaled_contact({**contact, "interface": p.plate_interface},
                               p.bead_radius / base_radius)
@@ -492,74 +609,18 @@ def evaluate(items: list[tuple[DevicePoint, Any]], spec: DeviceSpec,
     for i, (_, p) in enumerate(items):
         key = _group_key(p) + ((p.striker_velocity, p.masses[0]) if own_step else ())
         groups.setdefault(key, []).append(i)
-    scenes: list[_Scenes | None] = [None] * len(items)
+    scenes: list[Any] = [None] * len(items)
     for idx in groups.values():
         for i, sc in zip(idx, _dynamics([items[i] for i in idx], spec, contact_of, store,
                                         "own" if own_step else "shared"), strict=True):
             scenes[i] = sc
-    # the stresses: the states of one bead on one plate in one call (one scene per modulus)
-    plates: dict[tuple[Any, ...], list[int]] = {}
-    for i, sc in enumerate(scenes):
-        p = sc.params
-        plates.setdefault((p.bead_radius, p.bead_E, p.bead_nu, p.plate_E, p.plate_nu,
-                           p.plate_thickness, p.plate_diameter, p.plate_interface), []).append(i)
-    plate_vm = [np.full(spec.moduli, np.nan) for _ in items]
-    soil_vm = [np.full(spec.moduli, np.nan) for _ in items]
-    for idx in plates.values():
-        ok = [i for i in idx if np.all(np.isfinite(scenes[i].d_peak))]
-        if not ok:
-            continue
-        p = scenes[ok[0]].params
-        t0 = time.perf_counter()
-        st = peak_stresses(p, np.concatenate([scenes[i].E for i in ok]), spec.soil_nu,
-                           np.concatenate([scenes[i].d_peak for i in ok]),
-                           contact=contact_of(p), operators=store,
-                           force=np.concatenate([scenes[i].wall_force for i in ok]))
-        share = (time.perf_counter() - t0) / len(ok)
-        for j, i in enumerate(ok):
-            sl = slice(j * spec.moduli, (j + 1) * spec.moduli)
-            soil_vm[i] = st.soil.peak[sl]
-            plate_vm[i] = st.plate.peak[sl] if st.plate is not None else np.zeros(spec.moduli)
-            scenes[i].wall_time += share
-    out = []
-    for i, sc in enumerate(scenes):
-        point, p = sc.point, sc.params
-        bead_mat = materials[point.bead_material]
-        plate_mat = materials[point.plate_material]
-        Y_plate = plate_yield_stress(plate_mat)
-        p0 = float(hertz_peak_pressure(np.array([sc.bead_force]), p.bead_E, p.bead_nu,
-                                       p.bead_radius)[0])
-        bead_index = p0 / (first_yield_ratio(p.bead_nu) * _bead_strength(bead_mat))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            sens = np.abs(sc.E * sc.dtof) / sc.tof
-            u = np.sqrt(spec.tof_scatter**2 / spec.hits
-                        + (sc.sampled.noise**2 + sc.sampled.spread**2) / spec.hits
-                        + sc.sampled.bias**2)
-            res = u / (sc.tof * sens)
-        plate_mass = (plate_mat.density * np.pi * 0.25 * p.plate_diameter**2
-                      * p.plate_thickness)
-        mass = float(np.sum(p.masses) + plate_mass)
-        length = float(p.n_beads * 2.0 * p.bead_radius + point.drop_height
-                       + p.plate_thickness)
-        out.append(DeviceCandidate(
-            point=point, soil_E=sc.E, tof_E=sc.tof, dtof_dE_E=sc.dtof, sensitivity_E=sens,
-            u_tof_E=u, resolution_E=np.where(np.isfinite(res), res, np.inf),
-            noise_E=sc.sampled.noise, bias_E=sc.sampled.bias, spread_E=sc.sampled.spread,
-            samples_per_pulse_E=sc.sampled.samples_per_pulse, overlap_E=sc.overlap,
-            detection_E=sc.detection, round_trip_E=sc.round_trip,
-            sensor_peak_E=sc.sensor_peak,
-            wall_force_E=sc.wall_force, plate_von_mises_E=plate_vm[i],
-            soil_von_mises_E=soil_vm[i], plate_yield_E=plate_vm[i] / Y_plate,
-            soil_yield_E=soil_vm[i] / spec.soil_yield_stress(sc.E), bead_force=sc.bead_force,
-            bead_yield_index=float(bead_index),
-            range_index=float(np.nanmax(sc.sensor_peak) / full_scale), mass=mass,
-            length=length, plate_mass_ratio=float(plate_mass / p.bead_mass), source=source,
-            step=sc.step, wall_time=sc.wall_time, limits=spec.limits,
-            checks_E={**sc.checks, "pulse_separation": sc.overlap,
-                      "bead_yield": np.full(sc.E.size, float(bead_index)),
-                      "sample_yield": soil_vm[i] / spec.soil_yield_stress(sc.E),
-                      "plate_yield": plate_vm[i] / Y_plate},
-            checks_assumed={} if spec.soil_strength is not None else {
-                "sample_yield": f"Y_soil = {spec.soil_strength_ratio:g} E (ssw design's "
-                                "stated assumption: --soil-strength states one)"}))
-    return out
+    nan = np.full(spec.moduli, np.nan)
+    broken = [_broken_before_stresses(_candidate(sc, nan, nan, spec, materials, full_scale,
+                                                 source, "?")) for sc in scenes]
+    if all_stresses:
+        broken = [[] for _ in scenes]
+    needed = [i for i, b in enumerate(broken) if not b]
+    plate_vm, soil_vm = _stresses(scenes, needed, spec, contact_of, store)
+    return [_candidate(sc, plate_vm[i], soil_vm[i], spec, materials, full_scale, source,
+                       "" if not broken[i] else "breaks " + ", ".join(broken[i]))
+            for i, sc in enumerate(scenes)]

@@ -7,10 +7,12 @@ rank, and place the thesis device.
    family (bead diameter x plate material; one process each with ``jobs > 1``) at the scan
    points of its continuous variables, evaluated over the soil grid
    (:func:`ssw.design.device_eval.evaluate`, the devices of one chain in one batched run);
-2. the bounded search: the ``finalists`` best devices (each of its own chain and plate)
-   move their continuous variables (sensor and striker mass ratios, drop height, plate
-   thickness, in their logarithm) inside the space's ranges by ``scipy.optimize.minimize``
-   (Powell, bounded; :func:`merit` as the objective, ``refine_evaluations`` evaluations);
+2. the bounded search: the ``finalists`` best devices (each of its own chain and plate,
+   among the chains and plates the run scans: the base device competes for its own pair's
+   start only when its chain is scanned) move their continuous variables (sensor and
+   striker mass ratios, drop height, plate thickness, in their logarithm) inside the
+   space's ranges by ``scipy.optimize.minimize`` (Powell, bounded; :func:`merit` as the
+   objective, ``refine_evaluations`` evaluations);
 3. the ranking (:func:`rank`): the feasible device of finest worst-case resolution; when
    none is feasible, the hard-feasible device of finest resolution whose soil yield is
    least in excess, else the smallest weighted violation; the Pareto fronts of the
@@ -47,7 +49,9 @@ HARD_WEIGHT = 10.0
 def merit(c: DeviceCandidate) -> float:
     """A scalar to minimize: ``ln(dE/E)`` plus ``HARD_WEIGHT`` times the hard limits'
     relative excess and the soft limit's excess (0 for a feasible device). Infinite for a
-    device with no TOF somewhere in the soil range.
+    device with no TOF somewhere in the soil range. The excesses not computed (a device
+    whose stresses were skipped, ``stresses_skipped``: it breaks another hard limit) count
+    0, so its merit is a lower bound.
 
     Parameters
     ----------
@@ -63,8 +67,9 @@ def merit(c: DeviceCandidate) -> float:
     if not np.isfinite(c.resolution):
         return float("inf")
     v = c.violations
-    hard = sum(v[k] for k in HARD)
-    return float(np.log(c.resolution) + HARD_WEIGHT * hard + v["soil_yield_index"])
+    hard = sum(v[k] for k in HARD if not np.isnan(v[k]))
+    soil = v["soil_yield_index"]
+    return float(np.log(c.resolution) + HARD_WEIGHT * hard + (0.0 if np.isnan(soil) else soil))
 
 
 def _order(c: DeviceCandidate) -> tuple[int, float, float]:
@@ -182,8 +187,9 @@ class _Task:
 def _evaluate(task: _Task, points: list[DevicePoint], source: str,
               own_step: bool = False) -> list[DeviceCandidate]:
     items = [(p, p.params(task.base, task.materials)) for p in points]
+    # a device at its own step is the base device or the recommended one: stated whole
     return evaluate(items, task.spec, task.materials, task.contact, task.base.bead_radius,
-                    task.full_scale, source=source, own_step=own_step)
+                    task.full_scale, source=source, own_step=own_step, all_stresses=own_step)
 
 
 def _scan_family(args: tuple[_Task, float, str, int, int]) -> list[DeviceCandidate]:
@@ -297,7 +303,7 @@ class DeviceDesignResult:
                        f"{self.spec.soil_yield_limit:g}; of the {n_hard} that meet every hard "
                        f"limit this one yields the sample least ({r.soil_yield_index:.3g})")
         else:
-            worst = max(r.violations, key=lambda k: r.violations[k])
+            worst = max(r.violations, key=lambda k: np.nan_to_num(r.violations[k], nan=-1.0))
             out.append(f"no device meets every hard limit; this one breaks them least "
                        f"(worst: {worst} {r.indices[worst]:.3g})")
         out.append(f"its sensitivity |d ln TOF / d ln E| >= {r.sensitivity:.3g}, TOF "
@@ -422,7 +428,13 @@ def run_device_design(space: DeviceSpace, spec: DeviceSpec, base: Any,
     if reference is not None:
         ref = _evaluate(task, [reference], "reference", own_step=True)[0]
         seen[ref.key] = ref
-    finalists = best_of_pairs(sorted(seen.values(), key=_order), spec.finalists)
+    # the searches start from the chains and plates this run scans (the base device competes
+    # for its own pair's start there): a part of a family (--part) searches its own pairs,
+    # never another part's, so the parts together search what one run does
+    mine = {(c.point.chain, c.point.plate_material) for c in scanned}
+    finalists = best_of_pairs(sorted((c for c in seen.values()
+                                      if (c.point.chain, c.point.plate_material) in mine),
+                                     key=_order), spec.finalists)
     searches = []
     if spec.refine_evaluations > 0 and finalists:
         for found, info in map_jobs(_refine, [(task, c) for c in finalists], jobs):

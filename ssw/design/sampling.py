@@ -18,8 +18,8 @@ upsampling and the vertex of a parabola (:func:`ssw.signal.peaks.refine_peak`, w
 * **noise**: white noise of standard deviation ``sigma`` on the samples moves each refined
   peak linearly for a small noise, ``dt* = sum_k g_k n_k / f_s`` with ``g_k`` the peak
   picker's derivative with respect to sample ``k`` (in samples per unit of the signal,
-  taken by a central difference of :func:`ssw.signal.peaks.refine_peaks` at the first clock
-  phase), so::
+  the exact derivative of :func:`ssw.signal.peaks.refine_peaks`, linear up to its parabola:
+  :func:`picker_gain`, at the first clock phase), so::
 
       sigma_t = sigma ||g||_2 / f_s
 
@@ -47,6 +47,8 @@ import numpy as np
 
 #: Samples each side of a peak kept for its refinement, beyond the refiner's own window.
 EDGE = 2
+#: The picker's interpolation matrices, by (window size, upsampling factor).
+_MATRICES: dict[tuple[int, int], np.ndarray] = {}
 
 
 @dataclass(frozen=True)
@@ -110,11 +112,41 @@ def _filtered(run: object, t_peak: np.ndarray, cols: np.ndarray, rate: float,
     return y, c - W
 
 
+def _interpolation_matrix(size: int, upsample: int) -> np.ndarray:
+    """(size, upsample size) the linear map of the peak picker's band-limited upsampling of
+    a window of ``size`` samples (:func:`ssw.signal.peaks.refine_peaks`: ``resample_poly``
+    with its Kaiser window and ``padtype='line'``, linear in the samples): row ``k`` is the
+    fine signal of a unit sample at ``k``. Kept per size (the windows have few sizes)."""
+    from scipy import signal
+
+    from ssw.signal.peaks import KAISER_BETA
+
+    key = (size, upsample)
+    if key not in _MATRICES:
+        _MATRICES[key] = signal.resample_poly(np.eye(size), upsample, 1, axis=1,
+                                              window=("kaiser", KAISER_BETA), padtype="line")
+    return _MATRICES[key]
+
+
 def picker_gain(s: np.ndarray, c: np.ndarray, pos: np.ndarray) -> np.ndarray:
     """``||d pos / d s_k||_2`` (samples per unit of the signal) of the peak picker
     (:func:`ssw.signal.peaks.refine_peaks`) at each row of the samples ``s`` (m, n_s), its
-    peak next to ``c`` at ``pos``: central differences of every sample of the picker's
-    window, a step of 1e-4 of the peak's height.
+    peak next to ``c`` at ``pos``.
+
+    The picker is linear up to its parabola: the window ``w`` of samples
+    ``c - HALF_WINDOW .. c + HALF_WINDOW`` is upsampled ``U`` times, ``f = w A``
+    (``_interpolation_matrix``), and the vertex of the parabola through the fine values
+    ``f_{j-1}, f_j, f_{j+1}`` at its largest one ``j`` gives ``pos = lo + (j + p) / U`` with
+    ``p = (f_{j-1} - f_{j+1}) / (2 D)``, ``D = f_{j-1} - 2 f_j + f_{j+1} < 0``. So, exactly
+    (the limit of a central difference of the picker; ``j`` recovered from ``pos``, as
+    ``|p| <= 1/2``)::
+
+        d pos / d w_k = (1 / U) sum_i (d p / d f_{j+i}) A[k, j + i],   i = -1, 0, 1,
+        d p / d f_{j-1} = (D - N) / (2 D^2),  d p / d f_j = N / D^2,
+        d p / d f_{j+1} = -(D + N) / (2 D^2),  N = f_{j-1} - f_{j+1};
+
+    0 where the parabola is clipped (``|p| = 1/2``) or not concave, as the picker's ``p``
+    is constant there.
 
     Parameters
     ----------
@@ -129,28 +161,35 @@ def picker_gain(s: np.ndarray, c: np.ndarray, pos: np.ndarray) -> np.ndarray:
     -------
     numpy.ndarray
         (m,) the gain, samples per unit of the signal (per N).
-    """
-    from ssw.signal.peaks import HALF_WINDOW, UPSAMPLE, refine_peaks
 
+    References
+    ----------
+    Smith, J. O. and Serra, X. (1987). PARSHL, appendix: quadratic interpolation of peaks
+    (the vertex ``p``).
+    """
+    from ssw.signal.peaks import HALF_WINDOW, UPSAMPLE
+
+    s = np.asarray(s, float)
+    c = np.asarray(c, np.int64)
     m, n_s = s.shape
-    r = np.arange(m)
     lo = np.maximum(c - HALF_WINDOW, 0)
     hi = np.minimum(c + HALF_WINDOW + 1, n_s)
-    w = 2 * HALF_WINDOW + 1
-    step = 1e-4 * np.abs(s[r, c])
-    k = lo[:, None] + np.arange(w)[None, :]  # (m, w) the samples moved
-    inside = k < hi[:, None]
-    k = np.minimum(k, n_s - 1)
-    rows = np.repeat(s, w, axis=0).reshape(m, w, n_s)
-    grad = np.zeros((m, w))
-    for sign in (1.0, -1.0):
-        moved = rows.copy()
-        ii, jj = np.nonzero(inside)
-        moved[ii, jj, k[ii, jj]] += sign * step[ii]
-        p, _ = refine_peaks(moved.reshape(m * w, n_s), np.repeat(c, w), UPSAMPLE)
-        grad += sign * np.where(inside, p.reshape(m, w), pos[:, None])
-    grad /= 2.0 * step[:, None]
-    return np.sqrt(np.sum(grad**2, axis=1))
+    gain = np.zeros(m)
+    for size in np.unique(hi - lo):  # the windows of one size: one matrix
+        rows = np.flatnonzero(hi - lo == size)
+        A = _interpolation_matrix(int(size), UPSAMPLE)
+        win = s[rows[:, None], lo[rows, None] + np.arange(size)[None, :]]
+        j = np.rint((pos[rows] - lo[rows]) * UPSAMPLE).astype(np.int64)
+        j = np.clip(j, 1, A.shape[1] - 2)
+        cols = A[:, j[:, None] + np.arange(-1, 2)[None, :]]  # (size, r, 3)
+        fm, f0, fp = np.einsum("rk,krt->tr", win, cols)
+        D, N = fm - 2.0 * f0 + fp, fm - fp
+        live = (D < 0) & (np.abs(N) < -D)  # concave and |p| < 1/2
+        D2 = np.where(live, 2.0 * D * D, 1.0)
+        dp = np.where(live, np.stack([(D - N) / D2, 2.0 * N / D2, -(D + N) / D2]), 0.0)
+        grad = np.einsum("krt,tr->rk", cols, dp) / UPSAMPLE
+        gain[rows] = np.sqrt(np.sum(grad**2, axis=1))
+    return gain
 
 
 def sampled_tof(run: object, peaks: object, rate: float, noise_rms: float,
@@ -196,6 +235,7 @@ def sampled_tof(run: object, peaks: object, rate: float, noise_rms: float,
     times = np.empty((2, cols.size, phases))
     gain = np.empty((2, cols.size))
     width = np.empty((2, cols.size))
+    rows, peaks_at, offsets = [], [], []  # every peak's samples at every phase: one pick
     for j, tp in enumerate((t_inc[cols], t_ref[cols])):
         y, start = _filtered(run, tp, cols, rate, taps, OVERSAMPLE, half_samples)
         mid = half_samples * OVERSAMPLE
@@ -215,11 +255,16 @@ def sampled_tof(run: object, peaks: object, rate: float, noise_rms: float,
             s = y[r[:, None], j0[:, None] + OVERSAMPLE * np.arange(n_s)[None, :]]
             c = np.rint((k - j0) / OVERSAMPLE).astype(np.int64)
             near = s[r[:, None], c[:, None] + np.arange(-1, 2)[None, :]]
-            c = np.clip(c - 1 + np.argmax(near, axis=1), 1, n_s - 2)
-            pos, _ = refine_peaks(s, c, UPSAMPLE)
-            times[j, :, p] = (start + j0 + pos * OVERSAMPLE) * h
-            if p == 0:
-                gain[j] = picker_gain(s, c, pos)
+            rows.append(s)
+            peaks_at.append(np.clip(c - 1 + np.argmax(near, axis=1), 1, n_s - 2))
+            offsets.append(start + j0)
+    # (the picker's rows are independent: one call gives each row's own numbers)
+    pos, _ = refine_peaks(np.concatenate(rows), np.concatenate(peaks_at), UPSAMPLE)
+    pos = pos.reshape(2, phases, cols.size)
+    for j in range(2):
+        times[j] = ((np.stack(offsets[j * phases:(j + 1) * phases]) + pos[j] * OVERSAMPLE)
+                    * h).T
+        gain[j] = picker_gain(rows[j * phases], peaks_at[j * phases], pos[j, 0])
     err = (times[1] - times[0]) - (t_ref[cols] - t_inc[cols])[:, None]
     bias, spread, noise, samples = nan.copy(), nan.copy(), nan.copy(), nan.copy()
     bias[cols] = err.mean(axis=1)

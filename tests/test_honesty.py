@@ -209,7 +209,7 @@ def study(folder: Path, device: str = "as_built", hits: int = HITS,
             m, [rec], level, c.chain_params(), "hertz", {}, acquisition=Acquisition(),
             trigger_level=TRIGGER, tof_scatter=SCATTER, full_scale=FULL_SCALE,
             gain=info["gain"], floor=info["floor"], covariance=info["covariance"],
-            model_loo=info.get("model_loo"))
+            model_loo=info.get("model_loo"), discrepancy=info.get("discrepancy"))
 
     rows = []
     for j, (E, nu) in enumerate(unseen):

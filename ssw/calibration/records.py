@@ -230,7 +230,7 @@ def leave_one_out(cal: Any, samples: list[Any], acq: Any, *, trigger_level: floa
             f, setup = fit_modulus(replace(smp, E=None), params, wall, opts, acq, level,
                                    trigger_level=trigger_level, tof_scatter=tof_scatter,
                                    gain=float(g.state.globals["gain"]), floor=g.floor,
-                                   E0=float(smp.E))
+                                   E0=float(smp.E), discrepancy=g.discrepancy)
         except (RecordingError, SolverError) as exc:
             rows.append({**row, "reason": str(exc)})
             continue
@@ -245,8 +245,8 @@ def leave_one_out(cal: Any, samples: list[Any], acq: Any, *, trigger_level: floa
 
 def fit_modulus(hits: Any, params: Any, wall: str, wall_options: dict[str, Any] | None,
                 acq: Any, level: str, *, trigger_level: float, tof_scatter: float,
-                gain: float = 1.0, floor: dict[str, float] | None = None, E0: float
-                ) -> tuple[Any, Any]:
+                gain: float = 1.0, floor: dict[str, float] | None = None, E0: float,
+                discrepancy: Any = None) -> tuple[Any, Any]:
     """A sample's E from its records at a level, the device held: E, each hit's striker
     speed, trigger time offset and reflected-wave delay fitted
     (:func:`ssw.calibration.waveform.fit`) from ``E0``, the weights the noise's with the
@@ -276,6 +276,9 @@ def fit_modulus(hits: Any, params: Any, wall: str, wall_options: dict[str, Any] 
         The model-error floor of the weights (None: the noise alone).
     E0 : float
         Pa, E's start (the TOF measurement's).
+    discrepancy : Discrepancy or dict or None
+        The calibration's model discrepancy at the features level
+        (:class:`ssw.calibration.discrepancy.Discrepancy` or its JSON form; None: none).
 
     Returns
     -------
@@ -283,6 +286,7 @@ def fit_modulus(hits: Any, params: Any, wall: str, wall_options: dict[str, Any] 
         The :class:`ssw.calibration.waveform.Fit` and its
         :class:`ssw.calibration.waveform.Setup`.
     """
+    from ssw.calibration.discrepancy import Discrepancy
     from ssw.calibration.waveform import (
         PER_HIT,
         Column,
@@ -293,8 +297,11 @@ def fit_modulus(hits: Any, params: Any, wall: str, wall_options: dict[str, Any] 
         initial_state,
     )
 
+    if isinstance(discrepancy, dict):
+        discrepancy = Discrepancy.from_dict(discrepancy)
     setup = Setup(params, wall, dict(wall_options or {}), acq, level, [hits],
-                  trigger_level, tof_scatter=tof_scatter, floor=dict(floor or {}))
+                  trigger_level, tof_scatter=tof_scatter, floor=dict(floor or {}),
+                  discrepancy=discrepancy if level == "features" else None)
     glob = device_globals(params, gain)
     v0 = float(params.striker_velocity)
     setup.fix_step(State(np.array([E0]), np.full(hits.n, 1.5 * v0), np.zeros(hits.n),

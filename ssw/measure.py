@@ -592,8 +592,8 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
     E = float(f.state.E[0])
     contrib = {k: v for k, v in m.contributions.items() if k not in _FIT_REPLACES}
     terms = modulus_budget(setup, f, level, floor, covariance)
-    if f"calibration ({level})" in terms:  # the records' globals replace the TOF's
-        contrib.pop("calibration", None)
+    if f"calibration ({level})" in terms or setup.discrepancy is not None:
+        contrib.pop("calibration", None)  # the records' calibration replaces the TOF's
     contrib.update(terms)
     if model_loo:
         contrib[f"model ({level} leave-one-out)"] = float(model_loo)

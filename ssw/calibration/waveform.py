@@ -1663,30 +1663,74 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
         f = fit(setup, st, free + per_hit)
     if (discrepancy and level == "features" and len(samples) >= 2
             and max(f.floor.values(), default=0.0) > START_FLOOR):
-        f = _with_discrepancy(setup, f, free, per_hit)
+        f = _with_discrepancy(setup, f.state, free, per_hit)
     return replace(f, start=scan)
 
 
-def _with_discrepancy(setup: Setup, f: Fit, free: list[Column], per_hit: list[Column]
-                      ) -> Fit:
-    """The references' fit ``f`` again with the model's discrepancy
+def refit_discrepancy(samples: list[Hits], params: Any, wall: str,
+                      wall_options: dict[str, Any], acq: Acquisition, trigger_level: float,
+                      tof_scatter: float, state: State) -> Fit:
+    """The model's discrepancy and floor fitted on ``samples`` alone with the device's
+    globals held (a leave-one-out refit, :func:`ssw.calibration.records.leave_one_out`):
+    each hit's parameters from ``state`` (the calibration's own fit of them), then the
+    passes of :func:`calibrate_records`' step 4 with no global freed.
+
+    Parameters
+    ----------
+    samples : list of Hits
+        References, each with its E.
+    params : ChainParams
+        The calibrated device's chain.
+    wall : str
+        The wall law.
+    wall_options : dict
+        Its options.
+    acq : Acquisition
+        The measurement model.
+    trigger_level : float
+        N, the records' trigger level.
+    tof_scatter : float
+        s, a hit's TOF scatter (the delays' prior).
+    state : State
+        The samples' E, their hits' parameters and the device's globals (the gain among
+        them).
+
+    Returns
+    -------
+    Fit
+        The hits' fit with the refitted ``discrepancy`` and ``floor``.
+    """
+    setup = Setup(params, wall, dict(wall_options), acq, "features", samples, trigger_level,
+                  tof_scatter=tof_scatter)
+    n_h = setup.n_hits
+    v0 = float(params.striker_velocity)
+    setup.fix_step(State(state.E, np.full(n_h, 1.5 * v0), np.zeros(n_h), np.zeros(n_h),
+                         dict(state.globals)))
+    per_hit = [Column(name, h) for name in PER_HIT for h in range(n_h)]
+    return _with_discrepancy(setup, state, [], per_hit)
+
+
+def _with_discrepancy(setup: Setup, state: State, free: list[Column],
+                      per_hit: list[Column]) -> Fit:
+    """The references' fit from ``state`` again with the model's discrepancy
     (:mod:`ssw.calibration.discrepancy`): the line estimated and the hits refitted
     :data:`~ssw.calibration.discrepancy.PASSES` times with the globals held, then the floor
     the corrected residuals leave (each feature's at least the line's cross-validated
-    error) and the globals freed again."""
+    error) and the globals ``free`` freed again."""
     from ssw.calibration.discrepancy import PASSES, estimate
 
     E = np.array([s.E for s in setup.samples], float)
     for _ in range(PASSES):
         bare = replace(setup, floor={}, discrepancy=None, runs=0)
-        obs = observe(bare, f.state, set())
+        obs = observe(bare, state, set())
         setup.runs += bare.runs
         rows = np.isin(obs.kind, FEATURES)
         shape = (setup.n_hits, len(FEATURES))
         setup.discrepancy = estimate(obs.model[rows].reshape(shape),
-                                     obs.data[rows].reshape(shape), f.state.delay,
+                                     obs.data[rows].reshape(shape), state.delay,
                                      setup.hit_of(), E)
-        f = fit(setup, f.state, per_hit)
+        f = fit(setup, state, per_hit)
+        state = f.state
     floor = model_floor(setup, f)
     least = setup.discrepancy.sigma
     if least is not None:  # what the line misses from reference to reference
@@ -1735,6 +1779,8 @@ def with_fit(cal: Any, f: Fit, level: str) -> Any:
             "start": [{**pt, "chi2": float(pt["chi2"]) if np.isfinite(pt["chi2"]) else None}
                       for pt in f.start],  # None: the point leaves observations unexplained
             "striker_velocity_per_hit": [float(v) for v in f.state.striker_velocity],
+            "time_offset_per_hit": [float(v) for v in f.state.time_offset],
+            "delay_per_hit": [float(v) for v in f.state.delay],
             "chi2": f.chi2, "chi2_dof": f.dof, "chi2_quantile": f.quantile,
             "flagged": f.flagged, "unexplained": f.unexplained, "converged": f.converged,
             "runs": f.runs, "floor": dict(f.floor),

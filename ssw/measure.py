@@ -497,7 +497,8 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
                         full_scale: float | None = None, gain: float = 1.0,
                         floor: dict[str, float] | None = None,
                         covariance: dict[str, Any] | None = None,
-                        model_loo: float | None = None) -> Measurement:
+                        model_loo: float | None = None,
+                        discrepancy: dict[str, Any] | None = None) -> Measurement:
     """E from the records' features or whole waveforms (``ssw measure --information``),
     starting from the TOF measurement ``m`` of the same recordings.
 
@@ -556,6 +557,10 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
         The calibration's model-error term in ``ln E`` at this level, from its references'
         leave-one-out predictions (:func:`ssw.calibration.records.with_loo`); it enters
         the budget as ``model ({level} leave-one-out)``.
+    discrepancy : dict or None
+        The calibration's model discrepancy at the features level (the JSON form of
+        :class:`ssw.calibration.discrepancy.Discrepancy`): the model's features corrected
+        by it (stated in the notes); None: uncorrected.
 
     Returns
     -------
@@ -583,12 +588,12 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
                    m.sample_rate, E=None, nu=m.nu, full_scale=full_scale)
     f, setup = fit_modulus(hits, params, wall, wall_options, acquisition, level,
                            trigger_level=trigger_level, tof_scatter=tof_scatter, gain=gain,
-                           floor=floor, E0=m.E)
+                           floor=floor, E0=m.E, discrepancy=discrepancy)
     E = float(f.state.E[0])
     contrib = {k: v for k, v in m.contributions.items() if k not in _FIT_REPLACES}
     terms = modulus_budget(setup, f, level, floor, covariance)
-    if f"calibration ({level})" in terms:  # the records' globals replace the TOF's
-        contrib.pop("calibration", None)
+    if f"calibration ({level})" in terms or setup.discrepancy is not None:
+        contrib.pop("calibration", None)  # the records' calibration replaces the TOF's
     contrib.update(terms)
     if model_loo:
         contrib[f"model ({level} leave-one-out)"] = float(model_loo)
@@ -600,6 +605,10 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
                      "residuals; common to the hits, so E's fit error is scaled by the square "
                      "root of their number): "
                      + ", ".join(f"{k} {v:.2g}" for k, v in floor.items()))
+    if setup.discrepancy is not None:
+        notes.append("the model's features are corrected by the calibration's model "
+                     "discrepancy, a line in (E / E_0)^(-2/5) fitted on its references: "
+                     + setup.discrepancy.describe())
     if model_loo:
         notes.append(f"the calibration's references, each predicted as an unseen sample at "
                      f"this level, call for a model term of {100 * model_loo:.3g} % in E "

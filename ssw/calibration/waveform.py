@@ -486,6 +486,9 @@ class Setup:
     scene_sensor_mass : numpy.ndarray or None
         (n_hits,) kg, a sensor mass per hit in place of the global one (the global
         start's grid, every point's hits in one chain run); None: the global.
+    discrepancy : ssw.calibration.discrepancy.Discrepancy or None
+        The model's features corrected by this line in ``(E / E_0)^(-2/5)`` (features level; None:
+        uncorrected).
     dt : float or None
         s, the chain's step for every run (fixed by :meth:`fix_step`).
     runs : int
@@ -513,6 +516,7 @@ class Setup:
     tof_scatter: float = 1.53e-5
     floor: dict[str, float] = field(default_factory=dict)
     scene_sensor_mass: np.ndarray | None = None
+    discrepancy: Any = None
     dt: float | None = None
     runs: int = 0
     _starts: np.ndarray = field(default=None, repr=False)
@@ -713,6 +717,9 @@ def observe(setup: Setup, state: State, wanted: set[str] | None = None) -> Obser
             val = f.values
             J = jac_block(h, f.jacobian[:, :k], f.jacobian[:, k], f.jacobian[:, k + 1],
                           f.jacobian[:, k + 2])
+            if setup.discrepancy is not None:
+                val, J = _corrected(setup, val, J, E[h], index.get(Column("E", int(i))),
+                                    smp.E is None or "E" in wanted)
             rows_model.append(val)
             rows_data.append(smp.features[hh])
             rel = np.array([setup.floor.get(n, 0.0) for n in FEATURES])
@@ -745,6 +752,19 @@ def observe(setup: Setup, state: State, wanted: set[str] | None = None) -> Obser
     return Observed(np.concatenate(rows_model), np.concatenate(rows_data),
                     np.concatenate(rows_sigma), np.array(rows_kind),
                     np.concatenate(rows_hit), np.concatenate(rows_jac), columns)
+
+
+def _corrected(setup: Setup, val: np.ndarray, J: np.ndarray, E: float, col_E: int | None,
+               free_E: bool) -> tuple[np.ndarray, np.ndarray]:
+    """A hit's model features and their Jacobian with the model's discrepancy
+    (:mod:`ssw.calibration.discrepancy`): ``m (1 + delta(E))``, its derivative
+    ``(1 + delta) dm/dp`` and, for E, ``+ m d delta / d ln E / E``."""
+    d, slope = setup.discrepancy.at([E])
+    out = val * (1.0 + d[0])
+    J = J * (1.0 + d[0])[:, None]
+    if free_E and col_E is not None:
+        J[:, col_E] += val * slope[0] / E
+    return out, J
 
 
 def initial_state(setup: Setup, globals_: dict[str, float], E: Any, speed: float) -> State:
@@ -934,6 +954,9 @@ class Fit:
         Observations the record has a value for and the model, at the optimum, none.
     floor : dict
         The model-error floor of the fit's weights (``floor`` of :class:`Setup`).
+    discrepancy : ssw.calibration.discrepancy.Discrepancy or None
+        The model's discrepancy the fit corrects its features by (``discrepancy`` of
+        :class:`Setup`).
     """
 
     state: State
@@ -948,6 +971,7 @@ class Fit:
     start: list[dict] = field(default_factory=list)
     unexplained: int = 0
     floor: dict[str, float] = field(default_factory=dict)
+    discrepancy: Any = None
 
     @property
     def flagged(self) -> bool:
@@ -1073,7 +1097,8 @@ def fit(setup: Setup, state: State, free: list[Column], iterations: int | None =
     final = at(pr.x)
     return Fit(final, list(free), from_x(setup, free, pr.x), cov, float(pr.cost), dof,
                float(stats.chi2.cdf(pr.cost, dof)), bool(pr.converged), setup.runs,
-               unexplained=explained.lost(pr.x), floor=dict(setup.floor))
+               unexplained=explained.lost(pr.x), floor=dict(setup.floor),
+               discrepancy=setup.discrepancy)
 
 
 class _Explained:
@@ -1521,7 +1546,7 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
                       free_globals: tuple[str, ...] = GLOBALS, scan: bool = True,
                       gain: float = 1.0,
                       start_grid: tuple[tuple[float, ...], tuple[float, ...]] | None = None,
-                      refine_levels: int = REFINE_LEVELS) -> Fit:
+                      refine_levels: int = REFINE_LEVELS, discrepancy: bool = True) -> Fit:
     """Fit the device's global parameters to reference records (every sample's E known):
     every one of ``free_globals`` with each hit's striker speed, time offset and delay.
 
@@ -1543,6 +1568,11 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     3. If some global is not identified (its standard error, scaled by the misfit, beyond
        :data:`ssw.calibration.information.IDENTIFIED_U` in its scaled coordinate), the fit
        again with only the identified ones free, the others at their start's values.
+    4. Under model error at the features level (a kind's floor above
+       :data:`START_FLOOR`, a few times the chain's own error; two references or more;
+       ``discrepancy``): the model's discrepancy, a line in ``(E / E_0)^(-2/5)`` per feature
+       (:mod:`ssw.calibration.discrepancy`), estimated with the hits refitted, then the
+       floor its corrected residuals leave and the fit of step 2 with it.
 
     Parameters
     ----------
@@ -1576,12 +1606,15 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
         dashpot); None: :data:`START_SENSOR_MASS` by :func:`start_damping` of the law.
     refine_levels : int
         Refinements of the global start (:func:`refine_start`).
+    discrepancy : bool
+        Step 4 where the features' floor says the model departs (False: the floor alone).
 
     Returns
     -------
     Fit
         The last fit (its ``free`` lists the globals it identified first; its ``floor``
-        the model-error floor; its ``start`` the grid).
+        the model-error floor; its ``discrepancy`` the correction, if any; its ``start``
+        the grid).
 
     Raises
     ------
@@ -1623,11 +1656,87 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     while True:
         kept = [c for c in free if f.std(c) <= IDENTIFIED_U]
         if len(kept) == len(free):
-            return replace(f, start=scan)
+            break
         free = kept
         st = f.state.copy()  # what is not identified goes back to its start's value
         st.globals.update({g: state.globals[g] for g in GLOBALS if Column(g) not in free})
         f = fit(setup, st, free + per_hit)
+    if (discrepancy and level == "features" and len(samples) >= 2
+            and max(f.floor.values(), default=0.0) > START_FLOOR):
+        f = _with_discrepancy(setup, f.state, free, per_hit)
+    return replace(f, start=scan)
+
+
+def refit_discrepancy(samples: list[Hits], params: Any, wall: str,
+                      wall_options: dict[str, Any], acq: Acquisition, trigger_level: float,
+                      tof_scatter: float, state: State) -> Fit:
+    """The model's discrepancy and floor fitted on ``samples`` alone with the device's
+    globals held (a leave-one-out refit, :func:`ssw.calibration.records.leave_one_out`):
+    each hit's parameters from ``state`` (the calibration's own fit of them), then the
+    passes of :func:`calibrate_records`' step 4 with no global freed.
+
+    Parameters
+    ----------
+    samples : list of Hits
+        References, each with its E.
+    params : ChainParams
+        The calibrated device's chain.
+    wall : str
+        The wall law.
+    wall_options : dict
+        Its options.
+    acq : Acquisition
+        The measurement model.
+    trigger_level : float
+        N, the records' trigger level.
+    tof_scatter : float
+        s, a hit's TOF scatter (the delays' prior).
+    state : State
+        The samples' E, their hits' parameters and the device's globals (the gain among
+        them).
+
+    Returns
+    -------
+    Fit
+        The hits' fit with the refitted ``discrepancy`` and ``floor``.
+    """
+    setup = Setup(params, wall, dict(wall_options), acq, "features", samples, trigger_level,
+                  tof_scatter=tof_scatter)
+    n_h = setup.n_hits
+    v0 = float(params.striker_velocity)
+    setup.fix_step(State(state.E, np.full(n_h, 1.5 * v0), np.zeros(n_h), np.zeros(n_h),
+                         dict(state.globals)))
+    per_hit = [Column(name, h) for name in PER_HIT for h in range(n_h)]
+    return _with_discrepancy(setup, state, [], per_hit)
+
+
+def _with_discrepancy(setup: Setup, state: State, free: list[Column],
+                      per_hit: list[Column]) -> Fit:
+    """The references' fit from ``state`` again with the model's discrepancy
+    (:mod:`ssw.calibration.discrepancy`): the line estimated and the hits refitted
+    :data:`~ssw.calibration.discrepancy.PASSES` times with the globals held, then the floor
+    the corrected residuals leave (each feature's at least the line's cross-validated
+    error) and the globals ``free`` freed again."""
+    from ssw.calibration.discrepancy import PASSES, estimate
+
+    E = np.array([s.E for s in setup.samples], float)
+    for _ in range(PASSES):
+        bare = replace(setup, floor={}, discrepancy=None, runs=0)
+        obs = observe(bare, state, set())
+        setup.runs += bare.runs
+        rows = np.isin(obs.kind, FEATURES)
+        shape = (setup.n_hits, len(FEATURES))
+        setup.discrepancy = estimate(obs.model[rows].reshape(shape),
+                                     obs.data[rows].reshape(shape), state.delay,
+                                     setup.hit_of(), E)
+        f = fit(setup, state, per_hit)
+        state = f.state
+    floor = model_floor(setup, f)
+    least = setup.discrepancy.sigma
+    if least is not None:  # what the line misses from reference to reference
+        floor = {k: max(floor.get(k, 0.0), float(least[i])) for i, k in enumerate(FEATURES)}
+    setup.floor = floor
+    return fit(setup, f.state, free + per_hit)
 
 
 def with_fit(cal: Any, f: Fit, level: str) -> Any:
@@ -1670,9 +1779,12 @@ def with_fit(cal: Any, f: Fit, level: str) -> Any:
             "start": [{**pt, "chi2": float(pt["chi2"]) if np.isfinite(pt["chi2"]) else None}
                       for pt in f.start],  # None: the point leaves observations unexplained
             "striker_velocity_per_hit": [float(v) for v in f.state.striker_velocity],
+            "time_offset_per_hit": [float(v) for v in f.state.time_offset],
+            "delay_per_hit": [float(v) for v in f.state.delay],
             "chi2": f.chi2, "chi2_dof": f.dof, "chi2_quantile": f.quantile,
             "flagged": f.flagged, "unexplained": f.unexplained, "converged": f.converged,
-            "runs": f.runs, "floor": dict(f.floor)}
+            "runs": f.runs, "floor": dict(f.floor),
+            "discrepancy": None if f.discrepancy is None else f.discrepancy.to_dict()}
     names, cov = global_covariance(f, hits=len(f.state.striker_velocity) / len(f.state.E))
     info["covariance"] = {"names": names, "matrix": cov.tolist()}
     if "information" in cal.provenance:  # the level this one started from
@@ -1684,6 +1796,12 @@ def with_fit(cal: Any, f: Fit, level: str) -> Any:
     warnings.append(f"RECORDS ({level}): the model-error floor of the records' fit, in the "
                     "weights of every measurement through the calibration at this level: "
                     + (", ".join(f"{k} {v:.2g}" for k, v in f.floor.items()) or "none"))
+    if f.discrepancy is not None:
+        warnings.append(f"MODEL ERROR ({level}): the references' features depart from every "
+                        "model the fit reaches, smoothly in E: the model's features are "
+                        "corrected by a line in (E / E_0)^(-2/5) fitted on the references (a model "
+                        "discrepancy, Kennedy and O'Hagan 2001) at every measurement through "
+                        "this calibration: " + f.discrepancy.describe())
     if f.flagged or not f.converged:
         warnings.append(f"RECORDS ({level}): the fit of the references' records "
                         + ("did not converge" if not f.converged else "")

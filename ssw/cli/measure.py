@@ -119,11 +119,12 @@ def _with_information(args: argparse.Namespace, ctx: Any, recs: list[Any], m: An
     floor = info.get("floor") if same else None
     covariance = info.get("covariance") if same else None
     model_loo = info.get("model_loo") if same else None  # its references' leave-one-out term
+    discrepancy = info.get("discrepancy") if same else None  # its model's correction
     return measure_information(
         m, recs, args.information, ctx.params, ctx.wall, ctx.wall_options, acquisition=acq,
         trigger_level=float(meta.get("trigger_level", settings.trigger_level)),
         tof_scatter=float(scatter), full_scale=ctx.device.full_scale_force, gain=gain,
-        floor=floor, covariance=covariance, model_loo=model_loo)
+        floor=floor, covariance=covariance, model_loo=model_loo, discrepancy=discrepancy)
 
 
 #: The error of a half-space reading beyond which a lift's measurement warns.

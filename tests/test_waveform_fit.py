@@ -42,7 +42,8 @@ def _state(theta):
 
 def test_a_step_that_loses_observations_is_not_a_better_fit(monkeypatch):
     monkeypatch.setattr(waveform, "observe", _observe)
-    setup = SimpleNamespace(runs=0, floor={}, acq=SimpleNamespace(sample_rate=51200.0),
+    setup = SimpleNamespace(runs=0, floor={}, discrepancy=None,
+                            acq=SimpleNamespace(sample_rate=51200.0),
                             tof_scatter=1.53e-5)
     f = waveform.fit(setup, _state(1.0), [Column("gain")])
     # every observation kept: the optimum of the two rows on the part of the space where

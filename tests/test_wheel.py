@@ -8,7 +8,7 @@ chain step inside it, its core dependencies from wheels, no PETSc or MPI. Two ch
   device, its plate's contact operators built anew in an empty cache) import neither PETSc,
   MPI nor Snakemake, and the simulate-then-measure round trip gives back the modulus of the
   simulated material within the measured interval;
-* ``slow``: a wheel built here from the tracked sources installs into a fresh venv with no
+* ``long`` (``make test-long``, which CI runs): a wheel built here from the tracked sources installs into a fresh venv with no
   compiler on PATH (``CC=false``) and without PETSc, MPI or Snakemake, and its ``ssw
   measure`` of a point, with a calibration written by this full install and its operators
   built in a cache of its own, gives this install's E and interval to 1e-9.
@@ -125,7 +125,7 @@ def instrument_venv(wheel, tmp_path_factory) -> tuple[Path, dict[str, str]]:
     return venv / "bin" / "python", env
 
 
-@pytest.mark.slow
+@pytest.mark.long
 def test_a_wheel_measures_as_the_full_install_without_a_compiler_or_petsc(
         instrument_venv, tmp_path):
     python, env = instrument_venv
@@ -165,7 +165,7 @@ def test_the_wheels_are_tested_by_this_module():
     cibw = meta["tool"]["cibuildwheel"]
     here = str(Path(__file__).relative_to(ROOT))
     assert here in cibw["test-sources"] and here in cibw["test-command"]
-    assert '-m "not slow"' in cibw["test-command"]
+    assert '-m "not slow and not long"' in cibw["test-command"]
     assert all((ROOT / p).exists() for p in cibw["test-sources"])
     floor = meta["project"]["requires-python"].removeprefix(">=").replace(".", "")
     assert cibw["build"][0] == f"cp{floor}-*"

@@ -205,29 +205,55 @@ def _names(wanted: set[str]) -> tuple[str, ...]:
                  if n in wanted or n == "striker_velocity")
 
 
-def observe(setup: Setup, state: State, wanted: set[str] | None = None) -> Observed:
-    """The model's observations of every sample's records and their derivatives, in ONE
-    chain run of all hits (module docstring).
+@dataclass(frozen=True)
+class _Run:
+    """One chain run of every hit through the measurement model (:func:`_measured`).
+
+    Parameters
+    ----------
+    samples : numpy.ndarray
+        (n, n_hits, channels) the filtered record samples of every hit before the gain:
+        channel 0 the sensor force (N per unit gain), then its derivatives by the chain's
+        parameters, by the time offset and by the delay.
+    E : numpy.ndarray
+        (n_hits,) each hit's sample's Young's modulus, Pa.
+    t_c : numpy.ndarray
+        (n_hits,) the model's trigger crossing, chain time, s.
+    slope : numpy.ndarray
+        (n_hits,) the gained fine output's slope at the crossing, N/s.
+    d_fine : numpy.ndarray
+        (n_hits, channels) the fine output and its derivatives at the crossing.
+    """
+
+    samples: np.ndarray
+    E: np.ndarray
+    t_c: np.ndarray
+    slope: np.ndarray
+    d_fine: np.ndarray
+
+
+def _measured(setup: Setup, state: State, names: tuple[str, ...]) -> _Run:
+    """The chain run of every hit (:func:`ssw.tof.api.sensor_derivatives`, its forward
+    sensitivities ``names`` and its time derivative) through the measurement model
+    (:mod:`ssw.daq.model`) at the records' sample times, the reflected waves shifted by
+    each hit's delay, and the model's trigger crossing on the fine output.
 
     Parameters
     ----------
     setup : Setup
-        The model and the records.
+        The model and the records (its ``runs`` counts the run).
     state : State
         The parameters' values.
-    wanted : set of str or None
-        Parameter names whose derivatives are needed (default: all); the others' columns
-        are 0.
+    names : tuple of str
+        The chain's sensitivities to compute (:func:`_names`).
 
     Returns
     -------
-    Observed
-        Rows: per hit its data (the features, or the window's samples not at a rail),
-        then its ``trigger`` and ``delay`` priors.
+    _Run
+        The samples, the hits' moduli and the trigger crossing.
     """
     from ssw.tof import api
 
-    wanted = set(PARAMETERS) if wanted is None else set(wanted)
     acq, fs = setup.acq, setup.acq.sample_rate
     hit_sample = setup.hit_of()
     n_h = setup.n_hits
@@ -240,7 +266,6 @@ def observe(setup: Setup, state: State, wanted: set[str] | None = None) -> Obser
     E = np.array([state.E[i] for i in hit_sample], float)
     nu = np.array([setup.samples[i].nu for i in hit_sample], float)
     p = setup._params(state)
-    names = _names(wanted)
     vary = {"striker_velocity": state.striker_velocity}
     if setup.scene_sensor_mass is not None:
         vary["sensor_mass"] = setup.scene_sensor_mass
@@ -266,7 +291,6 @@ def observe(setup: Setup, state: State, wanted: set[str] | None = None) -> Obser
                             (-rate * after)[..., None]], axis=2)
     samples, fine = filter_fine(acq, grid, stack, fine=True)
     g = float(state.globals["gain"])
-    k = len(names)
     # the model's trigger crossing, on the fine output (chain clock)
     L = acq.taps.size
     t_fine = grid.s[grid.lead + L - 1:][: fine.shape[0]] + acq.pure_delay
@@ -274,20 +298,62 @@ def observe(setup: Setup, state: State, wanted: set[str] | None = None) -> Obser
     cols_h = np.arange(n_h)
     slope = g * (fine[j, cols_h, 0] - fine[j - 1, cols_h, 0]) * (acq.oversample * fs)
     d_fine = 0.5 * (fine[j, cols_h] + fine[j - 1, cols_h])  # (n_h, channels)
-    columns = setup.columns
-    index = {c: i for i, c in enumerate(columns)}
-    rows_model, rows_data, rows_sigma, rows_kind, rows_hit, rows_jac = [], [], [], [], [], []
+    return _Run(samples, E, t_c, slope, d_fine)
 
-    def jac_block(h: int, d_chain: np.ndarray, d_tau: np.ndarray, d_delay: np.ndarray,
-                  d_gain: np.ndarray) -> np.ndarray:
-        """Rows of hit ``h``: chain sensitivities (m, k), the time offset's, the delay's
-        and the gain's derivatives (m,) -> the parameters' columns."""
+
+@dataclass(frozen=True)
+class _Rows:
+    """Where a hit's derivatives go among the parameters' columns (:func:`observe`).
+
+    Parameters
+    ----------
+    setup : Setup
+        The model and the records.
+    names : tuple of str
+        The chain's sensitivities, in the order of the run's channels.
+    wanted : set of str
+        The parameters whose derivatives are needed.
+    index : dict
+        Each :class:`Column`'s index among ``setup.columns``.
+    hit_sample : numpy.ndarray
+        (n_hits,) each hit's sample.
+    """
+
+    setup: Setup
+    names: tuple[str, ...]
+    wanted: set[str]
+    index: dict[Column, int]
+    hit_sample: np.ndarray
+
+    def jacobian(self, h: int, d_chain: np.ndarray, d_tau: np.ndarray, d_delay: np.ndarray,
+                 d_gain: np.ndarray) -> np.ndarray:
+        """Rows of hit ``h`` in the parameters' columns.
+
+        Parameters
+        ----------
+        h : int
+            The hit.
+        d_chain : numpy.ndarray
+            (m, k) the rows' chain sensitivities (SI per parameter's unit).
+        d_tau : numpy.ndarray
+            (m,) their derivatives by the hit's time offset (per s).
+        d_delay : numpy.ndarray
+            (m,) by the hit's delay (per s).
+        d_gain : numpy.ndarray
+            (m,) by the DAQ gain.
+
+        Returns
+        -------
+        numpy.ndarray
+            (m, n_columns) the Jacobian's rows.
+        """
+        setup, index = self.setup, self.index
         m = d_gain.shape[0]
-        J = np.zeros((m, len(columns)))
-        for c, name in enumerate(names):
+        J = np.zeros((m, len(index)))
+        for c, name in enumerate(self.names):
             if name == "E":
-                i = hit_sample[h]
-                if setup.samples[i].E is None or "E" in wanted:
+                i = self.hit_sample[h]
+                if setup.samples[i].E is None or "E" in self.wanted:
                     J[:, index[Column("E", int(i))]] = d_chain[:, c]
             elif name == "striker_velocity":
                 J[:, index[Column("striker_velocity", h)]] = d_chain[:, c]
@@ -298,66 +364,170 @@ def observe(setup: Setup, state: State, wanted: set[str] | None = None) -> Obser
         J[:, index[Column("gain")]] = d_gain
         return J
 
-    for h in range(n_h):
-        i = hit_sample[h]
-        smp = setup.samples[i]
-        hh = h - setup._starts[i]
-        a, b = smp.window[hh]
-        m = b - a
-        y = g * samples[:m, h]  # (m, channels)
-        if setup.level == "waveform":
-            keep = ~smp.rails[hh, a:b]
-            val = y[keep, 0]
-            J = jac_block(h, y[keep, 1:1 + k], y[keep, 1 + k], y[keep, 2 + k], val / g)
-            rows_model.append(val)
-            rows_data.append(smp.force[hh, a:b][keep])
-            top = float(np.max(np.abs(smp.force[hh, a:b])))
-            rows_sigma.append(np.full(val.size, np.hypot(
-                smp.noise, setup.floor.get("waveform", 0.0) * top)))
-            rows_kind += ["waveform"] * val.size
-        else:
-            up = upsample(y)
-            f = pulse_features(up[:, 0], 1.0 / (UPSAMPLE * fs),
-                               dy=np.concatenate([up[:, 1:], up[:, :1] / g], axis=1),
-                               noise=smp.noise, rate=fs)
-            val = f.values
-            J = jac_block(h, f.jacobian[:, :k], f.jacobian[:, k], f.jacobian[:, k + 1],
-                          f.jacobian[:, k + 2])
-            if setup.discrepancy is not None:
-                val, J = _corrected(setup, val, J, E[h], index.get(Column("E", int(i))),
-                                    smp.E is None or "E" in wanted)
-            rows_model.append(val)
-            rows_data.append(smp.features[hh])
-            rel = np.array([setup.floor.get(n, 0.0) for n in FEATURES])
-            rows_sigma.append(np.hypot(smp.feature_sigma[hh],
-                                       rel * np.abs(smp.features[hh])))
-            rows_kind += list(FEATURES)
-        rows_hit.append(np.full(val.size, h))
-        rows_jac.append(J)
-        # the trigger: time_offset - t_c ~ 1/(2 f_s) +- trigger_sigma
-        Jt = np.zeros((1, len(columns)))
-        dtc = -g * d_fine[h, 1:1 + k] / slope[h]
-        Jt[0] -= jac_block(h, dtc[None, :], np.zeros(1), np.zeros(1), np.zeros(1))[0]
-        Jt[0, index[Column("gain")]] = setup.trigger_level / (g * slope[h])
-        Jt[0, index[Column("time_offset", h)]] = 1.0
-        rows_model.append(np.array([tau[h] - t_c[h] - 0.5 / fs]))
-        rows_data.append(np.zeros(1))
-        rows_sigma.append(np.array([setup.trigger_sigma]))
-        rows_kind.append("trigger")
-        rows_hit.append(np.array([h]))
-        rows_jac.append(Jt)
-        # the delay's prior
-        Jd = np.zeros((1, len(columns)))
-        Jd[0, index[Column("delay", h)]] = 1.0
-        rows_model.append(np.array([state.delay[h]]))
-        rows_data.append(np.zeros(1))
-        rows_sigma.append(np.array([setup.tof_scatter]))
-        rows_kind.append("delay")
-        rows_hit.append(np.array([h]))
-        rows_jac.append(Jd)
-    return Observed(np.concatenate(rows_model), np.concatenate(rows_data),
-                    np.concatenate(rows_sigma), np.array(rows_kind),
-                    np.concatenate(rows_hit), np.concatenate(rows_jac), columns)
+
+#: A block of observations: model, data, sigma, kinds, Jacobian.
+_Block = tuple[np.ndarray, np.ndarray, np.ndarray, list[str], np.ndarray]
+
+
+def _waveform_rows(rows: _Rows, h: int, y: np.ndarray, g: float) -> _Block:
+    """A hit's waveform rows: its window's samples not at a rail, their noise with the
+    waveform's model-error floor times the record's largest sample.
+
+    Parameters
+    ----------
+    rows : _Rows
+        The columns.
+    h : int
+        The hit.
+    y : numpy.ndarray
+        (m, channels) the gained model samples of its window and their derivatives.
+    g : float
+        The DAQ gain.
+
+    Returns
+    -------
+    tuple
+        The rows' model (N), data (N), sigma (N), kinds and Jacobian.
+    """
+    setup = rows.setup
+    k = len(rows.names)
+    i = rows.hit_sample[h]
+    smp = setup.samples[i]
+    hh = h - setup._starts[i]
+    a, b = smp.window[hh]
+    keep = ~smp.rails[hh, a:b]
+    val = y[keep, 0]
+    J = rows.jacobian(h, y[keep, 1:1 + k], y[keep, 1 + k], y[keep, 2 + k], val / g)
+    top = float(np.max(np.abs(smp.force[hh, a:b])))
+    sigma = np.full(val.size, np.hypot(smp.noise, setup.floor.get("waveform", 0.0) * top))
+    return val, smp.force[hh, a:b][keep], sigma, ["waveform"] * val.size, J
+
+
+def _feature_rows(rows: _Rows, h: int, y: np.ndarray, g: float, E: float) -> _Block:
+    """A hit's feature rows: the upsampled model's features (:mod:`ssw.signal.features`)
+    with their chain rule, the model's discrepancy where the setup carries one
+    (:func:`_corrected`), their noise with each feature's model-error floor.
+
+    Parameters
+    ----------
+    rows : _Rows
+        The columns.
+    h : int
+        The hit.
+    y : numpy.ndarray
+        (m, channels) the gained model samples of its window and their derivatives.
+    g : float
+        The DAQ gain.
+    E : float
+        The hit's sample's Young's modulus, Pa.
+
+    Returns
+    -------
+    tuple
+        The rows' model, data, sigma (each feature's unit), kinds and Jacobian.
+    """
+    setup = rows.setup
+    k = len(rows.names)
+    i = rows.hit_sample[h]
+    smp = setup.samples[i]
+    hh = h - setup._starts[i]
+    fs = setup.acq.sample_rate
+    up = upsample(y)
+    f = pulse_features(up[:, 0], 1.0 / (UPSAMPLE * fs),
+                       dy=np.concatenate([up[:, 1:], up[:, :1] / g], axis=1),
+                       noise=smp.noise, rate=fs)
+    val = f.values
+    J = rows.jacobian(h, f.jacobian[:, :k], f.jacobian[:, k], f.jacobian[:, k + 1],
+                      f.jacobian[:, k + 2])
+    if setup.discrepancy is not None:
+        val, J = _corrected(setup, val, J, E, rows.index.get(Column("E", int(i))),
+                            smp.E is None or "E" in rows.wanted)
+    rel = np.array([setup.floor.get(n, 0.0) for n in FEATURES])
+    sigma = np.hypot(smp.feature_sigma[hh], rel * np.abs(smp.features[hh]))
+    return val, smp.features[hh], sigma, list(FEATURES), J
+
+
+def _prior_rows(rows: _Rows, h: int, run: _Run, state: State) -> list[_Block]:
+    """A hit's two priors (module docstring of :mod:`ssw.calibration.waveform`): the
+    trigger, ``time_offset - t_c ~ 1/(2 f_s) +- trigger_sigma``, and the delay's zero mean
+    with the TOF's scatter.
+
+    Parameters
+    ----------
+    rows : _Rows
+        The columns.
+    h : int
+        The hit.
+    run : _Run
+        The chain run (its trigger crossing).
+    state : State
+        The parameters' values.
+
+    Returns
+    -------
+    list of tuple
+        The trigger's row (s) and the delay's (s), each model, data, sigma, kinds and
+        Jacobian.
+    """
+    setup, index = rows.setup, rows.index
+    k = len(rows.names)
+    fs = setup.acq.sample_rate
+    g = float(state.globals["gain"])
+    Jt = np.zeros((1, len(index)))
+    dtc = -g * run.d_fine[h, 1:1 + k] / run.slope[h]
+    Jt[0] -= rows.jacobian(h, dtc[None, :], np.zeros(1), np.zeros(1), np.zeros(1))[0]
+    Jt[0, index[Column("gain")]] = setup.trigger_level / (g * run.slope[h])
+    Jt[0, index[Column("time_offset", h)]] = 1.0
+    trigger = (np.array([state.time_offset[h] - run.t_c[h] - 0.5 / fs]), np.zeros(1),
+               np.array([setup.trigger_sigma]), ["trigger"], Jt)
+    Jd = np.zeros((1, len(index)))
+    Jd[0, index[Column("delay", h)]] = 1.0
+    delay = (np.array([state.delay[h]]), np.zeros(1), np.array([setup.tof_scatter]),
+             ["delay"], Jd)
+    return [trigger, delay]
+
+
+def observe(setup: Setup, state: State, wanted: set[str] | None = None) -> Observed:
+    """The model's observations of every sample's records and their derivatives, in ONE
+    chain run of all hits (module docstring of :mod:`ssw.calibration.waveform`).
+
+    Parameters
+    ----------
+    setup : Setup
+        The model and the records.
+    state : State
+        The parameters' values.
+    wanted : set of str or None
+        Parameter names whose derivatives are needed (default: all); the others' columns
+        are 0.
+
+    Returns
+    -------
+    Observed
+        Rows: per hit its data (the features, or the window's samples not at a rail),
+        then its ``trigger`` and ``delay`` priors.
+    """
+    wanted = set(PARAMETERS) if wanted is None else set(wanted)
+    names = _names(wanted)
+    run = _measured(setup, state, names)
+    g = float(state.globals["gain"])
+    columns = setup.columns
+    rows = _Rows(setup, names, wanted, {c: i for i, c in enumerate(columns)}, setup.hit_of())
+    blocks: list[_Block] = []
+    hits: list[np.ndarray] = []
+    for h in range(setup.n_hits):
+        i = rows.hit_sample[h]
+        a, b = setup.samples[i].window[h - setup._starts[i]]
+        y = g * run.samples[:b - a, h]  # (m, channels)
+        data = (_waveform_rows(rows, h, y, g) if setup.level == "waveform"
+                else _feature_rows(rows, h, y, g, run.E[h]))
+        blocks += [data, *_prior_rows(rows, h, run, state)]
+        hits += [np.full(data[0].size, h), np.array([h]), np.array([h])]
+    return Observed(np.concatenate([b[0] for b in blocks]),
+                    np.concatenate([b[1] for b in blocks]),
+                    np.concatenate([b[2] for b in blocks]),
+                    np.array([kind for b in blocks for kind in b[3]]),
+                    np.concatenate(hits), np.concatenate([b[4] for b in blocks]), columns)
 
 
 def _corrected(setup: Setup, val: np.ndarray, J: np.ndarray, E: float, col_E: int | None,

@@ -150,13 +150,11 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     2. A fit of every free parameter; then the model-error floor estimated from its
        residuals (:func:`model_floor`: each kind's chi^2 brought to its share of the
        degrees of freedom) and the fit again with it, until the floor settles
-       (:data:`FLOOR_RTOL`, at most :data:`FLOOR_PASSES` times). The chi^2 of a
-       calibration is then its degrees of freedom by construction; what it says about the
-       model is the floor (stated in the result, and the weights of every measurement
-       through the calibration, :func:`ssw.measure.measure_information`).
-    3. If some global is not identified (its standard error, scaled by the misfit, beyond
-       :data:`ssw.calibration.information.IDENTIFIED_U` in its scaled coordinate), the fit
-       again with only the identified ones free, the others at their start's values.
+       (:func:`_settled`). The chi^2 of a calibration is then its degrees of freedom by
+       construction; what it says about the model is the floor (stated in the result, and
+       the weights of every measurement, :func:`ssw.measure.measure_information`).
+    3. If some global is not identified, the fit again with only the identified ones
+       free, the others at their start's values (:func:`_identified`).
     4. Under model error at the features level (a kind's floor above
        :data:`START_FLOOR`, a few times the chain's own error; two references or more;
        ``discrepancy``): the model's discrepancy, a line in ``(E / E_0)^(-2/5)`` per feature
@@ -210,8 +208,6 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     ConfigError
         A reference without its E.
     """
-    from ssw.calibration.information import IDENTIFIED_U
-
     if any(s.E is None for s in samples):
         raise ConfigError("reference", [s.id for s in samples if s.E is None],
                           "references with a known E")
@@ -224,36 +220,126 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     setup.fix_step(State(E, np.full(n_h, 1.5 * v0), np.zeros(n_h), np.zeros(n_h), glob))
     per_hit = [Column(name, h) for name in PER_HIT for h in range(n_h)]
     free = [Column(g) for g in free_globals]
-    kinds = FEATURES if level == "features" else ("waveform",)
-    if scan and {"sensor_mass", "damping"} <= set(free_globals):
+    grid = ((start_grid or (None, None))
+            if scan and {"sensor_mass", "damping"} <= set(free_globals) else None)
+    state, scan = _start(setup, glob, E, v0, per_hit, grid, refine_levels)
+    f = _settled(setup, fit(setup, state, free + per_hit), free + per_hit)
+    f, free = _identified(setup, f, state, free, per_hit)
+    if (discrepancy and level == "features" and len(samples) >= 2
+            and max(f.floor.values(), default=0.0) > START_FLOOR):
+        f = _with_discrepancy(setup, f.state, free, per_hit)
+    return replace(f, start=scan)
+
+
+def _start(setup: Setup, glob: dict[str, float], E: np.ndarray, v0: float,
+           per_hit: list[Column], grid: tuple[Any, Any] | None,
+           refine_levels: int) -> tuple[State, list[dict]]:
+    """Step 1 of :func:`calibrate_records`: the start of the globals' fit, and the
+    model-error floor of its weights.
+
+    Parameters
+    ----------
+    setup : Setup
+        The model and the records (its ``floor`` is set).
+    glob : dict
+        The device's globals (SI; :func:`device_globals`).
+    E : numpy.ndarray
+        (n_samples,) the references' Young's moduli, Pa.
+    v0 : float
+        m/s, the device's striker speed.
+    per_hit : list of Column
+        Every hit's parameters.
+    grid : tuple or None
+        The global start's sensor masses and dissipation coefficients (each None: the
+        default grid): the best point of the grid (:func:`global_start`, weights with the
+        floor :data:`START_FLOOR`) refined around it (:func:`refine_start`). None: the
+        device's values, each hit's parameters fitted with the globals held, and the floor
+        their residuals call for (:func:`model_floor`).
+    refine_levels : int
+        Refinements of the global start.
+
+    Returns
+    -------
+    tuple
+        The start's state and the grid's points (empty without a grid).
+    """
+    if grid is not None:
+        kinds = FEATURES if setup.level == "features" else ("waveform",)
         setup.floor = dict.fromkeys(kinds, START_FLOOR)
-        state, scan = refine_start(setup, glob, E, v0, *global_start(
-            setup, glob, E, v0, *(start_grid or (None, None))), levels=refine_levels)
-    else:  # the device's globals; each hit's own parameters, and the floor they leave
-        hits_only = fit(setup, initial_state(setup, glob, E, v0), per_hit)
-        state, scan = hits_only.state, []
-        setup.floor = model_floor(setup, hits_only)
-    f = fit(setup, state, free + per_hit)
+        return refine_start(setup, glob, E, v0, *global_start(setup, glob, E, v0, *grid),
+                            levels=refine_levels)
+    # the device's globals; each hit's own parameters, and the floor they leave
+    hits_only = fit(setup, initial_state(setup, glob, E, v0), per_hit)
+    setup.floor = model_floor(setup, hits_only)
+    return hits_only.state, []
+
+
+def _settled(setup: Setup, f: Fit, cols: list[Column]) -> Fit:
+    """Step 2 of :func:`calibrate_records`: the model-error floor estimated from a fit's
+    residuals (:func:`model_floor`) and the fit again with it, until the floor settles
+    (every kind within :data:`FLOOR_RTOL` of the last pass's; at most
+    :data:`FLOOR_PASSES` times).
+
+    Parameters
+    ----------
+    setup : Setup
+        The model and the records (its ``floor`` is set to each pass's).
+    f : Fit
+        The fit with the start's floor.
+    cols : list of Column
+        The free parameters.
+
+    Returns
+    -------
+    Fit
+        The last fit.
+    """
     for _ in range(FLOOR_PASSES):  # the floor: the start's, then the residuals' own
         floor = model_floor(setup, f)
         settled = all(abs(v - setup.floor.get(k, 0.0)) <= FLOOR_RTOL * v
                       for k, v in floor.items())
         setup.floor = floor
-        f = fit(setup, f.state, free + per_hit)
+        f = fit(setup, f.state, cols)
         if settled:
             break
+    return f
+
+
+def _identified(setup: Setup, f: Fit, start: State, free: list[Column],
+                per_hit: list[Column]) -> tuple[Fit, list[Column]]:
+    """Step 3 of :func:`calibrate_records`: while some free global is not identified (its
+    standard error, scaled by the misfit, beyond
+    :data:`ssw.calibration.information.IDENTIFIED_U` in its scaled coordinate), the fit
+    again with only the identified ones free, the others at their start's values.
+
+    Parameters
+    ----------
+    setup : Setup
+        The model and the records.
+    f : Fit
+        The fit of every free global.
+    start : State
+        The start (the values of the globals that are not identified).
+    free : list of Column
+        The free globals.
+    per_hit : list of Column
+        Every hit's parameters (always free).
+
+    Returns
+    -------
+    tuple
+        The last fit and the globals it identified.
+    """
+    from ssw.calibration.information import IDENTIFIED_U
+
     while True:
         kept = [c for c in free if f.std(c) <= IDENTIFIED_U]
         if len(kept) == len(free):
-            break
+            return f, free
         free = kept
         st = f.state.copy()  # what is not identified goes back to its start's value
-        st.globals.update({g: state.globals[g] for g in GLOBALS if Column(g) not in free})
+        st.globals.update({g: start.globals[g] for g in GLOBALS if Column(g) not in free})
         f = fit(setup, st, free + per_hit)
-    if (discrepancy and level == "features" and len(samples) >= 2
-            and max(f.floor.values(), default=0.0) > START_FLOOR):
-        f = _with_discrepancy(setup, f.state, free, per_hit)
-    return replace(f, start=scan)
 
 
 def refit_discrepancy(samples: list[Hits], params: Any, wall: str,

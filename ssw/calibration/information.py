@@ -4,7 +4,7 @@ uncertainties of the parameters, at stated noise (``ssw identify``).
 For a model's observations ``y(theta)`` with standard deviations ``s`` (independent), the
 whitened Jacobian ``A = (dy / dx) / s`` in the scaled coordinates ``x`` of the parameters
 (``ln theta`` for a log-scaled one, ``theta / scale`` otherwise:
-:data:`ssw.calibration.waveform.PARAMETERS`) gives the Fisher information ``A^T A`` (Bard
+:data:`ssw.calibration.hits.PARAMETERS`) gives the Fisher information ``A^T A`` (Bard
 1974; Press et al. 2007, sec. 15.5). Nuisance parameters (a hit's time offset and
 delay) are profiled out: the information of the parameters of interest is that of ``(I -
 P_b) A_a``, ``P_b`` the projection onto the nuisances' columns (the Schur complement).

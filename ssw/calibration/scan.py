@@ -1,8 +1,8 @@
 """The global scan of a TOF calibration (:mod:`ssw.calibration.fit`): each free
 parameter's range (:func:`scan_ranges`), the tensor grid evaluated in batched runs
-(:func:`scan_grid`), its local minima as starts (:func:`_starts`), the batched
-bounded Levenberg-Marquardt of every problem's starts (:func:`_lm_batch`,
-:class:`Solution`) and the pick among the solutions (:func:`_pick`).
+(:func:`scan_grid`), its local minima as starts (``_starts``), the batched
+bounded Levenberg-Marquardt of every problem's starts (``_lm_batch``,
+:class:`Solution`) and the pick among the solutions (``_pick``).
 """
 
 from __future__ import annotations

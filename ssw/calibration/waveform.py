@@ -19,8 +19,8 @@ simulated record and a recorded one are the same kind of object, so the residual
 like with like, and every derivative is exact: the chain's sensitivities through the linear
 measurement model (and the extractor's chain rule).
 
-Parameters (:data:`PARAMETERS`; SI, each with its scaled coordinate, ``ln x`` or ``x /
-scale``):
+Parameters (:data:`~ssw.calibration.hits.PARAMETERS`; SI, each with its scaled coordinate,
+``ln x`` or ``x / scale``):
 
 * per sample: ``E`` (known for a reference, free for a measured sample);
 * per hit: the striker speed ``striker_velocity`` (hits differ; the amplitude and the pulse
@@ -141,8 +141,9 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
 
     1. The start: when the sensor's mass and the dashpot may be freed, the best point of
        a grid of them (:func:`global_start`, weights with the floor
-       :data:`START_FLOOR`) refined around it (:func:`refine_start`); else (or with
-       ``scan`` False) the device's values, each hit's parameters fitted to the records
+       :data:`~ssw.calibration.start.START_FLOOR`) refined around it
+       (:func:`refine_start`); else (or with ``scan`` False) the device's values, each hit's
+       parameters fitted to the records
        with the globals held, and the model-error floor those residuals call for
        (:func:`model_floor`) in the weights of what follows (so that a first fit of the
        globals is not drawn by the noise's weights alone where the model cannot reach
@@ -150,13 +151,14 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     2. A fit of every free parameter; then the model-error floor estimated from its
        residuals (:func:`model_floor`: each kind's chi^2 brought to its share of the
        degrees of freedom) and the fit again with it, until the floor settles
-       (:func:`_settled`). The chi^2 of a calibration is then its degrees of freedom by
+       (``_settled``). The chi^2 of a calibration is then its degrees of freedom by
        construction; what it says about the model is the floor (stated in the result, and
        the weights of every measurement, :func:`ssw.measure.measure_information`).
     3. If some global is not identified, the fit again with only the identified ones
-       free, the others at their start's values (:func:`_identified`).
+       free, the others at their start's values (``_identified``).
     4. Under model error at the features level (a kind's floor above
-       :data:`START_FLOOR`, a few times the chain's own error; two references or more;
+       :data:`~ssw.calibration.start.START_FLOOR`, a few times the chain's own error; two
+       references or more;
        ``discrepancy``): the model's discrepancy, a line in ``(E / E_0)^(-2/5)`` per feature
        (:mod:`ssw.calibration.discrepancy`), estimated with the hits refitted, then the
        floor its corrected residuals leave and the fit of step 2 with it.
@@ -180,7 +182,7 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     tof_scatter : float
         s, a hit's TOF scatter (the delays' prior).
     free_globals : tuple of str
-        The globals that may be freed (:data:`GLOBALS`).
+        The globals that may be freed (:data:`~ssw.calibration.hits.GLOBALS`).
     scan : bool
         Start from :func:`global_start` when the sensor's mass and the dashpot may be
         freed; False: from ``params`` (a calibration of the same records at another level,
@@ -190,7 +192,8 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     start_grid : tuple or None
         The global start's sensor masses (multiples of the device's) and contact
         dissipation coefficients (the unit of ``params.damping_law``; N s/m for the
-        dashpot); None: :data:`START_SENSOR_MASS` by :func:`start_damping` of the law.
+        dashpot); None: :data:`~ssw.calibration.start.START_SENSOR_MASS` by
+        :func:`start_damping` of the law.
     refine_levels : int
         Refinements of the global start (:func:`refine_start`).
     discrepancy : bool
@@ -252,8 +255,9 @@ def _start(setup: Setup, glob: dict[str, float], E: np.ndarray, v0: float,
     grid : tuple or None
         The global start's sensor masses and dissipation coefficients (each None: the
         default grid): the best point of the grid (:func:`global_start`, weights with the
-        floor :data:`START_FLOOR`) refined around it (:func:`refine_start`). None: the
-        device's values, each hit's parameters fitted with the globals held, and the floor
+        floor :data:`~ssw.calibration.start.START_FLOOR`) refined around it
+        (:func:`refine_start`). None: the device's values, each hit's parameters fitted with the
+        globals held, and the floor
         their residuals call for (:func:`model_floor`).
     refine_levels : int
         Refinements of the global start.

@@ -40,8 +40,9 @@ class Fit:
     values : numpy.ndarray
         (q,) their values, SI.
     cov_x : numpy.ndarray
-        (q, q) their covariance in the scaled coordinates (:func:`coordinate`), from the
-        Gauss-Newton curvature at the optimum (unscaled by the misfit).
+        (q, q) their covariance in the scaled coordinates
+        (:func:`~ssw.calibration.observation.coordinate`), from the Gauss-Newton curvature at the
+        optimum (unscaled by the misfit).
     chi2 : float
         The weighted residuals' sum of squares (data and priors).
     dof : int
@@ -54,7 +55,8 @@ class Fit:
     runs : int
         Chain runs.
     start : list of dict
-        The global start's grid (:func:`global_start`) with each point's chi^2, if any.
+        The global start's grid (:func:`~ssw.calibration.start.global_start`) with each
+        point's chi^2, if any.
     unexplained : int
         Observations the record has a value for and the model, at the optimum, none.
     floor : dict
@@ -142,8 +144,9 @@ def fit(setup: Setup, state: State, free: list[Column], iterations: int | None =
         ) -> Fit:
     """Fit the ``free`` parameters of ``state`` to the records by the one bounded
     Levenberg-Marquardt (:func:`ssw.calibration.lm.levenberg_marquardt`), in the scaled
-    coordinates, each parameter within its range (:data:`PARAMETERS`). A trial point where
-    the model loses observations that the current point explains (a hit's pulse or trigger
+    coordinates, each parameter within its range (:data:`~ssw.calibration.hits.PARAMETERS`).
+    A trial point where the model loses observations that the current point explains (a hit's pulse
+    or trigger
     crossing it no longer produces) is rejected: those rows would drop out of chi^2, a
     fall that is no better fit and a trap the fit cannot leave.
 
@@ -238,8 +241,9 @@ class _Explained:
 
 def global_covariance(f: Fit, hits: float = 1.0) -> tuple[list[str], np.ndarray]:
     """The covariance of a fit's free globals in their scaled coordinates
-    (:func:`coordinate`), scaled by the misfit (:attr:`Fit.misfit`), every per-hit
-    parameter marginalized; with a model-error floor (``floor`` of :class:`Fit`), times ``hits``:
+    (:func:`~ssw.calibration.observation.coordinate`), scaled by the misfit
+    (:attr:`Fit.misfit`), every per-hit parameter marginalized; with a model-error floor (``floor``
+    of :class:`Fit`), times ``hits``:
     the model's error is the same on every hit of a sample and does not average down
     over them as the weights assume (conservative: the noise's share, far smaller, is
     scaled with it).
@@ -247,7 +251,7 @@ def global_covariance(f: Fit, hits: float = 1.0) -> tuple[list[str], np.ndarray]
     Parameters
     ----------
     f : Fit
-        A fit (a calibration of records, :func:`calibrate_records`).
+        A fit (a calibration of records, :func:`~ssw.calibration.waveform.calibrate_records`).
     hits : float
         Hits per sample.
 
@@ -301,7 +305,7 @@ def propagated(setup: Setup, f: Fit, names: list[str], cov: np.ndarray) -> np.nd
     f : Fit
         The fit (the globals held at their values).
     names : list of str
-        The globals (:data:`GLOBALS`).
+        The globals (:data:`~ssw.calibration.hits.GLOBALS`).
     cov : numpy.ndarray
         (g, g) their covariance in their scaled coordinates.
 

@@ -50,7 +50,7 @@ def measure_information(m: Measurement, recordings: list[Any], level: str, param
     terms (calibration, Poisson's ratio, wall, integrator) stay. ``chi2`` and its quantile flag
     a recording the model does not explain (a clipped hit, a yielding sample, a time
     offset the trigger does not explain): beyond
-    :data:`ssw.calibration.waveform.FLAG_QUANTILE` the measurement says so in its notes and
+    :data:`ssw.calibration.waveform_fit.FLAG_QUANTILE` the measurement says so in its notes and
     ``flagged``.
 
     Parameters

@@ -2,7 +2,7 @@
 
 Problem. References ``i`` (known ``E_i``, ``nu_i``; measured ``T_i`` with standard uncertainty
 ``s_i``) and free parameters ``theta`` of the device, each within its range
-(:func:`scan_ranges`): minimize the weighted sum of squares
+(:func:`~ssw.calibration.scan.scan_ranges`): minimize the weighted sum of squares
 
     ``chi^2(theta) = sum_i ((TOF(E_i, nu_i; theta) - T_i) / s_i)^2``  subject to
     ``lo <= theta <= hi``.

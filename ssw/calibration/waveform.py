@@ -141,13 +141,12 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
 
     1. The start: when the sensor's mass and the dashpot may be freed, the best point of
        a grid of them (:func:`global_start`, weights with the floor
-       :data:`~ssw.calibration.start.START_FLOOR`) refined around it
-       (:func:`refine_start`); else (or with ``scan`` False) the device's values, each hit's
-       parameters fitted to the records
-       with the globals held, and the model-error floor those residuals call for
-       (:func:`model_floor`) in the weights of what follows (so that a first fit of the
-       globals is not drawn by the noise's weights alone where the model cannot reach
-       the records: a calibration of the waveform from the features' one).
+       :data:`~ssw.calibration.start.START_FLOOR`) refined around it (:func:`refine_start`);
+       else (or with ``scan`` False) the device's values, each hit's parameters fitted to
+       the records with the globals held, and the model-error floor those residuals call
+       for (:func:`model_floor`) in the weights of what follows (so that a first fit of the
+       globals is not drawn by the noise's weights alone where the model cannot reach the
+       records: a calibration of the waveform from the features' one).
     2. A fit of every free parameter; then the model-error floor estimated from its
        residuals (:func:`model_floor`: each kind's chi^2 brought to its share of the
        degrees of freedom) and the fit again with it, until the floor settles
@@ -158,10 +157,10 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
        free, the others at their start's values (``_identified``).
     4. Under model error at the features level (a kind's floor above
        :data:`~ssw.calibration.start.START_FLOOR`, a few times the chain's own error; two
-       references or more;
-       ``discrepancy``): the model's discrepancy, a line in ``(E / E_0)^(-2/5)`` per feature
-       (:mod:`ssw.calibration.discrepancy`), estimated with the hits refitted, then the
-       floor its corrected residuals leave and the fit of step 2 with it.
+       references or more; ``discrepancy``): the model's discrepancy, a line in
+       ``(E / E_0)^(-2/5)`` per feature (:mod:`ssw.calibration.discrepancy`), estimated with
+       the hits refitted, then the floor its corrected residuals leave and the fit of step
+       2 with it.
 
     Parameters
     ----------
@@ -190,10 +189,9 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     gain : float
         The DAQ gain's start (another level's calibration's).
     start_grid : tuple or None
-        The global start's sensor masses (multiples of the device's) and contact
-        dissipation coefficients (the unit of ``params.damping_law``; N s/m for the
-        dashpot); None: :data:`~ssw.calibration.start.START_SENSOR_MASS` by
-        :func:`start_damping` of the law.
+        The global start's sensor masses (multiples of the device's) and contact dissipation
+        coefficients (the unit of ``params.damping_law``; N s/m for the dashpot); None:
+        :data:`~ssw.calibration.start.START_SENSOR_MASS` by :func:`start_damping` of the law.
     refine_levels : int
         Refinements of the global start (:func:`refine_start`).
     discrepancy : bool
@@ -202,9 +200,8 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     Returns
     -------
     Fit
-        The last fit (its ``free`` lists the globals it identified first; its ``floor``
-        the model-error floor; its ``discrepancy`` the correction, if any; its ``start``
-        the grid).
+        The last fit (its ``free`` lists the globals it identified first; its ``floor`` the
+        model-error floor; its ``discrepancy`` the correction, if any; its ``start`` the grid).
 
     Raises
     ------

@@ -135,10 +135,10 @@ def test_calibrate_with_the_waveform_frees_what_the_records_identify(capsys, tmp
     globals it identifies and finds the nominal sensor mass, a zero dashpot and unit gain.
     The global start's grid is cut to the nominal point (the device is nominal; the grid's
     search is the slow honesty study's, tests/test_honesty.py)."""
-    import ssw.calibration.waveform as waveform
+    import ssw.calibration.start as start
 
-    monkeypatch.setattr(waveform, "START_SENSOR_MASS", (1.0,))
-    monkeypatch.setattr(waveform, "START_DAMPING", (0.0,))
+    monkeypatch.setattr(start, "START_SENSOR_MASS", (1.0,))
+    monkeypatch.setattr(start, "START_DAMPING", (0.0,))
     refs = []
     for mat, E, nu in (("pcf08", 38e6, 0.34), ("pcf30", 445e6, 0.30)):
         path = tmp_path / f"{mat}.h5"

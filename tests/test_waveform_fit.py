@@ -1,4 +1,4 @@
-"""The fit of a waveform model's parameters (:func:`ssw.calibration.waveform.fit`) on a model
+"""The fit of a waveform model's parameters (:func:`ssw.calibration.waveform_fit.fit`) on a model
 whose observations exist only in part of the parameter space (a hit's pulse that the model
 does not produce beyond some parameter value): the fit must not trade observations for
 chi^2. Before, a step into the region where a hit's features vanish dropped their rows from
@@ -14,7 +14,7 @@ from types import SimpleNamespace
 import numpy as np
 import pytest
 
-from ssw.calibration import waveform
+from ssw.calibration import waveform, waveform_fit
 from ssw.calibration.waveform import Column, Observed, State
 
 #: Row A wants theta = 2 (weight 10); row B wants 1.2 (weight 3) and exists only below
@@ -41,11 +41,11 @@ def _state(theta):
 
 
 def test_a_step_that_loses_observations_is_not_a_better_fit(monkeypatch):
-    monkeypatch.setattr(waveform, "observe", _observe)
+    monkeypatch.setattr(waveform_fit, "observe", _observe)
     setup = SimpleNamespace(runs=0, floor={}, discrepancy=None,
                             acq=SimpleNamespace(sample_rate=51200.0),
                             tof_scatter=1.53e-5)
-    f = waveform.fit(setup, _state(1.0), [Column("gain")])
+    f = waveform_fit.fit(setup, _state(1.0), [Column("gain")])
     # every observation kept: the optimum of the two rows on the part of the space where
     # both exist is its edge theta -> 1.5 (chi^2 falls towards it: the unconstrained
     # optimum 1.934 lies beyond)

@@ -68,8 +68,9 @@ POWER = -0.4
 #: device: at 0.5 (the median estimate) the features the line cannot follow (the amplitude
 #: ratio) weigh enough to pull the unseen 800 MPa 12 % low, flagged; at 0.95, 4.3 % low.
 CV_CONFIDENCE = FLOOR_CONFIDENCE
-#: Passes of the correction and the hits' refit at the references (:func:`ssw.calibration.
-#: waveform.calibrate_records`): the correction is estimated before the hits' delays, so
+#: Passes of the correction and the hits' refit at the references
+#: (:func:`ssw.calibration.waveform.calibrate_records`): the correction is estimated before
+#: the hits' delays, so
 #: that a pass moves only what the hits' speeds move (measured on the honesty study's
 #: device, the line's coefficients settle to 1e-4 within two passes).
 PASSES = 3

@@ -466,19 +466,13 @@ def calibrate(
     model = TofModel(device, tuple(free), np.array([r.E for r in refs]),
                      np.array([r.nu for r in refs]), materials, dict(numerics), wall, opts,
                      on_run=on_run)
-    check_enough(len(refs), model.free)
-    subsets = leave_one_out_sets(len(refs)) if loo else []
-    fit, subs = identify(model, refs, ranges=ranges, subsets=subsets, scan_points=scan_points)
-    warnings = fit_warnings(fit)
-    if any(w.startswith("the covariance is not") for w in warnings):
-        fit = replace(fit, covariance=None, std=None)  # a covariance no consumer can use
+    fit, subs, warnings = _fitted(model, refs, loo, ranges, scan_points)
     merr = None if fit.model_error is None else fit.model_error.to_dict()
     values = theta_dict(model.free, fit.theta)
     cal_device = device.with_(**values)
     references = _reference_rows(refs, chain_params(cal_device, materials, **numerics), wall,
                                  opts)
-    std = None if fit.std is None else dict(zip(fit.covariance_names, map(float, fit.std),
-                                                strict=True))
+    std = _parameter_std(fit)
     loo_rows = _loo_predictions(model, refs, subs, materials, numerics, wall, opts) if loo else []
     prov = {**_provenance(refs, model, device, wall, numerics, fit, merr, reference_sample, t0),
             **(provenance or {})}
@@ -494,6 +488,62 @@ def calibrate(
         device_sha256=device_digest(device, materials),
         covariance_parameters=fit.covariance_names, model_error=merr, warnings=warnings,
     )
+
+
+def _fitted(model: TofModel, refs: list[Reference], loo: bool,
+            ranges: dict[str, tuple[float, float]] | None,
+            scan_points: int | None) -> tuple[Any, list[Any], list[str]]:
+    """The fit of a calibration (:func:`ssw.calibration.fit.identify`), its subsets' when
+    ``loo``, and its warnings; a covariance no consumer can use dropped.
+
+    Parameters
+    ----------
+    model : TofModel
+        The TOF model of the references.
+    refs : list of Reference
+        The references.
+    loo : bool
+        Fit every leave-one-out subset as well.
+    ranges : dict or None
+        The free parameters' ranges (SI).
+    scan_points : int or None
+        The start scan's points.
+
+    Returns
+    -------
+    tuple
+        The fit, the subsets' fits and the warnings.
+
+    Raises
+    ------
+    ConfigError
+        Fewer references than free parameters.
+    """
+    check_enough(len(refs), model.free)
+    subsets = leave_one_out_sets(len(refs)) if loo else []
+    fit, subs = identify(model, refs, ranges=ranges, subsets=subsets, scan_points=scan_points)
+    warnings = fit_warnings(fit)
+    if any(w.startswith("the covariance is not") for w in warnings):
+        fit = replace(fit, covariance=None, std=None)  # a covariance no consumer can use
+    return fit, subs, warnings
+
+
+def _parameter_std(fit: Any) -> dict[str, float] | None:
+    """The fit's standard error of each parameter of its covariance (SI), or None without a
+    covariance.
+
+    Parameters
+    ----------
+    fit : ssw.calibration.fit.Fit
+        The calibration's fit.
+
+    Returns
+    -------
+    dict or None
+        Name -> standard error.
+    """
+    return None if fit.std is None else dict(zip(fit.covariance_names, map(float, fit.std),
+                                                 strict=True))
 
 
 def _reference_rows(refs: list[Reference], params: Any, wall: str,

@@ -4,7 +4,7 @@ uncertainties of the parameters, at stated noise (``ssw identify``).
 For a model's observations ``y(theta)`` with standard deviations ``s`` (independent), the
 whitened Jacobian ``A = (dy / dx) / s`` in the scaled coordinates ``x`` of the parameters
 (``ln theta`` for a log-scaled one, ``theta / scale`` otherwise:
-:data:`ssw.calibration.waveform.PARAMETERS`) gives the Fisher information ``A^T A`` (Bard
+:data:`ssw.calibration.hits.PARAMETERS`) gives the Fisher information ``A^T A`` (Bard
 1974; Press et al. 2007, sec. 15.5). Nuisance parameters (a hit's time offset and
 delay) are profiled out: the information of the parameters of interest is that of ``(I -
 P_b) A_a``, ``P_b`` the projection onto the nuisances' columns (the Schur complement).
@@ -311,6 +311,92 @@ def natural(info: Information, damping_law: str = "dashpot") -> dict[str, float 
     return out
 
 
+def _records_rows(setup: Any, state: Any, cols: list[Any], scale_nu: float) -> np.ndarray:
+    """One hit's observations of a level in the scaled coordinates, weighted by their
+    standard deviations: the columns ``cols`` (the first :data:`INTEREST` but ``nu``, then
+    the nuisances) with ``nu``'s inserted second, its derivative a five-point central
+    difference of step :data:`NU_STEP` (``nu`` is no parameter of the model).
+
+    Parameters
+    ----------
+    setup : ssw.calibration.observation.Setup
+        The model and the one hit's record (its time step fixed here).
+    state : ssw.calibration.hits.State
+        The parameters' values (SI).
+    cols : list of ssw.calibration.hits.Column
+        The columns, in order.
+    scale_nu : float
+        ``nu``'s scaled coordinate's unit.
+
+    Returns
+    -------
+    numpy.ndarray
+        (n_ok, len(cols) + 1) the rows with a finite model and Jacobian.
+    """
+    from dataclasses import replace as dc_replace
+
+    from ssw.calibration.waveform import dtheta_dx, get, observe
+
+    rec = setup.samples[0]
+    setup.fix_step(state)
+    obs = observe(setup, state)
+    d_nu = 0.0
+    for o, w in zip(NU_OFFSETS, NU_WEIGHTS, strict=True):
+        moved = dc_replace(rec, nu=rec.nu + o * NU_STEP)
+        d_nu = d_nu + w * observe(dc_replace(setup, samples=[moved], runs=0), state,
+                                  wanted={"striker_velocity"}).model
+    d_nu = d_nu / (12 * NU_STEP)
+    index = {c: j for j, c in enumerate(obs.columns)}
+    vals = np.array([get(state, c) for c in cols])
+    scaled = dtheta_dx(setup, cols, vals)
+    J = np.column_stack([obs.jacobian[:, index[c]] for c in cols])
+    J = J * scaled[None, :]
+    J = np.insert(J, 1, d_nu * scale_nu, axis=1)
+    ok = np.isfinite(obs.model) & np.all(np.isfinite(J), axis=1)
+    return J[ok] / obs.sigma[ok, None]
+
+
+def _tof_row(params: Any, wall: str, wall_options: dict[str, Any], E: float, nu: float,
+             scale_of: Any) -> np.ndarray:
+    """The TOF's derivatives by :data:`INTEREST` in the scaled coordinates (s per unit; the
+    gain's 0), ``nu``'s a five-point central difference of step :data:`NU_STEP`.
+
+    Parameters
+    ----------
+    params : ChainParams
+        The device's chain.
+    wall : str
+        The wall law.
+    wall_options : dict
+        Its options.
+    E : float
+        Pa, the sample's modulus.
+    nu : float
+        Its Poisson's ratio.
+    scale_of : callable
+        A parameter's name -> its scaled coordinate's unit.
+
+    Returns
+    -------
+    numpy.ndarray
+        (1, len(INTEREST)) the row.
+    """
+    from ssw.calibration.waveform import device_globals
+    from ssw.tof import api
+
+    glob = device_globals(params)
+    td = api.tof_derivatives(E, nu, params, wall, **wall_options)
+    T = np.asarray(api.tof(E, nu + np.array(NU_OFFSETS) * NU_STEP, params, wall,
+                           **wall_options), float)
+    row = [float(td.dtof["E"]) * E, float(np.dot(NU_WEIGHTS, T)) / (12 * NU_STEP) * scale_of("nu"),
+           float(td.dtof["striker_velocity"]) * params.striker_velocity,
+           float(td.dtof["preload"]) * scale_of("preload"),
+           float(td.dtof["sensor_mass"]) * glob["sensor_mass"],
+           float(td.dtof["striker_mass"]) * glob["striker_mass"],
+           float(td.dtof["damping"]) * scale_of("damping"), 0.0]
+    return np.array([row])
+
+
 def identifiability(params: Any, wall: str, wall_options: dict[str, Any], E: float,
                     nu: float, settings: Any, *, hits: int = 5, tof_scatter: float = 1.53e-5,
                     noise: float | None = None, seed: int = 0) -> Identifiability:
@@ -360,15 +446,11 @@ def identifiability(params: Any, wall: str, wall_options: dict[str, Any], E: flo
         Setup,
         State,
         device_globals,
-        dtheta_dx,
-        get,
-        observe,
         parameter,
     )
     from ssw.daq.model import Acquisition
     from ssw.daq.settings import SimulationSettings
     from ssw.daq.simulated import SimulatedBackend
-    from ssw.tof import api
 
     quiet = dc_replace(settings, simulation=SimulationSettings(
         noise_rms=0.0, trigger_jitter=0.0, striker_velocity_cov=0.0))
@@ -396,39 +478,14 @@ def identifiability(params: Any, wall: str, wall_options: dict[str, Any], E: flo
     for level in ("features", "waveform"):
         setup = Setup(params, wall, wall_options, acq, level, [rec], settings.trigger_level,
                       tof_scatter=tof_scatter)
-        setup.fix_step(state)
-        obs = observe(setup, state)
-        d_nu = 0.0
-        for o, w in zip(NU_OFFSETS, NU_WEIGHTS, strict=True):
-            moved = dc_replace(rec, nu=nu + o * NU_STEP)
-            d_nu = d_nu + w * observe(dc_replace(setup, samples=[moved], runs=0), state,
-                                      wanted={"striker_velocity"}).model
-        d_nu = d_nu / (12 * NU_STEP)
-        index = {c: j for j, c in enumerate(obs.columns)}
-        vals = np.array([get(state, c) for c in (*[c for c in cols if c], *nuis)])
-        scaled = dtheta_dx(setup, [c for c in cols if c] + nuis, vals)
-        J = np.column_stack([obs.jacobian[:, index[c]] for c in cols if c]
-                            + [obs.jacobian[:, index[c]] for c in nuis])
-        J = J * scaled[None, :]
-        J = np.insert(J, 1, d_nu * scale_nu, axis=1)
-        ok = np.isfinite(obs.model) & np.all(np.isfinite(J), axis=1)
-        A = J[ok] / obs.sigma[ok, None]
+        A = _records_rows(setup, state, [c for c in cols if c] + nuis, scale_nu)
         interest = np.arange(A.shape[1]) < len(INTEREST)
         Ap = profile(A, interest) * np.sqrt(hits)
-        levels[level] = summarize(Ap, INTEREST, int(ok.sum()) * hits)
-        known[level] = given(Ap, INTEREST, ("nu",), int(ok.sum()) * hits)
-        alone[level] = given(Ap, INTEREST, device, int(ok.sum()) * hits)
+        levels[level] = summarize(Ap, INTEREST, A.shape[0] * hits)
+        known[level] = given(Ap, INTEREST, ("nu",), A.shape[0] * hits)
+        alone[level] = given(Ap, INTEREST, device, A.shape[0] * hits)
     # TOF: one per hit, the chain's (the TOF level's model), scatter tof_scatter
-    td = api.tof_derivatives(E, nu, params, wall, **wall_options)
-    T = np.asarray(api.tof(E, nu + np.array(NU_OFFSETS) * NU_STEP, params, wall,
-                           **wall_options), float)
-    row = [float(td.dtof["E"]) * E, float(np.dot(NU_WEIGHTS, T)) / (12 * NU_STEP) * scale_nu,
-           float(td.dtof["striker_velocity"]) * params.striker_velocity,
-           float(td.dtof["preload"]) * scale_of("preload"),
-           float(td.dtof["sensor_mass"]) * glob["sensor_mass"],
-           float(td.dtof["striker_mass"]) * glob["striker_mass"],
-           float(td.dtof["damping"]) * scale_of("damping"), 0.0]
-    A = np.array([row]) / tof_scatter * np.sqrt(hits)
+    A = _tof_row(params, wall, wall_options, E, nu, scale_of) / tof_scatter * np.sqrt(hits)
     levels = {"tof": summarize(A, INTEREST, hits), **levels}
     known = {"tof": given(A, INTEREST, ("nu",), hits), **known}
     alone = {"tof": given(A, INTEREST, device, hits), **alone}

@@ -276,7 +276,7 @@ def compare_laws(samples: list[Any], params: Any, wall: str,
     ConfigError
         ``level`` is not a records' level, or an unknown law.
     """
-    from ssw.calibration.waveform import START_DAMPING
+    from ssw.calibration.start import START_DAMPING
     from ssw.chain.dissipation import DEFAULT_LAW, LAWS
 
     if level not in ("features", "waveform"):

@@ -32,18 +32,21 @@ over hits does not average away. It enters as a TOF uncertainty
 NI 9234 records of known TOF (x16 band-limited interpolation before the parabolic vertex):
 0.72 us at 51.2 kS/s (PCF 08, the broadest reflected pulse: 0.04 sample), and 2 to 5 us at
 25.6 kS/s and below, where the module's filter cuts into the pulse (0.13 sample).
+
+Records. :func:`measure_information` (:mod:`ssw.measure.records`) refines the TOF
+measurement by the records' features or whole waveforms.
 """
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 import numpy as np
 
 from ssw.errors import RecordingError
-from ssw.modulus import MODEL_TERM
+from ssw.measure.records import measure_information  # noqa: F401
 from ssw.signal.tof import MIN_HITS_FOR_SCATTER
 
 #: Systematic TOF uncertainty of the peak picking, in sample periods (1 sigma): the largest
@@ -363,30 +366,18 @@ def measure(
         raise RecordingError("no recording to measure")
     pool = pooled_tof(recordings, tof_options)
     n = pool["n_accepted"]
-    notes: list[str] = []
-    stated = getattr(device, "tof_scatter", None)
-    if np.isnan(pool["tof_sem"]) and stated is not None:
-        pool["tof_sem"] = float(stated) / np.sqrt(n)
-        notes.append(f"{n} accepted hit(s), fewer than {MIN_HITS_FOR_SCATTER}: the TOF term "
-                     f"uses the device's stated scatter, {stated:.3g} s per hit "
-                     f"({device.tof_scatter_source or 'source not given'})")
+    notes = _stated_scatter(pool, device)
     nu_arg = np.array([nu[0], nu[1]], float) if isinstance(nu, tuple | list) else float(nu)
     est = estimate_moduli([pool["tof_mean"]], [pool["tof_sem"]], nu_arg, params, wall,
                           wall_options, calibration=calibration)[0]
-    missing = dict(est.missing)
-    if "tof" in missing:
-        missing["tof"] = (f"{n} accepted hit(s), fewer than {MIN_HITS_FOR_SCATTER}: the TOF's "
-                          "scatter is not estimable and the device file states none "
-                          "(record more hits, or state repeatability.tof_std)")
+    missing = _missing(est, n)
     contrib = dict(est.contributions)
     if notes and "tof" in contrib:
         contrib["tof (stated scatter)"] = contrib.pop("tof")
     if sample_range is not None:  # a stated range of sample thickness: uniform in ln E
-        ends = [estimate_moduli([pool["tof_mean"]], [float("nan")], nu_arg, params, wall, o,
-                                calibration=None)[0].E for o in sample_range]
-        contrib["sample"] = float(abs(np.log(ends[1] / ends[0])) / (2.0 * np.sqrt(3.0)))
-        notes.append(f"sample thickness stated as a range: E {ends[0] / 1e6:.4g} MPa on the "
-                     f"thinnest, {ends[1] / 1e6:.4g} MPa on the thickest (a uniform term)")
+        contrib["sample"], note = _sample_range_term(pool["tof_mean"], nu_arg, params, wall,
+                                                     sample_range)
+        notes.append(note)
     # sampling: a systematic TOF uncertainty of the peak picking at the record's rate
     u_samp = sampling_uncertainty(pool["sample_rate"]) / (
         pool["tof_mean"] * abs(est.dlnTOF_dlnE))
@@ -402,15 +393,7 @@ def measure(
         extra.update(_checks(est, params, wall, wall_options, strengths, strength, stresses,
                              notes))
     if strength is not None:
-        yc = yield_check(est.E, est.nu, params, wall_options, strength)
-        extra.update(yc)
-        if yc["sample_yielded"]:
-            notes.append(
-                f"the sample yielded under the bead: peak von Mises stress "
-                f"{yc['sample_peak_von_mises'] / 1e6:.3g} MPa is {yc['yield_index']:.2f} x its "
-                f"strength {strength / 1e6:.3g} MPa (elastic field at the hit's peak force "
-                f"{yc['peak_wall_force']:.3g} N): the TOF carries plastic work as well as E; "
-                "a lower striker speed or a thicker plate keeps it elastic (ssw design)")
+        extra.update(_yield(est, params, wall_options, strength, notes))
     return Measurement(
         E=est.E, E_low=est.E * float(np.exp(-COVERAGE_Z * u)),
         E_high=est.E * float(np.exp(COVERAGE_Z * u)), u=u, contributions=contrib,
@@ -422,6 +405,122 @@ def measure(
         synthetic=any(bool(r.meta.get("synthetic", False)) for r in recordings),
         missing=missing, extra=extra,
     )
+
+
+def _missing(est: Any, n: int) -> dict[str, str]:
+    """The budget's terms the estimate could not give, the TOF's saying why (too few hits
+    and no stated scatter) and the way on.
+
+    Parameters
+    ----------
+    est : ssw.modulus.ModulusEstimate
+        The estimate (its ``missing`` terms).
+    n : int
+        The accepted hits.
+
+    Returns
+    -------
+    dict
+        Each missing term's reason.
+    """
+    missing = dict(est.missing)
+    if "tof" in missing:
+        missing["tof"] = (f"{n} accepted hit(s), fewer than {MIN_HITS_FOR_SCATTER}: the TOF's "
+                          "scatter is not estimable and the device file states none "
+                          "(record more hits, or state repeatability.tof_std)")
+    return missing
+
+
+def _stated_scatter(pool: dict[str, Any], device: Any) -> list[str]:
+    """The TOF's standard error from the device's stated scatter where the hits are too few
+    to estimate one (``pool["tof_sem"]`` NaN; set in place), and the note saying so.
+
+    Parameters
+    ----------
+    pool : dict
+        The pooled TOF (:func:`pooled_tof`; s).
+    device : ssw.device.Device or None
+        The device (its ``tof_scatter``, s per hit, and its source).
+
+    Returns
+    -------
+    list of str
+        The note, or none.
+    """
+    n = pool["n_accepted"]
+    stated = getattr(device, "tof_scatter", None)
+    if np.isnan(pool["tof_sem"]) and stated is not None:
+        pool["tof_sem"] = float(stated) / np.sqrt(n)
+        return [f"{n} accepted hit(s), fewer than {MIN_HITS_FOR_SCATTER}: the TOF term "
+                f"uses the device's stated scatter, {stated:.3g} s per hit "
+                f"({device.tof_scatter_source or 'source not given'})"]
+    return []
+
+
+def _sample_range_term(tof_mean: float, nu: Any, params: Any, wall: str,
+                       sample_range: list[dict[str, Any]]) -> tuple[float, str]:
+    """The budget's term of a stated range of sample thickness: E on the thinnest and the
+    thickest sample, uniform in ``ln E``: ``|ln(E_hi / E_lo)| / (2 sqrt 3)``.
+
+    Parameters
+    ----------
+    tof_mean : float
+        s, the pooled TOF.
+    nu : float or numpy.ndarray
+        The medium's Poisson's ratio, or its range.
+    params : ssw.chain.params.ChainParams
+        The device's chain.
+    wall : str
+        The wall law's name.
+    sample_range : list of dict
+        The wall options of the thinnest and the thickest sample.
+
+    Returns
+    -------
+    tuple
+        The term (relative standard uncertainty of E) and its note.
+    """
+    from ssw.modulus import estimate_moduli
+
+    ends = [estimate_moduli([tof_mean], [float("nan")], nu, params, wall, o,
+                            calibration=None)[0].E for o in sample_range]
+    term = float(abs(np.log(ends[1] / ends[0])) / (2.0 * np.sqrt(3.0)))
+    return term, (f"sample thickness stated as a range: E {ends[0] / 1e6:.4g} MPa on the "
+                  f"thinnest, {ends[1] / 1e6:.4g} MPa on the thickest (a uniform term)")
+
+
+def _yield(est: Any, params: Any, wall_options: dict[str, Any] | None, strength: float,
+           notes: list[str]) -> dict[str, Any]:
+    """The sample's yield check at the measured E (:func:`yield_check`), with a note
+    appended to ``notes`` when the sample yielded.
+
+    Parameters
+    ----------
+    est : ssw.modulus.ModulusEstimate
+        The estimate (E, Pa; nu).
+    params : ssw.chain.params.ChainParams
+        The device's chain.
+    wall_options : dict or None
+        The wall builder's options.
+    strength : float
+        Pa, the sample's uniaxial strength.
+    notes : list of str
+        The measurement's notes (appended to).
+
+    Returns
+    -------
+    dict
+        The yield check's entries.
+    """
+    yc = yield_check(est.E, est.nu, params, wall_options, strength)
+    if yc["sample_yielded"]:
+        notes.append(
+            f"the sample yielded under the bead: peak von Mises stress "
+            f"{yc['sample_peak_von_mises'] / 1e6:.3g} MPa is {yc['yield_index']:.2f} x its "
+            f"strength {strength / 1e6:.3g} MPa (elastic field at the hit's peak force "
+            f"{yc['peak_wall_force']:.3g} N): the TOF carries plastic work as well as E; "
+            "a lower striker speed or a thicker plate keeps it elastic (ssw design)")
+    return yc
 
 
 def _checks(est: Any, params: Any, wall: str, wall_options: dict[str, Any] | None,
@@ -482,163 +581,3 @@ def parse_nu(text: str | float) -> float | tuple[float, float]:
     except ValueError as exc:
         raise ConfigError("--soil-nu", text, "a Poisson's ratio NU or a range LO:HI with "
                           "-1 < LO <= HI <= 0.5") from exc
-
-
-#: Terms of the TOF budget that a fit of the records replaces (the scatter of the hits and
-#: the peak picking's sampling error are in the fit's own residuals; the TOF model's error,
-#: :func:`ssw.modulus.model_term`, by the records' own: their calibration's floor and the
-#: fit's ``sqrt(chi2 / dof)``).
-_FIT_REPLACES = ("tof", "tof (stated scatter)", "sampling", MODEL_TERM)
-
-
-def measure_information(m: Measurement, recordings: list[Any], level: str, params: Any,
-                        wall: str, wall_options: dict[str, Any] | None, *, acquisition: Any,
-                        trigger_level: float, tof_scatter: float,
-                        full_scale: float | None = None, gain: float = 1.0,
-                        floor: dict[str, float] | None = None,
-                        covariance: dict[str, Any] | None = None,
-                        model_loo: float | None = None,
-                        discrepancy: dict[str, Any] | None = None) -> Measurement:
-    """E from the records' features or whole waveforms (``ssw measure --information``),
-    starting from the TOF measurement ``m`` of the same recordings.
-
-    The sample's E, each accepted hit's striker speed, trigger time offset and delay are
-    fitted (:func:`ssw.calibration.waveform.fit`) with the device at its (calibrated)
-    values, the weights the noise's with the calibration's model-error ``floor`` (stated in
-    the notes). E's standard error in ``ln E`` is the fit's, scaled by ``sqrt(chi2 / dof)``
-    when the model does not reach the noise (a model-discrepancy term, stated), and with
-    a floor by the square root of the hits (the model's error is common to a sample's
-    hits and does not average down over them); with a floor the budget names its two
-    shares, ``{level} fit`` (the noise's weights alone at the optimum,
-    :func:`ssw.calibration.waveform.noise_std`) and ``model ({level})`` (the rest: the
-    model-error floor and the misfit, :mod:`ssw.calibration.model_error`). These
-    replace the TOF's scatter, sampling and model-error terms of ``m``'s budget, whose other
-    terms (calibration, Poisson's ratio, wall, integrator) stay. ``chi2`` and its quantile flag
-    a recording the model does not explain (a clipped hit, a yielding sample, a time
-    offset the trigger does not explain): beyond
-    :data:`ssw.calibration.waveform.FLAG_QUANTILE` the measurement says so in its notes and
-    ``flagged``.
-
-    Parameters
-    ----------
-    m : Measurement
-        The TOF measurement of the recordings (its E the start, its accepted hits used).
-    recordings : list of ssw.daq.recording.Recording
-        The sessions.
-    level : str
-        ``features`` or ``waveform``.
-    params : ssw.chain.params.ChainParams
-        The (calibrated) device's chain.
-    wall : str
-        The wall law.
-    wall_options : dict or None
-        Its options.
-    acquisition : ssw.daq.model.Acquisition
-        The measurement model (rate, sensitivity, coupling).
-    trigger_level : float
-        N, the recordings' trigger level.
-    tof_scatter : float
-        s, one hit's TOF scatter (the prior of each hit's delay).
-    full_scale : float or None
-        N, the rails (samples at them are left out).
-    gain : float
-        The DAQ gain (a waveform calibration's, :func:`ssw.calibration.waveform.with_fit`).
-    floor : dict or None
-        The model-error floor of the weights (``floor`` of :class:`ssw.calibration.waveform.Setup`:
-        a calibration's, estimated from its references' residuals,
-        :func:`ssw.calibration.waveform.model_floor`); None: the noise alone.
-    covariance : dict or None
-        A calibration of records' globals: ``names`` and ``matrix``, their covariance in
-        the scaled coordinates (:func:`ssw.calibration.waveform.global_covariance`). Given,
-        it replaces the TOF calibration's term of the budget by its own, propagated
-        through the fit (:func:`ssw.calibration.waveform.propagated`), since the fit
-        replaces what the TOF calibration fitted (the striker speed) by each hit's own.
-    model_loo : float or None
-        The calibration's model-error term in ``ln E`` at this level, from its references'
-        leave-one-out predictions (:func:`ssw.calibration.records.with_loo`); it enters
-        the budget as ``model ({level} leave-one-out)``.
-    discrepancy : dict or None
-        The calibration's model discrepancy at the features level (the JSON form of
-        :class:`ssw.calibration.discrepancy.Discrepancy`): the model's features corrected
-        by it (stated in the notes); None: uncorrected.
-
-    Returns
-    -------
-    Measurement
-        ``m`` with E, its interval and budget from the fit, and in ``extra``:
-        ``information``, ``identified`` (value and standard error of every fitted parameter
-        the records identify), ``chi2``, ``chi2_dof``, ``chi2_quantile``, ``flagged``,
-        ``fit_runs``.
-    """
-    from ssw.calibration.information import IDENTIFIED_U
-    from ssw.calibration.records import fit_modulus, modulus_budget
-    from ssw.calibration.waveform import FLAG_QUANTILE, Hits, coordinate
-    from ssw.modulus import COVERAGE_Z
-
-    forces, kt = [], []
-    for rec in recordings:
-        for h in rec.hits:
-            forces.append(h.force)
-            kt.append(h.trigger_index)
-    keep = [i for i, a in enumerate(m.accepted) if a]
-    if not keep:
-        raise RecordingError("no accepted hit to fit")
-    n = min(len(f) for f in forces)
-    hits = Hits.of(np.stack([forces[i][:n] for i in keep]), [kt[i] for i in keep],
-                   m.sample_rate, E=None, nu=m.nu, full_scale=full_scale)
-    f, setup = fit_modulus(hits, params, wall, wall_options, acquisition, level,
-                           trigger_level=trigger_level, tof_scatter=tof_scatter, gain=gain,
-                           floor=floor, E0=m.E, discrepancy=discrepancy)
-    E = float(f.state.E[0])
-    contrib = {k: v for k, v in m.contributions.items() if k not in _FIT_REPLACES}
-    terms = modulus_budget(setup, f, level, floor, covariance)
-    if f"calibration ({level})" in terms or setup.discrepancy is not None:
-        contrib.pop("calibration", None)  # the records' calibration replaces the TOF's
-    contrib.update(terms)
-    if model_loo:
-        contrib[f"model ({level} leave-one-out)"] = float(model_loo)
-    u = float(np.sqrt(sum(v**2 for v in contrib.values())))
-    notes = [x for x in m.notes if "TOF term" not in x and MODEL_TERM not in x]
-    if any(floor.values() if floor else ()):
-        notes.append("the weights carry the calibration's model-error floor (relative "
-                     "standard deviation added to the noise's, estimated from its references' "
-                     "residuals; common to the hits, so E's fit error is scaled by the square "
-                     "root of their number): "
-                     + ", ".join(f"{k} {v:.2g}" for k, v in floor.items()))
-    if setup.discrepancy is not None:
-        notes.append("the model's features are corrected by the calibration's model "
-                     "discrepancy, a line in (E / E_0)^(-2/5) fitted on its references: "
-                     + setup.discrepancy.describe())
-    if model_loo:
-        notes.append(f"the calibration's references, each predicted as an unseen sample at "
-                     f"this level, call for a model term of {100 * model_loo:.3g} % in E "
-                     f"(95 % upper bound): 'model ({level} leave-one-out)'")
-    if f.misfit > 1.0:
-        notes.append(f"the model leaves chi2/dof = {f.misfit:.3g} of the records unexplained: "
-                     f"E's fit error is scaled by sqrt({f.misfit:.3g}) (a model-discrepancy "
-                     "term)")
-    if f.unexplained:
-        notes.append(f"FLAGGED: {f.unexplained} observation(s) of the records have no value in "
-                     "the model (a pulse or a trigger crossing it does not produce)")
-    elif f.flagged:
-        notes.append(f"FLAGGED: the model does not explain these records (chi2 {f.chi2:.4g} "
-                     f"on {f.dof} degrees of freedom, quantile {f.quantile:.6f} > "
-                     f"{FLAG_QUANTILE}): a clipped hit, a yielding sample or a time "
-                     "offset the trigger did not remove; E is not to be trusted as is")
-    if not f.converged:
-        notes.append("the fit did not converge: E is its last iterate")
-    identified: dict[str, dict[str, float]] = {}
-    for c, v in zip(f.free, f.values, strict=True):
-        s = f.std(c)
-        if s <= IDENTIFIED_U:
-            log = c.name in ("E", "striker_velocity")
-            identified[c.label] = {"value": float(v),
-                                   "std": float(s * v if log else s * coordinate(setup, c)[1])}
-    extra = {**m.extra, "information": level, "identified": identified,
-             "chi2": f.chi2, "chi2_dof": f.dof, "chi2_quantile": f.quantile,
-             "flagged": f.flagged, "unexplained": f.unexplained,
-             "fit_converged": f.converged, "fit_runs": f.runs,
-             "E_tof": m.E, "E_tof_low": m.E_low, "E_tof_high": m.E_high}
-    return replace(m, E=E, E_low=E * float(np.exp(-COVERAGE_Z * u)),
-                   E_high=E * float(np.exp(COVERAGE_Z * u)), u=u, contributions=contrib,
-                   notes=tuple(notes), extra=extra)

@@ -8,10 +8,11 @@ chain step inside it, its core dependencies from wheels, no PETSc or MPI. Two ch
   device, its plate's contact operators built anew in an empty cache) import neither PETSc,
   MPI nor Snakemake, and the simulate-then-measure round trip gives back the modulus of the
   simulated material within the measured interval;
-* ``long`` (``make test-long``, which CI runs): a wheel built here from the tracked sources installs into a fresh venv with no
-  compiler on PATH (``CC=false``) and without PETSc, MPI or Snakemake, and its ``ssw
-  measure`` of a point, with a calibration written by this full install and its operators
-  built in a cache of its own, gives this install's E and interval to 1e-9.
+* ``long`` (``make test-long``, which CI runs): a wheel built here from the tracked
+  sources installs into a fresh venv with no compiler on PATH (``CC=false``) and without
+  PETSc, MPI or Snakemake, and its ``ssw measure`` of a point, with a calibration written
+  by this full install and its operators built in a cache of its own, gives this
+  install's E and interval to 1e-9.
 """
 
 from __future__ import annotations

@@ -28,6 +28,7 @@ from numpy.typing import NDArray
 
 from ssw.contact.contact_lcp import solve_lcp
 from ssw.contact.lu import componentwise_ok, lu_nopivot
+from ssw.contact.retained import sphere_gap0
 from ssw.errors import SolverError
 
 #: Gap tolerance, relative to the largest indentation of the curve.
@@ -74,7 +75,8 @@ class LcpResult:
 
 def sphere_surface(r: NDArray, radius: float) -> NDArray[np.float64]:
     """Height (m) of a sphere of ``radius`` above its lowest point at radius ``r`` (m):
-    ``r^2 / (R + sqrt(R^2 - r^2))`` (no cancellation for small r).
+    the gap at zero indentation of the contact operators
+    (:func:`ssw.contact.retained.sphere_gap0`, ``r^2 / (R + sqrt((R - r)(R + r)))``).
 
     Parameters
     ----------
@@ -93,11 +95,7 @@ def sphere_surface(r: NDArray, radius: float) -> NDArray[np.float64]:
     SolverError
         If a radius is not below the sphere's.
     """
-    r = np.asarray(r, float)
-    if np.any(r >= radius):
-        raise SolverError("a collocation radius lies beyond the sphere's radius: "
-                          "shrink the candidate zone")
-    return r * r / (radius + np.sqrt(radius * radius - r * r))
+    return sphere_gap0(r, radius)
 
 
 class _ActiveSolver:

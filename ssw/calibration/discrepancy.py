@@ -4,8 +4,9 @@ in the sample's modulus, fitted on the references (Kennedy and O'Hagan 2001).
 A device outside every law ssw offers (a sensor built differently, a dissipation law or a
 wall ssw does not have) makes features the model cannot reach at any value of its
 parameters, and its departure is not noise: it is the same from one hit to the next and
-changes slowly with the sample (the chain's TOF off by 0.5 % on a soft sample and 1.6 % on a
-stiff one; the incident pulse's width off by the same 9.5 % on every sample). A floor on the
+changes slowly with the sample (the honesty study's device against a chain of its nominal
+masses: the TOF off by 0.5 % on a soft sample and 1.6 % on a stiff one, the incident
+pulse's width by the same 9.5 % on every sample). A floor on the
 weights (:func:`ssw.calibration.waveform.model_floor`) treats it as noise and leaves its
 bias in E. Here it is a function of the modulus, fitted where E is known: per feature ``k``
 the relative correction
@@ -20,23 +21,23 @@ the TOF and of the reflected pulses the wall makes, goes as ``E*^(-2/5)`` (Johns
 sec. 11.4: ``t_c = 2.87 (m^2 / (R E*^2 V))^(1/5)``), so a wall, a dissipation or a sensor the
 model does not have departs from it in proportion to that scale, and the departure
 saturates on stiff samples as the wall's part of the record does (measured on the honesty
-study's device: the chain's TOF departs by +0.4, -0.4, -1.1, -1.4, -1.6, -1.6, -1.8 % at
-20, 38, 80, 123, 250, 445, 800 MPa; a line in ``ln E`` through 38, 123 and 445 MPa misses
-20 MPa by 0.7 % of the TOF, one in ``x`` by 0.1 %). The
-DELAYED features (:data:`ssw.signal.features.DELAYED`) are taken before the hits' delays
-(the delays carry each hit's scatter about the sample's TOF, the correction the sample's
-own departure). The line is the lowest order a few references identify. What it misses is
-measured twice:
+study's device, noise-free, its calibrated chain: the TOF departs by +0.4, -0.4, -1.1,
+-1.4, -1.6, -1.6, -1.8 % at 20, 38, 80, 123, 250, 445, 800 MPa; a line in ``ln E`` through
+38, 123 and 445 MPa misses 20 and 800 MPa by 0.65 and 0.24 % of the TOF, one in ``x`` by
+0.31 and 0.09 %). The DELAYED features (:data:`ssw.signal.features.DELAYED`) are taken
+before the hits' delays (the delays carry each hit's scatter about the sample's TOF, the
+correction the sample's own departure). The line is the lowest order a few references
+identify. What it misses is measured twice:
 
 * per feature, on the residuals: each reference's ``rho_jk`` predicted by the line of the
   others (a constant from one), and the relative error those predictions lack beyond the
   hits' noise (the upper confidence bound of
   :func:`ssw.calibration.model_error.floor_bound` at :data:`CV_CONFIDENCE`, one degree of
   freedom a reference) is the least floor of that feature's weights (``sigma``). A
-  feature the line
-  follows (the TOF, the incident pulse's width) keeps its weight; one whose departure the
-  line cannot follow from reference to reference (the reflected pulse's amplitude and width
-  under a wall law ssw lacks) loses its weight instead of pulling E along a wrong line;
+  feature the line follows (the TOF, the incident pulse's width) keeps its weight; one
+  whose departure the line cannot follow from reference to reference (the reflected
+  pulse's amplitude and width under a wall law ssw lacks) loses its weight instead of
+  pulling E along a wrong line;
 * on E, by the references' leave-one-out predictions
   (:func:`ssw.calibration.records.with_loo`), which refit the line without the reference
   they predict, so that every interval made with the correction carries the error of its
@@ -70,9 +71,9 @@ POWER = -0.4
 CV_CONFIDENCE = FLOOR_CONFIDENCE
 #: Passes of the correction and the hits' refit at the references
 #: (:func:`ssw.calibration.waveform.calibrate_records`): the correction is estimated before
-#: the hits' delays, so
-#: that a pass moves only what the hits' speeds move (measured on the honesty study's
-#: device, the line's coefficients settle to 1e-4 within two passes).
+#: the hits' delays, so that a pass moves only what the hits' speeds move (measured on the
+#: honesty study's device: the coefficients move by up to 4e-4 in the second pass and
+#: 1e-4 in the third).
 PASSES = 3
 
 

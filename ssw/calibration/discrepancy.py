@@ -155,8 +155,8 @@ class Discrepancy:
         return cls(coef, float(d["ln_E0"]), int(d["references"]), sigma)
 
     def describe(self) -> str:
-        """The correction in words: each feature's at the references' mean modulus and its
-        change per factor e of E, in %.
+        """The correction in words: each feature's at the references' mean modulus ``E_0``
+        and at ``E_0 / e`` and ``E_0 e``, in %.
 
         Returns
         -------
@@ -164,9 +164,10 @@ class Discrepancy:
             One clause per feature.
         """
         lo, hi = self.at(np.exp(self.ln_E0 + np.array([-1.0, 1.0])))[0]
-        return ", ".join(f"{k} {100 * a:+.2g} % ({100 * u:+.2g} to {100 * v:+.2g} % at E_0 / e "
-                         "to E_0 e)" for k, a, u, v in zip(FEATURES, self.coef[:, 0], lo, hi,
-                                                           strict=True))
+        return (f"at E_0 = {np.exp(self.ln_E0) / 1e6:.4g} MPa (at E_0 / e, E_0 e): "
+                + ", ".join(f"{k} {100 * a:+.2g} % ({100 * u:+.2g}, {100 * v:+.2g} %)"
+                            for k, a, u, v in zip(FEATURES, self.coef[:, 0], lo, hi,
+                                                  strict=True)))
 
 
 def estimate(model: np.ndarray, data: np.ndarray, delay: np.ndarray, sample: np.ndarray,

@@ -57,7 +57,7 @@ from typing import Any
 
 import numpy as np
 
-from ssw.calibration.model_error import FLOOR_CONFIDENCE
+from ssw.calibration.model_error import FLOOR_CONFIDENCE, floor_bound
 from ssw.signal.features import DELAYED
 from ssw.signal.features import NAMES as FEATURES
 
@@ -231,13 +231,14 @@ def _cross_validated(x: np.ndarray, y: np.ndarray, se: np.ndarray) -> float:
     """The least floor of one feature (module docstring): each point predicted by the
     line of the others, the upper bound of the relative error the predictions lack beyond
     the points' standard errors (both the point's and the prediction's, ``sqrt 2 se``)."""
-    from ssw.calibration.model_error import floor_bound
+    from numpy.polynomial import polynomial
 
     ok = np.flatnonzero(np.isfinite(y))
     if ok.size < 2:
         return 0.0
-    err = np.array([np.polyval(_line(np.delete(x[ok], i), np.delete(y[ok], i))[::-1],
-                               x[ok][i]) - y[ok][i] for i in range(ok.size)])
+    err = np.array([polynomial.polyval(x[ok][i], _line(np.delete(x[ok], i),
+                                                       np.delete(y[ok], i))) - y[ok][i]
+                    for i in range(ok.size)])
     noise = np.sqrt(2.0) * np.nan_to_num(se[ok])
     return float(floor_bound(err, np.maximum(noise, 1e-12), np.ones(ok.size), float(ok.size),
                              CV_CONFIDENCE))

@@ -95,6 +95,10 @@ class Setup:
     discrepancy : ssw.calibration.discrepancy.Discrepancy or None
         The model's features corrected by this line in ``(E / E_0)^(-2/5)`` (features level; None:
         uncorrected).
+    prior : dict
+        Global -> (mean, standard deviation), SI: a measured global's prior, one
+        observation of kind ``prior`` (:data:`~ssw.calibration.hits.GLOBAL_PRIORS`). Empty:
+        none.
     dt : float or None
         s, the chain's step for every run (fixed by :meth:`fix_step`).
     runs : int
@@ -123,6 +127,7 @@ class Setup:
     floor: dict[str, float] = field(default_factory=dict)
     scene_sensor_mass: np.ndarray | None = None
     discrepancy: Any = None
+    prior: dict[str, tuple[float, float]] = field(default_factory=dict)
     dt: float | None = None
     runs: int = 0
     _starts: np.ndarray = field(default=None, repr=False)
@@ -505,7 +510,8 @@ def observe(setup: Setup, state: State, wanted: set[str] | None = None) -> Obser
     -------
     Observed
         Rows: per hit its data (the features, or the window's samples not at a rail),
-        then its ``trigger`` and ``delay`` priors.
+        then its ``trigger`` and ``delay`` priors; last, one row per measured global's
+        ``prior`` (``setup.prior``, counted with the first hit).
     """
     wanted = set(PARAMETERS) if wanted is None else set(wanted)
     names = _names(wanted)
@@ -523,6 +529,12 @@ def observe(setup: Setup, state: State, wanted: set[str] | None = None) -> Obser
                 else _feature_rows(rows, h, y, g, run.E[h]))
         blocks += [data, *_prior_rows(rows, h, run, state)]
         hits += [np.full(data[0].size, h), np.array([h]), np.array([h])]
+    for name, (mean, std) in setup.prior.items():
+        Jp = np.zeros((1, len(columns)))
+        Jp[0, rows.index[Column(name)]] = 1.0
+        blocks.append((np.array([state.globals[name] - mean]), np.zeros(1),
+                       np.array([std]), ["prior"], Jp))
+        hits.append(np.zeros(1, int))
     return Observed(np.concatenate([b[0] for b in blocks]),
                     np.concatenate([b[1] for b in blocks]),
                     np.concatenate([b[2] for b in blocks]),

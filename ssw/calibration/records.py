@@ -120,9 +120,10 @@ def calibrate_levels(cal: Any, samples: list[Any], acq: Any, level: str, *,
     out = {"features": checked(with_fit(cal, f, "features"))}
     if level == "waveform":
         feat = out["features"]
+        info = feat.provenance["information"]
         w = calibrate_records(samples, feat.chain_params(), wall, opts, acq, "waveform",
                               trigger_level, tof_scatter, scan=False,
-                              gain=float(feat.provenance["information"]["gain"]))
+                              gain=float(info["gain"]), prior=_prior_of(info))
         out["waveform"] = checked(with_fit(feat, w, "waveform"))
     return out
 
@@ -237,7 +238,7 @@ def leave_one_out(cal: Any, samples: list[Any], acq: Any, *, trigger_level: floa
                  calibrate_records(others, cal.chain_params(), wall, opts, acq, level,
                                    trigger_level, tof_scatter,
                                    free_globals=tuple(info["freed"]), scan=False,
-                                   gain=float(info["gain"])))
+                                   gain=float(info["gain"]), prior=_prior_of(info)))
             names, C = global_covariance(g, hits=sum(s.n for s in others) / len(others))
             params = cal.chain_params().with_(**{
                 k: float(g.state.globals[k]) for k in ("preload", "sensor_mass",
@@ -394,3 +395,23 @@ def modulus_budget(setup: Any, f: Any, level: str, floor: dict[str, float] | Non
         C = propagated(setup, f, list(covariance["names"]), np.asarray(covariance["matrix"]))
         out[f"calibration ({level})"] = float(np.sqrt(max(C[0, 0], 0.0)))
     return out
+
+
+def _prior_of(info: dict[str, Any]) -> dict[str, tuple[float, float]] | None:
+    """The measured globals' priors a calibration of records was fitted with (its
+    ``provenance["information"]["prior"]``: the device file's values), for a fit from it
+    (the next level's, a leave-one-out's); None where it states none (the device's values).
+
+    Parameters
+    ----------
+    info : dict
+        A calibration's ``provenance["information"]``.
+
+    Returns
+    -------
+    dict or None
+        Global -> (mean, standard deviation), SI.
+    """
+    if "prior" not in info:
+        return None
+    return {k: (float(m), float(s)) for k, (m, s) in info["prior"].items()}

@@ -55,6 +55,7 @@ import numpy as np
 # of the calibration of records stays importable from here.
 from ssw.calibration.hits import (  # noqa: F401
     CHAIN_GLOBALS,
+    GLOBAL_PRIORS,
     GLOBALS,
     LEAD,
     LEVELS,
@@ -135,9 +136,12 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
                       free_globals: tuple[str, ...] = GLOBALS, scan: bool = True,
                       gain: float = 1.0,
                       start_grid: tuple[tuple[float, ...], tuple[float, ...]] | None = None,
-                      refine_levels: int = REFINE_LEVELS, discrepancy: bool = True) -> Fit:
+                      refine_levels: int = REFINE_LEVELS, discrepancy: bool = True,
+                      prior: dict[str, tuple[float, float]] | None = None) -> Fit:
     """Fit the device's global parameters to reference records (every sample's E known):
-    every one of ``free_globals`` with each hit's striker speed, time offset and delay.
+    every one of ``free_globals`` with each hit's striker speed, time offset and delay,
+    each measured global (:data:`~ssw.calibration.hits.GLOBAL_PRIORS`: the striker's
+    mass) held near the device file's value by its prior.
 
     1. The start: when the sensor's mass and the dashpot may be freed, the best point of
        a grid of them (:func:`global_start`, weights with the floor
@@ -196,6 +200,11 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
         Refinements of the global start (:func:`refine_start`).
     discrepancy : bool
         Step 4 where the features' floor says the model departs (False: the floor alone).
+    prior : dict or None
+        The freed measured globals' priors, global -> (mean, standard deviation), SI; None:
+        ``params``' values with :data:`~ssw.calibration.hits.GLOBAL_PRIORS`' relative
+        widths (a calibration from another level's passes that level's ``prior``: the
+        device file's values).
 
     Returns
     -------
@@ -214,6 +223,9 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     setup = Setup(params, wall, dict(wall_options), acq, level, samples, trigger_level,
                   tof_scatter=tof_scatter)
     glob = device_globals(params, gain)
+    if prior is None:
+        prior = {g: (glob[g], w * glob[g]) for g, w in GLOBAL_PRIORS.items()}
+    setup.prior = {g: (float(m), float(s)) for g, (m, s) in prior.items() if g in free_globals}
     E = np.array([s.E for s in samples], float)
     v0 = float(params.striker_velocity)
     n_h = setup.n_hits
@@ -460,6 +472,7 @@ def with_fit(cal: Any, f: Fit, level: str) -> Any:
             "chi2": f.chi2, "chi2_dof": f.dof, "chi2_quantile": f.quantile,
             "flagged": f.flagged, "unexplained": f.unexplained, "converged": f.converged,
             "runs": f.runs, "floor": dict(f.floor),
+            "prior": {k: [float(m), float(s)] for k, (m, s) in f.prior.items()},
             "discrepancy": None if f.discrepancy is None else f.discrepancy.to_dict()}
     names, cov = global_covariance(f, hits=len(f.state.striker_velocity) / len(f.state.E))
     info["covariance"] = {"names": names, "matrix": cov.tolist()}

@@ -64,6 +64,9 @@ class Fit:
     discrepancy : ssw.calibration.discrepancy.Discrepancy or None
         The model's discrepancy the fit corrects its features by (``discrepancy`` of
         :class:`Setup`).
+    prior : dict
+        The measured globals' priors of the fit, global -> (mean, standard deviation), SI
+        (``prior`` of :class:`Setup`).
     """
 
     state: State
@@ -79,6 +82,7 @@ class Fit:
     unexplained: int = 0
     floor: dict[str, float] = field(default_factory=dict)
     discrepancy: Any = None
+    prior: dict[str, tuple[float, float]] = field(default_factory=dict)
 
     @property
     def flagged(self) -> bool:
@@ -206,7 +210,7 @@ def fit(setup: Setup, state: State, free: list[Column], iterations: int | None =
     return Fit(final, list(free), from_x(setup, free, pr.x), cov, float(pr.cost), dof,
                float(stats.chi2.cdf(pr.cost, dof)), bool(pr.converged), setup.runs,
                unexplained=explained.lost(pr.x), floor=dict(setup.floor),
-               discrepancy=setup.discrepancy)
+               discrepancy=setup.discrepancy, prior=dict(setup.prior))
 
 
 class _Explained:

@@ -159,6 +159,11 @@ def test_calibrate_with_the_waveform_frees_what_the_records_identify(capsys, tmp
     # the waveform started from the features' calibration; without the references'
     # leave-one-out check (--no-loo) the file says its intervals lack that term
     assert info["from"]["level"] == "features"
+    # both levels hold the striker to the device file's weighed mass, not the features'
+    # fit of it: the prior's mean and its 5 % width
+    weighed = [PARAMS.masses[0], 0.05 * PARAMS.masses[0]]
+    assert info["prior"]["striker_mass"] == pytest.approx(weighed, rel=1e-12)
+    assert info["from"]["prior"]["striker_mass"] == pytest.approx(weighed, rel=1e-12)
     assert any(w.startswith("RECORDS (waveform): no leave-one-out check")
                for w in r["warnings"])
 
@@ -176,3 +181,32 @@ def test_a_fit_whose_model_lacks_observations_the_record_has_is_flagged():
 
     assert not fit_with(0).flagged
     assert fit_with(1016).flagged
+
+
+def test_a_measured_global_s_prior_is_one_observation_of_its_offset(recording):
+    """A measured global's prior (``Setup.prior``, the striker's weighed mass) is one row:
+    ``(value - mean) / std`` in the fit's weighted residuals, its derivative ``1 / std`` in
+    that global's column alone; without it the rows are the records' and the hits' priors."""
+    from ssw.calibration.hits import Column, Hits, device_globals
+    from ssw.calibration.observation import Setup, initial_state, observe
+
+    rec = read_any(recording)
+    smp = Hits.from_recording(rec, E=E_TRUE, nu=NU, full_scale=445.0)
+    glob = device_globals(PARAMS)
+    mean, std = 0.9 * glob["striker_mass"], 0.05 * glob["striker_mass"]
+    setup = Setup(PARAMS, "hertz", {}, Acquisition(sample_rate=rec.sample_rate), "features",
+                  [smp], 5.0, prior={"striker_mass": (mean, std)})
+    state = initial_state(setup, glob, [E_TRUE], float(PARAMS.striker_velocity))
+    setup.fix_step(state)
+    with_prior = observe(setup, state)
+    bare = observe(replace(setup, prior={}), state)
+    assert with_prior.model.size == bare.model.size + 1
+    last = with_prior.kind == "prior"
+    assert np.count_nonzero(last) == 1 and last[-1]
+    assert with_prior.model[-1] - with_prior.data[-1] == pytest.approx(
+        glob["striker_mass"] - mean, rel=1e-12)
+    assert with_prior.sigma[-1] == std
+    col = with_prior.columns.index(Column("striker_mass"))
+    row = with_prior.jacobian[-1]
+    assert row[col] == 1.0 and np.count_nonzero(row) == 1
+    np.testing.assert_array_equal(with_prior.model[:-1], bare.model)

@@ -43,13 +43,13 @@ GLOBALS = ("preload", "sensor_mass", "striker_mass", "damping", "gain")
 #: uncertainty of the device file's value as a prior of the records' fit (``prior`` of
 #: :class:`~ssw.calibration.observation.Setup`). The striker is weighed (a balance reads it
 #: to 0.1 %); 5 % also covers a striker the file states as a bead (``striker.mass`` unset)
-#: that departs from one by a few %. Without this prior, a model that lacks the device's
-#: sensor and dissipation (the honesty study's device, :mod:`tests.test_honesty`) fits its
-#: references' features with the striker at 0.77x its weighed mass and the DAQ gain at
-#: 1.38, a pair that fits the references and extrapolates 18 % wrong to 800 MPa; with it,
-#: 1.0x and a gain of 1.02 (the device's: 1.03x, 1.0) and 800 MPa within 2 %.
-#: Calibrating under model error, a parameter the data cannot separate from the model's
-#: discrepancy is known only from its prior (Brynjarsdottir and O'Hagan 2014).
+#: that departs from one by a few %. Under model error a parameter the records cannot tell
+#: from the model's discrepancy is known only from its prior (Brynjarsdottir and O'Hagan
+#: 2014): without this one, a model that lacks the device's sensor contacts and
+#: dissipation laws (the honesty study's device, ``tests/test_honesty.py``, its striker
+#: 1.03x a bead) fits its references' features with the striker at 0.77x a bead and the
+#: DAQ gain at 1.38, a pair that explains the references and misses 800 MPa by 18 %; with
+#: it, 1.007x and 1.033, and 800 MPa within 3 % (2026-11-29).
 GLOBAL_PRIORS = {"striker_mass": 0.05}
 #: The chain's parameters among them (its forward sensitivities).
 CHAIN_GLOBALS = ("preload", "sensor_mass", "striker_mass", "damping")

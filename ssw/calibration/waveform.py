@@ -42,6 +42,16 @@ Two per-hit priors enter as observations of their own (kinds ``trigger`` and ``d
   record after the midpoint between the incident and reflected peaks) with a zero-mean
   prior of that standard deviation carries it, so that the TOF itself weighs no more than
   the stated scatter allows, and the other features and samples bring what they add.
+
+A measured global enters as one more (kind ``prior``): the striker's weighed mass, the
+device file's value with the relative width of :data:`~ssw.calibration.hits.GLOBAL_PRIORS`
+(under model error the records alone trade it for the DAQ gain; Brynjarsdottir and O'Hagan
+2014).
+
+References
+----------
+Brynjarsdottir, J. and O'Hagan, A. (2014). Learning about physical parameters: the
+importance of model discrepancy. Inverse Problems 30, 114007.
 """
 
 from __future__ import annotations

@@ -164,6 +164,8 @@ def test_calibrate_with_the_waveform_frees_what_the_records_identify(capsys, tmp
     weighed = [PARAMS.masses[0], 0.05 * PARAMS.masses[0]]
     assert info["prior"]["striker_mass"] == pytest.approx(weighed, rel=1e-12)
     assert info["from"]["prior"]["striker_mass"] == pytest.approx(weighed, rel=1e-12)
+    assert any(w.startswith("RECORDS (waveform): measured globals held") and "striker_mass"
+               in w for w in r["warnings"])
     assert any(w.startswith("RECORDS (waveform): no leave-one-out check")
                for w in r["warnings"])
 

@@ -443,9 +443,10 @@ def with_fit(cal: Any, f: Fit, level: str) -> Any:
     numerics' ``damping``) and the striker speed (the hits' mean) at the fit's values
     (fitted where freed, else the fit's start: the device's, or the global start's);
     the fit itself (level, freed parameters with their standard errors, the DAQ gain,
-    chi^2 and its quantile, the model-error floor, the freed globals' covariance in their
-    scaled coordinates) in ``provenance["information"]``, where ``ssw measure
-    --information`` reads the gain, the floor and the covariance. The TOF calibration's
+    chi^2 and its quantile, the model-error floor, the measured globals' priors, the freed
+    globals' covariance in their scaled coordinates) in ``provenance["information"]``,
+    where ``ssw measure --information`` reads the gain, the floor and the covariance; the
+    priors also in a ``RECORDS`` line of ``warnings``. The TOF calibration's
     covariance stays the calibration term of a TOF measurement's budget.
 
     Parameters
@@ -495,6 +496,11 @@ def with_fit(cal: Any, f: Fit, level: str) -> Any:
     warnings.append(f"RECORDS ({level}): the model-error floor of the records' fit, in the "
                     "weights of every measurement through the calibration at this level: "
                     + (", ".join(f"{k} {v:.2g}" for k, v in f.floor.items()) or "none"))
+    if f.prior:
+        warnings.append(f"RECORDS ({level}): measured globals held near the device file's "
+                        "values by their priors (ssw.calibration.hits.GLOBAL_PRIORS): "
+                        + ", ".join(f"{k} {m:.4g} +- {s:.2g} (SI)"
+                                    for k, (m, s) in f.prior.items()))
     if f.discrepancy is not None:
         warnings.append(f"MODEL ERROR ({level}): the references' features depart from every "
                         "model the fit reaches, smoothly in E: the model's features are "

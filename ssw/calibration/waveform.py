@@ -499,7 +499,7 @@ def with_fit(cal: Any, f: Fit, level: str) -> Any:
     if f.prior:
         warnings.append(f"RECORDS ({level}): measured globals held near the device file's "
                         "values by their priors (ssw.calibration.hits.GLOBAL_PRIORS): "
-                        + ", ".join(f"{k} {m:.4g} +- {s:.2g} (SI)"
+                        + ", ".join(f"{k} {m:.4g} +- {s:.2g} {parameter(k).unit}"
                                     for k, (m, s) in f.prior.items()))
     if f.discrepancy is not None:
         warnings.append(f"MODEL ERROR ({level}): the references' features depart from every "

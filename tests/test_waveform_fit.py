@@ -42,7 +42,7 @@ def _state(theta):
 
 def test_a_step_that_loses_observations_is_not_a_better_fit(monkeypatch):
     monkeypatch.setattr(waveform_fit, "observe", _observe)
-    setup = SimpleNamespace(runs=0, floor={}, discrepancy=None,
+    setup = SimpleNamespace(runs=0, floor={}, discrepancy=None, prior={},
                             acq=SimpleNamespace(sample_rate=51200.0),
                             tof_scatter=1.53e-5)
     f = waveform_fit.fit(setup, _state(1.0), [Column("gain")])

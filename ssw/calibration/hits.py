@@ -86,6 +86,32 @@ def device_globals(params: Any, gain: float = 1.0) -> dict[str, float]:
             "gain": float(gain)}
 
 
+def measured_priors(globals_: dict[str, float], free: tuple[str, ...],
+                    prior: dict[str, tuple[float, float]] | None = None
+                    ) -> dict[str, tuple[float, float]]:
+    """The priors of the measured globals among ``free`` (:data:`GLOBAL_PRIORS`).
+
+    Parameters
+    ----------
+    globals_ : dict
+        The device's globals (SI; :func:`device_globals`): the priors' means.
+    free : tuple of str
+        The globals a fit frees (a held global needs no prior).
+    prior : dict or None
+        Global -> (mean, standard deviation), SI, in place of ``globals_``' values with
+        :data:`GLOBAL_PRIORS`' relative widths (a fit from another level's calibration:
+        the device file's values it was fitted with).
+
+    Returns
+    -------
+    dict
+        Global -> (mean, standard deviation), SI, for each freed measured global.
+    """
+    if prior is None:
+        prior = {g: (globals_[g], w * globals_[g]) for g, w in GLOBAL_PRIORS.items()}
+    return {g: (float(m), float(s)) for g, (m, s) in prior.items() if g in free}
+
+
 def parameter(name: str, law: str | None = None) -> Parameter:
     """The parameter ``name`` of :data:`PARAMETERS` (ConfigError listing them otherwise);
     ``damping`` under the dissipation ``law`` when given (its unit, range and scale:

@@ -81,6 +81,7 @@ from ssw.calibration.hits import (  # noqa: F401
     columns_of,
     device_globals,
     get,
+    measured_priors,
     parameter,
     put,
 )
@@ -153,28 +154,21 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     each measured global (:data:`~ssw.calibration.hits.GLOBAL_PRIORS`: the striker's
     mass) held near the device file's value by its prior.
 
-    1. The start: when the sensor's mass and the dashpot may be freed, the best point of
-       a grid of them (:func:`global_start`, weights with the floor
-       :data:`~ssw.calibration.start.START_FLOOR`) refined around it (:func:`refine_start`);
-       else (or with ``scan`` False) the device's values, each hit's parameters fitted to
-       the records with the globals held, and the model-error floor those residuals call
-       for (:func:`model_floor`) in the weights of what follows (so that a first fit of the
-       globals is not drawn by the noise's weights alone where the model cannot reach the
-       records: a calibration of the waveform from the features' one).
-    2. A fit of every free parameter; then the model-error floor estimated from its
-       residuals (:func:`model_floor`: each kind's chi^2 brought to its share of the
-       degrees of freedom) and the fit again with it, until the floor settles
-       (``_settled``). The chi^2 of a calibration is then its degrees of freedom by
-       construction; what it says about the model is the floor (stated in the result, and
-       the weights of every measurement, :func:`ssw.measure.measure_information`).
+    1. The start (``_start``): when the sensor's mass and the dashpot may be freed, the
+       best point of a grid of them refined around it (:func:`global_start`,
+       :func:`refine_start`); else (or with ``scan`` False) the device's values, the hits
+       fitted with the globals held, and the model-error floor their residuals call for.
+    2. A fit of every free parameter, the floor re-estimated from its residuals
+       (:func:`model_floor`) and the fit again until the floor settles (``_settled``): a
+       calibration's chi^2 is then its degrees of freedom by construction; what it says
+       about the model is the floor (in the result and every measurement's weights).
     3. If some global is not identified, the fit again with only the identified ones
        free, the others at their start's values (``_identified``).
     4. Under model error at the features level (a kind's floor above
-       :data:`~ssw.calibration.start.START_FLOOR`, a few times the chain's own error; two
-       references or more; ``discrepancy``): the model's discrepancy, a line in
-       ``(E / E_0)^(-2/5)`` per feature (:mod:`ssw.calibration.discrepancy`), estimated with
-       the hits refitted, then the floor its corrected residuals leave and the fit of step
-       2 with it.
+       :data:`~ssw.calibration.start.START_FLOOR`; two references or more;
+       ``discrepancy``): the model's discrepancy (:mod:`ssw.calibration.discrepancy`)
+       estimated with the hits refitted, then the floor its corrected residuals leave and
+       the fit of step 2 with it (``_with_discrepancy``).
 
     Parameters
     ----------
@@ -211,10 +205,8 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     discrepancy : bool
         Step 4 where the features' floor says the model departs (False: the floor alone).
     prior : dict or None
-        The freed measured globals' priors, global -> (mean, standard deviation), SI; None:
-        ``params``' values with :data:`~ssw.calibration.hits.GLOBAL_PRIORS`' relative
-        widths (a calibration from another level's passes that level's ``prior``: the
-        device file's values).
+        The measured globals' priors, global -> (mean, standard deviation), SI (another
+        level's: the device file's values); None: :func:`measured_priors` of ``params``.
 
     Returns
     -------
@@ -233,9 +225,7 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     setup = Setup(params, wall, dict(wall_options), acq, level, samples, trigger_level,
                   tof_scatter=tof_scatter)
     glob = device_globals(params, gain)
-    if prior is None:
-        prior = {g: (glob[g], w * glob[g]) for g, w in GLOBAL_PRIORS.items()}
-    setup.prior = {g: (float(m), float(s)) for g, (m, s) in prior.items() if g in free_globals}
+    setup.prior = measured_priors(glob, free_globals, prior)
     E = np.array([s.E for s in samples], float)
     v0 = float(params.striker_velocity)
     n_h = setup.n_hits

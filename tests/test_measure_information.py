@@ -136,6 +136,7 @@ def test_calibrate_with_the_waveform_frees_what_the_records_identify(capsys, tmp
     The global start's grid is cut to the nominal point (the device is nominal; the grid's
     search is the slow honesty study's, tests/test_honesty.py)."""
     import ssw.calibration.start as start
+    import ssw.calibration.waveform  # noqa: F401  (its re-exports bound before the patch)
 
     monkeypatch.setattr(start, "START_SENSOR_MASS", (1.0,))
     monkeypatch.setattr(start, "START_DAMPING", (0.0,))

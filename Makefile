@@ -41,9 +41,10 @@ test: setup
 	$(SMK) --lint --configfile "$(CONFIG)"
 	PATH="$$(cd "$(VENV)/bin" && pwd):$$PATH" $(PY) -m pytest -m "not slow and not long" -n $(TEST_WORKERS) $(PYTEST_ARGS)
 
-## The long checks the default run leaves out (whole studies on Slurm and in a browser, limit
-## loads, the misspecified device's calibration): a few minutes more; CI runs them after
-## `make test`.
+## The long checks the default run leaves out (whole studies on Slurm and in a browser, the
+## cluster's waits on held and vanished jobs, the device design through Snakemake, limit
+## loads, the misspecified device's calibration), each with a faster check of the same rule
+## in the default run: a few minutes more; CI runs them after `make test`.
 test-long: setup
 	@if [ "$${CI:-}" = true ]; then bash scripts/slurm-local.sh start; \
 	else bash scripts/slurm-local.sh start || echo "[test] local Slurm not started: its tests skip and say why (CI=true: they fail)"; fi

@@ -27,20 +27,24 @@ os.environ["SSW_CALIBRATION"] = "none"
 #   whole study, is shared by the workers through a file lock: its tests spread);
 # * the tests that share a machine-wide resource (the local Slurm cluster and its job names;
 #   `mpiexec -n 2` runs, which busy-wait when they share the 2 cores with one another).
-# and moves the groups and modules of EARLY to the front, longest first: a long one that
-# starts last leaves the other worker idle at the end.
+# and moves the tests, groups and modules of EARLY to the front, longest first: a long one
+# that starts last leaves the other worker idle at the end. The two longest tests lead, one
+# on each worker: xdist hands the first unit to the first worker and the second to the
+# second, then one more unit to each (a worker gets more once at most 2 of its tests wait).
 
 #: Markers whose tests share one machine-wide resource (one group each).
 SHARED_MARKERS = ("slurm", "mpi")
 #: Session fixtures computed once per run across the workers (a file lock): no group.
 LOCKED_FIXTURES = ("ci_study",)
-#: Dispatched first, longest first: groups (named by a member's key: a marker,
-#: ``fixture:NAME`` or a module's path) and modules (a path: its tests that are in no group).
-#: From ``pytest -n 2 --durations=0`` (2 cores, 2026-11-26): a module's or group's seconds.
+#: Dispatched first, longest first: single tests (a node id), groups (named by a member's
+#: key: a marker, ``fixture:NAME`` or a module's path) and modules (a path: its tests that are
+#: in no group). From ``pytest -n 2 --durations=0`` (2 cores, 2026-11-29): the two longest
+#: tests (113 s and 117 s of the 523 s run), then modules' and groups' seconds.
 EARLY = (
+    "tests/test_honesty.py::test_the_as_built_device_is_honest_small",  # the study's variant
+    "tests/test_docs.py",  # the documentation site, from nothing in a fresh clone
     "slurm",  # the lost-jobs, pending and Ctrl-C tests' waits
     "tests/test_workflow.py",  # the CI study (ci_study) and the tests that read it
-    "tests/test_docs.py",  # the documentation site, from nothing in a fresh clone
     "fixture:made", "tests/test_commands.py",  # the README's and the docs' commands
     "tests/test_calibration.py",
     "tests/test_contact_plastic.py",
@@ -78,7 +82,8 @@ def _group_keys(item: pytest.Item) -> list[str]:
 def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item]) -> None:
     """Mark the tests that share an expensive fixture or a machine-wide resource with one
     ``xdist_group`` per connected set (before xdist reads the marks), and order the items:
-    those of EARLY first, in its order, then the rest in collection order."""
+    those of EARLY first, in its order (a test by its node id, else by its group or its
+    module), then the rest in collection order."""
     parent: dict[str, str] = {}
 
     def find(k: str) -> str:
@@ -102,8 +107,8 @@ def pytest_collection_modifyitems(config: pytest.Config, items: list[pytest.Item
             group[item.nodeid] = find(ks[0])
             item.add_marker(pytest.mark.xdist_group(find(ks[0])))
     rank = {name: i for i, name in enumerate(EARLY)}
-    items.sort(key=lambda it: rank.get(group.get(it.nodeid) or it.nodeid.split("::")[0],
-                                       len(rank)))
+    items.sort(key=lambda it: rank.get(it.nodeid, rank.get(
+        group.get(it.nodeid) or it.nodeid.split("::")[0], len(rank))))
 
 
 def pytest_collection_finish(session: pytest.Session) -> None:

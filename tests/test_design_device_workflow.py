@@ -41,6 +41,10 @@ def _env() -> dict[str, str]:
             "SSW_CACHE_DIR": "none"}
 
 
+# long: a whole Snakemake run of the device design; the default run checks the same
+# equality of parts merged and one run through the commands the rules call
+# (tests/test_design_scale.py::test_a_design_split_into_parts_and_merged_is_the_single_run)
+@pytest.mark.long
 def test_scattered_families_give_the_single_run_table(tmp_path):
     cfg = yaml.safe_load((ROOT / "config" / "config.yaml").read_text())
     cfg["calibration"]["use"] = False

@@ -303,6 +303,10 @@ def test_every_caption_renders_into_the_report(tiny_report):
         assert phrase in results or phrase.replace("&#x27;", "'") in results, phrase
 
 
+# long: chromium over the whole report; the default run keeps the same report's build and
+# its captions and results (test_every_caption_renders_into_the_report) and the outline's
+# categories and introduction (tests/test_report_outline.py)
+@pytest.mark.long
 def test_report_renders_in_a_headless_browser(tiny_report):
     from ssw.config import load_config
     from ssw.workflow import report_categories, report_stages

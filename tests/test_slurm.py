@@ -522,6 +522,11 @@ def _rename_test_jobs(new_name: str) -> list[str]:
     return ids
 
 
+# long: 15-20 s of waiting on the cluster; the watch's rule (lost after the grace, not
+# before; one call back) is checked in the default run by tests/test_cluster.py
+# (test_vanished_jobs_are_lost_after_the_grace_not_before,
+# test_the_watch_thread_calls_back_once_and_ends)
+@pytest.mark.long
 def test_jobs_that_vanish_from_slurm_stop_the_run_with_a_message(tmp_path: Path,
                                                                  slurm_cluster: str) -> None:
     """The executor plugin takes a job its status query does not list as still queued, and
@@ -635,6 +640,10 @@ def _run_held(tmp_path: Path, resources: list[str], marker: str, reports: int,
     return log_path.read_text(), seen, running, proc.returncode
 
 
+# long: 15-20 s of waiting on a held job; the pending rule is checked in the default run by
+# tests/test_cluster.py (test_a_job_pending_beyond_its_limit_stops_the_run_with_squeues_reason,
+# test_the_watch_thread_stops_a_run_whose_job_pends_beyond_its_limit)
+@pytest.mark.long
 def test_a_job_that_pends_beyond_its_limit_stops_the_run_with_squeues_reason(
         tmp_path: Path, slurm_cluster: str) -> None:
     """A job Slurm never starts (held) stops the run once it has pended its limit (the job
@@ -653,6 +662,10 @@ def test_a_job_that_pends_beyond_its_limit_stops_the_run_with_squeues_reason(
           f"(limit {limit_s:g} s)")
 
 
+# long: 15-20 s of waiting on a held job; the waiting rule is checked in the default run by
+# tests/test_cluster.py (test_a_waiting_run_reports_a_pending_job_once_per_limit,
+# test_the_watch_thread_reports_a_pending_job_and_waits)
+@pytest.mark.long
 def test_a_run_told_to_wait_reports_a_pending_job_and_keeps_waiting(
         tmp_path: Path, slurm_cluster: str) -> None:
     """The same held job with ssw_on_pending=wait: the run reports it with squeue's reason

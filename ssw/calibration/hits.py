@@ -87,8 +87,7 @@ def device_globals(params: Any, gain: float = 1.0) -> dict[str, float]:
 
 
 def measured_priors(globals_: dict[str, float], free: tuple[str, ...],
-                    prior: dict[str, tuple[float, float]] | None = None
-                    ) -> dict[str, tuple[float, float]]:
+                    prior: dict[str, Any] | None = None) -> dict[str, tuple[float, float]]:
     """The priors of the measured globals among ``free`` (:data:`GLOBAL_PRIORS`).
 
     Parameters
@@ -98,9 +97,10 @@ def measured_priors(globals_: dict[str, float], free: tuple[str, ...],
     free : tuple of str
         The globals a fit frees (a held global needs no prior).
     prior : dict or None
-        Global -> (mean, standard deviation), SI, in place of ``globals_``' values with
-        :data:`GLOBAL_PRIORS`' relative widths (a fit from another level's calibration:
-        the device file's values it was fitted with).
+        Global -> (mean, standard deviation), SI, a pair or its JSON list (a calibration's
+        ``provenance["information"]["prior"]``: the device file's values another level was
+        fitted with), in place of ``globals_``' values with :data:`GLOBAL_PRIORS`' relative
+        widths.
 
     Returns
     -------

@@ -123,7 +123,7 @@ def calibrate_levels(cal: Any, samples: list[Any], acq: Any, level: str, *,
         info = feat.provenance["information"]
         w = calibrate_records(samples, feat.chain_params(), wall, opts, acq, "waveform",
                               trigger_level, tof_scatter, scan=False,
-                              gain=float(info["gain"]), prior=_prior_of(info))
+                              gain=float(info["gain"]), prior=info.get("prior"))
         out["waveform"] = checked(with_fit(feat, w, "waveform"))
     return out
 
@@ -238,7 +238,7 @@ def leave_one_out(cal: Any, samples: list[Any], acq: Any, *, trigger_level: floa
                  calibrate_records(others, cal.chain_params(), wall, opts, acq, level,
                                    trigger_level, tof_scatter,
                                    free_globals=tuple(info["freed"]), scan=False,
-                                   gain=float(info["gain"]), prior=_prior_of(info)))
+                                   gain=float(info["gain"]), prior=info.get("prior")))
             names, C = global_covariance(g, hits=sum(s.n for s in others) / len(others))
             params = cal.chain_params().with_(**{
                 k: float(g.state.globals[k]) for k in ("preload", "sensor_mass",
@@ -396,22 +396,3 @@ def modulus_budget(setup: Any, f: Any, level: str, floor: dict[str, float] | Non
         out[f"calibration ({level})"] = float(np.sqrt(max(C[0, 0], 0.0)))
     return out
 
-
-def _prior_of(info: dict[str, Any]) -> dict[str, tuple[float, float]] | None:
-    """The measured globals' priors a calibration of records was fitted with (its
-    ``provenance["information"]["prior"]``: the device file's values), for a fit from it
-    (the next level's, a leave-one-out's); None where it states none (the device's values).
-
-    Parameters
-    ----------
-    info : dict
-        A calibration's ``provenance["information"]``.
-
-    Returns
-    -------
-    dict or None
-        Global -> (mean, standard deviation), SI.
-    """
-    if "prior" not in info:
-        return None
-    return {k: (float(m), float(s)) for k, (m, s) in info["prior"].items()}

@@ -65,7 +65,6 @@ import numpy as np
 # of the calibration of records stays importable from here.
 from ssw.calibration.hits import (  # noqa: F401
     CHAIN_GLOBALS,
-    GLOBAL_PRIORS,
     GLOBALS,
     LEAD,
     LEVELS,
@@ -148,7 +147,7 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
                       gain: float = 1.0,
                       start_grid: tuple[tuple[float, ...], tuple[float, ...]] | None = None,
                       refine_levels: int = REFINE_LEVELS, discrepancy: bool = True,
-                      prior: dict[str, tuple[float, float]] | None = None) -> Fit:
+                      prior: dict[str, Any] | None = None) -> Fit:
     """Fit the device's global parameters to reference records (every sample's E known):
     every one of ``free_globals`` with each hit's striker speed, time offset and delay,
     each measured global (:data:`~ssw.calibration.hits.GLOBAL_PRIORS`: the striker's
@@ -205,8 +204,8 @@ def calibrate_records(samples: list[Hits], params: Any, wall: str,
     discrepancy : bool
         Step 4 where the features' floor says the model departs (False: the floor alone).
     prior : dict or None
-        The measured globals' priors, global -> (mean, standard deviation), SI (another
-        level's: the device file's values); None: :func:`measured_priors` of ``params``.
+        The measured globals' priors (:func:`measured_priors`' ``prior``: another level's,
+        the device file's values); None: :func:`measured_priors` of ``params``.
 
     Returns
     -------

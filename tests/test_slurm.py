@@ -476,6 +476,21 @@ def _test_jobs() -> list[str]:
     return [line for line in q.stdout.splitlines() if line.startswith(JOB_PREFIX)]
 
 
+def _test_jobs_after_cancel(timeout_s: float) -> list[str]:
+    """This module's jobs still queued once the ones cancelled have left.
+
+    A cancelled job passes through COMPLETING while slurmd kills its steps, which takes
+    seconds on a loaded node; a job that was never cancelled stays PENDING or RUNNING.
+    Polls until the queue holds none of them or ``timeout_s`` (s) passes, and returns
+    what is left then (read before any clean-up cancels them)."""
+    deadline = time.monotonic() + timeout_s
+    jobs = _test_jobs()
+    while jobs and time.monotonic() < deadline:
+        time.sleep(0.5)
+        jobs = _test_jobs()
+    return jobs
+
+
 def test_ctrl_c_cancels_the_slurm_jobs(tmp_path: Path, slurm_cluster: str) -> None:
     """Ctrl-C (SIGINT) on a Snakemake run with the SLURM profile, while one job runs and
     others wait in the queue: every submitted job leaves the queue, no output appears, and
@@ -497,12 +512,13 @@ def test_ctrl_c_cancels_the_slurm_jobs(tmp_path: Path, slurm_cluster: str) -> No
             pytest.fail(f"the 3 jobs were not submitted and started within 90 s: {jobs}")
         os.killpg(proc.pid, signal.SIGINT)
         log = proc.communicate(timeout=120)[0]
+        left = _test_jobs_after_cancel(timeout_s=60.0)
     finally:
         if proc.poll() is None:
             os.killpg(proc.pid, signal.SIGKILL)
         cancel_test_jobs()
     assert proc.returncode != 0
-    assert _test_jobs() == [], log[-2000:]
+    assert left == [], log[-2000:]
     assert "Terminating processes on user request" in log, log[-2000:]
     assert not list((tmp_path / "out").glob("*.txt")) if (tmp_path / "out").exists() else True
     locks = tmp_path / ".snakemake" / "locks"

@@ -43,7 +43,7 @@ test: setup
 
 ## The long checks the default run leaves out (whole studies on Slurm and in a browser, the
 ## cluster's waits on held and vanished jobs, the device design through Snakemake, limit
-## loads, the misspecified device's calibration), each with a faster check of the same rule
+## loads, the misspecified device's calibration, the documentation site from nothing), each with a faster check of the same rule
 ## in the default run: a few minutes more; CI runs them after `make test`.
 test-long: setup
 	@if [ "$${CI:-}" = true ]; then bash scripts/slurm-local.sh start; \

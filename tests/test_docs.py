@@ -11,6 +11,9 @@ Sphinx configuration, its extension and the package versions) and rewrites every
 their Markdown, the schemas, the modules they document) while every cross-reference is
 resolved again. A failed build deletes the cache, so the next one starts from nothing and
 reports every warning again.
+
+The build runs in ``make test-long``; ``make test`` checks its docstring and API-page rules
+on the same objects without Sphinx, in seconds.
 """
 
 from __future__ import annotations
@@ -39,8 +42,11 @@ def _cache_key() -> str:
     return h.hexdigest()[:16]
 
 
+@pytest.mark.long
 def test_make_docs_builds_without_warnings(tmp_path):
-    """``make docs`` (the README's command) with warnings as errors."""
+    """``make docs`` (the README's command) with warnings as errors: in ``make test-long``
+    (the site from nothing, its figures made by small runs: 97 s of a 2-core CI run); the
+    default run checks its docstring and API rules without Sphinx (below)."""
     cache = ROOT / "build" / "docs-cache" / _cache_key()
     cache.mkdir(parents=True, exist_ok=True)
     r = subprocess.run(
@@ -83,6 +89,120 @@ def _assert_generated_figures(html: Path) -> None:
         assert png.is_file() and png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n", (page, src)
         body = text[text.index("<h1"):]
         assert body.index(made[0]) < body.index("<p>"), f"{page}: the figure does not open it"
+
+
+# ------------------------------------------------------------- the build's rules, without it
+
+
+def _build_settings() -> dict:
+    """docs/conf.py's values, as Sphinx reads them."""
+    import runpy
+
+    return runpy.run_path(str(ROOT / "docs" / "conf.py"))
+
+
+def _documented(module) -> list[tuple[str, object, str]]:
+    """What ``automodule`` with ``:members:`` (docs/conf.py's ``autodoc_default_options``)
+    renders of ``module``: its public functions and classes (those of ``__all__`` when it
+    has one) defined in it and holding a docstring of their own, and the classes' public
+    methods and properties with one, as ``(name, object, autodoc's kind)``."""
+    import inspect
+
+    names = getattr(module, "__all__", None) or [n for n in vars(module)
+                                                  if not n.startswith("_")]
+    out: list[tuple[str, object, str]] = []
+    for name in names:
+        obj = getattr(module, name, None)
+        if (not (inspect.isfunction(obj) or inspect.isclass(obj))
+                or obj.__module__ != module.__name__):
+            continue
+        own = obj.__doc__ if inspect.isfunction(obj) else vars(obj).get("__doc__")
+        if not own:
+            continue
+        full = f"{module.__name__}.{name}"
+        out.append((full, obj, "function" if inspect.isfunction(obj) else "class"))
+        for attr, raw in (vars(obj).items() if inspect.isclass(obj) else ()):
+            fn = raw.__func__ if isinstance(raw, (staticmethod, classmethod)) else raw
+            if attr.startswith("_") or not getattr(fn, "__doc__", None):
+                continue
+            if isinstance(raw, property):
+                out.append((f"{full}.{attr}", raw, "attribute"))
+            elif inspect.isfunction(fn):
+                out.append((f"{full}.{attr}", getattr(obj, attr), "method"))
+    return out
+
+
+def _docstring_faults(name: str, obj: object, what: str, checks: set[str]) -> list[str]:
+    """The faults the build reports in one docstring: numpydoc's validation codes of
+    ``checks`` (as numpydoc's Sphinx hook runs it) and ssw_docs' one parameter per entry."""
+    import inspect
+
+    from numpydoc.docscrape_sphinx import get_doc_object
+    from numpydoc.validate import validate
+    from ssw_docs import parameter_entry_faults
+
+    text = inspect.getdoc(obj) or ""
+    faults = [] if what == "attribute" else parameter_entry_faults(text.splitlines())
+    report = validate(get_doc_object(obj, what, text))
+    faults += [f"{code}: {msg}" for code, msg in report["errors"] if code in checks]
+    return [f"{name}: {f}" for f in faults]
+
+
+def test_every_rendered_docstring_passes_the_builds_numpydoc_checks():
+    """The docstring rules of ``make docs`` (docs/conf.py's ``numpydoc_validation_checks``
+    and exclusions, one parameter per entry) on every docstring the API pages render,
+    without Sphinx: seconds, where the whole build (``make test-long``) takes minutes."""
+    import importlib
+    import re as regex
+
+    from ssw_docs import ssw_modules
+
+    conf = _build_settings()
+    checks = set(conf["numpydoc_validation_checks"])
+    excluded = regex.compile("|".join(conf["numpydoc_validation_exclude"]))
+    faults: list[str] = []
+    seen = 0
+    for module in ssw_modules():
+        for name, obj, what in _documented(importlib.import_module(module)):
+            if not excluded.search(name):
+                seen += 1
+                faults += _docstring_faults(name, obj, what, checks)
+    assert seen > 1000, f"only {seen} docstrings found: the walk lost the package"
+    assert not faults, "\n".join(faults[:30])
+
+
+def test_the_docstring_check_finds_what_the_build_rejects():
+    """The check above fails on the faults the build warns on: a parameter left out (PR01),
+    one the signature lacks (PR02), two in one entry, no Returns (RT01)."""
+    def area(width: float, height: float, scale: float) -> float:
+        """Area of a rectangle.
+
+        Parameters
+        ----------
+        width, height : float
+            Its sides (m).
+        depth : float
+            Not a parameter.
+        """
+        return width * height * scale
+
+    faults = "\n".join(_docstring_faults("area", area, "function",
+                                         set(_build_settings()["numpydoc_validation_checks"])))
+    for expected in ("PR01", "PR02", "RT01", "names several parameters"):
+        assert expected in faults, (expected, faults)
+
+
+def test_every_module_is_on_an_api_page():
+    """Each module of ``ssw`` is in the ``ssw-api`` directive of one API page (the build's
+    ``env-check-consistency`` rule, without the build)."""
+    from ssw_docs import api_modules, ssw_modules
+
+    targets = [m.group(1) for page in sorted((ROOT / "docs" / "api").glob("*.rst"))
+               for m in re.finditer(r"^\.\. ssw-api:: (\S+)$", page.read_text(),
+                                    re.MULTILINE)]
+    assert targets
+    on_pages = {name for target in targets for name in api_modules(target)}
+    assert set(ssw_modules()) <= on_pages, sorted(set(ssw_modules()) - on_pages)
 
 
 # ---------------------------------------------------------------------------- README links

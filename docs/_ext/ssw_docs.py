@@ -515,26 +515,39 @@ def _resolve_reexport(app: Sphinx, env: Any, node: Any, contnode: Any) -> Any:
 _SECTIONS = ("Parameters", "Other Parameters")
 
 
-def _check_one_parameter_per_entry(app: Sphinx, what: str, name: str, obj: Any,
-                                   options: Any, lines: list[str]) -> None:
-    """Warn on a ``Parameters`` entry that names several parameters (``a, b : float``)
-    or none (a line that is no ``name : type`` entry). Runs before numpydoc rewrites the
-    docstring."""
-    if what not in {"function", "method", "class"}:
-        return
+def parameter_entry_faults(lines: list[str]) -> list[str]:
+    """What breaks the rule of one parameter per entry in a docstring's ``Parameters`` and
+    ``Other Parameters`` sections (an entry ``a, b : float``), or numpydoc's own parse
+    error, each as a sentence; empty when the docstring keeps the rule.
+
+    Parameters
+    ----------
+    lines : list of str
+        The docstring's lines, as autodoc hands them on (before numpydoc rewrites them).
+
+    Returns
+    -------
+    list of str
+        The faults.
+    """
     from numpydoc.docscrape import NumpyDocString
 
     try:
         doc = NumpyDocString("\n".join(lines))
     except Exception as exc:  # numpydoc's own parse error, reported as such
-        logger.warning("%s: numpydoc cannot parse the docstring: %s", name, exc,
-                       type="ssw", subtype="docstring")
+        return [f"numpydoc cannot parse the docstring: {exc}"]
+    return [f"{section} entry {param.name!r} names several parameters (one per entry)"
+            for section in _SECTIONS for param in doc[section] if "," in param.name]
+
+
+def _check_one_parameter_per_entry(app: Sphinx, what: str, name: str, obj: Any,
+                                   options: Any, lines: list[str]) -> None:
+    """Warn on what :func:`parameter_entry_faults` finds in a function's, method's or
+    class's docstring. Runs before numpydoc rewrites the docstring."""
+    if what not in {"function", "method", "class"}:
         return
-    for section in _SECTIONS:
-        for param in doc[section]:
-            if "," in param.name:
-                logger.warning("%s: %s entry %r names several parameters (one per entry)",
-                               name, section, param.name, type="ssw", subtype="docstring")
+    for fault in parameter_entry_faults(lines):
+        logger.warning("%s: %s", name, fault, type="ssw", subtype="docstring")
 
 
 # ------------------------------------------------------------------ numpydoc's template

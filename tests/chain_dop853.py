@@ -138,14 +138,30 @@ def sensor_signal(E: float, nu: float, v: float, *, sensor_mass: float = BEAD_MA
             f = f + coef.reshape(shape) * fac * rate * (d > 0)
         return f
 
+    # the step's right-hand side, called some 10^5 times a record: the arithmetic of
+    # forces() element by element (the same values to the bit), in fewer numpy calls
+    law_b, law_w = laws[0], laws[-1]
     out = np.empty(2 * n)
+    d = np.empty(n)
+    rate = np.empty(n)
+    fac = np.empty(n)
 
     def rhs(_t: float, y: np.ndarray) -> np.ndarray:
-        f = forces(y[:n], y[n:])
-        out[:n] = y[n:]
-        out[n:] = load - f
-        out[n + 1:] += f[:-1]
-        out[n:] /= m
+        x, w = y[:n], y[n:]
+        np.subtract(x[:-1], x[1:], out=d[:-1])
+        d[-1] = x[-1]
+        dp = np.maximum(d, 0.0)
+        f = stiff * dp * np.sqrt(dp)
+        if damped:
+            np.subtract(w[:-1], w[1:], out=rate[:-1])
+            rate[-1] = w[-1]
+            fac[:-1] = law_b(dp[:-1], f[:-1])
+            fac[-1:] = law_w(dp[-1:], f[-1:])
+            f = f + coef * fac * rate * (d > 0)
+        out[:n] = w
+        acc = load - f
+        acc[1:] += f[:-1]
+        np.divide(acc, m, out=out[n:])
         return out.copy()
 
     t = np.arange(0.0, t_end, SAMPLE)

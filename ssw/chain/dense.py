@@ -121,14 +121,45 @@ def hermite_data(run: Any, i: np.ndarray, cols: np.ndarray, tangent: bool = Fals
         ``Y`` (m, 6): ``[S_i, dt S'_i, dt^2 S''_i, S_i+1, dt S'_i+1, dt^2 S''_i+1]`` (N;
         NaN where the samples do not reach), and ``dY`` (m, 6, k) or None.
     """
-    # sums over a fixed small axis, not matrix products: a scene's numbers do not depend on
-    # the scenes around it
-    Y = (STENCIL[None] * _samples(run.sensor, i, cols)[:, None, :]).sum(axis=2)
+    Y = _stencil(_samples(run.sensor, i, cols), pairwise=True)
     if not tangent:
         return Y, None
     dS = _samples(np.moveaxis(run.dsensor, 2, 1), i, cols)  # (m, 8, k)
-    dY = (STENCIL[None, :, :, None] * dS[:, None, :, :]).sum(axis=2)
-    return Y, dY
+    return Y, _stencil(dS, pairwise=dS.shape[-1] == 1)
+
+
+def _stencil(S: np.ndarray, pairwise: bool) -> np.ndarray:
+    """``STENCIL`` applied to the 8 samples of each interval: ``S`` (m, 8, ...) to (m, 6, ...).
+
+    The eight products are summed in a fixed order, elementwise (not a matrix product: a
+    scene's numbers do not depend on the scenes around it): pairwise, ``((p0 + p1) + (p2 +
+    p3)) + ((p4 + p5) + (p6 + p7))``, or from left to right. These are the orders numpy's
+    ``sum`` over that axis took before (pairwise along a contiguous axis: the sensor and a
+    single derivative; left to right across one: several derivatives), so the record's
+    numbers are those it gave, bit for bit, at a third of the time on 20 000 intervals and
+    8 derivatives (0.077 s against 0.22 s, ``time.perf_counter``, 2 cores, 2026-11-29): no
+    (m, 6, 8, k) temporary.
+
+    Parameters
+    ----------
+    S : numpy.ndarray
+        (m, 8, ...) the samples ``x[i - 3 .. i + 4]`` (:func:`_samples`).
+    pairwise : bool
+        The pairwise order (else left to right).
+
+    Returns
+    -------
+    numpy.ndarray
+        (m, 6, ...) the node data.
+    """
+    shape = (1, 6) + (1,) * (S.ndim - 2)
+    p = [STENCIL[:, j].reshape(shape) * S[:, None, j] for j in range(8)]
+    if pairwise:
+        return ((p[0] + p[1]) + (p[2] + p[3])) + ((p[4] + p[5]) + (p[6] + p[7]))
+    out = p[0] + p[1]
+    for term in p[2:]:
+        out += term
+    return out
 
 
 def _poly(Y: np.ndarray) -> np.ndarray:

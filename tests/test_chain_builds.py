@@ -196,7 +196,8 @@ int _mm256_movemask_pd(__m256d); int _mm_movemask_pd(__m128d); void _mm256_zerou
 unsigned __int64 _xgetbv(unsigned int);
 """,
     "intrin.h": "void __cpuidex(int info[4], int leaf, int sub);\n",
-    "math.h": "double sqrt(double); double fabs(double);\n#define isinf(x) __builtin_isinf(x)\n",
+    "math.h": "double sqrt(double); double fabs(double); double pow(double, double);\n"
+              "double log(double);\n#define isinf(x) __builtin_isinf(x)\n",
     "string.h": "void *memcpy(void *, const void *, unsigned __int64);\n"
                 "void *memset(void *, int, unsigned __int64);\n",
 }

@@ -12,8 +12,9 @@ and compares, bit by bit, with the installed build (GCC, ``setup.py``'s flags, t
 lanes): the far and near Hertz law at 1003 contacts (edge cases included: zeros of both
 signs, infinities, NaN, a zero |delta|), the TOFs of 40 moduli on the Hertz wall and of 5 on
 the ``fem`` wall (the law evaluated in the step, blocks of steps per call), the TOF
-derivatives and the sensor signal with its sensitivities, and runs with each dissipation
-law, a preload and all six parameters' tangents.
+derivatives and the sensor signal with its sensitivities, runs with each dissipation law,
+a preload and all six parameters' tangents, and a run on a non-Hertzian power law (its
+``pow`` and ``log`` evaluated in the step).
 
 The comparison can fail: Clang with ``-ffp-contract=fast`` (which overrides the source's
 pragma) and ``-march=haswell`` fuses multiply-adds, and its results must differ from the
@@ -41,6 +42,7 @@ from ssw.chain.integrate import simulate
 from ssw.chain.kernel import averaged_hertz
 from ssw.chain.params import ChainParams
 from ssw.chain.sensitivity import PARAMETERS
+from ssw.chain.wall_power import PowerWall
 from ssw.tof import api
 from ssw.walls import build_wall
 
@@ -106,6 +108,14 @@ def _fingerprint() -> dict[str, np.ndarray]:
         w = build_wall("hertz", q, E[::13], np.full(E[::13].size, 0.3))
         run = simulate(q, w, derivatives=tuple(PARAMETERS))
         out[f"{law}_sensor"], out[f"{law}_dsensor"] = run.sensor, run.dsensor
+    # a power law of exponent 1.8 the step evaluates (pow and log), equal to the Hertz
+    # wall's force at 0.2 mm
+    h = build_wall("hertz", p, E[::13], np.full(E[::13].size, 0.3))
+    s = 2e-4 ** (1.5 - 1.8)
+    pw = PowerWall(h.coef * s, np.full(h.n, 1.8), dcoef_dE=h.dcoef_dE * s,
+                   dexponent_dE=np.full(h.n, 1e-9))
+    run = simulate(p, pw, derivatives=tuple(PARAMETERS))
+    out["power_sensor"], out["power_dsensor"] = run.sensor, run.dsensor
     return out
 
 

@@ -13,8 +13,8 @@ lanes): the far and near Hertz law at 1003 contacts (edge cases included: zeros 
 signs, infinities, NaN, a zero |delta|), the TOFs of 40 moduli on the Hertz wall and of 5 on
 the ``fem`` wall (the law evaluated in the step, blocks of steps per call), the TOF
 derivatives and the sensor signal with its sensitivities, runs with each dissipation law,
-a preload and all six parameters' tangents, and a run on a non-Hertzian power law (its
-``pow`` and ``log`` evaluated in the step).
+a preload and all six parameters' tangents, and the step's power law (its Hertzian form,
+and ``pow`` and ``log`` for other exponents) at the same 1003 indentations.
 
 The comparison can fail: Clang with ``-ffp-contract=fast`` (which overrides the source's
 pragma) and ``-march=haswell`` fuses multiply-adds, and its results must differ from the
@@ -42,7 +42,6 @@ from ssw.chain.integrate import simulate
 from ssw.chain.kernel import averaged_hertz
 from ssw.chain.params import ChainParams
 from ssw.chain.sensitivity import PARAMETERS
-from ssw.chain.wall_power import PowerWall
 from ssw.tof import api
 from ssw.walls import build_wall
 
@@ -108,14 +107,14 @@ def _fingerprint() -> dict[str, np.ndarray]:
         w = build_wall("hertz", q, E[::13], np.full(E[::13].size, 0.3))
         run = simulate(q, w, derivatives=tuple(PARAMETERS))
         out[f"{law}_sensor"], out[f"{law}_dsensor"] = run.sensor, run.dsensor
-    # a power law of exponent 1.8 the step evaluates (pow and log), equal to the Hertz
-    # wall's force at 0.2 mm
-    h = build_wall("hertz", p, E[::13], np.full(E[::13].size, 0.3))
-    s = 2e-4 ** (1.5 - 1.8)
-    pw = PowerWall(h.coef * s, np.full(h.n, 1.8), dcoef_dE=h.dcoef_dE * s,
-                   dexponent_dE=np.full(h.n, 1e-9))
-    run = simulate(p, pw, derivatives=tuple(PARAMETERS))
-    out["power_sensor"], out["power_dsensor"] = run.sensor, run.dsensor
+    # the step's power law: its Hertzian form, and pow and log for other exponents
+    e = np.where(np.arange(d.size) % 2, 1.5, rng.uniform(1.0, 3.0, d.size))
+    law = (rng.uniform(1e9, 1e11, d.size), e, rng.normal(0.0, 10.0, d.size),
+           rng.normal(0.0, 1e-9, d.size))
+    out["power_law"] = np.stack(kernel.power_law(law, d, tangent=True, with_E=True))
+    out["power_law_hertz"] = np.stack(
+        kernel.power_law((law[0], np.full(d.size, 1.5), *law[2:]), d, tangent=True,
+                         with_E=True))
     return out
 
 

@@ -1,23 +1,23 @@
-"""The power-law wall inside the compiled step (``ssw.chain.kernel.Stepper.use_power_law``).
+"""The Hertzian power-law wall inside the compiled step (``Stepper.use_power_law``).
 
-A run on a :class:`ssw.chain.wall_power.PowerWall` advances a block of steps in one call of
-the compiled step, which evaluates the wall's law itself. The Python loop it replaced (one
-step at a time, the wall's row written by ``_WallDrive.write_row`` from the wall's methods)
-is what a run on a wall the step does not know still takes: here :class:`_Reference`, the
-same law evaluated by numpy's IEEE operations (the Hertzian form, as ``PowerWall`` did
-before the step evaluated it) and Python's ``math`` module (libm's ``pow`` and ``log``, one
-value at a time), run with ``record_forces=True``. Truth, each a second method:
+A run on a Hertzian :class:`ssw.chain.wall_power.PowerWall` (every exponent 1.5: ``rigid``,
+``hertz``, ``fit`` with ``k_hertz``) advances a block of steps in one call of the compiled
+step, which evaluates the wall's law itself. The Python loop it replaced (one step at a
+time, the wall's row written by ``_WallDrive.write_row`` from the law's numpy methods) is
+what a run on a wall the step does not know still takes: here :class:`_Reference`, the same
+``PowerWall`` without ``step_power_law``, run with ``record_forces=True``. Truth, each a
+second method:
 
 * the two loops against each other, bit for bit: sensor signals, wall forces, the peaks,
   the stop times and the sensor's sensitivities (the modulus, the striker's speed and
-  mass, the sensor's mass, the preload, the damping and the step's own column), for the
-  Hertzian laws (``rigid``, ``hertz``), a non-Hertzian law with an E-dependent exponent
-  (the logarithm's term) and a law whose scenes mix exponents (the ``d sqrt(d)`` form
-  taken once the non-Hertzian scenes have stopped, as ``PowerWall.take`` does), each
+  mass, the sensor's mass, the preload, the damping and the step's own column), each
   dissipation law, with and without tangents, scenes stopping early;
-* the law's evaluation against Python's ``math`` module (libm's ``pow`` and ``log``, one
-  value at a time) and the Hertzian form's IEEE operations, bit for bit, at the
-  indentations that test the edges (0, -0, negative, NaN, the smallest subnormal);
+* a law of another exponent, or one whose exponent moves with E, stays on the Python loop
+  (numpy's ``power`` and ``log`` are not libm's on every CPU: the module docstring of
+  :mod:`ssw.chain.wall_power`);
+* the step's law against numpy's IEEE operations (the Hertzian form) and Python's ``math``
+  module (libm's ``pow`` and ``log``, one value at a time, for any exponent), bit for bit,
+  at the indentations that test the edges (0, -0, negative, NaN, the smallest subnormal);
 * physics: a bead on a rigid flat is the mirror image of a symmetric collision of two
   chains (``F = 2^1.5 A u^1.5 = A (2u)^1.5``), through the compiled loop.
 """
@@ -35,7 +35,7 @@ from ssw.chain.integrate import simulate
 from ssw.chain.params import ChainParams
 from ssw.chain.sensitivity import PARAMETERS, STEP
 from ssw.chain.statics import initial_state
-from ssw.chain.wall_power import PowerWall, hertz_wall, rigid_wall
+from ssw.chain.wall_power import PowerWall, fit_wall, hertz_wall, rigid_wall
 from ssw.errors import ConfigError
 
 E = np.array([15e6, 60e6, 240e6, 900e6])
@@ -51,8 +51,7 @@ LAWS = {"dashpot": 2.0, "kuwabara_kono": 3e3, "hunt_crossley": 0.05}
 
 def _power_law(p: ChainParams) -> PowerWall:
     """``F = coef d^n`` per scene, n 1.25 .. 2.2, each equal to the Hertz wall's force at
-    the scene's indentation ``D_REF`` (so that its scenes stop like the Hertz wall's), with
-    an E-dependent exponent (the logarithm's term of ``dF/dE``)."""
+    the indentation ``D_REF``, with an E-dependent exponent."""
     h = hertz_wall(p, E, NU)
     n = np.array([1.25, 1.6, 1.9, 2.2])
     scale = D_REF ** (1.5 - n)
@@ -60,20 +59,20 @@ def _power_law(p: ChainParams) -> PowerWall:
                      dexponent_dE=np.array([2.0e-9, -1.0e-9, 5.0e-10, 1.0e-10]))
 
 
-def _mixed(p: ChainParams) -> PowerWall:
-    """Two Hertzian scenes on very soft soils (4 and 6 MPa) and two stiffer non-Hertzian
-    ones, which stop first."""
-    h, w = hertz_wall(p, [4e6, 6e6], NU[:2]), _power_law(p)
-    return PowerWall(np.concatenate([h.coef, w.coef[2:]]), np.array([1.5, 1.5, 1.9, 2.2]),
-                     dcoef_dE=np.concatenate([h.dcoef_dE, w.dcoef_dE[2:]]),
-                     dexponent_dE=np.concatenate([[0.0, 0.0], w.dexponent_dE[2:]]))
-
-
+#: The Hertzian laws (the step evaluates them).
 WALLS = {
     "rigid": lambda p: rigid_wall(p, E, NU),
     "hertz": lambda p: hertz_wall(p, E, NU),
+    "k_hertz": lambda p: fit_wall(p, E, NU, K=np.array([0.7, 0.9, 1.1, 1.3])),
+    "constant-exponent": lambda p: replace(hertz_wall(p, E, NU),
+                                           dexponent_dE=np.zeros(E.size)),
+}
+#: Laws the step leaves to the Python loop.
+PYTHON_WALLS = {
     "power": _power_law,
-    "mixed": _mixed,
+    "mixed": lambda p: replace(hertz_wall(p, E, NU), exponent=np.array([1.5, 1.5, 1.5, 1.6])),
+    "moving-exponent": lambda p: replace(hertz_wall(p, E, NU), dexponent_dE=np.full(E.size,
+                                                                                    1e-9)),
 }
 
 
@@ -108,14 +107,11 @@ def compiled_blocks(monkeypatch):
 
 
 class _Reference:
-    """A power law the compiled step does not know (no ``step_power_law``): the run drives
-    it from Python. ``F = coef d^n``, ``d = max(x, 0)``, ``dF/dd`` and ``dF/dE`` by numpy
-    in the Hertzian form (every exponent 1.5: ``(coef d) sqrt(d)``, ``(1.5 coef) sqrt(d)``)
-    and by ``math.pow`` and ``math.log`` otherwise; the rest is the wrapped wall's."""
+    """The law a run drives from Python: the wrapped :class:`PowerWall`'s own methods, its
+    ``step_power_law`` hidden."""
 
     def __init__(self, wall: PowerWall) -> None:
         self.w = wall
-        self.n = wall.n
 
     def __getattr__(self, name: str):
         if name == "step_power_law":
@@ -124,40 +120,6 @@ class _Reference:
 
     def take(self, idx: np.ndarray) -> _Reference:
         return _Reference(self.w.take(idx))
-
-    def force_and_tangent(self, d: np.ndarray, with_E: bool) -> tuple:
-        w, dp = self.w, np.maximum(d, 0.0)
-        if np.all(w.exponent == 1.5):
-            sq = np.sqrt(dp)
-            F, kd, dn = w.coef * dp * sq, 1.5 * w.coef * sq, dp * sq
-        else:
-            def libm(e: np.ndarray) -> np.ndarray:
-                return np.array([math.pow(a, b) for a, b in zip(dp, e, strict=True)])
-
-            dn = libm(w.exponent)
-            F = w.coef * dn
-            kd = np.where(dp > 0, w.exponent * w.coef * libm(w.exponent - 1.0), 0.0)
-        if not with_E:
-            return F, kd, None
-        kE = w.dcoef_dE * dn
-        if w.dexponent_dE is not None:
-            ln = np.array([math.log(a if a > 0 else 1.0) for a in dp])
-            kE = kE + w.coef * dn * ln * w.dexponent_dE
-        return F, kd, kE
-
-    def force(self, d: np.ndarray) -> np.ndarray:
-        return self.force_and_tangent(d, False)[0]
-
-    def dforce_dd(self, d: np.ndarray) -> np.ndarray:
-        return self.force_and_tangent(d, False)[1]
-
-    def dforce_dE(self, d: np.ndarray) -> np.ndarray:
-        if self.w.dcoef_dE is None:
-            return self.w.dforce_dE(d)  # the wall's ConfigError
-        return self.force_and_tangent(d, True)[2]
-
-    def hertz_equivalent(self, d_ref: float) -> np.ndarray:
-        return self.force(np.full(self.n, d_ref)) / d_ref**1.5
 
 
 def _both(p: ChainParams, wall: PowerWall, calls: list, **kw):
@@ -174,9 +136,9 @@ def _both(p: ChainParams, wall: PowerWall, calls: list, **kw):
 @pytest.mark.parametrize("wall", sorted(WALLS))
 @pytest.mark.parametrize("law", sorted(LAWS))
 def test_the_compiled_loop_gives_the_python_loops_bits(wall, law, compiled_blocks):
-    """Every wall, every dissipation law, with the preload and every tangent column: the
-    same bits either loop; the scenes stop at different times (early stops leave the
-    step's law rows with the scenes kept)."""
+    """Every Hertzian law, every dissipation law, with the preload and every tangent
+    column: the same bits either loop; the scenes stop at different times (early stops
+    leave the step's law rows with the scenes kept)."""
     p = ChainParams(damping=LAWS[law], damping_law=law, preload=2.0)
     w = WALLS[wall](p)
     fast, slow = _both(p, w, compiled_blocks, derivatives=ALL)
@@ -187,13 +149,19 @@ def test_the_compiled_loop_gives_the_python_loops_bits(wall, law, compiled_block
     assert (np.unique(fast.stop_time).size > 1) == (wall != "rigid")
     moved = np.any(fast.dsensor != 0.0, axis=(0, 1))
     assert np.all(moved[[i for i, c in enumerate(ALL) if c != "E" or wall != "rigid"]])
-    if wall == "mixed" and law != "kuwabara_kono":
-        # the non-Hertzian scenes stop first: the d sqrt(d) form from then on (with
-        # Kuwabara-Kono's damping the soft Hertzian scenes stop first)
-        assert fast.stop_time[2:].max() < fast.stop_time[:2].min()
 
 
-@pytest.mark.parametrize("wall", ["hertz", "power"])
+@pytest.mark.parametrize("wall", sorted(PYTHON_WALLS))
+def test_other_laws_stay_on_the_python_loop(wall, compiled_blocks):
+    """A law with an exponent other than 1.5, or one moving with E, is the run's Python
+    loop's: no block of the compiled loop, and a run like any other."""
+    p = ChainParams(damping=2.0)
+    run = simulate(p, PYTHON_WALLS[wall](p), derivatives=ALL)
+    assert not compiled_blocks
+    assert np.all(np.isfinite(run.stop_time)) and np.all(np.isfinite(run.dsensor[0]))
+
+
+@pytest.mark.parametrize("wall", ["hertz", "k_hertz"])
 def test_without_tangents_the_loops_agree(wall, compiled_blocks):
     """No sensitivities, undamped, with gravity: the same bits either loop."""
     p = ChainParams()
@@ -207,7 +175,7 @@ def test_a_law_without_its_E_dependence_keeps_to_python_for_E(compiled_blocks):
     Python and raises the law's ConfigError, as it did before the step evaluated power
     laws."""
     p = ChainParams(damping=2.0)
-    w = replace(_power_law(p), dcoef_dE=None, dexponent_dE=None)
+    w = replace(hertz_wall(p, E, NU), dcoef_dE=None)
     names = ("striker_velocity", "damping")
     fast, slow = _both(p, w, compiled_blocks, derivatives=names)
     _same_bits(fast, slow)
@@ -221,17 +189,17 @@ def test_the_per_step_loop_with_the_steps_law_gives_the_same_bits(compiled_block
     """``record_forces`` runs one step per call, the step still evaluating the law: the
     compiled blocks' bits, and the forces it records are the wall force's."""
     p = ChainParams(damping=0.05, damping_law="hunt_crossley")
-    w = _mixed(p)
+    w = WALLS["k_hertz"](p)
     fast, slow = (simulate(p, w, derivatives=ALL, record_forces=r) for r in (False, True))
     _same_bits(fast, slow)
     assert np.array_equal(_bits(slow.forces[:, :, -1]), _bits(slow.wall_force))
 
 
-def test_the_law_is_libms_pow_and_log_and_the_hertzian_form():
+def test_the_steps_law_is_libms_pow_and_log_and_the_hertzian_form():
     """``kernel.power_law`` against Python's ``math`` (libm), one value at a time, bit for
     bit: ``coef pow(d, n)``, ``(n coef) pow(d, n - 1)``, ``dc pow(d, n) + ((coef pow(d, n))
     log(d)) dn`` for d > 0 (0 and the log's term 0 otherwise, NaN kept); the Hertzian form
-    ``(coef d) sqrt(d)``, ``(1.5 coef) sqrt(d)``. The wall's methods are this law."""
+    ``(coef d) sqrt(d)``, ``(1.5 coef) sqrt(d)``, and a Hertzian ``PowerWall``'s methods."""
     rng = np.random.default_rng(7)
     x = np.concatenate([rng.uniform(-1e-5, 1e-4, 200), 10 ** rng.uniform(-12, -3, 300),
                         [0.0, -0.0, -1.0, 5e-324, np.nan, 1e-300, 1.0]])
@@ -250,17 +218,15 @@ def test_the_law_is_libms_pow_and_log_and_the_hertzian_form():
     want = np.array([ref(*v) for v in zip(coef, n, dc, dn, x, strict=True)]).T
     for got, w in zip((F, kd, kE), want, strict=True):
         assert np.array_equal(_bits(got), _bits(w))
-    w = PowerWall(coef, n, dcoef_dE=dc, dexponent_dE=dn)
-    for got, mine in zip((F, kd, kE), (w.force(x), w.dforce_dd(x), w.dforce_dE(x)),
-                         strict=True):
-        assert np.array_equal(_bits(got), _bits(mine))
     h = np.full(m, 1.5)
-    Fh, kh, _ = kernel.power_law((coef, h, None, None), x, tangent=True)
+    law = (coef, h, dc, np.zeros(m))
+    Fh, kh, kEh = kernel.power_law(law, x, tangent=True, with_E=True)
     dp = np.where((x > 0) | np.isnan(x), x, 0.0)
     assert np.array_equal(_bits(Fh), _bits(coef * dp * np.sqrt(dp)))
     assert np.array_equal(_bits(kh), _bits(1.5 * coef * np.sqrt(dp)))
-    ours = _Reference(w).force_and_tangent(x, True)
-    for got, mine in zip((F, kd, kE), ours, strict=True):
+    w = PowerWall(*law[:2], dcoef_dE=law[2], dexponent_dE=law[3])
+    for got, mine in zip((Fh, kh, kEh), (w.force(x), w.dforce_dd(x), w.dforce_dE(x)),
+                         strict=True):
         assert np.array_equal(_bits(got), _bits(mine))
 
 

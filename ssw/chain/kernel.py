@@ -350,14 +350,15 @@ def piecewise(law: tuple, x: np.ndarray, tangent: bool = False, with_E: bool = F
 
 def power_law(law: tuple, x: np.ndarray, tangent: bool = False, with_E: bool = False
               ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
-    """A power law per scene, by the step's own code (one implementation for the step and
-    :class:`ssw.chain.wall_power.PowerWall`).
+    """A power law per scene, by the step's own code (what :meth:`Stepper.use_power_law`
+    evaluates).
 
     ``F = coef d^e``, ``d = max(x, 0)`` (a NaN stays); when every exponent is 1.5 the
-    ``d sqrt(d)`` form (``(coef d) sqrt(d)``, ``dF/dd = (1.5 coef) sqrt(d)``), else libm's
-    ``pow`` (``coef pow(d, e)``, ``dF/dd = (e coef) pow(d, e - 1)``, 0 for ``d = 0``):
-    operations in that order, so that the step and the wall's own evaluation give the same
-    bits.
+    ``d sqrt(d)`` form (``(coef d) sqrt(d)``, ``dF/dd = (1.5 coef) sqrt(d)``), the
+    operations of :class:`ssw.chain.wall_power.PowerWall` in their order (the same bits),
+    else libm's ``pow`` (``coef pow(d, e)``, ``dF/dd = (e coef) pow(d, e - 1)``, 0 for
+    ``d = 0``), which numpy's ``power`` matches only where it calls libm (not its AVX-512
+    code).
 
     Parameters
     ----------

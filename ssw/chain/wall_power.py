@@ -15,12 +15,16 @@ and the laws built as one:
 Each law carries its derivative in the soil's modulus where it is known (``dcoef_dE``,
 ``dexponent_dE``), for the exact forward sensitivities of :mod:`ssw.chain.sensitivity`.
 
-The force, its tangent and its E-derivative are evaluated by the compiled step's code
-(:func:`ssw.chain.kernel.power_law`), which also evaluates the law inside a run
-(:meth:`PowerWall.step_power_law`): one implementation, so that a run gives the same bits
-whether its loop is compiled or in Python. (numpy's ``power`` and ``log`` are not libm's on
-every CPU: with AVX-512 numpy takes its own SIMD versions, which differ from glibc's in the
-last bit of about 5 % of the powers.)
+A Hertzian law (every exponent 1.5, constant in E: ``rigid``, ``hertz``, ``fit`` with
+``k_hertz``) is evaluated inside a run by the compiled step
+(:meth:`PowerWall.step_power_law`, :func:`ssw.chain.kernel.power_law`), in the IEEE
+operations of :meth:`PowerWall.force`, :meth:`PowerWall.dforce_dd` and
+:meth:`PowerWall.dforce_dE` and their order (products and a square root, each correctly
+rounded): the same bits as the run's Python loop on the law's own methods. Any other law
+stays on that loop: numpy's ``power`` and ``log`` are not libm's on every CPU (with
+AVX-512 numpy takes its own SIMD versions, which differ from glibc's ``pow`` in the last
+bit of about 5 % of the values), so the step's ``pow`` would not reproduce the law's
+numbers bit for bit.
 
 References
 ----------
@@ -34,7 +38,6 @@ from typing import Any
 
 import numpy as np
 
-from ssw.chain.kernel import power_law
 from ssw.chain.params import ChainParams
 from ssw.chain.wall_base import compliance_scale, compliance_scale_dE, scene_arrays
 from ssw.errors import ConfigError
@@ -88,58 +91,29 @@ class PowerWall:
         numpy.ndarray
             Force (N), (n,); 0 for ``d <= 0``.
         """
-        return power_law(self._rows(), d)[0]
+        dp = np.maximum(d, 0.0)
+        if self.hertzian:
+            return self.coef * dp * np.sqrt(dp)
+        return self.coef * dp**self.exponent
 
-    def _rows(self) -> tuple:
-        """``(coef, exponent, dcoef_dE, dexponent_dE)``, the law's rows."""
-        return self.coef, self.exponent, self.dcoef_dE, self.dexponent_dE
-
-    def step_power_law(self) -> tuple:
+    def step_power_law(self) -> tuple | None:
         """The law's rows for the compiled step, which then evaluates the wall's force
-        itself (:meth:`ssw.chain.kernel.Stepper.use_power_law`).
+        itself (:meth:`ssw.chain.kernel.Stepper.use_power_law`), when the law is Hertzian
+        (module docstring).
 
         Returns
         -------
-        tuple
+        tuple or None
             ``(coef, exponent, dcoef_dE, dexponent_dE)``: (n,) float arrays (N/m^n, -,
-            N/m^n/Pa, 1/Pa; the last two None where the law has none).
+            N/m^n/Pa, 1/Pa; the last two None where the law has none); None for a law with
+            an exponent other than 1.5, or whose exponent moves with E (its ``dF/dE``
+            takes a logarithm): the run evaluates it in Python.
         """
+        de = self.dexponent_dE
+        if not self.hertzian or (de is not None and np.any(de != 0.0)):
+            return None
         return tuple(None if x is None else np.ascontiguousarray(x, float)
-                     for x in self._rows())
-
-    def force_and_tangent(self, d: np.ndarray, with_E: bool
-                          ) -> tuple[np.ndarray, np.ndarray, np.ndarray | None]:
-        """Force, tangent stiffness and (with ``with_E``) ``dF/dE`` at ``d`` in one
-        evaluation (:func:`ssw.chain.wall.force_and_tangent`).
-
-        Parameters
-        ----------
-        d : numpy.ndarray
-            Indentations (m), (n,).
-        with_E : bool
-            Whether ``dF/dE`` is wanted (needs ``dcoef_dE``).
-
-        Returns
-        -------
-        tuple
-            ``(F, dF/dd, dF/dE)``: N, N/m and N/Pa, (n,) each; ``dF/dE`` None without
-            ``with_E``.
-
-        Raises
-        ------
-        ConfigError
-            ``with_E`` for a law built without its E-dependence.
-        """
-        if with_E:
-            self._check_E()
-        F, kd, kE = power_law(self._rows(), d, tangent=True, with_E=with_E)
-        return F, kd, kE  # type: ignore[return-value]
-
-    def _check_E(self) -> None:
-        """ConfigError unless the law's E-dependence is known."""
-        if self.dcoef_dE is None:
-            raise ConfigError("wall", "a power law without its E-dependence",
-                              "a law built by hertz_wall, fit_wall or rigid_wall")
+                     for x in (self.coef, self.exponent, self.dcoef_dE, self.dexponent_dE))
 
     def dforce_dd(self, d: np.ndarray) -> np.ndarray:
         """Tangent stiffness ``n coef d^(n-1)`` (N/m) at ``d`` (m); 0 for ``d <= 0``.
@@ -154,7 +128,10 @@ class PowerWall:
         numpy.ndarray
             Tangent stiffness (N/m), (n,).
         """
-        return power_law(self._rows(), d, tangent=True)[1]  # type: ignore[return-value]
+        dp = np.maximum(d, 0.0)
+        if self.hertzian:
+            return 1.5 * self.coef * np.sqrt(dp)
+        return np.where(dp > 0, self.exponent * self.coef * dp ** (self.exponent - 1.0), 0.0)
 
     def dforce_dE(self, d: np.ndarray) -> np.ndarray:
         """``dF/dE`` (N/Pa) at fixed indentation ``d`` (m): ``dcoef/dE d^n + coef d^n ln(d)
@@ -175,8 +152,15 @@ class PowerWall:
         ConfigError
             If the law was built without its E-dependence (``dcoef_dE`` is None).
         """
-        self._check_E()
-        return power_law(self._rows(), d, with_E=True)[2]  # type: ignore[return-value]
+        if self.dcoef_dE is None:
+            raise ConfigError("wall", "a power law without its E-dependence",
+                              "a law built by hertz_wall, fit_wall or rigid_wall")
+        dp = np.maximum(d, 0.0)
+        dn = dp * np.sqrt(dp) if self.hertzian else dp ** self.exponent
+        out = self.dcoef_dE * dn
+        if self.dexponent_dE is not None:
+            out = out + self.coef * dn * np.log(np.where(dp > 0, dp, 1.0)) * self.dexponent_dE
+        return out
 
     def potential(self, d: np.ndarray) -> np.ndarray:
         """Stored energy ``coef d^(n+1) / (n+1)`` (J).

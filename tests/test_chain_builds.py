@@ -12,8 +12,9 @@ and compares, bit by bit, with the installed build (GCC, ``setup.py``'s flags, t
 lanes): the far and near Hertz law at 1003 contacts (edge cases included: zeros of both
 signs, infinities, NaN, a zero |delta|), the TOFs of 40 moduli on the Hertz wall and of 5 on
 the ``fem`` wall (the law evaluated in the step, blocks of steps per call), the TOF
-derivatives and the sensor signal with its sensitivities, and runs with each dissipation
-law, a preload and all six parameters' tangents.
+derivatives and the sensor signal with its sensitivities, runs with each dissipation law,
+a preload and all six parameters' tangents, and the step's power law (its Hertzian form,
+and ``pow`` and ``log`` for other exponents) at the same 1003 indentations.
 
 The comparison can fail: Clang with ``-ffp-contract=fast`` (which overrides the source's
 pragma) and ``-march=haswell`` fuses multiply-adds, and its results must differ from the
@@ -106,6 +107,14 @@ def _fingerprint() -> dict[str, np.ndarray]:
         w = build_wall("hertz", q, E[::13], np.full(E[::13].size, 0.3))
         run = simulate(q, w, derivatives=tuple(PARAMETERS))
         out[f"{law}_sensor"], out[f"{law}_dsensor"] = run.sensor, run.dsensor
+    # the step's power law: its Hertzian form, and pow and log for other exponents
+    e = np.where(np.arange(d.size) % 2, 1.5, rng.uniform(1.0, 3.0, d.size))
+    law = (rng.uniform(1e9, 1e11, d.size), e, rng.normal(0.0, 10.0, d.size),
+           rng.normal(0.0, 1e-9, d.size))
+    out["power_law"] = np.stack(kernel.power_law(law, d, tangent=True, with_E=True))
+    out["power_law_hertz"] = np.stack(
+        kernel.power_law((law[0], np.full(d.size, 1.5), *law[2:]), d, tangent=True,
+                         with_E=True))
     return out
 
 
@@ -196,7 +205,8 @@ int _mm256_movemask_pd(__m256d); int _mm_movemask_pd(__m128d); void _mm256_zerou
 unsigned __int64 _xgetbv(unsigned int);
 """,
     "intrin.h": "void __cpuidex(int info[4], int leaf, int sub);\n",
-    "math.h": "double sqrt(double); double fabs(double);\n#define isinf(x) __builtin_isinf(x)\n",
+    "math.h": "double sqrt(double); double fabs(double); double pow(double, double);\n"
+              "double log(double);\n#define isinf(x) __builtin_isinf(x)\n",
     "string.h": "void *memcpy(void *, const void *, unsigned __int64);\n"
                 "void *memset(void *, int, unsigned __int64);\n",
 }

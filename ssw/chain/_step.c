@@ -8,8 +8,8 @@
    sensitivities (N, n, k), positions and velocities stacked (2, N, n) and (2, N, n, k);
    contact j joins beads j and j + 1, contact N - 1 is the wall (its force, and its
    sensitivities, are written by the caller before ssw_forces: any wall law, with or
-   without state; or, for a piecewise-linear law, ssw.walls.fem.PiecewiseLinearWall, by
-   the step itself).
+   without state; or by the step itself, for a piecewise-linear law,
+   ssw.walls.fem.PiecewiseLinearWall, and for a power law, ssw.chain.wall_power.PowerWall).
 
    No Python C-API: a plain shared library, built by setuptools with the package (setup.py)
    and checked by its loader against this file's hash (SSW_STEP_SOURCE), its constants and
@@ -135,6 +135,11 @@ typedef struct {
        modulus's sensitivity column (-1: none). K1 = 0: the caller writes the wall row. */
     int K1, c_E;
     double *wd, *wa, *wb, *wda, *wdb;
+    /* a power law the step evaluates itself (ssw_power_law; power_law = 1, K1 = 0), its
+       rows (n): coef (N/m^e), e, dcoef/dE (N/m^e/Pa, or NULL) and de/dE (1/Pa, or NULL:
+       constant). power_law = 0: none. */
+    int power_law;
+    double *pc, *pe, *pdc, *pde;
 } ssw_chain;
 
 /* ssw_chain's fields in their order, for the loader's check of its ctypes mirror
@@ -144,7 +149,8 @@ typedef struct {
     X(N) X(n) X(k) X(predict) X(damped_tangent) X(law) X(c_D) X(c_P) X(c_T) X(n_mass)       \
     X(mass_row) X(mass_col) X(A) X(dt) X(damping) X(g) X(z) X(acc) X(inv_m) X(preload)      \
     X(f) X(power) X(ZT) X(Acc) X(dF) X(work) X(s) X(n_rec) X(rec_rows) X(pair) X(wall)      \
-    X(dpair) X(peak_u) X(peak_f) X(K1) X(c_E) X(wd) X(wa) X(wb) X(wda) X(wdb)
+    X(dpair) X(peak_u) X(peak_f) X(K1) X(c_E) X(wd) X(wa) X(wb) X(wda) X(wdb)          \
+    X(power_law) X(pc) X(pe) X(pdc) X(pde)
 
 /* The exported functions' answers: 0, or the size they refused (ssw_step_error) */
 enum {
@@ -179,8 +185,10 @@ static const char *const ERRORS[E_CODES] = {
     "0 .. k - 1",
     "law, the dissipation law: 0 (dashpot), 1 (Kuwabara-Kono) or 2 (Hunt-Crossley)",
     "an array the call needs is NULL",
-    "K1, the wall law's breakpoints per scene: 0 (the caller writes the wall row), or at "
-    "least 1 with its rows wd, wa, wb (and wda, wdb with the modulus's column c_E)",
+    "the step's wall law: K1, the piecewise law's breakpoints per scene, 0 (none) or at "
+    "least 1 with its rows wd, wa, wb (and wda, wdb with the modulus's column c_E); "
+    "power_law, 0 (none) or 1 with K1 = 0 and its rows pc, pe (and pdc with c_E); neither: "
+    "the caller writes the wall row",
     "the record: s, the sensor bead, 1 .. N - 1; n_rec >= n scenes; pair and wall set; "
     "rec_rows >= 1 (ssw.chain.kernel.Stepper.start_record)",
     "row, the record's row: 0 .. rec_rows - 1, a block's rows >= 0 within them",
@@ -271,6 +279,9 @@ static int chain_error(const ssw_chain *c)
         return E_ARRAY;
     if (c->K1 < 0 || (c->K1 > 0 && (!c->wd || !c->wa || !c->wb ||
                                     (k > 0 && c->c_E >= 0 && (!c->wda || !c->wdb)))))
+        return E_WALL_LAW;
+    if (c->power_law < 0 || c->power_law > 1 ||
+        (c->power_law && (c->K1 || !c->pc || !c->pe || (k > 0 && c->c_E >= 0 && !c->pdc))))
         return E_WALL_LAW;
     return SSW_OK;
 }
@@ -693,6 +704,91 @@ static void wall_row(const ssw_chain *c)
     }
 }
 
+/* The power law F = coef dp^e at the indentation x, dp = max(x, 0) (numpy's maximum: a
+   NaN stays), ssw.chain.wall_power.PowerWall's operations in their order: with hertzian
+   (every exponent of the law 1.5) F = (coef dp) sqrt(dp), kd = (1.5 coef) sqrt(dp), dn =
+   dp sqrt(dp); else F = coef pow(dp, e), kd = (e coef) pow(dp, e - 1) (0 unless dp > 0), dn
+   = pow(dp, e). With kE (needs dc): dF/dE = dc dn, plus ((coef dn) ln(dp) de with de (ln 1
+   = 0 unless dp > 0). kd, kE: NULL where not wanted. */
+SSW_INLINE double power_law(double coef, double e, double dc, const double *de,
+                            int hertzian, double x, double *kd, double *kE)
+{
+    const double dp = (x > 0.0 || x != x) ? x : 0.0;
+    double F, dn;
+    if (hertzian) {
+        const double sq = sqrt(dp);
+        F = coef * dp * sq;
+        dn = dp * sq;
+        if (kd)
+            *kd = 1.5 * coef * sq;
+    } else {
+        dn = pow(dp, e);
+        F = coef * dn;
+        if (kd)
+            *kd = dp > 0.0 ? e * coef * pow(dp, e - 1.0) : 0.0;
+    }
+    if (kE) {
+        double out = dc * dn;
+        if (de)
+            out = out + coef * dn * log(dp > 0.0 ? dp : 1.0) * *de;
+        *kE = out;
+    }
+    return F;
+}
+
+/* Every exponent of a power law of n scenes is 1.5 (PowerWall.hertzian: its sqrt form). */
+SSW_INLINE int all_hertzian(const double *e, int64_t n)
+{
+    int h = 1;
+    for (int64_t i = 0; i < n; i++)
+        h &= e[i] == 1.5;
+    return h;
+}
+
+/* The power law of m values (ssw.chain.wall_power.PowerWall), each with its own coef, e,
+   dc, de (dc, de may be NULL; de NULL: constant exponents) at x: F, and kd, kE where not
+   NULL (kE needs dc); the sqrt form where hertzian is 1 (the caller's law has every
+   exponent 1.5). */
+SSW_API int ssw_power_law(int64_t m, int hertzian, const double *coef, const double *e,
+                          const double *dc, const double *de, const double *x, double *F,
+                          double *kd, double *kE)
+{
+    if (m < 0)
+        return E_COUNT;
+    if (!coef || !e || !x || !F || (kE && !dc))
+        return E_ARRAY;
+    for (int64_t q = 0; q < m; q++)
+        F[q] = power_law(coef[q], e[q], dc ? dc[q] : 0.0, de ? de + q : 0, hertzian != 0, x[q],
+                         kd ? kd + q : 0, kE ? kE + q : 0);
+    return SSW_OK;
+}
+
+/* The wall's row of f (and of dF) from the step's own power law, as the caller's
+   (ssw.chain.integrate._WallDrive.write_row): dF = U kd, then dF[c_E] += kE. Its sqrt form
+   while every current scene's exponent is 1.5 (as PowerWall.take's law of the scenes
+   kept). */
+static void power_row(const ssw_chain *c)
+{
+    const int N = c->N, n = c->n, k = c->k;
+    const int wantE = k && c->c_E >= 0, hertzian = all_hertzian(c->pe, n);
+    const double *u_last = c->z + (ptrdiff_t)(N - 1) * n;
+    for (int i = 0; i < n; i++) {
+        double kd = 0.0, kE = 0.0;
+        c->f[(ptrdiff_t)(N - 1) * n + i] =
+            power_law(c->pc[i], c->pe[i], wantE ? c->pdc[i] : 0.0,
+                      wantE && c->pde ? c->pde + i : 0, hertzian, u_last[i], k ? &kd : 0,
+                      wantE ? &kE : 0);
+        if (k) {
+            const double *U = c->ZT + ((ptrdiff_t)(N - 1) * n + i) * k;
+            double *dF = c->dF + ((ptrdiff_t)(N - 1) * n + i) * k;
+            for (int p = 0; p < k; p++)
+                dF[p] = U[p] * kd;
+            if (wantE)
+                dF[c->c_E] += kE;
+        }
+    }
+}
+
 /* Averaged Hertz forces of m contacts (tests and any caller outside the step), by the
    step's far_forces; fd and fa both or neither. */
 SSW_API int ssw_hertz(int64_t m, const double *d, const double *a, double A, double *out,
@@ -888,6 +984,8 @@ SSW_NOINLINE void forces(const ssw_chain *c, int has_old, int kick)
 
     if (c->K1)
         wall_row(c);
+    else if (c->power_law)
+        power_row(c);
     if (c->power)
         memset(c->power, 0, sizeof(double) * n);
     contact_forces(c, w_x, tangent ? w_fd : 0, tangent ? w_fa : 0);
@@ -1020,9 +1118,9 @@ SSW_API int ssw_record(const ssw_chain *c, int row)
     return SSW_OK;
 }
 
-/* Steps of a run whose wall row the step writes itself (K1 > 0) or that is held fixed:
-   rows times drift, forces (has_old, kick) and record into rows row0 .. row0 + rows - 1
-   of the block buffers: one call for a block of steps. */
+/* Steps of a run whose wall row the step writes itself (K1 > 0, or power_law) or that is
+   held fixed: rows times drift, forces (has_old, kick) and record into rows row0 .. row0 +
+   rows - 1 of the block buffers: one call for a block of steps. */
 SSW_API int ssw_advance(const ssw_chain *c, int rows, int row0)
 {
     int e = chain_error(c);

@@ -589,7 +589,8 @@ def _start(b: Batch, wall: Any, stateful: bool, tg: Tangent | None, dt: float,
            ) -> tuple[Stepper, _WallDrive]:
     """The compiled step at the run's initial state (:mod:`ssw.chain.statics`, or
     ``initial``) with its sensitivities, and the wall's drive; a piecewise-linear wall's law
-    goes into the step (one call per step) unless the E sensitivity needs what it lacks."""
+    (``step_law``) or a Hertzian power law (``step_power_law``) goes into the step unless the E
+    sensitivity needs what it lacks."""
     p, n = b.params, b.n
     N, s = p.n_beads, p.sensor_index
     damping, law = p.damping, law_of(p.damping_law, "chain.damping_law")
@@ -624,12 +625,15 @@ def _start(b: Batch, wall: Any, stateful: bool, tg: Tangent | None, dt: float,
     ch.z[0], ch.z[1] = u0.T, v0.T
     if tg is not None:
         ch.ZT[...] = ZT
-    # a piecewise-linear wall's law is evaluated by the step itself (one call per step);
-    # without its E derivatives, the E sensitivity goes through force_and_tangent, which
-    # says so
+    # a piecewise-linear law or a Hertzian power law is evaluated by the step itself (a
+    # block of steps in one call); without its E derivatives, the E sensitivity goes
+    # through force_and_tangent, which says so
     step_law = None if stateful else getattr(wall, "step_law", lambda: None)()
+    power = None if stateful else getattr(wall, "step_power_law", lambda: None)()
     if step_law is not None and (drive.c_E is None or step_law[3] is not None):
         ch.use_law(step_law)
+    elif power is not None and (drive.c_E is None or power[2] is not None):
+        ch.use_power_law(*power)
     return ch, drive
 
 

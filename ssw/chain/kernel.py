@@ -76,6 +76,7 @@ class _Chain(ctypes.Structure):
         ("pair", _D), ("wall", _D), ("dpair", _D), ("peak_u", _D), ("peak_f", _D),
         ("K1", ctypes.c_int), ("c_E", ctypes.c_int),
         ("wd", _D), ("wa", _D), ("wb", _D), ("wda", _D), ("wdb", _D),
+        ("power_law", ctypes.c_int), ("pc", _D), ("pe", _D), ("pdc", _D), ("pde", _D),
     ]
 
 
@@ -171,6 +172,7 @@ def load(path: str | Path) -> ctypes.CDLL:
         "ssw_hertz": [ctypes.c_int64, _D, _D, ctypes.c_double, _D, _D, _D],
         "ssw_piecewise": [ctypes.c_int64, ctypes.c_int, ctypes.c_int, _D, _D, _D, _D, _D, _D,
                           _D, _D, _D, ctypes.POINTER(ctypes.c_int)],
+        "ssw_power_law": [ctypes.c_int64, ctypes.c_int, _D, _D, _D, _D, _D, _D, _D, _D],
     }
     for name, args in types.items():
         fn = getattr(lib, name)
@@ -346,6 +348,69 @@ def piecewise(law: tuple, x: np.ndarray, tangent: bool = False, with_E: bool = F
     return out, kd, kE, j
 
 
+def power_law(law: tuple, x: np.ndarray, tangent: bool = False, with_E: bool = False
+              ) -> tuple[np.ndarray, np.ndarray | None, np.ndarray | None]:
+    """A power law per scene, by the step's own code (what :meth:`Stepper.use_power_law`
+    evaluates).
+
+    ``F = coef d^e``, ``d = max(x, 0)`` (a NaN stays); when every exponent is 1.5 the
+    ``d sqrt(d)`` form (``(coef d) sqrt(d)``, ``dF/dd = (1.5 coef) sqrt(d)``), the
+    operations of :class:`ssw.chain.wall_power.PowerWall` in their order (the same bits),
+    else libm's ``pow`` (``coef pow(d, e)``, ``dF/dd = (e coef) pow(d, e - 1)``, 0 for
+    ``d = 0``), which numpy's ``power`` matches only where it calls libm (not its AVX-512
+    code).
+
+    Parameters
+    ----------
+    law : tuple
+        ``(coef, exponent, dcoef_dE, dexponent_dE)``: (n,) float arrays, N/m^e, -, N/m^e/Pa
+        and 1/Pa (the last two None when unknown, or constant in E for ``dexponent_dE``).
+    x : numpy.ndarray
+        m, the indentations: shape (..., n), the last axis the scenes'.
+    tangent : bool
+        Also ``dF/dd`` (N/m).
+    with_E : bool
+        Also ``dF/dE = dcoef/dE d^e + coef d^e ln(d) de/dE`` (N/Pa; the logarithm's term 0
+        for ``x <= 0``): needs ``dcoef_dE``.
+
+    Returns
+    -------
+    tuple
+        ``(F, dF/dd, dF/dE)``, each the shape of ``x`` broadcast with (n,) (None where not
+        asked).
+
+    Raises
+    ------
+    SswError
+        ``with_E`` without ``dcoef_dE``; rows of different shapes.
+    """
+    coef = np.asarray(law[0], float)
+    shape = np.broadcast_shapes(np.shape(x), coef.shape)
+    hertzian = bool(np.all(np.asarray(law[1]) == 1.5))
+    if with_E and law[2] is None:
+        raise SswError("the power law's dF/dE needs its dcoef_dE")
+
+    def full(y: object, rows: bool = True) -> np.ndarray | None:
+        if y is None:
+            return None
+        if rows and np.shape(y) != coef.shape:
+            raise SswError(f"the power law's rows: {np.shape(y)}, its coefficients "
+                           f"{coef.shape}")
+        return np.ascontiguousarray(np.broadcast_to(np.asarray(y, float), shape))
+
+    c, e, dc, de = (full(y) for y in law)
+    xs = full(x, rows=False)
+    out = np.empty(shape)
+    kd = np.empty(shape) if tangent else None
+    kE = np.empty(shape) if with_E else None
+    lib = library()
+    if code := lib.ssw_power_law(out.size, int(hertzian), _ptr(c), _ptr(e),
+                                 _ptr(dc if with_E else None), _ptr(de if with_E else None),
+                                 _ptr(xs), _ptr(out), _ptr(kd), _ptr(kE)):
+        _refused(lib, "ssw_power_law", code)
+    return out, kd, kE
+
+
 def stop_update(S: np.ndarray, W: np.ndarray, times: np.ndarray, consts: np.ndarray,
                 F: np.ndarray, B: np.ndarray) -> np.ndarray:
     """The early-stop rule over a block of the record, by the step's code
@@ -452,6 +517,7 @@ class Stepper:
         self._rec: tuple = (0, None, None, None)
         self._rec_rows = 0
         self.law: tuple | None = None
+        self.power_law = False
         self._bind()
 
     def _bind(self) -> None:
@@ -460,7 +526,9 @@ class Stepper:
         rows = [i for i, _ in c["mass_at"]] + [0, 0]
         cols = [j for _, j in c["mass_at"]] + [0, 0]
         s, pair, wall, dpair = self._rec
-        wd, wa, wb, wda, wdb = self.law or (None,) * 5
+        pw = self.power_law
+        wd, wa, wb, wda, wdb = (None,) * 5 if pw or self.law is None else self.law
+        pc, pe, pdc, pde = self.law if pw and self.law is not None else (None,) * 4
         self._c = _Chain(
             N=N, n=n, k=k, predict=int(c["predict"]), damped_tangent=int(c["damped_tangent"]),
             law=int(c.get("law", 0)), c_D=c["c_D"], c_P=c["c_P"], c_T=int(c.get("c_T", -1)),
@@ -474,7 +542,8 @@ class Stepper:
             pair=_ptr(pair), wall=_ptr(wall), dpair=_ptr(dpair),
             peak_u=_ptr(self.peak_u), peak_f=_ptr(self.peak_f),
             K1=0 if wd is None else wd.shape[1], c_E=c["c_E"],
-            wd=_ptr(wd), wa=_ptr(wa), wb=_ptr(wb), wda=_ptr(wda), wdb=_ptr(wdb))
+            wd=_ptr(wd), wa=_ptr(wa), wb=_ptr(wb), wda=_ptr(wda), wdb=_ptr(wdb),
+            power_law=int(pw), pc=_ptr(pc), pe=_ptr(pe), pdc=_ptr(pdc), pde=_ptr(pde))
         self._ref = ctypes.byref(self._c)
         lib = library()
         self._drift, self._forces, self._record = lib.ssw_drift, lib.ssw_forces, lib.ssw_record
@@ -493,6 +562,31 @@ class Stepper:
         shape = (self.n, np.shape(law[0])[1])
         self.law = tuple(None if x is None else _rows(x, shape, "the wall law's rows")
                          for x in law)
+        self.power_law = False
+        self._bind()
+
+    def use_power_law(self, coef: np.ndarray, exponent: np.ndarray,
+                      dcoef_dE: np.ndarray | None, dexponent_dE: np.ndarray | None) -> None:
+        """Evaluate the wall's row in the step, from a power law ``F = coef [d]_+^e`` per
+        scene (:func:`power_law`, :class:`ssw.chain.wall_power.PowerWall`; ``dcoef_dE``
+        needed with the ``E`` sensitivity, ``consts["c_E"]``). Its ``d sqrt(d)`` form
+        while every current scene's exponent is 1.5 (the step checks each time, so the
+        scenes :meth:`keep` leaves decide, as :meth:`PowerWall.take`'s law).
+
+        Parameters
+        ----------
+        coef : numpy.ndarray
+            (n,) N/m^e.
+        exponent : numpy.ndarray
+            (n,) -.
+        dcoef_dE : numpy.ndarray or None
+            (n,) N/m^e/Pa, or None (unknown).
+        dexponent_dE : numpy.ndarray or None
+            (n,) 1/Pa, or None (constant).
+        """
+        self.law = tuple(None if x is None else _rows(x, (self.n,), "the power law's rows")
+                         for x in (coef, exponent, dcoef_dE, dexponent_dE))
+        self.power_law = True
         self._bind()
 
     def start_record(self, s: int, wall: np.ndarray, pair: np.ndarray,
@@ -550,8 +644,8 @@ class Stepper:
         """``rows`` whole steps, each :meth:`drift`, :meth:`forces` (``has_old``, ``kick``)
         and :meth:`record` into rows ``row0 ..``: one call for a block of steps of a run
         whose wall row does not change from Python (the step evaluates the wall's law,
-        :meth:`use_law`). A block of 32 steps of a few scenes cost 3-4 us of call overhead
-        per step as three calls.
+        :meth:`use_law`, :meth:`use_power_law`). A block of 32 steps of a few scenes cost
+        3-4 us of call overhead per step as three calls.
 
         Parameters
         ----------

@@ -15,6 +15,17 @@ and the laws built as one:
 Each law carries its derivative in the soil's modulus where it is known (``dcoef_dE``,
 ``dexponent_dE``), for the exact forward sensitivities of :mod:`ssw.chain.sensitivity`.
 
+A Hertzian law (every exponent 1.5, constant in E: ``rigid``, ``hertz``, ``fit`` with
+``k_hertz``) is evaluated inside a run by the compiled step
+(:meth:`PowerWall.step_power_law`, :func:`ssw.chain.kernel.power_law`), in the IEEE
+operations of :meth:`PowerWall.force`, :meth:`PowerWall.dforce_dd` and
+:meth:`PowerWall.dforce_dE` and their order (products and a square root, each correctly
+rounded): the same bits as the run's Python loop on the law's own methods. Any other law
+stays on that loop: numpy's ``power`` and ``log`` are not libm's on every CPU (with
+AVX-512 numpy takes its own SIMD versions, which differ from glibc's ``pow`` in the last
+bit of about 5 % of the values), so the step's ``pow`` would not reproduce the law's
+numbers bit for bit.
+
 References
 ----------
 K. L. Johnson, *Contact Mechanics*, Cambridge University Press, 1985, ch. 4.
@@ -84,6 +95,25 @@ class PowerWall:
         if self.hertzian:
             return self.coef * dp * np.sqrt(dp)
         return self.coef * dp**self.exponent
+
+    def step_power_law(self) -> tuple | None:
+        """The law's rows for the compiled step, which then evaluates the wall's force
+        itself (:meth:`ssw.chain.kernel.Stepper.use_power_law`), when the law is Hertzian
+        (module docstring).
+
+        Returns
+        -------
+        tuple or None
+            ``(coef, exponent, dcoef_dE, dexponent_dE)``: (n,) float arrays (N/m^n, -,
+            N/m^n/Pa, 1/Pa; the last two None where the law has none); None for a law with
+            an exponent other than 1.5, or whose exponent moves with E (its ``dF/dE``
+            takes a logarithm): the run evaluates it in Python.
+        """
+        de = self.dexponent_dE
+        if not self.hertzian or (de is not None and np.any(de != 0.0)):
+            return None
+        return tuple(None if x is None else np.ascontiguousarray(x, float)
+                     for x in (self.coef, self.exponent, self.dcoef_dE, self.dexponent_dE))
 
     def dforce_dd(self, d: np.ndarray) -> np.ndarray:
         """Tangent stiffness ``n coef d^(n-1)`` (N/m) at ``d`` (m); 0 for ``d <= 0``.

@@ -571,7 +571,8 @@ class Stepper:
         scene (:func:`power_law`, :class:`ssw.chain.wall_power.PowerWall`; ``dcoef_dE``
         needed with the ``E`` sensitivity, ``consts["c_E"]``). Its ``d sqrt(d)`` form
         while every current scene's exponent is 1.5 (the step checks each time, so the
-        scenes :meth:`keep` leaves decide, as :meth:`PowerWall.take`'s law).
+        scenes :meth:`keep` leaves decide, as they do the law of
+        :meth:`ssw.chain.wall_power.PowerWall.take`).
 
         Parameters
         ----------

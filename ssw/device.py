@@ -98,6 +98,10 @@ class Device:
         stated).
     tof_scatter_source : str
         Where ``tof_scatter`` comes from.
+    striker_mass_std : float or None
+        kg, the stated standard uncertainty of the striker's mass as weighed (the prior of
+        calibrations of records, :func:`ssw.calibration.hits.device_priors`; None: not
+        stated, 5 % of the mass).
     description : str
         Free text describing the device.
     source : str
@@ -130,6 +134,7 @@ class Device:
     dissipation: float = 0.0
     tof_scatter: float | None = None
     tof_scatter_source: str = ""
+    striker_mass_std: float | None = None
     description: str = ""
     source: str = ""
 
@@ -148,6 +153,10 @@ class Device:
             v = getattr(self, name)
             if v is not None and not (np.isfinite(v) and v > 0):
                 raise ConfigError(_yaml_field(name), v, "a mass > 0 kg, or null (a bead's)")
+        u = self.striker_mass_std
+        if u is not None and not (np.isfinite(u) and u > 0):
+            raise ConfigError("striker.mass_std", u,
+                              "a standard uncertainty > 0 kg, or null (5 % of the mass)")
         if not (np.isfinite(self.preload) and self.preload >= 0):
             raise ConfigError("chain.preload", self.preload, "a force >= 0 N")
         if not (np.isfinite(self.plate_thickness) and self.plate_thickness >= 0):
@@ -248,8 +257,8 @@ class Device:
                       "bead_radius": self.bead_radius, "preload": self.preload},
             "sensor": {"index": self.sensor_index, "mass": self.sensor_mass,
                        "reads": self.sensor_reads},
-            "striker": {"mass": self.striker_mass, "velocity": self.striker_velocity,
-                        "drop_height": None},
+            "striker": {"mass": self.striker_mass, "mass_std": self.striker_mass_std,
+                        "velocity": self.striker_velocity, "drop_height": None},
             "plate": {"material": self.plate_material, "thickness": self.plate_thickness,
                       "diameter": self.plate_diameter, "interface": self.plate_interface},
             "daq_sensor": {"model": self.sensor_model, "sensitivity": self.sensitivity,
@@ -260,7 +269,8 @@ class Device:
 
     def physics_dict(self) -> dict[str, Any]:
         """Every physical field, flat (no name, description, sources, nor the stated TOF
-        scatter: a measured property of the device, not part of its model). A device
+        scatter and striker mass uncertainty: measured properties of the device, not part
+        of its model). A device
         without dissipation (coefficient 0, whatever the law's name) leaves the dissipation
         out: its physics, and the digest a calibration records of it, are those of a
         device file that states none.
@@ -271,7 +281,8 @@ class Device:
             Field name -> value (SI units) of the physical fields.
         """
         d = asdict(self)
-        for k in ("name", "description", "source", "tof_scatter", "tof_scatter_source"):
+        for k in ("name", "description", "source", "tof_scatter", "tof_scatter_source",
+                  "striker_mass_std"):
             d.pop(k)
         if self.dissipation == 0:
             d.pop("dissipation_law")
@@ -284,7 +295,8 @@ _YAML_FIELDS = {
     "beads": "chain.beads", "bead_material": "chain.bead_material",
     "bead_radius": "chain.bead_radius", "preload": "chain.preload",
     "sensor_index": "sensor.index", "sensor_mass": "sensor.mass", "sensor_reads": "sensor.reads",
-    "striker_mass": "striker.mass", "striker_velocity": "striker.velocity",
+    "striker_mass": "striker.mass", "striker_mass_std": "striker.mass_std",
+    "striker_velocity": "striker.velocity",
     "plate_material": "plate.material", "plate_thickness": "plate.thickness",
     "plate_diameter": "plate.diameter", "plate_interface": "plate.interface",
     "sensor_model": "daq_sensor.model", "sensitivity": "daq_sensor.sensitivity",
@@ -352,6 +364,7 @@ def device_from_dict(data: dict[str, Any], source: str = "") -> Device:
         tof_scatter=None if d["repeatability"].get("tof_std") is None
         else float(d["repeatability"]["tof_std"]),
         tof_scatter_source=str(d["repeatability"].get("source", "")), source=source,
+        striker_mass_std=None if st.get("mass_std") is None else float(st["mass_std"]),
     )
 
 

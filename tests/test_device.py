@@ -36,7 +36,8 @@ def test_the_thesis_device_is_shipped_and_default():
 
 def test_round_trip(tmp_path):
     d = load_device().with_(preload=2.5, sensor_mass=0.04, sensor_reads="lower",
-                            dissipation_law="hunt_crossley", dissipation=0.02)
+                            dissipation_law="hunt_crossley", dissipation=0.02,
+                            striker_mass_std=2e-5)
     write_device(tmp_path / "d.yaml", d, "# a test device")
     back = load_device(tmp_path / "d.yaml")
     assert back.with_(source="") == d.with_(source="")
@@ -65,6 +66,8 @@ def test_more_beads_keep_the_beads_below_the_sensor():
     (("chain", "preload"), -1.0, "chain.preload"),
     (("dissipation", "law"), "tsuji", "dissipation.law"),
     (("dissipation", "coefficient"), -1.0, "dissipation.coefficient"),
+    (("striker", "mass_std"), 0.0, "striker.mass_std"),
+    (("striker", "mass_std"), float("nan"), "striker.mass_std"),
 ])
 def test_bad_fields_are_refused_naming_them(path, value, field):
     raw = load_device().to_dict()
@@ -141,6 +144,26 @@ def test_a_conservative_devices_digest_does_not_depend_on_the_laws_name():
     assert device_digest(same, mats) == device_digest(base, mats)
     assert device_digest(damped, mats) != device_digest(base, mats)
     assert "dissipation" not in base.physics_dict() and "dissipation" in damped.physics_dict()
+
+
+def test_the_striker_s_stated_uncertainty_is_its_prior_not_its_physics():
+    """``striker.mass_std`` (kg) is the prior's width of the striker's mass in calibrations
+    of records (a striker weighed to 0.1 % is held to 0.1 %); unstated, 5 % of the mass.
+    A statement about the device, not its physics: the digest a calibration records of the
+    device does not change with it."""
+    from ssw.calibration.file import device_digest
+    from ssw.calibration.hits import device_priors
+
+    mats = material_set()
+    base = load_device()
+    weighed = base.with_(striker_mass_std=6e-5)
+    assert device_digest(weighed, mats) == device_digest(base, mats)
+    bead = chain_params(base, mats).masses[0]  # the thesis striker is a bead
+    assert device_priors(chain_params(base, mats)) == {
+        "striker_mass": pytest.approx((bead, 0.05 * bead), rel=1e-15)}
+    assert device_priors(chain_params(weighed, mats),
+                         {"striker_mass": weighed.striker_mass_std}) == {
+        "striker_mass": pytest.approx((bead, 6e-5), rel=1e-15)}
 
 
 # ------------------------------------------------------------------ chain physics it adds

@@ -147,9 +147,15 @@ def test_calibrate_with_the_waveform_frees_what_the_records_identify(capsys, tmp
                      "3", "--sample", mat, "--output", str(path), "--json"]) == 0
         capsys.readouterr()
         refs += ["--reference-recording", f"{path},{E},{nu}"]
+    # the device file states its striker weighed to 0.2 % (the acquisitions' device else)
+    from ssw.device import load_device, write_device
+
+    weighed = float(0.002 * PARAMS.masses[0])
+    device = tmp_path / "device.yaml"
+    write_device(device, load_device().with_(striker_mass_std=weighed))
     out = tmp_path / "cal.json"
     r = _run(capsys, ["calibrate", *refs, "--wall", "hertz", "--information", "waveform",
-                      "--no-loo", "--output", str(out)])
+                      "--no-loo", "--device", str(device), "--output", str(out)])
     info = r["information"]
     assert info["level"] == "waveform" and "sensor_mass" in info["freed"]
     assert info["values"]["sensor_mass"] == pytest.approx(PARAMS.masses[PARAMS.sensor_index],
@@ -161,10 +167,10 @@ def test_calibrate_with_the_waveform_frees_what_the_records_identify(capsys, tmp
     # leave-one-out check (--no-loo) the file says its intervals lack that term
     assert info["from"]["level"] == "features"
     # both levels hold the striker to the device file's weighed mass, not the features'
-    # fit of it: the prior's mean and its 5 % width
-    weighed = [PARAMS.masses[0], 0.05 * PARAMS.masses[0]]
-    assert info["prior"]["striker_mass"] == pytest.approx(weighed, rel=1e-12)
-    assert info["from"]["prior"]["striker_mass"] == pytest.approx(weighed, rel=1e-12)
+    # fit of it: the prior's mean and the uncertainty the file states
+    prior = [PARAMS.masses[0], weighed]
+    assert info["prior"]["striker_mass"] == pytest.approx(prior, rel=1e-12)
+    assert info["from"]["prior"]["striker_mass"] == pytest.approx(prior, rel=1e-12)
     assert any(w.startswith("RECORDS (waveform): measured globals held") and "striker_mass"
                in w for w in r["warnings"])
     assert any(w.startswith("RECORDS (waveform): no leave-one-out check")

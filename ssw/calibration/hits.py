@@ -41,7 +41,8 @@ PARAMETERS: dict[str, Parameter] = {
 GLOBALS = ("preload", "sensor_mass", "striker_mass", "damping", "gain")
 #: The globals a lab measures before any calibration, each with the relative standard
 #: uncertainty of the device file's value as a prior of the records' fit (``prior`` of
-#: :class:`~ssw.calibration.observation.Setup`). The striker is weighed (a balance reads it
+#: :class:`~ssw.calibration.observation.Setup`) where the file states none
+#: (``striker.mass_std``, :func:`device_priors`). The striker is weighed (a balance reads it
 #: to 0.1 %); 5 % also covers a striker the file states as a bead (``striker.mass`` unset)
 #: that departs from one by a few %. Under model error a parameter the records cannot tell
 #: from the model's discrepancy is known only from its prior (Brynjarsdottir and O'Hagan
@@ -84,6 +85,31 @@ def device_globals(params: Any, gain: float = 1.0) -> dict[str, float]:
             "sensor_mass": float(params.masses[params.sensor_index]),
             "striker_mass": float(params.masses[0]), "damping": float(params.damping),
             "gain": float(gain)}
+
+
+def device_priors(params: Any, stated: dict[str, float | None] | None = None
+                  ) -> dict[str, tuple[float, float]]:
+    """The measured globals' priors of a device (:data:`GLOBAL_PRIORS`): each its value in
+    the device file (the chain ``params``), with the standard uncertainty the file states
+    (``striker.mass_std``: a striker weighed to 0.1 % is held to 0.1 %), else the relative
+    width of :data:`GLOBAL_PRIORS`.
+
+    Parameters
+    ----------
+    params : ssw.chain.params.ChainParams
+        The device's chain (the priors' means, :func:`device_globals`).
+    stated : dict or None
+        Global -> its stated standard uncertainty (SI) or None (not stated), e.g.
+        ``{"striker_mass": Device.striker_mass_std}``.
+
+    Returns
+    -------
+    dict
+        Global -> (mean, standard deviation), SI.
+    """
+    glob, stated = device_globals(params), stated or {}
+    return {g: (glob[g], float(stated[g]) if stated.get(g) is not None else w * glob[g])
+            for g, w in GLOBAL_PRIORS.items()}
 
 
 def measured_priors(globals_: dict[str, float], free: tuple[str, ...],

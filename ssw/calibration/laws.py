@@ -155,7 +155,8 @@ def law_fit(samples: list[Any], params: Any, law: str, wall: str,
             wall_options: dict[str, Any] | None, acq: Any, level: str, *,
             trigger_level: float, tof_scatter: float,
             start_grid: tuple[tuple[float, ...], tuple[float, ...]] | None = None,
-            refine_levels: int | None = None) -> LawScore:
+            refine_levels: int | None = None,
+            prior: dict[str, Any] | None = None) -> LawScore:
     """The references' records calibrated under the dissipation ``law`` at ``level`` and
     scored (:func:`score`): ``features`` from the global start in the law's scale; then,
     for ``waveform``, from the features' fit with its DAQ gain (as
@@ -186,12 +187,17 @@ def law_fit(samples: list[Any], params: Any, law: str, wall: str,
         in the law's unit); None: the default (:func:`ssw.calibration.waveform.start_damping`).
     refine_levels : int or None
         Refinements of the start (None: the default).
+    prior : dict or None
+        The measured globals' priors (:func:`ssw.calibration.hits.device_priors`; None:
+        the device's values with :data:`ssw.calibration.hits.GLOBAL_PRIORS`' widths), kept
+        by both levels.
 
     Returns
     -------
     LawScore
         The law's fit at ``level``, scored.
     """
+    from ssw.calibration.hits import device_priors
     from ssw.calibration.waveform import (
         REFINE_LEVELS,
         Setup,
@@ -206,9 +212,10 @@ def law_fit(samples: list[Any], params: Any, law: str, wall: str,
     p = params.with_(damping_law=law, damping=law_of(law).scale)
     kw = {"trigger_level": trigger_level, "tof_scatter": tof_scatter}
     gain = 1.0
+    prior = device_priors(p) if prior is None else prior  # the file's, at both levels
     f = calibrate_records(samples, p, wall, opts, acq, "features", start_grid=start_grid,
                           refine_levels=REFINE_LEVELS if refine_levels is None
-                          else refine_levels, **kw)
+                          else refine_levels, prior=prior, **kw)
     if level == "waveform":
         g = f.state.globals
         p = p.with_(**{k: float(g[k]) for k in ("preload", "sensor_mass", "striker_mass",
@@ -216,7 +223,7 @@ def law_fit(samples: list[Any], params: Any, law: str, wall: str,
                     striker_velocity=float(np.mean(f.state.striker_velocity)))
         gain = float(g["gain"])
         f = calibrate_records(samples, p, wall, opts, acq, "waveform", scan=False,
-                              gain=gain, **kw)
+                              gain=gain, prior=prior, **kw)
     # the fit's own model: its chain's step fixed as calibrate_records fixed it
     setup = Setup(p, wall, opts, acq, level, samples, trigger_level,
                   tof_scatter=tof_scatter)
@@ -230,7 +237,8 @@ def compare_laws(samples: list[Any], params: Any, wall: str,
                  wall_options: dict[str, Any] | None, acq: Any, level: str, *,
                  trigger_level: float, tof_scatter: float, laws: tuple[str, ...] | None = None,
                  start_grid: tuple[tuple[float, ...], tuple[float, ...]] | None = None,
-                 refine_levels: int | None = None) -> dict[str, Any]:
+                 refine_levels: int | None = None,
+                 prior: dict[str, Any] | None = None) -> dict[str, Any]:
     """The references' records fitted under each dissipation law and compared by AIC and
     BIC (module docstring).
 
@@ -260,6 +268,8 @@ def compare_laws(samples: list[Any], params: Any, wall: str,
         as dashpots (N s/m) scaled to each law likewise.
     refine_levels : int or None
         Refinements of each law's start (None: the default).
+    prior : dict or None
+        The measured globals' priors (:func:`law_fit`).
 
     Returns
     -------
@@ -291,7 +301,7 @@ def compare_laws(samples: list[Any], params: Any, wall: str,
             grid = (start_grid[0], tuple(c * ratio for c in (start_grid[1] or START_DAMPING)))
         scores.append(law_fit(samples, params, law, wall, wall_options, acq, level,
                               trigger_level=trigger_level, tof_scatter=tof_scatter,
-                              start_grid=grid, refine_levels=refine_levels))
+                              start_grid=grid, refine_levels=refine_levels, prior=prior))
     return summarize(scores, level)
 
 

@@ -54,7 +54,8 @@ def calibrate_levels(cal: Any, samples: list[Any], acq: Any, level: str, *,
                      trigger_level: float, tof_scatter: float, wall: str,
                      wall_options: dict[str, Any] | None = None,
                      start_grid: tuple[tuple[float, ...], tuple[float, ...]] | None = None,
-                     refine_levels: int | None = None, loo: bool = True) -> dict[str, Any]:
+                     refine_levels: int | None = None, loo: bool = True,
+                     prior: dict[str, Any] | None = None) -> dict[str, Any]:
     """The TOF calibration ``cal`` refined by its references' records up to ``level``
     (module docstring): every level's calibration, in order.
 
@@ -86,6 +87,11 @@ def calibrate_levels(cal: Any, samples: list[Any], acq: Any, level: str, *,
         Each level's references' leave-one-out predictions and the model term they call for
         (:func:`with_loo`); False: none, and a warning says the intervals at these levels
         lack that check.
+    prior : dict or None
+        The measured globals' priors, global -> (mean, standard deviation), SI
+        (:func:`ssw.calibration.hits.device_priors` of a device file that states its
+        striker's uncertainty); None: the device's values with
+        :data:`ssw.calibration.hits.GLOBAL_PRIORS`' widths. Every level keeps them.
 
     Returns
     -------
@@ -105,7 +111,7 @@ def calibrate_levels(cal: Any, samples: list[Any], acq: Any, level: str, *,
     f = calibrate_records(samples, cal.chain_params(), wall, opts, acq, "features",
                           trigger_level, tof_scatter, start_grid=start_grid,
                           refine_levels=REFINE_LEVELS if refine_levels is None
-                          else refine_levels)
+                          else refine_levels, prior=prior)
     kw = {"trigger_level": trigger_level, "tof_scatter": tof_scatter, "wall": wall,
           "wall_options": opts}
 

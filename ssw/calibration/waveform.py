@@ -44,9 +44,9 @@ Two per-hit priors enter as observations of their own (kinds ``trigger`` and ``d
   the stated scatter allows, and the other features and samples bring what they add.
 
 A measured global enters as one more (kind ``prior``): the striker's weighed mass, the
-device file's value with the relative width of :data:`~ssw.calibration.hits.GLOBAL_PRIORS`
-(under model error the records alone trade it for the DAQ gain; Brynjarsdottir and O'Hagan
-2014).
+device file's value with the uncertainty the file states (``striker.mass_std``), else the
+relative width of :data:`~ssw.calibration.hits.GLOBAL_PRIORS` (under model error the
+records alone trade it for the DAQ gain; Brynjarsdottir and O'Hagan 2014).
 
 References
 ----------
@@ -487,7 +487,8 @@ def with_fit(cal: Any, f: Fit, level: str) -> Any:
                     + (", ".join(f"{k} {v:.2g}" for k, v in f.floor.items()) or "none"))
     if f.prior:
         warnings.append(f"RECORDS ({level}): measured globals held near the device file's "
-                        "values by their priors (ssw.calibration.hits.GLOBAL_PRIORS): "
+                        "values by their priors (the file's striker.mass_std, else "
+                        "ssw.calibration.hits.GLOBAL_PRIORS): "
                         + ", ".join(f"{k} {m:.4g} +- {s:.2g} {parameter(k).unit}"
                                     for k, (m, s) in f.prior.items()))
     if f.discrepancy is not None:

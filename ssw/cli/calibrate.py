@@ -208,6 +208,7 @@ def _with_information(args: argparse.Namespace, ctx: Any, cal: Any) -> Any:
     globals they identify are freed, the others held; with ``--compare-laws`` the records
     fitted under each dissipation law too (:func:`ssw.calibration.laws.compare_laws`, in
     the provenance's ``law_comparison``)."""
+    from ssw.calibration.hits import device_priors
     from ssw.calibration.records import calibrate_levels
     from ssw.calibration.waveform import Hits
     from ssw.daq.importers import read_any
@@ -229,9 +230,12 @@ def _with_information(args: argparse.Namespace, ctx: Any, cal: Any) -> Any:
     scatter = ctx.device.tof_scatter or 1.53e-5  # the thesis's scatter when none is stated
     acq = Acquisition(sample_rate=float(rate), sensitivity=ctx.device.sensitivity,
                       coupling=settings.coupling)
+    # the striker held to its weighed mass, within what the device file states of it
+    prior = device_priors(cal.chain_params(), {"striker_mass": ctx.device.striker_mass_std})
     levels = calibrate_levels(cal, samples, acq, args.information, trigger_level=trig,
                               tof_scatter=float(scatter), wall=ctx.wall,
-                              wall_options=ctx.wall_options, loo=not args.no_loo)
+                              wall_options=ctx.wall_options, loo=not args.no_loo,
+                              prior=prior)
     out = levels[args.information]
     if args.compare_laws:
         from dataclasses import replace
@@ -240,7 +244,7 @@ def _with_information(args: argparse.Namespace, ctx: Any, cal: Any) -> Any:
 
         cmp = compare_laws(samples, cal.chain_params(), ctx.wall, ctx.wall_options, acq,
                            args.information, trigger_level=trig,
-                           tof_scatter=float(scatter))
+                           tof_scatter=float(scatter), prior=prior)
         out = replace(out, provenance={**out.provenance, "law_comparison": cmp})
     return out
 

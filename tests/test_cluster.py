@@ -276,6 +276,60 @@ def test_the_pause_between_status_queries_stops_growing_at_the_cap():
                       (21.0, 21.0), (31.0, 25.0)]
 
 
+class _RemoteLike:
+    """The remote executor's bookkeeping (snakemake-interface-executor-plugins 9.x,
+    ``RemoteExecutor``): a status round takes every job out of ``active_jobs`` for its query
+    and puts back those the query yields; ``cancel`` (Ctrl-C) passes what ``active_jobs``
+    holds to the plugin's ``cancel_jobs``. ``interrupt_at`` the job of the query at which a
+    Ctrl-C arrives (None: none)."""
+
+    def __init__(self, jobs, interrupt_at=None) -> None:
+        self.active_jobs, self.cancelled, self.interrupt_at = list(jobs), [], interrupt_at
+
+    async def check_active_jobs(self, active_jobs):
+        for job in active_jobs:
+            if job == self.interrupt_at:
+                self.cancel()
+            if job != "ended":
+                yield job
+
+    def cancel_jobs(self, active_jobs) -> None:
+        self.cancelled += active_jobs
+
+    def cancel(self) -> None:
+        self.cancel_jobs(list(self.active_jobs))
+
+    def status_round(self) -> None:
+        import asyncio
+
+        async def query():
+            return [j async for j in self.check_active_jobs(jobs)]
+
+        jobs = list(self.active_jobs)
+        self.active_jobs.clear()
+        self.active_jobs.extend(asyncio.run(query()))
+
+
+def test_a_ctrl_c_during_a_status_query_cancels_the_jobs_it_holds():
+    """The executor's list is empty while a status query runs: a Ctrl-C then cancelled
+    nothing and left the run's jobs on the cluster; with :func:`cancel_in_flight` it
+    cancels every job of the run, each once, and not those the query saw end."""
+    from ssw.workflow import cancel_in_flight
+
+    bare = _RemoteLike(["a", "b"], interrupt_at="b")
+    bare.status_round()
+    assert bare.cancelled == []  # the race itself
+    fixed = _RemoteLike(["a", "b"], interrupt_at="b")
+    cancel_in_flight(fixed)
+    fixed.status_round()
+    assert fixed.cancelled == ["a", "b"]
+    after = _RemoteLike(["a", "ended", "b"])
+    cancel_in_flight(after)
+    after.status_round()
+    after.cancel()
+    assert after.cancelled == ["a", "b"]
+
+
 def test_the_watch_timing_comes_from_the_environment_or_the_defaults():
     assert cl.slurm_timing({})[:2] == (cl.VANISH_GRACE_S, cl.WATCH_POLL_S) == (60.0, 15.0)
     assert cl.slurm_timing({"SSW_SLURM_VANISH_GRACE_S": "600",

@@ -95,6 +95,7 @@ from ssw.workflow.resources import (
     runtime_min,
 )
 from ssw.workflow.run import (
+    cancel_in_flight,
     cap_status_pause,
     check_cluster_fit,
     end_of_run,
@@ -117,6 +118,7 @@ __all__ = [
     "alternatives",
     "calibrated_inputs",
     "calibration_flag",
+    "cancel_in_flight",
     "cap_status_pause",
     "check_cluster_fit",
     "contact_file",

@@ -111,6 +111,43 @@ def cap_status_pause(executor: Any, pause_s: float) -> None:
     executor.check_active_jobs = capped
 
 
+def cancel_in_flight(executor: Any) -> None:
+    """Make an interrupted run cancel the jobs a status query holds too.
+
+    The remote executor (snakemake-interface-executor-plugins 9.x,
+    ``RemoteExecutor._wait_for_jobs``) takes every job out of ``active_jobs`` for the time of
+    a status query (a ``squeue`` or ``sacct`` call: up to seconds) and puts back those still
+    active after it; ``cancel`` (Ctrl-C, SIGTERM) cancels what ``active_jobs`` holds, so an
+    interruption during a query left every job of the run queued or running on the cluster.
+    Each query is wrapped here to keep the jobs it holds until they are back in the list
+    (those it reports ended leave with its end), and ``cancel_jobs`` cancels them with the
+    listed ones, each once.
+
+    Parameters
+    ----------
+    executor : snakemake_interface_executor_plugins.executors.remote.RemoteExecutor
+        The run's executor (``check_active_jobs`` an async generator of the jobs still
+        active, ``cancel_jobs`` the plugin's scancel of a list of jobs).
+    """
+    query, cancel = executor.check_active_jobs, executor.cancel_jobs
+    held: list[Any] = []
+
+    async def holding(active_jobs: list[Any]) -> Any:
+        held[:] = list(active_jobs)
+        still: list[Any] = []
+        async for job in query(active_jobs):
+            still.append(job)
+            yield job
+        held[:] = still  # back in active_jobs next, under the executor's lock
+
+    def cancel_all(active_jobs: list[Any]) -> None:
+        jobs = {id(j): j for j in [*active_jobs, *list(held)]}
+        cancel(list(jobs.values()))
+
+    executor.check_active_jobs = holding
+    executor.cancel_jobs = cancel_all
+
+
 #: The executors whose spawned jobs' command lines name the interpreter unquoted
 #: (snakemake-interface-executor-plugins 9.4, ``format_job_exec``): (module, class).
 _SPAWNING_EXECUTORS = (
@@ -164,9 +201,10 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
     (:func:`ssw.cluster.status_command`; or a ConfigError naming the flag), every job must
     fit a node (:func:`check_cluster_fit`), the pause between two status queries stops
     growing at the run's limit (:func:`ssw.cluster.slurm_timing`, :func:`cap_status_pause`),
-    and a watch stops the run with a message when its jobs are lost, and when a job pends
-    beyond its limit stops the run or reports the job, as its resources ``ssw_pending_s``
-    and ``ssw_on_pending`` say (:func:`ssw.cluster.watch_lost_jobs`, with a ``squeue``
+    an interruption cancels every job submitted (:func:`cancel_in_flight`), and a watch
+    stops the run with a message when its jobs are lost, and when a job pends beyond its
+    limit stops the run or reports the job, as its resources ``ssw_pending_s`` and
+    ``ssw_on_pending`` say (:func:`ssw.cluster.watch_lost_jobs`, with a ``squeue``
     query of the run's jobs by the run's job name, as the executor plugin's own, and
     Slurm's reason for each state).
 
@@ -214,6 +252,7 @@ def prepare_slurm_run(workflow: Any) -> list[str]:
     executor = getattr(scheduler, "_executor", None)
     if executor is not None:
         cap_status_pause(executor, pause_s)
+        cancel_in_flight(executor)
     run_id = getattr(executor, "run_uuid", None)
     if run_id is None:
         notes.append("the lost-jobs watch is off: the Slurm executor has no run ID")

@@ -278,7 +278,7 @@ def test_the_pause_between_status_queries_stops_growing_at_the_cap():
 
 class _RemoteLike:
     """The remote executor's bookkeeping (snakemake-interface-executor-plugins 9.x,
-    ``RemoteExecutor``): a status round takes every job out of ``active_jobs`` for its query
+    ``RemoteExecutor``): each status check takes every job out of ``active_jobs`` for its query
     and puts back those the query yields; ``cancel`` (Ctrl-C) passes what ``active_jobs``
     holds to the plugin's ``cancel_jobs``. ``interrupt_at`` the job of the query at which a
     Ctrl-C arrives (None: none)."""
@@ -299,7 +299,7 @@ class _RemoteLike:
     def cancel(self) -> None:
         self.cancel_jobs(list(self.active_jobs))
 
-    def status_round(self) -> None:
+    def status_check(self) -> None:
         import asyncio
 
         async def query():
@@ -317,15 +317,15 @@ def test_a_ctrl_c_during_a_status_query_cancels_the_jobs_it_holds():
     from ssw.workflow import cancel_in_flight
 
     bare = _RemoteLike(["a", "b"], interrupt_at="b")
-    bare.status_round()
+    bare.status_check()
     assert bare.cancelled == []  # the race itself
     fixed = _RemoteLike(["a", "b"], interrupt_at="b")
     cancel_in_flight(fixed)
-    fixed.status_round()
+    fixed.status_check()
     assert fixed.cancelled == ["a", "b"]
     after = _RemoteLike(["a", "ended", "b"])
     cancel_in_flight(after)
-    after.status_round()
+    after.status_check()
     after.cancel()
     assert after.cancelled == ["a", "b"]
 

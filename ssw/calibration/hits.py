@@ -107,7 +107,13 @@ def device_priors(params: Any, stated: dict[str, float | None] | None = None
     dict
         Global -> (mean, standard deviation), SI.
     """
-    glob, stated = device_globals(params), stated or {}
+    return _priors(device_globals(params), stated or {})
+
+
+def _priors(glob: dict[str, float], stated: dict[str, float | None]
+            ) -> dict[str, tuple[float, float]]:
+    """Each measured global's (value in ``glob``, its ``stated`` standard uncertainty or
+    :data:`GLOBAL_PRIORS`' relative width of the value), SI."""
     return {g: (glob[g], float(stated[g]) if stated.get(g) is not None else w * glob[g])
             for g, w in GLOBAL_PRIORS.items()}
 
@@ -134,7 +140,7 @@ def measured_priors(globals_: dict[str, float], free: tuple[str, ...],
         Global -> (mean, standard deviation), SI, for each freed measured global.
     """
     if prior is None:
-        prior = {g: (globals_[g], w * globals_[g]) for g, w in GLOBAL_PRIORS.items()}
+        prior = _priors(globals_, {})
     return {g: (float(m), float(s)) for g, (m, s) in prior.items() if g in free}
 
 

@@ -349,13 +349,13 @@ def test_a_pid_that_cannot_be_sent_kills_its_fork_unrun(injected, tmp_path):
     assert again.stdout == ref.stdout and len(_served(tmp_path / "warm.log")) == 1
 
 
+#: The request deadline (s) of the warm process in the silent-caller test: long enough for
+#: a served check-config on a loaded machine (about 1 s), short of ``REQUEST_TIMEOUT_S``.
+SHORT_DEADLINE_S = 5.0
+
 #: A caller that sends a whole valid request (its streams: a pipe it reads) and reads the
 #: fork's pid, then leaves (``leave``) or stays silent without confirming (``stay``); it
 #: prints the pid, then what the fork wrote to the pipe (nothing: it never ran).
-#: The request deadline (s) of the warm process in the silent-caller test: long enough for
-#: a served check-config on a loaded machine (about 1 s), short of ``REQUEST_TIMEOUT_S``.
-SHORT_DEADLINE_S = 4.0
-
 RAW_CALLER = """
 import json, os, socket, sys, time
 from ssw import warmstart

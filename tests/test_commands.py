@@ -179,20 +179,40 @@ def _run(cmd: list[str], cwd: Path, env: dict[str, str]) -> None:
     assert r.returncode == 0, f"{cmd}: exit {r.returncode}\n{r.stdout[-3000:]}\n{r.stderr[-3000:]}"
 
 
-def _acquire(out: str, material: str, seed: int, cwd: Path, env: dict[str, str]) -> None:
-    _run(["ssw", "acquire", "--simulate", "--sample", out.removesuffix(".h5"),
-          "--material", material, "--hits", "3", "--seed", str(seed), "--output", out,
-          "--device", "my_device.yaml", "--calibration", "none"], cwd, env)
+#: One process running ``ssw`` commands one after the other, as ``ssw`` runs each (the
+#: console script's ``ssw.cli.main``), stopping at the first that fails: the fixtures' many
+#: acquisitions pay the interpreter's start and ssw's imports once (about 2 s a command).
+_SSW_EACH = """
+import json, sys
+from ssw.cli import main
+for argv in json.loads(sys.argv[1]):
+    rc = main(argv)
+    if rc:
+        sys.exit(f"ssw {' '.join(argv)}: exit {rc}")
+"""
+
+
+def _ssw_each(commands: list[list[str]], cwd: Path, env: dict[str, str]) -> None:
+    """Run the ``ssw`` commands (argv without ``ssw``) in one process, in order."""
+    import json
+
+    _run([sys.executable, "-c", _SSW_EACH, json.dumps(commands)], cwd, env)
+
+
+def _acquire(out: str, material: str, seed: int) -> list[str]:
+    """The README's ``ssw acquire`` of a simulated session of 3 hits (argv without ``ssw``)."""
+    return ["acquire", "--simulate", "--sample", out.removesuffix(".h5"), "--material",
+            material, "--hits", "3", "--seed", str(seed), "--output", out, "--device",
+            "my_device.yaml", "--calibration", "none"]
 
 
 def make_device(d: Path, env: dict[str, str]) -> None:
     """The README's device (a copy of the thesis's), simulated recordings of three
     references of known modulus (the Sawbones foams) and of a test point (PCF 15)."""
     shutil.copy(ROOT / "config" / "devices" / "thesis.yaml", d / "my_device.yaml")
-    for name, material, seed in [("ref_soft.h5", "pcf08", 1), ("ref_mid.h5", "pcf15", 2),
-                                 ("ref_stiff.h5", "pcf30", 3), ("point7_1.h5", "pcf15", 4),
-                                 ("point7_2.h5", "pcf15", 5)]:
-        _acquire(name, material, seed, d, env)
+    _ssw_each([_acquire(name, material, seed) for name, material, seed in [
+        ("ref_soft.h5", "pcf08", 1), ("ref_mid.h5", "pcf15", 2), ("ref_stiff.h5", "pcf30", 3),
+        ("point7_1.h5", "pcf15", 4), ("point7_2.h5", "pcf15", 5)]], d, env)
 
 
 def make_calibration(d: Path, env: dict[str, str]) -> None:
@@ -209,8 +229,7 @@ def make_calibration(d: Path, env: dict[str, str]) -> None:
 def make_recordings(d: Path, env: dict[str, str]) -> None:
     """Two recordings of one point in two formats: ssw's HDF5 and NI TDMS."""
     shutil.copy(ROOT / "config" / "devices" / "thesis.yaml", d / "my_device.yaml")
-    _acquire("rec1.h5", "pcf15", 6, d, env)
-    _acquire("rec2.h5", "pcf15", 7, d, env)
+    _ssw_each([_acquire("rec1.h5", "pcf15", 6), _acquire("rec2.h5", "pcf15", 7)], d, env)
     _run([sys.executable, "-c", "from ssw.daq.importers import read_any, write_any; "
           "write_any('rec2.tdms', read_any('rec2.h5'))"], d, env)
     (d / "rec2.h5").unlink()

@@ -41,13 +41,17 @@ if TYPE_CHECKING:
     import selectors
 
 #: What the warm process imports: the modules that the study's commands import (measured
-#: with ``python -X importtime`` on each job of ``make study``). None of them starts a
-#: thread or MPI (PETSc, gmsh and MPI load in the fork that needs them): a fork of a
-#: process with threads would copy their locks, not the threads.
+#: with ``python -X importtime`` on each job of ``make study``), and ``scipy.signal``, which
+#: every command reading a recording imports (a survey's ``ssw measure`` jobs: 0.45 s each
+#: after the rest; the example survey's 5 points 1.3-2.0 s each before it, 0.9-1.2 s with
+#: it, ``snakemake --cores 2 --configfile config/survey_example.yaml``, 2 cores,
+#: 2026-11-29). None of them starts a thread or MPI (PETSc, gmsh and MPI load in the fork
+#: that needs them): a fork of a process with threads would copy their locks, not the
+#: threads.
 PRELOAD = (
     "numpy", "scipy.linalg", "scipy.sparse", "scipy.sparse.linalg", "scipy.special",
     "scipy.interpolate", "scipy.optimize", "h5py", "matplotlib.pyplot", "PIL.PngImagePlugin",
-    "jsonschema",
+    "jsonschema", "scipy.signal",
     "ssw.cli", "ssw.cli.calibrate", "ssw.cli.chain", "ssw.cli.contact", "ssw.cli.design",
     "ssw.cli.fit", "ssw.cli.report", "ssw.cli.validate", "ssw.cli._device", "ssw.cli._sample",
     "ssw.cli._soil", "ssw.calibration.fit", "ssw.calibration.references", "ssw.chain.run",

@@ -153,13 +153,12 @@ def test_every_rendered_docstring_passes_the_builds_numpydoc_checks():
     and exclusions, one parameter per entry) on every docstring the API pages render,
     without Sphinx: seconds, where the whole build (``make test-long``) takes minutes."""
     import importlib
-    import re as regex
 
     from ssw_docs import ssw_modules
 
     conf = _build_settings()
     checks = set(conf["numpydoc_validation_checks"])
-    excluded = regex.compile("|".join(conf["numpydoc_validation_exclude"]))
+    excluded = re.compile("|".join(conf["numpydoc_validation_exclude"]))
     faults: list[str] = []
     seen = 0
     for module in ssw_modules():
